@@ -1,0 +1,142 @@
+/* Closed-form test solids, built by the tests themselves. Every mesh is closed,
+   wound counter-clockwise seen from outside, its lowest point at z = 0 unless a
+   base height is given. Free with gen_free(). */
+#ifndef ADASLICE_MESHGEN_H
+#define ADASLICE_MESHGEN_H
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+#include "../adaslice.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static adaslice_mesh gen_alloc(size_t nv, size_t nt)
+{
+    adaslice_mesh m;
+    memset(&m, 0, sizeof m);
+    m.vertices = (float *)calloc(nv * 3 + 3, sizeof(float));
+    m.triangles = (uint32_t *)calloc(nt * 3 + 3, sizeof(uint32_t));
+    if (!m.vertices || !m.triangles) abort();
+    return m;
+}
+
+static void gen_free(adaslice_mesh *m)
+{
+    free(m->vertices);
+    free(m->triangles);
+    memset(m, 0, sizeof *m);
+}
+
+static uint32_t gen_vertex(adaslice_mesh *m, double x, double y, double z)
+{
+    float *v = m->vertices + 3 * m->vertex_count;
+    v[0] = (float)x; v[1] = (float)y; v[2] = (float)z;
+    return (uint32_t)m->vertex_count++;
+}
+
+static void gen_triangle(adaslice_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t *t = m->triangles + 3 * m->triangle_count++;
+    t[0] = a; t[1] = b; t[2] = c;
+}
+
+/* UV sphere of radius r centred on (0, 0, base + r): `slices` around, `stacks`
+   from pole to pole (ring k at polar angle pi*k/stacks). */
+static adaslice_mesh gen_sphere(double r, int slices, int stacks, double base)
+{
+    adaslice_mesh m = gen_alloc((size_t)(slices * (stacks - 1) + 2), (size_t)(2 * slices * (stacks - 1)));
+    uint32_t top = gen_vertex(&m, 0, 0, base + 2 * r), bottom;
+    int i, k;
+    for (k = 1; k < stacks; k++) {
+        double th = M_PI * k / stacks;
+        for (i = 0; i < slices; i++) {
+            double ph = 2 * M_PI * i / slices;
+            gen_vertex(&m, r * sin(th) * cos(ph), r * sin(th) * sin(ph), base + r + r * cos(th));
+        }
+    }
+    bottom = gen_vertex(&m, 0, 0, base);
+#define GEN_RING(k, i) ((uint32_t)(1 + ((k) - 1) * slices + ((i) % slices)))
+    for (i = 0; i < slices; i++) {
+        gen_triangle(&m, top, GEN_RING(1, i), GEN_RING(1, i + 1));
+        gen_triangle(&m, bottom, GEN_RING(stacks - 1, i + 1), GEN_RING(stacks - 1, i));
+        for (k = 1; k < stacks - 1; k++) {
+            gen_triangle(&m, GEN_RING(k, i), GEN_RING(k + 1, i), GEN_RING(k + 1, i + 1));
+            gen_triangle(&m, GEN_RING(k, i), GEN_RING(k + 1, i + 1), GEN_RING(k, i + 1));
+        }
+    }
+#undef GEN_RING
+    return m;
+}
+
+/* Right circular cone: base disc of radius r at z = base, apex at base + h. */
+static adaslice_mesh gen_cone(double r, double h, int slices, double base)
+{
+    adaslice_mesh m = gen_alloc((size_t)slices + 2, (size_t)(2 * slices));
+    uint32_t apex = gen_vertex(&m, 0, 0, base + h), centre = gen_vertex(&m, 0, 0, base);
+    int i;
+    for (i = 0; i < slices; i++)
+        gen_vertex(&m, r * cos(2 * M_PI * i / slices), r * sin(2 * M_PI * i / slices), base);
+    for (i = 0; i < slices; i++) {
+        uint32_t a = (uint32_t)(2 + i), b = (uint32_t)(2 + (i + 1) % slices);
+        gen_triangle(&m, a, b, apex);
+        gen_triangle(&m, centre, b, a);
+    }
+    return m;
+}
+
+/* Right circular cylinder of radius r from z = base to base + h, axis x = y = 0. */
+static adaslice_mesh gen_cylinder(double r, double h, int slices, double base)
+{
+    adaslice_mesh m = gen_alloc((size_t)(2 * slices + 2), (size_t)(4 * slices));
+    uint32_t cb = gen_vertex(&m, 0, 0, base), ct = gen_vertex(&m, 0, 0, base + h);
+    int i;
+    for (i = 0; i < slices; i++) {
+        double c = r * cos(2 * M_PI * i / slices), s = r * sin(2 * M_PI * i / slices);
+        gen_vertex(&m, c, s, base);
+        gen_vertex(&m, c, s, base + h);
+    }
+    for (i = 0; i < slices; i++) {
+        uint32_t b0 = (uint32_t)(2 + 2 * i), t0 = b0 + 1;
+        uint32_t b1 = (uint32_t)(2 + 2 * ((i + 1) % slices)), t1 = b1 + 1;
+        gen_triangle(&m, b0, b1, t1);
+        gen_triangle(&m, b0, t1, t0);
+        gen_triangle(&m, cb, b1, b0);
+        gen_triangle(&m, ct, t0, t1);
+    }
+    return m;
+}
+
+/* Axis-aligned box [x0,x1] x [y0,y1] x [z0,z1]. */
+static adaslice_mesh gen_box(double x0, double y0, double z0, double x1, double y1, double z1)
+{
+    static const int quads[6][4] = {
+        {0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    adaslice_mesh m = gen_alloc(8, 12);
+    int i;
+    for (i = 0; i < 8; i++)
+        gen_vertex(&m, (i & 1) ? x1 : x0, (i & 2) ? y1 : y0, (i & 4) ? z1 : z0);
+    for (i = 0; i < 6; i++) {
+        gen_triangle(&m, (uint32_t)quads[i][0], (uint32_t)quads[i][1], (uint32_t)quads[i][2]);
+        gen_triangle(&m, (uint32_t)quads[i][0], (uint32_t)quads[i][2], (uint32_t)quads[i][3]);
+    }
+    return m;
+}
+
+/* dst gets src's triangles appended (src is left alone). */
+static void gen_append(adaslice_mesh *dst, const adaslice_mesh *src)
+{
+    size_t nv = dst->vertex_count + src->vertex_count, nt = dst->triangle_count + src->triangle_count, i;
+    float *v = (float *)realloc(dst->vertices, (nv * 3 + 3) * sizeof(float));
+    uint32_t *t = (uint32_t *)realloc(dst->triangles, (nt * 3 + 3) * sizeof(uint32_t));
+    if (!v || !t) abort();
+    memcpy(v + 3 * dst->vertex_count, src->vertices, src->vertex_count * 3 * sizeof(float));
+    for (i = 0; i < src->triangle_count * 3; i++)
+        t[3 * dst->triangle_count + i] = src->triangles[i] + (uint32_t)dst->vertex_count;
+    dst->vertices = v;
+    dst->triangles = t;
+    dst->vertex_count = nv;
+    dst->triangle_count = nt;
+}
+#endif

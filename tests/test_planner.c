@@ -1,0 +1,327 @@
+/* The planner against the paper's worked example and a brute-force reference.
+   This file holds a private (static) copy of the implementation so it can also
+   read the DP's K and D arrays. */
+#if defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wunused-function"
+#endif
+#define ADASLICE_STATIC
+#define ADASLICE_IMPLEMENTATION
+#include "../adaslice.h"
+#include "check.h"
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+/* §3.3, Fig. 3: eps = 0.6, 2 to 3 bins per layer. The figure's bar heights are
+   not in the text; these eight values satisfy every sum the text states
+   (phi3+phi4+phi5 = 0.9, phi4+phi5 = 0.7, and each K and D below). */
+static const double fig3_phi[8] = {0.1, 0.2, 0.2, 0.3, 0.4, 0.1, 0.3, 0.2};
+
+static adaslice_profile fig3_profile(void)
+{
+    adaslice_profile p;
+    memset(&p, 0, sizeof p);
+    p.metric = ADASLICE_METRIC_CUSP;
+    p.bin_count = 8;
+    p.bin = 1;
+    p.height = 8;
+    p.phi = (double *)fig3_phi;
+    return p;
+}
+
+static void fig3_k_and_d_arrays(void)
+{
+    /* the DP in tenths, as integers: K[i] and D[i] straight from the core */
+    static const uint32_t K[9] = {0, ADASLICE__UNREACHED, 1, 1, 2, ADASLICE__UNREACHED, 3, ADASLICE__UNREACHED, 4};
+    static const int D[9] = {-1, -1, 0, 0, 2, -1, 4, -1, 6};
+    uint64_t prefix[4], first[4], run[4], worst[4];
+    uint32_t layers[4], queue[4];
+    unsigned char back[9];
+    adaslice__dp dp;
+    int i;
+    memset(&dp, 0, sizeof dp);
+    dp.lo = 2; dp.hi = 3; dp.cap = 4; dp.eps = 6; dp.width = 1;
+    dp.prefix = prefix; dp.first = first; dp.run = run; dp.worst = worst;
+    dp.layers = layers; dp.queue = queue; dp.back = back;
+    adaslice__dp_start(&dp);
+    for (i = 1; i <= 8; i++) {
+        adaslice__dp_push(&dp, (uint64_t)(fig3_phi[i - 1] * 10 + 0.5), 0);
+        CHECKF(dp.layers[i % dp.cap] == K[i], "K[%d] = %u, paper %u", i, dp.layers[i % dp.cap], K[i]);
+        if (K[i] != ADASLICE__UNREACHED)
+            CHECKF((int)(i - adaslice__dp_back(&dp, (uint32_t)i)) == D[i], "D[%d] = %d, paper %d", i,
+                   (int)(i - adaslice__dp_back(&dp, (uint32_t)i)), D[i]);
+    }
+}
+
+static void fig3_plan_and_stuck_greedy(void)
+{
+    adaslice_profile p = fig3_profile();
+    adaslice_plan_options o;
+    adaslice_plan plan;
+    adaslice_error e;
+    static const uint32_t want[5] = {0, 2, 4, 6, 8};
+    int k;
+    memset(&o, 0, sizeof o);
+    o.eps = 0.6; o.tmin = 2; o.tmax = 3; o.sharp = ADASLICE_SHARP_OFF;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_OK);
+    CHECK(plan.layer_count == 4);
+    for (k = 0; k < 5 && plan.layer_count == 4; k++) CHECKF(plan.planes[k] == want[k], "S plane %d = %u", k, plan.planes[k]);
+    CHECK(plan.worst_error <= 0.6 && plan.over_eps == 0);
+    adaslice_plan_free(&plan);
+    /* the greedy takes phi1..phi3, then is stuck with phi4 + phi5 = 0.7 > eps */
+    o.method = ADASLICE_METHOD_GREEDY;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_OK);
+    CHECK(plan.layer_count >= 2 && plan.planes[1] == 3 && plan.planes[2] == 5);
+    CHECK(plan.layer_count >= 2 && fabs(plan.layers[1].error - 0.7) < 1e-12);
+    CHECK(plan.over_eps >= 1);
+    adaslice_plan_free(&plan);
+}
+
+/* ------------------------------------------------------ brute force */
+
+typedef struct ref_case {
+    int n, lo, hi, volume;
+    double bin, eps;
+    double phi[40];
+    unsigned char forced[41];
+} ref_case;
+
+typedef struct ref_best {
+    int found;
+    int layers;       /* fewest layers ... */
+    double worst;     /* ... and the smallest worst error among those */
+    double min_worst; /* smallest worst error of any plan */
+} ref_best;
+
+static double ref_error(const ref_case *c, int l, int i)
+{
+    double s = 0;
+    int j;
+    for (j = l; j < i; j++) s += c->volume ? fabs(c->phi[j] - c->phi[l]) : c->phi[j];
+    return s * c->bin;
+}
+
+/* Every plan, by depth-first search over the next plane: the best (fewest
+   layers, then smallest worst) with errors <= eps and layers <= max_layers. */
+static void ref_search(const ref_case *c, int at, int layers, double worst, double eps, int max_layers,
+                       ref_best *best, int *reach)
+{
+    int len;
+    if (at > *reach) *reach = at;
+    if (at == c->n) {
+        if (!best->found || layers < best->layers || (layers == best->layers && worst < best->worst)) {
+            best->layers = layers; best->worst = worst;
+        }
+        if (!best->found || worst < best->min_worst) best->min_worst = worst;
+        best->found = 1;
+        return;
+    }
+    if (layers >= max_layers) return;
+    for (len = c->lo; len <= c->hi && at + len <= c->n; len++) {
+        int j, crosses = 0;
+        double e = ref_error(c, at, at + len);
+        for (j = at + 1; j < at + len; j++) crosses |= c->forced[j];
+        if (crosses || e > eps) continue;
+        ref_search(c, at + len, layers + 1, worst > e ? worst : e, eps, max_layers, best, reach);
+    }
+}
+
+static int ref_tileable(int len, int lo, int hi)
+{
+    int k;
+    for (k = 1; k * lo <= len; k++) if (len <= k * hi) return 1;
+    return len == 0;
+}
+
+static void ref_forced(ref_case *c, double sharp)
+{
+    int i, last = 0;
+    memset(c->forced, 0, sizeof c->forced);
+    if (sharp <= 0) return;
+    for (i = 1; i < c->n; i++)
+        if (fabs(c->phi[i] - c->phi[i - 1]) > sharp && ref_tileable(i - last, c->lo, c->hi) &&
+            ref_tileable(c->n - i, c->lo, c->hi)) { c->forced[i] = 1; last = i; }
+}
+
+static unsigned rng_state = 12345u;
+static unsigned rng(void) { rng_state = rng_state * 1103515245u + 12345u; return (rng_state >> 8) & 0xffffffu; }
+
+static int plan_is_valid(const ref_case *c, const adaslice_plan *plan, double eps)
+{
+    size_t k;
+    if (plan->planes[0] != 0 || plan->planes[plan->layer_count] != (uint32_t)c->n) return 0;
+    for (k = 0; k < plan->layer_count; k++) {
+        int l = (int)plan->planes[k], i = (int)plan->planes[k + 1], j;
+        if (i - l < c->lo || i - l > c->hi) return 0;
+        if (ref_error(c, l, i) > eps || plan->layers[k].error != ref_error(c, l, i)) return 0;
+        for (j = l + 1; j < i; j++) if (c->forced[j]) return 0;
+    }
+    return 1;
+}
+
+/* Random dyadic profiles, so that every sum is exact in double and the
+   reference and the planner cannot disagree by rounding. */
+static void optimal_equals_brute_force(void)
+{
+    int trial, feasible = 0, infeasible = 0, volumes = 0, budgets = 0, forced_cases = 0;
+    for (trial = 0; trial < 12000; trial++) {
+        ref_case c;
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        adaslice_error e;
+        ref_best best, any;
+        int i, reach = 0, reach_any = 0, max_n;
+        double sharp = (rng() % 3 == 0) ? 0.25 * (1 + rng() % 4) : ADASLICE_SHARP_OFF;
+        adaslice_result r;
+        memset(&c, 0, sizeof c);
+        c.volume = rng() % 4 == 0;
+        c.lo = 1 + (int)(rng() % 4);
+        c.hi = c.lo + (int)(rng() % 4);
+        max_n = c.lo == 1 ? 14 : c.lo == 2 ? 22 : 34;
+        c.n = 1 + (int)(rng() % (unsigned)max_n);
+        c.bin = (1 + rng() % 8) / 64.0;
+        for (i = 0; i < c.n; i++) c.phi[i] = (rng() % 5 == 0) ? 0 : (rng() % 33) / 16.0;
+        c.eps = (1 + rng() % 256) / 256.0 * c.hi * c.bin * (c.volume ? 1.0 : 1.2);
+        ref_forced(&c, sharp);
+        memset(&p, 0, sizeof p);
+        p.metric = c.volume ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        p.bin_count = (size_t)c.n;
+        p.bin = c.bin;
+        p.height = c.n * c.bin;
+        p.phi = c.phi;
+        memset(&o, 0, sizeof o);
+        o.eps = c.eps;
+        o.tmin = (rng() % 2 || c.lo == 1) ? c.lo * c.bin : (c.lo - 0.5) * c.bin;
+        o.tmax = (rng() % 2) ? c.hi * c.bin : (c.hi + 0.5) * c.bin;
+        o.sharp = sharp;
+
+        memset(&best, 0, sizeof best);
+        ref_search(&c, 0, 0, 0, c.eps, 1 << 30, &best, &reach);
+        memset(&any, 0, sizeof any);
+        ref_search(&c, 0, 0, 0, 1e300, 1 << 30, &any, &reach_any);
+        r = adaslice_plan_profile(&p, &o, &plan, &e);
+        for (i = 1; i < c.n; i++) forced_cases += c.forced[i];
+        if (best.found) {
+            feasible++;
+            CHECKF(r == ADASLICE_OK, "trial %d: feasible but planner says %s", trial, e.message);
+            if (r != ADASLICE_OK) continue;
+            CHECKF((int)plan.layer_count == best.layers, "trial %d: %zu layers, brute force %d", trial,
+                   plan.layer_count, best.layers);
+            CHECKF(plan.worst_error == best.worst, "trial %d: worst %.17g, brute force %.17g", trial,
+                   plan.worst_error, best.worst);
+            CHECKF(plan_is_valid(&c, &plan, c.eps), "trial %d: plan breaks a constraint", trial);
+            CHECK(plan.over_eps == 0);
+            adaslice_plan_free(&plan);
+            /* budget: the smallest eps with at most B layers */
+            if (trial % 3 == 0) {
+                ref_best b;
+                int dummy = 0;
+                o.budget = (size_t)best.layers + rng() % 3;
+                memset(&b, 0, sizeof b);
+                ref_search(&c, 0, 0, 0, 1e300, (int)o.budget, &b, &dummy);
+                r = adaslice_plan_profile(&p, &o, &plan, &e);
+                CHECKF(r == ADASLICE_OK && b.found, "trial %d: budget %zu fails: %s", trial, o.budget, e.message);
+                if (r == ADASLICE_OK) {
+                    CHECKF(plan.worst_error == b.min_worst && plan.eps == b.min_worst,
+                           "trial %d: budget %zu gives worst %.17g eps %.17g, brute force %.17g", trial, o.budget,
+                           plan.worst_error, plan.eps, b.min_worst);
+                    CHECK(plan.layer_count <= o.budget);
+                    CHECK(plan_is_valid(&c, &plan, plan.eps));
+                    adaslice_plan_free(&plan);
+                }
+                budgets++;
+            }
+        } else {
+            infeasible++;
+            CHECKF(r == ADASLICE_ERR_INFEASIBLE, "trial %d: infeasible but planner says %d", trial, (int)r);
+            if (r != ADASLICE_ERR_INFEASIBLE) { adaslice_plan_free(&plan); continue; }
+            CHECKF(e.z == reach * c.bin, "trial %d: first uncovered z %g, brute force %g", trial, e.z, reach * c.bin);
+            if (any.found) {
+                CHECKF(e.min_eps >= any.min_worst && e.min_eps <= any.min_worst * (1 + 2e-6),
+                       "trial %d: smallest eps %.17g, brute force %.17g", trial, e.min_eps, any.min_worst);
+                o.eps = e.min_eps;
+                CHECKF(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_OK, "trial %d: the suggested eps fails", trial);
+                adaslice_plan_free(&plan);
+            } else {
+                CHECK(e.min_eps == 0);
+            }
+        }
+        volumes += c.volume;
+    }
+    CHECKF(feasible > 3000 && infeasible > 1000 && volumes > 1500 && budgets > 800 && forced_cases > 500,
+           "coverage: %d feasible, %d infeasible, %d volume, %d budget, %d forced planes", feasible, infeasible,
+           volumes, budgets, forced_cases);
+}
+
+/* Baselines never break the thickness bounds (but the uniform remainder) and
+   count their layers over eps truthfully. */
+static void baselines_keep_their_constraints(void)
+{
+    int trial;
+    for (trial = 0; trial < 2000; trial++) {
+        double phi[300];
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        int n = 20 + (int)(rng() % 280), i, m;
+        memset(&p, 0, sizeof p);
+        for (i = 0; i < n; i++) phi[i] = (rng() % 1000) / 1000.0;
+        p.bin_count = (size_t)n; p.bin = 0.002; p.phi = phi; p.height = n * 0.002;
+        p.metric = trial % 2 ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        for (m = ADASLICE_METHOD_GREEDY; m <= ADASLICE_METHOD_COARSEST; m++) {
+            size_t k, over = 0;
+            memset(&o, 0, sizeof o);
+            o.method = (adaslice_method)m;
+            o.eps = 0.0001 * (1 + rng() % 100);
+            o.tmin = 0.01; o.tmax = 0.03;
+            if (adaslice_plan_profile(&p, &o, &plan, NULL) != ADASLICE_OK) { CHECK(0); continue; }
+            CHECK(plan.planes[0] == 0 && plan.planes[plan.layer_count] == (uint32_t)n);
+            for (k = 0; k < plan.layer_count; k++) {
+                uint32_t len = plan.planes[k + 1] - plan.planes[k];
+                int last_uniform = m != ADASLICE_METHOD_GREEDY && k + 1 == plan.layer_count;
+                CHECKF(len <= plan.bins_max && (len >= plan.bins_min || last_uniform), "method %d layer %zu: %u bins", m, k, len);
+                over += plan.layers[k].error > o.eps;
+            }
+            CHECK(over == plan.over_eps);
+            adaslice_plan_free(&plan);
+        }
+    }
+}
+
+static void bad_arguments_are_named(void)
+{
+    adaslice_profile p = fig3_profile();
+    adaslice_plan_options o;
+    adaslice_plan plan;
+    adaslice_error e;
+    double bad[3] = {0.1, -1, 0.2};
+    memset(&o, 0, sizeof o);
+    o.tmin = 2; o.tmax = 1;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "tmin"));
+    o.tmin = 0.5; o.tmax = 3;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin size"));
+    o.tmin = 2.2; o.tmax = 2.8;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "multiple"));
+    o.tmin = 2; o.tmax = 3; o.eps = -1;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "eps"));
+    o.eps = 0.6;
+    p.phi = bad; p.bin_count = 3;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin 1"));
+    p = fig3_profile();
+    o.eps = 0.25; /* phi4 + phi5 needs 0.7 ... every 2-bin window must fit */
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_INFEASIBLE);
+    CHECKF(strstr(e.message, "smallest feasible eps") && e.z == 0 && e.min_eps >= 0.5 && e.min_eps < 0.5001,
+           "%s (z %g, min eps %g)", e.message, e.z, e.min_eps);
+    p.bin_count = 1; /* thinner than tmin */
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_INFEASIBLE && strstr(e.message, "thinner"));
+}
+
+void test_planner(void)
+{
+    RUN(fig3_k_and_d_arrays);
+    RUN(fig3_plan_and_stuck_greedy);
+    RUN(optimal_equals_brute_force);
+    RUN(baselines_keep_their_constraints);
+    RUN(bad_arguments_are_named);
+}
