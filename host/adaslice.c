@@ -1,0 +1,677 @@
+/* adaslice - the command-line tool over adaslice.h.
+
+   adaslice plan MODEL [options]          plan adaptive layers for a mesh
+   adaslice plan --profile FILE [options] plan a metric profile made elsewhere
+
+   Exit status: 0 done; 1 the work failed (a file that cannot be read or written,
+   a malformed mesh, constraints that no plan meets); 2 the command line is wrong.
+   Every message is one line on stderr that starts with "adaslice: ". */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* getline, clock_gettime */
+#endif
+#define ADASLICE_IMPLEMENTATION
+#include "../adaslice.h"
+#include "svg.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
+
+static int complain(int rc, const char *fmt, ...)
+{
+    va_list ap;
+    fputs("adaslice: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return rc;
+}
+
+/* A parameter the library rejects came from the command line, hence exit 2. */
+static int library_error(const adaslice_error *e)
+{
+    return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s", e->message);
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* ----------------------------------------------------- names and units */
+
+static const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"};
+static const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
+enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
+
+typedef struct metric_info { const char *label, *phi_unit, *eps_unit; } metric_info;
+static const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
+    {"cusp height", "mm/mm", "mm"},        /* eq. 4-6 */
+    {"roughness", "mm/mm", "mm"},          /* eq. 8-10 */
+    {"area deviation", "1/mm", ""},        /* eq. 12-14 */
+    {"volume deviation", "mm^2", "mm^3"},  /* eq. 17-20 */
+};
+
+static const char *format_name(adaslice_format f)
+{
+    static const char *const names[] = {"unknown format", "binary STL", "ASCII STL", "OBJ", "PLY"};
+    return (unsigned)f < sizeof names / sizeof *names ? names[f] : names[0];
+}
+
+/* " mm" or "" for a dimensionless value */
+static const char *unit_suffix(const char *unit, char buf[16])
+{
+    snprintf(buf, 16, "%s%s", *unit ? " " : "", unit);
+    return buf;
+}
+
+/* ------------------------------------------------------ atomic output */
+
+typedef void (*write_fn)(FILE *f, const void *ctx);
+
+/* Writes PATH through "PATH.tmp.PID" and renames it into place, so that PATH
+   never holds a partial file whatever fails. */
+static int write_atomic(const char *path, write_fn fill, const void *ctx)
+{
+    size_t size = strlen(path) + 32;
+    char *tmp = malloc(size);
+    FILE *f;
+    int err = 0;
+    if (!tmp) return complain(RC_FAIL, "cannot write %s: out of memory", path);
+    snprintf(tmp, size, "%s.tmp.%ld", path, (long)getpid());
+    f = fopen(tmp, "w");
+    if (!f) {
+        err = errno;
+    } else {
+        errno = 0;
+        fill(f, ctx);
+        if (ferror(f)) err = errno ? errno : EIO;
+        if (fflush(f) != 0 && !err) err = errno;
+        if (fclose(f) != 0 && !err) err = errno;
+        if (!err && rename(tmp, path) != 0) err = errno;
+        if (err) remove(tmp);
+    }
+    free(tmp);
+    return err ? complain(RC_FAIL, "cannot write %s: %s", path, strerror(err)) : RC_OK;
+}
+
+static void json_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
+        else if (c < 0x20) fprintf(f, "\\u%04x", c);
+        else fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+static void json_number(FILE *f, double v)
+{
+    if (isfinite(v)) fprintf(f, "%.17g", v);
+    else fputs("null", f);
+}
+
+/* ---------------------------------------------------------------- plan */
+
+typedef struct plan_args {
+    const char *model, *profile;   /* exactly one is set */
+    adaslice_metric metric;
+    adaslice_method method;
+    double bin, eps, tmin, tmax;
+    double scale;                  /* 0: not given */
+    double sharp;                  /* 0: pre-pass off */
+    size_t budget;                 /* 0: none */
+    const char *out, *profile_out, *plot;
+    int json, compare, help;
+} plan_args;
+
+typedef struct plan_job {
+    const plan_args *args;
+    size_t triangles, degenerate;  /* model only */
+    adaslice_format format;
+    adaslice_profile profile;
+    int profiled;                  /* profile came from the library and needs freeing */
+    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all four with --compare */
+    adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
+    int planned[METHOD_COUNT];
+    double ms_load, ms_profile, ms_plan;
+} plan_job;
+
+static void plan_usage(FILE *f)
+{
+    fprintf(f,
+        "usage: adaslice plan MODEL [options]\n"
+        "       adaslice plan --profile FILE [options]\n"
+        "\n"
+        "Finds the slicing plan with the fewest layers whose every layer error stays\n"
+        "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
+        "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
+        "\n"
+        "input\n"
+        "  --profile FILE      plan this profile instead of a MODEL: one value per line,\n"
+        "                      or CSV whose last column is the value; bins of --bin mm\n"
+        "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
+        "profile\n"
+        "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"
+        "  --bin MM            bin size                                    [%g]\n"
+        "plan\n"
+        "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"
+        "  --eps E             allowed error per layer (mm; area: none;\n"
+        "                      volume: mm^3)                               [%g]\n"
+        "  --tmin MM           thinnest layer                              [%g]\n"
+        "  --tmax MM           thickest layer                              [%g]\n"
+        "  --sharp T           slice where phi jumps by more than T; 0: off [%g]\n"
+        "  --budget K          at most K layers, with the smallest eps that allows it\n"
+        "output\n"
+        "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
+        "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
+        "  --plot FILE         SVG figure of the profile and the layer thickness\n"
+        "  --json              print a JSON object instead of the summary\n"
+        "  --compare           plan coarsest, optimal, greedy and finest on the same\n"
+        "                      profile and print them as in the paper's Table 3\n"
+        "Heights are in mm from the part's bottom.\n",
+        ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN, ADASLICE_DEFAULT_TMAX,
+        ADASLICE_DEFAULT_SHARP);
+}
+
+/* The value after option argv[*i]; NULL, said so, if there is none. */
+static const char *value_of(int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc || !strncmp(argv[*i + 1], "--", 2)) {
+        complain(RC_USAGE, "option %s needs a value", argv[*i]);
+        return NULL;
+    }
+    return argv[++*i];
+}
+
+static int file_option(int argc, char **argv, int *i, const char **out)
+{
+    *out = value_of(argc, argv, i);
+    return *out ? RC_OK : RC_USAGE;
+}
+
+static int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    char *end;
+    double d;
+    if (!v) return RC_USAGE;
+    d = strtod(v, &end);
+    if (end == v || *end || !isfinite(d) || d < 0 || (d == 0 && !zero_ok))
+        return complain(RC_USAGE, "%s %s: not a %s finite number", opt, v, zero_ok ? "non-negative" : "positive");
+    *out = d;
+    return RC_OK;
+}
+
+static int count_option(int argc, char **argv, int *i, size_t *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    char *end;
+    unsigned long long n;
+    if (!v) return RC_USAGE;
+    errno = 0;
+    n = strtoull(v, &end, 10);
+    /* planes are 32-bit bin indices, so no plan has more layers than that */
+    if (*v < '0' || *v > '9' || *end || errno == ERANGE || n == 0 || n > UINT32_MAX)
+        return complain(RC_USAGE, "%s %s: not a positive whole number", opt, v);
+    *out = (size_t)n;
+    return RC_OK;
+}
+
+static int name_option(int argc, char **argv, int *i, const char *const *names, int count,
+                       const char *choices, int *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    int k;
+    if (!v) return RC_USAGE;
+    for (k = 0; k < count; k++)
+        if (!strcmp(v, names[k])) {
+            *out = k;
+            return RC_OK;
+        }
+    return complain(RC_USAGE, "%s %s: unknown, expected %s", opt, v, choices);
+}
+
+static int parse_plan(int argc, char **argv, plan_args *a)
+{
+    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL;
+    memset(a, 0, sizeof *a);
+    a->bin = ADASLICE_DEFAULT_BIN;
+    a->eps = ADASLICE_DEFAULT_EPS;
+    a->tmin = ADASLICE_DEFAULT_TMIN;
+    a->tmax = ADASLICE_DEFAULT_TMAX;
+    a->sharp = ADASLICE_DEFAULT_SHARP;
+    for (i = 1; i < argc && !rc; i++) {
+        const char *o = argv[i];
+        if (o[0] != '-') {
+            if (a->model) return complain(RC_USAGE, "unexpected argument %s: MODEL is already %s", o, a->model);
+            a->model = o;
+        }
+        else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { a->help = 1; return RC_OK; }
+        else if (!strcmp(o, "--json")) a->json = 1;
+        else if (!strcmp(o, "--compare")) a->compare = 1;
+        else if (!strcmp(o, "--profile")) rc = file_option(argc, argv, &i, &a->profile);
+        else if (!strcmp(o, "--out")) rc = file_option(argc, argv, &i, &a->out);
+        else if (!strcmp(o, "--profile-out")) rc = file_option(argc, argv, &i, &a->profile_out);
+        else if (!strcmp(o, "--plot")) rc = file_option(argc, argv, &i, &a->plot);
+        else if (!strcmp(o, "--bin")) rc = number_option(argc, argv, &i, 0, &a->bin);
+        else if (!strcmp(o, "--eps")) rc = number_option(argc, argv, &i, 0, &a->eps);
+        else if (!strcmp(o, "--tmin")) rc = number_option(argc, argv, &i, 0, &a->tmin);
+        else if (!strcmp(o, "--tmax")) rc = number_option(argc, argv, &i, 0, &a->tmax);
+        else if (!strcmp(o, "--scale")) rc = number_option(argc, argv, &i, 0, &a->scale);
+        else if (!strcmp(o, "--sharp")) rc = number_option(argc, argv, &i, 1, &a->sharp);
+        else if (!strcmp(o, "--budget")) rc = count_option(argc, argv, &i, &a->budget);
+        else if (!strcmp(o, "--metric"))
+            rc = name_option(argc, argv, &i, METRIC_NAMES, METRIC_COUNT, "cusp, roughness, area or volume", &metric);
+        else if (!strcmp(o, "--method"))
+            rc = name_option(argc, argv, &i, METHOD_NAMES, METHOD_COUNT, "optimal, greedy, finest or coarsest", &method);
+        else return complain(RC_USAGE, "unknown option %s (see adaslice plan --help)", o);
+    }
+    if (rc) return rc;
+    a->metric = (adaslice_metric)metric;
+    a->method = (adaslice_method)method;
+    if (!a->model && !a->profile) return complain(RC_USAGE, "plan needs a MODEL or --profile FILE");
+    if (a->model && a->profile)
+        return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
+                        a->model, a->profile);
+    if (a->profile && a->scale) return complain(RC_USAGE, "--scale applies to a MODEL, not to --profile");
+    if (a->tmin > a->tmax) return complain(RC_USAGE, "--tmin %g is larger than --tmax %g", a->tmin, a->tmax);
+    if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
+        return complain(RC_USAGE, "--budget works with --method optimal only, not %s", METHOD_NAMES[a->method]);
+    return RC_OK;
+}
+
+static int profile_model(const plan_args *a, plan_job *j)
+{
+    adaslice_load_options lo;
+    adaslice_profile_options po;
+    adaslice_mesh mesh;
+    adaslice_error err;
+    adaslice_result r;
+    double t0 = now_ms();
+
+    memset(&lo, 0, sizeof lo);
+    lo.scale = a->scale;
+    if (adaslice_mesh_load_file(a->model, &lo, &mesh, &err) != ADASLICE_OK) return library_error(&err);
+    j->ms_load = now_ms() - t0;
+    j->triangles = mesh.triangle_count;
+    j->degenerate = mesh.degenerate_dropped;
+    j->format = mesh.format;
+
+    memset(&po, 0, sizeof po);
+    po.metric = a->metric;
+    po.bin = a->bin;
+    t0 = now_ms();
+    r = adaslice_profile_exact(&mesh, &po, &j->profile, &err);
+    j->ms_profile = now_ms() - t0;
+    adaslice_mesh_free(&mesh);
+    if (r != ADASLICE_OK) return library_error(&err);
+    j->profiled = 1;
+    return RC_OK;
+}
+
+static char *trim(char *s)
+{
+    char *end = s + strlen(s);
+    while (*s == ' ' || *s == '\t') s++;
+    while (end > s && (end[-1] == '\n' || end[-1] == '\r' || end[-1] == ' ' || end[-1] == '\t')) *--end = 0;
+    return s;
+}
+
+/* Appends v to the growing array *phi of *n values. */
+static int push(double **phi, size_t *n, size_t *cap, double v)
+{
+    if (*n == *cap) {
+        size_t grown = *cap ? 2 * *cap : 4096;
+        double *p = grown > SIZE_MAX / sizeof *p ? NULL : realloc(*phi, grown * sizeof *p);
+        if (!p) return 0;
+        *phi = p;
+        *cap = grown;
+    }
+    (*phi)[(*n)++] = v;
+    return 1;
+}
+
+/* One value per line, or CSV with the value last; blank lines and # comments
+   are skipped, and so is a first line that is not a number (a header). */
+static int read_profile(const plan_args *a, plan_job *j)
+{
+    const char *path = a->profile;
+    FILE *f = fopen(path, "r");
+    char *line = NULL;
+    size_t line_cap = 0, lineno = 0, n = 0, cap = 0;
+    double *phi = NULL, t0 = now_ms();
+    int rc = RC_OK, first = 1;
+
+    if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
+    while (!rc && getline(&line, &line_cap, f) != -1) {
+        char *s = trim(line), *field = strrchr(s, ','), *end;
+        double v;
+        lineno++;
+        if (!*s || *s == '#') continue;
+        field = field ? trim(field + 1) : s;
+        v = strtod(field, &end);
+        if (end == field || *end) {
+            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: %.80s", path, lineno, s);
+        } else if (!isfinite(v) || v < 0) {
+            rc = complain(RC_FAIL, "%s:%zu: %.80s: profile values must be finite and >= 0", path, lineno, s);
+        } else if (!push(&phi, &n, &cap, v)) {
+            rc = complain(RC_FAIL, "%s: out of memory after %zu values", path, n);
+        }
+        first = 0;
+    }
+    if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
+    if (!rc && !n) rc = complain(RC_FAIL, "%s: no profile values", path);
+    fclose(f);
+    free(line);
+    j->ms_load = now_ms() - t0;
+    if (rc) {
+        free(phi);
+        return rc;
+    }
+    j->profile.metric = a->metric;
+    j->profile.bin_count = n;
+    j->profile.bin = a->bin;
+    j->profile.height = n * a->bin;
+    j->profile.phi = phi;
+    return RC_OK;
+}
+
+static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_method method)
+{
+    adaslice_plan_options o;
+    adaslice_result r;
+    memset(&o, 0, sizeof o);
+    o.method = method;
+    o.eps = a->eps;
+    o.tmin = a->tmin;
+    o.tmax = a->tmax;
+    o.sharp = a->sharp > 0 ? a->sharp : ADASLICE_SHARP_OFF;
+    o.budget = method == ADASLICE_METHOD_OPTIMAL ? a->budget : 0;
+    r = adaslice_plan_profile(&j->profile, &o, &j->plan[method], &j->why[method]);
+    j->why[method].result = r;
+    j->planned[method] = 1;
+    return r;
+}
+
+/* The asked plan must succeed; with --compare the others may be infeasible,
+   which their row of the table then says. */
+static int run_plan(const plan_args *a, plan_job *j)
+{
+    double t0;
+    int rc = a->model ? profile_model(a, j) : read_profile(a, j), m;
+    if (rc) return rc;
+    t0 = now_ms();
+    if (plan_with(a, j, a->method) != ADASLICE_OK) return library_error(&j->why[a->method]);
+    j->ms_plan = now_ms() - t0;
+    for (m = 0; a->compare && m < METHOD_COUNT; m++) {
+        adaslice_result r = j->planned[m] ? ADASLICE_OK : plan_with(a, j, (adaslice_method)m);
+        if (r != ADASLICE_OK && r != ADASLICE_ERR_INFEASIBLE) return library_error(&j->why[m]);
+    }
+    return RC_OK;
+}
+
+static void job_free(plan_job *j)
+{
+    int m;
+    for (m = 0; m < METHOD_COUNT; m++)
+        if (j->planned[m] && j->why[m].result == ADASLICE_OK) adaslice_plan_free(&j->plan[m]);
+    if (j->profiled) adaslice_profile_free(&j->profile);
+    else free(j->profile.phi);
+}
+
+static void write_plan_csv(FILE *f, const void *ctx)
+{
+    const plan_job *j = (const plan_job *)ctx;
+    const adaslice_plan *p = &j->plan[j->args->method];
+    size_t k;
+    fputs("layer,z_bottom,z_top,thickness,error\n", f);
+    for (k = 0; k < p->layer_count; k++) {
+        const adaslice_layer *l = &p->layers[k];
+        fprintf(f, "%zu,%.9g,%.9g,%.9g,%.9g\n", k + 1, l->z_bottom, l->z_top, l->thickness, l->error);
+    }
+}
+
+/* phi with 17 digits, so that planning the file with --profile gives this plan. */
+static void write_profile_csv(FILE *f, const void *ctx)
+{
+    const adaslice_profile *pr = &((const plan_job *)ctx)->profile;
+    size_t i;
+    fputs("z,phi\n", f);
+    for (i = 0; i < pr->bin_count; i++) fprintf(f, "%.9g,%.17g\n", (i + 0.5) * pr->bin, pr->phi[i]);
+}
+
+static void write_plot(FILE *f, const void *ctx)
+{
+    const plan_job *j = (const plan_job *)ctx;
+    const plan_args *a = j->args;
+    svg_plan_figure fig;
+    fig.model = base_name(a->model ? a->model : a->profile);
+    fig.metric = METRICS[a->metric].label;
+    fig.phi_unit = METRICS[a->metric].phi_unit;
+    fig.eps_unit = METRICS[a->metric].eps_unit;
+    fig.method = METHOD_NAMES[a->method];
+    fig.profile = &j->profile;
+    fig.plan = &j->plan[a->method];
+    svg_write_plan(f, &fig);
+}
+
+static int write_outputs(const plan_args *a, const plan_job *j)
+{
+    if (a->out && write_atomic(a->out, write_plan_csv, j)) return RC_FAIL;
+    if (a->profile_out && write_atomic(a->profile_out, write_profile_csv, j)) return RC_FAIL;
+    if (a->plot && write_atomic(a->plot, write_plot, j)) return RC_FAIL;
+    return RC_OK;
+}
+
+/* The rows of the paper's Table 3, in its order. */
+static const adaslice_method TABLE3[] = {
+    ADASLICE_METHOD_COARSEST, ADASLICE_METHOD_OPTIMAL, ADASLICE_METHOD_GREEDY, ADASLICE_METHOD_FINEST};
+static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest"};
+
+static void print_compare(const plan_args *a, const plan_job *j)
+{
+    const char *unit = METRICS[a->metric].eps_unit;
+    char u[16], head[40];
+    int r;
+    snprintf(head, sizeof head, "worst error%s%s%s", *unit ? " (" : "", unit, *unit ? ")" : "");
+    printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
+           METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
+    printf("%-10s %8s  %-18s %s\n", "method", "layers", head, "layers over eps");
+    for (r = 0; r < 4; r++) {
+        const adaslice_plan *p = &j->plan[TABLE3[r]];
+        const adaslice_error *e = &j->why[TABLE3[r]];
+        if (e->result == ADASLICE_OK)
+            printf("%-10s %8zu  %-18.6g %zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
+        else if (e->min_eps > 0)
+            printf("%-10s %8s  (feasible from eps %g)\n", TABLE3_NAMES[r], "none", e->min_eps);
+        else
+            printf("%-10s %8s  (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
+    }
+    if (a->budget) printf("(Optimal with a budget of %zu layers)\n", a->budget);
+}
+
+static void print_summary(const plan_args *a, const plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    const adaslice_profile *pr = &j->profile;
+    char u[16];
+    const char *eu = unit_suffix(METRICS[a->metric].eps_unit, u);
+    if (a->model) {
+        printf("model      %s: %s, %zu triangles", a->model, format_name(j->format), j->triangles);
+        if (j->degenerate) printf(" (%zu degenerate dropped)", j->degenerate);
+        printf("\n");
+    } else {
+        printf("profile    %s: %zu values\n", a->profile, pr->bin_count);
+    }
+    printf("height     %g mm, %zu bins of %g mm\n", pr->height, pr->bin_count, pr->bin);
+    printf("metric     %s\n", METRICS[a->metric].label);
+    printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
+    if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
+    printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);
+    printf("layers     %zu\n", p->layer_count);
+    printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
+    if (p->over_eps) printf(", %zu layers over eps", p->over_eps);
+    if (a->sharp > 0) printf("\nforced     %zu planes at sharp changes (> %g)\n", p->forced_planes, a->sharp);
+    else printf("\nforced     none (sharp-change pre-pass off)\n");
+    printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
+    if (a->compare) print_compare(a, j);
+}
+
+static void print_json_plan_fields(FILE *f, const adaslice_plan *p)
+{
+    fprintf(f, "\"layers\": %zu, \"worst_error\": ", p->layer_count);
+    json_number(f, p->worst_error);
+    fputs(", \"total_error\": ", f);
+    json_number(f, p->total_error);
+    fprintf(f, ", \"over_eps\": %zu", p->over_eps);
+}
+
+static void print_json(const plan_args *a, const plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    const adaslice_profile *pr = &j->profile;
+    size_t k;
+    int r;
+    printf("{\n  \"model\": ");
+    json_string(stdout, a->model ? a->model : a->profile);
+    printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
+    if (a->model) json_string(stdout, format_name(j->format));
+    else printf("null");
+    if (a->model) printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu", j->triangles, j->degenerate);
+    else printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null");
+    printf(",\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", METRIC_NAMES[a->metric], METHOD_NAMES[a->method]);
+    json_number(stdout, p->eps);
+    printf(",\n  \"tmin\": ");
+    json_number(stdout, a->tmin);
+    printf(",\n  \"tmax\": ");
+    json_number(stdout, a->tmax);
+    printf(",\n  \"bin\": ");
+    json_number(stdout, pr->bin);
+    printf(",\n  \"bins\": %zu,\n  \"bins_min\": %u,\n  \"bins_max\": %u,\n  \"height_mm\": ",
+           pr->bin_count, p->bins_min, p->bins_max);
+    json_number(stdout, pr->height);
+    if (a->budget) printf(",\n  \"budget\": %zu", a->budget);
+    printf(",\n  \"sharp\": ");
+    if (a->sharp > 0) json_number(stdout, a->sharp);
+    else printf("null");
+    printf(",\n  ");
+    print_json_plan_fields(stdout, p);
+    printf(",\n  \"forced_planes\": %zu,\n  \"time_ms\": {\"load\": %.3f, \"profile\": %.3f, \"plan\": %.3f}",
+           p->forced_planes, j->ms_load, j->ms_profile, j->ms_plan);
+    printf(",\n  \"layer_list\": [");
+    for (k = 0; k < p->layer_count; k++) {
+        const adaslice_layer *l = &p->layers[k];
+        printf("%s\n    {\"z_bottom\": ", k ? "," : "");
+        json_number(stdout, l->z_bottom);
+        printf(", \"z_top\": ");
+        json_number(stdout, l->z_top);
+        printf(", \"thickness\": ");
+        json_number(stdout, l->thickness);
+        printf(", \"error\": ");
+        json_number(stdout, l->error);
+        printf("}");
+    }
+    printf("\n  ]");
+    if (a->compare) {
+        printf(",\n  \"compare\": [");
+        for (r = 0; r < 4; r++) {
+            const adaslice_error *e = &j->why[TABLE3[r]];
+            printf("%s\n    {\"method\": \"%s\", ", r ? "," : "", METHOD_NAMES[TABLE3[r]]);
+            if (e->result == ADASLICE_OK) {
+                print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
+            } else {
+                printf("\"layers\": null, \"min_eps\": ");
+                json_number(stdout, e->min_eps);
+            }
+            printf("}");
+        }
+        printf("\n  ]");
+    }
+    printf("\n}\n");
+}
+
+static int cmd_plan(int argc, char **argv)
+{
+    plan_args a;
+    plan_job j;
+    int rc = parse_plan(argc, argv, &a);
+    if (rc) return rc;
+    if (a.help) {
+        plan_usage(stdout);
+        return RC_OK;
+    }
+    memset(&j, 0, sizeof j);
+    j.args = &a;
+    rc = run_plan(&a, &j);
+    if (!rc) rc = write_outputs(&a, &j);
+    if (!rc) (a.json ? print_json : print_summary)(&a, &j);
+    job_free(&j);
+    return rc;
+}
+
+/* ---------------------------------------------------------------- main */
+
+typedef struct command {
+    const char *name, *summary;
+    int (*run)(int argc, char **argv); /* argv[0] is the command's name */
+} command;
+
+static const command COMMANDS[] = {
+    {"plan", "plan adaptive layers for a mesh or a metric profile", cmd_plan},
+};
+enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
+
+static void usage(FILE *f)
+{
+    int i;
+    fputs("usage: adaslice COMMAND [options]\n"
+          "       adaslice --help | --version\n"
+          "\n"
+          "commands:\n", f);
+    for (i = 0; i < COMMAND_COUNT; i++) fprintf(f, "  %-10s %s\n", COMMANDS[i].name, COMMANDS[i].summary);
+    fputs("\n'adaslice COMMAND --help' lists the command's options.\n", f);
+}
+
+int main(int argc, char **argv)
+{
+    int i, rc;
+    if (argc < 2) {
+        usage(stderr);
+        return RC_USAGE;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(stdout);
+        rc = RC_OK;
+    } else if (!strcmp(argv[1], "--version")) {
+        printf("adaslice %s\n", ADASLICE_VERSION);
+        rc = RC_OK;
+    } else {
+        for (i = 0; i < COMMAND_COUNT && strcmp(argv[1], COMMANDS[i].name); i++) {}
+        if (i == COMMAND_COUNT)
+            return complain(RC_USAGE, "unknown %s %s (see adaslice --help)",
+                            argv[1][0] == '-' ? "option" : "command", argv[1]);
+        rc = COMMANDS[i].run(argc - 1, argv + 1);
+    }
+    /* a full disk or closed pipe on stdout is a failure, not a silent success */
+    if (fflush(stdout) != 0 || ferror(stdout)) return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));
+    return rc;
+}
