@@ -1,7 +1,107 @@
 /* adaslice.h - adaptive slicing for layer-based additive manufacturing.
    Public domain / MIT-0, see the end of the file.
 
-@@DOC@@
+   adaslice.h — adaptive slicing for layer-based additive manufacturing
+   (resin SLA/MSLA first), after Mao, Kwok, Chen and Wang, "Adaptive Slicing
+   Based on Efficient Profile Analysis". A mesh is turned into a metric
+   profile phi(z) — the error density per mm of height — and a dynamic
+   program picks the fewest layers whose integrated error each stays within
+   eps, with every thickness in [tmin, tmax].
+
+   DO THIS in exactly one C or C++ file:
+       #define ADASLICE_IMPLEMENTATION
+       #include "adaslice.h"
+   and include it without the define anywhere else.
+
+   EXAMPLE (error handling shortened; see examples/plan_model.c)
+       adaslice_mesh mesh;  adaslice_profile profile;  adaslice_plan plan;
+       adaslice_error err;
+       if (adaslice_mesh_load_file("part.stl", NULL, &mesh, &err) ||
+           adaslice_profile_exact(&mesh, NULL, &profile, &err) ||   // cusp, b = 2 um
+           adaslice_plan_profile(&profile, NULL, &plan, &err))      // eps 0.065 mm
+           fprintf(stderr, "%s\n", err.message);
+       for (size_t k = 0; k < plan.layer_count; k++)
+           printf("%g %g\n", plan.layers[k].z_bottom, plan.layers[k].thickness);
+       adaslice_plan_free(&plan); adaslice_profile_free(&profile); adaslice_mesh_free(&mesh);
+
+   Every options struct may be NULL or zero-initialised: zero means the
+   documented default (the paper's: cusp height, b = 0.002 mm, eps = 0.065,
+   tmin = 0.05 mm, tmax = 0.15 mm, sharp-change threshold 0.5). Every call
+   that can fail returns an adaslice_result and, if you pass one, fills an
+   adaslice_error with a one-line message naming the problem (byte offset or
+   line, height, value). There is no global state: calls are reentrant.
+
+   PIPELINE AND UNITS
+   mesh (mm, build direction +z) -> profile: N = ceil(H/b) bins, bin i is
+   [z0 + i*b, z0 + (i+1)*b) -> plan: planes 0 = s0 < ... < sK = N on bin
+   boundaries; heights in a plan are mm above the part's bottom z0.
+
+   MESHES  adaslice_mesh_load reads binary and ASCII STL, OBJ (polygons fan-
+   triangulated, negative indices) and PLY (ascii, binary little and big
+   endian; faces of any size; triangle strips) from memory. Zero-area
+   triangles are dropped and counted; NaN/Inf, bad numbers, truncation,
+   indices out of range and overflowing counts are errors with distinct codes.
+   `scale` converts units (scans are often in metres).
+
+   PROFILES (exact: from the triangles, no sampling)
+     cusp       eq. 4-6    phi = max |n_z| * w over triangles meeting the bin;
+                           eps in mm
+     roughness  eq. 8-10   phi = max w / sin(theta), theta the angle between
+                           normal and z, clamped at roughness_max (default
+                           1/sin 5 deg = 11.47): flat faces print without steps,
+                           and the formula is infinite there; eps in mm
+     area       eq. 12-14  phi = |A(i+1) - A(i)| / (b A(i)) * wmax, A at bin
+                           centres; one-sided at the top bin; if A(i) = 0 the
+                           neighbour's area is the reference; dimensionless eps.
+                           Tips (A -> 0) make phi large: that is the metric.
+     volume     eq. 17-20  phi = A * wmax (mm^2); a layer's error is
+                           b * sum |phi[j] - phi[first]| in mm^3
+   A(z) is exact: each triangle's cut is a segment whose endpoints move
+   linearly with z, so its Green's-theorem term is quadratic in z; the terms
+   are summed per block of 256 bins about the block's first centre. Area and
+   volume assume a closed mesh: overlapping shells count twice, open or
+   inconsistently wound meshes give signed sums (negative areas read as 0).
+   w is an optional per-triangle weight in [0,1] (eq. 21-24); wmax the
+   largest weight among triangles meeting the bin.
+
+   PLANS
+     optimal   Procedure 1 in O(N) for additive metrics: the feasible
+               predecessors of a plane form a window whose ends only move
+               up, kept in a monotone queue; O(N w) for volume deviation.
+               Among plans with the fewest layers it returns one whose worst
+               layer error is smallest: the DP orders states by (layers,
+               worst) lexicographically, which is exact because any prefix
+               of an optimal plan is itself optimal in that order; within
+               the queue's front block the best max(worst, layer error) is
+               where the two cross, tracked by a forward-only pointer.
+               The DP runs on integers: b*phi is quantised up to units of a
+               power of two near 2^-40 of the largest layer error, so a
+               plan feasible in units is feasible in mm (volume adds one unit
+               per bin unless every value was exact). The §3.3 pre-pass
+               forces a plane where |phi[i] - phi[i-1]| > sharp, unless that
+               would leave a stretch no layers can fill.
+               budget > 0: the smallest eps whose plan has at most that many
+               layers (bisection over eps in units).
+     greedy    ref. [3]: grow each layer while it stays within eps, starting
+               from tmin; where even tmin exceeds eps it takes tmin anyway
+               and counts the layer in over_eps (the paper's "stuck" greedy).
+     finest, coarsest   uniform tmin or tmax; the top layer holds the rest.
+   Infeasible: ADASLICE_ERR_INFEASIBLE with error.z (the lowest height no
+   plan gets past) and error.min_eps (the smallest eps that works, 0 if the
+   thickness range cannot tile the height at all).
+
+   OPTIONS (define before including the implementation)
+     ADASLICE_IMPLEMENTATION  the implementation, in one file
+     ADASLICE_STATIC          every function static (private to the file)
+     ADASLICE_DEF             the linkage of public functions (overrides the above)
+     ADASLICE_MALLOC(size), ADASLICE_FREE(ptr)
+                              the default allocator (malloc/free); or pass an
+                              adaslice_allocator {alloc, free, user} per call
+     ADASLICE_NO_MALLOC       no default allocator: every call needs one
+     ADASLICE_ASSERT(x)       internal invariant checks (assert by default)
+     ADASLICE_NO_STDIO        leaves out adaslice_mesh_load_file, the only
+                              stdio user
+   LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; 2^32 - 1 vertices.
 */
 #ifndef ADASLICE_H
 #define ADASLICE_H

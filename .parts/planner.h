@@ -10,7 +10,7 @@
 
 typedef struct adaslice__dp {
     uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
-    uint32_t cap;             /* ring size: hi + 1 planes */
+    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
     uint64_t eps;             /* allowed error per layer, in units */
     int volume;               /* eq. 20 instead of an additive sum */
     uint64_t slack;           /* volume: units added per bin for rounding */
@@ -31,7 +31,7 @@ typedef struct adaslice__dp {
 
 static uint32_t adaslice__dp_queue_at(const adaslice__dp *dp, uint32_t k)
 {
-    return dp->queue[(dp->head + k) % dp->cap];
+    return dp->queue[(dp->head + k) & (dp->cap - 1)];
 }
 
 static void adaslice__dp_set_back(adaslice__dp *dp, uint32_t plane, uint32_t len)
@@ -47,17 +47,21 @@ static uint32_t adaslice__dp_back(const adaslice__dp *dp, uint32_t plane)
 }
 
 /* Layer from plane l to the current plane: its error in units. */
+static uint64_t adaslice__dp_sum(const adaslice__dp *dp, uint32_t l)
+{
+    return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
+}
+
 static uint64_t adaslice__dp_error(const adaslice__dp *dp, uint32_t l)
 {
-    if (dp->volume) return dp->run[l % dp->cap];
-    return dp->prefix[dp->plane % dp->cap] - dp->prefix[l % dp->cap];
+    return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
 }
 
 /* (layers, worst) of plane a is at least that of plane b, lexicographically */
 static int adaslice__dp_no_better(const adaslice__dp *dp, uint32_t a, uint32_t b)
 {
-    uint32_t ka = dp->layers[a % dp->cap], kb = dp->layers[b % dp->cap];
-    return ka != kb ? ka > kb : dp->worst[a % dp->cap] >= dp->worst[b % dp->cap];
+    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
+    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
 }
 
 static void adaslice__dp_start(adaslice__dp *dp)
@@ -86,35 +90,36 @@ static void adaslice__dp_choose_additive(adaslice__dp *dp, uint32_t *best)
     uint64_t va, vb;
     if (i >= dp->lo) {
         uint32_t l = i - dp->lo;
-        if (l >= dp->floor && dp->layers[l % dp->cap] != ADASLICE__UNREACHED) {
+        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
             while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
             if (dp->scan > dp->count) dp->scan = dp->count;
-            dp->queue[(dp->head + dp->count++) % dp->cap] = l;
+            ADASLICE_ASSERT(dp->count < dp->cap);
+            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
         }
     }
     while (dp->count) {
         uint32_t f = adaslice__dp_queue_at(dp, 0);
-        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_error(dp, f) <= dp->eps) break;
-        dp->head = (dp->head + 1) % dp->cap;
+        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
+        dp->head = (dp->head + 1) & (dp->cap - 1);
         dp->count--;
         if (dp->scan) dp->scan--;
     }
     *best = ADASLICE__UNREACHED;
     if (!dp->count) return;
-    kf = dp->layers[adaslice__dp_queue_at(dp, 0) % dp->cap];
+    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
     while (dp->scan < dp->count) {
         uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
-        if (dp->layers[l % dp->cap] != kf || dp->worst[l % dp->cap] >= adaslice__dp_error(dp, l)) break;
+        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
         dp->scan++;
     }
     pos = dp->scan;
     /* candidate before the crossing: its layer error dominates */
     a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
-    va = a != ADASLICE__UNREACHED ? adaslice__dp_error(dp, a) : UINT64_MAX;
+    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
     /* candidate at the crossing: its worst so far dominates */
     b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
-    if (b != ADASLICE__UNREACHED && dp->layers[b % dp->cap] != kf) b = ADASLICE__UNREACHED;
-    vb = b != ADASLICE__UNREACHED ? dp->worst[b % dp->cap] : UINT64_MAX;
+    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
+    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
     *best = va <= vb ? a : b;
 }
 
@@ -130,10 +135,10 @@ static void adaslice__dp_choose_volume(adaslice__dp *dp, uint32_t *best)
     start = i > dp->hi ? i - dp->hi : 0;
     if (start < dp->floor) start = dp->floor;
     for (l = start; l + dp->lo <= i; l++) {
-        uint32_t k = dp->layers[l % dp->cap];
-        uint64_t e = dp->run[l % dp->cap], w;
+        uint32_t k = dp->layers[l & (dp->cap - 1)];
+        uint64_t e = dp->run[l & (dp->cap - 1)], w;
         if (k == ADASLICE__UNREACHED || e > dp->eps) continue;
-        w = dp->worst[l % dp->cap] > e ? dp->worst[l % dp->cap] : e;
+        w = dp->worst[l & (dp->cap - 1)] > e ? dp->worst[l & (dp->cap - 1)] : e;
         if (k < best_k || (k == best_k && w < best_w)) { best_k = k; best_w = w; *best = l; }
     }
 }
@@ -147,25 +152,25 @@ static void adaslice__dp_push(adaslice__dp *dp, uint64_t units, int forced)
     dp->plane = i;
     if (dp->volume) {
         uint32_t l = i > dp->hi ? i - dp->hi : 0;
-        dp->first[(i - 1) % c] = units;
-        dp->run[(i - 1) % c] = 0;
+        dp->first[(i - 1) & (c - 1)] = units;
+        dp->run[(i - 1) & (c - 1)] = 0;
         for (; l < i; l++) {
-            uint64_t f = dp->first[l % c];
-            dp->run[l % c] += (units > f ? units - f : f - units) + dp->slack;
+            uint64_t f = dp->first[l & (c - 1)];
+            dp->run[l & (c - 1)] += (units > f ? units - f : f - units) + dp->slack;
         }
         adaslice__dp_choose_volume(dp, &best);
     } else {
-        dp->prefix[i % c] = dp->prefix[(i - 1) % c] + units;
+        dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
         adaslice__dp_choose_additive(dp, &best);
     }
     if (best == ADASLICE__UNREACHED) {
-        dp->layers[i % c] = ADASLICE__UNREACHED;
-        dp->worst[i % c] = 0;
+        dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;
+        dp->worst[i & (c - 1)] = 0;
         adaslice__dp_set_back(dp, i, 0);
     } else {
         uint64_t e = adaslice__dp_error(dp, best);
-        dp->layers[i % c] = dp->layers[best % c] + 1;
-        dp->worst[i % c] = dp->worst[best % c] > e ? dp->worst[best % c] : e;
+        dp->layers[i & (c - 1)] = dp->layers[best & (c - 1)] + 1;
+        dp->worst[i & (c - 1)] = dp->worst[best & (c - 1)] > e ? dp->worst[best & (c - 1)] : e;
         adaslice__dp_set_back(dp, i, i - best);
         dp->reach = i;
     }
@@ -202,7 +207,7 @@ static uint32_t adaslice__job_run(adaslice__job *job, uint64_t eps)
     adaslice__dp_start(&job->dp);
     for (i = 0; i < job->n; i++)
         adaslice__dp_push(&job->dp, job->units[i], job->forced && job->forced[i + 1] && i + 1 < job->n);
-    return job->dp.layers[job->n % job->dp.cap];
+    return job->dp.layers[job->n & (job->dp.cap - 1)];
 }
 
 /* The smallest eps (units) whose optimal plan has at most max_layers layers
@@ -401,9 +406,12 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     planes = ADASLICE__CAST(uint32_t *, adaslice__alloc(&plan->allocator, (size_t)layers + 1, sizeof(uint32_t)));
     if (!planes) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
     for (i = job->n, k = layers; ; k--) {
+        uint32_t len;
         planes[k] = i;
         if (!i) break;
-        i -= adaslice__dp_back(&job->dp, i);
+        len = adaslice__dp_back(&job->dp, i);
+        ADASLICE_ASSERT(len >= job->lo && len <= job->hi && len <= i && k > 0);
+        i -= len;
     }
     r = adaslice__plan_fill(p, planes, layers + 1, eps, plan, err);
     adaslice__free(&plan->allocator, planes);
@@ -504,7 +512,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     case ADASLICE_METHOD_OPTIMAL: {
         adaslice__dp *dp = &job.dp;
         unsigned char *mem;
-        dp->lo = job.lo; dp->hi = job.hi; dp->cap = job.hi + 1;
+        dp->lo = job.lo; dp->hi = job.hi;
+        for (dp->cap = 2; dp->cap <= job.hi; dp->cap *= 2) {}
         dp->volume = job.volume;
         dp->width = job.hi <= 255 ? 1 : 2;
         job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, job.n, sizeof(uint64_t)));

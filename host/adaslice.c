@@ -178,7 +178,7 @@ static void plan_usage(FILE *f)
         "                      volume: mm^3)                               [%g]\n"
         "  --tmin MM           thinnest layer                              [%g]\n"
         "  --tmax MM           thickest layer                              [%g]\n"
-        "  --sharp T           slice where phi jumps by more than T; 0: off [%g]\n"
+        "  --sharp T           a plane at each phi jump above T; 0: off    [%g]\n"
         "  --budget K          at most K layers, with the smallest eps that allows it\n"
         "output\n"
         "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
@@ -495,16 +495,16 @@ static void print_compare(const plan_args *a, const plan_job *j)
     snprintf(head, sizeof head, "worst error%s%s%s", *unit ? " (" : "", unit, *unit ? ")" : "");
     printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
            METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
-    printf("%-10s %8s  %-18s %s\n", "method", "layers", head, "layers over eps");
+    printf("%-10s %8s %18s %10s\n", "method", "layers", head, "over eps");
     for (r = 0; r < 4; r++) {
         const adaslice_plan *p = &j->plan[TABLE3[r]];
         const adaslice_error *e = &j->why[TABLE3[r]];
         if (e->result == ADASLICE_OK)
-            printf("%-10s %8zu  %-18.6g %zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
+            printf("%-10s %8zu %18.6g %10zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
         else if (e->min_eps > 0)
-            printf("%-10s %8s  (feasible from eps %g)\n", TABLE3_NAMES[r], "none", e->min_eps);
+            printf("%-10s %8s   (feasible from eps %g)\n", TABLE3_NAMES[r], "none", e->min_eps);
         else
-            printf("%-10s %8s  (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
+            printf("%-10s %8s   (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
     }
     if (a->budget) printf("(Optimal with a budget of %zu layers)\n", a->budget);
 }

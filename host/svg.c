@@ -155,15 +155,14 @@ static void plan_steps(FILE *f, const adaslice_plan *p, double b, const axis *x,
         fprintf(f, "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"/>\n",
                 px(x, 0), y0, px(x, r.bins * b) - px(x, 0), y1 - y0, colour);
     }
-    /* planes are visible as slices when layers average four pixels or more */
-    if (p->layer_count * 4 <= (size_t)(BOTTOM - TOP) && p->layer_count > 1) {
-        fputs("<path stroke=\"#fff\" stroke-width=\"0.8\" d=\"", f);
-        for (k = 1; k < p->layer_count; k++) {
-            uint32_t t = layer_bins(p, k - 1) > layer_bins(p, k) ? layer_bins(p, k - 1) : layer_bins(p, k);
-            fprintf(f, "M%.1f %.1fH%.1f", px(x, 0), px(z, p->planes[k] * b), px(x, t * b));
-        }
-        fputs("\"/>\n", f);
+    /* planes between layers tall enough to tell apart show as slices */
+    fputs("<path stroke=\"#fff\" stroke-width=\"0.6\" stroke-opacity=\"0.85\" d=\"", f);
+    for (k = 1; k < p->layer_count; k++) {
+        double below = px(z, p->planes[k - 1] * b), at = px(z, p->planes[k] * b), above = px(z, p->planes[k + 1] * b);
+        uint32_t t = layer_bins(p, k - 1) > layer_bins(p, k) ? layer_bins(p, k - 1) : layer_bins(p, k);
+        if (below - at >= 3 && at - above >= 3) fprintf(f, "M%.1f %.1fH%.1f", px(x, 0), at, px(x, t * b));
     }
+    fputs("\"/>\n", f);
     fprintf(f, "<path fill=\"none\" stroke=\"%s\" d=\"M%.1f %.1f", INK, px(x, 0), px(z, 0));
     r.end = 0;
     while (next_run(p, z, b, &r))
@@ -174,7 +173,7 @@ static void plan_steps(FILE *f, const adaslice_plan *p, double b, const axis *x,
 /* The colour scale sits above the plan panel, aligned with its thickness axis. */
 static void colour_scale(FILE *f, const adaslice_plan *p, double b, const axis *x)
 {
-    double tmin = p->bins_min * b, tmax = p->bins_max * b, x0 = px(x, tmin), x1 = px(x, tmax);
+    double x0 = px(x, p->bins_min * b), x1 = px(x, p->bins_max * b);
     char colour[8];
     int i;
     fputs("<defs><linearGradient id=\"thickness\" x1=\"0\" x2=\"1\" y1=\"0\" y2=\"0\">", f);
@@ -187,15 +186,15 @@ static void colour_scale(FILE *f, const adaslice_plan *p, double b, const axis *
             x0, TOP - 14, x1 - x0 > 1 ? x1 - x0 : 1, INK);
     fprintf(f, "<path d=\"M%.1f %dV%dM%.1f %dV%d\" stroke=\"%s\" stroke-dasharray=\"4 3\"/>\n",
             x0, TOP - 6, BOTTOM, x1, TOP - 6, BOTTOM, MUTED);
-    fprintf(f, "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\" font-size=\"10\" fill=\"%s\">t<tspan baseline-shift=\"sub\" font-size=\"8\">min</tspan></text>\n",
-            x0, TOP - 18, MUTED);
-    fprintf(f, "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\" font-size=\"10\" fill=\"%s\">t<tspan baseline-shift=\"sub\" font-size=\"8\">max</tspan></text>\n",
-            x1, TOP - 18, MUTED);
+    fprintf(f, "<text x=\"%.1f\" y=\"%d\" text-anchor=\"end\" font-size=\"10\" fill=\"%s\">t<tspan baseline-shift=\"sub\" font-size=\"8\">min</tspan></text>\n",
+            x0 - 4, TOP - 7, MUTED);
+    fprintf(f, "<text x=\"%.1f\" y=\"%d\" font-size=\"10\" fill=\"%s\">t<tspan baseline-shift=\"sub\" font-size=\"8\">max</tspan></text>\n",
+            x1 + 4, TOP - 7, MUTED);
 }
 
 static void caption(FILE *f, int x, const char *text)
 {
-    fprintf(f, "<text x=\"%d\" y=\"%d\" font-weight=\"bold\">", x, TOP - 24);
+    fprintf(f, "<text x=\"%d\" y=\"%d\" font-weight=\"bold\">", x, TOP - 30);
     xml_text(f, text);
     fputs("</text>\n", f);
 }

@@ -1,0 +1,93 @@
+# adaslice: make | make demo | make check | make check-models | make bench
+CC      ?= gcc
+CLANG   ?= clang
+CXX     ?= g++
+CLANGXX ?= clang++
+WARN     = -Wall -Wextra -Wpedantic -Werror
+CSTD     = -std=c99 $(WARN) -D_POSIX_C_SOURCE=200809L
+CFLAGS  ?= -O2
+SAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+MODELS  ?= ../shared/models
+FUZZ_SECONDS ?= 20
+B        = build
+
+HOST_SRC  = host/adaslice.c host/svg.c
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_loaders.c tests/test_cli.c
+HDRS      = adaslice.h host/svg.h tests/check.h tests/meshgen.h
+
+.PHONY: all demo check check-models bench compile-checks fuzz clean
+
+all: $(B)/adaslice
+
+$(B):
+	mkdir -p $(B)
+
+$(B)/adaslice: $(HOST_SRC) $(HDRS) | $(B)
+	$(CC) $(CSTD) $(CFLAGS) $(HOST_SRC) -o $@ -lm
+
+# The main job on a bundled example: plan the hand (CC BY 4.0, see
+# examples/models/README.md) scaled to the paper's 23.8 mm, and plot it.
+demo: $(B)/adaslice
+	$(B)/adaslice plan examples/models/hand_closed.obj --scale 88.7 --compare \
+	    --out $(B)/hand_plan.csv --plot $(B)/hand_plot.svg
+	@echo "wrote $(B)/hand_plan.csv and $(B)/hand_plot.svg"
+
+# --- make check ----------------------------------------------------------
+# Sanitized builds of the tool and the test runner; the runner prints the
+# final "N passed, N failed".
+$(B)/san/adaslice: $(HOST_SRC) $(HDRS) | $(B)
+	mkdir -p $(B)/san
+	$(CC) $(CSTD) $(SAN) $(HOST_SRC) -o $@ -lm
+
+$(B)/san/run_tests: $(TEST_SRC) $(HDRS) | $(B)
+	mkdir -p $(B)/san
+	$(CC) $(CSTD) $(SAN) $(TEST_SRC) -o $@ -lm
+
+# The header as C99 under gcc and clang, as C++ under g++ and clang++, two
+# translation units linked together (plain and ADASLICE_STATIC), and the
+# README's example.
+compile-checks: | $(B)
+	mkdir -p $(B)/cc
+	$(CC) $(CSTD) -c tests/compile/one.c -o $(B)/cc/one_gcc.o
+	$(CLANG) $(CSTD) -c tests/compile/one.c -o $(B)/cc/one_clang.o
+	$(CXX) -x c++ -std=c++11 $(WARN) -c tests/compile/one.c -o $(B)/cc/one_gxx.o
+	$(CLANGXX) -x c++ -std=c++11 $(WARN) -c tests/compile/one.c -o $(B)/cc/one_clangxx.o
+	$(CC) $(CSTD) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu -lm
+	$(CLANG) $(CSTD) -DTWO_STATIC tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_static -lm
+	$(CXX) -x c++ -std=c++11 $(WARN) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_cxx -lm
+	$(CC) $(CSTD) -DADASLICE_NO_STDIO -c tests/compile/one.c -o $(B)/cc/one_nostdio.o
+	$(CC) $(CSTD) -O2 examples/plan_model.c -o $(B)/plan_model -lm
+	$(CLANG) $(CSTD) -O2 examples/plan_model.c -o $(B)/cc/plan_model_clang -lm
+	$(B)/cc/two_tu && $(B)/cc/two_tu_static && $(B)/cc/two_tu_cxx
+	$(B)/plan_model examples/models/hand_closed.obj 88.7 > $(B)/cc/plan_model.out
+	@echo "compile checks: ok"
+
+$(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h | $(B)
+	$(CLANG) -std=c99 $(WARN) -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+	    tests/fuzz_loaders.c -o $@ -lm
+
+# A bounded libFuzzer run over the loaders; new inputs go to build/, not the repo.
+fuzz: $(B)/fuzz_loaders
+	mkdir -p $(B)/fuzz_work
+	$(B)/fuzz_loaders -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -max_len=4096 \
+	    -print_final_stats=1 $(B)/fuzz_work tests/fuzz_corpus 2>&1 | tail -n 12
+
+check: compile-checks fuzz $(B)/san/adaslice $(B)/san/run_tests
+	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
+
+# --- the shared models (not in the repository) ---------------------------
+$(B)/test_models: tests/test_models.c adaslice.h | $(B)
+	$(CC) $(CSTD) $(SAN) tests/test_models.c -o $@ -lm
+
+check-models: $(B)/test_models
+	$(B)/test_models $(MODELS)
+
+# --- make bench -----------------------------------------------------------
+$(B)/bench: bench/bench.c adaslice.h | $(B)
+	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c -o $@ -lm
+
+bench: $(B)/bench
+	$(B)/bench $(MODELS)
+
+clean:
+	rm -rf $(B)

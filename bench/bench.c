@@ -1,0 +1,156 @@
+/* make bench: the planner against Procedure 1 as printed, in the same process,
+   and the exact profiles on the largest shared models. Medians of repeated runs. */
+#define ADASLICE_IMPLEMENTATION
+#include "../adaslice.h"
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, by_value);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* Procedure 1 exactly as the paper prints it: the inner summation included.
+   Returns K, or -1 when infeasible. */
+static long procedure1(const double *phi, size_t n, double bin, double eps, double tmin, double tmax)
+{
+    long lo = (long)ceil(tmin / bin - 1e-9), hi = (long)floor(tmax / bin + 1e-9), i, l, m;
+    long *K = (long *)malloc((n + 1) * sizeof(long)), *D = (long *)malloc((n + 1) * sizeof(long)), k;
+    for (i = 0; i <= (long)n; i++) { K[i] = LONG_MAX; D[i] = -1; }
+    K[0] = 0;
+    for (i = 1; i <= (long)n; i++) {
+        for (l = i - hi; l <= i - lo; l++) {
+            double sum = 0;
+            if (l < 0) continue;
+            for (m = l + 1; m <= i; m++) sum += phi[m - 1];
+            if (sum * bin <= eps && K[l] != LONG_MAX && K[i] > K[l] + 1) { K[i] = K[l] + 1; D[i] = l; }
+        }
+    }
+    k = K[n] == LONG_MAX ? -1 : K[n];
+    free(K);
+    free(D);
+    return k;
+}
+
+static void bench_planner(const char *label, const adaslice_profile *p, int runs, int slow_runs)
+{
+    adaslice_plan_options o;
+    adaslice_plan plan;
+    adaslice_error e;
+    double fast[64], slow[8], t;
+    long k_slow = 0;
+    int r;
+    memset(&o, 0, sizeof o);
+    o.sharp = ADASLICE_SHARP_OFF; /* Procedure 1 has no pre-pass */
+    for (r = 0; r < runs; r++) {
+        t = now();
+        if (adaslice_plan_profile(p, &o, &plan, &e) != ADASLICE_OK) { printf("plan failed: %s\n", e.message); exit(1); }
+        fast[r] = now() - t;
+        if (r + 1 < runs) adaslice_plan_free(&plan);
+    }
+    for (r = 0; r < slow_runs; r++) {
+        t = now();
+        k_slow = procedure1(p->phi, p->bin_count, p->bin, o.eps ? o.eps : ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN,
+                            ADASLICE_DEFAULT_TMAX);
+        slow[r] = now() - t;
+    }
+    {
+        double f = median(fast, runs), s = median(slow, slow_runs);
+        printf("planner %-28s N = %8zu  K = %6zu (Procedure 1: %ld)  optimal %9.3f ms  Procedure 1 %10.1f ms  ratio %6.0fx\n",
+               label, p->bin_count, plan.layer_count, k_slow, f * 1e3, s * 1e3, s / f);
+        if ((long)plan.layer_count != k_slow) { printf("MISMATCH in layer count\n"); exit(1); }
+    }
+    adaslice_plan_free(&plan);
+}
+
+static int load(const char *path, double height, adaslice_mesh *m)
+{
+    adaslice_load_options lo;
+    adaslice_error e;
+    double a[3], b[3];
+    memset(&lo, 0, sizeof lo);
+    if (adaslice_mesh_load_file(path, &lo, m, &e) != ADASLICE_OK) { printf("%s\n", e.message); return 0; }
+    if (height > 0) {
+        size_t i;
+        double s;
+        adaslice_mesh_bounds(m, a, b);
+        s = height / (b[2] - a[2]);
+        for (i = 0; i < 3 * m->vertex_count; i++) m->vertices[i] = (float)(m->vertices[i] * s);
+    }
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    const char *models = argc > 1 ? argv[1] : "../shared/models";
+    static const char *big[] = {"turbineblade.ply", "dragon_vrip_res2.ply", "lucy.ply", "counter.unitsmm.STL"};
+    static const double big_height[] = {0, 92.0, 0, 0}; /* the dragon is in metres */
+    static const char *metric_name[] = {"cusp", "roughness", "area", "volume"};
+    adaslice_mesh hand;
+    adaslice_profile_options po;
+    adaslice_profile p, tiled;
+    size_t i, j;
+    int mi;
+
+    /* the paper's Table 1 row: the Hand, b = 2 um, 23.77 mm tall: N = 11,885 */
+    if (!load("examples/models/hand_closed.obj", 23.77, &hand)) return 1;
+    memset(&po, 0, sizeof po);
+    if (adaslice_profile_exact(&hand, &po, &p, NULL) != ADASLICE_OK) return 1;
+    bench_planner("hand, b = 2 um", &p, 41, 5);
+    /* N = 1,000,000: the same profile repeated, 2 m of part */
+    tiled = p;
+    tiled.bin_count = 1000000;
+    tiled.phi = (double *)malloc(tiled.bin_count * sizeof(double));
+    tiled.area = NULL;
+    memset(&tiled.allocator, 0, sizeof tiled.allocator);
+    for (i = 0; i < tiled.bin_count; i++) tiled.phi[i] = p.phi[i % p.bin_count];
+    bench_planner("hand repeated to 1M bins", &tiled, 11, 1);
+    free(tiled.phi);
+    adaslice_profile_free(&p);
+    adaslice_mesh_free(&hand);
+
+    for (j = 0; j < sizeof big / sizeof big[0]; j++) {
+        char path[1024];
+        adaslice_mesh m;
+        double t, tl;
+        snprintf(path, sizeof path, "%s/%s", models, big[j]);
+        t = now();
+        if (!load(path, big_height[j], &m)) return 1;
+        tl = now() - t;
+        printf("profile %-24s %7zu triangles  load %7.1f ms", big[j], m.triangle_count, tl * 1e3);
+        for (mi = 0; mi < 4; mi++) {
+            double times[9];
+            int r;
+            memset(&po, 0, sizeof po);
+            po.metric = (adaslice_metric)mi;
+            for (r = 0; r < 9; r++) {
+                t = now();
+                if (adaslice_profile_exact(&m, &po, &p, NULL) != ADASLICE_OK) return 1;
+                times[r] = now() - t;
+                if (r < 8) adaslice_profile_free(&p);
+            }
+            printf("  %s %6.1f ms", metric_name[mi], median(times, 9) * 1e3);
+            if (mi == 3) printf("  (N = %zu)", p.bin_count);
+            adaslice_profile_free(&p);
+        }
+        printf("\n");
+        adaslice_mesh_free(&m);
+    }
+    return 0;
+}
