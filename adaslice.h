@@ -524,11 +524,1818 @@ static void adaslice__free(const adaslice_allocator *a, void *p)
     if (p && a->free) a->free(a->user, p);
 }
 
-@@LOADERS@@
+/* ------------------------------------------------------------------ mesh input */
 
-@@PROFILES@@
+/* Geometry as it is read, before it becomes an adaslice_mesh. */
+typedef struct adaslice__build {
+    const char *text;           /* the input, which is not NUL-terminated */
+    const unsigned char *bytes; /* the same input, for binary reads */
+    size_t size;
+    const char *name;           /* the format, for messages */
+    double scale;
+    adaslice_allocator a;
+    adaslice_error *err;
+    float *v;                   /* x, y, z per vertex */
+    size_t nv, vcap;
+    uint32_t *t;                /* three vertex indices per triangle */
+    size_t nt, tcap;
+} adaslice__build;
 
-@@PLANNER@@
+static size_t adaslice__at(const adaslice__build *b, const char *w) { return (size_t)(w - b->text); }
+
+/* Fails with the place in front of the message: "OBJ line 12: ..." for text,
+   "PLY byte 96: ..." for binary data. */
+static adaslice_result adaslice__bad(adaslice__build *b, adaslice_result code, size_t offset,
+                                     size_t line, const char *fmt, ...)
+{
+    char what[256];
+    va_list ap;
+    va_start(ap, fmt);
+    adaslice__vformat(what, sizeof what, fmt, ap);
+    va_end(ap);
+    if (line) return adaslice__fail(b->err, code, offset, line, "%s line %zu: %s", b->name, line, what);
+    return adaslice__fail(b->err, code, offset, 0, "%s byte %zu: %s", b->name, offset, what);
+}
+
+/* A word of the input, short and printable enough to quote in a one-line message. */
+static const char *adaslice__quote(char q[48], const char *w, size_t n)
+{
+    size_t i, k = n < 40 ? n : 40;
+    for (i = 0; i < k; i++) q[i] = (w[i] >= 32 && w[i] < 127) ? w[i] : '?';
+    if (n > k) memcpy(q + k, "...", 4);
+    else q[k] = 0;
+    return q;
+}
+
+/* An integral double as exact text: %g keeps only six digits, too few for an index. */
+static const char *adaslice__int_text(char buf[24], double v)
+{
+    adaslice__out o;
+    o.buf = buf; o.cap = 24; o.len = 0;
+    if (v < 0) { adaslice__putc(&o, '-'); v = -v; }
+    adaslice__putu(&o, (unsigned long long)v);
+    buf[o.len] = 0;
+    return buf;
+}
+
+/* Room for `need` items, at least twice the old capacity so that appending stays
+   linear; NULL when out of memory (then `old` is still valid). */
+static void *adaslice__grow(const adaslice_allocator *a, void *old, size_t used, size_t *cap,
+                            size_t need, size_t item)
+{
+    size_t n = *cap < SIZE_MAX / 2 ? 2 * *cap : need;
+    void *p;
+    if (n < need) n = need;
+    if (n < 64) n = 64;
+    p = adaslice__alloc(a, n, item);
+    if (!p) return NULL;
+    if (used) memcpy(p, old, used * item);
+    adaslice__free(a, old);
+    *cap = n;
+    return p;
+}
+
+static adaslice_result adaslice__reserve(adaslice__build *b, size_t vertices, size_t triangles)
+{
+    void *p;
+    if (vertices > b->vcap) {
+        p = adaslice__grow(&b->a, b->v, b->nv, &b->vcap, vertices, 3 * sizeof(float));
+        if (!p) return adaslice__fail(b->err, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory", b->name);
+        b->v = ADASLICE__CAST(float *, p);
+    }
+    if (triangles > b->tcap) {
+        p = adaslice__grow(&b->a, b->t, b->nt, &b->tcap, triangles, 3 * sizeof(uint32_t));
+        if (!p) return adaslice__fail(b->err, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory", b->name);
+        b->t = ADASLICE__CAST(uint32_t *, p);
+    }
+    return ADASLICE_OK;
+}
+
+/* Scales one coordinate; NaN or infinity, in the file or after scaling, is an error (§1). */
+static adaslice_result adaslice__coord(adaslice__build *b, double v, size_t offset, size_t line, float *out)
+{
+    double s = v * b->scale;
+    if (!(fabs(v) <= DBL_MAX))
+        return adaslice__bad(b, ADASLICE_ERR_NONFINITE, offset, line, "coordinate %g is not finite", v);
+    if (!(fabs(s) <= FLT_MAX))
+        return adaslice__bad(b, ADASLICE_ERR_NONFINITE, offset, line,
+                             "coordinate %g scaled by %g is not finite as a float", v, b->scale);
+    *out = (float)s;
+    return ADASLICE_OK;
+}
+
+static adaslice_result adaslice__vertex(adaslice__build *b, const float xyz[3])
+{
+    adaslice_result r;
+    if (b->nv == UINT32_MAX)
+        return adaslice__fail(b->err, ADASLICE_ERR_OVERFLOW, 0, 0,
+                              "%s: more than 4294967295 vertices do not fit 32-bit indices", b->name);
+    if (b->nv == b->vcap && (r = adaslice__reserve(b, b->nv + 1, 0))) return r;
+    memcpy(b->v + 3 * b->nv++, xyz, 3 * sizeof(float));
+    return ADASLICE_OK;
+}
+
+/* The caller has checked the indices against the vertex count. */
+static adaslice_result adaslice__triangle(adaslice__build *b, uint32_t i, uint32_t j, uint32_t k)
+{
+    uint32_t *t;
+    adaslice_result r;
+    if (b->nt == b->tcap && (r = adaslice__reserve(b, 0, b->nt + 1))) return r;
+    t = b->t + 3 * b->nt++;
+    t[0] = i; t[1] = j; t[2] = k;
+    return ADASLICE_OK;
+}
+
+/* Exactly zero area, in double from the stored floats: repeated corners included. */
+static int adaslice__zero_area(const float *v, const uint32_t *t)
+{
+    const float *a = v + 3 * (size_t)t[0], *p = v + 3 * (size_t)t[1], *q = v + 3 * (size_t)t[2];
+    double ux = (double)p[0] - a[0], uy = (double)p[1] - a[1], uz = (double)p[2] - a[2];
+    double wx = (double)q[0] - a[0], wy = (double)q[1] - a[1], wz = (double)q[2] - a[2];
+    return uy * wz - uz * wy == 0 && uz * wx - ux * wz == 0 && ux * wy - uy * wx == 0;
+}
+
+/* Drops zero-area triangles, since no later stage can give them a normal, and hands
+   the arrays over to the mesh. The vertices of dropped triangles stay. */
+static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
+{
+    size_t i, kept = 0;
+    for (i = 0; i < b->nt; i++) {
+        const uint32_t *t = b->t + 3 * i;
+        uint32_t *to = b->t + 3 * kept;
+        if (adaslice__zero_area(b->v, t)) continue;
+        to[0] = t[0]; to[1] = t[1]; to[2] = t[2];
+        kept++;
+    }
+    if (!kept && b->nt)
+        return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: all %zu triangles have zero area",
+                              b->name, b->nt);
+    if (!kept) return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: no triangles", b->name);
+    mesh->vertex_count = b->nv;
+    mesh->vertices = b->v;
+    mesh->triangle_count = kept;
+    mesh->triangles = b->t;
+    mesh->degenerate_dropped = b->nt - kept;
+    mesh->allocator = b->a;
+    b->v = NULL;
+    b->t = NULL;
+    return ADASLICE_OK;
+}
+
+/* ---------------------------------------------------------------- text input */
+
+typedef struct adaslice__text {
+    const char *p, *end;
+    size_t line; /* 1-based line of p */
+} adaslice__text;
+
+static adaslice__text adaslice__text_at(const adaslice__build *b)
+{
+    adaslice__text t;
+    t.p = b->text;
+    t.end = b->text + b->size;
+    t.line = 1;
+    return t;
+}
+
+static int adaslice__blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+/* The next whitespace-separated word and its length; 0 at the end of the data, or
+   of the line unless `cross` lets it read on past newlines. */
+static size_t adaslice__word(adaslice__text *t, int cross, const char **w)
+{
+    const char *p = t->p;
+    for (; p < t->end; p++) {
+        if (*p == '\n') {
+            if (!cross) break;
+            t->line++;
+        } else if (!adaslice__blank(*p)) break;
+    }
+    *w = p;
+    while (p < t->end && *p != '\n' && !adaslice__blank(*p)) p++;
+    t->p = p;
+    return (size_t)(p - *w);
+}
+
+static void adaslice__skip_line(adaslice__text *t)
+{
+    while (t->p < t->end && *t->p != '\n') t->p++;
+    if (t->p < t->end) { t->p++; t->line++; }
+}
+
+/* Case-insensitive comparison with a lowercase keyword. */
+static int adaslice__is(const char *w, size_t n, const char *kw)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        char c = w[i];
+        if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
+        if (!kw[i] || c != kw[i]) return 0;
+    }
+    return kw[n] == 0;
+}
+
+/* An optionally signed decimal integer at the front of w[0..n); returns the characters
+   read, 0 if there is none. Magnitudes saturate at 2^53: beyond any valid count or
+   index, and still exact as a double. */
+static size_t adaslice__integer(const char *w, size_t n, long long *out)
+{
+    size_t i = n && (w[0] == '-' || w[0] == '+'), start = i;
+    long long v = 0;
+    for (; i < n && w[i] >= '0' && w[i] <= '9'; i++) {
+        v = 10 * v + (w[i] - '0');
+        if (v > (1LL << 53)) v = 1LL << 53;
+    }
+    if (i == start) return 0;
+    *out = w[0] == '-' ? -v : v;
+    return i;
+}
+
+/* strtod on a NUL-terminated copy, because the input has no terminator; the whole
+   word must be the number. */
+static adaslice_result adaslice__number(adaslice__build *b, const char *w, size_t n, size_t line, double *out)
+{
+    char buf[64], *end, q[48];
+    *out = 0;
+    if (n < sizeof buf) {
+        memcpy(buf, w, n);
+        buf[n] = 0;
+        *out = strtod(buf, &end);
+        if (n && end == buf + n) return ADASLICE_OK;
+    }
+    return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line, "'%s' is not a number",
+                         adaslice__quote(q, w, n));
+}
+
+/* `want` is quoted in the message: pass "facet' or 'endsolid" for two choices. */
+static adaslice_result adaslice__unexpected(adaslice__build *b, const adaslice__text *t, const char *w,
+                                            size_t n, const char *want)
+{
+    char q[48];
+    if (!n) return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, b->size, t->line,
+                                 "the data ends where '%s' was expected", want);
+    return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), t->line, "expected '%s', found '%s'",
+                         want, adaslice__quote(q, w, n));
+}
+
+static adaslice_result adaslice__expect(adaslice__build *b, adaslice__text *t, const char *keyword)
+{
+    const char *w;
+    size_t n = adaslice__word(t, 1, &w);
+    return adaslice__is(w, n, keyword) ? ADASLICE_OK : adaslice__unexpected(b, t, w, n, keyword);
+}
+
+static adaslice_result adaslice__read_coord(adaslice__build *b, adaslice__text *t, int cross, float *out)
+{
+    const char *w;
+    size_t n = adaslice__word(t, cross, &w);
+    double v;
+    adaslice_result r;
+    if (!n) return adaslice__bad(b, t->p < t->end ? ADASLICE_ERR_FORMAT : ADASLICE_ERR_TRUNCATED,
+                                 adaslice__at(b, w), t->line, "the %s ends where a coordinate was expected",
+                                 t->p < t->end ? "line" : "data");
+    if ((r = adaslice__number(b, w, n, t->line, &v))) return r;
+    return adaslice__coord(b, v, adaslice__at(b, w), t->line, out);
+}
+
+/* --------------------------------------------------------------- binary data */
+
+enum { ADASLICE__I8 = 1, ADASLICE__U8, ADASLICE__I16, ADASLICE__U16, ADASLICE__I32, ADASLICE__U32,
+       ADASLICE__F32, ADASLICE__F64 };
+static const unsigned char adaslice__type_size[9] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
+
+/* One value of a PLY scalar type (binary STL uses U32 and F32), assembled byte by
+   byte so that the host's byte order and alignment do not matter. */
+static double adaslice__scalar(const unsigned char *p, int type, int big_endian)
+{
+    unsigned n = adaslice__type_size[type], i;
+    uint64_t u = 0;
+    for (i = 0; i < n; i++) u |= (uint64_t)p[big_endian ? n - 1 - i : i] << (8 * i);
+    if (type == ADASLICE__F32) {
+        uint32_t bits = (uint32_t)u;
+        float f;
+        memcpy(&f, &bits, 4);
+        return f;
+    }
+    if (type == ADASLICE__F64) {
+        double d;
+        memcpy(&d, &u, 8);
+        return d;
+    }
+    if (type % 2 && u >> (8 * n - 1)) return (double)u - ldexp(1.0, (int)(8 * n)); /* signed */
+    return (double)u;
+}
+
+/* ----------------------------------------------------------------------- STL */
+
+static adaslice_result adaslice__stl_binary(adaslice__build *b)
+{
+    size_t count, i, at;
+    float xyz[3];
+    int corner, k;
+    adaslice_result r;
+    if (b->size < 84)
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, b->size, 0,
+                             "the data ends inside the 84-byte header and triangle count");
+    count = (size_t)adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0);
+    /* a wrong count and a cut-off file look alike, so both are a count mismatch */
+    if ((b->size - 84) % 50 || (b->size - 84) / 50 != count)
+        return adaslice__fail(b->err, ADASLICE_ERR_COUNT, 80, 0,
+                              "binary STL: header says %zu triangles (%zu bytes) but the data is %zu bytes",
+                              count, 84 + 50 * count, b->size);
+    if ((r = adaslice__reserve(b, 3 * count, count))) return r;
+    for (i = 0; i < count; i++) {
+        for (corner = 0; corner < 3; corner++) { /* the 12-byte normal is ignored: often wrong */
+            for (k = 0; k < 3; k++) {
+                at = 84 + 50 * i + 12 + 12 * (size_t)corner + 4 * (size_t)k;
+                r = adaslice__coord(b, adaslice__scalar(b->bytes + at, ADASLICE__F32, 0), at, 0, &xyz[k]);
+                if (r) return r;
+            }
+            if ((r = adaslice__vertex(b, xyz))) return r;
+        }
+        r = adaslice__triangle(b, (uint32_t)(b->nv - 3), (uint32_t)(b->nv - 2), (uint32_t)(b->nv - 1));
+        if (r) return r;
+    }
+    return ADASLICE_OK;
+}
+
+/* facet normal n n n / outer loop / vertex x y z (three or more) / endloop / endfacet */
+static adaslice_result adaslice__stl_facet(adaslice__build *b, adaslice__text *t)
+{
+    size_t n, corners = 0, first = b->nv;
+    const char *w;
+    float xyz[3];
+    int k;
+    adaslice_result r;
+    if ((r = adaslice__expect(b, t, "normal"))) return r;
+    for (k = 0; k < 3; k++) /* the stored normal is ignored: often wrong */
+        if (!(n = adaslice__word(t, 1, &w))) return adaslice__unexpected(b, t, w, n, "normal component");
+    if ((r = adaslice__expect(b, t, "outer")) || (r = adaslice__expect(b, t, "loop"))) return r;
+    while (n = adaslice__word(t, 1, &w), adaslice__is(w, n, "vertex")) {
+        for (k = 0; k < 3; k++)
+            if ((r = adaslice__read_coord(b, t, 1, &xyz[k]))) return r;
+        if ((r = adaslice__vertex(b, xyz))) return r;
+        if (++corners >= 3 && (r = adaslice__triangle(b, (uint32_t)first, (uint32_t)(b->nv - 2),
+                                                      (uint32_t)(b->nv - 1))))
+            return r;
+    }
+    if (!adaslice__is(w, n, "endloop")) return adaslice__unexpected(b, t, w, n, "vertex' or 'endloop");
+    if (corners < 3)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), t->line,
+                             "a facet needs at least 3 vertices, this one has %zu", corners);
+    return adaslice__expect(b, t, "endfacet");
+}
+
+/* One or more "solid name ... endsolid name" blocks. */
+static adaslice_result adaslice__stl_ascii(adaslice__build *b)
+{
+    adaslice__text t = adaslice__text_at(b);
+    const char *w;
+    size_t n = adaslice__word(&t, 1, &w);
+    adaslice_result r;
+    do {
+        if (!adaslice__is(w, n, "solid")) return adaslice__unexpected(b, &t, w, n, "solid");
+        adaslice__skip_line(&t);
+        while (n = adaslice__word(&t, 1, &w), !adaslice__is(w, n, "endsolid")) {
+            if (!adaslice__is(w, n, "facet")) return adaslice__unexpected(b, &t, w, n, "facet' or 'endsolid");
+            if ((r = adaslice__stl_facet(b, &t))) return r;
+        }
+        adaslice__skip_line(&t);
+    } while ((n = adaslice__word(&t, 1, &w)) != 0);
+    return ADASLICE_OK;
+}
+
+/* ----------------------------------------------------------------------- OBJ */
+
+/* "7", "7/1", "7/1/3", "7//3" or relative "-1": the vertex part, as a 0-based index
+   into the vertices read so far. */
+static adaslice_result adaslice__obj_index(adaslice__build *b, const char *w, size_t n, size_t line, uint32_t *out)
+{
+    long long i, k;
+    size_t used = adaslice__integer(w, n, &i);
+    char q[48];
+    if (!used || (used < n && w[used] != '/'))
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line, "'%s' is not a vertex index",
+                             adaslice__quote(q, w, n));
+    if (i == 0)
+        return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,
+                             "vertex index 0 is invalid (OBJ counts from 1)");
+    k = i < 0 ? (long long)b->nv + i : i - 1;
+    if (k < 0 || k >= (long long)b->nv)
+        return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,
+                             "vertex index %s is out of range (%zu vertices so far)",
+                             adaslice__quote(q, w, used), b->nv);
+    *out = (uint32_t)k;
+    return ADASLICE_OK;
+}
+
+/* The corners after "f", fan-triangulated. */
+static adaslice_result adaslice__obj_face(adaslice__build *b, adaslice__text *t, const char *keyword)
+{
+    uint32_t first = 0, prev = 0, cur = 0;
+    size_t corners = 0, n;
+    const char *w;
+    adaslice_result r;
+    while ((n = adaslice__word(t, 0, &w)) && w[0] != '#') {
+        if ((r = adaslice__obj_index(b, w, n, t->line, &cur))) return r;
+        if (corners == 0) first = cur;
+        else if (corners >= 2 && (r = adaslice__triangle(b, first, prev, cur))) return r;
+        prev = cur;
+        corners++;
+    }
+    if (corners < 3)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, keyword), t->line,
+                             "a face needs at least 3 vertices, this one has %zu", corners);
+    return ADASLICE_OK;
+}
+
+/* Only v and f matter; every other statement (vt, vn, g, usemtl, ...) is skipped. */
+static adaslice_result adaslice__obj(adaslice__build *b)
+{
+    adaslice__text t = adaslice__text_at(b);
+    const char *w;
+    size_t n;
+    float xyz[3];
+    int k;
+    adaslice_result r;
+    while (t.p < t.end) {
+        n = adaslice__word(&t, 0, &w);
+        if (adaslice__is(w, n, "v")) { /* a w or colours after x y z are ignored */
+            for (k = 0; k < 3; k++)
+                if ((r = adaslice__read_coord(b, &t, 0, &xyz[k]))) return r;
+            if ((r = adaslice__vertex(b, xyz))) return r;
+        } else if (adaslice__is(w, n, "f")) {
+            if ((r = adaslice__obj_face(b, &t, w))) return r;
+        }
+        adaslice__skip_line(&t);
+    }
+    return ADASLICE_OK;
+}
+
+/* ----------------------------------------------------------------------- PLY */
+
+enum { ADASLICE__PLY_OTHER, ADASLICE__PLY_X, ADASLICE__PLY_Y, ADASLICE__PLY_Z, ADASLICE__PLY_INDICES };
+enum { ADASLICE__PLY_VERTEX = 1, ADASLICE__PLY_FACE, ADASLICE__PLY_STRIPS };
+
+typedef struct adaslice__ply_prop {
+    unsigned char type;       /* ADASLICE__I8 ... ADASLICE__F64 */
+    unsigned char count_type; /* lists: the type of the length; 0 for scalars */
+    unsigned char role;       /* ADASLICE__PLY_X ...; only vertex indices are a list role */
+} adaslice__ply_prop;
+
+typedef struct adaslice__ply_elem {
+    char name[48];
+    size_t count;             /* records */
+    size_t at, line;          /* where the header names it */
+    unsigned first, props;    /* its properties in adaslice__ply_reader.props */
+    unsigned char kind;       /* ADASLICE__PLY_VERTEX ..., 0 for elements we skip */
+} adaslice__ply_elem;
+
+typedef struct adaslice__ply_reader {
+    adaslice__build *b;
+    adaslice__text t;         /* the header, then ASCII data */
+    size_t pos;               /* binary data: offset of the next value */
+    size_t at;                /* offset of the value read last */
+    int encoding;             /* 0 ASCII, 1 little endian, 2 big endian */
+    int has_vertex;
+    size_t vertices;          /* records of the vertex element */
+    unsigned elem_count, prop_count;
+    adaslice__ply_elem elems[32];
+    adaslice__ply_prop props[256];
+} adaslice__ply_reader;
+
+static size_t adaslice__ply_line(const adaslice__ply_reader *r) { return r->encoding ? 0 : r->t.line; }
+
+static int adaslice__ply_type(const char *w, size_t n)
+{
+    static const char *const names[16] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double",
+                                           "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32",
+                                           "float64"};
+    int i;
+    for (i = 0; i < 16; i++)
+        if (adaslice__is(w, n, names[i])) return i % 8 + 1;
+    return 0;
+}
+
+static adaslice_result adaslice__ply_element_line(adaslice__ply_reader *r)
+{
+    adaslice__build *b = r->b;
+    adaslice__ply_elem *e;
+    const char *w;
+    size_t n;
+    long long count;
+    char q[48];
+    if (r->elem_count == 32)
+        return adaslice__bad(b, ADASLICE_ERR_UNSUPPORTED, adaslice__at(b, r->t.p), r->t.line,
+                             "more than 32 elements");
+    e = &r->elems[r->elem_count++];
+    e->line = r->t.line;
+    e->first = r->prop_count;
+    e->props = 0;
+    n = adaslice__word(&r->t, 0, &w);
+    e->at = adaslice__at(b, w);
+    adaslice__quote(e->name, w, n);
+    e->kind = adaslice__is(w, n, "vertex") ? ADASLICE__PLY_VERTEX
+            : adaslice__is(w, n, "face") ? ADASLICE__PLY_FACE
+            : adaslice__is(w, n, "tristrips") ? ADASLICE__PLY_STRIPS : 0;
+    if (e->kind == ADASLICE__PLY_VERTEX && r->has_vertex)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "a second 'vertex' element");
+    n = adaslice__word(&r->t, 0, &w);
+    if (!n || adaslice__integer(w, n, &count) != n || count < 0)
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), r->t.line,
+                             "element count '%s' is not a number", adaslice__quote(q, w, n));
+    if (count > UINT32_MAX) /* indices are 32-bit, and no other element gets this big */
+        return adaslice__bad(b, ADASLICE_ERR_OVERFLOW, adaslice__at(b, w), r->t.line,
+                             "element '%s' count %s exceeds 4294967295", e->name, adaslice__quote(q, w, n));
+    e->count = (size_t)count;
+    if (e->kind == ADASLICE__PLY_VERTEX) {
+        r->has_vertex = 1;
+        r->vertices = e->count;
+    }
+    return ADASLICE_OK;
+}
+
+/* "property TYPE NAME" or "property list COUNT_TYPE ITEM_TYPE NAME" */
+static adaslice_result adaslice__ply_property_line(adaslice__ply_reader *r)
+{
+    adaslice__build *b = r->b;
+    adaslice__ply_elem *e;
+    adaslice__ply_prop *p;
+    const char *w;
+    size_t n, line = r->t.line;
+    int axis;
+    char q[48];
+    if (!r->elem_count)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, r->t.p), line, "a property before any element");
+    if (r->prop_count == 256)
+        return adaslice__bad(b, ADASLICE_ERR_UNSUPPORTED, adaslice__at(b, r->t.p), line,
+                             "more than 256 properties");
+    e = &r->elems[r->elem_count - 1];
+    p = &r->props[r->prop_count++];
+    e->props++;
+    p->count_type = 0;
+    n = adaslice__word(&r->t, 0, &w);
+    if (adaslice__is(w, n, "list")) {
+        n = adaslice__word(&r->t, 0, &w);
+        p->count_type = (unsigned char)adaslice__ply_type(w, n);
+        if (p->count_type >= ADASLICE__F32)
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), line,
+                                 "a list length cannot be of type '%s'", adaslice__quote(q, w, n));
+        if (p->count_type) n = adaslice__word(&r->t, 0, &w); /* else the type check names it */
+    }
+    p->type = (unsigned char)adaslice__ply_type(w, n);
+    if (!p->type)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), line, "unknown property type '%s'",
+                             adaslice__quote(q, w, n));
+    n = adaslice__word(&r->t, 0, &w);
+    axis = adaslice__is(w, n, "x") ? 1 : adaslice__is(w, n, "y") ? 2 : adaslice__is(w, n, "z") ? 3 : 0;
+    p->role = ADASLICE__PLY_OTHER;
+    if (axis && e->kind == ADASLICE__PLY_VERTEX) {
+        if (p->count_type)
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), line, "vertex '%s' is a list",
+                                 adaslice__quote(q, w, n));
+        p->role = (unsigned char)axis;
+    }
+    if ((e->kind == ADASLICE__PLY_FACE && adaslice__is(w, n, "vertex_index")) ||
+        ((e->kind == ADASLICE__PLY_FACE || e->kind == ADASLICE__PLY_STRIPS) && adaslice__is(w, n, "vertex_indices"))) {
+        if (!p->count_type || p->type >= ADASLICE__F32)
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), line, "'%s' is not a list of integers",
+                                 adaslice__quote(q, w, n));
+        p->role = ADASLICE__PLY_INDICES;
+    }
+    return ADASLICE_OK;
+}
+
+static adaslice_result adaslice__ply_header(adaslice__ply_reader *r)
+{
+    adaslice__build *b = r->b;
+    const char *w;
+    size_t n = adaslice__word(&r->t, 0, &w);
+    unsigned i, k, roles;
+    int has_format = 0;
+    char q[48];
+    adaslice_result res;
+    if (!adaslice__is(w, n, "ply")) return adaslice__bad(b, ADASLICE_ERR_FORMAT, 0, 1, "no 'ply' magic");
+    for (;;) {
+        adaslice__skip_line(&r->t);
+        if (r->t.p == r->t.end)
+            return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, b->size, r->t.line, "the header has no 'end_header'");
+        n = adaslice__word(&r->t, 0, &w);
+        res = ADASLICE_OK;
+        if (adaslice__is(w, n, "format")) {
+            n = adaslice__word(&r->t, 0, &w);
+            r->encoding = adaslice__is(w, n, "ascii") ? 0 : adaslice__is(w, n, "binary_little_endian") ? 1
+                        : adaslice__is(w, n, "binary_big_endian") ? 2 : -1;
+            if (r->encoding < 0)
+                return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "unknown format '%s'",
+                                     adaslice__quote(q, w, n));
+            n = adaslice__word(&r->t, 0, &w);
+            if (!adaslice__is(w, n, "1.0"))
+                return adaslice__bad(b, ADASLICE_ERR_UNSUPPORTED, adaslice__at(b, w), r->t.line,
+                                     "version '%s' (only 1.0 is read)", adaslice__quote(q, w, n));
+            has_format = 1;
+        } else if (adaslice__is(w, n, "element")) {
+            res = adaslice__ply_element_line(r);
+        } else if (adaslice__is(w, n, "property")) {
+            res = adaslice__ply_property_line(r);
+        } else if (adaslice__is(w, n, "end_header")) {
+            break;
+        } else if (n && !adaslice__is(w, n, "comment") && !adaslice__is(w, n, "obj_info")) {
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line,
+                                 "unknown header keyword '%s'", adaslice__quote(q, w, n));
+        }
+        if (res) return res;
+    }
+    if (!has_format)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "the header has no 'format' line");
+    if (!r->has_vertex)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "the header has no 'vertex' element");
+    for (i = 0; i < r->elem_count; i++) {
+        const adaslice__ply_elem *e = &r->elems[i];
+        for (roles = 0, k = 0; k < e->props; k++) roles |= 1u << r->props[e->first + k].role;
+        if (e->kind == ADASLICE__PLY_VERTEX && (roles & 14u) != 14u)
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, e->at, e->line, "element 'vertex' lacks x, y or z");
+        if (e->kind > ADASLICE__PLY_VERTEX && !(roles & 16u))
+            return adaslice__bad(b, ADASLICE_ERR_FORMAT, e->at, e->line, "element '%s' has no vertex_indices list",
+                                 e->name);
+    }
+    adaslice__skip_line(&r->t);
+    return ADASLICE_OK;
+}
+
+/* Reads the next value of `type`. ASCII words are parsed only when `out` is wanted, so
+   skipped properties cost no strtod. r->at is where the value began. */
+static adaslice_result adaslice__ply_value(adaslice__ply_reader *r, const adaslice__ply_elem *e, size_t record,
+                                           int type, double *out)
+{
+    adaslice__build *b = r->b;
+    if (!r->encoding) {
+        const char *w;
+        size_t n = adaslice__word(&r->t, 1, &w);
+        long long i;
+        char q[48];
+        r->at = adaslice__at(b, w);
+        if (!n) goto truncated;
+        if (!out) return ADASLICE_OK;
+        if (type >= ADASLICE__F32) return adaslice__number(b, w, n, r->t.line, out);
+        if (adaslice__integer(w, n, &i) != n)
+            return adaslice__bad(b, ADASLICE_ERR_NUMBER, r->at, r->t.line, "'%s' is not an integer",
+                                 adaslice__quote(q, w, n));
+        *out = (double)i;
+        return ADASLICE_OK;
+    }
+    r->at = r->pos;
+    if (b->size - r->pos < adaslice__type_size[type]) goto truncated;
+    if (out) *out = adaslice__scalar(b->bytes + r->pos, type, r->encoding == 2);
+    r->pos += adaslice__type_size[type];
+    return ADASLICE_OK;
+truncated:
+    return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, r->at, adaslice__ply_line(r),
+                         "the data ends inside element '%s' (record %zu of %zu)", e->name, record + 1, e->count);
+}
+
+/* A list property: vertex indices become triangles (faces as fans, triangle strips
+   with -1 restarts and alternating winding); any other list is walked past. */
+static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslice__ply_elem *e, size_t record,
+                                          const adaslice__ply_prop *p)
+{
+    adaslice__build *b = r->b;
+    size_t n, j, at, line, left, run = 0, item = r->encoding ? adaslice__type_size[p->type] : 1;
+    uint32_t first = 0, prev = 0, prev2 = 0, cur = 0;
+    double v;
+    char num[24];
+    adaslice_result res;
+    if ((res = adaslice__ply_value(r, e, record, p->count_type, &v))) return res;
+    at = r->at;
+    line = adaslice__ply_line(r);
+    if (v < 0) return adaslice__bad(b, ADASLICE_ERR_FORMAT, at, line, "list length %g is negative", v);
+    left = r->encoding ? b->size - r->pos : (size_t)(r->t.end - r->t.p);
+    if (v > (double)(left / item))
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, at, line,
+                             "a list of %s entries cannot fit in the %zu bytes left",
+                             adaslice__int_text(num, v), left);
+    n = (size_t)v;
+    for (j = 0; j < n; j++) {
+        if ((res = adaslice__ply_value(r, e, record, p->type, p->role ? &v : NULL))) return res;
+        if (!p->role) continue;
+        if (e->kind == ADASLICE__PLY_STRIPS && v == -1) { run = 0; continue; }
+        if (!(v >= 0 && v < (double)r->vertices))
+            return adaslice__bad(b, ADASLICE_ERR_INDEX, r->at, adaslice__ply_line(r),
+                                 "vertex index %s is out of range (%zu vertices)", adaslice__int_text(num, v),
+                                 r->vertices);
+        cur = (uint32_t)v;
+        if (e->kind == ADASLICE__PLY_FACE) {
+            if (j == 0) first = cur;
+            else if (j >= 2) res = adaslice__triangle(b, first, prev, cur);
+        } else if (run >= 2) { /* odd triangles of a strip run backwards */
+            res = run % 2 ? adaslice__triangle(b, prev, prev2, cur) : adaslice__triangle(b, prev2, prev, cur);
+        }
+        if (res) return res;
+        prev2 = prev;
+        prev = cur;
+        run++;
+    }
+    if (p->role && e->kind == ADASLICE__PLY_FACE && n < 3)
+        return adaslice__bad(b, ADASLICE_ERR_FORMAT, at, line, "a face needs at least 3 vertices, this one has %zu", n);
+    return ADASLICE_OK;
+}
+
+static adaslice_result adaslice__ply_element(adaslice__ply_reader *r, const adaslice__ply_elem *e)
+{
+    adaslice__build *b = r->b;
+    size_t i, least = 0, left;
+    unsigned k;
+    adaslice_result res = ADASLICE_OK;
+    if (!e->props) return ADASLICE_OK; /* no data, however many records it claims */
+    /* Every record takes some bytes (in ASCII a character and a separator per value),
+       so a count the data cannot hold is refused before anything is allocated. */
+    for (k = 0; k < e->props; k++) {
+        const adaslice__ply_prop *p = &r->props[e->first + k];
+        least += r->encoding ? adaslice__type_size[p->count_type ? p->count_type : p->type] : 2;
+    }
+    left = r->encoding ? b->size - r->pos : (size_t)(r->t.end - r->t.p);
+    if (e->count > (left + !r->encoding) / least)
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, r->encoding ? r->pos : adaslice__at(b, r->t.p),
+                             adaslice__ply_line(r),
+                             "element '%s' has %zu records of at least %zu bytes, but only %zu bytes remain",
+                             e->name, e->count, least, left);
+    if (e->kind == ADASLICE__PLY_VERTEX) res = adaslice__reserve(b, e->count, 0);
+    else if (e->kind) res = adaslice__reserve(b, 0, b->nt + e->count);
+    if (res) return res;
+    for (i = 0; i < e->count; i++) {
+        float xyz[3] = {0, 0, 0};
+        for (k = 0; k < e->props; k++) {
+            const adaslice__ply_prop *p = &r->props[e->first + k];
+            double v;
+            if (p->count_type) {
+                res = adaslice__ply_list(r, e, i, p);
+            } else if (p->role) {
+                res = adaslice__ply_value(r, e, i, p->type, &v);
+                if (!res) res = adaslice__coord(b, v, r->at, adaslice__ply_line(r), &xyz[p->role - 1]);
+            } else {
+                res = adaslice__ply_value(r, e, i, p->type, NULL);
+            }
+            if (res) return res;
+        }
+        if (e->kind == ADASLICE__PLY_VERTEX && (res = adaslice__vertex(b, xyz))) return res;
+    }
+    return ADASLICE_OK;
+}
+
+static adaslice_result adaslice__ply(adaslice__build *b)
+{
+    adaslice__ply_reader r;
+    unsigned i;
+    adaslice_result res;
+    memset(&r, 0, sizeof r);
+    r.b = b;
+    r.t = adaslice__text_at(b);
+    if ((res = adaslice__ply_header(&r))) return res;
+    r.pos = adaslice__at(b, r.t.p);
+    for (i = 0; i < r.elem_count; i++)
+        if ((res = adaslice__ply_element(&r, &r.elems[i]))) return res;
+    return ADASLICE_OK;
+}
+
+/* ------------------------------------------------------------- the loaders */
+
+static int adaslice__obj_keyword(const char *w, size_t n)
+{
+    static const char *const keywords[] = {"v", "vt", "vn", "vp", "f", "l", "p", "g", "o", "s", "usemtl", "mtllib"};
+    size_t i;
+    for (i = 0; i < sizeof keywords / sizeof *keywords; i++)
+        if (adaslice__is(w, n, keywords[i])) return 1;
+    return 0;
+}
+
+/* AUTO: the first rule that matches wins; ADASLICE_FORMAT_AUTO when none does. A
+   binary STL header may start with "solid", so the exact size is tested first. */
+static adaslice_format adaslice__detect(const adaslice__build *b)
+{
+    adaslice__text t = adaslice__text_at(b);
+    const char *w;
+    size_t n;
+    if (b->size >= 4 && memcmp(b->text, "ply", 3) == 0 && (b->text[3] == '\n' || adaslice__blank(b->text[3])))
+        return ADASLICE_FORMAT_PLY;
+    if (b->size >= 84 && (b->size - 84) % 50 == 0 &&
+        (double)((b->size - 84) / 50) == adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0))
+        return ADASLICE_FORMAT_STL_BINARY;
+    n = adaslice__word(&t, 1, &w);
+    if (adaslice__is(w, n, "solid")) {
+        adaslice__skip_line(&t);
+        n = adaslice__word(&t, 1, &w);
+        if (adaslice__is(w, n, "facet") || adaslice__is(w, n, "endsolid")) return ADASLICE_FORMAT_STL_ASCII;
+    }
+    t = adaslice__text_at(b);
+    while ((n = adaslice__word(&t, 1, &w)) && w[0] == '#') adaslice__skip_line(&t);
+    if (adaslice__obj_keyword(w, n)) return ADASLICE_FORMAT_OBJ;
+    return b->size >= 84 ? ADASLICE_FORMAT_STL_BINARY : ADASLICE_FORMAT_AUTO;
+}
+
+ADASLICE_DEF adaslice_result adaslice_mesh_load(const void *data, size_t size, const adaslice_load_options *options,
+                                                adaslice_mesh *mesh, adaslice_error *error)
+{
+    adaslice__build b;
+    adaslice__text t;
+    const char *w;
+    adaslice_format format = options ? options->format : ADASLICE_FORMAT_AUTO;
+    adaslice_result r;
+    adaslice__ok(error);
+    if (!mesh) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "mesh is NULL");
+    memset(mesh, 0, sizeof *mesh);
+    if (!data && size) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "data is NULL, size %zu", size);
+    memset(&b, 0, sizeof b);
+    if (!data) data = ""; /* so that no pointer arithmetic touches NULL */
+    b.text = ADASLICE__CAST(const char *, data);
+    b.bytes = ADASLICE__CAST(const unsigned char *, data);
+    b.size = size;
+    b.err = error;
+    b.scale = options && options->scale != 0 ? options->scale : 1;
+    b.a = adaslice__allocator(options ? options->allocator : NULL);
+    if (!(b.scale > 0 && b.scale <= DBL_MAX))
+        return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "scale %g is not positive and finite", b.scale);
+    if (format == ADASLICE_FORMAT_AUTO) {
+        t = adaslice__text_at(&b);
+        if (!adaslice__word(&t, 1, &w)) return adaslice__fail(error, ADASLICE_ERR_EMPTY, 0, 0, "the data is empty");
+        format = adaslice__detect(&b);
+        if (format == ADASLICE_FORMAT_AUTO)
+            return adaslice__fail(error, ADASLICE_ERR_FORMAT, 0, 0,
+                                  "not a mesh: no 'ply' magic, STL 'solid ... facet' or OBJ statement, "
+                                  "and %zu bytes is too short for binary STL", size);
+    }
+    switch (format) {
+    case ADASLICE_FORMAT_STL_BINARY: b.name = "binary STL"; r = adaslice__stl_binary(&b); break;
+    case ADASLICE_FORMAT_STL_ASCII: b.name = "ASCII STL"; r = adaslice__stl_ascii(&b); break;
+    case ADASLICE_FORMAT_OBJ: b.name = "OBJ"; r = adaslice__obj(&b); break;
+    case ADASLICE_FORMAT_PLY: b.name = "PLY"; r = adaslice__ply(&b); break;
+    default: return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "unknown format %d", (int)format);
+    }
+    if (!r) r = adaslice__finish(&b, mesh);
+    if (r) {
+        adaslice__free(&b.a, b.v);
+        adaslice__free(&b.a, b.t);
+        return r;
+    }
+    mesh->format = format;
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh)
+{
+    if (!mesh) return;
+    adaslice__free(&mesh->allocator, mesh->vertices);
+    adaslice__free(&mesh->allocator, mesh->triangles);
+    memset(mesh, 0, sizeof *mesh);
+}
+
+ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
+{
+    size_t i;
+    int k;
+    for (k = 0; k < 3; k++) lo[k] = hi[k] = 0;
+    for (i = 0; i < 3 * mesh->triangle_count; i++) {
+        const float *v = mesh->vertices + 3 * (size_t)mesh->triangles[i];
+        for (k = 0; k < 3; k++) {
+            if (i == 0 || v[k] < lo[k]) lo[k] = v[k];
+            if (i == 0 || v[k] > hi[k]) hi[k] = v[k];
+        }
+    }
+}
+
+#ifndef ADASLICE_NO_STDIO
+#include <errno.h>
+
+ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path, const adaslice_load_options *options,
+                                                     adaslice_mesh *mesh, adaslice_error *error)
+{
+    adaslice_allocator a = adaslice__allocator(options ? options->allocator : NULL);
+    adaslice_result r;
+    void *data = NULL;
+    long size = -1;
+    FILE *f;
+    char why[320];
+    if (mesh) memset(mesh, 0, sizeof *mesh);
+    if (!path) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "path is NULL");
+    if (!(f = fopen(path, "rb")))
+        return adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot open: %s", path, strerror(errno));
+    if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
+    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot find the size: %s", path, strerror(errno));
+    } else if (!(data = adaslice__alloc(&a, (size_t)size, 1))) {
+        r = adaslice__fail(error, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory for %zu bytes", path, (size_t)size);
+    } else if (fread(data, 1, (size_t)size, f) != (size_t)size) {
+        r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot read", path);
+    } else if ((r = adaslice_mesh_load(data, (size_t)size, options, mesh, error)) && error) {
+        memcpy(why, error->message, sizeof why);
+        adaslice__fail(error, r, error->offset, error->line, "%s: %s", path, why);
+    }
+    fclose(f);
+    adaslice__free(&a, data);
+    return r;
+}
+#endif
+
+
+/* ================================================================ profiles */
+/* Bins: N = ceil(H / b); bin i covers [z0 + i*b, z0 + (i+1)*b). */
+
+static size_t adaslice__bin_of(double z, double z0, double bin, size_t n)
+{
+    double f = (z - z0) / bin;
+    size_t i;
+    if (!(f > 0)) return 0;
+    i = f >= (double)n ? n - 1 : (size_t)f;
+    return i < n ? i : n - 1;
+}
+
+/* Range-maximum updates in O(log N) each on an implicit segment tree of 2N
+   nodes, pushed down to the leaves once at the end: a triangle spanning
+   thousands of bins costs the same as one spanning two. */
+static void adaslice__rmax_update(double *tree, size_t n, size_t first, size_t last, double v)
+{
+    size_t l = first + n, r = last + n + 1;
+    for (; l < r; l >>= 1, r >>= 1) {
+        if (l & 1) { if (tree[l] < v) tree[l] = v; l++; }
+        if (r & 1) { --r; if (tree[r] < v) tree[r] = v; }
+    }
+}
+
+static void adaslice__rmax_push(double *tree, size_t n)
+{
+    size_t i;
+    for (i = 1; i < n; i++) {
+        if (tree[2 * i] < tree[i]) tree[2 * i] = tree[i];
+        if (tree[2 * i + 1] < tree[i]) tree[2 * i + 1] = tree[i];
+    }
+}
+
+static void adaslice__corner(const adaslice_mesh *m, size_t t, int k, double p[3])
+{
+    const float *v = m->vertices + 3 * (size_t)m->triangles[3 * t + k];
+    p[0] = v[0]; p[1] = v[1]; p[2] = v[2];
+}
+
+static void adaslice__normal(const double a[3], const double b[3], const double c[3], double n[3])
+{
+    double u[3], w[3];
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = b[k] - a[k]; w[k] = c[k] - a[k]; }
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* Per-triangle value that the max-type profiles take: |n_z| (eq. 4) or
+   1/sin(theta) = |n| / |n_xy| clamped at roughness_max (eq. 8), times the weight. */
+static double adaslice__facet_value(adaslice_metric metric, const double n[3], double roughness_max)
+{
+    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    double xy = sqrt(n[0] * n[0] + n[1] * n[1]);
+    if (metric == ADASLICE_METRIC_CUSP) return fabs(n[2]) / len;
+    if (xy * roughness_max <= len) return roughness_max;
+    return len / xy;
+}
+
+/* Piece of a triangle's cut between heights za and zb: the directed segment
+   from P(z) to Q(z), both linear in z, contributes sign * cross(P, Q) / 2 to
+   the signed area A(z) (Green's theorem over the cross-section's contour). */
+typedef struct adaslice__piece {
+    double za, zb;       /* the piece is valid for za <= z < zb */
+    double p[2], pd[2];  /* P(z) = p + pd * (z - za) */
+    double q[2], qd[2];
+    double sign;
+} adaslice__piece;
+
+#define ADASLICE__BLOCK 256  /* bins per block of the area accumulator */
+#define ADASLICE__DIRECT 8   /* pieces spanning at most this many centres are evaluated directly */
+
+static double adaslice__piece_at(const adaslice__piece *pc, double z, double out_p[2], double out_q[2])
+{
+    double t = z - pc->za;
+    out_p[0] = pc->p[0] + pc->pd[0] * t; out_p[1] = pc->p[1] + pc->pd[1] * t;
+    out_q[0] = pc->q[0] + pc->qd[0] * t; out_q[1] = pc->q[1] + pc->qd[1] * t;
+    return 0.5 * pc->sign * (out_p[0] * out_q[1] - out_p[1] * out_q[0]);
+}
+
+typedef struct adaslice__area_acc {
+    size_t n;
+    double z0, bin;
+    double *direct;      /* n: values added at single centres */
+    double *coef;        /* 3 * (n + 1): per-bin differences of the block-local quadratic */
+} adaslice__area_acc;
+
+static double adaslice__centre(const adaslice__area_acc *acc, size_t i)
+{
+    return acc->z0 + ((double)i + 0.5) * acc->bin;
+}
+
+/* Adds a piece to every bin whose centre lies in [za, zb). Short pieces are
+   evaluated at their few centres; long ones become a quadratic per block,
+   expanded about the block's first centre so no term is far from its origin. */
+static void adaslice__area_add(adaslice__area_acc *acc, const adaslice__piece *pc)
+{
+    double f = (pc->za - acc->z0) / acc->bin - 0.5, g = (pc->zb - acc->z0) / acc->bin - 0.5;
+    size_t first, end, i, k;
+    double P[2], Q[2];
+    if (g <= 0 || f >= (double)acc->n) return;
+    first = f <= 0 ? 0 : (size_t)ceil(f);
+    end = g >= (double)acc->n ? acc->n : (size_t)ceil(g);
+    while (first > 0 && adaslice__centre(acc, first - 1) >= pc->za) first--;
+    while (first < acc->n && adaslice__centre(acc, first) < pc->za) first++;
+    while (end < acc->n && adaslice__centre(acc, end) < pc->zb) end++;
+    while (end > first && adaslice__centre(acc, end - 1) >= pc->zb) end--;
+    if (end <= first) return;
+    if (end - first <= ADASLICE__DIRECT) {
+        for (i = first; i < end; i++) acc->direct[i] += adaslice__piece_at(pc, adaslice__centre(acc, i), P, Q);
+        return;
+    }
+    for (i = first; i < end; i = k) {
+        size_t block_end = (i / ADASLICE__BLOCK + 1) * ADASLICE__BLOCK;
+        double origin = adaslice__centre(acc, (i / ADASLICE__BLOCK) * ADASLICE__BLOCK), c[3];
+        double *d = acc->coef + 3 * i;
+        k = end < block_end ? end : block_end;
+        c[0] = adaslice__piece_at(pc, origin, P, Q);
+        c[1] = 0.5 * pc->sign * (P[0] * pc->qd[1] - P[1] * pc->qd[0] + pc->pd[0] * Q[1] - pc->pd[1] * Q[0]);
+        c[2] = 0.5 * pc->sign * (pc->pd[0] * pc->qd[1] - pc->pd[1] * pc->qd[0]);
+        d[0] += c[0]; d[1] += c[1]; d[2] += c[2];
+        if (k < block_end) { /* a block's sums restart at its first bin anyway */
+            d = acc->coef + 3 * k;
+            d[0] -= c[0]; d[1] -= c[1]; d[2] -= c[2];
+        }
+    }
+}
+
+static void adaslice__area_finish(const adaslice__area_acc *acc, double *area)
+{
+    size_t i;
+    double s0 = 0, s1 = 0, s2 = 0, origin = 0;
+    for (i = 0; i < acc->n; i++) {
+        double t;
+        if (i % ADASLICE__BLOCK == 0) { s0 = s1 = s2 = 0; origin = adaslice__centre(acc, i); }
+        s0 += acc->coef[3 * i]; s1 += acc->coef[3 * i + 1]; s2 += acc->coef[3 * i + 2];
+        t = adaslice__centre(acc, i) - origin;
+        area[i] = acc->direct[i] + s0 + (s1 + s2 * t) * t;
+    }
+}
+
+/* Cross-section area at every bin centre. x and y are taken about the box
+   centre, so terms stay small; the sign is fixed by the mesh's signed volume,
+   so an inside-out mesh still gives positive areas. */
+static void adaslice__areas(const adaslice_mesh *m, const double lo[3], const double hi[3],
+                            adaslice__area_acc *acc, double *area)
+{
+    double cx = 0.5 * (lo[0] + hi[0]), cy = 0.5 * (lo[1] + hi[1]), cz = 0.5 * (lo[2] + hi[2]);
+    double volume = 0;
+    size_t t, i;
+    for (t = 0; t < m->triangle_count; t++) {
+        double v[3][3], n[3], d[2], s, *p0, *p1, *p2, *tmp;
+        adaslice__piece pc;
+        int k;
+        for (k = 0; k < 3; k++) {
+            adaslice__corner(m, t, k, v[k]);
+            v[k][0] -= cx; v[k][1] -= cy;
+        }
+        adaslice__normal(v[0], v[1], v[2], n);
+        volume += ((v[0][2] - cz) * (v[1][0] * v[2][1] - v[1][1] * v[2][0]) +
+                   (v[1][2] - cz) * (v[2][0] * v[0][1] - v[2][1] * v[0][0]) +
+                   (v[2][2] - cz) * (v[0][0] * v[1][1] - v[0][1] * v[1][0])) / 6.0;
+        p0 = v[0]; p1 = v[1]; p2 = v[2];
+        if (p0[2] > p1[2]) { tmp = p0; p0 = p1; p1 = tmp; }
+        if (p1[2] > p2[2]) { tmp = p1; p1 = p2; p2 = tmp; }
+        if (p0[2] > p1[2]) { tmp = p0; p0 = p1; p1 = tmp; }
+        if (!(p2[2] > p0[2])) continue; /* horizontal: no cut */
+        /* The contour runs along z x n; the segment from the long edge
+           (p0-p2) towards p1 either does or runs against it. */
+        d[0] = -n[1]; d[1] = n[0];
+        s = (p1[2] - p0[2]) / (p2[2] - p0[2]);
+        s = (p1[0] - (p0[0] + s * (p2[0] - p0[0]))) * d[0] + (p1[1] - (p0[1] + s * (p2[1] - p0[1]))) * d[1];
+        if (s == 0) continue; /* the triangle is vertical along its cut: zero-width */
+        pc.sign = s > 0 ? 1.0 : -1.0;
+        pc.pd[0] = (p2[0] - p0[0]) / (p2[2] - p0[2]);
+        pc.pd[1] = (p2[1] - p0[1]) / (p2[2] - p0[2]);
+        if (p1[2] > p0[2]) {
+            pc.za = p0[2]; pc.zb = p1[2];
+            pc.p[0] = p0[0]; pc.p[1] = p0[1];
+            pc.q[0] = p0[0]; pc.q[1] = p0[1];
+            pc.qd[0] = (p1[0] - p0[0]) / (p1[2] - p0[2]);
+            pc.qd[1] = (p1[1] - p0[1]) / (p1[2] - p0[2]);
+            adaslice__area_add(acc, &pc);
+        }
+        if (p2[2] > p1[2]) {
+            double u = (p1[2] - p0[2]) / (p2[2] - p0[2]);
+            pc.za = p1[2]; pc.zb = p2[2];
+            pc.p[0] = p0[0] + u * (p2[0] - p0[0]); pc.p[1] = p0[1] + u * (p2[1] - p0[1]);
+            pc.q[0] = p1[0]; pc.q[1] = p1[1];
+            pc.qd[0] = (p2[0] - p1[0]) / (p2[2] - p1[2]);
+            pc.qd[1] = (p2[1] - p1[1]) / (p2[2] - p1[2]);
+            adaslice__area_add(acc, &pc);
+        }
+    }
+    adaslice__area_finish(acc, area);
+    for (i = 0; i < acc->n; i++) {
+        if (volume < 0) area[i] = -area[i];
+        if (area[i] < 0) area[i] = 0; /* open or badly wound meshes: see the manual */
+    }
+}
+
+/* eq. 14 with one-sided differences at the top bin; where A(i) is zero the
+   neighbour's area is the reference, and where both are zero phi is zero. */
+static double adaslice__area_deviation(const double *area, size_t n, size_t i, double bin)
+{
+    size_t j = i + 1 < n ? i + 1 : (i > 0 ? i - 1 : i);
+    double ref = area[i] > 0 ? area[i] : area[j];
+    if (!(ref > 0)) return 0;
+    return fabs(area[j] - area[i]) / (bin * ref);
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
+                                                    const adaslice_profile_options *options,
+                                                    adaslice_profile *profile, adaslice_error *err)
+{
+    adaslice_profile_options opt;
+    adaslice_allocator al;
+    adaslice__area_acc acc;
+    double lo[3], hi[3], bins, *tree = NULL;
+    size_t n, t, i;
+    int max_type, weighted;
+
+    if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
+    memset(profile, 0, sizeof *profile);
+    if (!mesh || !mesh->triangle_count || !mesh->vertices || !mesh->triangles)
+        return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh has no triangles");
+    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if (opt.bin == 0) opt.bin = ADASLICE_DEFAULT_BIN;
+    if (opt.roughness_max == 0) opt.roughness_max = ADASLICE_DEFAULT_ROUGHNESS_MAX;
+    if (!(opt.bin > 0) || opt.bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: bin size %g is not a positive number", opt.bin);
+    if (!(opt.roughness_max >= 1) || opt.roughness_max > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: roughness clamp %g must be at least 1", opt.roughness_max);
+    if ((unsigned)opt.metric > ADASLICE_METRIC_VOLUME)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: unknown metric %d", (int)opt.metric);
+    if (opt.weights)
+        for (t = 0; t < mesh->triangle_count; t++)
+            if (!(opt.weights[t] >= 0 && opt.weights[t] <= 1))
+                return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                                      "profile: weight of triangle %zu is %g, outside [0, 1]", t, (double)opt.weights[t]);
+    for (t = 0; t < 3 * mesh->triangle_count; t++)
+        if (mesh->triangles[t] >= mesh->vertex_count)
+            return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "profile: triangle %zu uses vertex %u of %zu",
+                                  t / 3, (unsigned)mesh->triangles[t], mesh->vertex_count);
+    adaslice_mesh_bounds(mesh, lo, hi);
+    bins = ceil((hi[2] - lo[2]) / opt.bin - 1e-9);
+    if (!(hi[2] > lo[2]))
+        return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh is flat (height 0 along z)");
+    if (bins < 1) bins = 1;
+    if (bins > 2147483646.0)
+        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "profile: %g bins of %g mm over %g mm is too many",
+                              bins, opt.bin, hi[2] - lo[2]);
+    n = (size_t)bins;
+    al = adaslice__allocator(opt.allocator);
+    max_type = opt.metric == ADASLICE_METRIC_CUSP || opt.metric == ADASLICE_METRIC_ROUGHNESS;
+    weighted = opt.weights != NULL;
+    profile->phi = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
+    if (!max_type) profile->area = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
+    if (max_type || weighted) tree = ADASLICE__CAST(double *, adaslice__alloc(&al, 2 * n, sizeof(double)));
+    memset(&acc, 0, sizeof acc);
+    if (!max_type) {
+        acc.n = n; acc.z0 = lo[2]; acc.bin = opt.bin;
+        acc.direct = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
+        acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&al, 3 * (n + 1), sizeof(double)));
+    }
+    if (!profile->phi || (!max_type && (!profile->area || !acc.direct || !acc.coef)) ||
+        ((max_type || weighted) && !tree)) {
+        adaslice__free(&al, profile->phi); adaslice__free(&al, profile->area);
+        adaslice__free(&al, tree); adaslice__free(&al, acc.direct); adaslice__free(&al, acc.coef);
+        memset(profile, 0, sizeof *profile);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+    }
+    profile->metric = opt.metric;
+    profile->bin_count = n;
+    profile->bin = opt.bin;
+    profile->z0 = lo[2];
+    profile->height = hi[2] - lo[2];
+    profile->allocator = al;
+
+    if (tree) {
+        /* max-type profiles (eq. 5, 9, 21, 22), or the max weight per bin (eq. 23, 24) */
+        memset(tree, 0, 2 * n * sizeof(double));
+        for (t = 0; t < mesh->triangle_count; t++) {
+            double v[3][3], nrm[3], zmin, zmax, value;
+            int k;
+            for (k = 0; k < 3; k++) adaslice__corner(mesh, t, k, v[k]);
+            adaslice__normal(v[0], v[1], v[2], nrm);
+            if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) continue; /* degenerate: no normal */
+            value = max_type ? adaslice__facet_value(opt.metric, nrm, opt.roughness_max) : 1.0;
+            if (weighted) value *= opt.weights[t];
+            zmin = v[0][2] < v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] < zmin) zmin = v[2][2];
+            zmax = v[0][2] > v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] > zmax) zmax = v[2][2];
+            adaslice__rmax_update(tree, n, adaslice__bin_of(zmin, lo[2], opt.bin, n),
+                                  adaslice__bin_of(zmax, lo[2], opt.bin, n), value);
+        }
+        adaslice__rmax_push(tree, n);
+    }
+    if (max_type) {
+        memcpy(profile->phi, tree + n, n * sizeof(double));
+    } else {
+        memset(acc.direct, 0, n * sizeof(double));
+        memset(acc.coef, 0, 3 * (n + 1) * sizeof(double));
+        adaslice__areas(mesh, lo, hi, &acc, profile->area);
+        for (i = 0; i < n; i++) {
+            double phi = opt.metric == ADASLICE_METRIC_AREA
+                             ? adaslice__area_deviation(profile->area, n, i, opt.bin)
+                             : profile->area[i];
+            profile->phi[i] = weighted ? phi * tree[n + i] : phi;
+        }
+    }
+    adaslice__free(&al, tree);
+    adaslice__free(&al, acc.direct);
+    adaslice__free(&al, acc.coef);
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)
+{
+    if (!profile) return;
+    adaslice__free(&profile->allocator, profile->phi);
+    adaslice__free(&profile->allocator, profile->area);
+    memset(profile, 0, sizeof *profile);
+}
+
+
+/* ================================================================= planner */
+/* The optimal plan (§3.3, Procedure 1) runs on integers: each bin's error
+   b*phi[i] is quantised to a count of units q, so prefix sums are exact, plans
+   do not depend on summation order, and a microcontroller fed the same
+   integers makes the same plan. The core is streaming: bins arrive one at a
+   time and only the last tmax/b planes are kept, plus one back-pointer per
+   plane (the bottom layer's length in bins). */
+
+#define ADASLICE__UNREACHED 0xffffffffu
+
+typedef struct adaslice__dp {
+    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
+    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
+    uint64_t eps;             /* allowed error per layer, in units */
+    int volume;               /* eq. 20 instead of an additive sum */
+    uint64_t slack;           /* volume: units added per bin for rounding */
+    uint32_t plane;           /* the last plane decided */
+    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
+    uint32_t reach;           /* highest plane any plan reaches */
+    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
+    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
+    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
+    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
+    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
+    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
+    uint32_t head, count;     /* the queue's first slot and length */
+    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
+    unsigned char *back;      /* (planes + 1) * width bytes */
+    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
+} adaslice__dp;
+
+static uint32_t adaslice__dp_queue_at(const adaslice__dp *dp, uint32_t k)
+{
+    return dp->queue[(dp->head + k) & (dp->cap - 1)];
+}
+
+static void adaslice__dp_set_back(adaslice__dp *dp, uint32_t plane, uint32_t len)
+{
+    if (dp->width == 1) dp->back[plane] = (unsigned char)len;
+    else { dp->back[2 * (size_t)plane] = (unsigned char)(len & 255u); dp->back[2 * (size_t)plane + 1] = (unsigned char)(len >> 8); }
+}
+
+static uint32_t adaslice__dp_back(const adaslice__dp *dp, uint32_t plane)
+{
+    if (dp->width == 1) return dp->back[plane];
+    return (uint32_t)dp->back[2 * (size_t)plane] | ((uint32_t)dp->back[2 * (size_t)plane + 1] << 8);
+}
+
+/* Layer from plane l to the current plane: its error in units. */
+static uint64_t adaslice__dp_sum(const adaslice__dp *dp, uint32_t l)
+{
+    return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
+}
+
+static uint64_t adaslice__dp_error(const adaslice__dp *dp, uint32_t l)
+{
+    return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
+}
+
+/* (layers, worst) of plane a is at least that of plane b, lexicographically */
+static int adaslice__dp_no_better(const adaslice__dp *dp, uint32_t a, uint32_t b)
+{
+    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
+    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
+}
+
+static void adaslice__dp_start(adaslice__dp *dp)
+{
+    dp->plane = 0;
+    dp->floor = 0;
+    dp->reach = 0;
+    dp->head = dp->count = dp->scan = 0;
+    dp->prefix[0] = 0;
+    dp->layers[0] = 0;
+    dp->worst[0] = 0;
+    adaslice__dp_set_back(dp, 0, 0);
+}
+
+/* Additive metrics: the feasible predecessors of plane i are a window of
+   planes whose both ends only move up (prefix sums never decrease), so a
+   queue ordered by plane with strictly increasing (layers, worst) holds every
+   candidate that can still win: a newer plane with no more layers and no
+   larger worst error beats an older one for good, its layer being shorter.
+   The front block (fewest layers) has worst[] increasing and layer error
+   decreasing along the queue, so the best max(worst, error) sits where the two
+   cross; `scan` finds that point and only moves forward: O(1) amortised. */
+static void adaslice__dp_choose_additive(adaslice__dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, kf, a, b, pos;
+    uint64_t va, vb;
+    if (i >= dp->lo) {
+        uint32_t l = i - dp->lo;
+        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
+            while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
+            if (dp->scan > dp->count) dp->scan = dp->count;
+            ADASLICE_ASSERT(dp->count < dp->cap);
+            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
+        }
+    }
+    while (dp->count) {
+        uint32_t f = adaslice__dp_queue_at(dp, 0);
+        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
+        dp->head = (dp->head + 1) & (dp->cap - 1);
+        dp->count--;
+        if (dp->scan) dp->scan--;
+    }
+    *best = ADASLICE__UNREACHED;
+    if (!dp->count) return;
+    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
+    while (dp->scan < dp->count) {
+        uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
+        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
+        dp->scan++;
+    }
+    pos = dp->scan;
+    /* candidate before the crossing: its layer error dominates */
+    a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
+    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
+    /* candidate at the crossing: its worst so far dominates */
+    b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
+    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
+    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
+    *best = va <= vb ? a : b;
+}
+
+/* Volume deviation (eq. 20) is not additive: every plane in the window is
+   tried, O(w) per plane. */
+static void adaslice__dp_choose_volume(adaslice__dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, l, start;
+    uint32_t best_k = ADASLICE__UNREACHED;
+    uint64_t best_w = 0;
+    *best = ADASLICE__UNREACHED;
+    if (i < dp->lo) return;
+    start = i > dp->hi ? i - dp->hi : 0;
+    if (start < dp->floor) start = dp->floor;
+    for (l = start; l + dp->lo <= i; l++) {
+        uint32_t k = dp->layers[l & (dp->cap - 1)];
+        uint64_t e = dp->run[l & (dp->cap - 1)], w;
+        if (k == ADASLICE__UNREACHED || e > dp->eps) continue;
+        w = dp->worst[l & (dp->cap - 1)] > e ? dp->worst[l & (dp->cap - 1)] : e;
+        if (k < best_k || (k == best_k && w < best_w)) { best_k = k; best_w = w; *best = l; }
+    }
+}
+
+/* Feeds the next bin's units; decides the plane on top of it. `forced` makes
+   that plane part of every plan (§3.3 sharp changes). */
+static void adaslice__dp_push(adaslice__dp *dp, uint64_t units, int forced)
+{
+    uint32_t i = dp->plane + 1, best;
+    uint32_t c = dp->cap;
+    dp->plane = i;
+    if (dp->volume) {
+        uint32_t l = i > dp->hi ? i - dp->hi : 0;
+        dp->first[(i - 1) & (c - 1)] = units;
+        dp->run[(i - 1) & (c - 1)] = 0;
+        for (; l < i; l++) {
+            uint64_t f = dp->first[l & (c - 1)];
+            dp->run[l & (c - 1)] += (units > f ? units - f : f - units) + dp->slack;
+        }
+        adaslice__dp_choose_volume(dp, &best);
+    } else {
+        dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
+        adaslice__dp_choose_additive(dp, &best);
+    }
+    if (best == ADASLICE__UNREACHED) {
+        dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;
+        dp->worst[i & (c - 1)] = 0;
+        adaslice__dp_set_back(dp, i, 0);
+    } else {
+        uint64_t e = adaslice__dp_error(dp, best);
+        dp->layers[i & (c - 1)] = dp->layers[best & (c - 1)] + 1;
+        dp->worst[i & (c - 1)] = dp->worst[best & (c - 1)] > e ? dp->worst[best & (c - 1)] : e;
+        adaslice__dp_set_back(dp, i, i - best);
+        dp->reach = i;
+    }
+    if (forced) {
+        dp->floor = i;
+        dp->head = dp->count = dp->scan = 0;
+    }
+}
+
+/* ------------------------------------------------- the planner on a profile */
+
+typedef struct adaslice__job {
+    const adaslice_profile *profile;
+    uint32_t n, lo, hi;
+    uint64_t *units;          /* per bin */
+    int volume;
+    uint64_t slack;
+    double quantum;           /* mm (or the metric's unit) per unit */
+    unsigned char *forced;    /* per plane, or NULL */
+    adaslice__dp dp;
+} adaslice__job;
+
+static size_t adaslice__ring_bytes(uint32_t cap)
+{
+    return (size_t)cap * (4 * sizeof(uint64_t) + 2 * sizeof(uint32_t));
+}
+
+/* Runs the DP with the given eps in units; returns the layer count or
+   ADASLICE__UNREACHED. */
+static uint32_t adaslice__job_run(adaslice__job *job, uint64_t eps)
+{
+    uint32_t i;
+    job->dp.eps = eps;
+    adaslice__dp_start(&job->dp);
+    for (i = 0; i < job->n; i++)
+        adaslice__dp_push(&job->dp, job->units[i], job->forced && job->forced[i + 1] && i + 1 < job->n);
+    return job->dp.layers[job->n & (job->dp.cap - 1)];
+}
+
+/* The smallest eps (units) whose optimal plan has at most max_layers layers
+   (UNREACHED: any count), found by bisection since the count never grows
+   with eps; UINT64_MAX if none. */
+static uint64_t adaslice__job_min_eps(adaslice__job *job, uint32_t max_layers)
+{
+    uint64_t lo = 0, hi = 0, k;
+    uint32_t i;
+    /* no layer's error exceeds hi bins of the largest value */
+    for (i = 0; i < job->n; i++) if (job->units[i] > hi) hi = job->units[i];
+    hi = (hi + job->slack) * job->hi;
+    k = adaslice__job_run(job, hi);
+    if (k == ADASLICE__UNREACHED || k > max_layers) return UINT64_MAX;
+    while (lo < hi) {
+        uint64_t mid = lo + (hi - lo) / 2;
+        k = adaslice__job_run(job, mid);
+        if (k != ADASLICE__UNREACHED && k <= max_layers) hi = mid; else lo = mid + 1;
+    }
+    return lo;
+}
+
+/* b * phi[i] as units of a power-of-two quantum chosen so the largest layer
+   error is about 2^40 units: additive metrics round up, so a plan feasible in
+   units is feasible in millimetres; volume rounds to nearest and, unless all
+   values were exact, adds a unit per bin to stay on the safe side. */
+static void adaslice__quantise(adaslice__job *job)
+{
+    const adaslice_profile *p = job->profile;
+    double top = 0;
+    int ex = 0;
+    uint32_t i;
+    for (i = 0; i < job->n; i++)
+        if (p->phi[i] * p->bin > top) top = p->phi[i] * p->bin;
+    if (top > 0) { (void)frexp(top * job->hi, &ex); job->quantum = ldexp(1.0, ex - 40); }
+    else job->quantum = 1;
+    job->slack = 0;
+    for (i = 0; i < job->n; i++) {
+        double x = p->phi[i] * p->bin / job->quantum;
+        if (job->volume) {
+            double r = floor(x + 0.5);
+            if (r != x) job->slack = 1;
+            job->units[i] = (uint64_t)r;
+        } else {
+            job->units[i] = (uint64_t)ceil(x);
+        }
+    }
+}
+
+static uint64_t adaslice__eps_units(double eps, double quantum)
+{
+    double x = eps / quantum;
+    return x >= 4.0e18 ? (uint64_t)4000000000000000000ull : (uint64_t)floor(x);
+}
+
+ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *p, size_t first, size_t end)
+{
+    double sum = 0;
+    size_t j;
+    if (p->metric == ADASLICE_METRIC_VOLUME)
+        for (j = first; j < end; j++) sum += fabs(p->phi[j] - p->phi[first]);
+    else
+        for (j = first; j < end; j++) sum += p->phi[j];
+    return sum * p->bin;
+}
+
+/* Whether r bins can be cut into layers of lo..hi bins, for every r <= n. */
+static void adaslice__tileable(unsigned char *ok, uint32_t n, uint32_t lo, uint32_t hi)
+{
+    uint32_t r, in_window = 0;
+    ok[0] = 1;
+    for (r = 1; r <= n; r++) {
+        if (r >= lo) in_window += ok[r - lo];
+        if (r >= hi + 1) in_window -= ok[r - hi - 1];
+        ok[r] = in_window > 0;
+    }
+}
+
+/* The local greedy of ref. [3]: from each plane, grow the layer while the
+   next bin keeps its error within eps; never leave a remainder that layers
+   of lo..hi bins cannot fill. Returns the plane count written. */
+static uint32_t adaslice__greedy(const adaslice_profile *p, uint32_t n, uint32_t lo, uint32_t hi,
+                                 double eps, const unsigned char *ok, uint32_t *planes)
+{
+    uint32_t s = 0, k = 0;
+    planes[k++] = 0;
+    while (s < n) {
+        uint32_t left = n - s, most = hi < left ? hi : left, len = lo, pick;
+        while (len < most && adaslice_layer_error(p, s, s + len + 1) <= eps) len++;
+        pick = len;
+        while (pick >= lo && !ok[left - pick]) pick--;
+        if (pick < lo) { pick = len; while (!ok[left - pick]) pick++; }
+        s += pick;
+        planes[k++] = s;
+    }
+    return k;
+}
+
+static uint32_t adaslice__uniform(uint32_t n, uint32_t len, uint32_t *planes)
+{
+    uint32_t k = 0, s = 0;
+    planes[k++] = 0;
+    while (s < n) { s = n - s > len ? s + len : n; planes[k++] = s; }
+    return k;
+}
+
+static adaslice_result adaslice__plan_fill(const adaslice_profile *p, const uint32_t *planes, uint32_t count,
+                                           double eps, adaslice_plan *plan, adaslice_error *err)
+{
+    uint32_t k;
+    adaslice_allocator *al = &plan->allocator;
+    plan->layer_count = count - 1;
+    plan->planes = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, count, sizeof(uint32_t)));
+    plan->layers = ADASLICE__CAST(adaslice_layer *, adaslice__alloc(al, count, sizeof(adaslice_layer)));
+    if (!plan->planes || !plan->layers)
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory for %u layers", (unsigned)count);
+    memcpy(plan->planes, planes, count * sizeof(uint32_t));
+    plan->eps = eps;
+    plan->worst_error = plan->total_error = 0;
+    plan->over_eps = 0;
+    for (k = 0; k + 1 < count; k++) {
+        adaslice_layer *L = &plan->layers[k];
+        L->z_bottom = planes[k] * p->bin;
+        L->z_top = planes[k + 1] * p->bin;
+        L->thickness = (planes[k + 1] - planes[k]) * p->bin;
+        L->error = adaslice_layer_error(p, planes[k], planes[k + 1]);
+        plan->total_error += L->error;
+        if (L->error > plan->worst_error) plan->worst_error = L->error;
+        if (L->error > eps) plan->over_eps++;
+    }
+    return ADASLICE_OK;
+}
+
+/* §3.3 pre-pass: a jump of more than `sharp` between consecutive bins forces
+   a plane at the upper bin's bottom. A jump is skipped where a plane there
+   would leave a stretch, below it or above it, that no layers of lo..hi bins
+   can fill (such as two jumps closer than tmin): the pre-pass never makes a
+   plan impossible by thickness alone. */
+static uint32_t adaslice__sharp_planes(const adaslice_profile *p, uint32_t n, double sharp,
+                                       const unsigned char *ok, unsigned char *forced)
+{
+    uint32_t i, last = 0, count = 0;
+    memset(forced, 0, n + 1);
+    for (i = 1; i < n; i++) {
+        if (fabs(p->phi[i] - p->phi[i - 1]) > sharp && ok[i - last] && ok[n - i]) {
+            forced[i] = 1;
+            last = i;
+            count++;
+        }
+    }
+    return count;
+}
+
+static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice_plan_options *opt,
+                                              double eps, adaslice_plan *plan, adaslice_error *err)
+{
+    const adaslice_profile *p = job->profile;
+    uint64_t eps_units;
+    uint32_t layers, i, k;
+    uint32_t *planes;
+    adaslice_result r;
+    adaslice__quantise(job);
+    if (opt->budget) {
+        uint32_t budget = opt->budget > 0xfffffffeu ? 0xfffffffeu : (uint32_t)opt->budget;
+        eps_units = adaslice__job_min_eps(job, budget);
+        if (eps_units == UINT64_MAX)
+            return adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                                  "plan: no plan has %zu layers or fewer: %u bins need at least %u layers of at most %g mm",
+                                  opt->budget, (unsigned)job->n, (unsigned)((job->n + job->hi - 1) / job->hi), job->hi * p->bin);
+        eps = eps_units * job->quantum;
+    } else {
+        eps_units = adaslice__eps_units(eps, job->quantum);
+    }
+    layers = adaslice__job_run(job, eps_units);
+    if (layers == ADASLICE__UNREACHED) {
+        uint32_t reach = job->dp.reach;
+        uint64_t need = adaslice__job_min_eps(job, ADASLICE__UNREACHED);
+        if (need == UINT64_MAX) {
+            r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                               "plan: no plan covers the part above z = %g mm for any eps: layers of %u to %u bins "
+                               "(%g to %g mm) cannot tile the height %g mm between forced planes",
+                               reach * p->bin, (unsigned)job->lo, (unsigned)job->hi, job->lo * p->bin,
+                               job->hi * p->bin, job->n * p->bin);
+            if (err) err->z = reach * p->bin;
+            return r;
+        } else {
+            /* rounded up so that passing the printed value back succeeds */
+            double min_eps = (double)need * job->quantum * (1 + 1e-6);
+            r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                               "plan: eps %g is too small: no plan covers the part above z = %g mm; "
+                               "the smallest feasible eps is %g", eps, reach * p->bin, min_eps);
+            if (err) { err->z = reach * p->bin; err->min_eps = min_eps; }
+            return r;
+        }
+    }
+    planes = ADASLICE__CAST(uint32_t *, adaslice__alloc(&plan->allocator, (size_t)layers + 1, sizeof(uint32_t)));
+    if (!planes) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
+    for (i = job->n, k = layers; ; k--) {
+        uint32_t len;
+        planes[k] = i;
+        if (!i) break;
+        len = adaslice__dp_back(&job->dp, i);
+        ADASLICE_ASSERT(len >= job->lo && len <= job->hi && len <= i && k > 0);
+        i -= len;
+    }
+    r = adaslice__plan_fill(p, planes, layers + 1, eps, plan, err);
+    adaslice__free(&plan->allocator, planes);
+    return r;
+}
+
+ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, const adaslice_plan_options *options,
+                                                   adaslice_plan *plan, adaslice_error *err)
+{
+    adaslice_plan_options opt;
+    adaslice__job job;
+    adaslice_allocator al;
+    adaslice_result r = ADASLICE_OK;
+    double lo_f, hi_f;
+    size_t i;
+    unsigned char *ok = NULL;
+    uint32_t *planes = NULL, count, forced = 0;
+    void *ring = NULL;
+
+    if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
+    memset(plan, 0, sizeof *plan);
+    if (!p || !p->phi || !p->bin_count)
+        return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "plan: the profile is empty");
+    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if (opt.eps == 0) opt.eps = ADASLICE_DEFAULT_EPS;
+    if (opt.tmin == 0) opt.tmin = ADASLICE_DEFAULT_TMIN;
+    if (opt.tmax == 0) opt.tmax = ADASLICE_DEFAULT_TMAX;
+    if (opt.sharp == 0) opt.sharp = ADASLICE_DEFAULT_SHARP;
+    if (!(p->bin > 0) || p->bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: bin size %g is not a positive number", p->bin);
+    if (!(opt.eps > 0) || opt.eps > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: eps %g is not a positive number", opt.eps);
+    if (!(opt.tmin > 0) || opt.tmin > DBL_MAX || !(opt.tmax > 0) || opt.tmax > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g and tmax %g must be positive numbers",
+                              opt.tmin, opt.tmax);
+    if (opt.tmin > opt.tmax)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g mm is larger than tmax %g mm", opt.tmin, opt.tmax);
+    if (p->bin > opt.tmin * (1 + 1e-9))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: bin size %g mm is larger than tmin %g mm; use a bin of at most tmin", p->bin, opt.tmin);
+    if ((unsigned)opt.method > ADASLICE_METHOD_COARSEST)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: unknown method %d", (int)opt.method);
+    if (p->bin_count > 0x7ffffffeu)
+        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "plan: %zu bins is too many", p->bin_count);
+    for (i = 0; i < p->bin_count; i++)
+        if (!(p->phi[i] >= 0) || p->phi[i] > DBL_MAX)
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                                  "plan: profile value %g at bin %zu (z = %g mm) is not a finite number >= 0",
+                                  p->phi[i], i, (double)i * p->bin);
+    /* b rarely divides tmin and tmax exactly in binary: allow a relative 1e-9 */
+    lo_f = ceil(opt.tmin / p->bin - 1e-9);
+    hi_f = floor(opt.tmax / p->bin + 1e-9);
+    if (lo_f > hi_f)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: no multiple of the bin size %g mm lies between tmin %g and tmax %g", p->bin, opt.tmin, opt.tmax);
+    if (hi_f > 65535)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: tmax / bin = %g bins per layer; at most 65535 are supported", hi_f);
+    if (lo_f < 1) lo_f = 1;
+
+    memset(&job, 0, sizeof job);
+    job.profile = p;
+    job.n = (uint32_t)p->bin_count;
+    job.lo = (uint32_t)lo_f;
+    job.hi = (uint32_t)hi_f;
+    job.volume = p->metric == ADASLICE_METRIC_VOLUME;
+    al = adaslice__allocator(opt.allocator);
+    plan->allocator = al;
+    plan->bins_min = job.lo;
+    plan->bins_max = job.hi;
+    if (job.n < job.lo) {
+        r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                           "plan: the part is %g mm tall, thinner than one layer of tmin %g mm", job.n * p->bin, opt.tmin);
+        if (err) err->z = 0;
+        return r;
+    }
+    ok = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, 1));
+    planes = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, (size_t)job.n + 1, sizeof(uint32_t)));
+    if (!ok || !planes) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); goto done; }
+
+    adaslice__tileable(ok, job.n, job.lo, job.hi);
+    switch (opt.method) {
+    case ADASLICE_METHOD_FINEST:
+    case ADASLICE_METHOD_COARSEST:
+        count = adaslice__uniform(job.n, opt.method == ADASLICE_METHOD_FINEST ? job.lo : job.hi, planes);
+        r = adaslice__plan_fill(p, planes, count, opt.eps, plan, err);
+        break;
+    case ADASLICE_METHOD_GREEDY:
+        if (!ok[job.n]) {
+            r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                               "plan: %u bins cannot be cut into layers of %u to %u bins", (unsigned)job.n,
+                               (unsigned)job.lo, (unsigned)job.hi);
+            break;
+        }
+        count = adaslice__greedy(p, job.n, job.lo, job.hi, opt.eps, ok, planes);
+        r = adaslice__plan_fill(p, planes, count, opt.eps, plan, err);
+        break;
+    case ADASLICE_METHOD_OPTIMAL: {
+        adaslice__dp *dp = &job.dp;
+        unsigned char *mem;
+        dp->lo = job.lo; dp->hi = job.hi;
+        for (dp->cap = 2; dp->cap <= job.hi; dp->cap *= 2) {}
+        dp->volume = job.volume;
+        dp->width = job.hi <= 255 ? 1 : 2;
+        job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, job.n, sizeof(uint64_t)));
+        ring = adaslice__alloc(&al, 1, adaslice__ring_bytes(dp->cap));
+        dp->back = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, dp->width));
+        if (!job.units || !ring || !dp->back) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
+        mem = ADASLICE__CAST(unsigned char *, ring);
+        dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
+        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
+        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
+        dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
+        dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint32_t);
+        dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem));
+        if (opt.sharp > 0) {
+            job.forced = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, 1));
+            if (!job.forced) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
+            forced = adaslice__sharp_planes(p, job.n, opt.sharp, ok, job.forced);
+        }
+        r = adaslice__plan_optimal(&job, &opt, opt.eps, plan, err);
+        plan->forced_planes = forced;
+        if (r == ADASLICE_ERR_INFEASIBLE && forced && err) {
+            size_t len = strlen(err->message);
+            adaslice__out o;
+            o.buf = err->message; o.cap = sizeof err->message; o.len = len;
+            adaslice__puts(&o, " (the sharp-change pre-pass forced ");
+            adaslice__putu(&o, forced);
+            adaslice__puts(&o, " planes; a threshold of 0 turns it off)");
+            err->message[o.len < o.cap ? o.len : o.cap - 1] = 0;
+        }
+        break;
+    }
+    }
+done:
+    adaslice__free(&al, job.units);
+    adaslice__free(&al, ring);
+    adaslice__free(&al, job.dp.back);
+    adaslice__free(&al, job.forced);
+    adaslice__free(&al, ok);
+    adaslice__free(&al, planes);
+    if (r != ADASLICE_OK) {
+        adaslice_plan_free(plan);
+        return r;
+    }
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
+{
+    adaslice_allocator al;
+    if (!plan) return;
+    al = plan->allocator;
+    adaslice__free(&al, plan->planes);
+    adaslice__free(&al, plan->layers);
+    memset(plan, 0, sizeof *plan);
+}
+
 
 #endif /* ADASLICE_IMPLEMENTATION_DONE */
 #endif /* ADASLICE_IMPLEMENTATION */
