@@ -2138,10 +2138,16 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     if (opt->budget) {
         uint32_t budget = opt->budget > 0xfffffffeu ? 0xfffffffeu : (uint32_t)opt->budget;
         eps_units = adaslice__job_min_eps(job, budget);
-        if (eps_units == UINT64_MAX)
+        if (eps_units == UINT64_MAX) {
+            uint32_t fewest = adaslice__job_run(job, UINT64_MAX >> 2);
+            if (fewest == ADASLICE__UNREACHED)
+                return adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
+                                      "plan: layers of %u to %u bins cannot tile the height %g mm",
+                                      (unsigned)job->lo, (unsigned)job->hi, job->n * p->bin);
             return adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
-                                  "plan: no plan has %zu layers or fewer: %u bins need at least %u layers of at most %g mm",
-                                  opt->budget, (unsigned)job->n, (unsigned)((job->n + job->hi - 1) / job->hi), job->hi * p->bin);
+                                  "plan: no plan has %zu layers or fewer: at least %u are needed with layers of at most %g mm",
+                                  opt->budget, (unsigned)fewest, job->hi * p->bin);
+        }
         eps = eps_units * job->quantum;
     } else {
         eps_units = adaslice__eps_units(eps, job->quantum);
@@ -2179,6 +2185,9 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
         i -= len;
     }
     r = adaslice__plan_fill(p, planes, layers + 1, eps, plan, err);
+    /* eps found by the budget is the plan's worst error in units; the error
+       summed in double may differ from it in the last bit */
+    if (opt->budget && plan->worst_error > plan->eps) { plan->eps = plan->worst_error; plan->over_eps = 0; }
     adaslice__free(&plan->allocator, planes);
     return r;
 }

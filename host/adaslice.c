@@ -60,12 +60,12 @@ static const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"
 static const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
 enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
 
-typedef struct metric_info { const char *label, *phi_unit, *eps_unit; } metric_info;
+typedef struct metric_info { const char *label, *phi_axis, *eps_unit; } metric_info;
 static const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
-    {"cusp height", "mm/mm", "mm"},        /* eq. 4-6 */
-    {"roughness", "mm/mm", "mm"},          /* eq. 8-10 */
-    {"area deviation", "1/mm", ""},        /* eq. 12-14 */
-    {"volume deviation", "mm^2", "mm^3"},  /* eq. 17-20 */
+    {"cusp height", "cusp height per mm of layer (mm/mm)", "mm"},       /* eq. 4-6 */
+    {"roughness", "roughness per mm of layer (mm/mm)", "mm"},           /* eq. 8-10 */
+    {"area deviation", "area deviation per mm of layer (1/mm)", ""},    /* eq. 12-14 */
+    {"volume deviation", "cross-section area A(z) (mm^2)", "mm^3"},     /* eq. 17-20 */
 };
 
 static const char *format_name(adaslice_format f)
@@ -466,7 +466,7 @@ static void write_plot(FILE *f, const void *ctx)
     svg_plan_figure fig;
     fig.model = base_name(a->model ? a->model : a->profile);
     fig.metric = METRICS[a->metric].label;
-    fig.phi_unit = METRICS[a->metric].phi_unit;
+    fig.phi_axis = METRICS[a->metric].phi_axis;
     fig.eps_unit = METRICS[a->metric].eps_unit;
     fig.method = METHOD_NAMES[a->method];
     fig.profile = &j->profile;

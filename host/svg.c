@@ -5,6 +5,8 @@
    small for any number of bins or layers. */
 #include "svg.h"
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 enum {
     WIDTH = 760, HEIGHT = 660,
@@ -104,18 +106,49 @@ static void z_axis(FILE *f, const axis *z)
             PROFILE_X0 - 52, (TOP + BOTTOM) / 2);
 }
 
-static void profile_curve(FILE *f, const adaslice_profile *pr, const axis *x, const axis *z)
+enum { ROWS = BOTTOM - TOP };
+
+/* The profile reduced to at most one value per pixel row: the largest phi of
+   the bins the row covers, so that no peak disappears. Returns the row count. */
+static size_t row_maxima(const adaslice_profile *pr, double top[ROWS])
 {
-    size_t rows = (size_t)(BOTTOM - TOP), n = pr->bin_count, groups = n < rows ? n : rows, g, i;
-    fprintf(f, "<path fill=\"#c6dbef\" stroke=\"#08519c\" stroke-width=\"1\" d=\"M%.1f %.1f",
-            px(x, 0), px(z, 0));
-    for (g = 0; g < groups; g++) {
-        size_t lo = g * n / groups, hi = (g + 1) * n / groups;
-        double top = 0;
-        for (i = lo; i < hi; i++)
-            if (pr->phi[i] > top) top = pr->phi[i];
-        fprintf(f, "H%.1fV%.1f", px(x, top), px(z, (double)hi * pr->bin));
+    size_t n = pr->bin_count, rows = n < ROWS ? n : ROWS, r, i;
+    for (r = 0; r < rows; r++) {
+        top[r] = 0;
+        for (i = r * n / rows; i < (r + 1) * n / rows; i++)
+            if (pr->phi[i] > top[r]) top[r] = pr->phi[i];
     }
+    return rows;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The largest value the phi axis shows. Where A(z) -> 0 at tips the area metric
+   spikes far above the rest of the profile, and an axis up to the spike would
+   flatten everything else; so a few rows that tower over the 98th percentile
+   are cut at the axis (*cut says how high they went; 0 if nothing is cut). */
+static double phi_limit(const double *top, size_t rows, double *cut)
+{
+    double sorted[ROWS], q;
+    memcpy(sorted, top, rows * sizeof *top);
+    qsort(sorted, rows, sizeof *sorted, compare_doubles);
+    q = sorted[(size_t)(0.98 * (rows - 1))];
+    *cut = q > 0 && sorted[rows - 1] > 4 * q ? sorted[rows - 1] : 0;
+    return *cut ? 1.5 * q : sorted[rows - 1] > 0 ? sorted[rows - 1] : 1;
+}
+
+static void profile_curve(FILE *f, const adaslice_profile *pr, const double *top, size_t rows,
+                          const axis *x, const axis *z)
+{
+    size_t r;
+    fprintf(f, "<path fill=\"#c6dbef\" stroke=\"#08519c\" d=\"M%.1f %.1f", px(x, 0), px(z, 0));
+    for (r = 0; r < rows; r++)
+        fprintf(f, "H%.1fV%.1f", px(x, top[r] < x->hi ? top[r] : x->hi),
+                px(z, (double)((r + 1) * pr->bin_count / rows) * pr->bin));
     fprintf(f, "H%.1fZ\"/>\n", px(x, 0));
 }
 
@@ -203,14 +236,11 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
 {
     const adaslice_profile *pr = fig->profile;
     const adaslice_plan *p = fig->plan;
-    double b = pr->bin, phi_max = 0, step;
+    double b = pr->bin, top[ROWS], cut, step;
+    size_t rows = row_maxima(pr, top);
+    double phi_max = phi_limit(top, rows, &cut);
     axis z, xphi, xt;
-    char label[160];
-    size_t i;
 
-    for (i = 0; i < pr->bin_count; i++)
-        if (pr->phi[i] > phi_max) phi_max = pr->phi[i];
-    if (phi_max <= 0) phi_max = 1;
     z.lo = 0; z.hi = pr->bin_count * b; z.p0 = BOTTOM; z.p1 = TOP;
     step = nice_step(phi_max, 4);
     xphi.lo = 0; xphi.hi = ceil(phi_max / step * (1 - 1e-9)) * step; xphi.p0 = PROFILE_X0; xphi.p1 = PROFILE_X1;
@@ -239,11 +269,12 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
     caption(f, PROFILE_X0, "metric profile");
     caption(f, PLAN_X0, "slicing plan");
     z_axis(f, &z);
-    snprintf(label, sizeof label, "%s%s%s%s", fig->metric, *fig->phi_unit ? " (" : "", fig->phi_unit,
-             *fig->phi_unit ? ")" : "");
-    panel(f, &xphi, step, label);
+    panel(f, &xphi, step, fig->phi_axis);
     panel(f, &xt, nice_step(xt.hi, 4), "layer thickness (mm)");
-    profile_curve(f, pr, &xphi, &z);
+    profile_curve(f, pr, top, rows, &xphi, &z);
+    if (cut)
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\" font-size=\"10\" fill=\"%s\">"
+                   "peaks up to %.4g cut at the axis</text>\n", PROFILE_X1, TOP - 8, MUTED, cut);
     plan_steps(f, p, b, &xt, &z);
     colour_scale(f, p, b, &xt);
     frame(f, &xphi);

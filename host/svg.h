@@ -8,7 +8,7 @@
 typedef struct svg_plan_figure {
     const char *model;          /* shown in the title */
     const char *metric;         /* e.g. "cusp height" */
-    const char *phi_unit;       /* unit of phi, "" if none */
+    const char *phi_axis;       /* what phi is, with its unit */
     const char *eps_unit;       /* unit of eps and layer errors, "" if none */
     const char *method;         /* e.g. "optimal" */
     const adaslice_profile *profile;

@@ -102,6 +102,127 @@ static int check_file(const char *dir, const char *name)
     return n == 0;
 }
 
+/* A plan keeps its promises: contiguous planes from 0 to N, thickness within
+   the bounds, each reported error recomputed and within eps. */
+static int plan_ok(const adaslice_profile *p, const adaslice_plan *plan, double eps, char *why, size_t cap)
+{
+    size_t k;
+    if (plan->planes[0] != 0 || plan->planes[plan->layer_count] != p->bin_count) {
+        snprintf(why, cap, "planes do not run from 0 to N");
+        return 0;
+    }
+    for (k = 0; k < plan->layer_count; k++) {
+        uint32_t len = plan->planes[k + 1] - plan->planes[k];
+        double e = adaslice_layer_error(p, plan->planes[k], plan->planes[k + 1]);
+        if (len < plan->bins_min || len > plan->bins_max || e != plan->layers[k].error || e > eps) {
+            snprintf(why, cap, "layer %zu: %u bins, error %g (eps %g)", k, len, e, eps);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Scaled to 40 mm tall (the paper's parts are 17.8 to 62.4 mm): every metric's
+   exact profile, the optimal plan and the baselines. On the watertight models
+   the area profile integrates to the mesh's own volume (divergence theorem). */
+static int check_plans(const char *dir, const char *name)
+{
+    static const char *metric_name[] = {"cusp", "roughness", "area", "volume"};
+    char path[4096], why[512] = "";
+    adaslice_mesh m;
+    adaslice_load_options lo;
+    double a[3], b[3], volume = 0, integral = 0;
+    size_t i, k[4] = {0, 0, 0, 0}, over[4] = {0, 0, 0, 0};
+    size_t forced = 0, k_forced = 0, k_greedy = 0;
+    int mi, ok = 1, watertight = 0;
+    static const char *closed[] = {"counter.unitsmm.STL", "geometry_bracelet", "armadillo.obj", "lucy.ply",
+                                   "turbineblade.ply", "hand_closed.obj"};
+    for (i = 0; i < sizeof closed / sizeof *closed; i++) watertight |= strncmp(name, closed[i], strlen(closed[i])) == 0;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    memset(&lo, 0, sizeof lo);
+    if (adaslice_mesh_load_file(path, &lo, &m, NULL) != ADASLICE_OK) return 0;
+    adaslice_mesh_bounds(&m, a, b);
+    for (i = 0; i < 3 * m.vertex_count; i++) m.vertices[i] = (float)((m.vertices[i] - a[i % 3]) * 40.0 / (b[2] - a[2]));
+    for (i = 0; i < m.triangle_count; i++) {
+        const float *p = m.vertices + 3 * m.triangles[3 * i], *q = m.vertices + 3 * m.triangles[3 * i + 1],
+                    *r = m.vertices + 3 * m.triangles[3 * i + 2];
+        volume += ((double)p[0] * ((double)q[1] * r[2] - (double)q[2] * r[1]) -
+                   (double)p[1] * ((double)q[0] * r[2] - (double)q[2] * r[0]) +
+                   (double)p[2] * ((double)q[0] * r[1] - (double)q[1] * r[0])) / 6.0;
+    }
+    for (mi = 0; mi < 4 && ok; mi++) {
+        adaslice_profile_options po;
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan, coarse;
+        adaslice_error e;
+        memset(&po, 0, sizeof po);
+        po.metric = (adaslice_metric)mi;
+        if (adaslice_profile_exact(&m, &po, &p, &e) != ADASLICE_OK) {
+            snprintf(why, sizeof why, "%s profile: %s", metric_name[mi], e.message);
+            ok = 0;
+            break;
+        }
+        for (i = 0; i < p.bin_count && ok; i++)
+            if (!(p.phi[i] >= 0 && p.phi[i] < 1e300) || (mi == 0 && p.phi[i] > 1)) {
+                snprintf(why, sizeof why, "%s profile: bin %zu is %g", metric_name[mi], i, p.phi[i]);
+                ok = 0;
+            }
+        if (mi == 3) {
+            for (i = 0; i < p.bin_count; i++) integral += p.area[i] * p.bin;
+            if (watertight && fabs(integral - fabs(volume)) > 1e-4 * fabs(volume)) {
+                snprintf(why, sizeof why, "area integrates to %.6g mm^3, the mesh holds %.6g", integral, fabs(volume));
+                ok = 0;
+            }
+        }
+        /* cusp at the paper's eps, with and without the §3.3 pre-pass; the
+           others at the smallest eps that fits in the coarsest plan's layer
+           count plus a third, without the pre-pass (its 0.5 is for cusp) */
+        memset(&o, 0, sizeof o);
+        if (ok && mi == 0) {
+            if (adaslice_plan_profile(&p, &o, &plan, &e) != ADASLICE_OK) { snprintf(why, sizeof why, "%s", e.message); ok = 0; }
+            else { ok = plan_ok(&p, &plan, plan.eps, why, sizeof why); forced = plan.forced_planes; k_forced = plan.layer_count; adaslice_plan_free(&plan); }
+        }
+        o.sharp = ADASLICE_SHARP_OFF;
+        o.method = ADASLICE_METHOD_COARSEST;
+        if (ok && adaslice_plan_profile(&p, &o, &coarse, &e) != ADASLICE_OK) { snprintf(why, sizeof why, "%s", e.message); ok = 0; }
+        if (ok) {
+            o.method = ADASLICE_METHOD_OPTIMAL;
+            if (mi != 0) o.budget = coarse.layer_count + coarse.layer_count / 3;
+            if (adaslice_plan_profile(&p, &o, &plan, &e) != ADASLICE_OK) {
+                snprintf(why, sizeof why, "%s plan: %s", metric_name[mi], e.message);
+                ok = 0;
+            } else {
+                ok = plan_ok(&p, &plan, plan.eps, why, sizeof why) && plan.layer_count >= coarse.layer_count;
+                k[mi] = plan.layer_count;
+                if (mi == 0) {
+                    adaslice_plan g;
+                    o.method = ADASLICE_METHOD_GREEDY;
+                    if (adaslice_plan_profile(&p, &o, &g, &e) == ADASLICE_OK) {
+                        over[0] = g.over_eps;
+                        /* a greedy plan within eps is a feasible plan: never fewer layers */
+                        if (g.over_eps == 0 && g.layer_count < plan.layer_count) {
+                            snprintf(why, sizeof why, "greedy %zu layers < optimal %zu", g.layer_count, plan.layer_count);
+                            ok = 0;
+                        }
+                        k_greedy = g.layer_count;
+                        adaslice_plan_free(&g);
+                    }
+                }
+                adaslice_plan_free(&plan);
+            }
+            adaslice_plan_free(&coarse);
+        }
+        adaslice_profile_free(&p);
+    }
+    printf("%s plans %s: optimal cusp K %zu (%zu with %zu forced planes; greedy %zu, %zu over eps), roughness-budget K %zu, "
+           "area-budget K %zu, volume-budget K %zu, volume %.6g mm^3 vs A integral %.6g%s%s\n",
+           ok ? "ok  " : "FAIL", name, k[0], k_forced, forced, k_greedy, over[0], k[1], k[2], k[3], fabs(volume), integral,
+           ok ? "" : ": ", why);
+    adaslice_mesh_free(&m);
+    return ok;
+}
+
 int main(int argc, char **argv)
 {
     DIR *d;
@@ -131,6 +252,8 @@ int main(int argc, char **argv)
     qsort(names, count, sizeof *names, by_name);
     for (i = 0; i < count; i++) {
         if (check_file(argv[1], names[i])) passed++;
+        else failed++;
+        if (check_plans(argv[1], names[i])) passed++;
         else failed++;
         free(names[i]);
     }
