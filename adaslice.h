@@ -82,9 +82,10 @@
                would leave a stretch no layers can fill.
                budget > 0: the smallest eps whose plan has at most that many
                layers (bisection over eps in units).
-     greedy    ref. [3]: grow each layer while it stays within eps, starting
-               from tmin; where even tmin exceeds eps it takes tmin anyway
-               and counts the layer in over_eps (the paper's "stuck" greedy).
+     greedy    ref. [3], local: each layer as thick as the profile at its
+               bottom plane allows (eps / (b phi) bins, clamped to tmin..tmax);
+               its real error is only known afterwards, and layers over eps are
+               counted in over_eps (the paper's greedy that gets "stuck").
      finest, coarsest   uniform tmin or tmax; the top layer holds the rest.
    Infeasible: ADASLICE_ERR_INFEASIBLE with error.z (the lowest height no
    plan gets past) and error.min_eps (the smallest eps that works, 0 if the
@@ -2051,17 +2052,33 @@ static void adaslice__tileable(unsigned char *ok, uint32_t n, uint32_t lo, uint3
     }
 }
 
-/* The local greedy of ref. [3]: from each plane, grow the layer while the
-   next bin keeps its error within eps; never leave a remainder that layers
-   of lo..hi bins cannot fill. Returns the plane count written. */
+/* The local greedy of ref. [3] (Dolenc and Makela): each layer is as thick as
+   the profile at its bottom plane allows, as if phi stayed at its value there:
+   eps / (b phi) bins for additive metrics, and for volume deviation the n with
+   b * |phi[s+1] - phi[s]| * n(n-1)/2 <= eps. Clamped to lo..hi, and never
+   leaving a remainder that layers of lo..hi bins cannot fill. What the layer
+   really costs is only known afterwards: that is what makes it local. */
+static uint32_t adaslice__greedy_length(const adaslice_profile *p, uint32_t s, uint32_t n, uint32_t hi, double eps)
+{
+    double rate = p->phi[s] * p->bin, len;
+    if (p->metric == ADASLICE_METRIC_VOLUME) {
+        double d = s + 1 < n ? fabs(p->phi[s + 1] - p->phi[s]) * p->bin : 0;
+        len = d > 0 ? floor(0.5 + sqrt(0.25 + 2 * eps / d)) : hi;
+    } else {
+        len = rate > 0 ? floor(eps / rate) : hi;
+    }
+    return len >= hi ? hi : (uint32_t)len;
+}
+
 static uint32_t adaslice__greedy(const adaslice_profile *p, uint32_t n, uint32_t lo, uint32_t hi,
                                  double eps, const unsigned char *ok, uint32_t *planes)
 {
     uint32_t s = 0, k = 0;
     planes[k++] = 0;
     while (s < n) {
-        uint32_t left = n - s, most = hi < left ? hi : left, len = lo, pick;
-        while (len < most && adaslice_layer_error(p, s, s + len + 1) <= eps) len++;
+        uint32_t left = n - s, len = adaslice__greedy_length(p, s, n, hi, eps), pick;
+        if (len < lo) len = lo;
+        if (len > left) len = left;
         pick = len;
         while (pick >= lo && !ok[left - pick]) pick--;
         if (pick < lo) { pick = len; while (!ok[left - pick]) pick++; }

@@ -506,7 +506,8 @@ static void print_compare(const plan_args *a, const plan_job *j)
         else
             printf("%-10s %8s   (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
     }
-    if (a->budget) printf("(Optimal with a budget of %zu layers)\n", a->budget);
+    if (a->budget)
+        printf("(Optimal with a budget of %zu layers: eps %g%s)\n", a->budget, j->plan[ADASLICE_METHOD_OPTIMAL].eps, u);
 }
 
 static void print_summary(const plan_args *a, const plan_job *j)
@@ -530,7 +531,8 @@ static void print_summary(const plan_args *a, const plan_job *j)
     printf("layers     %zu\n", p->layer_count);
     printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
     if (p->over_eps) printf(", %zu layers over eps", p->over_eps);
-    if (a->sharp > 0) printf("\nforced     %zu planes at sharp changes (> %g)\n", p->forced_planes, a->sharp);
+    if (a->sharp > 0)
+        printf("\nforced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes, p->forced_planes == 1 ? "" : "s", a->sharp);
     else printf("\nforced     none (sharp-change pre-pass off)\n");
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
     if (a->compare) print_compare(a, j);
