@@ -70,7 +70,8 @@ $(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h | $(B)
 fuzz: $(B)/fuzz_loaders
 	mkdir -p $(B)/fuzz_work
 	$(B)/fuzz_loaders -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -max_len=4096 \
-	    -print_final_stats=1 $(B)/fuzz_work tests/fuzz_corpus 2>&1 | tail -n 12
+	    -print_final_stats=1 $(B)/fuzz_work tests/fuzz_corpus > $(B)/fuzz.log 2>&1; \
+	    status=$$?; tail -n 12 $(B)/fuzz.log; exit $$status
 
 check: compile-checks fuzz $(B)/san/adaslice $(B)/san/run_tests
 	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests

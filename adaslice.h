@@ -1419,8 +1419,14 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path, const ada
     if (!path) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "path is NULL");
     if (!(f = fopen(path, "rb")))
         return adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot open: %s", path, strerror(errno));
+    /* a directory opens on some systems and fails only when read */
+    if (getc(f) == EOF && ferror(f)) {
+        r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot read: %s", path, strerror(errno));
+        fclose(f);
+        return r;
+    }
     if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
-    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
+    if (size < 0 || size == LONG_MAX || fseek(f, 0, SEEK_SET) != 0) {
         r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot find the size: %s", path, strerror(errno));
     } else if (!(data = adaslice__alloc(&a, (size_t)size, 1))) {
         r = adaslice__fail(error, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory for %zu bytes", path, (size_t)size);
@@ -2329,9 +2335,9 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
             size_t len = strlen(err->message);
             adaslice__out o;
             o.buf = err->message; o.cap = sizeof err->message; o.len = len;
-            adaslice__puts(&o, " (the sharp-change pre-pass forced ");
+            adaslice__puts(&o, " (the sharp-change pre-pass forced planes: ");
             adaslice__putu(&o, forced);
-            adaslice__puts(&o, " planes; a threshold of 0 turns it off)");
+            adaslice__puts(&o, "; planning without it may need a smaller eps)");
             err->message[o.len < o.cap ? o.len : o.cap - 1] = 0;
         }
         break;

@@ -531,9 +531,13 @@ static void print_summary(const plan_args *a, const plan_job *j)
     printf("layers     %zu\n", p->layer_count);
     printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
     if (p->over_eps) printf(", %zu layers over eps", p->over_eps);
-    if (a->sharp > 0)
-        printf("\nforced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes, p->forced_planes == 1 ? "" : "s", a->sharp);
-    else printf("\nforced     none (sharp-change pre-pass off)\n");
+    printf("\n");
+    /* the section 3.3 pre-pass belongs to the optimal method only */
+    if (a->method == ADASLICE_METHOD_OPTIMAL && a->sharp > 0)
+        printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes,
+               p->forced_planes == 1 ? "" : "s", a->sharp);
+    else if (a->method == ADASLICE_METHOD_OPTIMAL)
+        printf("forced     none (sharp-change pre-pass off)\n");
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
     if (a->compare) print_compare(a, j);
 }

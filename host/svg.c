@@ -65,7 +65,8 @@ static void hue_colour(double u, char out[8])
 static void thickness_colour(const adaslice_plan *plan, uint32_t bins, char out[8])
 {
     uint32_t span = plan->bins_max - plan->bins_min;
-    hue_colour(span ? (double)(bins - plan->bins_min) / span : 1, out);
+    /* a uniform plan's top layer may be thinner than tmin */
+    hue_colour(span ? ((double)bins - plan->bins_min) / span : 1, out);
 }
 
 /* Frame, grid and ticks of a panel; the value axis is horizontal. */
@@ -108,6 +109,12 @@ static void z_axis(FILE *f, const axis *z)
 
 enum { ROWS = BOTTOM - TOP };
 
+/* Bins [row_start(r), row_start(r + 1)) are drawn in pixel row r of `rows`. */
+static size_t row_start(size_t r, size_t bins, size_t rows)
+{
+    return (size_t)((unsigned long long)r * bins / rows);
+}
+
 /* The profile reduced to at most one value per pixel row: the largest phi of
    the bins the row covers, so that no peak disappears. Returns the row count. */
 static size_t row_maxima(const adaslice_profile *pr, double top[ROWS])
@@ -115,7 +122,7 @@ static size_t row_maxima(const adaslice_profile *pr, double top[ROWS])
     size_t n = pr->bin_count, rows = n < ROWS ? n : ROWS, r, i;
     for (r = 0; r < rows; r++) {
         top[r] = 0;
-        for (i = r * n / rows; i < (r + 1) * n / rows; i++)
+        for (i = row_start(r, n, rows); i < row_start(r + 1, n, rows); i++)
             if (pr->phi[i] > top[r]) top[r] = pr->phi[i];
     }
     return rows;
@@ -148,7 +155,7 @@ static void profile_curve(FILE *f, const adaslice_profile *pr, const double *top
     fprintf(f, "<path fill=\"#c6dbef\" stroke=\"#08519c\" d=\"M%.1f %.1f", px(x, 0), px(z, 0));
     for (r = 0; r < rows; r++)
         fprintf(f, "H%.1fV%.1f", px(x, top[r] < x->hi ? top[r] : x->hi),
-                px(z, (double)((r + 1) * pr->bin_count / rows) * pr->bin));
+                px(z, (double)row_start(r + 1, pr->bin_count, rows) * pr->bin));
     fprintf(f, "H%.1fZ\"/>\n", px(x, 0));
 }
 
@@ -256,7 +263,7 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
     xml_text(f, fig->model);
     fputs(" &#8212; ", f);
     xml_text(f, fig->method);
-    fprintf(f, " plan, K = %zu layers, &#949; = %g", p->layer_count, p->eps);
+    fprintf(f, " plan, K = %zu layer%s, &#949; = %g", p->layer_count, p->layer_count == 1 ? "" : "s", p->eps);
     if (*fig->eps_unit) fprintf(f, " %s", fig->eps_unit);
     fputs("</text>\n", f);
     fprintf(f, "<text x=\"%d\" y=\"46\" fill=\"%s\">", PROFILE_X0 - 52, MUTED);

@@ -12,7 +12,7 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static adaslice_mesh gen_alloc(size_t nv, size_t nt)
+static inline adaslice_mesh gen_alloc(size_t nv, size_t nt)
 {
     adaslice_mesh m;
     memset(&m, 0, sizeof m);
@@ -22,21 +22,21 @@ static adaslice_mesh gen_alloc(size_t nv, size_t nt)
     return m;
 }
 
-static void gen_free(adaslice_mesh *m)
+static inline void gen_free(adaslice_mesh *m)
 {
     free(m->vertices);
     free(m->triangles);
     memset(m, 0, sizeof *m);
 }
 
-static uint32_t gen_vertex(adaslice_mesh *m, double x, double y, double z)
+static inline uint32_t gen_vertex(adaslice_mesh *m, double x, double y, double z)
 {
     float *v = m->vertices + 3 * m->vertex_count;
     v[0] = (float)x; v[1] = (float)y; v[2] = (float)z;
     return (uint32_t)m->vertex_count++;
 }
 
-static void gen_triangle(adaslice_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+static inline void gen_triangle(adaslice_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 {
     uint32_t *t = m->triangles + 3 * m->triangle_count++;
     t[0] = a; t[1] = b; t[2] = c;
@@ -44,7 +44,7 @@ static void gen_triangle(adaslice_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 
 /* UV sphere of radius r centred on (0, 0, base + r): `slices` around, `stacks`
    from pole to pole (ring k at polar angle pi*k/stacks). */
-static adaslice_mesh gen_sphere(double r, int slices, int stacks, double base)
+static inline adaslice_mesh gen_sphere(double r, int slices, int stacks, double base)
 {
     adaslice_mesh m = gen_alloc((size_t)(slices * (stacks - 1) + 2), (size_t)(2 * slices * (stacks - 1)));
     uint32_t top = gen_vertex(&m, 0, 0, base + 2 * r), bottom;
@@ -71,7 +71,7 @@ static adaslice_mesh gen_sphere(double r, int slices, int stacks, double base)
 }
 
 /* Right circular cone: base disc of radius r at z = base, apex at base + h. */
-static adaslice_mesh gen_cone(double r, double h, int slices, double base)
+static inline adaslice_mesh gen_cone(double r, double h, int slices, double base)
 {
     adaslice_mesh m = gen_alloc((size_t)slices + 2, (size_t)(2 * slices));
     uint32_t apex = gen_vertex(&m, 0, 0, base + h), centre = gen_vertex(&m, 0, 0, base);
@@ -87,7 +87,7 @@ static adaslice_mesh gen_cone(double r, double h, int slices, double base)
 }
 
 /* Right circular cylinder of radius r from z = base to base + h, axis x = y = 0. */
-static adaslice_mesh gen_cylinder(double r, double h, int slices, double base)
+static inline adaslice_mesh gen_cylinder(double r, double h, int slices, double base)
 {
     adaslice_mesh m = gen_alloc((size_t)(2 * slices + 2), (size_t)(4 * slices));
     uint32_t cb = gen_vertex(&m, 0, 0, base), ct = gen_vertex(&m, 0, 0, base + h);
@@ -109,7 +109,7 @@ static adaslice_mesh gen_cylinder(double r, double h, int slices, double base)
 }
 
 /* Axis-aligned box [x0,x1] x [y0,y1] x [z0,z1]. */
-static adaslice_mesh gen_box(double x0, double y0, double z0, double x1, double y1, double z1)
+static inline adaslice_mesh gen_box(double x0, double y0, double z0, double x1, double y1, double z1)
 {
     static const int quads[6][4] = {
         {0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
@@ -125,7 +125,7 @@ static adaslice_mesh gen_box(double x0, double y0, double z0, double x1, double 
 }
 
 /* dst gets src's triangles appended (src is left alone). */
-static void gen_append(adaslice_mesh *dst, const adaslice_mesh *src)
+static inline void gen_append(adaslice_mesh *dst, const adaslice_mesh *src)
 {
     size_t nv = dst->vertex_count + src->vertex_count, nt = dst->triangle_count + src->triangle_count, i;
     float *v = (float *)realloc(dst->vertices, (nv * 3 + 3) * sizeof(float));

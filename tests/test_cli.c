@@ -6,11 +6,7 @@
 #endif
 #include "check.h"
 #include "../adaslice.h"
-/* meshgen's solids are static functions and this file uses one of them */
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
 #include "meshgen.h"
-#pragma GCC diagnostic pop
 
 #include <dirent.h>
 #include <fcntl.h>
