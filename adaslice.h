@@ -2337,7 +2337,7 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
             o.buf = err->message; o.cap = sizeof err->message; o.len = len;
             adaslice__puts(&o, " (the sharp-change pre-pass forced planes: ");
             adaslice__putu(&o, forced);
-            adaslice__puts(&o, "; planning without it may need a smaller eps)");
+            adaslice__puts(&o, "; without them a smaller eps may be feasible)");
             err->message[o.len < o.cap ? o.len : o.cap - 1] = 0;
         }
         break;
