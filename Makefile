@@ -60,6 +60,8 @@ compile-checks: | $(B)
 	$(CLANG) $(CSTD) -O2 examples/plan_model.c -o $(B)/cc/plan_model_clang -lm
 	$(B)/cc/two_tu && $(B)/cc/two_tu_static && $(B)/cc/two_tu_cxx
 	$(B)/plan_model examples/models/hand_closed.obj 88.7 > $(B)/cc/plan_model.out
+	test "$$(wc -l < $(B)/cc/plan_model.out)" -eq 367
+	sed -n '/^```c$$/,/^```$$/p' README.md | sed '1d;$$d' | diff - examples/plan_model.c
 	@echo "compile checks: ok"
 
 $(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h | $(B)

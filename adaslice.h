@@ -2009,23 +2009,26 @@ static uint64_t adaslice__job_min_eps(adaslice__job *job, uint32_t max_layers)
 static void adaslice__quantise(adaslice__job *job)
 {
     const adaslice_profile *p = job->profile;
-    double top = 0;
+    double top = 0, per_unit = 1;
     int ex = 0;
     uint32_t i;
     for (i = 0; i < job->n; i++)
-        if (p->phi[i] * p->bin > top) top = p->phi[i] * p->bin;
-    if (top > 0) { (void)frexp(top * job->hi, &ex); job->quantum = ldexp(1.0, ex - 40); }
-    else job->quantum = 1;
+        if (p->phi[i] > top) top = p->phi[i];
+    job->quantum = 1;
+    if (top * p->bin > 0) {
+        (void)frexp(top * p->bin * job->hi, &ex);
+        job->quantum = ldexp(1.0, ex - 40);
+        per_unit = ldexp(p->bin, 40 - ex); /* b / quantum, exact: a power of two apart */
+    }
     job->slack = 0;
-    for (i = 0; i < job->n; i++) {
-        double x = p->phi[i] * p->bin / job->quantum;
-        if (job->volume) {
-            double r = floor(x + 0.5);
+    if (job->volume) {
+        for (i = 0; i < job->n; i++) {
+            double x = p->phi[i] * per_unit, r = floor(x + 0.5);
             if (r != x) job->slack = 1;
             job->units[i] = (uint64_t)r;
-        } else {
-            job->units[i] = (uint64_t)ceil(x);
         }
+    } else {
+        for (i = 0; i < job->n; i++) job->units[i] = (uint64_t)ceil(p->phi[i] * per_unit);
     }
 }
 
@@ -2289,7 +2292,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     planes = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, (size_t)job.n + 1, sizeof(uint32_t)));
     if (!ok || !planes) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); goto done; }
 
-    adaslice__tileable(ok, job.n, job.lo, job.hi);
+    if (opt.method == ADASLICE_METHOD_GREEDY || (opt.method == ADASLICE_METHOD_OPTIMAL && opt.sharp > 0))
+        adaslice__tileable(ok, job.n, job.lo, job.hi);
     switch (opt.method) {
     case ADASLICE_METHOD_FINEST:
     case ADASLICE_METHOD_COARSEST:
