@@ -1,8 +1,7 @@
-/* adaslice.h - adaptive slicing for layer-based additive manufacturing.
-   Public domain / MIT-0, see the end of the file.
+/* adaslice.h v0.1.0 — adaptive slicing for layer-based additive manufacturing
+   (resin SLA/MSLA first). MIT No Attribution or public domain: see the end.
 
-   adaslice.h — adaptive slicing for layer-based additive manufacturing
-   (resin SLA/MSLA first), after Mao, Kwok, Chen and Wang, "Adaptive Slicing
+   After Mao, Kwok, Chen and Wang, "Adaptive Slicing
    Based on Efficient Profile Analysis". A mesh is turned into a metric
    profile phi(z) — the error density per mm of height — and a dynamic
    program picks the fewest layers whose integrated error each stays within

@@ -320,19 +320,25 @@ static void case_stl_ascii_roundtrip(void)
     free(b.p);
 }
 
+/* The pentagon the polygon cases write, fan-triangulated from corner `apex`. */
+static adaslice_mesh pentagon_fan(uint32_t apex)
+{
+    adaslice_mesh m = gen_alloc(5, 3);
+    uint32_t k;
+    gen_vertex(&m, 0, 0, 0);
+    gen_vertex(&m, 2, 0, 0);
+    gen_vertex(&m, 3, 1, 0);
+    gen_vertex(&m, 1, 2, 0);
+    gen_vertex(&m, -1, 1, 0);
+    for (k = 1; k < 4; k++) gen_triangle(&m, apex, (apex + k) % 5, (apex + k + 1) % 5);
+    return m;
+}
+
 static void case_stl_ascii_polygon_fan(void)
 {
-    adaslice_mesh want = gen_alloc(5, 3), m;
+    adaslice_mesh want = pentagon_fan(0), m;
     adaslice_error e;
     buf b = {0, 0, 0};
-    gen_vertex(&want, 0, 0, 0);
-    gen_vertex(&want, 2, 0, 0);
-    gen_vertex(&want, 3, 1, 0);
-    gen_vertex(&want, 1, 2, 0);
-    gen_vertex(&want, -1, 1, 0);
-    gen_triangle(&want, 0, 1, 2);
-    gen_triangle(&want, 0, 2, 3);
-    gen_triangle(&want, 0, 3, 4);
     text(&b, "SOLID pentagon\nFACET NORMAL 0 0 1\nOUTER LOOP\nvertex 0 0 0\nvertex 2 0 0\nvertex 3 1 0\n"
              "vertex 1 2 0\nvertex -1 1 0\nENDLOOP\nENDFACET\nENDSOLID");
     CHECKF(load(&b, ADASLICE_FORMAT_AUTO, 0, &m, &e) == ADASLICE_OK, "%s", e.message);
@@ -435,17 +441,9 @@ static void case_ply_integer_coordinates(void)
 
 static void case_ply_polygons(void)
 {
-    adaslice_mesh want = gen_alloc(5, 3), m;
+    adaslice_mesh want = pentagon_fan(4), m;
     adaslice_error e;
     buf b = {0, 0, 0};
-    gen_vertex(&want, 0, 0, 0);
-    gen_vertex(&want, 2, 0, 0);
-    gen_vertex(&want, 3, 1, 0);
-    gen_vertex(&want, 1, 2, 0);
-    gen_vertex(&want, -1, 1, 0);
-    gen_triangle(&want, 4, 0, 1);
-    gen_triangle(&want, 4, 1, 2);
-    gen_triangle(&want, 4, 2, 3);
     text(&b, "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_index\nend_header\n"
              "0 0 0\n2 0 0\n3 1 0\n1 2 0\n-1 1 0\n5 4 0 1 2 3\n");
