@@ -12,7 +12,7 @@ FUZZ_SECONDS ?= 20
 B        = build
 
 HOST_SRC  = host/adaslice.c host/svg.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_loaders.c tests/test_cli.c
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_loaders.c tests/test_cli.c
 HDRS      = adaslice.h host/svg.h tests/check.h tests/meshgen.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean
@@ -53,7 +53,7 @@ compile-checks: | $(B)
 	$(CXX) -x c++ -std=c++11 $(WARN) -c tests/compile/one.c -o $(B)/cc/one_gxx.o
 	$(CLANGXX) -x c++ -std=c++11 $(WARN) -c tests/compile/one.c -o $(B)/cc/one_clangxx.o
 	$(CC) $(CSTD) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu -lm
-	$(CLANG) $(CSTD) -DTWO_STATIC tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_static -lm
+	$(CLANG) $(CSTD) -Wno-unused-function -DTWO_STATIC tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_static -lm
 	$(CXX) -x c++ -std=c++11 $(WARN) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_cxx -lm
 	$(CC) $(CSTD) -DADASLICE_NO_STDIO -c tests/compile/one.c -o $(B)/cc/one_nostdio.o
 	$(CC) $(CSTD) -O2 examples/plan_model.c -o $(B)/plan_model -lm

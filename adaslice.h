@@ -204,6 +204,55 @@ ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh);
 /* Lowest and highest corner of the box around the vertices that triangles use. */
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3]);
 
+/* ------------------------------------------------- layered depth image (LDI) */
+
+/* A grid of parallel rays along +x, +y or +z. Pixel (i, j) has its centre at
+   (origin[0] + (i + 0.5) pitch, origin[1] + (j + 0.5) pitch) in the plane's
+   coordinates (u, v): (y, z) for rays along x, (z, x) along y, (x, y) along z
+   (a cyclic order, so u x v = the ray direction). */
+typedef enum adaslice_axis { ADASLICE_AXIS_X = 0, ADASLICE_AXIS_Y, ADASLICE_AXIS_Z } adaslice_axis;
+
+typedef struct adaslice_grid {
+    adaslice_axis axis;
+    double origin[2];   /* mm */
+    double pitch;       /* mm per pixel */
+    int width, height;  /* pixels, at most 2^21 each */
+} adaslice_grid;
+
+/* Where a ray meets the surface. 8 bytes: depth along the ray relative to the
+   LDI's depth_origin (float: 2^-24 of the part's extent), and the triangle
+   index with the top bit set when the ray leaves the solid there. */
+typedef struct adaslice_sample {
+    float depth;
+    uint32_t face;
+} adaslice_sample;
+
+#define ADASLICE_SAMPLE_LEAVES 0x80000000u
+#define ADASLICE_SAMPLE_FACE(s) ((s).face & 0x7fffffffu)
+
+/* Samples of pixel p are samples[first[p] .. first[p+1]), sorted by depth;
+   p = j * width + i. */
+typedef struct adaslice_ldi {
+    adaslice_grid grid;
+    double depth_origin;       /* mm along the ray where depth 0 lies */
+    size_t *first;             /* width * height + 1 */
+    adaslice_sample *samples;
+    size_t sample_count;
+    adaslice_allocator allocator;
+} adaslice_ldi;
+
+/* Rasterises every triangle scan line by scan line at pixel centres. Vertices
+   are snapped to 1/256 pixel and edges tested exactly with a top-left rule,
+   so a ray through a shared edge or vertex meets exactly one of the triangles
+   there (or, on a silhouette, an entering and a leaving one together). */
+ADASLICE_DEF adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const adaslice_grid *grid,
+                                                const adaslice_allocator *allocator, adaslice_ldi *ldi,
+                                                adaslice_error *error);
+ADASLICE_DEF void adaslice_ldi_free(adaslice_ldi *ldi);
+/* The square grid along `axis` with `resolution` pixels across the mesh's
+   largest extent (the paper's LDI resolution), covering the mesh. */
+ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice_axis axis, int resolution);
+
 /* ---------------------------------------------------------------- profile */
 
 typedef enum adaslice_metric {
@@ -217,6 +266,8 @@ typedef enum adaslice_metric {
 /* 1/sin(5 degrees): surfaces flatter than 5 degrees count as 5 degrees, since
    1/sin(theta) is infinite on horizontal faces (which print without steps). */
 #define ADASLICE_DEFAULT_ROUGHNESS_MAX 11.473713245669855
+#define ADASLICE_DEFAULT_RESOLUTION 2048
+#define ADASLICE_DEFAULT_MEMORY_LIMIT ((size_t)512 << 20)
 
 typedef struct adaslice_profile_options {
     adaslice_metric metric;
@@ -224,6 +275,10 @@ typedef struct adaslice_profile_options {
     double roughness_max;                /* 0: ADASLICE_DEFAULT_ROUGHNESS_MAX */
     const float *weights;                /* NULL, or one weight in [0,1] per triangle
                                             (eq. 21-24) */
+    int resolution;                      /* sampled only: LDI pixels across the mesh's
+                                            largest extent; 0: ADASLICE_DEFAULT_RESOLUTION */
+    size_t memory_limit;                 /* sampled only: bytes of LDI held at once (it is
+                                            built in bands of rows); 0: the default */
     const adaslice_allocator *allocator; /* NULL: default */
 } adaslice_profile_options;
 
@@ -237,6 +292,7 @@ typedef struct adaslice_profile {
     double height;      /* H, mm */
     double *phi;        /* N values, all finite and >= 0 */
     double *area;       /* area and volume metrics: A at each bin's centre (mm^2); else NULL */
+    size_t unsampled_bins; /* sampled profiles: bins no ray sample fell in (see the manual) */
     adaslice_allocator allocator;
 } adaslice_profile;
 
@@ -245,6 +301,13 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *options,
                                                     adaslice_profile *profile,
                                                     adaslice_error *error);
+/* The paper's sampled profile (§3.2, eq. 5, 9, 13-14, 19-20): LDIs along x, y
+   and z at `resolution` pixels across the largest extent; each sample adds its
+   triangle's value to the bin of its height; areas count the z rays inside at
+   each bin centre. */
+ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
+                                                      const adaslice_profile_options *options,
+                                                      adaslice_profile *profile, adaslice_error *error);
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile);
 
 /* ------------------------------------------------------------------- plan */
@@ -1442,6 +1505,332 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path, const ada
 #endif
 
 
+/* ===================================================== layered depth image */
+/* Triangles are rasterised one scan line at a time into spans of pixels; the
+   same spans build a stored LDI, feed the sampled profiles, and update layer
+   masks. Coordinates are snapped to 1/256 pixel and every inside test is an
+   exact integer edge function with a top-left rule. */
+
+#define ADASLICE__SUBPIXEL 256
+#define ADASLICE__GRID_LIMIT 2097152.0 /* 2^21 pixels: keeps edge functions within 2^62 */
+
+typedef struct adaslice__span {
+    int row, first, end;     /* pixels [first, end) of the row */
+    double depth, step;      /* depth at pixel 0's centre in the row, and per pixel */
+    double lo, hi;           /* the triangle's depth range: depths are clamped to it */
+    uint32_t face;           /* triangle index | ADASLICE_SAMPLE_LEAVES */
+} adaslice__span;
+
+/* The depth of pixel i of a span; every user computes it this way, so a
+   sample is on the same side of a height wherever it is looked at. */
+static double adaslice__span_depth(const adaslice__span *s, int i)
+{
+    double d = s->depth + s->step * (double)i;
+    return d < s->lo ? s->lo : (d > s->hi ? s->hi : d);
+}
+
+typedef void (*adaslice__span_fn)(void *ctx, const adaslice__span *span);
+
+typedef struct adaslice__raster {
+    const adaslice_grid *grid;
+    double depth_origin;
+    int row_first, row_end;      /* rows to cover */
+    int slab;                    /* only depths in [slab_lo, slab_hi) */
+    double slab_lo, slab_hi;
+    adaslice__span_fn fn;
+    void *ctx;
+} adaslice__raster;
+
+static void adaslice__project(adaslice_axis axis, const float *p, double out[3])
+{
+    int a = axis == ADASLICE_AXIS_X ? 1 : (axis == ADASLICE_AXIS_Y ? 2 : 0);
+    out[0] = p[a];
+    out[1] = p[(a + 1) % 3];
+    out[2] = p[(a + 2) % 3];
+}
+
+static int64_t adaslice__floor_div(int64_t a, int64_t b) /* b > 0 */
+{
+    int64_t q = a / b;
+    return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
+/* The smallest i with alpha i + beta >= 0 (alpha > 0), and the largest with
+   alpha < 0: a floating-point guess, then exact integer correction (an int64
+   division per edge and row costs more than the rest of the row). */
+static int64_t adaslice__first_nonnegative(int64_t alpha, int64_t beta)
+{
+    int64_t i = (int64_t)ceil(-(double)beta / (double)alpha);
+    while (alpha * i + beta < 0) i++;
+    while (alpha * (i - 1) + beta >= 0) i--;
+    return i;
+}
+
+static int64_t adaslice__last_nonnegative(int64_t alpha, int64_t beta)
+{
+    int64_t i = (int64_t)floor(-(double)beta / (double)alpha);
+    while (alpha * i + beta < 0) i--;
+    while (alpha * (i + 1) + beta >= 0) i++;
+    return i;
+}
+
+/* First pixel in [lo, hi] whose depth is >= bound (or < bound when `below`),
+   given that the span's depth is monotone; hi + 1 if none. */
+static int adaslice__span_find(const adaslice__span *s, int lo, int hi, double bound, int below)
+{
+    int a = lo, b = hi + 1;
+    /* pred(i) = (depth >= bound) flips once along the span: find where */
+    int pred_lo = adaslice__span_depth(s, lo) >= bound;
+    if (below) pred_lo = !pred_lo;
+    if (pred_lo) return lo;
+    if (s->step == 0) return hi + 1;
+    while (a + 1 < b) {
+        int mid = a + (b - a) / 2;
+        int p = adaslice__span_depth(s, mid) >= bound;
+        if (below) p = !p;
+        if (p) b = mid; else a = mid;
+    }
+    return b;
+}
+
+/* Returns 0, or 1 if a vertex lies so far off the grid that the exact edge
+   functions could overflow. */
+static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_mesh *m, uint32_t t)
+{
+    const adaslice_grid *g = r->grid;
+    double P[3][3], U[3], V[3], D[3], nx, ny, nz, gx, gy, dlo, dhi;
+    int64_t X[3], Y[3], area, ylo, yhi;
+    int k, j, j0, j1;
+    adaslice__span s;
+    for (k = 0; k < 3; k++) {
+        adaslice__project(g->axis, m->vertices + 3 * (size_t)m->triangles[3 * (size_t)t + k], P[k]);
+        U[k] = (P[k][0] - g->origin[0]) / g->pitch;
+        V[k] = (P[k][1] - g->origin[1]) / g->pitch;
+        D[k] = P[k][2] - r->depth_origin;
+        if (!(fabs(U[k]) < ADASLICE__GRID_LIMIT && fabs(V[k]) < ADASLICE__GRID_LIMIT)) return 1;
+        X[k] = (int64_t)floor(U[k] * ADASLICE__SUBPIXEL + 0.5);
+        Y[k] = (int64_t)floor(V[k] * ADASLICE__SUBPIXEL + 0.5);
+    }
+    area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
+    if (area == 0) return 0; /* seen edge-on: the rays graze it */
+    s.face = t | (area > 0 ? ADASLICE_SAMPLE_LEAVES : 0u); /* normal along +ray: leaving */
+    if (area < 0) { /* rasterise counter-clockwise */
+        int64_t ti; double td;
+        ti = X[1]; X[1] = X[2]; X[2] = ti;
+        ti = Y[1]; Y[1] = Y[2]; Y[2] = ti;
+        td = U[1]; U[1] = U[2]; U[2] = td;
+        td = V[1]; V[1] = V[2]; V[2] = td;
+        td = D[1]; D[1] = D[2]; D[2] = td;
+    }
+    /* the depth plane, from the unsnapped vertices, in pixel units */
+    nx = (V[1] - V[0]) * (D[2] - D[0]) - (D[1] - D[0]) * (V[2] - V[0]);
+    ny = (D[1] - D[0]) * (U[2] - U[0]) - (U[1] - U[0]) * (D[2] - D[0]);
+    nz = (U[1] - U[0]) * (V[2] - V[0]) - (V[1] - V[0]) * (U[2] - U[0]);
+    gx = nz != 0 ? -nx / nz : 0;
+    gy = nz != 0 ? -ny / nz : 0;
+    dlo = D[0] < D[1] ? D[0] : D[1]; if (D[2] < dlo) dlo = D[2];
+    dhi = D[0] > D[1] ? D[0] : D[1]; if (D[2] > dhi) dhi = D[2];
+    s.lo = dlo; s.hi = dhi; s.step = gx;
+    ylo = Y[0] < Y[1] ? Y[0] : Y[1]; if (Y[2] < ylo) ylo = Y[2];
+    yhi = Y[0] > Y[1] ? Y[0] : Y[1]; if (Y[2] > yhi) yhi = Y[2];
+    /* rows whose centre 256 j + 128 lies in [ylo, yhi] */
+    j0 = (int)-adaslice__floor_div(-(ylo - ADASLICE__SUBPIXEL / 2), ADASLICE__SUBPIXEL);
+    j1 = (int)adaslice__floor_div(yhi - ADASLICE__SUBPIXEL / 2, ADASLICE__SUBPIXEL);
+    if (j0 < r->row_first) j0 = r->row_first;
+    if (j1 > r->row_end - 1) j1 = r->row_end - 1;
+    for (j = j0; j <= j1; j++) {
+        int64_t yc = (int64_t)j * ADASLICE__SUBPIXEL + ADASLICE__SUBPIXEL / 2, lo = 0, hi = g->width - 1;
+        int e, first, last;
+        for (e = 0; e < 3 && lo <= hi; e++) {
+            int a = e, b = (e + 1) % 3;
+            int64_t dx = X[b] - X[a], dy = Y[b] - Y[a];
+            int top_left = dy < 0 || (dy == 0 && dx < 0);
+            /* inside: dx (y - Ya) - dy (x - Xa) > 0, or = 0 on a top-left edge;
+               at x = 256 i + 128 that is alpha i + beta >= 0 */
+            int64_t alpha = -dy * ADASLICE__SUBPIXEL;
+            int64_t beta = dx * (yc - Y[a]) - dy * (ADASLICE__SUBPIXEL / 2 - X[a]) - (top_left ? 0 : 1);
+            if (alpha > 0) { int64_t q = adaslice__first_nonnegative(alpha, beta); if (q > lo) lo = q; }
+            else if (alpha < 0) { int64_t q = adaslice__last_nonnegative(alpha, beta); if (q < hi) hi = q; }
+            else if (beta < 0) hi = lo - 1;
+        }
+        if (lo > hi) continue;
+        s.row = j;
+        s.depth = D[0] + gx * (0.5 - U[0]) + gy * ((double)j + 0.5 - V[0]);
+        first = (int)lo;
+        last = (int)hi;
+        if (r->slab) {
+            /* the pixels whose depth is in [slab_lo, slab_hi): a run, as depth is monotone */
+            if (s.step >= 0) {
+                first = adaslice__span_find(&s, first, last, r->slab_lo, 0);
+                last = adaslice__span_find(&s, first, last, r->slab_hi, 0) - 1;
+            } else {
+                int f2 = adaslice__span_find(&s, first, last, r->slab_hi, 1);
+                last = adaslice__span_find(&s, f2, last, r->slab_lo, 1) - 1;
+                first = f2;
+            }
+            if (first > last) continue;
+        }
+        s.first = first;
+        s.end = last + 1;
+        r->fn(r->ctx, &s);
+    }
+    return 0;
+}
+
+/* Rasterises every triangle; fails naming the first one too far off the grid. */
+static adaslice_result adaslice__raster_mesh(const adaslice__raster *r, const adaslice_mesh *m, adaslice_error *err)
+{
+    size_t t;
+    for (t = 0; t < m->triangle_count; t++)
+        if (adaslice__raster_triangle(r, m, (uint32_t)t))
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                                  "LDI: triangle %zu lies more than 2^21 pixels from the grid", t);
+    return ADASLICE_OK;
+}
+
+/* ---- a stored LDI, or one band of rows of it */
+
+typedef struct adaslice__ldi_fill {
+    const adaslice_grid *grid;
+    int row_first;
+    size_t *first;               /* per pixel of the band */
+    adaslice_sample *samples;
+    size_t *row_samples;         /* counting pass per row, or NULL */
+    int pass;                    /* 0: count rows, 1: count pixels, 2: fill */
+} adaslice__ldi_fill;
+
+static void adaslice__ldi_visit(void *ctx, const adaslice__span *s)
+{
+    adaslice__ldi_fill *f = ADASLICE__CAST(adaslice__ldi_fill *, ctx);
+    size_t base = (size_t)(s->row - f->row_first) * (size_t)f->grid->width;
+    int i;
+    if (f->pass == 0) { f->row_samples[s->row] += (size_t)(s->end - s->first); return; }
+    if (f->pass == 1) { for (i = s->first; i < s->end; i++) f->first[base + (size_t)i]++; return; }
+    for (i = s->first; i < s->end; i++) {
+        adaslice_sample *out = &f->samples[--f->first[base + (size_t)i]];
+        out->depth = (float)adaslice__span_depth(s, i);
+        out->face = s->face;
+    }
+}
+
+static int adaslice__sample_before(const adaslice_sample *a, const adaslice_sample *b)
+{
+    return a->depth < b->depth || (a->depth == b->depth && a->face < b->face);
+}
+
+/* Builds rows [row_first, row_end) into `ldi` (whose grid is the full grid):
+   first[] has (rows * width + 1) entries. */
+static adaslice_result adaslice__ldi_band(const adaslice_mesh *m, adaslice_ldi *ldi, int row_first, int row_end,
+                                          adaslice_error *err)
+{
+    adaslice__raster r;
+    adaslice__ldi_fill f;
+    size_t pixels = (size_t)(row_end - row_first) * (size_t)ldi->grid.width, p, total = 0;
+    adaslice_result res;
+    memset(&r, 0, sizeof r);
+    r.grid = &ldi->grid;
+    r.depth_origin = ldi->depth_origin;
+    r.row_first = row_first;
+    r.row_end = row_end;
+    r.fn = adaslice__ldi_visit;
+    r.ctx = &f;
+    memset(&f, 0, sizeof f);
+    f.grid = &ldi->grid;
+    f.row_first = row_first;
+    f.first = ldi->first;
+    f.pass = 1;
+    memset(ldi->first, 0, (pixels + 1) * sizeof(size_t));
+    if ((res = adaslice__raster_mesh(&r, m, err)) != ADASLICE_OK) return res;
+    for (p = 0; p < pixels; p++) { total += ldi->first[p]; ldi->first[p] = total; }
+    ldi->first[pixels] = total;
+    ldi->sample_count = total;
+    ldi->samples = ADASLICE__CAST(adaslice_sample *, adaslice__alloc(&ldi->allocator, total, sizeof(adaslice_sample)));
+    if (!ldi->samples)
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "LDI: out of memory for %zu samples", total);
+    f.samples = ldi->samples;
+    f.pass = 2;
+    (void)adaslice__raster_mesh(&r, m, err);
+    for (p = 0; p < pixels; p++) { /* insertion sort: a ray meets few surfaces */
+        size_t a = ldi->first[p], b = ldi->first[p + 1], i, k;
+        for (i = a + 1; i < b; i++) {
+            adaslice_sample s = ldi->samples[i];
+            for (k = i; k > a && adaslice__sample_before(&s, &ldi->samples[k - 1]); k--) ldi->samples[k] = ldi->samples[k - 1];
+            ldi->samples[k] = s;
+        }
+    }
+    return ADASLICE_OK;
+}
+
+static adaslice_result adaslice__grid_check(const adaslice_grid *g, adaslice_error *err)
+{
+    if (!g || (unsigned)g->axis > ADASLICE_AXIS_Z || g->width < 1 || g->height < 1 ||
+        g->width > (int)ADASLICE__GRID_LIMIT || g->height > (int)ADASLICE__GRID_LIMIT || !(g->pitch > 0) ||
+        g->pitch > DBL_MAX || !(fabs(g->origin[0]) < DBL_MAX) || !(fabs(g->origin[1]) < DBL_MAX))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "LDI: grid %d x %d pixels of %g mm is not valid (1 to 2^21 pixels a side)",
+                              g ? g->width : 0, g ? g->height : 0, g ? g->pitch : 0.0);
+    return ADASLICE_OK;
+}
+
+static double adaslice__depth_origin(const adaslice_mesh *m, adaslice_axis axis)
+{
+    double lo[3], hi[3];
+    adaslice_mesh_bounds(m, lo, hi);
+    return lo[axis];
+}
+
+ADASLICE_DEF adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const adaslice_grid *grid,
+                                                const adaslice_allocator *allocator, adaslice_ldi *ldi,
+                                                adaslice_error *err)
+{
+    adaslice_result r;
+    size_t pixels;
+    if (!ldi) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "LDI: no output given");
+    memset(ldi, 0, sizeof *ldi);
+    if ((r = adaslice__grid_check(grid, err)) != ADASLICE_OK) return r;
+    if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "LDI: the mesh has no triangles");
+    ldi->allocator = adaslice__allocator(allocator);
+    ldi->grid = *grid;
+    ldi->depth_origin = adaslice__depth_origin(mesh, grid->axis);
+    pixels = (size_t)grid->width * (size_t)grid->height;
+    ldi->first = ADASLICE__CAST(size_t *, adaslice__alloc(&ldi->allocator, pixels + 1, sizeof(size_t)));
+    if (!ldi->first) {
+        r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "LDI: out of memory for %zu pixels", pixels);
+    } else if ((r = adaslice__ldi_band(mesh, ldi, 0, grid->height, err)) == ADASLICE_OK) {
+        adaslice__ok(err);
+        return ADASLICE_OK;
+    }
+    adaslice_ldi_free(ldi);
+    return r;
+}
+
+ADASLICE_DEF void adaslice_ldi_free(adaslice_ldi *ldi)
+{
+    if (!ldi) return;
+    adaslice__free(&ldi->allocator, ldi->first);
+    adaslice__free(&ldi->allocator, ldi->samples);
+    memset(ldi, 0, sizeof *ldi);
+}
+
+ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice_axis axis, int resolution)
+{
+    adaslice_grid g;
+    double lo[3], hi[3], extent = 0;
+    int k, a = axis == ADASLICE_AXIS_X ? 1 : (axis == ADASLICE_AXIS_Y ? 2 : 0);
+    adaslice_mesh_bounds(mesh, lo, hi);
+    for (k = 0; k < 3; k++) if (hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
+    if (resolution < 1) resolution = 1;
+    memset(&g, 0, sizeof g);
+    g.axis = axis;
+    g.pitch = extent > 0 ? extent / resolution : 1;
+    g.origin[0] = lo[a];
+    g.origin[1] = lo[(a + 1) % 3];
+    /* one pixel more than the extent needs, so the far faces' centres are inside */
+    g.width = (int)ceil((hi[a] - lo[a]) / g.pitch) + 1;
+    g.height = (int)ceil((hi[(a + 1) % 3] - lo[(a + 1) % 3]) / g.pitch) + 1;
+    return g;
+}
+
 /* ================================================================ profiles */
 /* Bins: N = ceil(H / b); bin i covers [z0 + i*b, z0 + (i+1)*b). */
 
@@ -1654,110 +2043,410 @@ static double adaslice__area_deviation(const double *area, size_t n, size_t i, d
     return fabs(area[j] - area[i]) / (bin * ref);
 }
 
-ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
-                                                    const adaslice_profile_options *options,
-                                                    adaslice_profile *profile, adaslice_error *err)
+/* Checks the options and the mesh, sizes the bins and allocates phi (and the
+   areas for area and volume). */
+static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                               adaslice_profile *profile, adaslice_profile_options *opt,
+                                               adaslice_error *err)
 {
-    adaslice_profile_options opt;
     adaslice_allocator al;
-    adaslice__area_acc acc;
-    double lo[3], hi[3], bins, *tree = NULL;
-    size_t n, t, i;
-    int max_type, weighted;
-
+    double lo[3], hi[3], bins;
+    size_t n, t;
     if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
     memset(profile, 0, sizeof *profile);
     if (!mesh || !mesh->triangle_count || !mesh->vertices || !mesh->triangles)
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh has no triangles");
-    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
-    if (opt.bin == 0) opt.bin = ADASLICE_DEFAULT_BIN;
-    if (opt.roughness_max == 0) opt.roughness_max = ADASLICE_DEFAULT_ROUGHNESS_MAX;
-    if (!(opt.bin > 0) || opt.bin > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: bin size %g is not a positive number", opt.bin);
-    if (!(opt.roughness_max >= 1) || opt.roughness_max > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: roughness clamp %g must be at least 1", opt.roughness_max);
-    if ((unsigned)opt.metric > ADASLICE_METRIC_VOLUME)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: unknown metric %d", (int)opt.metric);
-    if (opt.weights)
+    if (options) *opt = *options; else memset(opt, 0, sizeof *opt);
+    if (opt->bin == 0) opt->bin = ADASLICE_DEFAULT_BIN;
+    if (opt->roughness_max == 0) opt->roughness_max = ADASLICE_DEFAULT_ROUGHNESS_MAX;
+    if (opt->resolution == 0) opt->resolution = ADASLICE_DEFAULT_RESOLUTION;
+    if (opt->memory_limit == 0) opt->memory_limit = ADASLICE_DEFAULT_MEMORY_LIMIT;
+    if (!(opt->bin > 0) || opt->bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: bin size %g is not a positive number", opt->bin);
+    if (!(opt->roughness_max >= 1) || opt->roughness_max > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: roughness clamp %g must be at least 1", opt->roughness_max);
+    if ((unsigned)opt->metric > ADASLICE_METRIC_VOLUME)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: unknown metric %d", (int)opt->metric);
+    if (opt->resolution < 1 || opt->resolution > 65536)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: LDI resolution %d is outside 1..65536", opt->resolution);
+    if (opt->weights)
         for (t = 0; t < mesh->triangle_count; t++)
-            if (!(opt.weights[t] >= 0 && opt.weights[t] <= 1))
+            if (!(opt->weights[t] >= 0 && opt->weights[t] <= 1))
                 return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                                      "profile: weight of triangle %zu is %g, outside [0, 1]", t, (double)opt.weights[t]);
+                                      "profile: weight of triangle %zu is %g, outside [0, 1]", t, (double)opt->weights[t]);
     for (t = 0; t < 3 * mesh->triangle_count; t++)
         if (mesh->triangles[t] >= mesh->vertex_count)
             return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "profile: triangle %zu uses vertex %u of %zu",
                                   t / 3, (unsigned)mesh->triangles[t], mesh->vertex_count);
     adaslice_mesh_bounds(mesh, lo, hi);
-    bins = ceil((hi[2] - lo[2]) / opt.bin - 1e-9);
     if (!(hi[2] > lo[2]))
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh is flat (height 0 along z)");
+    bins = ceil((hi[2] - lo[2]) / opt->bin - 1e-9);
     if (bins < 1) bins = 1;
     if (bins > 2147483646.0)
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "profile: %g bins of %g mm over %g mm is too many",
-                              bins, opt.bin, hi[2] - lo[2]);
+                              bins, opt->bin, hi[2] - lo[2]);
     n = (size_t)bins;
-    al = adaslice__allocator(opt.allocator);
-    max_type = opt.metric == ADASLICE_METRIC_CUSP || opt.metric == ADASLICE_METRIC_ROUGHNESS;
-    weighted = opt.weights != NULL;
+    al = adaslice__allocator(opt->allocator);
     profile->phi = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
-    if (!max_type) profile->area = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
-    if (max_type || weighted) tree = ADASLICE__CAST(double *, adaslice__alloc(&al, 2 * n, sizeof(double)));
-    memset(&acc, 0, sizeof acc);
-    if (!max_type) {
-        acc.n = n; acc.z0 = lo[2]; acc.bin = opt.bin;
-        acc.direct = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
-        acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&al, 3 * (n + 1), sizeof(double)));
-    }
-    if (!profile->phi || (!max_type && (!profile->area || !acc.direct || !acc.coef)) ||
-        ((max_type || weighted) && !tree)) {
-        adaslice__free(&al, profile->phi); adaslice__free(&al, profile->area);
-        adaslice__free(&al, tree); adaslice__free(&al, acc.direct); adaslice__free(&al, acc.coef);
+    if (opt->metric >= ADASLICE_METRIC_AREA)
+        profile->area = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
+    if (!profile->phi || (opt->metric >= ADASLICE_METRIC_AREA && !profile->area)) {
+        adaslice__free(&al, profile->phi);
+        adaslice__free(&al, profile->area);
         memset(profile, 0, sizeof *profile);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
     }
-    profile->metric = opt.metric;
+    memset(profile->phi, 0, n * sizeof(double));
+    profile->metric = opt->metric;
     profile->bin_count = n;
-    profile->bin = opt.bin;
+    profile->bin = opt->bin;
     profile->z0 = lo[2];
     profile->height = hi[2] - lo[2];
     profile->allocator = al;
+    return ADASLICE_OK;
+}
 
+/* What a triangle contributes to a max-type profile (its value times its
+   weight), or to the max weight per bin (area and volume); -1 if it has no
+   normal. */
+static double adaslice__face_value(const adaslice_mesh *mesh, size_t t, const adaslice_profile_options *opt)
+{
+    double v[3][3], nrm[3], value = 1;
+    int k;
+    for (k = 0; k < 3; k++) adaslice__corner(mesh, t, k, v[k]);
+    adaslice__normal(v[0], v[1], v[2], nrm);
+    if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) return -1;
+    if (opt->metric <= ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(opt->metric, nrm, opt->roughness_max);
+    return opt->weights ? value * opt->weights[t] : value;
+}
+
+/* Area and volume deviation from the areas (eq. 14, 17), times the largest
+   weight in each bin (eq. 23, 24) when there are weights. */
+static void adaslice__phi_from_area(adaslice_profile *p, const double *wmax)
+{
+    size_t i;
+    for (i = 0; i < p->bin_count; i++) {
+        double phi = p->metric == ADASLICE_METRIC_AREA ? adaslice__area_deviation(p->area, p->bin_count, i, p->bin)
+                                                       : p->area[i];
+        p->phi[i] = wmax ? phi * wmax[i] : phi;
+    }
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
+                                                    const adaslice_profile_options *options,
+                                                    adaslice_profile *profile, adaslice_error *err)
+{
+    adaslice_profile_options opt;
+    adaslice__area_acc acc;
+    adaslice_result r;
+    double lo[3], hi[3], *tree = NULL;
+    size_t n, t;
+    int max_type;
+
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, err)) != ADASLICE_OK) return r;
+    n = profile->bin_count;
+    max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
+    memset(&acc, 0, sizeof acc);
+    if (max_type || opt.weights) tree = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 2 * n, sizeof(double)));
+    if (!max_type) {
+        acc.n = n; acc.z0 = profile->z0; acc.bin = opt.bin;
+        acc.direct = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, n, sizeof(double)));
+        acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 3 * (n + 1), sizeof(double)));
+    }
+    if (((max_type || opt.weights) && !tree) || (!max_type && (!acc.direct || !acc.coef))) {
+        adaslice__free(&profile->allocator, tree);
+        adaslice__free(&profile->allocator, acc.direct);
+        adaslice__free(&profile->allocator, acc.coef);
+        adaslice_profile_free(profile);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+    }
     if (tree) {
-        /* max-type profiles (eq. 5, 9, 21, 22), or the max weight per bin (eq. 23, 24) */
+        /* each triangle over every bin its z-range meets (eq. 5, 9, 21-24) */
         memset(tree, 0, 2 * n * sizeof(double));
         for (t = 0; t < mesh->triangle_count; t++) {
-            double v[3][3], nrm[3], zmin, zmax, value;
+            double value = adaslice__face_value(mesh, t, &opt), v[3][3], zmin, zmax;
             int k;
+            if (value < 0) continue;
             for (k = 0; k < 3; k++) adaslice__corner(mesh, t, k, v[k]);
-            adaslice__normal(v[0], v[1], v[2], nrm);
-            if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) continue; /* degenerate: no normal */
-            value = max_type ? adaslice__facet_value(opt.metric, nrm, opt.roughness_max) : 1.0;
-            if (weighted) value *= opt.weights[t];
             zmin = v[0][2] < v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] < zmin) zmin = v[2][2];
             zmax = v[0][2] > v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] > zmax) zmax = v[2][2];
-            adaslice__rmax_update(tree, n, adaslice__bin_of(zmin, lo[2], opt.bin, n),
-                                  adaslice__bin_of(zmax, lo[2], opt.bin, n), value);
+            adaslice__rmax_update(tree, n, adaslice__bin_of(zmin, profile->z0, opt.bin, n),
+                                  adaslice__bin_of(zmax, profile->z0, opt.bin, n), value);
         }
         adaslice__rmax_push(tree, n);
     }
     if (max_type) {
         memcpy(profile->phi, tree + n, n * sizeof(double));
     } else {
+        adaslice_mesh_bounds(mesh, lo, hi);
         memset(acc.direct, 0, n * sizeof(double));
         memset(acc.coef, 0, 3 * (n + 1) * sizeof(double));
         adaslice__areas(mesh, lo, hi, &acc, profile->area);
-        for (i = 0; i < n; i++) {
-            double phi = opt.metric == ADASLICE_METRIC_AREA
-                             ? adaslice__area_deviation(profile->area, n, i, opt.bin)
-                             : profile->area[i];
-            profile->phi[i] = weighted ? phi * tree[n + i] : phi;
-        }
+        adaslice__phi_from_area(profile, tree ? tree + n : NULL);
     }
-    adaslice__free(&al, tree);
-    adaslice__free(&al, acc.direct);
-    adaslice__free(&al, acc.coef);
+    adaslice__free(&profile->allocator, tree);
+    adaslice__free(&profile->allocator, acc.direct);
+    adaslice__free(&profile->allocator, acc.coef);
     adaslice__ok(err);
     return ADASLICE_OK;
+}
+
+/* ---- sampled profiles (§3.2, §4.1): the paper's method, from LDIs along x, y, z */
+
+typedef struct adaslice__sampling {
+    adaslice_profile *profile;
+    const double *face_value;    /* per triangle, see adaslice__face_value */
+    double *wmax;                /* per bin, or NULL */
+    unsigned char *reached;      /* per bin: some sample fell in it */
+    long long *inside;           /* z rays, area: per bin-centre difference counts */
+    double inverse_bin;
+} adaslice__sampling;
+
+/* Smallest bin index whose centre is at or above z (N if none). */
+static size_t adaslice__centre_at_or_above(const adaslice_profile *p, double z)
+{
+    double f = ceil((z - p->z0) / p->bin - 0.5);
+    size_t i;
+    if (!(f > 0)) return 0;
+    i = f >= (double)p->bin_count ? p->bin_count : (size_t)f;
+    while (i > 0 && p->z0 + ((double)(i - 1) + 0.5) * p->bin >= z) i--;
+    while (i < p->bin_count && p->z0 + ((double)i + 0.5) * p->bin < z) i++;
+    return i;
+}
+
+/* Samples straight from the spans, with nothing stored: each covered pixel
+   is one sample at its depth (rays along z) or at its row's or column's height
+   (rays along x or y). */
+typedef struct adaslice__direct {
+    adaslice__sampling *s;
+    const adaslice_grid *grid;
+    double depth_origin;
+} adaslice__direct;
+
+static size_t adaslice__sample_bin(const adaslice__sampling *s, double z)
+{
+    double f = (z - s->profile->z0) * s->inverse_bin;
+    if (!(f > 0)) return 0;
+    return f >= (double)(s->profile->bin_count - 1) ? s->profile->bin_count - 1 : (size_t)f;
+}
+
+/* Samples of one triangle in bins first..last (every bin between them: the
+   caller only asks when consecutive samples are at most a bin apart). */
+static void adaslice__sample_bins(adaslice__sampling *s, size_t first, size_t last, uint32_t face)
+{
+    adaslice_profile *p = s->profile;
+    double v = s->face_value[face & ~ADASLICE_SAMPLE_LEAVES];
+    size_t b;
+    for (b = first; b <= last; b++) {
+        s->reached[b] = 1;
+        if (p->metric <= ADASLICE_METRIC_ROUGHNESS) { if (v > p->phi[b]) p->phi[b] = v; }
+        else if (s->wmax && v > s->wmax[b]) s->wmax[b] = v;
+    }
+}
+
+static void adaslice__sample_one(adaslice__sampling *s, double z, uint32_t face)
+{
+    size_t b = adaslice__sample_bin(s, z);
+    adaslice__sample_bins(s, b, b, face);
+}
+
+static void adaslice__direct_visit(void *ctx, const adaslice__span *span)
+{
+    adaslice__direct *d = ADASLICE__CAST(adaslice__direct *, ctx);
+    const adaslice_grid *g = d->grid;
+    int i;
+    if (g->axis == ADASLICE_AXIS_X) { /* one height for the whole row */
+        adaslice__sample_one(d->s, g->origin[1] + (span->row + 0.5) * g->pitch, span->face);
+    } else if (g->axis == ADASLICE_AXIS_Z && fabs(span->step) <= d->s->profile->bin) {
+        /* depth moves at most a bin per pixel: the samples hit every bin
+           between the span's two ends, and only those */
+        size_t a = adaslice__sample_bin(d->s, adaslice__span_depth(span, span->first) + d->depth_origin);
+        size_t b = adaslice__sample_bin(d->s, adaslice__span_depth(span, span->end - 1) + d->depth_origin);
+        adaslice__sample_bins(d->s, a < b ? a : b, a < b ? b : a, span->face);
+    } else {
+        for (i = span->first; i < span->end; i++)
+            adaslice__sample_one(d->s, g->axis == ADASLICE_AXIS_Z ? adaslice__span_depth(span, i) + d->depth_origin
+                                                                  : g->origin[0] + (i + 0.5) * g->pitch, span->face);
+    }
+}
+
+static void adaslice__sample_band(adaslice__sampling *s, const adaslice_ldi *ldi, int row_first, int row_end)
+{
+    const adaslice_grid *g = &ldi->grid;
+    adaslice_profile *p = s->profile;
+    int i, j;
+    for (j = row_first; j < row_end; j++) {
+        for (i = 0; i < g->width; i++) {
+            size_t px = (size_t)(j - row_first) * (size_t)g->width + (size_t)i, k;
+            size_t a = ldi->first[px], b = ldi->first[px + 1];
+            int winding = 0;
+            double entered = 0;
+            for (k = a; k < b; k++) {
+                const adaslice_sample *smp = &ldi->samples[k];
+                double z = g->axis == ADASLICE_AXIS_Z ? smp->depth + ldi->depth_origin
+                         : g->axis == ADASLICE_AXIS_X ? g->origin[1] + (j + 0.5) * g->pitch
+                                                      : g->origin[0] + (i + 0.5) * g->pitch;
+                adaslice__sample_one(s, z, smp->face);
+                if (s->inside) {
+                    /* eq. 13: pixels inside at each bin centre, from the ray's
+                       intervals of positive winding number */
+                    int before = winding;
+                    winding += (smp->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
+                    if (before <= 0 && winding > 0) entered = z;
+                    if (before > 0 && winding <= 0) {
+                        s->inside[adaslice__centre_at_or_above(p, entered)]++;
+                        s->inside[adaslice__centre_at_or_above(p, z)]--;
+                    }
+                }
+            }
+        }
+    }
+}
+
+typedef struct adaslice__row_count { size_t *rows; } adaslice__row_count;
+
+static void adaslice__row_visit(void *ctx, const adaslice__span *s)
+{
+    ADASLICE__CAST(adaslice__row_count *, ctx)->rows[s->row] += (size_t)(s->end - s->first);
+}
+
+/* The LDI of one axis, band by band so that a band's pixels and samples stay
+   within the memory limit; every band sees every triangle, so the result does
+   not depend on where the bands are cut. */
+static adaslice_result adaslice__sample_axis(adaslice__sampling *s, const adaslice_mesh *mesh, adaslice_axis axis,
+                                             const adaslice_profile_options *opt, adaslice_error *err)
+{
+    adaslice_allocator *al = &s->profile->allocator;
+    adaslice_ldi ldi;
+    adaslice__raster r;
+    adaslice__row_count rc;
+    adaslice_result res = ADASLICE_OK;
+    int row = 0;
+    memset(&ldi, 0, sizeof ldi);
+    ldi.allocator = *al;
+    ldi.grid = adaslice_grid_fit(mesh, axis, opt->resolution);
+    ldi.depth_origin = adaslice__depth_origin(mesh, axis);
+    if (!s->inside) { /* no areas wanted from these rays: nothing to store */
+        adaslice__direct d;
+        d.s = s;
+        d.grid = &ldi.grid;
+        d.depth_origin = ldi.depth_origin;
+        memset(&r, 0, sizeof r);
+        r.grid = &ldi.grid;
+        r.depth_origin = ldi.depth_origin;
+        r.row_end = ldi.grid.height;
+        r.fn = adaslice__direct_visit;
+        r.ctx = &d;
+        return adaslice__raster_mesh(&r, mesh, err);
+    }
+    rc.rows = ADASLICE__CAST(size_t *, adaslice__alloc(al, (size_t)ldi.grid.height, sizeof(size_t)));
+    ldi.first = ADASLICE__CAST(size_t *, adaslice__alloc(al, (size_t)ldi.grid.width * ldi.grid.height + 1, sizeof(size_t)));
+    if (!rc.rows || !ldi.first) {
+        res = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for a %d x %d LDI",
+                             ldi.grid.width, ldi.grid.height);
+        goto done;
+    }
+    memset(rc.rows, 0, (size_t)ldi.grid.height * sizeof(size_t));
+    memset(&r, 0, sizeof r);
+    r.grid = &ldi.grid;
+    r.depth_origin = ldi.depth_origin;
+    r.row_end = ldi.grid.height;
+    r.fn = adaslice__row_visit;
+    r.ctx = &rc;
+    if ((res = adaslice__raster_mesh(&r, mesh, err)) != ADASLICE_OK) goto done;
+    while (row < ldi.grid.height) {
+        size_t bytes = 0;
+        int end = row;
+        while (end < ldi.grid.height) {
+            size_t more = rc.rows[end] * sizeof(adaslice_sample) + (size_t)ldi.grid.width * sizeof(size_t);
+            if (end > row && bytes + more > opt->memory_limit) break;
+            bytes += more;
+            end++;
+        }
+        if ((res = adaslice__ldi_band(mesh, &ldi, row, end, err)) != ADASLICE_OK) goto done;
+        adaslice__sample_band(s, &ldi, row, end);
+        adaslice__free(al, ldi.samples);
+        ldi.samples = NULL;
+        row = end;
+    }
+done:
+    adaslice__free(al, rc.rows);
+    adaslice__free(al, ldi.first);
+    adaslice__free(al, ldi.samples);
+    return res;
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
+                                                      const adaslice_profile_options *options,
+                                                      adaslice_profile *profile, adaslice_error *err)
+{
+    adaslice_profile_options opt;
+    adaslice__sampling s;
+    adaslice_result r;
+    double *face_value = NULL;
+    size_t n, t, i;
+    int axis, max_type;
+
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, err)) != ADASLICE_OK) return r;
+    n = profile->bin_count;
+    max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
+    memset(&s, 0, sizeof s);
+    s.profile = profile;
+    s.inverse_bin = 1.0 / profile->bin;
+    face_value = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, mesh->triangle_count, sizeof(double)));
+    s.reached = ADASLICE__CAST(unsigned char *, adaslice__alloc(&profile->allocator, n, 1));
+    if (opt.weights && !max_type) s.wmax = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, n, sizeof(double)));
+    if (!max_type) s.inside = ADASLICE__CAST(long long *, adaslice__alloc(&profile->allocator, n + 1, sizeof(long long)));
+    if (!face_value || !s.reached || (opt.weights && !max_type && !s.wmax) || (!max_type && !s.inside)) {
+        r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+        goto done;
+    }
+    for (t = 0; t < mesh->triangle_count; t++) face_value[t] = adaslice__face_value(mesh, t, &opt);
+    s.face_value = face_value;
+    memset(s.reached, 0, n);
+    if (s.wmax) memset(s.wmax, 0, n * sizeof(double));
+    if (s.inside) memset(s.inside, 0, (n + 1) * sizeof(long long));
+    for (axis = ADASLICE_AXIS_X; axis <= ADASLICE_AXIS_Z; axis++) {
+        long long *inside = s.inside;
+        if (axis != ADASLICE_AXIS_Z) s.inside = NULL; /* areas come from the z rays */
+        r = adaslice__sample_axis(&s, mesh, (adaslice_axis)axis, &opt, err);
+        s.inside = inside;
+        if (r != ADASLICE_OK) goto done;
+    }
+    if (max_type) {
+        /* A bin no ray reached (thinner than a pixel and between two rows of
+           the x and y rays, with no surface facing z) takes the larger of its
+           nearest reached neighbours: never zero by mere lack of samples. */
+        size_t below = n, k;
+        for (i = 0; i < n; i++) {
+            if (s.reached[i]) { below = i; continue; }
+            for (k = i + 1; k < n && !s.reached[k]; k++) {}
+            profile->phi[i] = below < n ? profile->phi[below] : 0;
+            if (k < n && profile->phi[k] > profile->phi[i]) profile->phi[i] = profile->phi[k];
+            profile->unsampled_bins++;
+        }
+    } else {
+        long long count = 0;
+        double pixel = 0;
+        adaslice_grid gz = adaslice_grid_fit(mesh, ADASLICE_AXIS_Z, opt.resolution);
+        pixel = gz.pitch * gz.pitch;
+        for (i = 0; i < n; i++) {
+            count += s.inside[i];
+            profile->area[i] = (double)count * pixel;
+            profile->unsampled_bins += !s.reached[i];
+        }
+        adaslice__phi_from_area(profile, s.wmax);
+    }
+    r = ADASLICE_OK;
+    adaslice__ok(err);
+done:
+    adaslice__free(&profile->allocator, face_value);
+    adaslice__free(&profile->allocator, s.reached);
+    adaslice__free(&profile->allocator, s.wmax);
+    adaslice__free(&profile->allocator, s.inside);
+    if (r != ADASLICE_OK) adaslice_profile_free(profile);
+    return r;
 }
 
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)

@@ -20,10 +20,5 @@ int one_plan_layers(void)
     if (adaslice_plan_profile(&p, NULL, &plan, NULL) != ADASLICE_OK) return -1;
     k = (int)plan.layer_count;
     adaslice_plan_free(&plan);
-#ifndef ADASLICE_NO_STDIO
-    { adaslice_mesh m; (void)adaslice_mesh_load_file; (void)m; }
-#endif
-    { adaslice_mesh m; (void)adaslice_mesh_load; (void)adaslice_profile_exact; (void)adaslice_profile_free;
-      (void)adaslice_mesh_free; (void)adaslice_mesh_bounds; (void)adaslice_layer_error; (void)adaslice_result_name; (void)m; }
     return k;
 }

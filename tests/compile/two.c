@@ -24,9 +24,5 @@ int main(void)
     adaslice_plan_free(&plan);
     if (k != one_plan_layers()) { printf("translation units disagree\n"); return 1; }
     (void)adaslice_result_name(ADASLICE_OK);
-#ifdef TWO_STATIC
-    (void)adaslice_mesh_load; (void)adaslice_mesh_load_file; (void)adaslice_mesh_free; (void)adaslice_mesh_bounds;
-    (void)adaslice_profile_exact; (void)adaslice_profile_free; (void)adaslice_layer_error;
-#endif
     return 0;
 }

@@ -1,0 +1,24 @@
+/* PNG writer for printer layer masks: grayscale, 1 or 8 bits per pixel, with
+   its own deflate tuned for mostly black images with a few smooth regions. */
+#ifndef ADASLICE_HOST_PNG_H
+#define ADASLICE_HOST_PNG_H
+#include <stddef.h>
+#include <stdint.h>
+
+/* Encodes a width x height grayscale image as a PNG file image in a malloc'd
+   buffer (*out, *out_size; the caller frees *out). bits is 1 or 8. 1-bit rows
+   are packed MSB first, 1 = white (lit); bits past the width in a row's last
+   byte are ignored. stride is the number of bytes between rows of pixels.
+   Returns 0 on success; -1 when out of memory or for invalid arguments (bits
+   not 1 or 8, width or height < 1, stride shorter than a row, or more than
+   2 GB of row data), with *out = NULL and *out_size = 0. */
+int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
+                    unsigned char **out, size_t *out_size);
+
+/* Running checksums as PNG and zlib use them: crc = png_crc32(0, data, n)
+   (CRC-32, IEEE polynomial); adler = png_adler32(1, data, n) (Adler-32).
+   Feeding the result back in continues the checksum over more data. */
+uint32_t png_crc32(uint32_t crc, const void *data, size_t size);
+uint32_t png_adler32(uint32_t adler, const void *data, size_t size);
+
+#endif
