@@ -58,6 +58,7 @@ static const char *base_name(const char *path)
 
 static const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"};
 static const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
+static const char *const SAMPLER_NAMES[] = {"exact", "ldi"};
 enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
 
 typedef struct metric_info { const char *label, *phi_axis, *eps_unit; } metric_info;
@@ -139,6 +140,8 @@ typedef struct plan_args {
     double scale;                  /* 0: not given */
     double sharp;                  /* 0: pre-pass off */
     size_t budget;                 /* 0: none */
+    int sampler;                   /* 0: exact, 1: LDI */
+    size_t resolution;             /* LDI pixels across the largest extent */
     const char *out, *profile_out, *plot;
     int json, compare, help;
 } plan_args;
@@ -172,6 +175,9 @@ static void plan_usage(FILE *f)
         "profile\n"
         "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"
         "  --bin MM            bin size                                    [%g]\n"
+        "  --sampler NAME      exact (from the triangles) or ldi (the\n"
+        "                      paper's sampling by rays along x, y, z)     [exact]\n"
+        "  --res R             ldi: pixels across the largest extent       [%d]\n"
         "plan\n"
         "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"
         "  --eps E             allowed error per layer (mm; area: none;\n"
@@ -188,8 +194,8 @@ static void plan_usage(FILE *f)
         "  --compare           plan coarsest, optimal, greedy and finest on the same\n"
         "                      profile and print them as in the paper's Table 3\n"
         "Heights are in mm from the part's bottom.\n",
-        ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN, ADASLICE_DEFAULT_TMAX,
-        ADASLICE_DEFAULT_SHARP);
+        ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_RESOLUTION, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN,
+        ADASLICE_DEFAULT_TMAX, ADASLICE_DEFAULT_SHARP);
 }
 
 /* The value after option argv[*i]; NULL, said so, if there is none. */
@@ -252,7 +258,7 @@ static int name_option(int argc, char **argv, int *i, const char *const *names, 
 
 static int parse_plan(int argc, char **argv, plan_args *a)
 {
-    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL;
+    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL, sampler = 0;
     memset(a, 0, sizeof *a);
     a->bin = ADASLICE_DEFAULT_BIN;
     a->eps = ADASLICE_DEFAULT_EPS;
@@ -279,6 +285,8 @@ static int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--scale")) rc = number_option(argc, argv, &i, 0, &a->scale);
         else if (!strcmp(o, "--sharp")) rc = number_option(argc, argv, &i, 1, &a->sharp);
         else if (!strcmp(o, "--budget")) rc = count_option(argc, argv, &i, &a->budget);
+        else if (!strcmp(o, "--res")) rc = count_option(argc, argv, &i, &a->resolution);
+        else if (!strcmp(o, "--sampler")) rc = name_option(argc, argv, &i, SAMPLER_NAMES, 2, "exact or ldi", &sampler);
         else if (!strcmp(o, "--metric"))
             rc = name_option(argc, argv, &i, METRIC_NAMES, METRIC_COUNT, "cusp, roughness, area or volume", &metric);
         else if (!strcmp(o, "--method"))
@@ -288,6 +296,9 @@ static int parse_plan(int argc, char **argv, plan_args *a)
     if (rc) return rc;
     a->metric = (adaslice_metric)metric;
     a->method = (adaslice_method)method;
+    a->sampler = sampler;
+    if (a->resolution > 65536) return complain(RC_USAGE, "--res %zu: at most 65536", a->resolution);
+    if (a->resolution && !a->sampler) return complain(RC_USAGE, "--res applies to --sampler ldi");
     if (!a->model && !a->profile) return complain(RC_USAGE, "plan needs a MODEL or --profile FILE");
     if (a->model && a->profile)
         return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
@@ -319,8 +330,10 @@ static int profile_model(const plan_args *a, plan_job *j)
     memset(&po, 0, sizeof po);
     po.metric = a->metric;
     po.bin = a->bin;
+    po.resolution = (int)a->resolution;
     t0 = now_ms();
-    r = adaslice_profile_exact(&mesh, &po, &j->profile, &err);
+    r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
+                   : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
     j->ms_profile = now_ms() - t0;
     adaslice_mesh_free(&mesh);
     if (r != ADASLICE_OK) return library_error(&err);
@@ -524,7 +537,11 @@ static void print_summary(const plan_args *a, const plan_job *j)
         printf("profile    %s: %zu values\n", a->profile, pr->bin_count);
     }
     printf("height     %g mm, %zu bins of %g mm\n", pr->height, pr->bin_count, pr->bin);
-    printf("metric     %s\n", METRICS[a->metric].label);
+    printf("metric     %s", METRICS[a->metric].label);
+    if (a->model && a->sampler)
+        printf(", sampled by LDIs of %d pixels across (%zu bins no ray reached take their neighbours' value)",
+               a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION, j->profile.unsampled_bins);
+    printf("\n");
     printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
     if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
     printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);
@@ -564,7 +581,8 @@ static void print_json(const plan_args *a, const plan_job *j)
     else printf("null");
     if (a->model) printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu", j->triangles, j->degenerate);
     else printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null");
-    printf(",\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", METRIC_NAMES[a->metric], METHOD_NAMES[a->method]);
+    printf(",\n  \"metric\": \"%s\",\n  \"sampler\": \"%s\",\n  \"unsampled_bins\": %zu,\n  \"method\": \"%s\",\n  \"eps\": ",
+           METRIC_NAMES[a->metric], SAMPLER_NAMES[a->sampler], j->profile.unsampled_bins, METHOD_NAMES[a->method]);
     json_number(stdout, p->eps);
     printf(",\n  \"tmin\": ");
     json_number(stdout, a->tmin);

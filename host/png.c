@@ -79,7 +79,7 @@ typedef struct deflater {
     uint64_t acc;       /* bits not yet in out, the oldest lowest */
     unsigned nacc;
     const unsigned char *data;
-    size_t n;
+    size_t n, row;      /* row: distance to the same byte one row up */
     uint32_t *syms;     /* a literal byte, or dist << 9 | length */
     size_t nsyms;
     uint32_t lfreq[286], dfreq[30];
@@ -329,37 +329,60 @@ static size_t match_length(const unsigned char *a, const unsigned char *b, size_
     return k;
 }
 
-/* Greedy LZ77 over d->data, flushing a block every BLOCK_SYMBOLS symbols.
-   row is the distance to the same byte one row up. */
-static int deflate_data(deflater *d, size_t row)
+typedef struct match { size_t len, dist; } match;
+
+/* What a match saves over literals, in bits, with literals guessed at 8 bits
+   and the match's codes at a few bits plus its extra bits: it ranks a short
+   run of the last byte above a slightly longer match from far away. */
+static long savings(const deflater *d, match m)
+{
+    if (m.len < 3) return 0;
+    return 8 * (long)m.len - 3 - len_extra[d->lcode[m.len - 3]] -
+           (m.dist == 1 ? 1 : 4 + dist_extra[dist_code(d, (uint32_t)m.dist)]);
+}
+
+/* The best of a run of the previous byte, the bytes one row up and the last
+   position with the same four bytes (which then becomes this one). */
+static match find_match(deflater *d, size_t i)
+{
+    const unsigned char *p = d->data;
+    size_t limit = d->n - i < MAX_MATCH ? d->n - i : MAX_MATCH;
+    match best = {0, 0}, m;
+    if (i >= 1) best = (match){match_length(p + i, p + i - 1, limit), 1};
+    if (best.len < limit && d->row <= WINDOW && i >= d->row) {
+        m = (match){match_length(p + i, p + i - d->row, limit), d->row};
+        if (savings(d, m) > savings(d, best)) best = m;
+    }
+    if (best.len < GOOD_MATCH && i + 4 <= d->n) {
+        uint32_t key, h, cand;
+        memcpy(&key, p + i, 4);
+        h = (key * 2654435761u) >> (32 - HASH_BITS);
+        cand = d->hash[h];
+        d->hash[h] = (uint32_t)i + 1;
+        if (cand && i - (cand - 1) <= WINDOW) {
+            m = (match){match_length(p + i, p + cand - 1, limit), i - (cand - 1)};
+            if (savings(d, m) > savings(d, best)) best = m;
+        }
+    }
+    return best;
+}
+
+/* LZ77 over d->data with one step of lazy evaluation: a literal goes first
+   when the match one byte on saves more. Flushes a block every BLOCK_SYMBOLS
+   symbols. */
+static int deflate_data(deflater *d)
 {
     const unsigned char *p = d->data;
     size_t n = d->n, i = 0, block_start = 0;
+    match m = find_match(d, 0), next = {0, 0};
     while (i < n) {
-        size_t limit = n - i < MAX_MATCH ? n - i : MAX_MATCH, best = 0, dist = 0, len;
-        if (i >= 1) { best = match_length(p + i, p + i - 1, limit); dist = 1; }
-        if (best < limit && row <= WINDOW && i >= row &&
-            (len = match_length(p + i, p + i - row, limit)) > best) {
-            best = len;
-            dist = row;
-        }
-        if (best < GOOD_MATCH && i + 4 <= n) {
-            uint32_t key, h, cand;
-            memcpy(&key, p + i, 4);
-            h = (key * 2654435761u) >> (32 - HASH_BITS);
-            cand = d->hash[h];
-            d->hash[h] = (uint32_t)i + 1;
-            if (cand && i - (cand - 1) <= WINDOW &&
-                (len = match_length(p + i, p + cand - 1, limit)) > best) {
-                best = len;
-                dist = i - (cand - 1);
-            }
-        }
-        if (best >= 3) {
-            d->syms[d->nsyms++] = (uint32_t)dist << 9 | (uint32_t)best;
-            d->lfreq[257 + d->lcode[best - 3]]++;
-            d->dfreq[dist_code(d, (uint32_t)dist)]++;
-            i += best;
+        int defer = m.len >= 3 && m.len < MAX_MATCH && i + 1 < n &&
+                    (next = find_match(d, i + 1), savings(d, next) > savings(d, m));
+        if (m.len >= 3 && !defer) {
+            d->syms[d->nsyms++] = (uint32_t)m.dist << 9 | (uint32_t)m.len;
+            d->lfreq[257 + d->lcode[m.len - 3]]++;
+            d->dfreq[dist_code(d, (uint32_t)m.dist)]++;
+            i += m.len;
         } else {
             d->syms[d->nsyms++] = p[i];
             d->lfreq[p[i]]++;
@@ -369,6 +392,7 @@ static int deflate_data(deflater *d, size_t row)
             if (flush_block(d, block_start, i, i == n)) return -1;
             block_start = i;
         }
+        if (i < n) m = defer ? next : find_match(d, i);
     }
     return d->nsyms ? flush_block(d, block_start, n, 1) : 0;
 }
@@ -383,44 +407,39 @@ static void put_be32(unsigned char *o, uint32_t v)
     o[3] = (unsigned char)v;
 }
 
-/* Rows of filter byte + data. Up turns every pixel equal to the one above into
-   a zero, which the matcher codes as runs; None is kept for rows with more
-   zero bytes of their own. Both are judged by 8-byte words, which is cheap and
-   close enough. */
+/* Rows of filter byte + data. The matcher already codes a row that repeats
+   the one above as a match one row back, so the Up filter only pays where
+   it turns a row without runs into one with them (gradients, fine vertical
+   stripes); turning an unchanged row into zeros instead would cost the next
+   row its match. Runs are judged by 8-byte words whose bytes are all equal,
+   and None wins ties: it does on mask rows. */
 static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes,
                         unsigned char last_mask, unsigned char *out)
 {
-    const uint64_t high = 0x8080808080808080u;
+    const uint64_t high = 0x8080808080808080u, ones = 0x0101010101010101u;
     for (int y = 0; y < height; y++, out += rowbytes + 1) {
-        const unsigned char *cur = pixels + (size_t)y * stride, *prev;
-        size_t body = rowbytes - 1, x = 0, same_words = 0, zero_words = 0;
+        const unsigned char *cur = pixels + (size_t)y * stride, *prev = cur - (y ? stride : 0);
+        size_t body = rowbytes - 1, x = 0, flat_none = 0, flat_up = 0;
         unsigned char last = cur[body] & last_mask;
-        if (y == 0) { /* Up against the zero row above the image is the identity */
-            out[0] = 2;
-            memcpy(out + 1, cur, body);
-            out[rowbytes] = last;
-            continue;
-        }
-        prev = cur - stride;
-        for (; x + 8 <= body; x += 8) {
+        for (; y > 0 && x + 8 <= body; x += 8) {
             uint64_t c, p, up;
             memcpy(&c, cur + x, 8);
             memcpy(&p, prev + x, 8);
-            same_words += c == p;
-            zero_words += c == 0;
             /* bytewise c - p: the high bits set in c and clear in p stop borrows
                crossing bytes, the last xor puts the right high bits back */
             up = ((c | high) - (p & ~high)) ^ ((c ^ ~p) & high);
+            flat_none += c == (c & 0xff) * ones;
+            flat_up += up == (up & 0xff) * ones;
             memcpy(out + 1 + x, &up, 8);
         }
-        for (; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
-        out[rowbytes] = (unsigned char)(last - (prev[body] & last_mask));
-        if (zero_words > same_words) {
+        if (flat_up > flat_none) {
+            for (; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
+            out[0] = 2;
+            out[rowbytes] = (unsigned char)(last - (prev[body] & last_mask));
+        } else {
             out[0] = 0;
             memcpy(out + 1, cur, body);
             out[rowbytes] = last;
-        } else {
-            out[0] = 2;
         }
     }
 }
@@ -449,6 +468,7 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     d.hash = (uint32_t *)calloc((size_t)1 << HASH_BITS, sizeof *d.hash);
     if (!filtered || !d.syms || !d.hash || reserve(&d, head + 2 + d.n / 16 + 1024)) goto done;
     d.data = filtered;
+    d.row = rowbytes + 1;
     for (int c = 0; c < 29; c++)
         for (int v = len_base[c] - 3; v < len_base[c] - 3 + (1 << len_extra[c]) && v < 256; v++)
             d.lcode[v] = (unsigned char)c;
@@ -470,7 +490,7 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     d.out[41] = 0x78; /* deflate, 32K window; 0x7801 is a multiple of 31 */
     d.out[42] = 0x01;
     d.size = head + 2;
-    if (deflate_data(&d, rowbytes + 1) || reserve(&d, 8 + 4 + 4 + 12)) goto done;
+    if (deflate_data(&d) || reserve(&d, 8 + 4 + 4 + 12)) goto done;
     align_byte(&d);
     put_be32(d.out + d.size, png_adler32(1, filtered, d.n));
     d.size += 4;

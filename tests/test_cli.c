@@ -291,6 +291,26 @@ done:
     run_free(&r);
 }
 
+/* --sampler ldi plans from the paper's sampled profile: on a sphere it
+   agrees with the exact profile's plan to within 2 % of the layers. */
+static void test_cli_sampler(void)
+{
+    run_result a = run("plan", sphere_stl(), "--json", NULL), b = run("plan", sphere_stl(), "--json", "--sampler", "ldi",
+                                                                       "--res", "1024", NULL);
+    double ka = json_field(a.out, "layers"), kb = json_field(b.out, "layers");
+    CHECKF(a.status == 0 && b.status == 0, "%s %s", a.err, b.err);
+    CHECKF(ka > 0 && fabs(ka - kb) <= 0.02 * ka, "exact %g layers, ldi %g", ka, kb);
+    CHECK(strstr(b.out, "\"sampler\": \"ldi\"") != NULL);
+    run_free(&a);
+    run_free(&b);
+    a = run("plan", sphere_stl(), "--sampler", "gpu", NULL);
+    CHECK(a.status == 2 && one_message(a.err) && strstr(a.err, "--sampler gpu"));
+    run_free(&a);
+    a = run("plan", sphere_stl(), "--sampler", "ldi", "--res", "0", NULL);
+    CHECK(a.status == 2 && one_message(a.err) && strstr(a.err, "--res"));
+    run_free(&a);
+}
+
 static void test_cli_profile_input(void)
 {
     const char *csv = in_dir("p.csv"), *plain = in_dir("p.txt");
@@ -432,6 +452,7 @@ void test_cli(void)
     RUN(test_cli_help_and_version);
     RUN(test_cli_bad_arguments);
     RUN(test_cli_plan_sphere);
+    RUN(test_cli_sampler);
     RUN(test_cli_profile_input);
     RUN(test_cli_profile_bad_lines);
     RUN(test_cli_infeasible);

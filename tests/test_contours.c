@@ -213,9 +213,9 @@ static void solids_give_closed_polygons_of_the_right_area(void)
                     edge[n++][1] = ring_index(&m[0], SLICES, STACKS, k, j);
                 }
             } else {
-                for (j = 0; j < SLICES; j++) { /* cylinder wall edges; cone edges to the apex */
+                for (j = 0; j < SLICES; j++, n++) { /* cylinder wall edges; cone edges to the apex */
                     edge[n][0] = (uint32_t)(s == 1 ? 2 + 2 * j : 2 + j);
-                    edge[n++][1] = s == 1 ? edge[n - 1][0] + 1 : 0;
+                    edge[n][1] = s == 1 ? edge[n][0] + 1 : 0;
                 }
             }
             ref = edge_polygon_area(&m[s], (const uint32_t(*)[2])edge, n, h[i]);
@@ -248,9 +248,10 @@ static void heights_at_vertices_give_the_section_just_above(void)
     for (r = 1; r < STACKS; r++) {
         int k = STACKS - r;
         double ref;
-        for (j = 0; j < SLICES; j++) ring[j][0] = ring[j][1] = ring_index(&sphere, SLICES, STACKS, k, j);
-        /* the degenerate "edge" (v, v) reads v itself */
-        for (j = 0; j < SLICES; j++) ring[j][1] = ring_index(&sphere, SLICES, STACKS, k - 1, j);
+        for (j = 0; j < SLICES; j++) { /* meridians cut at their lower ends */
+            ring[j][0] = ring_index(&sphere, SLICES, STACKS, k, j);
+            ring[j][1] = ring_index(&sphere, SLICES, STACKS, k - 1, j);
+        }
         ref = edge_polygon_area(&sphere, (const uint32_t(*)[2])ring, SLICES, h[r]);
         CHECKF(polygons_at(&c, (size_t)r) == 1, "ring %d: %zu polygons", k, polygons_at(&c, (size_t)r));
         if (polygons_at(&c, (size_t)r) == 1) {
@@ -369,7 +370,10 @@ static void open_meshes_give_open_polylines(void)
     c = slice(&side, h, 3);
     for (i = 0; i < 2; i++) {
         const adaslice_polygon *p = c.polygons + c.first_polygon[i];
-        CHECK(polygons_at(&c, i) == 1 && !p->closed && p->count == 4);
+        const double *end = c.points + 2 * (p->first + p->count - 1);
+        CHECK(polygons_at(&c, i) == 1 && !p->closed);
+        /* the walls x = 4, y = 3, x = 0 in turn (diagonals add points in between) */
+        CHECK(c.points[2 * p->first] == 4 && c.points[2 * p->first + 1] == 0 && end[0] == 0 && end[1] == 0);
         /* the chord stands in for the missing face */
         CHECK(fabs(area_at(&c, i) - 12) < 1e-12);
         CHECK(adaslice_contours_winding(&c, i, 2, 1) == 1 && adaslice_contours_winding(&c, i, 2, -1) == 0);
@@ -382,9 +386,11 @@ static void open_meshes_give_open_polylines(void)
     CHECK(polygons_at(&c, 1) == 1 && c.polygons[c.first_polygon[1]].closed);
     adaslice_contours_free(&c);
 
-    top.triangles[0] ^= top.triangles[1]; /* one wall triangle turned inside out */
-    top.triangles[1] ^= top.triangles[0];
-    top.triangles[0] ^= top.triangles[1];
+    {   /* one wall triangle turned inside out */
+        uint32_t v = top.triangles[6];
+        top.triangles[6] = top.triangles[7];
+        top.triangles[7] = v;
+    }
     c = slice(&top, h + 1, 1);
     CHECK(c.polygon_count >= 1 && open_polygons(&c) >= 1);
     adaslice_contours_free(&c);
@@ -465,11 +471,11 @@ static void winding_is_exact_next_to_an_edge(void)
 {
     static const double tri[3][2] = {{-12, -12}, {24, 24}, {-12, 24}};
     adaslice_mesh m = gen_prism(tri, 3, 0, 1);
-    double h = 0.5, u = DBL_EPSILON / 4; /* one ulp of 0.5 */
+    double h = 0.5, u = DBL_EPSILON / 2; /* one ulp of 0.5 */
     adaslice_contours c = slice(&m, &h, 1);
     int i, j, wrong = 0;
-    CHECK(c.polygon_count == 1 && c.polygons[0].closed && c.polygons[0].count == 3);
-    CHECK(c.points[0] == -12 || c.points[2] == -12 || c.points[4] == -12);
+    CHECK(c.polygon_count == 1 && c.polygons[0].closed);
+    CHECK(area_at(&c, 0) == 648); /* the corners came through exactly */
     for (i = -20; i <= 20; i++)
         for (j = -20; j <= 20; j++) {
             double x = 0.5 + i * u, y = 0.5 + j * u;
@@ -581,7 +587,7 @@ static void running_out_of_memory_leaks_nothing(void)
         r = adaslice_contours_slice(&m, h, 50, &o, &c, &e);
         if (r == ADASLICE_OK) {
             done = 1;
-            CHECK(c.polygon_count == 48 && f.live == 4);
+            CHECK(c.polygon_count == 49 && f.live == 4); /* none at the bottom pole */
             adaslice_contours_free(&c);
         } else {
             CHECKF(r == ADASLICE_ERR_NOMEM && c.points == NULL, "failure %d: %s", n, e.message);
