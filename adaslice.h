@@ -365,6 +365,45 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan);
    b * sum phi (additive metrics), b * sum |phi[j] - phi[first]| (volume, eq. 20). */
 ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t first, size_t end);
 
+/* ------------------------------------------------------------------ masks */
+
+/* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
+   each call applies the z-ray samples between the previous height and this
+   one, so every sample is rasterised once over the whole print. A pixel is
+   lit when the winding number of its z ray below the height is positive
+   (overlapping shells stay lit; open meshes light what their rays enclose).
+   With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
+   grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
+   per pixel when s > 1, plus the image. */
+typedef struct adaslice_masker {
+    const adaslice_mesh *mesh;
+    adaslice_grid grid;          /* the printer's pixels; axis must be z */
+    int supersample;             /* s; 1 gives 1-bit masks */
+    unsigned char *image;        /* s = 1: rows of (width + 7) / 8 bytes, MSB first, 1 = lit;
+                                    s > 1: rows of width bytes. Row 0 is the grid's row 0 */
+    size_t stride;               /* bytes per image row */
+    double lit;                  /* lit pixels (fractions with s > 1) */
+    /* private */
+    adaslice_grid rays;
+    double depth_origin, done;   /* samples below `done` are applied */
+    uint32_t *order;             /* triangles by lowest z */
+    size_t next;                 /* order[next] is the lowest not yet active */
+    uint32_t *active;
+    size_t active_count;
+    int16_t *winding;            /* per ray */
+    uint16_t *coverage;          /* per pixel, s > 1 */
+    unsigned char grey[257];     /* coverage -> grey level */
+    adaslice_allocator allocator;
+} adaslice_masker;
+
+ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *masker, const adaslice_mesh *mesh,
+                                                  const adaslice_grid *grid, int supersample,
+                                                  const adaslice_allocator *allocator, adaslice_error *error);
+/* The mask at `height` (absolute z, mm) in masker->image; heights must not
+   decrease from call to call. */
+ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
+ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
+
 /* ------------------------------------------------------------ stdio helpers */
 #ifndef ADASLICE_NO_STDIO
 /* Reads a whole file and loads it; errors name the path. */
@@ -3060,6 +3099,149 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
     memset(plan, 0, sizeof *plan);
 }
 
+
+/* =================================================================== masks */
+
+typedef struct adaslice__zkey { float z; uint32_t t; } adaslice__zkey;
+
+static int adaslice__zkey_cmp(const void *a, const void *b)
+{
+    const adaslice__zkey *x = ADASLICE__CAST(const adaslice__zkey *, a), *y = ADASLICE__CAST(const adaslice__zkey *, b);
+    return x->z < y->z ? -1 : (x->z > y->z ? 1 : (x->t < y->t ? -1 : x->t > y->t));
+}
+
+static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
+{
+    float a = m->vertices[3 * (size_t)m->triangles[3 * t] + 2], b = m->vertices[3 * (size_t)m->triangles[3 * t + 1] + 2],
+          c = m->vertices[3 * (size_t)m->triangles[3 * t + 2] + 2], r = a;
+    if (highest) { if (b > r) r = b; if (c > r) r = c; }
+    else { if (b < r) r = b; if (c < r) r = c; }
+    return r;
+}
+
+ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
+{
+    adaslice_allocator al;
+    if (!mk) return;
+    al = mk->allocator;
+    adaslice__free(&al, mk->image);
+    adaslice__free(&al, mk->order);
+    adaslice__free(&al, mk->active);
+    adaslice__free(&al, mk->winding);
+    adaslice__free(&al, mk->coverage);
+    memset(mk, 0, sizeof *mk);
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const adaslice_mesh *mesh,
+                                                  const adaslice_grid *grid, int s, const adaslice_allocator *allocator,
+                                                  adaslice_error *err)
+{
+    adaslice_result r;
+    adaslice__zkey *keys;
+    size_t t, rays, pixels;
+    int k;
+    if (!mk) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker given");
+    memset(mk, 0, sizeof *mk);
+    if ((r = adaslice__grid_check(grid, err)) != ADASLICE_OK) return r;
+    if (grid->axis != ADASLICE_AXIS_Z)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: the grid's rays must run along z");
+    if (s < 1 || s > 16 || (double)grid->width * s > ADASLICE__GRID_LIMIT || (double)grid->height * s > ADASLICE__GRID_LIMIT)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: supersampling %d is outside 1..16 (or too fine for the grid)", s);
+    if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "masks: the mesh has no triangles");
+    mk->allocator = adaslice__allocator(allocator);
+    mk->mesh = mesh;
+    mk->grid = *grid;
+    mk->supersample = s;
+    mk->rays = *grid;
+    mk->rays.pitch = grid->pitch / s;
+    mk->rays.width = grid->width * s;
+    mk->rays.height = grid->height * s;
+    mk->depth_origin = adaslice__depth_origin(mesh, ADASLICE_AXIS_Z);
+    mk->done = -DBL_MAX;
+    rays = (size_t)mk->rays.width * (size_t)mk->rays.height;
+    pixels = (size_t)grid->width * (size_t)grid->height;
+    mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
+    mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
+    mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
+    if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
+    mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
+    mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
+    keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(adaslice__zkey)));
+    if (!mk->image || !mk->winding || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
+        adaslice__free(&mk->allocator, keys);
+        adaslice_masker_free(mk);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
+    }
+    memset(mk->image, 0, mk->stride * (size_t)grid->height);
+    memset(mk->winding, 0, rays * sizeof(int16_t));
+    if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
+    for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__tri_z(mesh, t, 0); keys[t].t = (uint32_t)t; }
+    qsort(keys, mesh->triangle_count, sizeof *keys, adaslice__zkey_cmp);
+    for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = keys[t].t;
+    adaslice__free(&mk->allocator, keys);
+    for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+/* A ray's winding number changes by one at each sample; a pixel changes
+   when one of its rays crosses between zero and positive. */
+static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
+{
+    adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
+    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1, s = (int16_t)mk->supersample;
+    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
+    size_t row = (size_t)(span->row / s);
+    int i;
+    for (i = span->first; i < span->end; i++) {
+        int before = w[i] > 0, after;
+        w[i] = (int16_t)(w[i] + step);
+        after = w[i] > 0;
+        if (before == after) continue;
+        if (s == 1) {
+            mk->image[row * mk->stride + (size_t)(i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
+            mk->lit += after ? 1 : -1;
+        } else {
+            size_t px = row * mk->stride + (size_t)(i / s);
+            mk->coverage[px] = (uint16_t)(mk->coverage[px] + (after ? 1 : -1));
+            mk->image[px] = mk->grey[mk->coverage[px]];
+            mk->lit += (after ? 1.0 : -1.0) / (s * s);
+        }
+    }
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
+{
+    adaslice__raster r;
+    const adaslice_mesh *m = mk->mesh;
+    double h = height - mk->depth_origin;
+    size_t k, kept = 0;
+    if (!(h >= mk->done) || h > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
+    /* triangles starting below the new height join; those ending below the
+       previous height (whose samples are all applied) leave */
+    while (mk->next < m->triangle_count && adaslice__tri_z(m, mk->order[mk->next], 0) - mk->depth_origin < h)
+        mk->active[mk->active_count++] = mk->order[mk->next++];
+    for (k = 0; k < mk->active_count; k++)
+        if (adaslice__tri_z(m, mk->active[k], 1) - mk->depth_origin >= mk->done) mk->active[kept++] = mk->active[k];
+    mk->active_count = kept;
+    memset(&r, 0, sizeof r);
+    r.grid = &mk->rays;
+    r.depth_origin = mk->depth_origin;
+    r.row_end = mk->rays.height;
+    r.slab = 1;
+    r.slab_lo = mk->done;
+    r.slab_hi = h;
+    r.fn = adaslice__mask_visit;
+    r.ctx = mk;
+    for (k = 0; k < mk->active_count; k++)
+        if (adaslice__raster_triangle(&r, m, mk->active[k]))
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                                  "masks: triangle %u lies more than 2^21 pixels from the printer's grid", (unsigned)mk->active[k]);
+    mk->done = h;
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
 
 #endif /* ADASLICE_IMPLEMENTATION_DONE */
 #endif /* ADASLICE_IMPLEMENTATION */

@@ -3,7 +3,7 @@
    The public declarations sit in the `#if 0` block below (a block rather than a
    comment because they carry comments of their own): paste them before the
    declarations' closing `#ifdef __cplusplus }`. Paste everything after the block
-   just before `#endif / * ADASLICE_IMPLEMENTATION_DONE * /`.
+   just before the `#endif` that closes ADASLICE_IMPLEMENTATION_DONE.
 
    Manual paragraph for the header's top comment:
 
@@ -233,8 +233,9 @@ static void adaslice__put_point(adaslice_contours *c, adaslice_polygon *p, const
     p->count++;
 }
 
-/* Follows `next` from segment i. A loop that shrinks below three distinct
-   points (a plane touching a lowest vertex) encloses nothing and is dropped. */
+/* Follows `next` from segment i. A loop left with fewer than three distinct
+   points (a plane touching a lowest vertex) or a polyline with fewer than two
+   has no extent and is dropped. */
 static void adaslice__emit(adaslice_contours *c, const adaslice_mesh *m, double h, adaslice__segment *seg,
                            uint32_t i)
 {

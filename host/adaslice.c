@@ -11,6 +11,7 @@
 #endif
 #define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include "cli.h"
 #include "svg.h"
 
 #include <errno.h>
@@ -22,9 +23,8 @@
 #include <time.h>
 #include <unistd.h>
 
-enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
 
-static int complain(int rc, const char *fmt, ...)
+int complain(int rc, const char *fmt, ...)
 {
     va_list ap;
     fputs("adaslice: ", stderr);
@@ -36,19 +36,19 @@ static int complain(int rc, const char *fmt, ...)
 }
 
 /* A parameter the library rejects came from the command line, hence exit 2. */
-static int library_error(const adaslice_error *e)
+int library_error(const adaslice_error *e)
 {
     return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s", e->message);
 }
 
-static double now_ms(void)
+double now_ms(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
-static const char *base_name(const char *path)
+const char *base_name(const char *path)
 {
     const char *slash = strrchr(path, '/');
     return slash ? slash + 1 : path;
@@ -56,13 +56,11 @@ static const char *base_name(const char *path)
 
 /* ----------------------------------------------------- names and units */
 
-static const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"};
-static const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
-static const char *const SAMPLER_NAMES[] = {"exact", "ldi"};
-enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
+const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"};
+const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
+const char *const SAMPLER_NAMES[] = {"exact", "ldi"};
 
-typedef struct metric_info { const char *label, *phi_axis, *eps_unit; } metric_info;
-static const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
+const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
     {"cusp height", "cusp height per mm of layer (mm/mm)", "mm"},       /* eq. 4-6 */
     {"roughness", "roughness per mm of layer (mm/mm)", "mm"},           /* eq. 8-10 */
     {"area deviation", "area deviation per mm of layer (1/mm)", ""},    /* eq. 12-14 */
@@ -84,11 +82,10 @@ static const char *unit_suffix(const char *unit, char buf[16])
 
 /* ------------------------------------------------------ atomic output */
 
-typedef void (*write_fn)(FILE *f, const void *ctx);
 
 /* Writes PATH through "PATH.tmp.PID" and renames it into place, so that PATH
    never holds a partial file whatever fails. */
-static int write_atomic(const char *path, write_fn fill, const void *ctx)
+int write_atomic(const char *path, write_fn fill, const void *ctx)
 {
     size_t size = strlen(path) + 32;
     char *tmp = malloc(size);
@@ -112,7 +109,7 @@ static int write_atomic(const char *path, write_fn fill, const void *ctx)
     return err ? complain(RC_FAIL, "cannot write %s: %s", path, strerror(err)) : RC_OK;
 }
 
-static void json_string(FILE *f, const char *s)
+void json_string(FILE *f, const char *s)
 {
     fputc('"', f);
     for (; *s; s++) {
@@ -124,7 +121,7 @@ static void json_string(FILE *f, const char *s)
     fputc('"', f);
 }
 
-static void json_number(FILE *f, double v)
+void json_number(FILE *f, double v)
 {
     if (isfinite(v)) fprintf(f, "%.17g", v);
     else fputs("null", f);
@@ -132,42 +129,23 @@ static void json_number(FILE *f, double v)
 
 /* ---------------------------------------------------------------- plan */
 
-typedef struct plan_args {
-    const char *model, *profile;   /* exactly one is set */
-    adaslice_metric metric;
-    adaslice_method method;
-    double bin, eps, tmin, tmax;
-    double scale;                  /* 0: not given */
-    double sharp;                  /* 0: pre-pass off */
-    size_t budget;                 /* 0: none */
-    int sampler;                   /* 0: exact, 1: LDI */
-    size_t resolution;             /* LDI pixels across the largest extent */
-    const char *out, *profile_out, *plot;
-    int json, compare, help;
-} plan_args;
 
-typedef struct plan_job {
-    const plan_args *args;
-    size_t triangles, degenerate;  /* model only */
-    adaslice_format format;
-    adaslice_profile profile;
-    int profiled;                  /* profile came from the library and needs freeing */
-    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all four with --compare */
-    adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
-    int planned[METHOD_COUNT];
-    double ms_load, ms_profile, ms_plan;
-} plan_job;
 
 static void plan_usage(FILE *f)
 {
+    fputs("usage: adaslice plan MODEL [options]\n"
+          "       adaslice plan --profile FILE [options]\n"
+          "\n"
+          "Finds the slicing plan with the fewest layers whose every layer error stays\n"
+          "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
+          "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
+          "\n", f);
+    plan_options_usage(f);
+}
+
+void plan_options_usage(FILE *f)
+{
     fprintf(f,
-        "usage: adaslice plan MODEL [options]\n"
-        "       adaslice plan --profile FILE [options]\n"
-        "\n"
-        "Finds the slicing plan with the fewest layers whose every layer error stays\n"
-        "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
-        "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
-        "\n"
         "input\n"
         "  --profile FILE      plan this profile instead of a MODEL: one value per line,\n"
         "                      or CSV whose last column is the value; bins of --bin mm\n"
@@ -208,13 +186,13 @@ static const char *value_of(int argc, char **argv, int *i)
     return argv[++*i];
 }
 
-static int file_option(int argc, char **argv, int *i, const char **out)
+int file_option(int argc, char **argv, int *i, const char **out)
 {
     *out = value_of(argc, argv, i);
     return *out ? RC_OK : RC_USAGE;
 }
 
-static int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
+int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
 {
     const char *opt = argv[*i], *v = value_of(argc, argv, i);
     char *end;
@@ -227,7 +205,7 @@ static int number_option(int argc, char **argv, int *i, int zero_ok, double *out
     return RC_OK;
 }
 
-static int count_option(int argc, char **argv, int *i, size_t *out)
+int count_option(int argc, char **argv, int *i, size_t *out)
 {
     const char *opt = argv[*i], *v = value_of(argc, argv, i);
     char *end;
@@ -242,7 +220,7 @@ static int count_option(int argc, char **argv, int *i, size_t *out)
     return RC_OK;
 }
 
-static int name_option(int argc, char **argv, int *i, const char *const *names, int count,
+int name_option(int argc, char **argv, int *i, const char *const *names, int count,
                        const char *choices, int *out)
 {
     const char *opt = argv[*i], *v = value_of(argc, argv, i);
@@ -256,7 +234,7 @@ static int name_option(int argc, char **argv, int *i, const char *const *names, 
     return complain(RC_USAGE, "%s %s: unknown, expected %s", opt, v, choices);
 }
 
-static int parse_plan(int argc, char **argv, plan_args *a)
+int parse_plan(int argc, char **argv, plan_args *a)
 {
     int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL, sampler = 0;
     memset(a, 0, sizeof *a);
@@ -335,7 +313,8 @@ static int profile_model(const plan_args *a, plan_job *j)
     r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
                    : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
     j->ms_profile = now_ms() - t0;
-    adaslice_mesh_free(&mesh);
+    if (j->keep_mesh) j->mesh = mesh;
+    else adaslice_mesh_free(&mesh);
     if (r != ADASLICE_OK) return library_error(&err);
     j->profiled = 1;
     return RC_OK;
@@ -427,7 +406,7 @@ static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_metho
 
 /* The asked plan must succeed; with --compare the others may be infeasible,
    which their row of the table then says. */
-static int run_plan(const plan_args *a, plan_job *j)
+int run_plan(const plan_args *a, plan_job *j)
 {
     double t0;
     int rc = a->model ? profile_model(a, j) : read_profile(a, j), m;
@@ -442,13 +421,14 @@ static int run_plan(const plan_args *a, plan_job *j)
     return RC_OK;
 }
 
-static void job_free(plan_job *j)
+void job_free(plan_job *j)
 {
     int m;
     for (m = 0; m < METHOD_COUNT; m++)
         if (j->planned[m] && j->why[m].result == ADASLICE_OK) adaslice_plan_free(&j->plan[m]);
     if (j->profiled) adaslice_profile_free(&j->profile);
     else free(j->profile.phi);
+    adaslice_mesh_free(&j->mesh);
 }
 
 static void write_plan_csv(FILE *f, const void *ctx)
@@ -487,7 +467,7 @@ static void write_plot(FILE *f, const void *ctx)
     svg_write_plan(f, &fig);
 }
 
-static int write_outputs(const plan_args *a, const plan_job *j)
+int write_outputs(const plan_args *a, const plan_job *j)
 {
     if (a->out && write_atomic(a->out, write_plan_csv, j)) return RC_FAIL;
     if (a->profile_out && write_atomic(a->profile_out, write_profile_csv, j)) return RC_FAIL;
@@ -661,6 +641,7 @@ typedef struct command {
 
 static const command COMMANDS[] = {
     {"plan", "plan adaptive layers for a mesh or a metric profile", cmd_plan},
+    {"slice", "plan a model and write its layer masks as a printable job", cmd_slice},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

@@ -12,7 +12,7 @@ static void write_path(FILE *f, const adaslice_contours *c, size_t i, int closed
         const double *pt = c->points + 2 * poly->first;
         if (poly->closed != closed) continue;
         for (k = 0; k < poly->count; k++)
-            fprintf(f, "%s%.4f %.4f", k ? " L" : " M", pt[2 * k], -pt[2 * k + 1]);
+            fprintf(f, "%s%.4f %.4f", k ? " L" : " M", pt[2 * k], 0.0 - pt[2 * k + 1]); /* never "-0" */
         if (closed) fputs(" Z", f);
     }
 }
@@ -38,17 +38,16 @@ void svg_write_contours(FILE *f, const adaslice_contours *c, size_t first, size_
                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.4fmm\" height=\"%.4fmm\" "
                "viewBox=\"%.4f %.4f %.4f %.4f\">\n",
             hi[0] - lo[0], hi[1] - lo[1], lo[0], -hi[1], hi[0] - lo[0], hi[1] - lo[1]);
-    /* strokes stay a hairline whatever the zoom (vector-effect is not inherited) */
-    fprintf(f, "<g fill=\"#3a6fb0\" fill-opacity=\"%.2f\" stroke=\"#14345c\" stroke-width=\"0.5\">\n",
-            count > 1 ? 0.35 : 1.0);
+    /* a hairline at 800 pixels across (renderers disagree on non-scaling strokes) */
+    fprintf(f, "<g fill=\"#3a6fb0\" fill-opacity=\"%.2f\" stroke=\"#14345c\" stroke-width=\"%.4f\">\n",
+            count > 1 ? 0.35 : 1.0, (hi[0] - lo[0] > hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1]) / 800);
     for (i = first; i < first + count; i++) {
-        fprintf(f, "<g id=\"z%zu\" data-z=\"%.6f\">\n<path fill-rule=\"nonzero\" "
-                   "vector-effect=\"non-scaling-stroke\" d=\"", i, c->heights[i]);
+        fprintf(f, "<g id=\"z%zu\" data-z=\"%.6f\">\n<path fill-rule=\"nonzero\" d=\"", i, c->heights[i]);
         write_path(f, c, i, 1);
         fputs("\"/>\n", f);
         for (open = 0, p = c->first_polygon[i]; p < c->first_polygon[i + 1]; p++) open += !c->polygons[p].closed;
         if (open) {
-            fputs("<path fill=\"none\" stroke=\"#c0392b\" vector-effect=\"non-scaling-stroke\" d=\"", f);
+            fputs("<path fill=\"none\" stroke=\"#c0392b\" d=\"", f);
             write_path(f, c, i, 0);
             fputs("\"/>\n", f);
         }

@@ -30,18 +30,29 @@ uint32_t png_crc32(uint32_t crc, const void *data, size_t size)
 
 uint32_t png_adler32(uint32_t adler, const void *data, size_t size)
 {
+    const uint64_t ones = 0x0101010101010101u;
     const unsigned char *p = (const unsigned char *)data;
     uint32_t a = adler & 0xffff, b = adler >> 16;
     while (size > 0) {
         /* 5552 bytes of 0xff is the most b can absorb before 32 bits overflow. */
         size_t n = size < 5552 ? size : 5552;
         size -= n;
-        for (; n >= 8; n -= 8, p += 8) {
-            uint64_t w;
+        while (n >= 8) {
+            uint64_t w, next;
             memcpy(&w, p, 8);
-            if (w == 0) { b += 8 * a; continue; } /* filtered masks are mostly zero */
+            if (w == (w & 0xff) * ones) { /* masks are mostly runs: sum m bytes of v at once */
+                uint32_t m = 8, v = (uint32_t)(w & 0xff);
+                while (m + 8 <= n && (memcpy(&next, p + m, 8), next == w)) m += 8;
+                b += m * a + v * (m * (m + 1) / 2);
+                a += m * v;
+                p += m;
+                n -= m;
+                continue;
+            }
             a += p[0]; b += a; a += p[1]; b += a; a += p[2]; b += a; a += p[3]; b += a;
             a += p[4]; b += a; a += p[5]; b += a; a += p[6]; b += a; a += p[7]; b += a;
+            p += 8;
+            n -= 8;
         }
         while (n--) { a += *p++; b += a; }
         a %= 65521;
@@ -368,12 +379,13 @@ static match find_match(deflater *d, size_t i)
 }
 
 /* LZ77 over d->data with one step of lazy evaluation: a literal goes first
-   when the match one byte on saves more. Flushes a block every BLOCK_SYMBOLS
-   symbols. */
+   when the match one byte on saves more. After 64 literals in a row the data
+   looks incompressible (noise) and only every 8th byte is probed. Flushes a
+   block every BLOCK_SYMBOLS symbols. */
 static int deflate_data(deflater *d)
 {
     const unsigned char *p = d->data;
-    size_t n = d->n, i = 0, block_start = 0;
+    size_t n = d->n, i = 0, block_start = 0, literals = 0;
     match m = find_match(d, 0), next = {0, 0};
     while (i < n) {
         int defer = m.len >= 3 && m.len < MAX_MATCH && i + 1 < n &&
@@ -383,16 +395,18 @@ static int deflate_data(deflater *d)
             d->lfreq[257 + d->lcode[m.len - 3]]++;
             d->dfreq[dist_code(d, (uint32_t)m.dist)]++;
             i += m.len;
+            literals = 0;
         } else {
             d->syms[d->nsyms++] = p[i];
             d->lfreq[p[i]]++;
             i++;
+            literals++;
         }
         if (d->nsyms == BLOCK_SYMBOLS) {
             if (flush_block(d, block_start, i, i == n)) return -1;
             block_start = i;
         }
-        if (i < n) m = defer ? next : find_match(d, i);
+        if (i < n) m = defer ? next : literals > 64 && literals % 8 ? (match){0, 0} : find_match(d, i);
     }
     return d->nsyms ? flush_block(d, block_start, n, 1) : 0;
 }
@@ -407,34 +421,33 @@ static void put_be32(unsigned char *o, uint32_t v)
     o[3] = (unsigned char)v;
 }
 
-/* Rows of filter byte + data. The matcher already codes a row that repeats
-   the one above as a match one row back, so the Up filter only pays where
-   it turns a row without runs into one with them (gradients, fine vertical
-   stripes); turning an unchanged row into zeros instead would cost the next
-   row its match. Runs are judged by 8-byte words whose bytes are all equal,
-   and None wins ties: it does on mask rows. */
+/* Rows of filter byte + data. The matcher codes runs and bytes repeated from
+   one row up, so a row costs little under None where its words are flat (all
+   bytes equal) or equal to the words above; Up only pays on rows whose Up
+   difference has more flat words than that (gradients, say). On masks None
+   wins, which keeps every row matchable against the row above. */
 static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes,
                         unsigned char last_mask, unsigned char *out)
 {
     const uint64_t high = 0x8080808080808080u, ones = 0x0101010101010101u;
     for (int y = 0; y < height; y++, out += rowbytes + 1) {
         const unsigned char *cur = pixels + (size_t)y * stride, *prev = cur - (y ? stride : 0);
-        size_t body = rowbytes - 1, x = 0, flat_none = 0, flat_up = 0;
+        size_t body = rowbytes - 1, flat_none = 0, flat_up = 0;
         unsigned char last = cur[body] & last_mask;
-        for (; y > 0 && x + 8 <= body; x += 8) {
+        for (size_t x = 0; y > 0 && x + 8 <= body; x += 8) {
             uint64_t c, p, up;
             memcpy(&c, cur + x, 8);
             memcpy(&p, prev + x, 8);
+            if (c == p) continue; /* counts for both */
             /* bytewise c - p: the high bits set in c and clear in p stop borrows
                crossing bytes, the last xor puts the right high bits back */
             up = ((c | high) - (p & ~high)) ^ ((c ^ ~p) & high);
             flat_none += c == (c & 0xff) * ones;
             flat_up += up == (up & 0xff) * ones;
-            memcpy(out + 1 + x, &up, 8);
         }
         if (flat_up > flat_none) {
-            for (; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
             out[0] = 2;
+            for (size_t x = 0; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
             out[rowbytes] = (unsigned char)(last - (prev[body] & last_mask));
         } else {
             out[0] = 0;

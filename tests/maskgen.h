@@ -9,10 +9,11 @@
 #include <stddef.h>
 #include <string.h>
 
-/* A shape: centre (cx, cy), a bounding radius, two sizes and an angle, and
-   the signed distance from a point to its edge (positive inside). */
+/* A shape: centre (cx, cy), a bounding radius, two sizes, the cosine and sine
+   of a turn, and the signed distance from a point to its edge (positive
+   inside). */
 typedef struct mask_shape {
-    double cx, cy, extent, a, b, angle;
+    double cx, cy, extent, a, b, cos, sin;
     double (*inside)(const struct mask_shape *s, double x, double y);
 } mask_shape;
 
@@ -37,14 +38,14 @@ static double mask_ring_inside(const mask_shape *s, double x, double y)
 
 static double mask_box_inside(const mask_shape *s, double x, double y)
 {
-    double c = cos(s->angle), n = sin(s->angle), dx = x - s->cx, dy = y - s->cy;
-    return fmin(s->a - fabs(dx * c + dy * n), s->b - fabs(dy * c - dx * n));
+    double dx = x - s->cx, dy = y - s->cy;
+    return fmin(s->a - fabs(dx * s->cos + dy * s->sin), s->b - fabs(dy * s->cos - dx * s->sin));
 }
 
 /* A ring of radii r_in < r_out; r_in < 0 makes it a disc. */
 static void mask_ring(unsigned char *g, int w, int h, double cx, double cy, double r_in, double r_out)
 {
-    mask_shape s = {cx, cy, r_out, r_in, r_out, 0, mask_ring_inside};
+    mask_shape s = {cx, cy, r_out, r_in, r_out, 1, 0, mask_ring_inside};
     mask_paint(g, w, h, &s);
 }
 
@@ -56,7 +57,7 @@ static void mask_disc(unsigned char *g, int w, int h, double cx, double cy, doub
 /* A rectangle of half sizes hw x hh turned by angle (radians) about its centre. */
 static void mask_box(unsigned char *g, int w, int h, double cx, double cy, double hw, double hh, double angle)
 {
-    mask_shape s = {cx, cy, hypot(hw, hh), hw, hh, angle, mask_box_inside};
+    mask_shape s = {cx, cy, hypot(hw, hh), hw, hh, cos(angle), sin(angle), mask_box_inside};
     mask_paint(g, w, h, &s);
 }
 

@@ -1,0 +1,72 @@
+/* The adaslice tool's shared parts: messages, atomic files, the plan options
+   and the job that plan and slice both run. */
+#ifndef ADASLICE_HOST_CLI_H
+#define ADASLICE_HOST_CLI_H
+#include <stdio.h>
+#include "../adaslice.h"
+
+enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
+enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
+
+extern const char *const METRIC_NAMES[];
+extern const char *const METHOD_NAMES[];
+extern const char *const SAMPLER_NAMES[];
+typedef struct metric_info { const char *label, *phi_axis, *eps_unit; } metric_info;
+extern const metric_info METRICS[METRIC_COUNT];
+
+/* "adaslice: " + the message on stderr; returns rc. */
+int complain(int rc, const char *fmt, ...);
+/* The library's message; exit 2 for an argument it rejects, else 1. */
+int library_error(const adaslice_error *e);
+double now_ms(void);
+const char *base_name(const char *path);
+
+typedef void (*write_fn)(FILE *f, const void *ctx);
+/* Writes PATH through "PATH.tmp.PID" and renames it into place. */
+int write_atomic(const char *path, write_fn fill, const void *ctx);
+void json_string(FILE *f, const char *s);
+void json_number(FILE *f, double v);
+
+typedef struct plan_args {
+    const char *model, *profile;   /* exactly one is set */
+    adaslice_metric metric;
+    adaslice_method method;
+    double bin, eps, tmin, tmax;
+    double scale;                  /* 0: not given */
+    double sharp;                  /* 0: pre-pass off */
+    size_t budget;                 /* 0: none */
+    int sampler;                   /* 0: exact, 1: LDI */
+    size_t resolution;             /* LDI pixels across the largest extent */
+    const char *out, *profile_out, *plot;
+    int json, compare, help;
+} plan_args;
+
+typedef struct plan_job {
+    const plan_args *args;
+    size_t triangles, degenerate;  /* model only */
+    adaslice_format format;
+    adaslice_profile profile;
+    int profiled;                  /* profile came from the library and needs freeing */
+    int keep_mesh;                 /* keep the model loaded (slice needs it) */
+    adaslice_mesh mesh;
+    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all four with --compare */
+    adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
+    int planned[METHOD_COUNT];
+    double ms_load, ms_profile, ms_plan;
+} plan_job;
+
+/* Option parsing: value_of and friends complain and return non-zero. */
+int number_option(int argc, char **argv, int *i, int zero_ok, double *out);
+int count_option(int argc, char **argv, int *i, size_t *out);
+int name_option(int argc, char **argv, int *i, const char *const *names, int count, const char *choices, int *out);
+int file_option(int argc, char **argv, int *i, const char **out);
+/* The plan options of `plan` (argv[0] is the command's name). */
+int parse_plan(int argc, char **argv, plan_args *a);
+void plan_options_usage(FILE *f);
+/* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */
+int run_plan(const plan_args *a, plan_job *j);
+int write_outputs(const plan_args *a, const plan_job *j);
+void job_free(plan_job *j);
+
+int cmd_slice(int argc, char **argv);
+#endif

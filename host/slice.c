@@ -1,0 +1,352 @@
+/* adaslice slice: plan a model, then write its layer masks on a printer's
+   pixel grid as a job directory: plan.csv, plot.svg, one PNG per layer, and
+   manifest.json, written last, so a job without one is not complete. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "cli.h"
+#include "png.h"
+#include "printer.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+typedef struct slice_args {
+    const char *dir;
+    const printer *preset;       /* or the three below */
+    int width, height;
+    double pitch;
+    int supersample;             /* --aa S; 1: 1-bit masks */
+    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
+    int placed;                  /* --place X,Y given */
+    double place[2];             /* the part's centre, mm from the plate's centre */
+    int mirror_x, mirror_y;
+} slice_args;
+
+static const char *const SLICE_AT[] = {"bottom", "middle", "top"};
+static const char *const MIRRORS[] = {"none", "x", "y", "xy"};
+
+static void slice_usage(FILE *f)
+{
+    int i;
+    fputs("usage: adaslice slice MODEL -o JOBDIR [printer] [masks] [plan options]\n"
+          "\n"
+          "Plans MODEL (as adaslice plan does) and writes JOBDIR/plan.csv, JOBDIR/plot.svg,\n"
+          "one PNG mask per layer (JOBDIR/layer_00001.png, ...) and, last, JOBDIR/manifest.json.\n"
+          "A pixel is lit when the winding number of its vertical ray below the slicing\n"
+          "height is positive.\n"
+          "\n"
+          "printer\n"
+          "  --printer NAME      a preset (below)                            [2k-5.5]\n"
+          "  --pixels WxH        pixels of the display, with --pitch\n"
+          "  --pitch MM          pixel size\n"
+          "  --mirror M          none, x, y or xy: flip the image as the display needs [none]\n"
+          "masks\n"
+          "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
+          "                      (1: 1-bit masks)                            [1]\n"
+          "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
+          "                      first, middle or last bin)                  [middle]\n"
+          "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
+          "\n", f);
+    plan_options_usage(f);
+    fputs("\nprinter presets\n", f);
+    for (i = 0; i < PRINTER_COUNT; i++)
+        fprintf(f, "  %-16s %d x %d px of %g mm: %s\n", PRINTERS[i].name, PRINTERS[i].width, PRINTERS[i].height,
+                PRINTERS[i].pitch, PRINTERS[i].about);
+}
+
+/* Takes the slice options out of argv; what is left goes to parse_plan. */
+static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest)
+{
+    int i, rc = RC_OK;
+    memset(s, 0, sizeof *s);
+    s->supersample = 1;
+    s->slice_at = 1;
+    rest[(*rest_argc)++] = argv[0];
+    for (i = 1; i < argc && !rc; i++) {
+        const char *o = argv[i];
+        if (!strcmp(o, "-o") || !strcmp(o, "--output")) rc = file_option(argc, argv, &i, &s->dir);
+        else if (!strcmp(o, "--printer")) {
+            const char *name = NULL;
+            if (!(rc = file_option(argc, argv, &i, &name)) && !(s->preset = printer_find(name)))
+                rc = complain(RC_USAGE, "--printer %s: unknown (see adaslice slice --help for the presets)", name);
+        } else if (!strcmp(o, "--pixels")) {
+            const char *v = NULL;
+            char tail;
+            if (!(rc = file_option(argc, argv, &i, &v)) &&
+                (sscanf(v, "%dx%d%c", &s->width, &s->height, &tail) != 2 || s->width < 1 || s->height < 1 ||
+                 s->width > 65536 || s->height > 65536))
+                rc = complain(RC_USAGE, "--pixels %s: expected WxH, each 1 to 65536", v);
+        } else if (!strcmp(o, "--pitch")) rc = number_option(argc, argv, &i, 0, &s->pitch);
+        else if (!strcmp(o, "--aa")) {
+            size_t n = 0;
+            if (!(rc = count_option(argc, argv, &i, &n)) && n > 16) rc = complain(RC_USAGE, "--aa %zu: at most 16", n);
+            s->supersample = (int)n;
+        } else if (!strcmp(o, "--slice-at")) rc = name_option(argc, argv, &i, SLICE_AT, 3, "bottom, middle or top", &s->slice_at);
+        else if (!strcmp(o, "--mirror")) {
+            int m = 0;
+            rc = name_option(argc, argv, &i, MIRRORS, 4, "none, x, y or xy", &m);
+            s->mirror_x = m & 1;
+            s->mirror_y = (m >> 1) & 1;
+        } else if (!strcmp(o, "--place")) {
+            const char *v = NULL;
+            char tail;
+            if (!(rc = file_option(argc, argv, &i, &v)) &&
+                (sscanf(v, "%lf,%lf%c", &s->place[0], &s->place[1], &tail) != 2 || !isfinite(s->place[0]) ||
+                 !isfinite(s->place[1])))
+                rc = complain(RC_USAGE, "--place %s: expected X,Y in mm", v);
+            s->placed = 1;
+        } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
+            slice_usage(stdout);
+            return -1;
+        } else rest[(*rest_argc)++] = argv[i];
+    }
+    if (rc) return rc;
+    if (!s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
+    if (s->preset && (s->width || s->pitch))
+        return complain(RC_USAGE, "--printer %s and --pixels/--pitch: give one or the other", s->preset->name);
+    if (!s->preset && !s->width && !s->pitch) s->preset = &PRINTERS[0];
+    if (s->preset) {
+        s->width = s->preset->width;
+        s->height = s->preset->height;
+        s->pitch = s->preset->pitch;
+    } else if (!s->width || !s->pitch) {
+        return complain(RC_USAGE, "--pixels WxH and --pitch MM go together");
+    }
+    return RC_OK;
+}
+
+typedef struct png_file { const unsigned char *data; size_t size; } png_file;
+
+static void write_png_bytes(FILE *f, const void *ctx)
+{
+    const png_file *p = (const png_file *)ctx;
+    fwrite(p->data, 1, p->size, f);
+}
+
+/* The masker's image (row 0 at the lowest y) as the display shows it: PNG
+   row 0 is the top, so +y points up unless mirrored; columns flip with x. */
+static void orient_image(const adaslice_masker *mk, const slice_args *s, unsigned char *out)
+{
+    int w = mk->grid.width, h = mk->grid.height, r, i;
+    for (r = 0; r < h; r++) {
+        const unsigned char *src = mk->image + (size_t)(s->mirror_y ? r : h - 1 - r) * mk->stride;
+        unsigned char *dst = out + (size_t)r * mk->stride;
+        if (!s->mirror_x) { memcpy(dst, src, mk->stride); continue; }
+        if (mk->supersample > 1) {
+            for (i = 0; i < w; i++) dst[i] = src[w - 1 - i];
+        } else {
+            memset(dst, 0, mk->stride);
+            for (i = 0; i < w; i++)
+                if (src[(w - 1 - i) >> 3] & (0x80u >> ((w - 1 - i) & 7))) dst[i >> 3] |= (unsigned char)(0x80u >> (i & 7));
+        }
+    }
+}
+
+typedef struct job_layer { double z_bottom, z_top, thickness, lit_mm2; } job_layer;
+
+typedef struct manifest {
+    const slice_args *s;
+    const plan_args *a;
+    const plan_job *j;
+    const job_layer *layers;
+    size_t count;
+    int digits;
+    double part[3];              /* size of the part, mm */
+} manifest;
+
+static void write_manifest(FILE *f, const void *ctx)
+{
+    const manifest *m = (const manifest *)ctx;
+    const slice_args *s = m->s;
+    const adaslice_plan *p = &m->j->plan[m->a->method];
+    size_t k;
+    fputs("{\n  \"format\": \"adaslice-job\",\n  \"version\": ", f);
+    json_string(f, ADASLICE_VERSION);
+    fputs(",\n  \"complete\": true,\n  \"model\": ", f);
+    json_string(f, m->a->model);
+    fputs(",\n  \"printer\": {\"name\": ", f);
+    if (s->preset) json_string(f, s->preset->name); else fputs("null", f);
+    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": ", s->width, s->height);
+    json_number(f, s->pitch);
+    fprintf(f, ", \"mirror\": \"%s\"},\n", MIRRORS[s->mirror_x | (s->mirror_y << 1)]);
+    fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n",
+            s->supersample > 1 ? 8 : 1, s->supersample, SLICE_AT[s->slice_at]);
+    fputs("  \"part_mm\": [", f);
+    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_number(f, m->part[k]); }
+    fputs("],\n  \"place_mm\": [", f);
+    json_number(f, s->place[0]);
+    fputs(", ", f);
+    json_number(f, s->place[1]);
+    fprintf(f, "],\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", METRIC_NAMES[m->a->metric],
+            METHOD_NAMES[m->a->method]);
+    json_number(f, p->eps);
+    fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", m->count);
+    for (k = 0; k < m->count; k++) {
+        const job_layer *l = &m->layers[k];
+        fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"layer_%0*zu.png\", \"z_bottom\": ", k ? "," : "", k + 1,
+                m->digits, k + 1);
+        json_number(f, l->z_bottom);
+        fputs(", \"z_top\": ", f);
+        json_number(f, l->z_top);
+        fputs(", \"thickness\": ", f);
+        json_number(f, l->thickness);
+        fputs(", \"lit_area_mm2\": ", f);
+        json_number(f, l->lit_mm2);
+        fputc('}', f);
+    }
+    fputs("\n  ]\n}\n", f);
+}
+
+/* A bar on a terminal, nothing otherwise; at most ten redraws a second. */
+static void progress(size_t done, size_t total, double started, double *last)
+{
+    double t = now_ms(), eta;
+    int filled, i;
+    if (!isatty(2) || (done < total && t - *last < 100)) return;
+    *last = t;
+    filled = (int)(30.0 * done / total);
+    eta = done ? (t - started) * (double)(total - done) / (double)done / 1000 : 0;
+    fputs("\r[", stderr);
+    for (i = 0; i < 30; i++) fputc(i < filled ? '#' : ' ', stderr);
+    fprintf(stderr, "] %zu/%zu layers, %.1f s left ", done, total, eta);
+    if (done == total) fputc('\n', stderr);
+}
+
+/* Where the grid's pixel (0, 0) lies in the model's coordinates, after
+   checking that the part fits on the plate. */
+static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_grid *g, double size[3])
+{
+    double lo[3], hi[3], plate[2], over[2];
+    int k;
+    adaslice_mesh_bounds(mesh, lo, hi);
+    plate[0] = s->width * s->pitch;
+    plate[1] = s->height * s->pitch;
+    for (k = 0; k < 3; k++) size[k] = hi[k] - lo[k];
+    for (k = 0; k < 2; k++) over[k] = fabs(s->place[k]) + size[k] / 2 - plate[k] / 2;
+    if (over[0] > 0 || over[1] > 0)
+        return complain(RC_FAIL, "the part (%g x %g mm%s) does not fit the %g x %g mm plate: %g mm too wide along %s",
+                        size[0], size[1], s->placed ? ", placed off centre" : "", plate[0], plate[1],
+                        over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
+    memset(g, 0, sizeof *g);
+    g->axis = ADASLICE_AXIS_Z;
+    g->pitch = s->pitch;
+    g->width = s->width;
+    g->height = s->height;
+    g->origin[0] = 0.5 * (lo[0] + hi[0]) - s->place[0] - plate[0] / 2;
+    g->origin[1] = 0.5 * (lo[1] + hi[1]) - s->place[1] - plate[1] / 2;
+    return RC_OK;
+}
+
+static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    adaslice_masker mk;
+    adaslice_error err;
+    adaslice_grid grid;
+    manifest man;
+    job_layer *layers = NULL;
+    unsigned char *image = NULL;
+    char *path = NULL;
+    size_t k, path_size = strlen(s->dir) + 64;
+    double started = now_ms(), last = 0;
+    int rc;
+
+    memset(&man, 0, sizeof man);
+    if ((rc = place_part(s, &j->mesh, &grid, man.part))) return rc;
+    if (adaslice_masker_init(&mk, &j->mesh, &grid, s->supersample, NULL, &err) != ADASLICE_OK) return library_error(&err);
+    layers = (job_layer *)calloc(p->layer_count ? p->layer_count : 1, sizeof *layers);
+    image = (unsigned char *)malloc(mk.stride * (size_t)grid.height);
+    path = (char *)malloc(path_size);
+    if (!layers || !image || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
+    man.digits = 5;
+    for (k = p->layer_count; k >= 100000; k /= 10) man.digits++;
+    for (k = 0; k < p->layer_count; k++) {
+        const adaslice_layer *l = &p->layers[k];
+        double h = s->slice_at == 0 ? l->z_bottom + j->profile.bin / 2
+                 : s->slice_at == 2 ? l->z_top - j->profile.bin / 2 : 0.5 * (l->z_bottom + l->z_top);
+        png_file png;
+        unsigned char *data = NULL;
+        if (adaslice_masker_slice(&mk, j->profile.z0 + h, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
+        orient_image(&mk, s, image);
+        if (png_encode_gray(image, grid.width, grid.height, mk.stride, s->supersample > 1 ? 8 : 1, &data, &png.size)) {
+            rc = complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
+            goto done;
+        }
+        png.data = data;
+        snprintf(path, path_size, "%s/layer_%0*zu.png", s->dir, man.digits, k + 1);
+        rc = write_atomic(path, write_png_bytes, &png);
+        free(data);
+        if (rc) goto done;
+        layers[k].z_bottom = l->z_bottom;
+        layers[k].z_top = l->z_top;
+        layers[k].thickness = l->thickness;
+        layers[k].lit_mm2 = mk.lit * grid.pitch * grid.pitch;
+        progress(k + 1, p->layer_count, started, &last);
+    }
+    man.s = s;
+    man.a = a;
+    man.j = j;
+    man.layers = layers;
+    man.count = p->layer_count;
+    snprintf(path, path_size, "%s/manifest.json", s->dir);
+    rc = write_atomic(path, write_manifest, &man);
+done:
+    adaslice_masker_free(&mk);
+    free(layers);
+    free(image);
+    free(path);
+    return rc;
+}
+
+int cmd_slice(int argc, char **argv)
+{
+    slice_args s;
+    plan_args a;
+    plan_job j;
+    char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *csv = NULL, *svg = NULL, *manifest = NULL;
+    int rest_argc = 0, rc;
+    size_t n;
+    struct stat st;
+
+    memset(&j, 0, sizeof j);
+    if (!rest) return complain(RC_FAIL, "out of memory");
+    rc = parse_slice(argc, argv, &s, &rest_argc, rest);
+    if (rc < 0) { free(rest); return RC_OK; }
+    if (!rc) rc = parse_plan(rest_argc, rest, &a);
+    if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
+    if (!rc && a.profile) rc = complain(RC_USAGE, "slice needs a MODEL, not --profile");
+    free(rest);
+    if (rc) return rc;
+    if (mkdir(s.dir, 0777) != 0 && errno != EEXIST) return complain(RC_FAIL, "cannot create %s: %s", s.dir, strerror(errno));
+    if (stat(s.dir, &st) != 0 || !S_ISDIR(st.st_mode)) return complain(RC_FAIL, "%s is not a directory", s.dir);
+    n = strlen(s.dir) + 32;
+    csv = (char *)malloc(n);
+    svg = (char *)malloc(n);
+    manifest = (char *)malloc(n);
+    if (!csv || !svg || !manifest) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+    snprintf(csv, n, "%s/plan.csv", s.dir);
+    snprintf(svg, n, "%s/plot.svg", s.dir);
+    snprintf(manifest, n, "%s/manifest.json", s.dir);
+    /* an earlier job's manifest must not vouch for layers about to change */
+    if (remove(manifest) != 0 && errno != ENOENT) { rc = complain(RC_FAIL, "cannot remove %s: %s", manifest, strerror(errno)); goto done; }
+    if (!a.out) a.out = csv;
+    if (!a.plot) a.plot = svg;
+    j.args = &a;
+    j.keep_mesh = 1;
+    rc = run_plan(&a, &j);
+    if (!rc) rc = write_outputs(&a, &j);
+    if (!rc) rc = write_masks(&s, &a, &j);
+    if (!rc) printf("%s: %zu layers for %s on %d x %d px of %g mm\n", s.dir, j.plan[a.method].layer_count,
+                    base_name(a.model), s.width, s.height, s.pitch);
+done:
+    job_free(&j);
+    free(csv);
+    free(svg);
+    free(manifest);
+    return rc;
+}
