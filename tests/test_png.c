@@ -1,0 +1,495 @@
+/* Tests of the PNG writer (host/png.c). Every image is decoded by an
+   independent decoder, OpenImageIO's oiiotool (libpng and zlib underneath,
+   which also check the chunk CRCs and the Adler-32), converted to 8-bit PGM
+   and compared pixel for pixel; oiiotool shows 1-bit pixels as 0 and 255.
+   Without oiiotool the round-trip cases fail: install openimageio-tools. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* mkdtemp, posix_spawn */
+#endif
+#include "check.h"
+#include "maskgen.h"
+#include "../host/png.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+static char dir[64];
+
+static uint32_t rng_state = 12345;
+
+static uint32_t rng(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 17;
+    rng_state ^= rng_state << 5;
+    return rng_state;
+}
+
+static int write_file(const char *path, const unsigned char *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    int ok = f && fwrite(data, 1, size, f) == size;
+    if (f && fclose(f) != 0) ok = 0;
+    return ok;
+}
+
+static unsigned char *read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *s = NULL;
+    long n;
+    *size = 0;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (s = (unsigned char *)malloc((size_t)n + 1)) != NULL)
+        *size = fread(s, 1, (size_t)n, f);
+    fclose(f);
+    return s;
+}
+
+/* ---- images and the round trip ------------------------------------------ */
+
+typedef struct image {
+    char png[128], pgm[128]; /* DIR/name.png, DIR/name.pgm */
+    int width, height, bits;
+    size_t stride;
+    unsigned char *pixels;
+} image;
+
+enum { MAX_IMAGES = 24 };
+
+typedef struct batch {
+    image im[MAX_IMAGES];
+    int count;
+} batch;
+
+/* A new image of the batch, its rows `pad` bytes longer than needed, filled
+   with garbage that must not reach the file. */
+static image *add(batch *b, const char *name, int width, int height, int bits, size_t pad)
+{
+    image *im = &b->im[b->count++];
+    size_t size;
+    snprintf(im->png, sizeof im->png, "%s/%s.png", dir, name);
+    snprintf(im->pgm, sizeof im->pgm, "%s/%s.pgm", dir, name);
+    im->width = width;
+    im->height = height;
+    im->bits = bits;
+    im->stride = (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) + pad;
+    size = im->stride * (size_t)height;
+    im->pixels = (unsigned char *)malloc(size);
+    for (size_t i = 0; im->pixels && i < size; i++) im->pixels[i] = (unsigned char)rng();
+    return im;
+}
+
+static int pixel(const image *im, int x, int y)
+{
+    const unsigned char *row = im->pixels + (size_t)y * im->stride;
+    return im->bits == 8 ? row[x] : (row[x >> 3] >> (7 - (x & 7)) & 1) * 255;
+}
+
+static void set_pixel(image *im, int x, int y, int v)
+{
+    unsigned char *row = im->pixels + (size_t)y * im->stride;
+    if (im->bits == 8) row[x] = (unsigned char)v;
+    else if (v >= 128) row[x >> 3] |= (unsigned char)(0x80 >> (x & 7));
+    else row[x >> 3] &= (unsigned char)~(0x80 >> (x & 7));
+}
+
+/* Coverage (w x h bytes) into the image: as is at 8 bits, packed at 1 bit. */
+static void from_coverage(image *im, const unsigned char *coverage)
+{
+    if (!im->pixels) return;
+    if (im->bits == 1) mask_pack(coverage, im->width, im->height, im->pixels, im->stride);
+    for (int y = 0; im->bits == 8 && y < im->height; y++)
+        memcpy(im->pixels + (size_t)y * im->stride, coverage + (size_t)y * (size_t)im->width, (size_t)im->width);
+}
+
+/* Runs oiiotool with args, its output in DIR/oiiotool.log; 0 when it exits 0. */
+static int run_oiiotool(char **args)
+{
+    char log[sizeof dir + 16];
+    posix_spawn_file_actions_t fa;
+    pid_t pid;
+    int st = 0, rc;
+    snprintf(log, sizeof log, "%s/oiiotool.log", dir);
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    fflush(NULL);
+    rc = posix_spawnp(&pid, "oiiotool", &fa, NULL, args, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc == 0 && waitpid(pid, &st, 0) == pid && WIFEXITED(st) && WEXITSTATUS(st) == 0) return 0;
+    if (rc == ENOENT || (rc == 0 && WIFEXITED(st) && WEXITSTATUS(st) == 127)) {
+        CHECKF(0, "oiiotool not found: the PNG round trips need OpenImageIO; install it with "
+                  "`apt-get install -y openimageio-tools`");
+    } else {
+        size_t n;
+        char *text = (char *)read_file(log, &n);
+        if (text) text[n < 300 ? n : 300] = 0;
+        CHECKF(0, "oiiotool failed: %s", text ? text : "(no output)");
+        free(text);
+    }
+    return -1;
+}
+
+/* The P5 PGM at path as w x h bytes of maxval 255, or NULL. */
+static unsigned char *read_pgm(const char *path, int w, int h)
+{
+    size_t n;
+    unsigned char *s = read_file(path, &n), *pixels = NULL;
+    int width, height, maxval, used = 0;
+    if (s) {
+        s[n] = 0;
+        if (sscanf((char *)s, "P5 %d %d %d%n", &width, &height, &maxval, &used) == 3 && width == w &&
+            height == h && maxval == 255 && n - (size_t)used - 1 == (size_t)w * (size_t)h &&
+            (pixels = (unsigned char *)malloc(n)) != NULL)
+            memcpy(pixels, s + used + 1, (size_t)w * (size_t)h);
+    }
+    free(s);
+    return pixels;
+}
+
+/* Encodes every image, has oiiotool decode them all in one run and compares
+   every pixel; frees the images. */
+static void round_trip(batch *b)
+{
+    char *args[2 + 5 * MAX_IMAGES] = {"oiiotool"};
+    int n = 1, encoded = 1;
+    for (int i = 0; i < b->count; i++) {
+        image *im = &b->im[i];
+        unsigned char *png = NULL;
+        size_t size = 0;
+        if (!im->pixels || png_encode_gray(im->pixels, im->width, im->height, im->stride, im->bits, &png, &size) ||
+            !write_file(im->png, png, size)) {
+            CHECKF(0, "cannot encode or write %s", im->png);
+            encoded = 0;
+        }
+        free(png);
+        args[n++] = im->png;
+        args[n++] = (char *)"-d";
+        args[n++] = (char *)"uint8";
+        args[n++] = (char *)"-o";
+        args[n++] = im->pgm;
+    }
+    args[n] = NULL;
+    if (encoded && run_oiiotool(args) == 0) {
+        for (int i = 0; i < b->count; i++) {
+            image *im = &b->im[i];
+            unsigned char *got = read_pgm(im->pgm, im->width, im->height);
+            long wrong = 0, first_x = -1, first_y = -1;
+            CHECKF(got, "%s: oiiotool wrote no %dx%d 8-bit PGM", im->pgm, im->width, im->height);
+            for (int y = 0; got && y < im->height; y++)
+                for (int x = 0; x < im->width; x++)
+                    if (got[(size_t)y * (size_t)im->width + x] != pixel(im, x, y) && wrong++ == 0) {
+                        first_x = x;
+                        first_y = y;
+                    }
+            CHECKF(wrong == 0, "%s (%dx%d, %d-bit): %ld pixels differ, the first at (%ld, %ld)", im->png,
+                   im->width, im->height, im->bits, wrong, first_x, first_y);
+            free(got);
+        }
+    }
+    for (int i = 0; i < b->count; i++) {
+        remove(b->im[i].png);
+        remove(b->im[i].pgm);
+        free(b->im[i].pixels);
+    }
+    b->count = 0;
+}
+
+/* A disc of the given share of a w x h image, centred, anti-aliased. */
+static unsigned char *disc_coverage(int w, int h, double share)
+{
+    unsigned char *g = (unsigned char *)calloc((size_t)w * (size_t)h, 1);
+    if (g) mask_disc(g, w, h, w / 2.0, h / 2.0, sqrt(share * w * h / 3.14159265358979));
+    return g;
+}
+
+static void fill(image *im, int (*f)(int x, int y))
+{
+    for (int y = 0; im->pixels && y < im->height; y++)
+        for (int x = 0; x < im->width; x++) set_pixel(im, x, y, f(x, y));
+}
+
+static int black(int x, int y) { (void)x; (void)y; return 0; }
+static int white(int x, int y) { (void)x; (void)y; return 255; }
+static int noise(int x, int y) { (void)x; (void)y; return (int)(rng() & 255); }
+static int checker1(int x, int y) { return (x ^ y) & 1 ? 255 : 0; }
+static int checker8(int x, int y) { return (x >> 3 ^ y >> 3) & 1 ? 255 : 0; }
+static int hstripes(int x, int y) { (void)x; return y % 5 < 2 ? 255 : 0; }
+static int vstripes(int x, int y) { (void)y; return x % 7 < 3 ? 255 : 0; }
+static int gradient(int x, int y) { return (x + 3 * y) & 255; }
+/* Rows that repeat rows 5 to 40 back, mostly: far matches for the hash */
+static int far_rows(int x, int y) { return (int)((x * 2654435761u ^ (uint32_t)(y % 37) * 40503u) >> 7 & 255); }
+
+/* ---- cases -------------------------------------------------------------- */
+
+static void test_png_checksums(void)
+{
+    static unsigned char data[70000];
+    uint32_t crc_table[256], crc = 0xffffffffu, a = 1, b = 0;
+    CHECK(png_crc32(0, "123456789", 9) == 0xCBF43926u);
+    CHECK(png_adler32(1, "Wikipedia", 9) == 0x11E60398u);
+    CHECK(png_crc32(0, "", 0) == 0 && png_adler32(1, "", 0) == 1);
+    CHECK(png_crc32(png_crc32(0, "1234", 4), "56789", 5) == 0xCBF43926u);
+    /* runs of 8+ equal bytes take a shortcut in the Adler-32: check it against
+       the definition over data of runs and noise, longer than 5552 bytes */
+    for (size_t i = 0; i < sizeof data;) {
+        size_t run = 1 + rng() % 3000;
+        int v = (int)(rng() % 3 ? (rng() & 1) * 255 : rng() & 255), random = rng() % 4 == 0;
+        for (; run-- > 0 && i < sizeof data; i++) data[i] = (unsigned char)(random ? rng() : (uint32_t)v);
+    }
+    for (size_t i = 0; i < sizeof data; i++) {
+        a = (a + data[i]) % 65521;
+        b = (b + a) % 65521;
+    }
+    CHECK(png_adler32(1, data, sizeof data) == (b << 16 | a));
+    CHECK(png_adler32(png_adler32(1, data, 12345), data + 12345, sizeof data - 12345) == (b << 16 | a));
+    for (uint32_t i = 0; i < 256; i++) {
+        uint32_t c = i;
+        for (int k = 0; k < 8; k++) c = c >> 1 ^ (c & 1 ? 0xEDB88320u : 0);
+        crc_table[i] = c;
+    }
+    for (size_t i = 0; i < sizeof data; i++) crc = crc_table[(crc ^ data[i]) & 255] ^ crc >> 8;
+    CHECK(png_crc32(0, data, sizeof data) == ~crc);
+}
+
+static void test_png_bad_arguments(void)
+{
+    unsigned char px[64] = {0}, *out = px;
+    size_t size = 1;
+    CHECK(png_encode_gray(px, 4, 4, 4, 4, &out, &size) == -1 && !out && size == 0);
+    CHECK(png_encode_gray(px, 0, 4, 4, 8, &out, &size) == -1);
+    CHECK(png_encode_gray(px, 4, 0, 4, 8, &out, &size) == -1);
+    CHECK(png_encode_gray(px, 4, 4, 3, 8, &out, &size) == -1);
+    CHECK(png_encode_gray(px, 17, 2, 2, 1, &out, &size) == -1);
+    CHECK(png_encode_gray(NULL, 4, 4, 4, 8, &out, &size) == -1);
+    CHECK(png_encode_gray(px, 65536, 65536, 65536, 8, &out, &size) == -1 && !out); /* 4 GB of rows */
+}
+
+static uint32_t be32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+/* The file's layout: signature, IHDR, IDAT with a zlib header, IEND, every
+   chunk's CRC; and the padding past the width and the stride do not matter. */
+static void test_png_layout(void)
+{
+    static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+    batch b = {0};
+    image *clean = add(&b, "clean", 13, 5, 1, 0), *padded = add(&b, "padded", 13, 5, 1, 3);
+    unsigned char *png = NULL, *png2 = NULL;
+    size_t size = 0, size2 = 0, pos = 8;
+    int chunks = 0;
+    for (int y = 0; y < 5; y++)
+        for (int x = 0; x < 13; x++) {
+            int v = (x * y + x) % 3 ? 255 : 0;
+            set_pixel(clean, x, y, v);
+            set_pixel(padded, x, y, v);
+        }
+    for (int y = 0; y < 5; y++) clean->pixels[y * clean->stride + 1] &= 0xF8; /* zero padding bits */
+    CHECK(png_encode_gray(clean->pixels, 13, 5, clean->stride, 1, &png, &size) == 0);
+    CHECK(png_encode_gray(padded->pixels, 13, 5, padded->stride, 1, &png2, &size2) == 0);
+    CHECK(png && png2 && size == size2 && !memcmp(png, png2, size));
+    CHECK(size > 8 && !memcmp(png, sig, 8));
+    while (png && pos + 12 <= size) {
+        uint32_t len = be32(png + pos);
+        const unsigned char *type = png + pos + 4, *body = type + 4;
+        if (pos + 12 + len > size) break;
+        CHECKF(png_crc32(0, type, len + 4) == be32(body + len), "chunk %d: bad CRC", chunks);
+        if (chunks == 0)
+            CHECK(!memcmp(type, "IHDR", 4) && len == 13 && be32(body) == 13 && be32(body + 4) == 5 &&
+                  body[8] == 1 && body[9] == 0 && body[10] == 0 && body[11] == 0 && body[12] == 0);
+        if (chunks == 1)
+            CHECK(!memcmp(type, "IDAT", 4) && len > 6 && (body[0] & 15) == 8 && (body[0] << 8 | body[1]) % 31 == 0);
+        if (chunks == 2) CHECK(!memcmp(type, "IEND", 4) && len == 0 && pos + 12 == size);
+        pos += 12 + len;
+        chunks++;
+    }
+    CHECK(chunks == 3);
+    free(png);
+    free(png2);
+    round_trip(&b);
+}
+
+static void test_png_small_images(void)
+{
+    static const int widths[] = {1, 7, 8, 9, 15, 17, 31, 33};
+    batch b = {0};
+    char name[48];
+    for (int bits = 1; bits <= 8; bits += 7) {
+        snprintf(name, sizeof name, "one_black_%d", bits);
+        fill(add(&b, name, 1, 1, bits, 0), black);
+        snprintf(name, sizeof name, "one_white_%d", bits);
+        fill(add(&b, name, 1, 1, bits, 2), white);
+        snprintf(name, sizeof name, "random_64x48_%d", bits);
+        fill(add(&b, name, 64, 48, bits, 5), noise);
+    }
+    for (int i = 0; i < 8; i++) {
+        snprintf(name, sizeof name, "random1_w%d", widths[i]);
+        fill(add(&b, name, widths[i], 1 + i % 3 * 2, 1, (size_t)i % 2), noise);
+        snprintf(name, sizeof name, "checker1_w%d", widths[i]);
+        fill(add(&b, name, widths[i], 1 + i, 1, 0), checker1);
+    }
+    round_trip(&b);
+}
+
+static void test_png_masks(void)
+{
+    const int w = 2560, h = 1440;
+    unsigned char *disc = disc_coverage(w, h, 0.25), *scene = (unsigned char *)malloc(2561 * 1440);
+    batch b = {0};
+    image *im;
+    CHECK(disc && scene);
+    if (!disc || !scene) { free(disc); free(scene); return; }
+    from_coverage(add(&b, "disc_aa8", w, h, 8, 0), disc);
+    from_coverage(add(&b, "disc1", w, h, 1, 0), disc);
+    im = add(&b, "disc_hard8", w, h, 8, 7);
+    fill(im, black);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) set_pixel(im, x, y, disc[(size_t)y * w + x] >= 128 ? 255 : 0);
+    mask_scene(scene, 2561, 1440, 30);
+    from_coverage(add(&b, "scene1_w2561", 2561, 1440, 1, 1), scene);
+    from_coverage(add(&b, "scene8_w2561", 2561, 1440, 8, 0), scene);
+    fill(add(&b, "black1", w, h, 1, 0), black);
+    fill(add(&b, "white1", w, h, 1, 0), white);
+    fill(add(&b, "black8", w, h, 8, 0), black);
+    fill(add(&b, "white8", w, h, 8, 0), white);
+    from_coverage(add(&b, "disc_row8", w, 1, 8, 0), disc + (size_t)(h / 2) * w);
+    from_coverage(add(&b, "disc_row1", w, 1, 1, 0), disc + (size_t)(h / 2) * w);
+    fill(add(&b, "column1", 1, h, 1, 0), hstripes);
+    fill(add(&b, "column8", 1, h, 8, 0), hstripes);
+    round_trip(&b);
+    free(disc);
+    free(scene);
+}
+
+static void test_png_patterns(void)
+{
+    const int w = 2560, h = 1440;
+    batch b = {0};
+    for (int bits = 1; bits <= 8; bits += 7) {
+        char name[48];
+        snprintf(name, sizeof name, "checker1_%d", bits);
+        fill(add(&b, name, w, h, bits, 0), checker1);
+        snprintf(name, sizeof name, "checker8_%d", bits);
+        fill(add(&b, name, w, h, bits, 0), checker8);
+        snprintf(name, sizeof name, "hstripes_%d", bits);
+        fill(add(&b, name, w, h, bits, 0), hstripes);
+        snprintf(name, sizeof name, "vstripes_%d", bits);
+        fill(add(&b, name, w, h, bits, 0), vstripes);
+    }
+    fill(add(&b, "gradient8", w, h, 8, 0), gradient);
+    fill(add(&b, "far_rows8", 500, 300, 8, 0), far_rows);
+    /* rows longer than deflate's 32 KB window: no match one row up */
+    fill(add(&b, "wide8", 40000, 4, 8, 0), hstripes);
+    fill(add(&b, "wide1", 300000, 3, 1, 0), vstripes);
+    round_trip(&b);
+}
+
+/* Noise does not compress: stored blocks, a little larger than the data. */
+static void test_png_noise(void)
+{
+    const int w = 2560, h = 1440;
+    batch b = {0};
+    image *im8 = add(&b, "noise8", w, h, 8, 0), *im1 = add(&b, "noise1", w, h, 1, 0);
+    unsigned char *png = NULL;
+    size_t size = 0, raw = (size_t)(w + 1) * h;
+    fill(im8, noise);
+    fill(im1, noise);
+    CHECK(im8->pixels && png_encode_gray(im8->pixels, w, h, im8->stride, 8, &png, &size) == 0);
+    CHECKF(size > raw && size < raw + raw / 1000 + 100, "noise, 8-bit: %zu bytes from %zu", size, raw);
+    free(png);
+    fill(add(&b, "noise1_3840x2400", 3840, 2400, 1, 0), noise);
+    round_trip(&b);
+}
+
+/* A 2560x1440 layer with a disc over 25 % of it is 460 KB of 1-bit rows or
+   3.7 MB of 8-bit ones; masks like it must come out at a few KB. */
+static void test_png_compression(void)
+{
+    const int w = 2560, h = 1440;
+    static const struct { const char *what; int bits; double share; size_t limit; } cases[] = {
+        {"disc 25 %, 1-bit", 1, 0.25, 6000},        {"disc 25 %, 8-bit anti-aliased", 8, 0.25, 20000},
+        {"disc 5 %, 1-bit", 1, 0.05, 3000},         {"disc 5 %, 8-bit anti-aliased", 8, 0.05, 12000},
+        {"all black, 1-bit", 1, 0, 1000},           {"all black, 8-bit", 8, 0, 4000},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        unsigned char *disc = disc_coverage(w, h, cases[k].share), *png = NULL;
+        batch b = {0};
+        image *im = add(&b, "disc", w, h, cases[k].bits, 0);
+        size_t size = 0;
+        if (disc && im->pixels) {
+            from_coverage(im, disc);
+            CHECK(png_encode_gray(im->pixels, w, h, im->stride, im->bits, &png, &size) == 0);
+            CHECKF(size < cases[k].limit, "%s: %zu bytes, more than %zu", cases[k].what, size, cases[k].limit);
+        }
+        free(png);
+        free(disc);
+        free(im->pixels);
+    }
+    {
+        unsigned char *scene = (unsigned char *)malloc((size_t)w * h), *png = NULL;
+        batch b = {0};
+        image *im8 = add(&b, "scene8", w, h, 8, 0), *im1 = add(&b, "scene1", w, h, 1, 0);
+        size_t size8 = 0, size1 = 0;
+        if (scene && im8->pixels && im1->pixels) {
+            mask_scene(scene, w, h, 99); /* the largest: 30 % */
+            from_coverage(im8, scene);
+            from_coverage(im1, scene);
+            CHECK(png_encode_gray(im8->pixels, w, h, im8->stride, 8, &png, &size8) == 0);
+            free(png);
+            CHECK(png_encode_gray(im1->pixels, w, h, im1->stride, 1, &png, &size1) == 0);
+            free(png);
+            CHECKF(size8 < 40000 && size1 < 15000, "bench scene: %zu bytes 8-bit, %zu bytes 1-bit", size8, size1);
+        }
+        free(scene);
+        free(im8->pixels);
+        free(im1->pixels);
+    }
+}
+
+static void remove_dir(void)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    while (d && (e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) {
+            char path[sizeof dir + sizeof e->d_name];
+            snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+            remove(path);
+        }
+    if (d) closedir(d);
+    rmdir(dir);
+}
+
+void test_png(void)
+{
+    const char *tmp = getenv("TMPDIR");
+    snprintf(dir, sizeof dir, "%s/adaslice-png-XXXXXX", tmp && strlen(tmp) < 40 ? tmp : "/tmp");
+    if (!mkdtemp(dir)) {
+        perror("test_png: mkdtemp");
+        return;
+    }
+    RUN(test_png_checksums);
+    RUN(test_png_bad_arguments);
+    RUN(test_png_layout);
+    RUN(test_png_small_images);
+    RUN(test_png_masks);
+    RUN(test_png_patterns);
+    RUN(test_png_noise);
+    RUN(test_png_compression);
+    remove_dir();
+}
