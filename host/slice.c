@@ -7,6 +7,7 @@
 #include "cli.h"
 #include "png.h"
 #include "printer.h"
+#include "contour_svg.h"
 
 #include <errno.h>
 #include <math.h>
@@ -25,6 +26,7 @@ typedef struct slice_args {
     int placed;                  /* --place X,Y given */
     double place[2];             /* the part's centre, mm from the plate's centre */
     int mirror_x, mirror_y;
+    int svg;                     /* also the contours of each layer as SVG */
 } slice_args;
 
 static const char *const SLICE_AT[] = {"bottom", "middle", "top"};
@@ -51,6 +53,7 @@ static void slice_usage(FILE *f)
           "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
+          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
           "\n", f);
     plan_options_usage(f);
     fputs("\nprinter presets\n", f);
@@ -100,6 +103,8 @@ static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, cha
                  !isfinite(s->place[1])))
                 rc = complain(RC_USAGE, "--place %s: expected X,Y in mm", v);
             s->placed = 1;
+        } else if (!strcmp(o, "--svg")) {
+            s->svg = 1;
         } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
             slice_usage(stdout);
             return -1;
@@ -118,6 +123,21 @@ static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, cha
         return complain(RC_USAGE, "--pixels WxH and --pitch MM go together");
     }
     return RC_OK;
+}
+
+/* JOBDIR/layer_00001.EXT: five digits, more if the plan has 100,000 layers or more. */
+static int layer_digits(size_t layers)
+{
+    int digits = 5;
+    for (; layers >= 100000 && digits < 20; layers /= 10) digits++;
+    return digits;
+}
+
+static void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext)
+{
+    char number[32];
+    snprintf(number, sizeof number, "%0*zu", digits, k + 1);
+    snprintf(path, size, "%s/layer_%s.%s", dir, number, ext);
 }
 
 typedef struct png_file { const unsigned char *data; size_t size; } png_file;
@@ -242,6 +262,55 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
     return RC_OK;
 }
 
+/* Where layer k is sliced, mm above the part's bottom. */
+static double slice_height(const slice_args *s, const plan_job *j, size_t k)
+{
+    const adaslice_layer *l = &j->plan[j->args->method].layers[k];
+    if (s->slice_at == 0) return l->z_bottom + j->profile.bin / 2;
+    if (s->slice_at == 2) return l->z_top - j->profile.bin / 2;
+    return 0.5 * (l->z_bottom + l->z_top);
+}
+
+typedef struct contour_file { const adaslice_contours *c; size_t layer; } contour_file;
+
+static void write_contour_svg(FILE *f, const void *ctx)
+{
+    const contour_file *cf = (const contour_file *)ctx;
+    svg_write_contours(f, cf->c, cf->layer, 1);
+}
+
+/* The slice polygons at the masks' heights, one SVG per layer; chaining
+   needs shared vertices, so the mesh is welded first (STL has none). */
+static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    adaslice_contours c;
+    adaslice_error err;
+    contour_file cf;
+    double *heights = (double *)malloc((p->layer_count ? p->layer_count : 1) * sizeof *heights);
+    size_t k, n = strlen(s->dir) + 64;
+    char *path = (char *)malloc(n);
+    int rc = RC_OK, digits = layer_digits(p->layer_count);
+    if (!heights || !path) { free(heights); free(path); return complain(RC_FAIL, "out of memory for the contours"); }
+    for (k = 0; k < p->layer_count; k++) heights[k] = j->profile.z0 + slice_height(s, j, k);
+    if (adaslice_mesh_weld(&j->mesh, &err) != ADASLICE_OK ||
+        adaslice_contours_slice(&j->mesh, heights, p->layer_count, NULL, &c, &err) != ADASLICE_OK) {
+        free(heights);
+        free(path);
+        return library_error(&err);
+    }
+    cf.c = &c;
+    for (k = 0; k < p->layer_count && !rc; k++) {
+        layer_path(path, n, s->dir, k, digits, "svg");
+        cf.layer = k;
+        rc = write_atomic(path, write_contour_svg, &cf);
+    }
+    adaslice_contours_free(&c);
+    free(heights);
+    free(path);
+    return rc;
+}
+
 static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
 {
     const adaslice_plan *p = &j->plan[a->method];
@@ -263,12 +332,10 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
     image = (unsigned char *)malloc(mk.stride * (size_t)grid.height);
     path = (char *)malloc(path_size);
     if (!layers || !image || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
-    man.digits = 5;
-    for (k = p->layer_count; k >= 100000; k /= 10) man.digits++;
+    man.digits = layer_digits(p->layer_count);
+    if (s->svg && (rc = write_contours(s, a, j))) goto done;
     for (k = 0; k < p->layer_count; k++) {
-        const adaslice_layer *l = &p->layers[k];
-        double h = s->slice_at == 0 ? l->z_bottom + j->profile.bin / 2
-                 : s->slice_at == 2 ? l->z_top - j->profile.bin / 2 : 0.5 * (l->z_bottom + l->z_top);
+        double h = slice_height(s, j, k);
         png_file png;
         unsigned char *data = NULL;
         if (adaslice_masker_slice(&mk, j->profile.z0 + h, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
@@ -278,13 +345,13 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
             goto done;
         }
         png.data = data;
-        snprintf(path, path_size, "%s/layer_%0*zu.png", s->dir, man.digits, k + 1);
+        layer_path(path, path_size, s->dir, k, man.digits, "png");
         rc = write_atomic(path, write_png_bytes, &png);
         free(data);
         if (rc) goto done;
-        layers[k].z_bottom = l->z_bottom;
-        layers[k].z_top = l->z_top;
-        layers[k].thickness = l->thickness;
+        layers[k].z_bottom = p->layers[k].z_bottom;
+        layers[k].z_top = p->layers[k].z_top;
+        layers[k].thickness = p->layers[k].thickness;
         layers[k].lit_mm2 = mk.lit * grid.pitch * grid.pitch;
         progress(k + 1, p->layer_count, started, &last);
     }

@@ -233,6 +233,22 @@ static int gradient(int x, int y) { return (x + 3 * y) & 255; }
 /* Rows that repeat rows 5 to 40 back, mostly: far matches for the hash */
 static int far_rows(int x, int y) { return (int)((x * 2654435761u ^ (uint32_t)(y % 37) * 40503u) >> 7 & 255); }
 
+/* Byte k about Fibonacci(k + 1) times, shuffled: an unlimited Huffman code
+   for these literals would need more than deflate's 15 bits. */
+static void fill_skewed(image *im)
+{
+    size_t n = (size_t)im->width * (size_t)im->height, i = 0;
+    uint32_t f0 = 1, f1 = 1;
+    for (int v = 0; i < n; v++, f1 += f0, f0 = f1 - f0)
+        for (uint32_t k = 0; k < f0 && i < n; k++) im->pixels[i++] = (unsigned char)v;
+    for (i = n - 1; i > 0; i--) {
+        size_t j = rng() % (i + 1);
+        unsigned char t = im->pixels[i];
+        im->pixels[i] = im->pixels[j];
+        im->pixels[j] = t;
+    }
+}
+
 /* ---- cases -------------------------------------------------------------- */
 
 static void test_png_checksums(void)
@@ -380,6 +396,7 @@ static void test_png_patterns(void)
 {
     const int w = 2560, h = 1440;
     batch b = {0};
+    image *im;
     for (int bits = 1; bits <= 8; bits += 7) {
         char name[48];
         snprintf(name, sizeof name, "checker1_%d", bits);
@@ -393,6 +410,8 @@ static void test_png_patterns(void)
     }
     fill(add(&b, "gradient8", w, h, 8, 0), gradient);
     fill(add(&b, "far_rows8", 500, 300, 8, 0), far_rows);
+    im = add(&b, "skewed8", 500, 400, 8, 0);
+    if (im->pixels) fill_skewed(im);
     /* rows longer than deflate's 32 KB window: no match one row up */
     fill(add(&b, "wide8", 40000, 4, 8, 0), hstripes);
     fill(add(&b, "wide1", 300000, 3, 1, 0), vstripes);
