@@ -12,7 +12,7 @@ FUZZ_SECONDS ?= 20
 B        = build
 
 HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/printer.c host/png.c host/contour_svg.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_loaders.c tests/test_cli.c
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_loaders.c tests/test_cli.c
 HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean

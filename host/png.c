@@ -1,13 +1,14 @@
 /* PNG encoder for layer masks, written from the PNG specification, RFC 1950
    (zlib) and RFC 1951 (deflate).
 
-   The images are mostly black with a few smooth white regions, so after the Up
-   filter nearly every byte is zero and the rest sit where an edge moved. The
-   matcher therefore tries only what pays off on such data: a run of the
-   previous byte (distance 1), the same bytes one row up (distance = row
-   length + 1), and, where those fail, one candidate from a small hash of four
-   bytes. Blocks are then coded with whichever of dynamic Huffman (length
-   limited by package-merge), fixed Huffman or stored is smallest. */
+   A mask is mostly black with a few smooth white regions: every row is a few
+   runs, and most rows repeat the row above except where an edge moved. The
+   matcher tries only what pays off on such data: a run of the previous byte
+   (distance 1), the same bytes one row up (distance = row length + 1, which
+   does what the Up filter would without breaking the runs), and where those
+   fall short one candidate from a small hash of four bytes. Each block of
+   symbols is then coded as the smallest of dynamic Huffman (code lengths
+   limited to 15 bits by package-merge), fixed Huffman or stored. */
 #include "png.h"
 #include <stdlib.h>
 #include <string.h>
@@ -287,13 +288,13 @@ static int flush_block(deflater *d, size_t start, size_t end, int final)
     for (int i = 0; i < 288; i++) fixed_lit.len[i] = i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8;
     for (int i = 0; i < 30; i++) fixed_dist.len[i] = 5;
     fixed_bits = 3 + data_bits(d, &fixed_lit, &fixed_dist);
-    stored_bits = 8 * (uint64_t)(end - start) + 40 * chunks;
+    stored_bits = 8 * (uint64_t)(end - start) + 40 * chunks; /* header, padding, LEN, NLEN */
 
     if (stored_bits <= dynamic_bits && stored_bits <= fixed_bits) {
         if (reserve(d, end - start + 5 * chunks + 16)) return -1;
         do {
             size_t len = end - start < 65535 ? end - start : 65535;
-            put(d, final && start + len == end, 3);
+            put(d, (uint32_t)(final && start + len == end), 3);
             align_byte(d);
             d->out[d->size++] = (unsigned char)len;
             d->out[d->size++] = (unsigned char)(len >> 8);
@@ -434,7 +435,7 @@ static void filter_rows(const unsigned char *pixels, int height, size_t stride, 
         const unsigned char *cur = pixels + (size_t)y * stride, *prev = cur - (y ? stride : 0);
         size_t body = rowbytes - 1, flat_none = 0, flat_up = 0;
         unsigned char last = cur[body] & last_mask;
-        for (size_t x = 0; y > 0 && x + 8 <= body; x += 8) {
+        for (size_t x = 0; y > 0 && x + 8 <= body; x += 8) { /* the first row gets None */
             uint64_t c, p, up;
             memcpy(&c, cur + x, 8);
             memcpy(&p, prev + x, 8);
@@ -477,9 +478,9 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     memset(&d, 0, sizeof d);
     d.n = (rowbytes + 1) * (size_t)height;
     filtered = (unsigned char *)malloc(d.n);
-    d.syms = (uint32_t *)malloc(BLOCK_SYMBOLS * sizeof *d.syms);
+    d.syms = (uint32_t *)malloc((d.n < BLOCK_SYMBOLS ? d.n : BLOCK_SYMBOLS) * sizeof *d.syms);
     d.hash = (uint32_t *)calloc((size_t)1 << HASH_BITS, sizeof *d.hash);
-    if (!filtered || !d.syms || !d.hash || reserve(&d, head + 2 + d.n / 16 + 1024)) goto done;
+    if (!filtered || !d.syms || !d.hash || reserve(&d, head + 2 + d.n / 64 + 1024)) goto done;
     d.data = filtered;
     d.row = rowbytes + 1;
     for (int c = 0; c < 29; c++)
@@ -515,7 +516,8 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     put_be32(d.out + d.size + 8, png_crc32(0, "IEND", 4));
     d.size += 12;
 
-    *out = d.out;
+    *out = (unsigned char *)realloc(d.out, d.size); /* give back the spare room */
+    if (!*out) *out = d.out;
     *out_size = d.size;
     d.out = NULL;
     rc = 0;

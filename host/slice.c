@@ -133,11 +133,24 @@ static int layer_digits(size_t layers)
     return digits;
 }
 
+/* "layer_00001.EXT" */
+static void layer_name(char name[40], size_t k, int digits, const char *ext)
+{
+    char number[24];
+    int n = 0, i;
+    size_t v = k + 1;
+    do { number[n++] = (char)('0' + (int)(v % 10)); v /= 10; } while (v && n < 20);
+    while (n < digits && n < 20) number[n++] = '0';
+    for (i = 0; i < n / 2; i++) { char t = number[i]; number[i] = number[n - 1 - i]; number[n - 1 - i] = t; }
+    number[n] = 0;
+    snprintf(name, 40, "layer_%s.%s", number, ext);
+}
+
 static void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext)
 {
-    char number[32];
-    snprintf(number, sizeof number, "%0*zu", digits, k + 1);
-    snprintf(path, size, "%s/layer_%s.%s", dir, number, ext);
+    char name[40];
+    layer_name(name, k, digits, ext);
+    snprintf(path, size, "%s/%s", dir, name);
 }
 
 typedef struct png_file { const unsigned char *data; size_t size; } png_file;
@@ -208,8 +221,9 @@ static void write_manifest(FILE *f, const void *ctx)
     fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", m->count);
     for (k = 0; k < m->count; k++) {
         const job_layer *l = &m->layers[k];
-        fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"layer_%0*zu.png\", \"z_bottom\": ", k ? "," : "", k + 1,
-                m->digits, k + 1);
+        char name[40];
+        layer_name(name, k, m->digits, "png");
+        fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"%s\", \"z_bottom\": ", k ? "," : "", k + 1, name);
         json_number(f, l->z_bottom);
         fputs(", \"z_top\": ", f);
         json_number(f, l->z_top);

@@ -135,9 +135,13 @@ static int run_oiiotool(char **args)
                   "`apt-get install -y openimageio-tools`");
     } else {
         size_t n;
-        char *text = (char *)read_file(log, &n);
-        if (text) text[n < 300 ? n : 300] = 0;
-        CHECKF(0, "oiiotool failed: %s", text ? text : "(no output)");
+        char *text = (char *)read_file(log, &n), *error = NULL;
+        if (text) {
+            text[n] = 0;
+            error = strstr(text, "ERROR");
+            if (error && strchr(error, '\n')) *strchr(error, '\n') = 0;
+        }
+        CHECKF(0, "oiiotool failed: %s", error ? error : text ? text : "(no output)");
         free(text);
     }
     return -1;
