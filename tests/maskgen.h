@@ -73,14 +73,15 @@ static void mask_pack(const unsigned char *g, int w, int h, unsigned char *bits,
 }
 
 /* A cross-section as a layer of a print might have: a hollow drum, a solid
-   disc, a bar and a few posts, sized by layer (0..99) to cover 5-30 %. */
+   disc, a bar and a few posts, growing with the layer (0..99) from 5 % to
+   30 % of the image. */
 static void mask_scene(unsigned char *g, int w, int h, int layer)
 {
     double t = (layer % 100) / 99.0, u = w / 2560.0;
     memset(g, 0, (size_t)w * (size_t)h);
-    mask_ring(g, w, h, 0.30 * w, 0.50 * h, (180 + 120 * t) * u, (300 + 200 * t) * u);
-    mask_disc(g, w, h, 0.72 * w, 0.40 * h, (150 + 150 * t) * u);
-    mask_box(g, w, h, 0.70 * w, 0.82 * h, (200 + 150 * t) * u, 40 * u, 0.3 + 0.5 * t);
+    mask_ring(g, w, h, 0.30 * w, 0.50 * h, (150 + 180 * t) * u, (250 + 330 * t) * u);
+    mask_disc(g, w, h, 0.72 * w, 0.40 * h, (110 + 210 * t) * u);
+    mask_box(g, w, h, 0.70 * w, 0.82 * h, (150 + 200 * t) * u, (40 + 10 * t) * u, 0.3 + 0.5 * t);
     for (int k = 0; k < 4; k++)
         mask_disc(g, w, h, (0.55 + 0.1 * k) * w, 0.12 * h, (20 + 10 * k) * u);
 }

@@ -388,6 +388,89 @@ static void test_cli_compare(void)
 
 /* Outputs that cannot be written fail with exit 1 and leave no file, not even
    the temporary one. */
+/* adaslice slice: a complete job directory, its manifest agreeing with the
+   plan and the PNGs; a part too big for the plate, an unknown printer, and a
+   run that fails part-way leaving no manifest behind. */
+static void test_cli_slice(void)
+{
+    char job[600], path[1000], *manifest, *csv, *png;
+    run_result r;
+    size_t layers, rows, k;
+    snprintf(job, sizeof job, "%s/job", dir);
+    r = run("slice", sphere_stl(), "-o", job, "--printer", "2k-5.5", "--svg", NULL);
+    CHECKF(r.status == 0 && !*r.err, "exit %d: %s", r.status, r.err);
+    run_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    manifest = read_all(path);
+    snprintf(path, sizeof path, "%s/plan.csv", job);
+    csv = read_all(path);
+    CHECK(manifest && csv);
+    if (!manifest || !csv) { free(manifest); free(csv); return; }
+    layers = (size_t)json_field(manifest, "layer_count");
+    rows = count_of(csv, "\n") - 1;
+    CHECKF(layers > 50 && layers == rows && count_of(manifest, "\"lit_area_mm2\"") == layers, "%zu layers, %zu rows", layers, rows);
+    CHECK(strstr(manifest, "\"complete\": true") && strstr(manifest, "\"width_px\": 2560") && strstr(manifest, "\"bits\": 1"));
+    for (k = 1; k <= layers; k++) {
+        snprintf(path, sizeof path, "%s/layer_%05zu.png", job, k);
+        png = read_all(path);
+        CHECKF(png && !memcmp(png, "\x89PNG\r\n\x1a\n", 8) && png[24] == 1, "layer %zu: not a 1-bit PNG", k);
+        free(png);
+        snprintf(path, sizeof path, "%s/layer_%05zu.svg", job, k);
+        CHECKF(exists(path), "layer %zu: no contour SVG", k);
+    }
+    snprintf(path, sizeof path, "%s/layer_%05zu.png", job, layers + 1);
+    CHECK(!exists(path));
+    free(manifest);
+    free(csv);
+
+    /* 8-bit anti-aliased masks */
+    r = run("slice", sphere_stl(), "-o", job, "--aa", "4", "--pixels", "600x400", "--pitch", "0.05", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    run_free(&r);
+    snprintf(path, sizeof path, "%s/layer_00001.png", job);
+    png = read_all(path);
+    CHECK(png && png[24] == 8);
+    free(png);
+
+    /* a 10 mm sphere on a 5 x 5 mm plate */
+    r = run("slice", sphere_stl(), "-o", job, "--pixels", "100x100", "--pitch", "0.05", NULL);
+    CHECKF(r.status == 1 && one_message(r.err) && strstr(r.err, "does not fit") && strstr(r.err, "5 mm too wide"),
+           "exit %d: %s", r.status, r.err);
+    run_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    CHECK(!exists(path));
+    r = run("slice", sphere_stl(), "-o", job, "--printer", "laser-9000", NULL);
+    CHECK(r.status == 2 && one_message(r.err) && strstr(r.err, "laser-9000"));
+    run_free(&r);
+    r = run("slice", sphere_stl(), NULL);
+    CHECK(r.status == 2 && one_message(r.err) && strstr(r.err, "-o JOBDIR"));
+    run_free(&r);
+
+    /* a complete job, then a run that cannot write its third layer */
+    r = run("slice", sphere_stl(), "-o", job, NULL);
+    CHECK(r.status == 0 && exists(path));
+    run_free(&r);
+    snprintf(path, sizeof path, "%s/layer_00003.png", job);
+    remove(path);
+    mkdir(path, 0755);
+    r = run("slice", sphere_stl(), "-o", job, NULL);
+    CHECKF(r.status == 1 && one_message(r.err) && strstr(r.err, "layer_00003.png"), "exit %d: %s", r.status, r.err);
+    run_free(&r);
+    rmdir(path);
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    CHECKF(!exists(path), "an interrupted job still has a manifest");
+    {
+        DIR *d = opendir(job);
+        struct dirent *e;
+        while (d && (e = readdir(d)) != NULL) {
+            snprintf(path, sizeof path, "%s/%s", job, e->d_name);
+            if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) remove(path);
+        }
+        if (d) closedir(d);
+        rmdir(job);
+    }
+}
+
 static void test_cli_unwritable_output(void)
 {
     const char *missing = in_dir("missing/plan.csv");
@@ -457,6 +540,7 @@ void test_cli(void)
     RUN(test_cli_profile_bad_lines);
     RUN(test_cli_infeasible);
     RUN(test_cli_compare);
+    RUN(test_cli_slice);
     RUN(test_cli_unwritable_output);
     RUN(test_cli_bad_model);
     remove_dir();

@@ -77,8 +77,12 @@ typedef struct batch {
    with garbage that must not reach the file. */
 static image *add(batch *b, const char *name, int width, int height, int bits, size_t pad)
 {
-    image *im = &b->im[b->count++];
+    image *im = &b->im[b->count];
     size_t size;
+    if (b->count++ == MAX_IMAGES) {
+        fprintf(stderr, "test_png: more than %d images in a batch\n", MAX_IMAGES);
+        abort();
+    }
     snprintf(im->png, sizeof im->png, "%s/%s.png", dir, name);
     snprintf(im->pgm, sizeof im->pgm, "%s/%s.pgm", dir, name);
     im->width = width;
@@ -157,7 +161,7 @@ static unsigned char *read_pgm(const char *path, int w, int h)
         s[n] = 0;
         if (sscanf((char *)s, "P5 %d %d %d%n", &width, &height, &maxval, &used) == 3 && width == w &&
             height == h && maxval == 255 && n - (size_t)used - 1 == (size_t)w * (size_t)h &&
-            (pixels = (unsigned char *)malloc(n)) != NULL)
+            (pixels = (unsigned char *)malloc((size_t)w * (size_t)h)) != NULL)
             memcpy(pixels, s + used + 1, (size_t)w * (size_t)h);
     }
     free(s);
@@ -168,7 +172,7 @@ static unsigned char *read_pgm(const char *path, int w, int h)
    every pixel; frees the images. */
 static void round_trip(batch *b)
 {
-    char *args[2 + 5 * MAX_IMAGES] = {"oiiotool"};
+    char *args[2 + 5 * MAX_IMAGES] = {(char *)"oiiotool"};
     int n = 1, encoded = 1;
     for (int i = 0; i < b->count; i++) {
         image *im = &b->im[i];
@@ -439,15 +443,17 @@ static void test_png_noise(void)
     round_trip(&b);
 }
 
-/* A 2560x1440 layer with a disc over 25 % of it is 460 KB of 1-bit rows or
-   3.7 MB of 8-bit ones; masks like it must come out at a few KB. */
+/* A 2560x1440 layer is 460 KB of 1-bit rows or 3.7 MB of 8-bit ones; masks
+   must come out at a few KB. The limits are about 1.3-1.5 times the sizes
+   measured when they were set (a disc over 25 %: 4.4 KB 1-bit, 13.2 KB 8-bit;
+   the bench scene at 30 %: 11.3 KB and 31.7 KB). */
 static void test_png_compression(void)
 {
     const int w = 2560, h = 1440;
     static const struct { const char *what; int bits; double share; size_t limit; } cases[] = {
-        {"disc 25 %, 1-bit", 1, 0.25, 6000},        {"disc 25 %, 8-bit anti-aliased", 8, 0.25, 20000},
-        {"disc 5 %, 1-bit", 1, 0.05, 3000},         {"disc 5 %, 8-bit anti-aliased", 8, 0.05, 12000},
-        {"all black, 1-bit", 1, 0, 1000},           {"all black, 8-bit", 8, 0, 4000},
+        {"disc 25 %, 1-bit", 1, 0.25, 6000},   {"disc 25 %, 8-bit anti-aliased", 8, 0.25, 20000},
+        {"disc 5 %, 1-bit", 1, 0.05, 3000},    {"disc 5 %, 8-bit anti-aliased", 8, 0.05, 11000},
+        {"all black, 1-bit", 1, 0, 1000},      {"all black, 8-bit", 8, 0, 5000},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         unsigned char *disc = disc_coverage(w, h, cases[k].share), *png = NULL;
