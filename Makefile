@@ -86,8 +86,8 @@ check-models: $(B)/test_models
 	$(B)/test_models $(MODELS)
 
 # --- make bench -----------------------------------------------------------
-$(B)/bench: bench/bench.c adaslice.h | $(B)
-	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c -o $@ -lm
+$(B)/bench: bench/bench.c host/png.c adaslice.h host/png.h | $(B)
+	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c host/png.c -o $@ -lm
 
 bench: $(B)/bench
 	$(B)/bench $(MODELS)
