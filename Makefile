@@ -12,8 +12,8 @@ FUZZ_SECONDS ?= 20
 B        = build
 
 HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/printer.c host/png.c host/contour_svg.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_loaders.c tests/test_cli.c
-HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c
+HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean
 
@@ -89,8 +89,12 @@ check-models: $(B)/test_models
 $(B)/bench: bench/bench.c host/png.c adaslice.h host/png.h | $(B)
 	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c host/png.c -o $@ -lm
 
-bench: $(B)/bench
+$(B)/bench_png: bench/bench_png.c host/png.c host/png.h tests/maskgen.h | $(B)
+	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
+
+bench: $(B)/bench $(B)/bench_png
 	$(B)/bench $(MODELS)
+	$(B)/bench_png
 
 clean:
 	rm -rf $(B)
