@@ -387,7 +387,9 @@ ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t
    each call applies the z-ray samples between the previous height and this
    one, so every sample is rasterised once over the whole print. A pixel is
    lit when the winding number of its z ray below the height is positive
-   (overlapping shells stay lit; open meshes light what their rays enclose).
+   (overlapping shells stay lit). On a ray whose surfaces do not balance (an
+   open or inconsistently wound mesh) it must also be positive counted from
+   above, so such a mesh never leaves a column lit to the top.
    With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
    grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
    per pixel when s > 1, plus the image. */
@@ -3200,11 +3202,21 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     memset(mk, 0, sizeof *mk);
 }
 
+/* Each ray's net winding number over the whole mesh. */
+static void adaslice__total_visit(void *ctx, const adaslice__span *span)
+{
+    adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
+    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
+    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
+    int i;
+    for (i = span->first; i < span->end; i++) w[i] = (int16_t)(w[i] + step);
+}
+
 ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const adaslice_mesh *mesh,
                                                   const adaslice_grid *grid, int s, const adaslice_allocator *allocator,
                                                   adaslice_error *err)
 {
-    adaslice_result r;
+    adaslice_result r, res;
     adaslice__zkey *keys;
     size_t t, rays, pixels;
     int k;
@@ -3248,6 +3260,23 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = keys[t].t;
     adaslice__free(&mk->allocator, keys);
     for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
+    /* A ray of an open or badly wound mesh may end with a net winding T != 0;
+       counting from above then disagrees with counting from below. A ray is
+       inside only where both are positive: w > 0 and w - T > 0, that is
+       w > max(0, T), so each ray starts at -max(0, T) and the test stays
+       "> 0". Closed meshes have T = 0 everywhere and nothing changes; no mesh
+       leaves a pixel lit above its top. */
+    {
+        adaslice__raster r;
+        memset(&r, 0, sizeof r);
+        r.grid = &mk->rays;
+        r.depth_origin = mk->depth_origin;
+        r.row_end = mk->rays.height;
+        r.fn = adaslice__total_visit;
+        r.ctx = mk;
+        if ((res = adaslice__raster_mesh(&r, mesh, err)) != ADASLICE_OK) { adaslice_masker_free(mk); return res; }
+        for (t = 0; t < rays; t++) mk->winding[t] = (int16_t)(mk->winding[t] > 0 ? -mk->winding[t] : 0);
+    }
     adaslice__ok(err);
     return ADASLICE_OK;
 }
