@@ -26,11 +26,14 @@ typedef struct slice_args {
     int placed;                  /* --place X,Y given */
     double place[2];             /* the part's centre, mm from the plate's centre */
     int mirror_x, mirror_y;
+    int rotate;                  /* quarter turns of the image, counter-clockwise */
+    double display[2];           /* --display WxH in mm, or 0 */
     int svg;                     /* also the contours of each layer as SVG */
 } slice_args;
 
 static const char *const SLICE_AT[] = {"bottom", "middle", "top"};
 static const char *const MIRRORS[] = {"none", "x", "y", "xy"};
+static const char *const ROTATIONS[] = {"0", "90", "180", "270"};
 
 static void slice_usage(FILE *f)
 {
@@ -46,7 +49,10 @@ static void slice_usage(FILE *f)
           "  --printer NAME      a preset (below)                            [2k-5.5]\n"
           "  --pixels WxH        pixels of the display, with --pitch\n"
           "  --pitch MM          pixel size\n"
+          "  --display WxH       the display's size in mm, instead of --pitch\n"
           "  --mirror M          none, x, y or xy: flip the image as the display needs [none]\n"
+          "  --rotate A          0, 90, 180 or 270: turn the image counter-clockwise for a\n"
+          "                      display mounted turned (90, 270: W and H are the image's)  [0]\n"
           "masks\n"
           "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
           "                      (1: 1-bit masks)                            [1]\n"
@@ -85,6 +91,14 @@ static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, cha
                  s->width > 65536 || s->height > 65536))
                 rc = complain(RC_USAGE, "--pixels %s: expected WxH, each 1 to 65536", v);
         } else if (!strcmp(o, "--pitch")) rc = number_option(argc, argv, &i, 0, &s->pitch);
+        else if (!strcmp(o, "--display")) {
+            const char *v = NULL;
+            char tail;
+            if (!(rc = file_option(argc, argv, &i, &v)) &&
+                (sscanf(v, "%lfx%lf%c", &s->display[0], &s->display[1], &tail) != 2 || !(s->display[0] > 0) ||
+                 !(s->display[1] > 0) || !isfinite(s->display[0]) || !isfinite(s->display[1])))
+                rc = complain(RC_USAGE, "--display %s: expected WxH in mm", v);
+        } else if (!strcmp(o, "--rotate")) rc = name_option(argc, argv, &i, ROTATIONS, 4, "0, 90, 180 or 270", &s->rotate);
         else if (!strcmp(o, "--aa")) {
             size_t n = 0;
             if (!(rc = count_option(argc, argv, &i, &n)) && n > 16) rc = complain(RC_USAGE, "--aa %zu: at most 16", n);
@@ -112,15 +126,28 @@ static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, cha
     }
     if (rc) return rc;
     if (!s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
-    if (s->preset && (s->width || s->pitch))
-        return complain(RC_USAGE, "--printer %s and --pixels/--pitch: give one or the other", s->preset->name);
-    if (!s->preset && !s->width && !s->pitch) s->preset = &PRINTERS[0];
+    if (s->preset && (s->width || s->pitch || s->display[0]))
+        return complain(RC_USAGE, "--printer %s and --pixels/--pitch/--display: give one or the other", s->preset->name);
+    if (s->pitch && s->display[0]) return complain(RC_USAGE, "--pitch and --display: give one or the other");
+    if (!s->preset && !s->width && !s->pitch && !s->display[0]) s->preset = &PRINTERS[0];
     if (s->preset) {
         s->width = s->preset->width;
         s->height = s->preset->height;
         s->pitch = s->preset->pitch;
-    } else if (!s->width || !s->pitch) {
-        return complain(RC_USAGE, "--pixels WxH and --pitch MM go together");
+    } else if (!s->width || (!s->pitch && !s->display[0])) {
+        return complain(RC_USAGE, "--pixels WxH goes with --pitch MM or --display WxH");
+    } else if (s->display[0]) {
+        /* square pixels: the two sides must agree */
+        double px = s->display[0] / s->width, py = s->display[1] / s->height;
+        if (fabs(px - py) > 0.01 * px)
+            return complain(RC_USAGE, "--display %gx%g over %dx%d pixels: pixels of %g x %g mm are not square", s->display[0],
+                            s->display[1], s->width, s->height, px, py);
+        s->pitch = px;
+    }
+    if (s->rotate & 1) { /* the plate is the image turned a quarter */
+        int t = s->width;
+        s->width = s->height;
+        s->height = t;
     }
     return RC_OK;
 }
@@ -162,20 +189,38 @@ static void write_png_bytes(FILE *f, const void *ctx)
 }
 
 /* The masker's image (row 0 at the lowest y) as the display shows it: PNG
-   row 0 is the top, so +y points up unless mirrored; columns flip with x. */
-static void orient_image(const adaslice_masker *mk, const slice_args *s, unsigned char *out)
+   row 0 is the top, so +y points up unless mirrored; columns flip with x;
+   then the image turns by quarter turns. out holds out_w x out_h pixels. */
+static int mask_pixel(const adaslice_masker *mk, int x, int y)
+{
+    const unsigned char *row = mk->image + (size_t)y * mk->stride;
+    return mk->supersample > 1 ? row[x] : (row[x >> 3] >> (7 - (x & 7))) & 1;
+}
+
+static void orient_image(const adaslice_masker *mk, const slice_args *s, unsigned char *out, size_t out_stride)
 {
     int w = mk->grid.width, h = mk->grid.height, r, i;
-    for (r = 0; r < h; r++) {
-        const unsigned char *src = mk->image + (size_t)(s->mirror_y ? r : h - 1 - r) * mk->stride;
-        unsigned char *dst = out + (size_t)r * mk->stride;
-        if (!s->mirror_x) { memcpy(dst, src, mk->stride); continue; }
-        if (mk->supersample > 1) {
-            for (i = 0; i < w; i++) dst[i] = src[w - 1 - i];
-        } else {
-            memset(dst, 0, mk->stride);
-            for (i = 0; i < w; i++)
-                if (src[(w - 1 - i) >> 3] & (0x80u >> ((w - 1 - i) & 7))) dst[i >> 3] |= (unsigned char)(0x80u >> (i & 7));
+    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h;
+    if (!s->rotate && !s->mirror_x) { /* the common case: whole rows */
+        for (r = 0; r < h; r++) memcpy(out + (size_t)r * out_stride, mk->image + (size_t)(s->mirror_y ? r : h - 1 - r) * mk->stride, mk->stride);
+        return;
+    }
+    memset(out, 0, out_stride * (size_t)out_h);
+    for (r = 0; r < out_h; r++) {
+        unsigned char *dst = out + (size_t)r * out_stride;
+        for (i = 0; i < out_w; i++) {
+            /* (i, r) in the turned picture back to (x, y) of the upright picture, then to the grid */
+            int x, y, v;
+            switch (s->rotate) {
+            case 1: x = w - 1 - r; y = i; break;
+            case 2: x = w - 1 - i; y = h - 1 - r; break;
+            case 3: x = r; y = h - 1 - i; break;
+            default: x = i; y = r; break;
+            }
+            if (s->mirror_x) x = w - 1 - x;
+            v = mask_pixel(mk, x, s->mirror_y ? y : h - 1 - y);
+            if (mk->supersample > 1) dst[i] = (unsigned char)v;
+            else if (v) dst[i >> 3] |= (unsigned char)(0x80u >> (i & 7));
         }
     }
 }
@@ -204,9 +249,10 @@ static void write_manifest(FILE *f, const void *ctx)
     json_string(f, m->a->model);
     fputs(",\n  \"printer\": {\"name\": ", f);
     if (s->preset) json_string(f, s->preset->name); else fputs("null", f);
-    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": ", s->width, s->height);
+    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": ", (s->rotate & 1) ? s->height : s->width,
+            (s->rotate & 1) ? s->width : s->height);
     json_number(f, s->pitch);
-    fprintf(f, ", \"mirror\": \"%s\"},\n", MIRRORS[s->mirror_x | (s->mirror_y << 1)]);
+    fprintf(f, ", \"mirror\": \"%s\", \"rotate\": %s},\n", MIRRORS[s->mirror_x | (s->mirror_y << 1)], ROTATIONS[s->rotate]);
     fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n",
             s->supersample > 1 ? 8 : 1, s->supersample, SLICE_AT[s->slice_at]);
     fputs("  \"part_mm\": [", f);
@@ -335,15 +381,18 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
     job_layer *layers = NULL;
     unsigned char *image = NULL;
     char *path = NULL;
-    size_t k, path_size = strlen(s->dir) + 64;
+    size_t k, path_size = strlen(s->dir) + 64, out_stride;
     double started = now_ms(), last = 0;
-    int rc;
+    int rc, out_w, out_h;
 
     memset(&man, 0, sizeof man);
     if ((rc = place_part(s, &j->mesh, &grid, man.part))) return rc;
     if (adaslice_masker_init(&mk, &j->mesh, &grid, s->supersample, NULL, &err) != ADASLICE_OK) return library_error(&err);
     layers = (job_layer *)calloc(p->layer_count ? p->layer_count : 1, sizeof *layers);
-    image = (unsigned char *)malloc(mk.stride * (size_t)grid.height);
+    out_w = (s->rotate & 1) ? grid.height : grid.width;
+    out_h = (s->rotate & 1) ? grid.width : grid.height;
+    out_stride = s->supersample > 1 ? (size_t)out_w : ((size_t)out_w + 7) / 8;
+    image = (unsigned char *)malloc(out_stride * (size_t)out_h);
     path = (char *)malloc(path_size);
     if (!layers || !image || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
     man.digits = layer_digits(p->layer_count);
@@ -353,8 +402,8 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
         png_file png;
         unsigned char *data = NULL;
         if (adaslice_masker_slice(&mk, j->profile.z0 + h, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
-        orient_image(&mk, s, image);
-        if (png_encode_gray(image, grid.width, grid.height, mk.stride, s->supersample > 1 ? 8 : 1, &data, &png.size)) {
+        orient_image(&mk, s, image, out_stride);
+        if (png_encode_gray(image, out_w, out_h, out_stride, s->supersample > 1 ? 8 : 1, &data, &png.size)) {
             rc = complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
             goto done;
         }

@@ -432,6 +432,35 @@ static void test_cli_slice(void)
     CHECK(png && png[24] == 8);
     free(png);
 
+    /* turning or mirroring the image changes no mask but its orientation:
+       a 2560 x 1440 display turned a quarter still gets 2560 x 1440 images */
+    r = run("slice", sphere_stl(), "-o", job, "--rotate", "90", "--mirror", "xy", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    run_free(&r);
+    snprintf(path, sizeof path, "%s/layer_00001.png", job);
+    png = read_all(path);
+    CHECK(png && (unsigned char)png[18] == 0x0a && (unsigned char)png[19] == 0x00 && (unsigned char)png[22] == 0x05 &&
+          (unsigned char)png[23] == 0xa0); /* width 2560, height 1440 */
+    free(png);
+    {
+        char first[64] = "", other[64] = "";
+        const char *turns[2][4] = {{"--rotate", "0", "--mirror", "none"}, {"--rotate", "270", "--mirror", "x"}};
+        int t;
+        for (t = 0; t < 2; t++) {
+            char *mf, *lit;
+            r = run("slice", sphere_stl(), "-o", job, "--pixels", "400x400", "--pitch", "0.05", turns[t][0], turns[t][1],
+                    turns[t][2], turns[t][3], NULL);
+            CHECK(r.status == 0);
+            run_free(&r);
+            snprintf(path, sizeof path, "%s/manifest.json", job);
+            mf = read_all(path);
+            lit = mf ? strstr(mf, "\"lit_area_mm2\"") : NULL;
+            if (lit) snprintf(t ? other : first, 64, "%.40s", lit);
+            free(mf);
+        }
+        CHECKF(*first && !strcmp(first, other), "lit areas differ: %s / %s", first, other);
+    }
+
     /* a 10 mm sphere on a 5 x 5 mm plate */
     r = run("slice", sphere_stl(), "-o", job, "--pixels", "100x100", "--pitch", "0.05", NULL);
     CHECKF(r.status == 1 && one_message(r.err) && strstr(r.err, "does not fit") && strstr(r.err, "5 mm too wide"),
