@@ -42,6 +42,15 @@
    indices out of range and overflowing counts are errors with distinct codes.
    `scale` converts units (scans are often in metres).
 
+   LAYERED DEPTH IMAGE  adaslice_ldi_build rasterises every triangle scan line
+   by scan line at the pixel centres of a grid of rays along x, y or z.
+   Vertices snap to 1/256 pixel and inside tests are exact integer edge
+   functions with a top-left rule, so a ray through a shared edge or vertex
+   meets exactly one of the triangles there (watertight). Each sample keeps its
+   depth, triangle and whether the ray enters or leaves the solid: 8 bytes
+   (float depth, uint32 triangle | leave bit); samples per pixel are sorted by
+   depth; 8 more bytes per pixel index them. No threads.
+
    PROFILES (exact: from the triangles, no sampling)
      cusp       eq. 4-6    phi = max |n_z| * w over triangles meeting the bin;
                            eps in mm
@@ -62,6 +71,26 @@
    inconsistently wound meshes give signed sums (negative areas read as 0).
    w is an optional per-triangle weight in [0,1] (eq. 21-24); wmax the
    largest weight among triangles meeting the bin.
+
+   SAMPLED PROFILES  adaslice_profile_sampled is the paper's method (§3.2):
+   LDIs along x, y and z with `resolution` pixels (default 2048) across the
+   largest extent. Each sample puts its triangle's value in the bin of its
+   height (cusp, roughness, the max weight); areas (eq. 13) count the z rays
+   whose winding number is positive at each bin centre. The z LDI for areas is
+   built in bands of rows within memory_limit (default 512 MiB) with identical
+   results; cusp and roughness need no stored LDI at all. A bin no sample
+   reaches (thinner than the x and y rays' spacing, with no surface facing z)
+   takes the larger value of its nearest reached neighbours, never a silent
+   zero, and is counted in profile.unsampled_bins.
+
+   MASKS  adaslice_masker_init / adaslice_masker_slice make layer masks on a
+   printer's pixel grid bottom-up in one sweep: each slice applies the z-ray
+   samples between the previous height and this one, so every sample is
+   rasterised once per print. A pixel is lit when its ray's winding number
+   below the height is positive (overlapping shells stay lit); where an open or
+   badly wound mesh leaves a ray unbalanced it must be positive counted from
+   above too, so no column is ever lit above the part. supersample s > 1 gives
+   8-bit masks from s x s rays per pixel. Memory: 2 bytes per ray.
 
    PLANS
      optimal   Procedure 1 in O(N) for additive metrics: the feasible
