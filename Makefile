@@ -26,11 +26,13 @@ $(B)/adaslice: $(HOST_SRC) $(HDRS) | $(B)
 	$(CC) $(CSTD) $(CFLAGS) $(HOST_SRC) -o $@ -lm
 
 # The main job on a bundled example: plan the hand (CC BY 4.0, see
-# examples/models/README.md) scaled to the paper's 23.8 mm, and plot it.
+# examples/models/README.md) scaled to the paper's 23.8 mm, plot it, and
+# write its masks as a job for a 3840 x 2400 printer.
 demo: $(B)/adaslice
 	$(B)/adaslice plan examples/models/hand_closed.obj --scale 88.7 --compare \
 	    --out $(B)/hand_plan.csv --plot $(B)/hand_plot.svg
-	@echo "wrote $(B)/hand_plan.csv and $(B)/hand_plot.svg"
+	$(B)/adaslice slice examples/models/hand_closed.obj --scale 88.7 --printer photon-mono-4k -o $(B)/hand_job
+	@echo "wrote $(B)/hand_plan.csv, $(B)/hand_plot.svg and the job $(B)/hand_job/"
 
 # --- make check ----------------------------------------------------------
 # Sanitized builds of the tool and the test runner; the runner prints the
