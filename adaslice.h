@@ -2515,6 +2515,22 @@ done:
     return res;
 }
 
+/* A bin no ray reached (thinner than the spacing of the x and y rays, with no
+   surface facing z) takes the larger value of its nearest reached neighbours:
+   never zero by mere lack of samples. */
+static void adaslice__fill_unreached(double *v, const unsigned char *reached, size_t n)
+{
+    size_t i = 0, k;
+    while (i < n) {
+        double fill;
+        if (reached[i]) { i++; continue; }
+        for (k = i; k < n && !reached[k]; k++) {} /* the run [i, k) */
+        fill = i > 0 ? v[i - 1] : 0;
+        if (k < n && v[k] > fill) fill = v[k];
+        for (; i < k; i++) v[i] = fill;
+    }
+}
+
 ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
                                                       const adaslice_profile_options *options,
                                                       adaslice_profile *profile, adaslice_error *err)
@@ -2552,19 +2568,11 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         s.inside = inside;
         if (r != ADASLICE_OK) goto done;
     }
+    for (i = 0; i < n; i++) profile->unsampled_bins += !s.reached[i];
     if (max_type) {
-        /* A bin no ray reached (thinner than a pixel and between two rows of
-           the x and y rays, with no surface facing z) takes the larger of its
-           nearest reached neighbours: never zero by mere lack of samples. */
-        size_t below = n, k;
-        for (i = 0; i < n; i++) {
-            if (s.reached[i]) { below = i; continue; }
-            for (k = i + 1; k < n && !s.reached[k]; k++) {}
-            profile->phi[i] = below < n ? profile->phi[below] : 0;
-            if (k < n && profile->phi[k] > profile->phi[i]) profile->phi[i] = profile->phi[k];
-            profile->unsampled_bins++;
-        }
+        adaslice__fill_unreached(profile->phi, s.reached, n);
     } else {
+        if (s.wmax) adaslice__fill_unreached(s.wmax, s.reached, n);
         long long count = 0;
         double pixel = 0;
         adaslice_grid gz = adaslice_grid_fit(mesh, ADASLICE_AXIS_Z, opt.resolution);
@@ -2572,7 +2580,6 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         for (i = 0; i < n; i++) {
             count += s.inside[i];
             profile->area[i] = (double)count * pixel;
-            profile->unsampled_bins += !s.reached[i];
         }
         adaslice__phi_from_area(profile, s.wmax);
     }

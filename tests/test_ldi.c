@@ -173,6 +173,34 @@ static void unreached_bins_are_filled(void)
     gen_free(&m);
 }
 
+/* Weights travel with the samples' triangle ids (eq. 21-24): half weight
+   everywhere halves the sampled cusp profile and the volume profile. */
+static void sampled_weights_follow_the_faces(void)
+{
+    adaslice_mesh m = gen_sphere(5, 32, 16, 0);
+    float *w = (float *)malloc(m.triangle_count * sizeof(float));
+    adaslice_metric metrics[2] = {ADASLICE_METRIC_CUSP, ADASLICE_METRIC_VOLUME};
+    size_t i, off = 0;
+    int k;
+    for (i = 0; i < m.triangle_count; i++) w[i] = 0.5f;
+    for (k = 0; k < 2; k++) {
+        adaslice_profile_options o;
+        adaslice_profile a, b;
+        memset(&o, 0, sizeof o);
+        o.metric = metrics[k];
+        o.resolution = 512;
+        CHECK(adaslice_profile_sampled(&m, &o, &a, NULL) == ADASLICE_OK);
+        o.weights = w;
+        CHECK(adaslice_profile_sampled(&m, &o, &b, NULL) == ADASLICE_OK);
+        for (i = 0; i < a.bin_count; i++) off += b.phi[i] != 0.5 * a.phi[i];
+        adaslice_profile_free(&a);
+        adaslice_profile_free(&b);
+    }
+    CHECK(off == 0);
+    free(w);
+    gen_free(&m);
+}
+
 static void bad_grids_are_refused(void)
 {
     adaslice_mesh m = gen_box(0, 0, 0, 1, 1, 1);
@@ -194,5 +222,6 @@ void test_ldi(void)
     RUN(sampled_sphere_matches_exact);
     RUN(bands_do_not_change_the_result);
     RUN(unreached_bins_are_filled);
+    RUN(sampled_weights_follow_the_faces);
     RUN(bad_grids_are_refused);
 }
