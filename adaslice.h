@@ -446,6 +446,11 @@ typedef struct adaslice_masker {
 ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *masker, const adaslice_mesh *mesh,
                                                   const adaslice_grid *grid, int supersample,
                                                   const adaslice_allocator *allocator, adaslice_error *error);
+/* A printer's plate as a grid of z rays: width x height pixels of `pitch` mm,
+   placed so that the centre of the mesh's box lies `offset` mm from the
+   plate's centre. */
+ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch,
+                                               const double offset[2]);
 /* The mask at `height` (absolute z, mm) in masker->image; heights must not
    decrease from call to call. */
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
@@ -3236,6 +3241,22 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->winding);
     adaslice__free(&al, mk->coverage);
     memset(mk, 0, sizeof *mk);
+}
+
+ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch,
+                                               const double offset[2])
+{
+    adaslice_grid g;
+    double lo[3], hi[3];
+    adaslice_mesh_bounds(mesh, lo, hi);
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.pitch = pitch;
+    g.width = width;
+    g.height = height;
+    g.origin[0] = 0.5 * (lo[0] + hi[0]) - (offset ? offset[0] : 0) - 0.5 * width * pitch;
+    g.origin[1] = 0.5 * (lo[1] + hi[1]) - (offset ? offset[1] : 0) - 0.5 * height * pitch;
+    return g;
 }
 
 /* Each ray's net winding number over the whole mesh. */

@@ -164,13 +164,7 @@ static void bench_masks(const char *dir, int supersample)
     for (k = 0; k < 3 * m.vertex_count; k++) m.vertices[k] = (float)(m.vertices[k] * scale);
     adaslice_mesh_bounds(&m, a, b);
     if (adaslice_profile_exact(&m, NULL, &p, NULL) != ADASLICE_OK || adaslice_plan_profile(&p, NULL, &plan, NULL) != ADASLICE_OK) exit(1);
-    memset(&g, 0, sizeof g);
-    g.axis = ADASLICE_AXIS_Z;
-    g.pitch = 0.04725;
-    g.width = 2560;
-    g.height = 1440;
-    g.origin[0] = 0.5 * (a[0] + b[0]) - 1280 * g.pitch;
-    g.origin[1] = 0.5 * (a[1] + b[1]) - 720 * g.pitch;
+    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
     t0 = now();
     if (adaslice_masker_init(&mk, &m, &g, supersample, NULL, NULL) != ADASLICE_OK) exit(1);
     t_mask += now() - t0;

@@ -312,13 +312,7 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
         return complain(RC_FAIL, "the part (%g x %g mm%s) does not fit the %g x %g mm plate: %g mm too wide along %s",
                         size[0], size[1], s->placed ? ", placed off centre" : "", plate[0], plate[1],
                         over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
-    memset(g, 0, sizeof *g);
-    g->axis = ADASLICE_AXIS_Z;
-    g->pitch = s->pitch;
-    g->width = s->width;
-    g->height = s->height;
-    g->origin[0] = 0.5 * (lo[0] + hi[0]) - s->place[0] - plate[0] / 2;
-    g->origin[1] = 0.5 * (lo[1] + hi[1]) - s->place[1] - plate[1] / 2;
+    *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch, s->place);
     return RC_OK;
 }
 

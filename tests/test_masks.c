@@ -11,20 +11,13 @@ static int mask_bit(const adaslice_masker *mk, int i, int j)
     return (mk->image[(size_t)j * mk->stride + (size_t)(i >> 3)] >> (7 - (i & 7))) & 1;
 }
 
+/* A third and a seventh of a pixel off centre, so centres rarely sit on edges. */
 static adaslice_grid plate_around(const adaslice_mesh *m, double pitch, int w, int h)
 {
-    adaslice_grid g;
-    double lo[3], hi[3];
-    adaslice_mesh_bounds(m, lo, hi);
-    memset(&g, 0, sizeof g);
-    g.axis = ADASLICE_AXIS_Z;
-    g.pitch = pitch;
-    g.width = w;
-    g.height = h;
-    /* a third of a pixel off any round number, so centres rarely sit on edges */
-    g.origin[0] = 0.5 * (lo[0] + hi[0]) - w * pitch / 2 + pitch / 3;
-    g.origin[1] = 0.5 * (lo[1] + hi[1]) - h * pitch / 2 + pitch / 7;
-    return g;
+    double offset[2];
+    offset[0] = -pitch / 3;
+    offset[1] = -pitch / 7;
+    return adaslice_grid_plate(m, w, h, pitch, offset);
 }
 
 /* Every pixel whose centre is more than a pixel from every contour edge is lit

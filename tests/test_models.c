@@ -307,13 +307,7 @@ static int check_masks(const char *dir, const char *name, int watertight)
     if (40 / (b[2] - a[2]) < s) s = 40 / (b[2] - a[2]);
     for (i = 0; i < 3 * m.vertex_count; i++) m.vertices[i] = (float)((m.vertices[i] - a[i % 3]) * s);
     adaslice_mesh_bounds(&m, a, b);
-    memset(&g, 0, sizeof g);
-    g.axis = ADASLICE_AXIS_Z;
-    g.pitch = 0.04725;
-    g.width = 2560;
-    g.height = 1440;
-    g.origin[0] = 0.5 * (a[0] + b[0]) - 1280 * g.pitch;
-    g.origin[1] = 0.5 * (a[1] + b[1]) - 720 * g.pitch;
+    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
     for (k = 0; k < 16; k++) z[k] = a[2] + (b[2] - a[2]) * (k + 0.5) / 16;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;

@@ -524,13 +524,7 @@ static void test_png_masker_images(void)
         adaslice_masker mk;
         adaslice_grid g;
         batch bt;
-        memset(&g, 0, sizeof g);
-        g.axis = ADASLICE_AXIS_Z;
-        g.pitch = 0.04725;
-        g.width = 2560;
-        g.height = 1440;
-        g.origin[0] = 0.5 * (a[0] + b[0]) - 1280 * g.pitch;
-        g.origin[1] = 0.5 * (a[1] + b[1]) - 720 * g.pitch;
+        g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
         bt.count = 0;
         CHECK(adaslice_masker_init(&mk, &m, &g, s, NULL, &e) == ADASLICE_OK);
         for (k = 0; k < 4; k++) {
