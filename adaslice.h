@@ -1977,34 +1977,60 @@ ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice
 /* ================================================================ profiles */
 /* Bins: N = ceil(H / b); bin i covers [z0 + i*b, z0 + (i+1)*b). */
 
-static size_t adaslice__bin_of(double z, double z0, double bin, size_t n)
+
+/* Range-maximum updates in O(1) each: a sparse table whose level k holds
+   maxima over runs of 2^k bins; a range [l, r] writes two overlapping runs of
+   the largest power of two that fits, and one push down, level by level, at
+   the end gives every bin its maximum. Levels stop at the longest range. */
+typedef struct adaslice__rmax {
+    size_t n;
+    int levels;
+    double *t;          /* levels * n */
+} adaslice__rmax;
+
+static int adaslice__floor_log2(size_t x) /* x >= 1 */
 {
-    double f = (z - z0) / bin;
-    size_t i;
-    if (!(f > 0)) return 0;
-    i = f >= (double)n ? n - 1 : (size_t)f;
-    return i < n ? i : n - 1;
+    int k = 0;
+    while (x >= ((size_t)1 << 16)) { x >>= 16; k += 16; }
+    if (x >= 256) { x >>= 8; k += 8; }
+    if (x >= 16) { x >>= 4; k += 4; }
+    if (x >= 4) { x >>= 2; k += 2; }
+    return x >= 2 ? k + 1 : k;
 }
 
-/* Range-maximum updates in O(log N) each on an implicit segment tree of 2N
-   nodes, pushed down to the leaves once at the end: a triangle spanning
-   thousands of bins costs the same as one spanning two. */
-static void adaslice__rmax_update(double *tree, size_t n, size_t first, size_t last, double v)
+static int adaslice__rmax_init(adaslice__rmax *r, size_t n, size_t longest, const adaslice_allocator *al)
 {
-    size_t l = first + n, r = last + n + 1;
-    for (; l < r; l >>= 1, r >>= 1) {
-        if (l & 1) { if (tree[l] < v) tree[l] = v; l++; }
-        if (r & 1) { --r; if (tree[r] < v) tree[r] = v; }
-    }
+    r->n = n;
+    r->levels = adaslice__floor_log2(longest ? longest : 1) + 1;
+    r->t = ADASLICE__CAST(double *, adaslice__alloc(al, (size_t)r->levels * n, sizeof(double)));
+    if (!r->t) return 0;
+    memset(r->t, 0, (size_t)r->levels * n * sizeof(double));
+    return 1;
 }
 
-static void adaslice__rmax_push(double *tree, size_t n)
+static void adaslice__rmax_update(adaslice__rmax *r, size_t first, size_t last, double v)
 {
-    size_t i;
-    for (i = 1; i < n; i++) {
-        if (tree[2 * i] < tree[i]) tree[2 * i] = tree[i];
-        if (tree[2 * i + 1] < tree[i]) tree[2 * i + 1] = tree[i];
+    int k = adaslice__floor_log2(last - first + 1);
+    double *level = r->t + (size_t)k * r->n;
+    size_t second = last + 1 - ((size_t)1 << k);
+    if (level[first] < v) level[first] = v;
+    if (level[second] < v) level[second] = v;
+}
+
+/* Pushes every level down; level 0 then holds each bin's maximum. */
+static double *adaslice__rmax_finish(adaslice__rmax *r)
+{
+    int k;
+    for (k = r->levels - 1; k > 0; k--) {
+        const double *up = r->t + (size_t)k * r->n;
+        double *down = r->t + (size_t)(k - 1) * r->n;
+        size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
+        for (j = 0; j < end; j++) {
+            if (down[j] < up[j]) down[j] = up[j];
+            if (down[j + half] < up[j]) down[j + half] = up[j];
+        }
     }
+    return r->t;
 }
 
 static void adaslice__corner(const adaslice_mesh *m, size_t t, int k, double p[3])
@@ -2276,14 +2302,45 @@ static void adaslice__phi_from_area(adaslice_profile *p, const double *wmax)
     }
 }
 
+/* Each triangle's value over every bin its height range meets (eq. 5, 9,
+   21-24): heights per vertex at height[v * stride], values per triangle
+   (negative: skip). Returns the per-bin maxima (the table's level 0, which
+   the caller frees), or NULL when out of memory. */
+static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const float *height, size_t stride,
+                                       const double *value, const adaslice_profile *p, adaslice__rmax *rmax)
+{
+    size_t t, n = p->bin_count, longest = 1;
+    double inverse = 1.0 / p->bin;
+    uint32_t *span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&p->allocator, 2 * mesh->triangle_count, sizeof(uint32_t)));
+    if (!span) return NULL;
+    for (t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *tri = mesh->triangles + 3 * t;
+        double a = height[tri[0] * stride], b = height[tri[1] * stride], c = height[tri[2] * stride];
+        double lo = a < b ? a : b, hi = a > b ? a : b, f;
+        if (c < lo) lo = c;
+        if (c > hi) hi = c;
+        f = (lo - p->z0) * inverse;
+        span[2 * t] = !(f > 0) ? 0 : f >= (double)(n - 1) ? (uint32_t)(n - 1) : (uint32_t)f;
+        f = (hi - p->z0) * inverse;
+        span[2 * t + 1] = !(f > 0) ? 0 : f >= (double)(n - 1) ? (uint32_t)(n - 1) : (uint32_t)f;
+        if (value[t] >= 0 && span[2 * t + 1] - span[2 * t] + 1 > longest) longest = span[2 * t + 1] - span[2 * t] + 1;
+    }
+    if (!adaslice__rmax_init(rmax, n, longest, &p->allocator)) { adaslice__free(&p->allocator, span); return NULL; }
+    for (t = 0; t < mesh->triangle_count; t++)
+        if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
+    adaslice__free(&p->allocator, span);
+    return adaslice__rmax_finish(rmax);
+}
+
 ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *options,
                                                     adaslice_profile *profile, adaslice_error *err)
 {
     adaslice_profile_options opt;
     adaslice__area_acc acc;
+    adaslice__rmax rmax;
     adaslice_result r;
-    double lo[3], hi[3], *tree = NULL;
+    double lo[3], hi[3], *tree = NULL, *value = NULL;
     size_t n, t;
     int max_type;
 
@@ -2291,43 +2348,34 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     memset(&acc, 0, sizeof acc);
-    if (max_type || opt.weights) tree = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 2 * n, sizeof(double)));
     if (!max_type) {
         acc.n = n; acc.z0 = profile->z0; acc.bin = opt.bin;
         acc.direct = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, n, sizeof(double)));
         acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 3 * (n + 1), sizeof(double)));
     }
+    if (max_type || opt.weights) {
+        value = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, mesh->triangle_count, sizeof(double)));
+        for (t = 0; value && t < mesh->triangle_count; t++) value[t] = adaslice__face_value(mesh, t, &opt);
+        if (value) tree = adaslice__max_over_bins(mesh, mesh->vertices + 2, 3, value, profile, &rmax);
+    }
     if (((max_type || opt.weights) && !tree) || (!max_type && (!acc.direct || !acc.coef))) {
         adaslice__free(&profile->allocator, tree);
+        adaslice__free(&profile->allocator, value);
         adaslice__free(&profile->allocator, acc.direct);
         adaslice__free(&profile->allocator, acc.coef);
         adaslice_profile_free(profile);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
     }
-    if (tree) {
-        /* each triangle over every bin its z-range meets (eq. 5, 9, 21-24) */
-        memset(tree, 0, 2 * n * sizeof(double));
-        for (t = 0; t < mesh->triangle_count; t++) {
-            double value = adaslice__face_value(mesh, t, &opt), v[3][3], zmin, zmax;
-            int k;
-            if (value < 0) continue;
-            for (k = 0; k < 3; k++) adaslice__corner(mesh, t, k, v[k]);
-            zmin = v[0][2] < v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] < zmin) zmin = v[2][2];
-            zmax = v[0][2] > v[1][2] ? v[0][2] : v[1][2]; if (v[2][2] > zmax) zmax = v[2][2];
-            adaslice__rmax_update(tree, n, adaslice__bin_of(zmin, profile->z0, opt.bin, n),
-                                  adaslice__bin_of(zmax, profile->z0, opt.bin, n), value);
-        }
-        adaslice__rmax_push(tree, n);
-    }
     if (max_type) {
-        memcpy(profile->phi, tree + n, n * sizeof(double));
+        memcpy(profile->phi, tree, n * sizeof(double));
     } else {
         adaslice_mesh_bounds(mesh, lo, hi);
         memset(acc.direct, 0, n * sizeof(double));
         memset(acc.coef, 0, 3 * (n + 1) * sizeof(double));
         adaslice__areas(mesh, lo, hi, &acc, profile->area);
-        adaslice__phi_from_area(profile, tree ? tree + n : NULL);
+        adaslice__phi_from_area(profile, tree);
     }
+    adaslice__free(&profile->allocator, value);
     adaslice__free(&profile->allocator, tree);
     adaslice__free(&profile->allocator, acc.direct);
     adaslice__free(&profile->allocator, acc.coef);
