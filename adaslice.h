@@ -410,6 +410,53 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan);
    b * sum phi (additive metrics), b * sum |phi[j] - phi[first]| (volume, eq. 20). */
 ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t first, size_t end);
 
+/* -------------------------------------------------------- build direction */
+
+/* §4.3: the plan seen along many build directions. A direction d means the
+   part is rotated so that d points up (+z). */
+typedef struct adaslice_orienter {
+    const adaslice_mesh *mesh;
+    adaslice_profile_options profile;  /* copies of the options given */
+    adaslice_plan_options plan;
+    adaslice_allocator allocator;
+} adaslice_orienter;
+
+typedef struct adaslice_direction_score {
+    double direction[3];
+    int feasible;          /* 0: no plan meets eps along this direction */
+    size_t layers;         /* K */
+    double worst_error;    /* the plan's largest layer error */
+    double mean_error;     /* its total error / K: the epsilon(O) of F(O), see the manual */
+    double score;          /* F(O), filled by adaslice_orient_scores */
+} adaslice_direction_score;
+
+ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *orienter, const adaslice_mesh *mesh,
+                                                    const adaslice_profile_options *profile,
+                                                    const adaslice_plan_options *plan, adaslice_error *error);
+/* The profile along direction d: adaslice_profile_exact of the mesh turned by
+   adaslice_mesh_rotate(adaslice_rotation_to_z(d)), bit for bit. Reentrant:
+   threads may share one orienter. */
+ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *orienter, const double d[3],
+                                                    adaslice_profile *profile, adaslice_error *error);
+/* K and the layer errors of the optimal plan along d. */
+ADASLICE_DEF adaslice_result adaslice_orienter_score(const adaslice_orienter *orienter, const double d[3],
+                                                     adaslice_direction_score *score, adaslice_error *error);
+ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
+/* n directions of a spherical Fibonacci lattice, x y z each, near-uniform on the sphere. */
+ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz);
+/* F(O) = alpha K / max K + (1 - alpha) eps / max eps over the feasible
+   directions (eq. 25); infeasible ones get F = 2. */
+ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *scores, size_t n, double alpha);
+/* Indices of directions whose F is lower than every neighbour's within
+   `radius` radians (ties go to the lower index), best first; returns how many. */
+ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *scores, size_t n, double radius,
+                                           size_t *out, size_t max);
+/* The rotation (row-major 3x3) turning unit direction d onto +z by the
+   smallest angle; its last row is d. */
+ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9]);
+/* Turns every vertex by r (row-major). */
+ADASLICE_DEF void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9]);
+
 /* ------------------------------------------------------------------ masks */
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -2053,9 +2100,9 @@ static void adaslice__normal(const double a[3], const double b[3], const double 
    1/sin(theta) = |n| / |n_xy| clamped at roughness_max (eq. 8), times the weight. */
 static double adaslice__facet_value(adaslice_metric metric, const double n[3], double roughness_max)
 {
-    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    double xy = sqrt(n[0] * n[0] + n[1] * n[1]);
+    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), xy;
     if (metric == ADASLICE_METRIC_CUSP) return fabs(n[2]) / len;
+    xy = sqrt(n[0] * n[0] + n[1] * n[1]);
     if (xy * roughness_max <= len) return roughness_max;
     return len / xy;
 }
@@ -2243,11 +2290,17 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
             if (!(opt->weights[t] >= 0 && opt->weights[t] <= 1))
                 return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                       "profile: weight of triangle %zu is %g, outside [0, 1]", t, (double)opt->weights[t]);
-    for (t = 0; t < 3 * mesh->triangle_count; t++)
+    lo[2] = DBL_MAX;
+    hi[2] = -DBL_MAX;
+    for (t = 0; t < 3 * mesh->triangle_count; t++) {
+        double z;
         if (mesh->triangles[t] >= mesh->vertex_count)
             return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "profile: triangle %zu uses vertex %u of %zu",
                                   t / 3, (unsigned)mesh->triangles[t], mesh->vertex_count);
-    adaslice_mesh_bounds(mesh, lo, hi);
+        z = mesh->vertices[3 * (size_t)mesh->triangles[t] + 2];
+        if (z < lo[2]) lo[2] = z;
+        if (z > hi[2]) hi[2] = z;
+    }
     if (!(hi[2] > lo[2]))
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh is flat (height 0 along z)");
     bins = ceil((hi[2] - lo[2]) / opt->bin - 1e-9);
@@ -2281,10 +2334,15 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
    normal. */
 static double adaslice__face_value(const adaslice_mesh *mesh, size_t t, const adaslice_profile_options *opt)
 {
-    double v[3][3], nrm[3], value = 1;
-    int k;
-    for (k = 0; k < 3; k++) adaslice__corner(mesh, t, k, v[k]);
-    adaslice__normal(v[0], v[1], v[2], nrm);
+    const uint32_t *tri = mesh->triangles + 3 * t;
+    const float *a = mesh->vertices + 3 * (size_t)tri[0], *b = mesh->vertices + 3 * (size_t)tri[1],
+                *c = mesh->vertices + 3 * (size_t)tri[2];
+    double u0 = (double)b[0] - a[0], u1 = (double)b[1] - a[1], u2 = (double)b[2] - a[2];
+    double w0 = (double)c[0] - a[0], w1 = (double)c[1] - a[1], w2 = (double)c[2] - a[2];
+    double nrm[3], value = 1;
+    nrm[0] = u1 * w2 - u2 * w1;
+    nrm[1] = u2 * w0 - u0 * w2;
+    nrm[2] = u0 * w1 - u1 * w0;
     if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) return -1;
     if (opt->metric <= ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(opt->metric, nrm, opt->roughness_max);
     return opt->weights ? value * opt->weights[t] : value;
@@ -3258,6 +3316,161 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
     memset(plan, 0, sizeof *plan);
 }
 
+
+/* ========================================================= build direction */
+
+ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9])
+{
+    /* Rodrigues about d x z; d = -z turns half a turn about x */
+    double c = d[2], vx = d[1], vy = -d[0], k;
+    if (c < -1 + 1e-12) {
+        r[0] = 1; r[1] = 0; r[2] = 0;
+        r[3] = 0; r[4] = -1; r[5] = 0;
+    } else {
+        k = 1 / (1 + c);
+        r[0] = 1 - vy * vy * k; r[1] = vx * vy * k; r[2] = -vy;
+        r[3] = vx * vy * k;     r[4] = 1 - vx * vx * k; r[5] = vx;
+    }
+    r[6] = d[0]; r[7] = d[1]; r[8] = d[2];
+}
+
+/* One expression for a turned coordinate, so the search's heights and a
+   turned mesh's z agree to the last bit. */
+static double adaslice__turn(const double *row, const float *p)
+{
+    return row[0] * p[0] + row[1] * p[1] + row[2] * p[2];
+}
+
+ADASLICE_DEF void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9])
+{
+    size_t v;
+    for (v = 0; v < mesh->vertex_count; v++) {
+        float *p = mesh->vertices + 3 * v, q[3];
+        int k;
+        for (k = 0; k < 3; k++) q[k] = (float)adaslice__turn(r + 3 * k, p);
+        memcpy(p, q, sizeof q);
+    }
+}
+
+ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)
+{
+    const double golden = 3.14159265358979323846 * (3 - sqrt(5.0));
+    size_t i;
+    for (i = 0; i < n; i++) {
+        double z = 1 - (2.0 * (double)i + 1) / (double)n, r = sqrt(1 - z * z), phi = golden * (double)i;
+        xyz[3 * i] = r * cos(phi);
+        xyz[3 * i + 1] = r * sin(phi);
+        xyz[3 * i + 2] = z;
+    }
+}
+
+ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const adaslice_mesh *mesh,
+                                                    const adaslice_profile_options *profile,
+                                                    const adaslice_plan_options *plan, adaslice_error *err)
+{
+    if (!o) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: no orienter given");
+    memset(o, 0, sizeof *o);
+    if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "orient: the mesh has no triangles");
+    o->mesh = mesh;
+    if (profile) o->profile = *profile;
+    if (plan) o->plan = *plan;
+    o->allocator = adaslice__allocator(profile ? profile->allocator : NULL);
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
+{
+    if (o) memset(o, 0, sizeof *o);
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, const double d[3],
+                                                    adaslice_profile *profile, adaslice_error *err)
+{
+    const adaslice_mesh *m = o->mesh;
+    adaslice_allocator al = o->allocator;
+    adaslice_mesh turned;
+    adaslice_result r;
+    double rot[9], len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), u[3];
+    if (!(len > 0) || len > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: direction (%g, %g, %g) has no length", d[0], d[1], d[2]);
+    u[0] = d[0] / len; u[1] = d[1] / len; u[2] = d[2] / len;
+    adaslice_rotation_to_z(u, rot);
+    /* a turned copy of the vertices, exactly as adaslice_mesh_rotate makes
+       it, so that planning the turned mesh later gives this very profile */
+    turned = *m;
+    memset(&turned.allocator, 0, sizeof turned.allocator);
+    turned.vertices = ADASLICE__CAST(float *, adaslice__alloc(&al, 3 * (m->vertex_count ? m->vertex_count : 1), sizeof(float)));
+    if (!turned.vertices) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
+    memcpy(turned.vertices, m->vertices, 3 * m->vertex_count * sizeof(float));
+    adaslice_mesh_rotate(&turned, rot);
+    r = adaslice_profile_exact(&turned, &o->profile, profile, err);
+    adaslice__free(&al, turned.vertices);
+    return r;
+}
+
+ADASLICE_DEF adaslice_result adaslice_orienter_score(const adaslice_orienter *o, const double d[3],
+                                                     adaslice_direction_score *s, adaslice_error *err)
+{
+    adaslice_profile p;
+    adaslice_plan plan;
+    adaslice_error e;
+    adaslice_result r;
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    memset(s, 0, sizeof *s);
+    if (len > 0) { s->direction[0] = d[0] / len; s->direction[1] = d[1] / len; s->direction[2] = d[2] / len; }
+    if ((r = adaslice_profile_along(o, d, &p, err)) != ADASLICE_OK) return r;
+    r = adaslice_plan_profile(&p, &o->plan, &plan, &e);
+    adaslice_profile_free(&p);
+    if (r == ADASLICE_ERR_INFEASIBLE) { adaslice__ok(err); return ADASLICE_OK; }
+    if (r != ADASLICE_OK) {
+        if (err) *err = e;
+        return r;
+    }
+    s->feasible = 1;
+    s->layers = plan.layer_count;
+    s->worst_error = plan.worst_error;
+    s->mean_error = plan.layer_count ? plan.total_error / (double)plan.layer_count : 0;
+    adaslice_plan_free(&plan);
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *s, size_t n, double alpha)
+{
+    double kmax = 0, emax = 0;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        if (!s[i].feasible) continue;
+        if ((double)s[i].layers > kmax) kmax = (double)s[i].layers;
+        if (s[i].mean_error > emax) emax = s[i].mean_error;
+    }
+    for (i = 0; i < n; i++)
+        s[i].score = !s[i].feasible ? 2
+                   : alpha * (kmax > 0 ? (double)s[i].layers / kmax : 0) +
+                     (1 - alpha) * (emax > 0 ? s[i].mean_error / emax : 0);
+}
+
+ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, size_t n, double radius,
+                                           size_t *out, size_t max)
+{
+    double c = cos(radius);
+    size_t i, j, count = 0;
+    for (i = 0; i < n; i++) {
+        int lowest = 1;
+        for (j = 0; j < n && lowest; j++) {
+            const double *a = s[i].direction, *b = s[j].direction;
+            if (j == i || a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < c) continue;
+            if (s[j].score < s[i].score || (s[j].score == s[i].score && j < i)) lowest = 0;
+        }
+        if (!lowest) continue;
+        /* insert by score into the best `max` */
+        for (j = count < max ? count++ : max; j > 0 && s[out[j - 1]].score > s[i].score; j--)
+            if (j < max) out[j] = out[j - 1];
+        if (j < max) out[j] = i;
+    }
+    return count;
+}
 
 /* =================================================================== masks */
 
