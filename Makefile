@@ -11,8 +11,8 @@ MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 20
 B        = build
 
-HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/printer.c host/png.c host/contour_svg.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c
+HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c
 HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean
@@ -23,7 +23,7 @@ $(B):
 	mkdir -p $(B)
 
 $(B)/adaslice: $(HOST_SRC) $(HDRS) | $(B)
-	$(CC) $(CSTD) $(CFLAGS) $(HOST_SRC) -o $@ -lm
+	$(CC) $(CSTD) $(CFLAGS) -pthread $(HOST_SRC) -o $@ -lm
 
 # The main job on a bundled example: plan the hand (CC BY 4.0, see
 # examples/models/README.md) scaled to the paper's 23.8 mm, plot it, and
@@ -39,7 +39,7 @@ demo: $(B)/adaslice
 # final "N passed, N failed".
 $(B)/san/adaslice: $(HOST_SRC) $(HDRS) | $(B)
 	mkdir -p $(B)/san
-	$(CC) $(CSTD) $(SAN) $(HOST_SRC) -o $@ -lm
+	$(CC) $(CSTD) $(SAN) -pthread $(HOST_SRC) -o $@ -lm
 
 $(B)/san/run_tests: $(TEST_SRC) $(HDRS) | $(B)
 	mkdir -p $(B)/san

@@ -425,8 +425,8 @@ typedef struct adaslice_direction_score {
     double direction[3];
     int feasible;          /* 0: no plan meets eps along this direction */
     size_t layers;         /* K */
-    double worst_error;    /* the plan's largest layer error */
-    double mean_error;     /* its total error / K: the epsilon(O) of F(O), see the manual */
+    double worst_error;    /* the plan's largest layer error: the epsilon(O) of F(O) */
+    double mean_error;     /* its total error / K */
     double score;          /* F(O), filled by adaslice_orient_scores */
 } adaslice_direction_score;
 
@@ -445,7 +445,9 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
 /* n directions of a spherical Fibonacci lattice, x y z each, near-uniform on the sphere. */
 ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz);
 /* F(O) = alpha K / max K + (1 - alpha) eps / max eps over the feasible
-   directions (eq. 25); infeasible ones get F = 2. */
+   directions (eq. 25), eps being the plan's worst layer error, the paper's
+   "geometric error" of §5.2 (a mean would fall as near-zero-error layers are
+   added, rewarding the very layers K counts against); infeasible ones get F = 2. */
 ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *scores, size_t n, double alpha);
 /* Indices of directions whose F is lower than every neighbour's within
    `radius` radians (ties go to the lower index), best first; returns how many. */
@@ -3328,8 +3330,8 @@ ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9])
         r[3] = 0; r[4] = -1; r[5] = 0;
     } else {
         k = 1 / (1 + c);
-        r[0] = 1 - vy * vy * k; r[1] = vx * vy * k; r[2] = -vy;
-        r[3] = vx * vy * k;     r[4] = 1 - vx * vx * k; r[5] = vx;
+        r[0] = 1 - vy * vy * k; r[1] = vx * vy * k;     r[2] = vy;
+        r[3] = vx * vy * k;     r[4] = 1 - vx * vx * k; r[5] = -vx;
     }
     r[6] = d[0]; r[7] = d[1]; r[8] = d[2];
 }
@@ -3443,12 +3445,12 @@ ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *s, size_t n, 
     for (i = 0; i < n; i++) {
         if (!s[i].feasible) continue;
         if ((double)s[i].layers > kmax) kmax = (double)s[i].layers;
-        if (s[i].mean_error > emax) emax = s[i].mean_error;
+        if (s[i].worst_error > emax) emax = s[i].worst_error;
     }
     for (i = 0; i < n; i++)
         s[i].score = !s[i].feasible ? 2
                    : alpha * (kmax > 0 ? (double)s[i].layers / kmax : 0) +
-                     (1 - alpha) * (emax > 0 ? s[i].mean_error / emax : 0);
+                     (1 - alpha) * (emax > 0 ? s[i].worst_error / emax : 0);
 }
 
 ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, size_t n, double radius,

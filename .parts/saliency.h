@@ -576,6 +576,33 @@ typedef struct adaslice__points {
     double lo[3];
 } adaslice__points;
 
+/* The sums of w n and w h over the candidates, w = exp(-d^2 / (2 sigma^2))
+   for those within 2 sigma of p (r2 = 4 sigma^2, scale = 1 / (2 sigma^2)).
+   Branch-free in four lanes, so compilers may run the lanes as one vector;
+   exp(-t) on [0, 2] is e^-1 times the Taylor series of e^s, s = 1 - t, to
+   degree 8: within 7e-6 relative. */
+static void adaslice__gauss_sums(const float *c, size_t count, size_t stride, const float p[3], float scale,
+                                 float r2, double out[2])
+{
+    float w[4], h[4] = {0, 0, 0, 0}, n[4] = {0, 0, 0, 0};
+    size_t i;
+    int l;
+    for (i = 0; i < count; i += 4) {
+        for (l = 0; l < 4; l++) {
+            size_t j = i + (size_t)l < count ? i + (size_t)l : i; /* a short last round repeats lane 0, masked */
+            float dx = c[j] - p[0], dy = c[stride + j] - p[1], dz = c[2 * stride + j] - p[2];
+            float d2 = dx * dx + dy * dy + dz * dz, s = 1 - d2 * scale;
+            w[l] = 0.36787944f * (1 + s * (1 + s * (1.0f / 2 + s * (1.0f / 6 + s * (1.0f / 24 + s * (1.0f / 120 +
+                   s * (1.0f / 720 + s * (1.0f / 5040 + s * (1.0f / 40320)))))))));
+            w[l] = d2 < r2 && i + (size_t)l < count ? w[l] : 0;
+            h[l] += w[l] * c[3 * stride + j];
+            n[l] += w[l] * c[4 * stride + j];
+        }
+    }
+    out[0] = ((double)n[0] + n[1]) + ((double)n[2] + n[3]);
+    out[1] = ((double)h[0] + h[1]) + ((double)h[2] + h[3]);
+}
+
 /* G(sigma) at every point: the Gaussian-weighted mean |H| within 2 sigma, over
    cells sigma/3 wide pooled at their centroids (see adaslice_saliency). */
 static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, double sigma, double *G,
@@ -585,8 +612,8 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
     float *cp = NULL, *cand = NULL;
     double *csum = NULL, *cn = NULL;
     uint32_t near[125];
-    size_t c, q, i, m, k;
-    double r2 = 4 * sigma * sigma, scale = -0.5 / (sigma * sigma);
+    size_t c, q, m, k;
+    float r2 = (float)(4 * sigma * sigma), scale = (float)(0.5 / (sigma * sigma));
     adaslice_result r;
     memset(&centres, 0, sizeof centres);
     memset(&queries, 0, sizeof queries);
@@ -619,6 +646,7 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
     for (q = 0; q < queries.count; q++) {
         size_t cells = adaslice__cells_near(&centres, queries.key[q], 2, near), count = 0;
         float *x = cand, *y = cand + m, *z = cand + 2 * m, *hs = cand + 3 * m, *ns = cand + 4 * m;
+        /* the centres of those cells, as columns x, y, z, sum of |H|, count */
         for (k = 0; k < cells; k++) {
             uint32_t j;
             for (j = centres.first[near[k]]; j < centres.first[near[k] + 1]; j++) {
@@ -630,17 +658,9 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
         }
         for (k = queries.first[q]; k < queries.first[q + 1]; k++) {
             uint32_t v = queries.member[k];
-            const float *p = pt->p + 3 * (size_t)v;
-            double sw = 0, sh = 0;
-            for (i = 0; i < count; i++) {
-                double dx = x[i] - p[0], dy = y[i] - p[1], dz = z[i] - p[2], d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 < r2) {
-                    double w = exp(d2 * scale);
-                    sw += w * ns[i];
-                    sh += w * hs[i];
-                }
-            }
-            G[v] = sh / sw; /* the point's own cell is within sigma: sw > 0 */
+            double sums[2];
+            adaslice__gauss_sums(cand, count, m, pt->p + 3 * (size_t)v, scale, r2, sums);
+            G[v] = sums[1] / sums[0]; /* the point's own cell is within sigma: the weight is positive */
         }
     }
     r = ADASLICE_OK;

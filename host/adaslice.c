@@ -156,6 +156,8 @@ void plan_options_usage(FILE *f)
         "  --sampler NAME      exact (from the triangles) or ldi (the\n"
         "                      paper's sampling by rays along x, y, z)     [exact]\n"
         "  --res R             ldi: pixels across the largest extent       [%d]\n"
+        "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
+        "                      (the best of 1000, as adaslice orient finds it)\n"
         "plan\n"
         "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"
         "  --eps E             allowed error per layer (mm; area: none;\n"
@@ -234,6 +236,19 @@ int name_option(int argc, char **argv, int *i, const char *const *names, int cou
     return complain(RC_USAGE, "%s %s: unknown, expected %s", opt, v, choices);
 }
 
+/* --orient best, or a direction X,Y,Z that is not zero */
+static int orient_option(int argc, char **argv, int *i, const char **out)
+{
+    double d[3];
+    char tail;
+    int rc = file_option(argc, argv, i, out);
+    if (rc || !strcmp(*out, "best")) return rc;
+    if (sscanf(*out, "%lf,%lf,%lf%c", &d[0], &d[1], &d[2], &tail) != 3 || !isfinite(d[0]) || !isfinite(d[1]) ||
+        !isfinite(d[2]) || (d[0] == 0 && d[1] == 0 && d[2] == 0))
+        return complain(RC_USAGE, "--orient %s: expected best or a direction X,Y,Z", *out);
+    return RC_OK;
+}
+
 int parse_plan(int argc, char **argv, plan_args *a)
 {
     int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL, sampler = 0;
@@ -264,6 +279,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--sharp")) rc = number_option(argc, argv, &i, 1, &a->sharp);
         else if (!strcmp(o, "--budget")) rc = count_option(argc, argv, &i, &a->budget);
         else if (!strcmp(o, "--res")) rc = count_option(argc, argv, &i, &a->resolution);
+        else if (!strcmp(o, "--orient")) rc = orient_option(argc, argv, &i, &a->orient);
         else if (!strcmp(o, "--sampler")) rc = name_option(argc, argv, &i, SAMPLER_NAMES, 2, "exact or ldi", &sampler);
         else if (!strcmp(o, "--metric"))
             rc = name_option(argc, argv, &i, METRIC_NAMES, METRIC_COUNT, "cusp, roughness, area or volume", &metric);
@@ -301,6 +317,27 @@ static int profile_model(const plan_args *a, plan_job *j)
     lo.scale = a->scale;
     if (adaslice_mesh_load_file(a->model, &lo, &mesh, &err) != ADASLICE_OK) return library_error(&err);
     j->ms_load = now_ms() - t0;
+    j->up[0] = j->up[1] = 0;
+    j->up[2] = 1;
+    if (a->orient) {
+        /* turn the part so the chosen direction points up (+z) */
+        double r[9], len;
+        if (!strcmp(a->orient, "best")) {
+            adaslice_direction_score *scores = NULL;
+            size_t minima[4], count = 0;
+            int rc = orient_search(a, &mesh, 1000, 0.5, &scores, minima, &count);
+            if (!rc && !count) rc = complain(RC_FAIL, "no build direction has a feasible plan");
+            if (rc) { free(scores); adaslice_mesh_free(&mesh); return rc; }
+            memcpy(j->up, scores[minima[0]].direction, sizeof j->up);
+            free(scores);
+        } else {
+            sscanf(a->orient, "%lf,%lf,%lf", &j->up[0], &j->up[1], &j->up[2]);
+        }
+        len = sqrt(j->up[0] * j->up[0] + j->up[1] * j->up[1] + j->up[2] * j->up[2]);
+        j->up[0] /= len; j->up[1] /= len; j->up[2] /= len;
+        adaslice_rotation_to_z(j->up, r);
+        adaslice_mesh_rotate(&mesh, r);
+    }
     j->triangles = mesh.triangle_count;
     j->degenerate = mesh.degenerate_dropped;
     j->format = mesh.format;
@@ -387,17 +424,22 @@ static int read_profile(const plan_args *a, plan_job *j)
     return RC_OK;
 }
 
+void plan_options_of(const plan_args *a, adaslice_method method, adaslice_plan_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->method = method;
+    o->eps = a->eps;
+    o->tmin = a->tmin;
+    o->tmax = a->tmax;
+    o->sharp = a->sharp > 0 ? a->sharp : ADASLICE_SHARP_OFF;
+    o->budget = method == ADASLICE_METHOD_OPTIMAL ? a->budget : 0;
+}
+
 static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_method method)
 {
     adaslice_plan_options o;
     adaslice_result r;
-    memset(&o, 0, sizeof o);
-    o.method = method;
-    o.eps = a->eps;
-    o.tmin = a->tmin;
-    o.tmax = a->tmax;
-    o.sharp = a->sharp > 0 ? a->sharp : ADASLICE_SHARP_OFF;
-    o.budget = method == ADASLICE_METHOD_OPTIMAL ? a->budget : 0;
+    plan_options_of(a, method, &o);
     r = adaslice_plan_profile(&j->profile, &o, &j->plan[method], &j->why[method]);
     j->why[method].result = r;
     j->planned[method] = 1;
@@ -642,6 +684,7 @@ typedef struct command {
 static const command COMMANDS[] = {
     {"plan", "plan adaptive layers for a mesh or a metric profile", cmd_plan},
     {"slice", "plan a model and write its layer masks as a printable job", cmd_slice},
+    {"orient", "search the build directions for the fewest layers and least error", cmd_orient},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

@@ -37,6 +37,7 @@ typedef struct plan_args {
     size_t budget;                 /* 0: none */
     int sampler;                   /* 0: exact, 1: LDI */
     size_t resolution;             /* LDI pixels across the largest extent */
+    const char *orient;            /* --orient best|X,Y,Z, or NULL */
     const char *out, *profile_out, *plot;
     int json, compare, help;
 } plan_args;
@@ -49,6 +50,7 @@ typedef struct plan_job {
     int profiled;                  /* profile came from the library and needs freeing */
     int keep_mesh;                 /* keep the model loaded (slice needs it) */
     adaslice_mesh mesh;
+    double up[3];                  /* --orient: the direction turned up; else 0, 0, 1 */
     adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all four with --compare */
     adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
     int planned[METHOD_COUNT];
@@ -69,4 +71,10 @@ int write_outputs(const plan_args *a, const plan_job *j);
 void job_free(plan_job *j);
 
 int cmd_slice(int argc, char **argv);
+int cmd_orient(int argc, char **argv);
+/* The library's plan options for method m from the command line's. */
+void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_options *o);
+/* Scores `count` directions on all cores; minima (best first, at most 4). */
+int orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t count, double alpha,
+                  adaslice_direction_score **scores, size_t *minima, size_t *minima_count);
 #endif

@@ -31,7 +31,7 @@ static double nice_step(double range, int count)
     return (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * mag;
 }
 
-static void xml_text(FILE *f, const char *s)
+void xml_text(FILE *f, const char *s)
 {
     for (; *s; s++) {
         switch (*s) {

@@ -15,6 +15,9 @@ typedef struct svg_plan_figure {
     const adaslice_plan *plan;  /* at least one layer */
 } svg_plan_figure;
 
+/* s as XML character data (escaped). */
+void xml_text(FILE *f, const char *s);
+
 /* Writes a standalone SVG document; errors show in ferror(f). */
 void svg_write_plan(FILE *f, const svg_plan_figure *fig);
 

@@ -500,6 +500,45 @@ static void test_cli_slice(void)
     }
 }
 
+/* adaslice orient: a long box lies down; plan --orient with the direction
+   found plans the same layers; bad counts and weights are usage errors. */
+static void test_cli_orient(void)
+{
+    const char *box = in_dir("box.stl"), *bad[][2] = {{"--dirs", "0"}, {"--dirs", "-3"}, {"--dirs", "2000000"},
+                                                     {"--dirs", "1.5"}, {"--alpha", "1.5"}, {"--alpha", "-0.1"},
+                                                     {"--alpha", "x"}};
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 10, 50);
+    run_result r;
+    char dir_arg[128];
+    double d[3], k;
+    const char *p;
+    size_t i;
+    write_stl(box, &m, m.triangle_count);
+    gen_free(&m);
+    r = run("orient", box, "--dirs", "1000", "--json", "--map", in_dir("map.svg"), NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    p = strstr(r.out, "\"direction\": [");
+    CHECK(p && sscanf(p, "\"direction\": [%lf, %lf, %lf]", &d[0], &d[1], &d[2]) == 3);
+    k = json_field(r.out, "layers");
+    CHECKF(fabs(d[2]) < 0.1 && (fabs(d[0]) > 0.95 || fabs(d[1]) > 0.95) && k > 60 && k < 200, "best (%g, %g, %g), %g layers", d[0], d[1], d[2], k);
+    CHECK(exists(in_dir("map.svg")));
+    run_free(&r);
+    snprintf(dir_arg, sizeof dir_arg, "%.9g,%.9g,%.9g", d[0], d[1], d[2]);
+    r = run("plan", box, "--orient", dir_arg, "--json", NULL);
+    CHECKF(r.status == 0 && json_field(r.out, "layers") == k, "plan --orient %s: %g layers, orient said %g", dir_arg,
+           json_field(r.out, "layers"), k);
+    run_free(&r);
+    for (i = 0; i < sizeof bad / sizeof *bad; i++) {
+        r = run("orient", box, bad[i][0], bad[i][1], NULL);
+        CHECKF(r.status == 2 && one_message(r.err) && strstr(r.err, bad[i][0]), "%s %s: exit %d, '%s'", bad[i][0], bad[i][1],
+               r.status, r.err);
+        run_free(&r);
+    }
+    r = run("plan", box, "--orient", "0,0,0", NULL);
+    CHECK(r.status == 2 && one_message(r.err) && strstr(r.err, "--orient"));
+    run_free(&r);
+}
+
 static void test_cli_unwritable_output(void)
 {
     const char *missing = in_dir("missing/plan.csv");
@@ -570,6 +609,7 @@ void test_cli(void)
     RUN(test_cli_infeasible);
     RUN(test_cli_compare);
     RUN(test_cli_slice);
+    RUN(test_cli_orient);
     RUN(test_cli_unwritable_output);
     RUN(test_cli_bad_model);
     remove_dir();

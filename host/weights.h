@@ -1,0 +1,34 @@
+/* Per-face weights for the profiles (paper §4.2): the mesh's saliency, a
+   weight file and regions given on the command line, multiplied face by face. */
+#ifndef ADASLICE_HOST_WEIGHTS_H
+#define ADASLICE_HOST_WEIGHTS_H
+#include <stdio.h>
+#include "../adaslice.h"
+
+enum { WEIGHT_BOX = 0, WEIGHT_SPHERE = 1, WEIGHT_REGIONS_MAX = 32 };
+
+/* A face is in a region when its centroid is: inside the box or on its faces,
+   or within the sphere's radius of its centre. */
+typedef struct weight_region {
+    int kind;          /* WEIGHT_BOX or WEIGHT_SPHERE */
+    double a[3], b[3]; /* box: lowest and highest corner; sphere: centre, b[0] radius */
+    double weight;
+} weight_region;
+
+typedef struct weight_args {
+    int saliency;                              /* --saliency */
+    const char *file;                          /* --weights FILE, or NULL */
+    size_t region_count;
+    weight_region regions[WEIGHT_REGIONS_MAX]; /* --weight REGION=W, in the order given */
+} weight_args;
+
+/* If argv[*i] is --saliency, --weights or --weight, takes it (and its value),
+   sets *rc (RC_OK, or RC_USAGE after a complaint) and returns 1; else 0. */
+int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc);
+int weights_given(const weight_args *w);
+/* One weight per triangle of `mesh` in *out (malloc'd), or *out = NULL when
+   none are asked for. A bad weight file is RC_USAGE, an unreadable one RC_FAIL;
+   the complaint is made. */
+int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **out);
+void weights_usage(FILE *f);
+#endif

@@ -1,0 +1,129 @@
+/* Runs the adaslice tool as a child process for end-to-end tests: the binary
+   named by $ADASLICE_BIN (default build/adaslice, from the repository root),
+   its stdout and stderr captured in files of a temporary directory. One
+   includer per test program (the state is static). */
+#ifndef ADASLICE_CLI_RUN_H
+#define ADASLICE_CLI_RUN_H
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
+#endif
+#include "check.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static const char *cli_tool = "build/adaslice";
+static char cli_dir[64];
+
+typedef struct cli_result {
+    int status;     /* exit status, -1 if the tool did not exit normally */
+    char *out, *err;
+} cli_result;
+
+/* The temporary directory; 0 if it cannot be made. */
+static int cli_begin(const char *prefix)
+{
+    const char *tmp = getenv("TMPDIR"), *bin = getenv("ADASLICE_BIN");
+    if (bin && *bin) cli_tool = bin;
+    snprintf(cli_dir, sizeof cli_dir, "%s/%s-XXXXXX", tmp && strlen(tmp) < 32 ? tmp : "/tmp", prefix);
+    if (!mkdtemp(cli_dir)) {
+        perror("mkdtemp");
+        return 0;
+    }
+    return 1;
+}
+
+/* DIR/name; each of the last eight results stays valid. */
+static const char *cli_path(const char *name)
+{
+    static char ring[8][512];
+    static int next;
+    char *p = ring[next++ & 7];
+    snprintf(p, sizeof ring[0], "%s/%s", cli_dir, name);
+    return p;
+}
+
+static char *cli_read(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *s = NULL;
+    long n;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (s = (char *)malloc((size_t)n + 1)) != NULL)
+        s[fread(s, 1, (size_t)n, f)] = 0;
+    fclose(f);
+    return s;
+}
+
+static void cli_write(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    size_t n = strlen(text);
+    CHECKF(f && fwrite(text, 1, n, f) == n && fclose(f) == 0, "cannot write %s", path);
+}
+
+/* cli_run(arg, ..., NULL) */
+static cli_result cli_run(const char *first, ...)
+{
+    char *argv[40], out[600], err[600];
+    cli_result r;
+    va_list ap;
+    pid_t pid;
+    int n = 0, st;
+    const char *a;
+    snprintf(out, sizeof out, "%s/stdout", cli_dir);
+    snprintf(err, sizeof err, "%s/stderr", cli_dir);
+    argv[n++] = (char *)cli_tool;
+    va_start(ap, first);
+    for (a = first; a && n < 39; a = va_arg(ap, const char *)) argv[n++] = (char *)a;
+    va_end(ap);
+    argv[n] = NULL;
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        int i = open("/dev/null", O_RDONLY), o = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        int e = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (i < 0 || o < 0 || e < 0 || dup2(i, 0) < 0 || dup2(o, 1) < 0 || dup2(e, 2) < 0) _exit(126);
+        execv(cli_tool, argv);
+        _exit(127);
+    }
+    r.status = -1;
+    if (pid > 0 && waitpid(pid, &st, 0) == pid && WIFEXITED(st)) r.status = WEXITSTATUS(st);
+    CHECKF(r.status != 127, "cannot run %s (build it first; tests run from the repository root)", cli_tool);
+    r.out = cli_read(out);
+    r.err = cli_read(err);
+    if (!r.out) r.out = (char *)calloc(1, 1);
+    if (!r.err) r.err = (char *)calloc(1, 1);
+    return r;
+}
+
+static void cli_free(cli_result *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+/* exactly one line on stderr, "adaslice: ..." */
+static int cli_one_message(const char *err)
+{
+    const char *nl = strchr(err, '\n');
+    return !strncmp(err, "adaslice: ", 10) && nl && nl[1] == 0;
+}
+
+static void cli_end(void)
+{
+    DIR *d = opendir(cli_dir);
+    struct dirent *e;
+    while (d && (e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) remove(cli_path(e->d_name));
+    if (d) closedir(d);
+    rmdir(cli_dir);
+}
+#endif

@@ -1,0 +1,161 @@
+/* The build-direction search (§4.3). */
+#include "../adaslice.h"
+#include "check.h"
+#include "meshgen.h"
+#include <math.h>
+#include <string.h>
+
+static adaslice_direction_score *search(const adaslice_mesh *m, size_t n, double alpha)
+{
+    adaslice_orienter o;
+    adaslice_error e;
+    adaslice_direction_score *s = (adaslice_direction_score *)calloc(n, sizeof *s);
+    double *d = (double *)malloc(3 * n * sizeof(double));
+    size_t i;
+    CHECK(adaslice_orienter_init(&o, m, NULL, NULL, &e) == ADASLICE_OK);
+    adaslice_fibonacci_directions(n, d);
+    for (i = 0; i < n; i++) CHECKF(adaslice_orienter_score(&o, d + 3 * i, s + i, &e) == ADASLICE_OK, "%s", e.message);
+    adaslice_orient_scores(s, n, alpha);
+    adaslice_orienter_free(&o);
+    free(d);
+    return s;
+}
+
+/* Unit vectors, spread evenly: every lattice point's nearest neighbour is
+   about sqrt(4 pi / n) away, none much closer. */
+static void fibonacci_directions_cover_the_sphere(void)
+{
+    size_t n = 500, i, j, bad = 0;
+    double *d = (double *)malloc(3 * n * sizeof(double)), spacing = sqrt(4 * M_PI / n), mean = 0;
+    adaslice_fibonacci_directions(n, d);
+    for (i = 0; i < n; i++) {
+        double best = 4;
+        bad += fabs(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2] - 1) > 1e-12;
+        for (j = 0; j < n; j++)
+            if (j != i) {
+                double dist = acos(fmin(1, d[3 * i] * d[3 * j] + d[3 * i + 1] * d[3 * j + 1] + d[3 * i + 2] * d[3 * j + 2]));
+                if (dist < best) best = dist;
+            }
+        mean += best / n;
+        bad += best < 0.5 * spacing || best > 1.5 * spacing;
+    }
+    CHECKF(bad == 0 && fabs(mean - 0.9 * spacing) < 0.2 * spacing, "%zu bad points, mean nearest %g (spacing %g)", bad, mean, spacing);
+    free(d);
+}
+
+/* A sphere looks the same from everywhere. Along any direction a bin's cusp
+   value is the |n . d| of some facet meeting it, within the facet's angular
+   diameter t = sqrt(dtheta^2 + dphi^2) (+ a bin's worth) of the smooth
+   |h - R| / R at that height; the integral of that is R, so K moves by at most
+   about 2 t relative each way: a spread below 4 t of K (+ a layer). The
+   spread must also shrink as the tessellation gets finer. */
+static void sphere_scores_the_same_everywhere(void)
+{
+    static const int tess[2][2] = {{96, 48}, {288, 144}};
+    double R = 10, last = 1;
+    int k;
+    for (k = 0; k < 2; k++) {
+        int slices = tess[k][0], stacks = tess[k][1];
+        double dth = M_PI / stacks, dph = 2 * M_PI / slices, t = sqrt(dth * dth + dph * dph) + 0.002 / R, spread;
+        adaslice_mesh m = gen_sphere(R, slices, stacks, 0);
+        adaslice_direction_score *s = search(&m, 40, 0.5);
+        size_t i, kmin = (size_t)-1, kmax = 0;
+        for (i = 0; i < 40; i++) {
+            CHECK(s[i].feasible);
+            if (s[i].layers < kmin) kmin = s[i].layers;
+            if (s[i].layers > kmax) kmax = s[i].layers;
+        }
+        spread = (double)(kmax - kmin) / (double)kmax;
+        CHECKF(spread <= 4 * t + 1.0 / kmax, "%dx%d: K from %zu to %zu, spread %g above 4t = %g", slices, stacks, kmin, kmax,
+               spread, 4 * t);
+        CHECKF(spread < last, "the spread %g does not shrink with the tessellation", spread);
+        last = spread;
+        free(s);
+        gen_free(&m);
+    }
+}
+
+/* A 10 x 10 x 50 mm box: lying down it needs a third of the layers of
+   standing up, so the best directions are its short axes, never the long one. */
+static void long_box_lies_down(void)
+{
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 10, 50);
+    size_t n = 400, minima[4], count, i;
+    adaslice_direction_score *s = search(&m, n, 0.5);
+    count = adaslice_orient_minima(s, n, 2.5 * sqrt(4 * M_PI / n), minima, 4);
+    CHECK(count >= 2);
+    for (i = 0; i < count && i < 2; i++) {
+        const double *d = s[minima[i]].direction;
+        CHECKF(fabs(d[2]) < 0.1 && (fabs(d[0]) > 0.95 || fabs(d[1]) > 0.95), "minimum %zu at (%g, %g, %g)", i, d[0], d[1], d[2]);
+    }
+    for (i = 0; i < n; i++)
+        if (fabs(s[i].direction[2]) > 0.99) CHECKF(s[i].score > s[minima[0]].score, "a long-axis direction scores best");
+    free(s);
+    gen_free(&m);
+}
+
+/* The rotation reported for a direction, applied to the mesh, plans the same
+   K: the search profiles exactly the turned mesh. */
+static void turning_the_mesh_reproduces_the_search(void)
+{
+    adaslice_load_options lo;
+    adaslice_mesh m, turned;
+    adaslice_orienter o;
+    adaslice_error e;
+    double d[3 * 7], r[9];
+    int k;
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 88.7;
+    CHECK(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &m, &e) == ADASLICE_OK);
+    CHECK(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &turned, &e) == ADASLICE_OK);
+    CHECK(adaslice_orienter_init(&o, &m, NULL, NULL, &e) == ADASLICE_OK);
+    adaslice_fibonacci_directions(7, d);
+    for (k = 0; k < 7; k++) {
+        adaslice_direction_score s;
+        adaslice_profile p;
+        adaslice_plan plan;
+        CHECK(adaslice_orienter_score(&o, d + 3 * k, &s, &e) == ADASLICE_OK && s.feasible);
+        memcpy(turned.vertices, m.vertices, 3 * m.vertex_count * sizeof(float));
+        adaslice_rotation_to_z(s.direction, r);
+        CHECK(fabs(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] - 1) < 1e-12 && fabs(r[0] * r[6] + r[1] * r[7] + r[2] * r[8]) < 1e-12);
+        adaslice_mesh_rotate(&turned, r);
+        CHECK(adaslice_profile_exact(&turned, NULL, &p, &e) == ADASLICE_OK);
+        CHECK(adaslice_plan_profile(&p, NULL, &plan, &e) == ADASLICE_OK);
+        CHECKF(plan.layer_count == s.layers && plan.worst_error == s.worst_error,
+               "direction %d: turned mesh %zu layers, search %zu", k, plan.layer_count, s.layers);
+        adaslice_plan_free(&plan);
+        adaslice_profile_free(&p);
+    }
+    adaslice_orienter_free(&o);
+    adaslice_mesh_free(&m);
+    adaslice_mesh_free(&turned);
+}
+
+/* Minima are lower than everything around them, so no two are neighbours. */
+static void minima_are_apart(void)
+{
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 20, 40);
+    size_t n = 300, minima[4], count, i, j;
+    double radius = 2.5 * sqrt(4 * M_PI / n);
+    adaslice_direction_score *s = search(&m, n, 0.5);
+    count = adaslice_orient_minima(s, n, radius, minima, 4);
+    CHECK(count >= 3);
+    for (i = 0; i < count; i++) {
+        for (j = 0; j < i; j++) {
+            const double *a = s[minima[i]].direction, *b = s[minima[j]].direction;
+            CHECK(a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < cos(radius));
+            CHECK(s[minima[j]].score <= s[minima[i]].score);
+        }
+    }
+    free(s);
+    gen_free(&m);
+}
+
+void test_orient(void)
+{
+    RUN(fibonacci_directions_cover_the_sphere);
+    RUN(sphere_scores_the_same_everywhere);
+    RUN(long_box_lies_down);
+    RUN(turning_the_mesh_reproduces_the_search);
+    RUN(minima_are_apart);
+}
