@@ -94,7 +94,7 @@ $(B)/bench: bench/bench.c host/png.c adaslice.h host/png.h | $(B)
 $(B)/bench_png: bench/bench_png.c host/png.c host/png.h tests/maskgen.h | $(B)
 	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
 
-bench: $(B)/bench $(B)/bench_png
+bench: $(B)/bench $(B)/bench_png $(B)/adaslice
 	$(B)/bench $(MODELS)
 	$(B)/bench_png
 

@@ -193,6 +193,61 @@ static void bench_masks(const char *dir, int supersample)
     adaslice_mesh_free(&m);
 }
 
+/* 1000 directions by the tool itself (threads on every core, load included),
+   timed from outside as a user would see it. */
+static void bench_orient(const char *path, const char *extra)
+{
+    char cmd[2048];
+    double t[3];
+    int r;
+    snprintf(cmd, sizeof cmd, "build/adaslice orient %s %s --dirs 1000 > build/orient_bench.txt", path, extra);
+    for (r = 0; r < 3; r++) {
+        double t0 = now();
+        if (system(cmd) != 0) { printf("failed: %s\n", cmd); exit(1); }
+        t[r] = now() - t0;
+    }
+    printf("orient  %-58s 1000 directions: %6.2f s (median of 3, both cores, load included)\n", path, median(t, 3));
+}
+
+/* Five dragons side by side, in mm: a plate of about a million triangles. */
+static void write_dragon_plate(const char *models, const char *out)
+{
+    char path[1024];
+    adaslice_mesh m;
+    adaslice_load_options lo;
+    double a[3], b[3];
+    FILE *f;
+    size_t k, v, t;
+    snprintf(path, sizeof path, "%s/dragon_vrip_res2.ply", models);
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 1000;
+    if (adaslice_mesh_load_file(path, &lo, &m, NULL) != ADASLICE_OK) exit(1);
+    adaslice_mesh_bounds(&m, a, b);
+    f = fopen(out, "wb");
+    if (!f) exit(1);
+    fprintf(f, "ply\nformat binary_little_endian 1.0\nelement vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
+               "element face %zu\nproperty list uchar int vertex_indices\nend_header\n", 5 * m.vertex_count, 5 * m.triangle_count);
+    for (k = 0; k < 5; k++)
+        for (v = 0; v < m.vertex_count; v++) {
+            float p[3];
+            p[0] = (float)(m.vertices[3 * v] + k * (b[0] - a[0] + 5));
+            p[1] = m.vertices[3 * v + 1];
+            p[2] = m.vertices[3 * v + 2];
+            fwrite(p, sizeof p, 1, f);
+        }
+    for (k = 0; k < 5; k++)
+        for (t = 0; t < m.triangle_count; t++) {
+            unsigned char three = 3;
+            int32_t idx[3];
+            int c;
+            for (c = 0; c < 3; c++) idx[c] = (int32_t)(m.triangles[3 * t + c] + k * m.vertex_count);
+            fwrite(&three, 1, 1, f);
+            fwrite(idx, sizeof idx, 1, f);
+        }
+    if (fclose(f) != 0) exit(1);
+    adaslice_mesh_free(&m);
+}
+
 int main(int argc, char **argv)
 {
     const char *models = argc > 1 ? argv[1] : "../shared/models";
@@ -233,6 +288,15 @@ int main(int argc, char **argv)
     }
     bench_masks(models, 1);
     bench_masks(models, 4);
+    {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/turbineblade.ply", models);
+        bench_orient(path, "");
+        snprintf(path, sizeof path, "%s/dragon_vrip_res2.ply", models);
+        bench_orient(path, "--scale 1000");
+        write_dragon_plate(models, "build/dragon_plate.ply");
+        bench_orient("build/dragon_plate.ply", "");
+    }
     for (j = 0; j < sizeof big / sizeof big[0]; j++) {
         char path[1024];
         adaslice_mesh m;
