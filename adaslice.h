@@ -2062,8 +2062,9 @@ static void adaslice__rmax_update(adaslice__rmax *r, size_t first, size_t last, 
     int k = adaslice__floor_log2(last - first + 1);
     double *level = r->t + (size_t)k * r->n;
     size_t second = last + 1 - ((size_t)1 << k);
-    if (level[first] < v) level[first] = v;
-    if (level[second] < v) level[second] = v;
+    /* unconditional stores: the comparisons are unpredictable, a select is not */
+    level[first] = level[first] < v ? v : level[first];
+    level[second] = level[second] < v ? v : level[second];
 }
 
 /* Pushes every level down; level 0 then holds each bin's maximum. */
@@ -2075,8 +2076,8 @@ static double *adaslice__rmax_finish(adaslice__rmax *r)
         double *down = r->t + (size_t)(k - 1) * r->n;
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
         for (j = 0; j < end; j++) {
-            if (down[j] < up[j]) down[j] = up[j];
-            if (down[j + half] < up[j]) down[j + half] = up[j];
+            down[j] = down[j] < up[j] ? up[j] : down[j];
+            down[j + half] = down[j + half] < up[j] ? up[j] : down[j + half];
         }
     }
     return r->t;
@@ -2376,14 +2377,21 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const float *h
     for (t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *tri = mesh->triangles + 3 * t;
         double a = height[tri[0] * stride], b = height[tri[1] * stride], c = height[tri[2] * stride];
-        double lo = a < b ? a : b, hi = a > b ? a : b, f;
-        if (c < lo) lo = c;
-        if (c > hi) hi = c;
+        double lo = a < b ? a : b, hi = a > b ? a : b, f, g;
+        size_t run;
+        lo = c < lo ? c : lo;
+        hi = c > hi ? c : hi;
+        /* selects, not branches: heights arrive in no useful order */
         f = (lo - p->z0) * inverse;
-        span[2 * t] = !(f > 0) ? 0 : f >= (double)(n - 1) ? (uint32_t)(n - 1) : (uint32_t)f;
-        f = (hi - p->z0) * inverse;
-        span[2 * t + 1] = !(f > 0) ? 0 : f >= (double)(n - 1) ? (uint32_t)(n - 1) : (uint32_t)f;
-        if (value[t] >= 0 && span[2 * t + 1] - span[2 * t] + 1 > longest) longest = span[2 * t + 1] - span[2 * t] + 1;
+        f = f > 0 ? f : 0;
+        f = f < (double)(n - 1) ? f : (double)(n - 1);
+        g = (hi - p->z0) * inverse;
+        g = g > 0 ? g : 0;
+        g = g < (double)(n - 1) ? g : (double)(n - 1);
+        span[2 * t] = (uint32_t)f;
+        span[2 * t + 1] = (uint32_t)g;
+        run = value[t] >= 0 ? span[2 * t + 1] - span[2 * t] + 1 : 1;
+        longest = run > longest ? run : longest;
     }
     if (!adaslice__rmax_init(rmax, n, longest, &p->allocator)) { adaslice__free(&p->allocator, span); return NULL; }
     for (t = 0; t < mesh->triangle_count; t++)

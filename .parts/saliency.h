@@ -576,29 +576,28 @@ typedef struct adaslice__points {
     double lo[3];
 } adaslice__points;
 
-/* The sums of w n and w h over the candidates, w = exp(-d^2 / (2 sigma^2))
-   for those within 2 sigma of p (r2 = 4 sigma^2, scale = 1 / (2 sigma^2)).
-   Branch-free in four lanes, so compilers may run the lanes as one vector;
-   exp(-t) on [0, 2] is e^-1 times the Taylor series of e^s, s = 1 - t, to
-   degree 8: within 7e-6 relative. */
+/* The sums of w n and w h over the candidates (columns x, y, z, h, n of
+   `stride` floats; count a multiple of 4), w = exp(-d^2 / (2 sigma^2)) for
+   those within 2 sigma of p (r2 = 4 sigma^2, scale = 1 / (2 sigma^2)).
+   Branch-free in four lanes, which compilers run as one vector; exp(-t) on
+   [0, 2] is e^-1 times the Taylor series of e^s, s = 1 - t, to degree 8:
+   within 7e-6 relative. */
 static void adaslice__gauss_sums(const float *c, size_t count, size_t stride, const float p[3], float scale,
                                  float r2, double out[2])
 {
-    float w[4], h[4] = {0, 0, 0, 0}, n[4] = {0, 0, 0, 0};
+    float h[4] = {0, 0, 0, 0}, n[4] = {0, 0, 0, 0};
     size_t i;
     int l;
-    for (i = 0; i < count; i += 4) {
+    for (i = 0; i < count; i += 4)
         for (l = 0; l < 4; l++) {
-            size_t j = i + (size_t)l < count ? i + (size_t)l : i; /* a short last round repeats lane 0, masked */
-            float dx = c[j] - p[0], dy = c[stride + j] - p[1], dz = c[2 * stride + j] - p[2];
+            float dx = c[i + l] - p[0], dy = c[stride + i + l] - p[1], dz = c[2 * stride + i + l] - p[2];
             float d2 = dx * dx + dy * dy + dz * dz, s = 1 - d2 * scale;
-            w[l] = 0.36787944f * (1 + s * (1 + s * (1.0f / 2 + s * (1.0f / 6 + s * (1.0f / 24 + s * (1.0f / 120 +
-                   s * (1.0f / 720 + s * (1.0f / 5040 + s * (1.0f / 40320)))))))));
-            w[l] = d2 < r2 && i + (size_t)l < count ? w[l] : 0;
-            h[l] += w[l] * c[3 * stride + j];
-            n[l] += w[l] * c[4 * stride + j];
+            float w = 0.36787944f * (1 + s * (1 + s * (1.0f / 2 + s * (1.0f / 6 + s * (1.0f / 24 + s * (1.0f / 120 +
+                      s * (1.0f / 720 + s * (1.0f / 5040 + s * (1.0f / 40320)))))))));
+            w = d2 < r2 ? w : 0;
+            h[l] += w * c[3 * stride + i + l];
+            n[l] += w * c[4 * stride + i + l];
         }
-    }
     out[0] = ((double)n[0] + n[1]) + ((double)n[2] + n[3]);
     out[1] = ((double)h[0] + h[1]) + ((double)h[2] + h[3]);
 }
@@ -622,7 +621,7 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
     cp = ADASLICE__CAST(float *, adaslice__alloc(al, m, 3 * sizeof(float)));
     csum = ADASLICE__CAST(double *, adaslice__alloc(al, m, sizeof(double)));
     cn = ADASLICE__CAST(double *, adaslice__alloc(al, m, sizeof(double)));
-    cand = ADASLICE__CAST(float *, adaslice__alloc(al, m, 5 * sizeof(float)));
+    cand = ADASLICE__CAST(float *, adaslice__alloc(al, m + 3, 5 * sizeof(float)));
     if (!cp || !csum || !cn || !cand) {
         r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "saliency: out of memory for %zu cells", m);
         goto done;
@@ -645,7 +644,7 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
     /* a point sees the centres within 2 sigma, all in the 5^3 cells around its own */
     for (q = 0; q < queries.count; q++) {
         size_t cells = adaslice__cells_near(&centres, queries.key[q], 2, near), count = 0;
-        float *x = cand, *y = cand + m, *z = cand + 2 * m, *hs = cand + 3 * m, *ns = cand + 4 * m;
+        float *x = cand, *y = cand + m + 3, *z = cand + 2 * (m + 3), *hs = cand + 3 * (m + 3), *ns = cand + 4 * (m + 3);
         /* the centres of those cells, as columns x, y, z, sum of |H|, count */
         for (k = 0; k < cells; k++) {
             uint32_t j;
@@ -656,10 +655,14 @@ static adaslice_result adaslice__gaussian_mean(const adaslice__points *pt, doubl
                 count++;
             }
         }
+        while (count % 4) { /* weightless copies of the first fill the last lanes */
+            x[count] = x[0]; y[count] = y[0]; z[count] = z[0]; hs[count] = ns[count] = 0;
+            count++;
+        }
         for (k = queries.first[q]; k < queries.first[q + 1]; k++) {
             uint32_t v = queries.member[k];
             double sums[2];
-            adaslice__gauss_sums(cand, count, m, pt->p + 3 * (size_t)v, scale, r2, sums);
+            adaslice__gauss_sums(cand, count, m + 3, pt->p + 3 * (size_t)v, scale, r2, sums);
             G[v] = sums[1] / sums[0]; /* the point's own cell is within sigma: the weight is positive */
         }
     }
@@ -683,25 +686,26 @@ static adaslice_result adaslice__normalise_map(const adaslice__points *pt, doubl
 {
     adaslice__cells g;
     uint32_t near[27];
-    size_t i, top = 0, others = 0;
+    size_t i, c, k, top = 0, others = 0;
     double sum = 0, r2 = radius * radius, factor;
     adaslice_result r;
     for (i = 1; i < pt->n; i++) if (S[i] > S[top]) top = i;
     if (!(S[top] > 0)) return ADASLICE_OK; /* a flat map stays 0 */
     if ((r = adaslice__cells_build(&g, pt->p, pt->n, pt->lo, radius, al, err)) != ADASLICE_OK) return r;
-    for (i = 0; i < pt->n; i++) {
-        const float *p = pt->p + 3 * i;
-        size_t cells = i == top ? 0 : adaslice__cells_near(&g, adaslice__cell_key(&g, p), 1, near), k;
-        int peak = i != top;
-        for (k = 0; k < cells && peak; k++) {
-            uint32_t j;
-            for (j = g.first[near[k]]; j < g.first[near[k] + 1] && peak; j++) {
-                const float *o = pt->p + 3 * (size_t)g.member[j];
-                double dx = (double)o[0] - p[0], dy = (double)o[1] - p[1], dz = (double)o[2] - p[2];
-                if (S[g.member[j]] > S[i] && dx * dx + dy * dy + dz * dz <= r2) peak = 0;
-            }
+    for (c = 0; c < g.count; c++) {
+        size_t cells = adaslice__cells_near(&g, g.key[c], 1, near), m;
+        for (m = g.first[c]; m < g.first[c + 1]; m++) {
+            uint32_t v = g.member[m], j;
+            const float *p = pt->p + 3 * (size_t)v;
+            int peak = v != top;
+            for (k = 0; k < cells && peak; k++)
+                for (j = g.first[near[k]]; j < g.first[near[k] + 1] && peak; j++) {
+                    const float *o = pt->p + 3 * (size_t)g.member[j];
+                    double dx = (double)o[0] - p[0], dy = (double)o[1] - p[1], dz = (double)o[2] - p[2];
+                    if (S[g.member[j]] > S[v] && dx * dx + dy * dy + dz * dz <= r2) peak = 0;
+                }
+            if (peak) { sum += S[v]; others++; }
         }
-        if (peak) { sum += S[i]; others++; }
     }
     adaslice__cells_free(&g, al);
     factor = others ? 1 - sum / (others * S[top]) : 1;
