@@ -83,6 +83,16 @@
    takes the larger value of its nearest reached neighbours, never a silent
    zero, and is counted in profile.unsampled_bins.
 
+   BUILD DIRECTION  adaslice_orienter_score plans the part along a direction d
+   (§4.3): the profile is exactly adaslice_profile_exact of the mesh turned by
+   adaslice_mesh_rotate(adaslice_rotation_to_z(d)), so planning the turned part
+   later gives the same K. adaslice_fibonacci_directions spreads n directions
+   evenly; adaslice_orient_scores computes F = alpha K / max K + (1 - alpha)
+   eps / max eps with eps the plan's worst layer error (the paper's
+   "geometric error", §5.2; a mean error would drop as near-zero-error layers
+   are added); adaslice_orient_minima finds directions lower than all their
+   neighbours. An orienter is read-only: threads may score directions at once.
+
    MASKS  adaslice_masker_init / adaslice_masker_slice make layer masks on a
    printer's pixel grid bottom-up in one sweep: each slice applies the z-ray
    samples between the previous height and this one, so every sample is
