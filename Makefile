@@ -88,10 +88,10 @@ check-models: $(B)/test_models
 	$(B)/test_models $(MODELS)
 
 # --- make bench -----------------------------------------------------------
-$(B)/bench: bench/bench.c host/png.c adaslice.h host/png.h | $(B)
+$(B)/bench: bench/bench.c bench/timing.h host/png.c adaslice.h host/png.h | $(B)
 	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c host/png.c -o $@ -lm
 
-$(B)/bench_png: bench/bench_png.c host/png.c host/png.h tests/maskgen.h | $(B)
+$(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/maskgen.h | $(B)
 	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
 
 bench: $(B)/bench $(B)/bench_png $(B)/adaslice
