@@ -43,10 +43,73 @@ static void search_progress(search *s)
     if (s->done == s->count) fputc('\n', stderr);
 }
 
+/* Each direction allocates and frees the same large arrays: a worker keeps
+   its freed blocks for the next direction, since returning them to the system
+   (munmap) and faulting them back in serialises the threads in the kernel. */
+typedef struct block_cache {
+    void *block[8];
+    size_t size[8];
+} block_cache;
+
+typedef union block_head { size_t size; double align_d; void *align_p; } block_head;
+
+static void *cache_alloc(void *user, size_t size)
+{
+    block_cache *c = (block_cache *)user;
+    int i, best = -1;
+    block_head *h;
+    for (i = 0; i < 8; i++)
+        if (c->block[i] && c->size[i] >= size && (best < 0 || c->size[i] < c->size[best])) best = i;
+    if (best >= 0) {
+        void *p = c->block[best];
+        c->block[best] = NULL;
+        return p;
+    }
+    h = (block_head *)malloc(sizeof *h + size);
+    if (!h) return NULL;
+    h->size = size;
+    return h + 1;
+}
+
+static void cache_free(void *user, void *p)
+{
+    block_cache *c = (block_cache *)user;
+    block_head *h = (block_head *)p - 1;
+    int i, smallest = 0;
+    for (i = 0; i < 8; i++) {
+        if (!c->block[i]) { c->block[i] = p; c->size[i] = h->size; return; }
+        if (c->size[i] < c->size[smallest]) smallest = i;
+    }
+    if (c->size[smallest] < h->size) { /* keep the larger block */
+        free((block_head *)c->block[smallest] - 1);
+        c->block[smallest] = p;
+        c->size[smallest] = h->size;
+        return;
+    }
+    free(h);
+}
+
+static void cache_clear(block_cache *c)
+{
+    int i;
+    for (i = 0; i < 8; i++)
+        if (c->block[i]) free((block_head *)c->block[i] - 1);
+}
+
 /* Workers take directions in small batches until none are left. */
 static void *search_worker(void *arg)
 {
     search *s = (search *)arg;
+    block_cache cache;
+    adaslice_allocator al;
+    adaslice_orienter mine = *s->o; /* the same options, this worker's allocator */
+    memset(&cache, 0, sizeof cache);
+    al.alloc = cache_alloc;
+    al.free = cache_free;
+    al.user = &cache;
+    mine.allocator = al;
+    mine.profile.allocator = &al;
+    mine.plan.allocator = &al;
     for (;;) {
         size_t first, end, i;
         pthread_mutex_lock(&s->lock);
@@ -54,14 +117,15 @@ static void *search_worker(void *arg)
         end = s->failed ? first : (first + 8 < s->count ? first + 8 : s->count);
         s->next = end;
         pthread_mutex_unlock(&s->lock);
-        if (first == end) return NULL;
+        if (first == end) break;
         for (i = first; i < end; i++) {
             adaslice_error e;
-            if (adaslice_orienter_score(s->o, s->dirs + 3 * i, &s->scores[i], &e) != ADASLICE_OK) {
+            if (adaslice_orienter_score(&mine, s->dirs + 3 * i, &s->scores[i], &e) != ADASLICE_OK) {
                 pthread_mutex_lock(&s->lock);
                 if (!s->failed) { s->failed = 1; s->err = e; }
+                s->next = s->count;
                 pthread_mutex_unlock(&s->lock);
-                return NULL;
+                break;
             }
         }
         pthread_mutex_lock(&s->lock);
@@ -69,6 +133,8 @@ static void *search_worker(void *arg)
         search_progress(s);
         pthread_mutex_unlock(&s->lock);
     }
+    cache_clear(&cache);
+    return NULL;
 }
 
 /* Scores `count` lattice directions on all the host's cores; the minima come
