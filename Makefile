@@ -11,9 +11,12 @@ MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 20
 B        = build
 
-HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c
-HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h
+HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
+            host/weights.c host/curvature.c host/saliency_cmd.c
+TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
+            tests/test_saliency.c tests/test_cli_weights.c
+HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h \
+            host/weights.h host/curvature.h tests/cli_run.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean
 
@@ -94,9 +97,13 @@ $(B)/bench: bench/bench.c bench/timing.h host/png.c adaslice.h host/png.h | $(B)
 $(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/maskgen.h | $(B)
 	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
 
-bench: $(B)/bench $(B)/bench_png $(B)/adaslice
+$(B)/bench_saliency: bench/bench_saliency.c bench/timing.h adaslice.h | $(B)
+	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench_saliency.c -o $@ -lm
+
+bench: $(B)/bench $(B)/bench_png $(B)/bench_saliency $(B)/adaslice
 	$(B)/bench $(MODELS)
 	$(B)/bench_png
+	$(B)/bench_saliency $(MODELS)
 
 clean:
 	rm -rf $(B)

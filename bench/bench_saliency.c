@@ -4,18 +4,11 @@
    usage: bench_saliency [MODELS_DIR]   (default ../shared/models) */
 #define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include "timing.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
-#include <time.h>
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec + t.tv_nsec * 1e-9;
-}
 
 /* Each block carries its size in front, so frees can be counted; 16 bytes
    keep the block aligned for anything the library stores. */
@@ -40,12 +33,6 @@ static void count_free(void *user, void *ptr)
     free(p);
 }
 
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 int main(int argc, char **argv)
 {
     static const char *const models[] = {"turbineblade.ply", "dragon_vrip_res2.ply"};
@@ -59,7 +46,7 @@ int main(int argc, char **argv)
         adaslice_allocator al;
         counter c = {0, 0};
         struct rusage ru;
-        double t[3], above = 0;
+        double t[3], mid, above = 0;
         float *w;
         size_t k;
         snprintf(path, sizeof path, "%s/%s", dir, models[i]);
@@ -84,11 +71,11 @@ int main(int argc, char **argv)
         }
         if (r == 3) {
             for (k = 0; k < mesh.triangle_count; k++) above += w[k] > 0.5f;
-            qsort(t, 3, sizeof *t, by_value);
+            mid = median(t, 3); /* and sorts t */
             getrusage(RUSAGE_SELF, &ru);
             printf("saliency %-22s %7zu triangles %7zu vertices  median %6.3f s (%.3f .. %.3f)  "
                    "library peak %5.1f MiB  process max RSS %5.1f MiB  %.2f%% of faces above 0.5\n",
-                   models[i], mesh.triangle_count, mesh.vertex_count, t[1], t[0], t[2], c.peak / 1048576.0,
+                   models[i], mesh.triangle_count, mesh.vertex_count, mid, t[0], t[2], c.peak / 1048576.0,
                    ru.ru_maxrss / 1024.0, 100.0 * above / (double)mesh.triangle_count);
             if (c.live) { printf("leak: %zu bytes still allocated\n", c.live); failed = 1; }
         }

@@ -12,6 +12,7 @@
 #define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
 #include "cli.h"
+#include "curvature.h"
 #include "svg.h"
 
 #include <errno.h>
@@ -57,7 +58,7 @@ const char *base_name(const char *path)
 /* ----------------------------------------------------- names and units */
 
 const char *const METRIC_NAMES[] = {"cusp", "roughness", "area", "volume"};
-const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest"};
+const char *const METHOD_NAMES[] = {"optimal", "greedy", "finest", "coarsest", "curvature"};
 const char *const SAMPLER_NAMES[] = {"exact", "ldi"};
 
 const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
@@ -159,7 +160,9 @@ void plan_options_usage(FILE *f)
         "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
         "                      (the best of 1000, as adaslice orient finds it)\n"
         "plan\n"
-        "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"
+        "  --method NAME       optimal, greedy, finest, coarsest or\n"
+        "                      curvature (thickness from mean curvature)   [optimal]\n"
+        "  --mapping NAME      curvature: linear, exp or step              [linear]\n"
         "  --eps E             allowed error per layer (mm; area: none;\n"
         "                      volume: mm^3)                               [%g]\n"
         "  --tmin MM           thinnest layer                              [%g]\n"
@@ -171,11 +174,13 @@ void plan_options_usage(FILE *f)
         "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
         "  --plot FILE         SVG figure of the profile and the layer thickness\n"
         "  --json              print a JSON object instead of the summary\n"
-        "  --compare           plan coarsest, optimal, greedy and finest on the same\n"
-        "                      profile and print them as in the paper's Table 3\n"
+        "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
+        "                      curvature on the same profile and print them as in\n"
+        "                      the paper's Table 3\n"
         "Heights are in mm from the part's bottom.\n",
         ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_RESOLUTION, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN,
         ADASLICE_DEFAULT_TMAX, ADASLICE_DEFAULT_SHARP);
+    weights_usage(f);
 }
 
 /* The value after option argv[*i]; NULL, said so, if there is none. */
@@ -284,7 +289,11 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--metric"))
             rc = name_option(argc, argv, &i, METRIC_NAMES, METRIC_COUNT, "cusp, roughness, area or volume", &metric);
         else if (!strcmp(o, "--method"))
-            rc = name_option(argc, argv, &i, METHOD_NAMES, METHOD_COUNT, "optimal, greedy, finest or coarsest", &method);
+            rc = name_option(argc, argv, &i, METHOD_NAMES, METHOD_COUNT, "optimal, greedy, finest, coarsest or curvature",
+                             &method);
+        else if (!strcmp(o, "--mapping"))
+            rc = name_option(argc, argv, &i, MAPPING_NAMES, MAPPING_COUNT, "linear, exp or step", &a->mapping);
+        else if (weights_option(argc, argv, &i, &a->weights, &rc)) continue;
         else return complain(RC_USAGE, "unknown option %s (see adaslice plan --help)", o);
     }
     if (rc) return rc;
@@ -298,6 +307,12 @@ int parse_plan(int argc, char **argv, plan_args *a)
         return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
                         a->model, a->profile);
     if (a->profile && a->scale) return complain(RC_USAGE, "--scale applies to a MODEL, not to --profile");
+    if (a->profile && weights_given(&a->weights))
+        return complain(RC_USAGE, "--saliency, --weights and --weight weight a MODEL's faces, not --profile");
+    if (a->profile && a->method == METHOD_CURVATURE)
+        return complain(RC_USAGE, "--method curvature needs a MODEL's curvature, not --profile");
+    if (a->method == METHOD_CURVATURE && a->orient && !strcmp(a->orient, "best"))
+        return complain(RC_USAGE, "--orient best searches with the library's methods, not curvature");
     if (a->tmin > a->tmax) return complain(RC_USAGE, "--tmin %g is larger than --tmax %g", a->tmin, a->tmax);
     if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
         return complain(RC_USAGE, "--budget works with --method optimal only, not %s", METHOD_NAMES[a->method]);
@@ -311,12 +326,21 @@ static int profile_model(const plan_args *a, plan_job *j)
     adaslice_mesh mesh;
     adaslice_error err;
     adaslice_result r;
-    double t0 = now_ms();
+    double t0 = now_ms(), ms_weights;
+    float *weights = NULL;
+    int rc;
 
     memset(&lo, 0, sizeof lo);
     lo.scale = a->scale;
     if (adaslice_mesh_load_file(a->model, &lo, &mesh, &err) != ADASLICE_OK) return library_error(&err);
     j->ms_load = now_ms() - t0;
+    /* before any turn, so that regions are in the model's own coordinates */
+    t0 = now_ms();
+    if ((rc = weights_for_plan(&a->weights, &mesh, &weights)) != RC_OK) {
+        adaslice_mesh_free(&mesh);
+        return rc;
+    }
+    ms_weights = now_ms() - t0;
     j->up[0] = j->up[1] = 0;
     j->up[2] = 1;
     if (a->orient) {
@@ -325,9 +349,9 @@ static int profile_model(const plan_args *a, plan_job *j)
         if (!strcmp(a->orient, "best")) {
             adaslice_direction_score *scores = NULL;
             size_t minima[4], count = 0;
-            int rc = orient_search(a, &mesh, 1000, 0.5, &scores, minima, &count);
+            rc = orient_search(a, &mesh, 1000, 0.5, &scores, minima, &count);
             if (!rc && !count) rc = complain(RC_FAIL, "no build direction has a feasible plan");
-            if (rc) { free(scores); adaslice_mesh_free(&mesh); return rc; }
+            if (rc) { free(scores); free(weights); adaslice_mesh_free(&mesh); return rc; }
             memcpy(j->up, scores[minima[0]].direction, sizeof j->up);
             free(scores);
         } else {
@@ -346,15 +370,19 @@ static int profile_model(const plan_args *a, plan_job *j)
     po.metric = a->metric;
     po.bin = a->bin;
     po.resolution = (int)a->resolution;
+    po.weights = weights;
     t0 = now_ms();
     r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
                    : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
-    j->ms_profile = now_ms() - t0;
+    free(weights);
+    if (r == ADASLICE_OK && (a->method == METHOD_CURVATURE || a->compare))
+        rc = curvature_for_plan(&mesh, &j->profile, &j->kappa);
+    j->ms_profile = now_ms() - t0 + ms_weights;
     if (j->keep_mesh) j->mesh = mesh;
     else adaslice_mesh_free(&mesh);
     if (r != ADASLICE_OK) return library_error(&err);
     j->profiled = 1;
-    return RC_OK;
+    return rc;
 }
 
 static char *trim(char *s)
@@ -440,7 +468,8 @@ static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_metho
     adaslice_plan_options o;
     adaslice_result r;
     plan_options_of(a, method, &o);
-    r = adaslice_plan_profile(&j->profile, &o, &j->plan[method], &j->why[method]);
+    r = method == METHOD_CURVATURE ? plan_curvature_with(a, j, &j->plan[method], &j->why[method])
+                                   : adaslice_plan_profile(&j->profile, &o, &j->plan[method], &j->why[method]);
     j->why[method].result = r;
     j->planned[method] = 1;
     return r;
@@ -457,7 +486,9 @@ int run_plan(const plan_args *a, plan_job *j)
     if (plan_with(a, j, a->method) != ADASLICE_OK) return library_error(&j->why[a->method]);
     j->ms_plan = now_ms() - t0;
     for (m = 0; a->compare && m < METHOD_COUNT; m++) {
-        adaslice_result r = j->planned[m] ? ADASLICE_OK : plan_with(a, j, (adaslice_method)m);
+        adaslice_result r;
+        if (m == METHOD_CURVATURE && !j->kappa) continue; /* a --profile has no curvature */
+        r = j->planned[m] ? ADASLICE_OK : plan_with(a, j, (adaslice_method)m);
         if (r != ADASLICE_OK && r != ADASLICE_ERR_INFEASIBLE) return library_error(&j->why[m]);
     }
     return RC_OK;
@@ -470,6 +501,7 @@ void job_free(plan_job *j)
         if (j->planned[m] && j->why[m].result == ADASLICE_OK) adaslice_plan_free(&j->plan[m]);
     if (j->profiled) adaslice_profile_free(&j->profile);
     else free(j->profile.phi);
+    free(j->kappa);
     adaslice_mesh_free(&j->mesh);
 }
 
@@ -519,8 +551,10 @@ int write_outputs(const plan_args *a, const plan_job *j)
 
 /* The rows of the paper's Table 3, in its order. */
 static const adaslice_method TABLE3[] = {
-    ADASLICE_METHOD_COARSEST, ADASLICE_METHOD_OPTIMAL, ADASLICE_METHOD_GREEDY, ADASLICE_METHOD_FINEST};
-static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest"};
+    ADASLICE_METHOD_COARSEST, ADASLICE_METHOD_OPTIMAL, ADASLICE_METHOD_GREEDY, ADASLICE_METHOD_FINEST,
+    METHOD_CURVATURE};
+static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest", "Curvature"};
+enum { TABLE3_ROWS = sizeof TABLE3 / sizeof *TABLE3 };
 
 static void print_compare(const plan_args *a, const plan_job *j)
 {
@@ -531,9 +565,10 @@ static void print_compare(const plan_args *a, const plan_job *j)
     printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
            METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
     printf("%-10s %8s %18s %10s\n", "method", "layers", head, "over eps");
-    for (r = 0; r < 4; r++) {
+    for (r = 0; r < TABLE3_ROWS; r++) {
         const adaslice_plan *p = &j->plan[TABLE3[r]];
         const adaslice_error *e = &j->why[TABLE3[r]];
+        if (!j->planned[TABLE3[r]]) continue; /* curvature, from a --profile */
         if (e->result == ADASLICE_OK)
             printf("%-10s %8zu %18.6g %10zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
         else if (e->min_eps > 0)
@@ -565,6 +600,8 @@ static void print_summary(const plan_args *a, const plan_job *j)
                a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION, j->profile.unsampled_bins);
     printf("\n");
     printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
+    if (a->method == METHOD_CURVATURE)
+        printf(" (%s mapping; eps only counts the layers over it)", MAPPING_NAMES[a->mapping]);
     if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
     printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);
     printf("layers     %zu\n", p->layer_count);
@@ -639,8 +676,9 @@ static void print_json(const plan_args *a, const plan_job *j)
     printf("\n  ]");
     if (a->compare) {
         printf(",\n  \"compare\": [");
-        for (r = 0; r < 4; r++) {
+        for (r = 0; r < TABLE3_ROWS; r++) {
             const adaslice_error *e = &j->why[TABLE3[r]];
+            if (!j->planned[TABLE3[r]]) continue;
             printf("%s\n    {\"method\": \"%s\", ", r ? "," : "", METHOD_NAMES[TABLE3[r]]);
             if (e->result == ADASLICE_OK) {
                 print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
@@ -685,6 +723,7 @@ static const command COMMANDS[] = {
     {"plan", "plan adaptive layers for a mesh or a metric profile", cmd_plan},
     {"slice", "plan a model and write its layer masks as a printable job", cmd_slice},
     {"orient", "search the build directions for the fewest layers and least error", cmd_orient},
+    {"saliency", "per-face weights from mesh saliency, and the mesh coloured by them", cmd_saliency},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

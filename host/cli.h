@@ -4,9 +4,12 @@
 #define ADASLICE_HOST_CLI_H
 #include <stdio.h>
 #include "../adaslice.h"
+#include "weights.h"
 
 enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
-enum { METRIC_COUNT = 4, METHOD_COUNT = 4 };
+enum { METRIC_COUNT = 4, METHOD_COUNT = 5 };
+/* the tool's fifth method, after the library's four (host/curvature.h) */
+#define METHOD_CURVATURE ((adaslice_method)(ADASLICE_METHOD_COARSEST + 1))
 
 extern const char *const METRIC_NAMES[];
 extern const char *const METHOD_NAMES[];
@@ -40,6 +43,8 @@ typedef struct plan_args {
     const char *orient;            /* --orient best|X,Y,Z, or NULL */
     const char *out, *profile_out, *plot;
     int json, compare, help;
+    int mapping;                   /* --mapping, an adaslice_mapping (--method curvature) */
+    weight_args weights;           /* --saliency, --weights, --weight (model only) */
 } plan_args;
 
 typedef struct plan_job {
@@ -51,9 +56,10 @@ typedef struct plan_job {
     int keep_mesh;                 /* keep the model loaded (slice needs it) */
     adaslice_mesh mesh;
     double up[3];                  /* --orient: the direction turned up; else 0, 0, 1 */
-    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all four with --compare */
+    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all of them with --compare */
     adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
     int planned[METHOD_COUNT];
+    double *kappa;                 /* curvature per bin, for the curvature method (model only) */
     double ms_load, ms_profile, ms_plan;
 } plan_job;
 
@@ -72,6 +78,7 @@ void job_free(plan_job *j);
 
 int cmd_slice(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
+int cmd_saliency(int argc, char **argv);
 /* The library's plan options for method m from the command line's. */
 void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_options *o);
 /* Scores `count` directions on all cores; minima (best first, at most 4). */

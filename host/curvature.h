@@ -1,10 +1,9 @@
-/* The curvature-based planner of the notes as the tool's fifth plan method. */
+/* The curvature-based planner of the notes as the tool's fifth plan method,
+   METHOD_CURVATURE (cli.h). */
 #ifndef ADASLICE_HOST_CURVATURE_H
 #define ADASLICE_HOST_CURVATURE_H
 #include "cli.h"
 
-/* after the library's four, in plan_job's arrays and METHOD_NAMES */
-#define METHOD_CURVATURE ((adaslice_method)(ADASLICE_METHOD_COARSEST + 1))
 enum { MAPPING_COUNT = 3 };
 extern const char *const MAPPING_NAMES[]; /* by adaslice_mapping */
 

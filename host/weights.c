@@ -28,25 +28,32 @@ int weights_given(const weight_args *w)
     return w->saliency || w->file || w->region_count;
 }
 
+static const struct { const char *name, *numbers; int count; } REGION_KINDS[] = { /* by WEIGHT_BOX, WEIGHT_SPHERE */
+    {"box", "X0,Y0,Z0,X1,Y1,Z1", 6}, {"sphere", "X,Y,Z,R", 4}};
+
 /* "box:x0,y0,z0,x1,y1,z1=W" or "sphere:x,y,z,r=W" */
 static int parse_region(const char *spec, weight_region *r)
 {
     const char *colon = strchr(spec, ':'), *equals = strrchr(spec, '='), *p;
     double v[6], w;
-    char *end;
-    int n = 0, want;
+    char *end = NULL;
+    int n, want;
     if (!colon || !equals || equals < colon)
         return complain(RC_USAGE, "--weight %s: expected box:X0,Y0,Z0,X1,Y1,Z1=W or sphere:X,Y,Z,R=W", spec);
-    if ((size_t)(colon - spec) == 3 && !strncmp(spec, "box", 3)) r->kind = WEIGHT_BOX, want = 6;
-    else if ((size_t)(colon - spec) == 6 && !strncmp(spec, "sphere", 6)) r->kind = WEIGHT_SPHERE, want = 4;
-    else return complain(RC_USAGE, "--weight %s: unknown region %.*s, expected box or sphere", spec, (int)(colon - spec), spec);
-    for (p = colon + 1; n < want; n++, p = end + 1) {
+    for (r->kind = 0; r->kind < 2; r->kind++) {
+        const char *name = REGION_KINDS[r->kind].name;
+        if (strlen(name) == (size_t)(colon - spec) && !strncmp(spec, name, strlen(name))) break;
+    }
+    if (r->kind == 2)
+        return complain(RC_USAGE, "--weight %s: unknown region %.*s, expected box or sphere", spec, (int)(colon - spec), spec);
+    want = REGION_KINDS[r->kind].count;
+    for (n = 0, p = colon + 1; n < want; n++, p = end + 1) {
         v[n] = strtod(p, &end);
         if (end == p || !isfinite(v[n]) || *end != (n + 1 < want ? ',' : '=')) break;
     }
     if (n < want || end != equals)
-        return complain(RC_USAGE, "--weight %s: a %s takes %s", spec, r->kind == WEIGHT_BOX ? "box" : "sphere",
-                        r->kind == WEIGHT_BOX ? "6 numbers X0,Y0,Z0,X1,Y1,Z1" : "4 numbers X,Y,Z,R");
+        return complain(RC_USAGE, "--weight %s: a %s takes %d numbers %s", spec, REGION_KINDS[r->kind].name, want,
+                        REGION_KINDS[r->kind].numbers);
     w = strtod(equals + 1, &end);
     if (end == equals + 1 || *end || !(w >= 0 && w <= 1))
         return complain(RC_USAGE, "--weight %s: the weight %s is not a number in [0, 1]", spec, equals + 1);

@@ -125,7 +125,8 @@ static void weight_file_errors(void)
         cli_write(weights, cases[i].text);
         r = cli_run("plan", model, "--weights", weights, NULL);
         CHECKF(r.status == 2 && cli_one_message(r.err) && !*r.out, "case %zu: exit %d, '%s'", i, r.status, r.err);
-        for (k = 0; k < 3; k++) CHECKF(strstr(r.err, cases[i].named[k]) != NULL, "case %zu: '%s' lacks %s", i, r.err, cases[i].named[k]);
+        for (k = 0; k < 3; k++)
+            CHECKF(strstr(r.err, cases[i].named[k]) != NULL, "case %zu: '%s' lacks %s", i, r.err, cases[i].named[k]);
         cli_free(&r);
     }
     /* comments and blank lines are skipped */
@@ -233,6 +234,27 @@ static void curvature_method(void)
     cli_free(&r);
 }
 
+/* Regions are in the model's own coordinates even when --orient turns the
+   part: a box around the whole model weighing 0 leaves a cusp profile of
+   zeros (worst error 0). The direction search neither weighs faces nor plans
+   by curvature, and says so. */
+static void weights_and_orient(void)
+{
+    const char *model = bump_obj();
+    cli_result r = cli_run("plan", model, "--orient", "1,0,0", "--weight", "box:-6,-6,-1,6,6,12=0", "--json", NULL);
+    CHECKF(r.status == 0 && json_number_at(r.out, "worst_error") == 0, "exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    r = cli_run("orient", model, "--method", "curvature", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("orient", model, "--saliency", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", model, "--orient", "best", "--method", "curvature", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "curvature"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_cli_weights(void)
 {
     if (!cli_begin("adaslice-weights")) return;
@@ -241,5 +263,6 @@ void test_cli_weights(void)
     RUN(weight_regions_select_faces_by_centroid);
     RUN(weight_option_errors);
     RUN(curvature_method);
+    RUN(weights_and_orient);
     cli_end();
 }

@@ -270,6 +270,33 @@ static void mean_curvature_on_borders_and_degenerate_triangles(void)
 
 static const double BUMP_DIR[3] = {0.663413948, 0.556670399, 0.5}; /* latitude 30, longitude 40 degrees */
 
+static double dist2(const adaslice_mesh *m, size_t a, size_t b)
+{
+    double d = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double e = (double)m->vertices[3 * a + k] - m->vertices[3 * b + k];
+        d += e * e;
+    }
+    return d;
+}
+
+/* each |H| capped at its largest neighbour's */
+static void cap_at_neighbours(const adaslice_mesh *m, double *H)
+{
+    double *top = (double *)calloc(m->vertex_count, sizeof *top);
+    size_t t, i;
+    int k;
+    for (t = 0; t < m->triangle_count; t++)
+        for (k = 0; k < 3; k++) {
+            uint32_t a = m->triangles[3 * t + k], b = m->triangles[3 * t + (k + 1) % 3];
+            top[a] = H[b] > top[a] ? H[b] : top[a];
+            top[b] = H[a] > top[b] ? H[a] : top[b];
+        }
+    for (i = 0; i < m->vertex_count; i++) H[i] = H[i] < top[i] ? H[i] : top[i];
+    free(top);
+}
+
 /* The saliency of the manual by all pairs: every vertex within 2 sigma, no
    pooling. The mesh is indexed and every vertex is in a triangle with area. */
 static void reference_saliency(const adaslice_mesh *m, float *face)
@@ -279,22 +306,21 @@ static void reference_saliency(const adaslice_mesh *m, float *face)
     size_t n = m->vertex_count, i, j, t, top;
     double *H = (double *)malloc(n * sizeof *H), *G = (double *)malloc(8 * n * sizeof *G);
     double *S = (double *)malloc(n * sizeof *S), *sal = (double *)calloc(n, sizeof *sal);
-    double lo[3], hi[3], eps, best = 0;
+    double lo[3], hi[3], eps = 0, best = 0;
     adaslice_error e;
     int s, k;
     CHECK(adaslice_mean_curvature(m, H, NULL, &e) == ADASLICE_OK);
+    cap_at_neighbours(m, H);
     adaslice_mesh_bounds(m, lo, hi);
-    eps = 0.003 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-#define D2(a, b) (((double)m->vertices[3 * (a)] - m->vertices[3 * (b)]) * ((double)m->vertices[3 * (a)] - m->vertices[3 * (b)]) + \
-                  ((double)m->vertices[3 * (a) + 1] - m->vertices[3 * (b) + 1]) * ((double)m->vertices[3 * (a) + 1] - m->vertices[3 * (b) + 1]) + \
-                  ((double)m->vertices[3 * (a) + 2] - m->vertices[3 * (b) + 2]) * ((double)m->vertices[3 * (a) + 2] - m->vertices[3 * (b) + 2]))
+    for (k = 0; k < 3; k++) eps += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    eps = 0.003 * sqrt(eps);
     for (s = 0; s < 8; s++) {
         double sigma = sigmas[s] * eps;
         for (i = 0; i < n; i++) {
             double sw = 0, sh = 0;
             for (j = 0; j < n; j++) {
-                double d2 = D2(i, j);
-                if (d2 < 4 * sigma * sigma) { sw += exp(-d2 / (2 * sigma * sigma)); sh += H[j] * exp(-d2 / (2 * sigma * sigma)); }
+                double d2 = dist2(m, i, j), w = exp(-d2 / (2 * sigma * sigma));
+                if (d2 < 4 * sigma * sigma) { sw += w; sh += w * H[j]; }
             }
             G[s * n + i] = sh / sw;
         }
@@ -308,7 +334,7 @@ static void reference_saliency(const adaslice_mesh *m, float *face)
         }
         for (i = 0; i < n; i++) {
             int peak = i != top;
-            for (j = 0; j < n && peak; j++) if (S[j] > S[i] && D2(i, j) <= r * r) peak = 0;
+            for (j = 0; j < n && peak; j++) if (S[j] > S[i] && dist2(m, i, j) <= r * r) peak = 0;
             if (peak) { sum += S[i]; others++; }
         }
         for (i = 0; i < n; i++) {
@@ -316,7 +342,6 @@ static void reference_saliency(const adaslice_mesh *m, float *face)
             sal[i] += S[i] / S[top] * f * f;
         }
     }
-#undef D2
     for (t = 0; t < m->triangle_count; t++) {
         double w = 0;
         for (k = 0; k < 3; k++) w += sal[m->triangles[3 * t + k]] / 3;
@@ -371,7 +396,8 @@ static void saliency_peaks_on_a_bump(void)
     double worst = 0;
     int k, max_seen = 0;
     CHECK(adaslice_saliency(&m, w, NULL, &e) == ADASLICE_OK);
-    CHECK(memcmp(m.vertices, before.vertices, 3 * m.vertex_count * sizeof(float)) == 0 && m.vertex_count == before.vertex_count);
+    CHECK(m.vertex_count == before.vertex_count &&
+          memcmp(m.vertices, before.vertices, 3 * m.vertex_count * sizeof(float)) == 0);
     for (t = 0; t < m.triangle_count; t++) {
         CHECKF(w[t] >= 0 && w[t] <= 1, "weight %g", w[t]);
         max_seen |= w[t] == 1;
@@ -594,6 +620,81 @@ static void curvature_plan_arguments(void)
     gen_free(&m);
 }
 
+/* ------------------------------------------------------- out of memory */
+
+/* An allocator that fails from its n-th call on and counts what is live. */
+typedef struct failing { int calls, fail_at; long live; } failing;
+
+static void *failing_alloc(void *user, size_t size)
+{
+    failing *f = (failing *)user;
+    void *p;
+    if (f->calls++ >= f->fail_at) return NULL;
+    p = malloc(size);
+    if (p) f->live++;
+    return p;
+}
+
+static void failing_free(void *user, void *p)
+{
+    ((failing *)user)->live--;
+    free(p);
+}
+
+/* Every call fails cleanly, with nothing left allocated, wherever memory runs
+   out, and succeeds once it does not. */
+static void nothing_leaks_when_memory_runs_out(void)
+{
+    adaslice_mesh m = bumped_sphere(4, 12, BUMP_DIR, 0.4, 0.2), w;
+    adaslice_allocator al;
+    adaslice_saliency_options so;
+    adaslice_curvature_options co;
+    adaslice_profile p;
+    adaslice_plan plan;
+    adaslice_error e;
+    failing f;
+    float *weight = (float *)malloc(m.triangle_count * sizeof *weight);
+    double *kappa;
+    int step, done;
+    al.alloc = failing_alloc;
+    al.free = failing_free;
+    al.user = &f;
+    CHECK(adaslice_profile_exact(&m, NULL, &p, &e) == ADASLICE_OK);
+    kappa = (double *)malloc(p.bin_count * sizeof *kappa);
+    for (step = 0; step < 4; step++) {
+        adaslice_result r;
+        done = 0;
+        for (f.fail_at = 0; !done && f.fail_at < 1000; f.fail_at++) {
+            f.calls = 0;
+            f.live = 0;
+            memset(&so, 0, sizeof so);
+            memset(&co, 0, sizeof co);
+            so.allocator = co.allocator = &al;
+            if (step == 0) {
+                w = copy_mesh(&m, 0);
+                w.allocator = al;
+                r = adaslice_mesh_weld_within(&w, 0.01, &e);
+                gen_free(&w);
+            } else if (step == 1) {
+                r = adaslice_saliency(&m, weight, &so, &e);
+            } else if (step == 2) {
+                r = adaslice_curvature_profile(&m, &p, &co, kappa, &e);
+            } else {
+                r = adaslice_plan_curvature(&p, kappa, &co, &plan, &e);
+                if (r == ADASLICE_OK) adaslice_plan_free(&plan);
+            }
+            CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "step %d, failing at %d: %s", step, f.fail_at, e.message);
+            CHECKF(f.live == 0, "step %d, failing at allocation %d: %ld blocks left", step, f.fail_at, f.live);
+            done = r == ADASLICE_OK;
+        }
+        CHECKF(done, "step %d never succeeded", step);
+    }
+    free(weight);
+    free(kappa);
+    adaslice_profile_free(&p);
+    gen_free(&m);
+}
+
 void test_saliency(void)
 {
     RUN(weld_within_merges_into_the_first_vertex_in_reach);
@@ -607,4 +708,5 @@ void test_saliency(void)
     RUN(curvature_plan_of_a_bent_sheet);
     RUN(curvature_plan_of_a_capped_cylinder);
     RUN(curvature_plan_arguments);
+    RUN(nothing_leaks_when_memory_runs_out);
 }
