@@ -2415,8 +2415,8 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
             return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "profile: triangle %zu uses vertex %u of %zu",
                                   t / 3, (unsigned)mesh->triangles[t], mesh->vertex_count);
         z = mesh->vertices[3 * (size_t)mesh->triangles[t] + 2];
-        if (z < lo[2]) lo[2] = z;
-        if (z > hi[2]) hi[2] = z;
+        lo[2] = z < lo[2] ? z : lo[2];
+        hi[2] = z > hi[2] ? z : hi[2];
     }
     if (!(hi[2] > lo[2]))
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh is flat (height 0 along z)");
@@ -2477,22 +2477,29 @@ static void adaslice__phi_from_area(adaslice_profile *p, const double *wmax)
     }
 }
 
-/* Each triangle's value over every bin its height range meets (eq. 5, 9,
-   21-24): heights per vertex at height[v * stride], values per triangle
-   (negative: skip). Returns the per-bin maxima (the table's level 0, which
+/* Each triangle's value (adaslice__face_value) over every bin its z-range
+   meets (eq. 5, 9, 21-24), in two passes: values and bin ranges, which size
+   the table, then the updates. Returns the per-bin maxima (the table, which
    the caller frees), or NULL when out of memory. */
-static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const float *height, size_t stride,
-                                       const double *value, const adaslice_profile *p, adaslice__rmax *rmax)
+static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice_profile_options *opt,
+                                       const adaslice_profile *p, adaslice__rmax *rmax)
 {
     size_t t, n = p->bin_count, longest = 1;
-    double inverse = 1.0 / p->bin;
+    double inverse = 1.0 / p->bin, *value;
     uint32_t *span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&p->allocator, 2 * mesh->triangle_count, sizeof(uint32_t)));
-    if (!span) return NULL;
+    value = ADASLICE__CAST(double *, adaslice__alloc(&p->allocator, mesh->triangle_count, sizeof(double)));
+    if (!span || !value) {
+        adaslice__free(&p->allocator, span);
+        adaslice__free(&p->allocator, value);
+        return NULL;
+    }
     for (t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *tri = mesh->triangles + 3 * t;
-        double a = height[tri[0] * stride], b = height[tri[1] * stride], c = height[tri[2] * stride];
+        double a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
+               c = mesh->vertices[3 * (size_t)tri[2] + 2];
         double lo = a < b ? a : b, hi = a > b ? a : b, f, g;
         size_t run;
+        value[t] = adaslice__face_value(mesh, t, opt);
         lo = c < lo ? c : lo;
         hi = c > hi ? c : hi;
         /* selects, not branches: heights arrive in no useful order */
@@ -2507,11 +2514,12 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const float *h
         run = value[t] >= 0 ? span[2 * t + 1] - span[2 * t] + 1 : 1;
         longest = run > longest ? run : longest;
     }
-    if (!adaslice__rmax_init(rmax, n, longest, &p->allocator)) { adaslice__free(&p->allocator, span); return NULL; }
-    for (t = 0; t < mesh->triangle_count; t++)
-        if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
+    if (adaslice__rmax_init(rmax, n, longest, &p->allocator))
+        for (t = 0; t < mesh->triangle_count; t++)
+            if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
     adaslice__free(&p->allocator, span);
-    return adaslice__rmax_finish(rmax);
+    adaslice__free(&p->allocator, value);
+    return rmax->t ? adaslice__rmax_finish(rmax) : NULL;
 }
 
 ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
@@ -2522,8 +2530,8 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
     adaslice__area_acc acc;
     adaslice__rmax rmax;
     adaslice_result r;
-    double lo[3], hi[3], *tree = NULL, *value = NULL;
-    size_t n, t;
+    double lo[3], hi[3], *tree = NULL;
+    size_t n;
     int max_type;
 
     if ((r = adaslice__profile_begin(mesh, options, profile, &opt, err)) != ADASLICE_OK) return r;
@@ -2536,13 +2544,10 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
         acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 3 * (n + 1), sizeof(double)));
     }
     if (max_type || opt.weights) {
-        value = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, mesh->triangle_count, sizeof(double)));
-        for (t = 0; value && t < mesh->triangle_count; t++) value[t] = adaslice__face_value(mesh, t, &opt);
-        if (value) tree = adaslice__max_over_bins(mesh, mesh->vertices + 2, 3, value, profile, &rmax);
+        tree = adaslice__max_over_bins(mesh, &opt, profile, &rmax);
     }
     if (((max_type || opt.weights) && !tree) || (!max_type && (!acc.direct || !acc.coef))) {
         adaslice__free(&profile->allocator, tree);
-        adaslice__free(&profile->allocator, value);
         adaslice__free(&profile->allocator, acc.direct);
         adaslice__free(&profile->allocator, acc.coef);
         adaslice_profile_free(profile);
@@ -2557,7 +2562,6 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
         adaslice__areas(mesh, lo, hi, &acc, profile->area);
         adaslice__phi_from_area(profile, tree);
     }
-    adaslice__free(&profile->allocator, value);
     adaslice__free(&profile->allocator, tree);
     adaslice__free(&profile->allocator, acc.direct);
     adaslice__free(&profile->allocator, acc.coef);
