@@ -27,7 +27,7 @@ typedef struct cli_result {
 } cli_result;
 
 /* The temporary directory; 0 if it cannot be made. */
-static int cli_begin(const char *prefix)
+static inline int cli_begin(const char *prefix)
 {
     const char *tmp = getenv("TMPDIR"), *bin = getenv("ADASLICE_BIN");
     if (bin && *bin) cli_tool = bin;
@@ -62,7 +62,7 @@ static char *cli_read(const char *path)
     return s;
 }
 
-static void cli_write(const char *path, const char *text)
+static inline void cli_write(const char *path, const char *text)
 {
     FILE *f = fopen(path, "wb");
     size_t n = strlen(text);
@@ -70,7 +70,7 @@ static void cli_write(const char *path, const char *text)
 }
 
 /* cli_run(arg, ..., NULL) */
-static cli_result cli_run(const char *first, ...)
+static inline cli_result cli_run(const char *first, ...)
 {
     char *argv[40], out[600], err[600];
     cli_result r;
@@ -104,20 +104,20 @@ static cli_result cli_run(const char *first, ...)
     return r;
 }
 
-static void cli_free(cli_result *r)
+static inline void cli_free(cli_result *r)
 {
     free(r->out);
     free(r->err);
 }
 
 /* exactly one line on stderr, "adaslice: ..." */
-static int cli_one_message(const char *err)
+static inline int cli_one_message(const char *err)
 {
     const char *nl = strchr(err, '\n');
     return !strncmp(err, "adaslice: ", 10) && nl && nl[1] == 0;
 }
 
-static void cli_end(void)
+static inline void cli_end(void)
 {
     DIR *d = opendir(cli_dir);
     struct dirent *e;
