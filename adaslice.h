@@ -445,6 +445,7 @@ typedef struct adaslice_orienter {
     const adaslice_mesh *mesh;
     adaslice_profile_options profile;  /* copies of the options given */
     adaslice_plan_options plan;
+    unsigned char *used;               /* per vertex: some triangle uses it (height ranges) */
     adaslice_allocator allocator;
 } adaslice_orienter;
 
@@ -2378,9 +2379,11 @@ static double adaslice__area_deviation(const double *area, size_t n, size_t i, d
 
 /* Checks the options and the mesh, sizes the bins and allocates phi (and the
    areas for area and volume). */
+/* zrange: the used vertices' lowest and highest z when the caller knows them
+   (and has checked the indices), else NULL. */
 static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
                                                adaslice_profile *profile, adaslice_profile_options *opt,
-                                               adaslice_error *err)
+                                               const double *zrange, adaslice_error *err)
 {
     adaslice_allocator al;
     double lo[3], hi[3], bins;
@@ -2407,9 +2410,9 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
             if (!(opt->weights[t] >= 0 && opt->weights[t] <= 1))
                 return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                       "profile: weight of triangle %zu is %g, outside [0, 1]", t, (double)opt->weights[t]);
-    lo[2] = DBL_MAX;
-    hi[2] = -DBL_MAX;
-    for (t = 0; t < 3 * mesh->triangle_count; t++) {
+    lo[2] = zrange ? zrange[0] : DBL_MAX;
+    hi[2] = zrange ? zrange[1] : -DBL_MAX;
+    for (t = 0; !zrange && t < 3 * mesh->triangle_count; t++) {
         double z;
         if (mesh->triangles[t] >= mesh->vertex_count)
             return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "profile: triangle %zu uses vertex %u of %zu",
@@ -2522,9 +2525,8 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
     return rmax->t ? adaslice__rmax_finish(rmax) : NULL;
 }
 
-ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
-                                                    const adaslice_profile_options *options,
-                                                    adaslice_profile *profile, adaslice_error *err)
+static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                               const double *zrange, adaslice_profile *profile, adaslice_error *err)
 {
     adaslice_profile_options opt;
     adaslice__area_acc acc;
@@ -2534,7 +2536,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
     size_t n;
     int max_type;
 
-    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, err)) != ADASLICE_OK) return r;
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     memset(&acc, 0, sizeof acc);
@@ -2567,6 +2569,13 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
     adaslice__free(&profile->allocator, acc.coef);
     adaslice__ok(err);
     return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
+                                                    const adaslice_profile_options *options,
+                                                    adaslice_profile *profile, adaslice_error *err)
+{
+    return adaslice__profile_exact(mesh, options, NULL, profile, err);
 }
 
 /* ---- sampled profiles (§3.2, §4.1): the paper's method, from LDIs along x, y, z */
@@ -2781,7 +2790,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
     size_t n, t, i;
     int axis, max_type;
 
-    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, NULL, err)) != ADASLICE_OK) return r;
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     memset(&s, 0, sizeof s);
@@ -3496,6 +3505,7 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
                                                     const adaslice_profile_options *profile,
                                                     const adaslice_plan_options *plan, adaslice_error *err)
 {
+    size_t t;
     if (!o) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: no orienter given");
     memset(o, 0, sizeof *o);
     if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "orient: the mesh has no triangles");
@@ -3503,13 +3513,27 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
     if (profile) o->profile = *profile;
     if (plan) o->plan = *plan;
     o->allocator = adaslice__allocator(profile ? profile->allocator : NULL);
+    /* indices are checked here once, not for every direction */
+    o->used = ADASLICE__CAST(unsigned char *, adaslice__alloc(&o->allocator, mesh->vertex_count ? mesh->vertex_count : 1, 1));
+    if (!o->used) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
+    memset(o->used, 0, mesh->vertex_count);
+    for (t = 0; t < 3 * mesh->triangle_count; t++) {
+        if (mesh->triangles[t] >= mesh->vertex_count) {
+            adaslice_orienter_free(o);
+            return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "orient: triangle %zu uses vertex %u of %zu", t / 3,
+                                  (unsigned)mesh->triangles[t], mesh->vertex_count);
+        }
+        o->used[mesh->triangles[t]] = 1;
+    }
     adaslice__ok(err);
     return ADASLICE_OK;
 }
 
 ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
 {
-    if (o) memset(o, 0, sizeof *o);
+    if (!o) return;
+    adaslice__free(&o->allocator, o->used);
+    memset(o, 0, sizeof *o);
 }
 
 ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, const double d[3],
@@ -3519,7 +3543,8 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
     adaslice_allocator al = o->allocator;
     adaslice_mesh turned;
     adaslice_result r;
-    double rot[9], len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), u[3];
+    double rot[9], len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), u[3], zrange[2];
+    size_t v;
     if (!(len > 0) || len > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: direction (%g, %g, %g) has no length", d[0], d[1], d[2]);
     u[0] = d[0] / len; u[1] = d[1] / len; u[2] = d[2] / len;
@@ -3530,9 +3555,17 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
     memset(&turned.allocator, 0, sizeof turned.allocator);
     turned.vertices = ADASLICE__CAST(float *, adaslice__alloc(&al, 3 * (m->vertex_count ? m->vertex_count : 1), sizeof(float)));
     if (!turned.vertices) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
-    memcpy(turned.vertices, m->vertices, 3 * m->vertex_count * sizeof(float));
-    adaslice_mesh_rotate(&turned, rot);
-    r = adaslice_profile_exact(&turned, &o->profile, profile, err);
+    zrange[0] = DBL_MAX;
+    zrange[1] = -DBL_MAX;
+    for (v = 0; v < m->vertex_count; v++) {
+        const float *p = m->vertices + 3 * v;
+        float *q = turned.vertices + 3 * v;
+        int k;
+        for (k = 0; k < 3; k++) q[k] = (float)adaslice__turn(rot + 3 * k, p);
+        zrange[0] = o->used[v] && q[2] < zrange[0] ? q[2] : zrange[0];
+        zrange[1] = o->used[v] && q[2] > zrange[1] ? q[2] : zrange[1];
+    }
+    r = adaslice__profile_exact(&turned, &o->profile, zrange, profile, err);
     adaslice__free(&al, turned.vertices);
     return r;
 }
