@@ -3299,6 +3299,35 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     return r;
 }
 
+/* The profile's bins and the thickness bounds as whole bins per layer,
+   [*lo, *hi], with the checks both planners need. */
+static adaslice_result adaslice__layer_bins(const adaslice_profile *p, double tmin, double tmax, uint32_t *lo,
+                                            uint32_t *hi, adaslice_error *err)
+{
+    double lo_f, hi_f;
+    if (!(p->bin > 0) || p->bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: bin size %g is not a positive number", p->bin);
+    if (!(tmin > 0) || tmin > DBL_MAX || !(tmax > 0) || tmax > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g and tmax %g must be positive numbers", tmin, tmax);
+    if (tmin > tmax)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g mm is larger than tmax %g mm", tmin, tmax);
+    if (p->bin > tmin * (1 + 1e-9))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: bin size %g mm is larger than tmin %g mm; use a bin of at most tmin", p->bin, tmin);
+    /* b rarely divides tmin and tmax exactly in binary: allow a relative 1e-9 */
+    lo_f = ceil(tmin / p->bin - 1e-9);
+    hi_f = floor(tmax / p->bin + 1e-9);
+    if (lo_f > hi_f)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: no multiple of the bin size %g mm lies between tmin %g and tmax %g", p->bin, tmin, tmax);
+    if (hi_f > 65535)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: tmax / bin = %g bins per layer; at most 65535 are supported", hi_f);
+    *lo = lo_f < 1 ? 1 : (uint32_t)lo_f;
+    *hi = (uint32_t)hi_f;
+    return ADASLICE_OK;
+}
+
 ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, const adaslice_plan_options *options,
                                                    adaslice_plan *plan, adaslice_error *err)
 {
@@ -3306,10 +3335,9 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     adaslice__job job;
     adaslice_allocator al;
     adaslice_result r = ADASLICE_OK;
-    double lo_f, hi_f;
     size_t i;
     unsigned char *ok = NULL;
-    uint32_t *planes = NULL, count, forced = 0;
+    uint32_t *planes = NULL, count, forced = 0, lo, hi;
     void *ring = NULL;
 
     if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
@@ -3321,43 +3349,22 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     if (opt.tmin == 0) opt.tmin = ADASLICE_DEFAULT_TMIN;
     if (opt.tmax == 0) opt.tmax = ADASLICE_DEFAULT_TMAX;
     if (opt.sharp == 0) opt.sharp = ADASLICE_DEFAULT_SHARP;
-    if (!(p->bin > 0) || p->bin > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: bin size %g is not a positive number", p->bin);
     if (!(opt.eps > 0) || opt.eps > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: eps %g is not a positive number", opt.eps);
-    if (!(opt.tmin > 0) || opt.tmin > DBL_MAX || !(opt.tmax > 0) || opt.tmax > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g and tmax %g must be positive numbers",
-                              opt.tmin, opt.tmax);
-    if (opt.tmin > opt.tmax)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g mm is larger than tmax %g mm", opt.tmin, opt.tmax);
-    if (p->bin > opt.tmin * (1 + 1e-9))
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: bin size %g mm is larger than tmin %g mm; use a bin of at most tmin", p->bin, opt.tmin);
+    if ((r = adaslice__layer_bins(p, opt.tmin, opt.tmax, &lo, &hi, err)) != ADASLICE_OK) return r;
     if ((unsigned)opt.method > ADASLICE_METHOD_COARSEST)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: unknown method %d", (int)opt.method);
-    if (p->bin_count > 0x7ffffffeu)
-        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "plan: %zu bins is too many", p->bin_count);
     for (i = 0; i < p->bin_count; i++)
         if (!(p->phi[i] >= 0) || p->phi[i] > DBL_MAX)
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "plan: profile value %g at bin %zu (z = %g mm) is not a finite number >= 0",
                                   p->phi[i], i, (double)i * p->bin);
-    /* b rarely divides tmin and tmax exactly in binary: allow a relative 1e-9 */
-    lo_f = ceil(opt.tmin / p->bin - 1e-9);
-    hi_f = floor(opt.tmax / p->bin + 1e-9);
-    if (lo_f > hi_f)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: no multiple of the bin size %g mm lies between tmin %g and tmax %g", p->bin, opt.tmin, opt.tmax);
-    if (hi_f > 65535)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: tmax / bin = %g bins per layer; at most 65535 are supported", hi_f);
-    if (lo_f < 1) lo_f = 1;
 
     memset(&job, 0, sizeof job);
     job.profile = p;
     job.n = (uint32_t)p->bin_count;
-    job.lo = (uint32_t)lo_f;
-    job.hi = (uint32_t)hi_f;
+    job.lo = lo;
+    job.hi = hi;
     job.volume = p->metric == ADASLICE_METRIC_VOLUME;
     al = adaslice__allocator(opt.allocator);
     plan->allocator = al;
@@ -5073,7 +5080,7 @@ ADASLICE_DEF adaslice_result adaslice_plan_curvature(const adaslice_profile *p, 
     adaslice_result r;
     unsigned char *ok = NULL;
     uint32_t *planes = NULL, n, lo, hi, s = 0, count = 0;
-    double lo_f, hi_f, kmax;
+    double kmax;
     size_t i;
     if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
     memset(plan, 0, sizeof *plan);
@@ -5084,14 +5091,7 @@ ADASLICE_DEF adaslice_result adaslice_plan_curvature(const adaslice_profile *p, 
     if (opt.tmax == 0) opt.tmax = ADASLICE_DEFAULT_TMAX;
     if (opt.alpha == 0) opt.alpha = ADASLICE_DEFAULT_ALPHA;
     if (opt.eps == 0) opt.eps = ADASLICE_DEFAULT_EPS;
-    if (!(p->bin > 0) || p->bin > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: bin size %g is not a positive number", p->bin);
-    if (!(opt.tmin > 0) || !(opt.tmax >= opt.tmin) || opt.tmax > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: tmin %g and tmax %g must be positive with tmin <= tmax",
-                              opt.tmin, opt.tmax);
-    if (p->bin > opt.tmin * (1 + 1e-9))
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: bin size %g mm is larger than tmin %g mm; use a bin of at most tmin", p->bin, opt.tmin);
+    if ((r = adaslice__layer_bins(p, opt.tmin, opt.tmax, &lo, &hi, err)) != ADASLICE_OK) return r;
     if ((unsigned)opt.mapping > ADASLICE_MAPPING_STEP)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: unknown mapping %d", (int)opt.mapping);
     if (!(opt.alpha > 0) || opt.alpha > DBL_MAX || !(opt.kappa_max >= 0) || opt.kappa_max > DBL_MAX ||
@@ -5099,25 +5099,12 @@ ADASLICE_DEF adaslice_result adaslice_plan_curvature(const adaslice_profile *p, 
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                               "plan: alpha %g, kappa_max %g and eps %g must be finite and positive (kappa_max: or 0)",
                               opt.alpha, opt.kappa_max, opt.eps);
-    if (p->bin_count > 0x7ffffffeu)
-        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "plan: %zu bins is too many", p->bin_count);
     for (i = 0; i < p->bin_count; i++)
         if (!(kappa[i] >= 0) || kappa[i] > DBL_MAX)
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "plan: curvature %g at bin %zu (z = %g mm) is not a finite number >= 0", kappa[i], i,
                                   (double)i * p->bin);
-    lo_f = ceil(opt.tmin / p->bin - 1e-9);
-    hi_f = floor(opt.tmax / p->bin + 1e-9);
-    if (lo_f > hi_f)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: no multiple of the bin size %g mm lies between tmin %g and tmax %g", p->bin, opt.tmin,
-                              opt.tmax);
-    if (hi_f > 65535)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "plan: tmax / bin = %g bins per layer; at most 65535 are supported", hi_f);
     n = (uint32_t)p->bin_count;
-    lo = lo_f < 1 ? 1 : (uint32_t)lo_f;
-    hi = (uint32_t)hi_f;
     al = adaslice__allocator(opt.allocator);
     plan->allocator = al;
     plan->bins_min = lo;
