@@ -15,7 +15,7 @@ HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c
             host/weights.c host/curvature.c host/saliency_cmd.c
 TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
             tests/test_saliency.c tests/test_cli_weights.c
-HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h \
+HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h tests/failing_alloc.h \
             host/weights.h host/curvature.h tests/cli_run.h
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean

@@ -5,6 +5,7 @@
 #include "../adaslice.h"
 #include "check.h"
 #include "meshgen.h"
+#include "failing_alloc.h"
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -546,24 +547,6 @@ static void bad_arguments_are_named(void)
 }
 
 /* An allocator that fails the n-th request and counts what is outstanding. */
-typedef struct failing { int left, live; } failing;
-
-static void *failing_alloc(void *user, size_t size)
-{
-    failing *f = (failing *)user;
-    void *p;
-    if (f->left-- == 0) return NULL;
-    p = malloc(size);
-    if (p) f->live++;
-    return p;
-}
-
-static void failing_free(void *user, void *p)
-{
-    ((failing *)user)->live--;
-    free(p);
-}
-
 static void running_out_of_memory_leaks_nothing(void)
 {
     adaslice_mesh m = gen_sphere(10, 64, 32, 0), s = soup_of(&m);
@@ -576,9 +559,7 @@ static void running_out_of_memory_leaks_nothing(void)
     int n, done = 0;
     size_t i;
     for (i = 0; i < 50; i++) h[i] = 0.4 * (double)i;
-    a.alloc = failing_alloc;
-    a.free = failing_free;
-    a.user = &f;
+    a = failing_allocator(&f);
     o.allocator = &a;
     for (n = 0; n < 100 && !done; n++) {
         adaslice_result r;
@@ -592,7 +573,7 @@ static void running_out_of_memory_leaks_nothing(void)
         } else {
             CHECKF(r == ADASLICE_ERR_NOMEM && c.points == NULL, "failure %d: %s", n, e.message);
         }
-        CHECKF(f.live == 0, "failure %d: %d blocks left", n, f.live);
+        CHECKF(f.live == 0, "failure %d: %ld blocks left", n, f.live);
     }
     CHECK(done && n > 8); /* the output grew more than once on the way */
     f.left = 0;

@@ -3,6 +3,7 @@
 #include "check.h"
 #include "../adaslice.h"
 #include "meshgen.h"
+#include "failing_alloc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -623,23 +624,6 @@ static void curvature_plan_arguments(void)
 /* ------------------------------------------------------- out of memory */
 
 /* An allocator that fails from its n-th call on and counts what is live. */
-typedef struct failing { int calls, fail_at; long live; } failing;
-
-static void *failing_alloc(void *user, size_t size)
-{
-    failing *f = (failing *)user;
-    void *p;
-    if (f->calls++ >= f->fail_at) return NULL;
-    p = malloc(size);
-    if (p) f->live++;
-    return p;
-}
-
-static void failing_free(void *user, void *p)
-{
-    ((failing *)user)->live--;
-    free(p);
-}
 
 /* Every call fails cleanly, with nothing left allocated, wherever memory runs
    out, and succeeds once it does not. */
@@ -655,17 +639,15 @@ static void nothing_leaks_when_memory_runs_out(void)
     failing f;
     float *weight = (float *)malloc(m.triangle_count * sizeof *weight);
     double *kappa;
-    int step, done;
-    al.alloc = failing_alloc;
-    al.free = failing_free;
-    al.user = &f;
+    int step, done, fail_at;
+    al = failing_allocator(&f);
     CHECK(adaslice_profile_exact(&m, NULL, &p, &e) == ADASLICE_OK);
     kappa = (double *)malloc(p.bin_count * sizeof *kappa);
     for (step = 0; step < 4; step++) {
         adaslice_result r;
         done = 0;
-        for (f.fail_at = 0; !done && f.fail_at < 1000; f.fail_at++) {
-            f.calls = 0;
+        for (fail_at = 0; !done && fail_at < 1000; fail_at++) {
+            f.left = fail_at;
             f.live = 0;
             memset(&so, 0, sizeof so);
             memset(&co, 0, sizeof co);
@@ -683,8 +665,8 @@ static void nothing_leaks_when_memory_runs_out(void)
                 r = adaslice_plan_curvature(&p, kappa, &co, &plan, &e);
                 if (r == ADASLICE_OK) adaslice_plan_free(&plan);
             }
-            CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "step %d, failing at %d: %s", step, f.fail_at, e.message);
-            CHECKF(f.live == 0, "step %d, failing at allocation %d: %ld blocks left", step, f.fail_at, f.live);
+            CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "step %d, failing at %d: %s", step, fail_at, e.message);
+            CHECKF(f.live == 0, "step %d, failing at allocation %d: %ld blocks left", step, fail_at, f.live);
             done = r == ADASLICE_OK;
         }
         CHECKF(done, "step %d never succeeded", step);
