@@ -433,6 +433,49 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *profi
                                                    adaslice_plan *plan, adaslice_error *error);
 ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan);
 
+/* The integer planner the optimal plan runs on, for callers with their own
+   units and memory (a microcontroller): bins arrive one at a time as integer
+   error units (b * phi rounded up), eps in the same units; it keeps the last
+   tmax/b planes and 1 byte per bin of back-pointer (2 when tmax/b > 255). Among
+   plans with the fewest layers it keeps one with the smallest worst layer. */
+#define ADASLICE_UNREACHED 0xffffffffu
+
+typedef struct adaslice_dp { /* its fields are private */
+    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
+    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
+    uint64_t eps;             /* allowed error per layer, in units */
+    int volume;               /* eq. 20 instead of an additive sum */
+    uint64_t slack;           /* volume: units added per bin for rounding */
+    uint32_t plane;           /* the last plane decided */
+    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
+    uint32_t reach;           /* highest plane any plan reaches */
+    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
+    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
+    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
+    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
+    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
+    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
+    uint32_t head, count;     /* the queue's first slot and length */
+    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
+    unsigned char *back;      /* (planes + 1) * width bytes */
+    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
+} adaslice_dp;
+
+/* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume);
+/* 0 if the workspace (8-byte aligned) is too small or the bounds are wrong
+   (1 <= bins_min <= bins_max <= 65535). volume: eq. 20 instead of sums, with
+   `slack` units added per bin. */
+ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
+                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack);
+/* The next bin; `forced` puts a plane on top of it in every plan (§3.3). */
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
+/* Fewest layers from the bottom to the plane on the last bin pushed, or ADASLICE_UNREACHED. */
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
+/* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
+   or a plane no plan reaches): follow it down from the top to read the plan. */
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
+
 /* Error of the layer holding bins [first, end) under the profile's metric:
    b * sum phi (additive metrics), b * sum |phi[j] - phi[first]| (volume, eq. 20). */
 ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t first, size_t end);
@@ -2859,65 +2902,46 @@ ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)
    time and only the last tmax/b planes are kept, plus one back-pointer per
    plane (the bottom layer's length in bins). */
 
-#define ADASLICE__UNREACHED 0xffffffffu
+#define ADASLICE__UNREACHED ADASLICE_UNREACHED
 
-typedef struct adaslice__dp {
-    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
-    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
-    uint64_t eps;             /* allowed error per layer, in units */
-    int volume;               /* eq. 20 instead of an additive sum */
-    uint64_t slack;           /* volume: units added per bin for rounding */
-    uint32_t plane;           /* the last plane decided */
-    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
-    uint32_t reach;           /* highest plane any plan reaches */
-    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
-    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
-    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
-    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
-    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
-    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
-    uint32_t head, count;     /* the queue's first slot and length */
-    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
-    unsigned char *back;      /* (planes + 1) * width bytes */
-    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
-} adaslice__dp;
 
-static uint32_t adaslice__dp_queue_at(const adaslice__dp *dp, uint32_t k)
+
+static uint32_t adaslice__dp_queue_at(const adaslice_dp *dp, uint32_t k)
 {
     return dp->queue[(dp->head + k) & (dp->cap - 1)];
 }
 
-static void adaslice__dp_set_back(adaslice__dp *dp, uint32_t plane, uint32_t len)
+static void adaslice__dp_set_back(adaslice_dp *dp, uint32_t plane, uint32_t len)
 {
     if (dp->width == 1) dp->back[plane] = (unsigned char)len;
     else { dp->back[2 * (size_t)plane] = (unsigned char)(len & 255u); dp->back[2 * (size_t)plane + 1] = (unsigned char)(len >> 8); }
 }
 
-static uint32_t adaslice__dp_back(const adaslice__dp *dp, uint32_t plane)
+static uint32_t adaslice__dp_back(const adaslice_dp *dp, uint32_t plane)
 {
     if (dp->width == 1) return dp->back[plane];
     return (uint32_t)dp->back[2 * (size_t)plane] | ((uint32_t)dp->back[2 * (size_t)plane + 1] << 8);
 }
 
 /* Layer from plane l to the current plane: its error in units. */
-static uint64_t adaslice__dp_sum(const adaslice__dp *dp, uint32_t l)
+static uint64_t adaslice__dp_sum(const adaslice_dp *dp, uint32_t l)
 {
     return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
 }
 
-static uint64_t adaslice__dp_error(const adaslice__dp *dp, uint32_t l)
+static uint64_t adaslice__dp_error(const adaslice_dp *dp, uint32_t l)
 {
     return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
 }
 
 /* (layers, worst) of plane a is at least that of plane b, lexicographically */
-static int adaslice__dp_no_better(const adaslice__dp *dp, uint32_t a, uint32_t b)
+static int adaslice__dp_no_better(const adaslice_dp *dp, uint32_t a, uint32_t b)
 {
     uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
     return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
 }
 
-static void adaslice__dp_start(adaslice__dp *dp)
+static void adaslice__dp_start(adaslice_dp *dp)
 {
     dp->plane = 0;
     dp->floor = 0;
@@ -2937,7 +2961,7 @@ static void adaslice__dp_start(adaslice__dp *dp)
    The front block (fewest layers) has worst[] increasing and layer error
    decreasing along the queue, so the best max(worst, error) sits where the two
    cross; `scan` finds that point and only moves forward: O(1) amortised. */
-static void adaslice__dp_choose_additive(adaslice__dp *dp, uint32_t *best)
+static void adaslice__dp_choose_additive(adaslice_dp *dp, uint32_t *best)
 {
     uint32_t i = dp->plane, kf, a, b, pos;
     uint64_t va, vb;
@@ -2978,7 +3002,7 @@ static void adaslice__dp_choose_additive(adaslice__dp *dp, uint32_t *best)
 
 /* Volume deviation (eq. 20) is not additive: every plane in the window is
    tried, O(w) per plane. */
-static void adaslice__dp_choose_volume(adaslice__dp *dp, uint32_t *best)
+static void adaslice__dp_choose_volume(adaslice_dp *dp, uint32_t *best)
 {
     uint32_t i = dp->plane, l, start;
     uint32_t best_k = ADASLICE__UNREACHED;
@@ -2998,7 +3022,7 @@ static void adaslice__dp_choose_volume(adaslice__dp *dp, uint32_t *best)
 
 /* Feeds the next bin's units; decides the plane on top of it. `forced` makes
    that plane part of every plan (§3.3 sharp changes). */
-static void adaslice__dp_push(adaslice__dp *dp, uint64_t units, int forced)
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced)
 {
     uint32_t i = dp->plane + 1, best;
     uint32_t c = dp->cap;
@@ -3043,12 +3067,60 @@ typedef struct adaslice__job {
     uint64_t slack;
     double quantum;           /* mm (or the metric's unit) per unit */
     unsigned char *forced;    /* per plane, or NULL */
-    adaslice__dp dp;
+    adaslice_dp dp;
 } adaslice__job;
 
-static size_t adaslice__ring_bytes(uint32_t cap)
+static uint32_t adaslice__ring_size(uint32_t bins_max)
 {
-    return (size_t)cap * (4 * sizeof(uint64_t) + 2 * sizeof(uint32_t));
+    uint32_t cap = 2;
+    while (cap <= bins_max) cap *= 2;
+    return cap;
+}
+
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
+{
+    size_t cap = adaslice__ring_size(bins_max), width = bins_max <= 255 ? 1 : 2;
+    return cap * ((volume ? 4 : 2) * sizeof(uint64_t) + 2 * sizeof(uint32_t)) + width * ((size_t)bins + 1);
+}
+
+ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
+                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack)
+{
+    unsigned char *mem = ADASLICE__CAST(unsigned char *, workspace);
+    uint32_t c;
+    if (!dp || !mem || bins_min < 1 || bins_min > bins_max || bins_max > 65535 || bins > 0x7ffffffeu ||
+        size < adaslice_dp_workspace(bins, bins_max, volume))
+        return 0;
+    memset(dp, 0, sizeof *dp);
+    dp->lo = bins_min;
+    dp->hi = bins_max;
+    dp->cap = c = adaslice__ring_size(bins_max);
+    dp->eps = eps;
+    dp->volume = volume != 0;
+    dp->slack = slack;
+    dp->width = bins_max <= 255 ? 1 : 2;
+    /* the 8-byte arrays first, so they stay aligned */
+    dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    if (volume) {
+        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    }
+    dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->back = mem;
+    adaslice__dp_start(dp);
+    return 1;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
+{
+    return dp->layers[dp->plane & (dp->cap - 1)];
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
+{
+    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
 }
 
 /* Runs the DP with the given eps in units; returns the layer count or
@@ -3057,9 +3129,10 @@ static uint32_t adaslice__job_run(adaslice__job *job, uint64_t eps)
 {
     uint32_t i;
     job->dp.eps = eps;
+    job->dp.slack = job->slack;
     adaslice__dp_start(&job->dp);
     for (i = 0; i < job->n; i++)
-        adaslice__dp_push(&job->dp, job->units[i], job->forced && job->forced[i + 1] && i + 1 < job->n);
+        adaslice_dp_push(&job->dp, job->units[i], job->forced && job->forced[i + 1] && i + 1 < job->n);
     return job->dp.layers[job->n & (job->dp.cap - 1)];
 }
 
@@ -3399,23 +3472,11 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
         r = adaslice__plan_fill(p, planes, count, opt.eps, plan, err);
         break;
     case ADASLICE_METHOD_OPTIMAL: {
-        adaslice__dp *dp = &job.dp;
-        unsigned char *mem;
-        dp->lo = job.lo; dp->hi = job.hi;
-        for (dp->cap = 2; dp->cap <= job.hi; dp->cap *= 2) {}
-        dp->volume = job.volume;
-        dp->width = job.hi <= 255 ? 1 : 2;
+        size_t need = adaslice_dp_workspace(job.n, job.hi, job.volume);
         job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, job.n, sizeof(uint64_t)));
-        ring = adaslice__alloc(&al, 1, adaslice__ring_bytes(dp->cap));
-        dp->back = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, dp->width));
-        if (!job.units || !ring || !dp->back) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
-        mem = ADASLICE__CAST(unsigned char *, ring);
-        dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
-        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
-        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
-        dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint64_t);
-        dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += dp->cap * sizeof(uint32_t);
-        dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem));
+        ring = adaslice__alloc(&al, 1, need);
+        if (!job.units || !ring) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
+        (void)adaslice_dp_init(&job.dp, ring, need, job.n, job.lo, job.hi, 0, job.volume, 0);
         if (opt.sharp > 0) {
             job.forced = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, 1));
             if (!job.forced) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
@@ -3438,7 +3499,6 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
 done:
     adaslice__free(&al, job.units);
     adaslice__free(&al, ring);
-    adaslice__free(&al, job.dp.back);
     adaslice__free(&al, job.forced);
     adaslice__free(&al, ok);
     adaslice__free(&al, planes);

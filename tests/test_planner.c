@@ -1,11 +1,4 @@
-/* The planner against the paper's worked example and a brute-force reference.
-   This file holds a private (static) copy of the implementation so it can also
-   read the DP's K and D arrays. */
-#if defined(__GNUC__)
-#pragma GCC diagnostic ignored "-Wunused-function"
-#endif
-#define ADASLICE_STATIC
-#define ADASLICE_IMPLEMENTATION
+/* The planner against the paper's worked example and a brute-force reference. */
 #include "../adaslice.h"
 #include "check.h"
 #include <stdlib.h>
@@ -31,25 +24,23 @@ static adaslice_profile fig3_profile(void)
 
 static void fig3_k_and_d_arrays(void)
 {
-    /* the DP in tenths, as integers: K[i] and D[i] straight from the core */
-    static const uint32_t K[9] = {0, ADASLICE__UNREACHED, 1, 1, 2, ADASLICE__UNREACHED, 3, ADASLICE__UNREACHED, 4};
+    /* the integer planner in tenths: K[i] and D[i] as the paper lists them */
+    static const uint32_t K[9] = {0, ADASLICE_UNREACHED, 1, 1, 2, ADASLICE_UNREACHED, 3, ADASLICE_UNREACHED, 4};
     static const int D[9] = {-1, -1, 0, 0, 2, -1, 4, -1, 6};
-    uint64_t prefix[4], first[4], run[4], worst[4];
-    uint32_t layers[4], queue[4];
-    unsigned char back[9];
-    adaslice__dp dp;
+    uint64_t workspace[64];
+    adaslice_dp dp;
     int i;
-    memset(&dp, 0, sizeof dp);
-    dp.lo = 2; dp.hi = 3; dp.cap = 4; dp.eps = 6; dp.width = 1;
-    dp.prefix = prefix; dp.first = first; dp.run = run; dp.worst = worst;
-    dp.layers = layers; dp.queue = queue; dp.back = back;
-    adaslice__dp_start(&dp);
+    CHECK(adaslice_dp_workspace(8, 3, 0) <= sizeof workspace);
+    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0));
+    CHECK(!adaslice_dp_init(&dp, workspace, 8, 8, 2, 3, 6, 0, 0)); /* too little memory */
+    CHECK(!adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 3, 2, 6, 0, 0));
+    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0));
     for (i = 1; i <= 8; i++) {
-        adaslice__dp_push(&dp, (uint64_t)(fig3_phi[i - 1] * 10 + 0.5), 0);
-        CHECKF(dp.layers[i % dp.cap] == K[i], "K[%d] = %u, paper %u", i, dp.layers[i % dp.cap], K[i]);
-        if (K[i] != ADASLICE__UNREACHED)
-            CHECKF((int)(i - adaslice__dp_back(&dp, (uint32_t)i)) == D[i], "D[%d] = %d, paper %d", i,
-                   (int)(i - adaslice__dp_back(&dp, (uint32_t)i)), D[i]);
+        adaslice_dp_push(&dp, (uint64_t)(fig3_phi[i - 1] * 10 + 0.5), 0);
+        CHECKF(adaslice_dp_layers(&dp) == K[i], "K[%d] = %u, paper %u", i, adaslice_dp_layers(&dp), K[i]);
+        if (K[i] != ADASLICE_UNREACHED)
+            CHECKF((int)(i - adaslice_dp_layer_below(&dp, (uint32_t)i)) == D[i], "D[%d] = %d, paper %d", i,
+                   (int)(i - adaslice_dp_layer_below(&dp, (uint32_t)i)), D[i]);
     }
 }
 
@@ -289,6 +280,60 @@ static void baselines_keep_their_constraints(void)
     }
 }
 
+/* Profiles that do not quantise exactly (real numbers): the error of every
+   layer of an optimal plan, summed in double, stays within eps. Volume
+   deviation rounds to nearest and must add a unit per bin to stay safe. */
+static void quantising_never_breaks_eps(void)
+{
+    int trial, over = 0, plans = 0;
+    for (trial = 0; trial < 3000; trial++) {
+        double phi[200];
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        int n = 40 + (int)(rng() % 160), i;
+        size_t k;
+        memset(&p, 0, sizeof p);
+        for (i = 0; i < n; i++) phi[i] = 0.1 + (rng() % 100000) / 7919.0;
+        p.metric = trial % 2 ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        p.bin_count = (size_t)n; p.bin = 0.01 / 3; p.phi = phi; p.height = n * p.bin;
+        memset(&o, 0, sizeof o);
+        o.tmin = 0.02; o.tmax = 0.1; o.sharp = ADASLICE_SHARP_OFF;
+        /* eps just at some layer's error, where rounding decides */
+        o.eps = adaslice_layer_error(&p, 0, 6 + rng() % 20) * (1 + (rng() % 3) * 1e-12);
+        if (adaslice_plan_profile(&p, &o, &plan, NULL) != ADASLICE_OK) continue;
+        plans++;
+        for (k = 0; k < plan.layer_count; k++) over += adaslice_layer_error(&p, plan.planes[k], plan.planes[k + 1]) > o.eps;
+        adaslice_plan_free(&plan);
+    }
+    CHECKF(over == 0 && plans > 1000, "%d layers over eps in %d plans", over, plans);
+}
+
+/* The sharpest case: one layer of two bins whose error is a hair above eps.
+   Rounding either value to the nearest unit may hide the hair, so the
+   planner must refuse it every time. */
+static void rounding_cannot_hide_an_excess(void)
+{
+    int trial, accepted = 0;
+    for (trial = 0; trial < 2000; trial++) {
+        double phi[2];
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        memset(&p, 0, sizeof p);
+        phi[0] = 0;
+        phi[1] = 1 + (rng() % 1000000) / 999983.0;
+        p.metric = trial % 2 ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        p.bin_count = 2; p.bin = 0.01; p.phi = phi; p.height = 0.02;
+        memset(&o, 0, sizeof o);
+        o.tmin = o.tmax = 0.02;
+        o.sharp = ADASLICE_SHARP_OFF;
+        o.eps = adaslice_layer_error(&p, 0, 2) * (1 - 1e-13);
+        if (adaslice_plan_profile(&p, &o, &plan, NULL) == ADASLICE_OK) { accepted++; adaslice_plan_free(&plan); }
+    }
+    CHECKF(accepted == 0, "%d layers over eps accepted", accepted);
+}
+
 static void bad_arguments_are_named(void)
 {
     adaslice_profile p = fig3_profile();
@@ -323,5 +368,7 @@ void test_planner(void)
     RUN(fig3_plan_and_stuck_greedy);
     RUN(optimal_equals_brute_force);
     RUN(baselines_keep_their_constraints);
+    RUN(quantising_never_breaks_eps);
+    RUN(rounding_cannot_hide_an_excess);
     RUN(bad_arguments_are_named);
 }
