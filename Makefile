@@ -3,6 +3,7 @@ CC      ?= gcc
 CLANG   ?= clang
 CXX     ?= g++
 CLANGXX ?= clang++
+ARM_CC  ?= arm-none-eabi-gcc
 WARN     = -Wall -Wextra -Wpedantic -Werror
 CSTD     = -std=c99 $(WARN) -D_POSIX_C_SOURCE=200809L
 CFLAGS  ?= -O2
@@ -63,6 +64,10 @@ compile-checks: | $(B)
 	$(CC) $(CSTD) -DADASLICE_NO_STDIO -c tests/compile/one.c -o $(B)/cc/one_nostdio.o
 	$(CC) $(CSTD) -O2 examples/plan_model.c -o $(B)/plan_model -lm
 	$(CLANG) $(CSTD) -O2 examples/plan_model.c -o $(B)/cc/plan_model_clang -lm
+	$(ARM_CC) -mcpu=cortex-m3 -mthumb -Os -std=c99 $(WARN) -Wno-unused-function -c tests/compile/mcu_planner.c \
+	    -o $(B)/cc/mcu_planner.o
+	arm-none-eabi-size $(B)/cc/mcu_planner.o | awk 'NR == 2 { print "integer planner on a Cortex-M3, N = 12000:", $$1, \
+	    "bytes of code,", $$3, "bytes of RAM"; if ($$3 > 16384) exit 1 }'
 	$(B)/cc/two_tu && $(B)/cc/two_tu_static && $(B)/cc/two_tu_cxx
 	$(B)/plan_model examples/models/hand_closed.obj 88.7 > $(B)/cc/plan_model.out
 	test "$$(wc -l < $(B)/cc/plan_model.out)" -eq 367
