@@ -3545,15 +3545,19 @@ static double adaslice__turn(const double *row, const float *p)
     return row[0] * p[0] + row[1] * p[1] + row[2] * p[2];
 }
 
+/* p turned by r into q (which may be p): the only place a vertex is turned */
+static void adaslice__turn_vertex(const double r[9], const float *p, float *q)
+{
+    float t[3];
+    int k;
+    for (k = 0; k < 3; k++) t[k] = (float)adaslice__turn(r + 3 * k, p);
+    memcpy(q, t, sizeof t);
+}
+
 ADASLICE_DEF void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9])
 {
     size_t v;
-    for (v = 0; v < mesh->vertex_count; v++) {
-        float *p = mesh->vertices + 3 * v, q[3];
-        int k;
-        for (k = 0; k < 3; k++) q[k] = (float)adaslice__turn(r + 3 * k, p);
-        memcpy(p, q, sizeof q);
-    }
+    for (v = 0; v < mesh->vertex_count; v++) adaslice__turn_vertex(r, mesh->vertices + 3 * v, mesh->vertices + 3 * v);
 }
 
 ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)
@@ -3625,10 +3629,8 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
     zrange[0] = DBL_MAX;
     zrange[1] = -DBL_MAX;
     for (v = 0; v < m->vertex_count; v++) {
-        const float *p = m->vertices + 3 * v;
         float *q = turned.vertices + 3 * v;
-        int k;
-        for (k = 0; k < 3; k++) q[k] = (float)adaslice__turn(rot + 3 * k, p);
+        adaslice__turn_vertex(rot, m->vertices + 3 * v, q);
         zrange[0] = o->used[v] && q[2] < zrange[0] ? q[2] : zrange[0];
         zrange[1] = o->used[v] && q[2] > zrange[1] ? q[2] : zrange[1];
     }
