@@ -15,7 +15,7 @@ B        = build
 HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
             host/weights.c host/curvature.c host/saliency_cmd.c
 TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
-            tests/test_saliency.c tests/test_cli_weights.c
+            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c
 HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h tests/failing_alloc.h \
             host/weights.h host/curvature.h tests/cli_run.h
 
@@ -99,7 +99,7 @@ check-models: $(B)/test_models
 $(B)/bench: bench/bench.c bench/timing.h host/png.c adaslice.h host/png.h | $(B)
 	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c host/png.c -o $@ -lm
 
-$(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/maskgen.h | $(B)
+$(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/maskgen.h adaslice.h | $(B)
 	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
 
 $(B)/bench_saliency: bench/bench_saliency.c bench/timing.h adaslice.h | $(B)

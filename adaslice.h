@@ -173,6 +173,11 @@
      ADASLICE_ASSERT(x)       internal invariant checks (assert by default)
      ADASLICE_NO_STDIO        leaves out adaslice_mesh_load_file, the only
                               stdio user
+     ADASLICE_FIRMWARE        the trimmed build for a microcontroller: only
+                              the integer planner (adaslice_dp_*), CRC-32 and
+                              the mask run-length code; no float, libm,
+                              malloc or stdio (implies the two above; asserts
+                              are off unless ADASLICE_ASSERT is defined)
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; 2^32 - 1 vertices.
 */
 #ifndef ADASLICE_H
@@ -195,6 +200,113 @@ extern "C" {
 
 #define ADASLICE_VERSION "0.1.0"
 
+/* ===================================================== the trimmed build */
+/* What a printer's microcontroller needs, and all that ADASLICE_FIRMWARE
+   compiles: the integer planner, CRC-32 and the mask run-length code. No
+   float, no libm, no malloc, no stdio; memset/memcpy from <string.h>. */
+
+/* The integer planner the optimal plan runs on, for callers with their own
+   units and memory (a microcontroller): bins arrive one at a time as integer
+   error units (b * phi rounded up), eps in the same units; it keeps the last
+   tmax/b planes and 1 byte per bin of back-pointer (2 when tmax/b > 255). Among
+   plans with the fewest layers it keeps one with the smallest worst layer. */
+#define ADASLICE_UNREACHED 0xffffffffu
+
+typedef struct adaslice_dp { /* its fields are private */
+    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
+    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
+    uint64_t eps;             /* allowed error per layer, in units */
+    int volume;               /* eq. 20 instead of an additive sum */
+    uint64_t slack;           /* volume: units added per bin for rounding */
+    uint32_t plane;           /* the last plane decided */
+    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
+    uint32_t reach;           /* highest plane any plan reaches */
+    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
+    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
+    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
+    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
+    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
+    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
+    uint32_t head, count;     /* the queue's first slot and length */
+    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
+    unsigned char *back;      /* (planes + 1) * width bytes */
+    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
+} adaslice_dp;
+
+/* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume);
+/* 0 if the workspace (8-byte aligned) is too small or the bounds are wrong
+   (1 <= bins_min <= bins_max <= 65535). volume: eq. 20 instead of sums, with
+   `slack` units added per bin. */
+ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
+                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack);
+/* The next bin; `forced` puts a plane on top of it in every plan (§3.3). */
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
+/* Fewest layers from the bottom to the plane on the last bin pushed, or ADASLICE_UNREACHED. */
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
+/* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
+   or a plane no plan reaches): follow it down from the top to read the plan. */
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
+
+/* CRC-32 (IEEE 802.3, as zlib's crc32 and PNG): crc = adaslice_crc32(0, data, n),
+   and running: adaslice_crc32(crc, more, m). */
+ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
+
+/* MASK RUN-LENGTH CODE: how masks travel to a printer. A mask is `height`
+   rows of `width` pixels, 1 bit per pixel (rows of (width + 7) / 8 bytes,
+   most significant bit first, 1 = lit, padding bits 0) or 8 bits (rows of
+   width bytes). The code is a sequence of row records; every number is a
+   LEB128 varint (7 bits per byte, low bits first, at most 5 bytes, < 2^32):
+       h odd    the previous row again, (h >> 1) + 1 times (before the first
+                row the previous row is dark)
+       h even   a new row of h >> 1 runs covering exactly width pixels:
+                1-bit: a length per run, runs alternating dark, lit, dark...
+                       (only the first may be 0, for a row that starts lit)
+                8-bit: a value byte and a length (>= 1) per run
+   An empty 2560 x 1440 mask is 2 bytes. A decoder checks the CRC-32 of the
+   rows it rebuilt, in the layout above, against the sender's. */
+#define ADASLICE_RLE_OK 0
+#define ADASLICE_RLE_ERR_VARINT 1  /* a number longer than 5 bytes or >= 2^32 */
+#define ADASLICE_RLE_ERR_RUN 2     /* runs that overrun the row, leave it short, or are 0 long */
+#define ADASLICE_RLE_ERR_ROWS 3    /* more rows than the mask has */
+#define ADASLICE_RLE_ERR_ARGUMENT 4
+
+/* Bytes of code an image can need at most. */
+ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits);
+/* Codes an image (rows `stride` bytes apart) into out; returns the bytes
+   written, or 0 if they would exceed `capacity` or the arguments are wrong. */
+ADASLICE_DEF size_t adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width, uint32_t height,
+                                        int bits, unsigned char *out, size_t capacity);
+
+typedef struct adaslice_rle_decoder { /* its fields are private */
+    uint32_t width, height, stride, bits;
+    unsigned char *row;     /* the caller's buffer of stride bytes */
+    uint32_t rows;          /* rows emitted */
+    uint32_t x;             /* pixels of the current row decoded */
+    uint32_t runs;          /* runs left in the current row */
+    uint32_t value;         /* the varint being read */
+    int shift;              /* its bits read so far */
+    int state;              /* what the next varint or byte is */
+    unsigned char pixel;    /* 8-bit: the current run's value; 1-bit: 0 or 1 */
+    uint32_t crc;           /* CRC-32 of the rows emitted */
+    uint32_t offset;        /* bytes consumed; at an error, the byte at fault */
+    int error;
+} adaslice_rle_decoder;
+
+/* 0 unless 1 <= width, height < 2^24, bits is 1 or 8 and row_size holds a row. */
+ADASLICE_DEF int adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height, int bits,
+                                           unsigned char *row, size_t row_size);
+/* Decodes the next `size` bytes of code, calling emit(ctx, y, row) for each
+   finished row, in order. Returns ADASLICE_RLE_OK or the error (sticky; the
+   byte at fault is dec->offset). */
+ADASLICE_DEF int adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                     void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx);
+/* 1 when every row has been emitted and no record is half read. */
+ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec);
+/* CRC-32 of the rows emitted so far. */
+#define ADASLICE_RLE_CRC(dec) ((dec)->crc)
+
+#ifndef ADASLICE_FIRMWARE
 /* ---------------------------------------------------------------- results */
 
 typedef enum adaslice_result {
@@ -406,6 +518,10 @@ typedef struct adaslice_plan_options {
                            Optimal method only. */
     size_t budget;      /* optimal only; 0: none. Otherwise at most this many layers,
                            and eps is replaced by the smallest eps that allows it */
+    uint32_t eps_units; /* optimal, additive metrics, no budget; 0: fine units
+                           (about 2^-40 of the largest layer error). Otherwise
+                           the plan a printer makes from adaslice_plan_units:
+                           eps is exactly this many units (ADASLICE_PRINTER_EPS_UNITS) */
     const adaslice_allocator *allocator;
 } adaslice_plan_options;
 
@@ -433,48 +549,16 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *profi
                                                    adaslice_plan *plan, adaslice_error *error);
 ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan);
 
-/* The integer planner the optimal plan runs on, for callers with their own
-   units and memory (a microcontroller): bins arrive one at a time as integer
-   error units (b * phi rounded up), eps in the same units; it keeps the last
-   tmax/b planes and 1 byte per bin of back-pointer (2 when tmax/b > 255). Among
-   plans with the fewest layers it keeps one with the smallest worst layer. */
-#define ADASLICE_UNREACHED 0xffffffffu
+/* The integers a printer plans on (firmware/PROTOCOL.md): with eps =
+   options->eps_units units, units[i] is b * phi[i] rounded up to whole units
+   and capped at eps_units + 1 (a bin above eps fits no layer either way), and
+   forced[i] = 1 where the §3.3 pre-pass puts a plane on top of bin i. Fed to
+   adaslice_dp (eps = eps_units) they give adaslice_plan_profile's planes
+   with the same options, bit for bit. units and forced hold N entries. */
+#define ADASLICE_PRINTER_EPS_UNITS 1048576u
+ADASLICE_DEF adaslice_result adaslice_plan_units(const adaslice_profile *profile, const adaslice_plan_options *options,
+                                                 uint32_t *units, unsigned char *forced, adaslice_error *error);
 
-typedef struct adaslice_dp { /* its fields are private */
-    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
-    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
-    uint64_t eps;             /* allowed error per layer, in units */
-    int volume;               /* eq. 20 instead of an additive sum */
-    uint64_t slack;           /* volume: units added per bin for rounding */
-    uint32_t plane;           /* the last plane decided */
-    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
-    uint32_t reach;           /* highest plane any plan reaches */
-    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
-    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
-    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
-    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
-    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
-    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
-    uint32_t head, count;     /* the queue's first slot and length */
-    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
-    unsigned char *back;      /* (planes + 1) * width bytes */
-    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
-} adaslice_dp;
-
-/* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
-ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume);
-/* 0 if the workspace (8-byte aligned) is too small or the bounds are wrong
-   (1 <= bins_min <= bins_max <= 65535). volume: eq. 20 instead of sums, with
-   `slack` units added per bin. */
-ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
-                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack);
-/* The next bin; `forced` puts a plane on top of it in every plan (§3.3). */
-ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
-/* Fewest layers from the bottom to the plane on the last bin pushed, or ADASLICE_UNREACHED. */
-ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
-/* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
-   or a plane no plan reaches): follow it down from the top to read the plan. */
-ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
 
 /* Error of the layer holding bins [first, end) under the profile's metric:
    b * sum phi (additive metrics), b * sum |phi[j] - phi[first]| (volume, eq. 20). */
@@ -723,6 +807,8 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
                                                      adaslice_mesh *mesh, adaslice_error *error);
 #endif
 
+#endif /* ADASLICE_FIRMWARE */
+
 #ifdef __cplusplus
 }
 #endif
@@ -736,13 +822,26 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
 #define ADASLICE_IMPLEMENTATION_DONE
 
 #include <string.h>
+#ifdef ADASLICE_FIRMWARE
+#ifndef ADASLICE_NO_MALLOC
+#define ADASLICE_NO_MALLOC
+#endif
+#ifndef ADASLICE_NO_STDIO
+#define ADASLICE_NO_STDIO
+#endif
+#else
 #include <math.h>
 #include <float.h>
 #include <limits.h>
+#endif
 
 #ifndef ADASLICE_ASSERT
+#ifdef ADASLICE_FIRMWARE
+#define ADASLICE_ASSERT(x) ((void)0)
+#else
 #include <assert.h>
 #define ADASLICE_ASSERT(x) assert(x)
+#endif
 #endif
 
 #if !defined(ADASLICE_NO_MALLOC) && !defined(ADASLICE_MALLOC)
@@ -754,14 +853,452 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
 #ifndef ADASLICE_NO_STDIO
 #include <stdio.h>
 #endif
+#ifndef ADASLICE_FIRMWARE
 #include <stdarg.h>
 #include <stdlib.h> /* strtod */
+#endif
 
 #ifdef __cplusplus
 #define ADASLICE__CAST(type, x) static_cast<type>(x)
 #else
 #define ADASLICE__CAST(type, x) ((type)(x))
 #endif
+
+/* ======================================== the trimmed build: the planner */
+/* The optimal plan (§3.3, Procedure 1) runs on integers: each bin's error
+   b*phi[i] is quantised to a count of units q, so prefix sums are exact, plans
+   do not depend on summation order, and a microcontroller fed the same
+   integers makes the same plan. The core is streaming: bins arrive one at a
+   time and only the last tmax/b planes are kept, plus one back-pointer per
+   plane (the bottom layer's length in bins). */
+
+#define ADASLICE__UNREACHED ADASLICE_UNREACHED
+
+
+
+static uint32_t adaslice__dp_queue_at(const adaslice_dp *dp, uint32_t k)
+{
+    return dp->queue[(dp->head + k) & (dp->cap - 1)];
+}
+
+static void adaslice__dp_set_back(adaslice_dp *dp, uint32_t plane, uint32_t len)
+{
+    if (dp->width == 1) dp->back[plane] = (unsigned char)len;
+    else { dp->back[2 * (size_t)plane] = (unsigned char)(len & 255u); dp->back[2 * (size_t)plane + 1] = (unsigned char)(len >> 8); }
+}
+
+static uint32_t adaslice__dp_back(const adaslice_dp *dp, uint32_t plane)
+{
+    if (dp->width == 1) return dp->back[plane];
+    return (uint32_t)dp->back[2 * (size_t)plane] | ((uint32_t)dp->back[2 * (size_t)plane + 1] << 8);
+}
+
+/* Layer from plane l to the current plane: its error in units. */
+static uint64_t adaslice__dp_sum(const adaslice_dp *dp, uint32_t l)
+{
+    return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
+}
+
+static uint64_t adaslice__dp_error(const adaslice_dp *dp, uint32_t l)
+{
+    return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
+}
+
+/* (layers, worst) of plane a is at least that of plane b, lexicographically */
+static int adaslice__dp_no_better(const adaslice_dp *dp, uint32_t a, uint32_t b)
+{
+    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
+    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
+}
+
+static void adaslice__dp_start(adaslice_dp *dp)
+{
+    dp->plane = 0;
+    dp->floor = 0;
+    dp->reach = 0;
+    dp->head = dp->count = dp->scan = 0;
+    dp->prefix[0] = 0;
+    dp->layers[0] = 0;
+    dp->worst[0] = 0;
+    adaslice__dp_set_back(dp, 0, 0);
+}
+
+/* Additive metrics: the feasible predecessors of plane i are a window of
+   planes whose both ends only move up (prefix sums never decrease), so a
+   queue ordered by plane with strictly increasing (layers, worst) holds every
+   candidate that can still win: a newer plane with no more layers and no
+   larger worst error beats an older one for good, its layer being shorter.
+   The front block (fewest layers) has worst[] increasing and layer error
+   decreasing along the queue, so the best max(worst, error) sits where the two
+   cross; `scan` finds that point and only moves forward: O(1) amortised. */
+static void adaslice__dp_choose_additive(adaslice_dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, kf, a, b, pos;
+    uint64_t va, vb;
+    if (i >= dp->lo) {
+        uint32_t l = i - dp->lo;
+        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
+            while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
+            if (dp->scan > dp->count) dp->scan = dp->count;
+            ADASLICE_ASSERT(dp->count < dp->cap);
+            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
+        }
+    }
+    while (dp->count) {
+        uint32_t f = adaslice__dp_queue_at(dp, 0);
+        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
+        dp->head = (dp->head + 1) & (dp->cap - 1);
+        dp->count--;
+        if (dp->scan) dp->scan--;
+    }
+    *best = ADASLICE__UNREACHED;
+    if (!dp->count) return;
+    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
+    while (dp->scan < dp->count) {
+        uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
+        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
+        dp->scan++;
+    }
+    pos = dp->scan;
+    /* candidate before the crossing: its layer error dominates */
+    a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
+    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
+    /* candidate at the crossing: its worst so far dominates */
+    b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
+    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
+    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
+    *best = va <= vb ? a : b;
+}
+
+/* Volume deviation (eq. 20) is not additive: every plane in the window is
+   tried, O(w) per plane. */
+static void adaslice__dp_choose_volume(adaslice_dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, l, start;
+    uint32_t best_k = ADASLICE__UNREACHED;
+    uint64_t best_w = 0;
+    *best = ADASLICE__UNREACHED;
+    if (i < dp->lo) return;
+    start = i > dp->hi ? i - dp->hi : 0;
+    if (start < dp->floor) start = dp->floor;
+    for (l = start; l + dp->lo <= i; l++) {
+        uint32_t k = dp->layers[l & (dp->cap - 1)];
+        uint64_t e = dp->run[l & (dp->cap - 1)], w;
+        if (k == ADASLICE__UNREACHED || e > dp->eps) continue;
+        w = dp->worst[l & (dp->cap - 1)] > e ? dp->worst[l & (dp->cap - 1)] : e;
+        if (k < best_k || (k == best_k && w < best_w)) { best_k = k; best_w = w; *best = l; }
+    }
+}
+
+/* Feeds the next bin's units; decides the plane on top of it. `forced` makes
+   that plane part of every plan (§3.3 sharp changes). */
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced)
+{
+    uint32_t i = dp->plane + 1, best;
+    uint32_t c = dp->cap;
+    dp->plane = i;
+    if (dp->volume) {
+        uint32_t l = i > dp->hi ? i - dp->hi : 0;
+        dp->first[(i - 1) & (c - 1)] = units;
+        dp->run[(i - 1) & (c - 1)] = 0;
+        for (; l < i; l++) {
+            uint64_t f = dp->first[l & (c - 1)];
+            dp->run[l & (c - 1)] += (units > f ? units - f : f - units) + dp->slack;
+        }
+        adaslice__dp_choose_volume(dp, &best);
+    } else {
+        dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
+        adaslice__dp_choose_additive(dp, &best);
+    }
+    if (best == ADASLICE__UNREACHED) {
+        dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;
+        dp->worst[i & (c - 1)] = 0;
+        adaslice__dp_set_back(dp, i, 0);
+    } else {
+        uint64_t e = adaslice__dp_error(dp, best);
+        dp->layers[i & (c - 1)] = dp->layers[best & (c - 1)] + 1;
+        dp->worst[i & (c - 1)] = dp->worst[best & (c - 1)] > e ? dp->worst[best & (c - 1)] : e;
+        adaslice__dp_set_back(dp, i, i - best);
+        dp->reach = i;
+    }
+    if (forced) {
+        dp->floor = i;
+        dp->head = dp->count = dp->scan = 0;
+    }
+}
+
+static uint32_t adaslice__ring_size(uint32_t bins_max)
+{
+    uint32_t cap = 2;
+    while (cap <= bins_max) cap *= 2;
+    return cap;
+}
+
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
+{
+    size_t cap = adaslice__ring_size(bins_max), width = bins_max <= 255 ? 1 : 2;
+    return cap * ((volume ? 4 : 2) * sizeof(uint64_t) + 2 * sizeof(uint32_t)) + width * ((size_t)bins + 1);
+}
+
+ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
+                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack)
+{
+    unsigned char *mem = ADASLICE__CAST(unsigned char *, workspace);
+    uint32_t c;
+    if (!dp || !mem || bins_min < 1 || bins_min > bins_max || bins_max > 65535 || bins > 0x7ffffffeu ||
+        size < adaslice_dp_workspace(bins, bins_max, volume))
+        return 0;
+    memset(dp, 0, sizeof *dp);
+    dp->lo = bins_min;
+    dp->hi = bins_max;
+    dp->cap = c = adaslice__ring_size(bins_max);
+    dp->eps = eps;
+    dp->volume = volume != 0;
+    dp->slack = slack;
+    dp->width = bins_max <= 255 ? 1 : 2;
+    /* the 8-byte arrays first, so they stay aligned */
+    dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    if (volume) {
+        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    }
+    dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->back = mem;
+    adaslice__dp_start(dp);
+    return 1;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
+{
+    return dp->layers[dp->plane & (dp->cap - 1)];
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
+{
+    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
+}
+
+/* ======================================= the trimmed build: CRC-32, masks */
+
+ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size)
+{
+    /* a nibble table: 64 bytes of flash instead of 1 KiB, at half the speed */
+    static const uint32_t nibble[16] = {
+        0x00000000u, 0x1db71064u, 0x3b6e20c8u, 0x26d930acu, 0x76dc4190u, 0x6b6b51f4u, 0x4db26158u, 0x5005713cu,
+        0xedb88320u, 0xf00f9344u, 0xd6d6a3e8u, 0xcb61b38cu, 0x9b64c2b0u, 0x86d3d2d4u, 0xa00ae278u, 0xbdbdf21cu};
+    const unsigned char *p = ADASLICE__CAST(const unsigned char *, data);
+    crc = ~crc;
+    while (size--) {
+        crc ^= *p++;
+        crc = (crc >> 4) ^ nibble[crc & 15u];
+        crc = (crc >> 4) ^ nibble[crc & 15u];
+    }
+    return ~crc;
+}
+
+static size_t adaslice__varint_put(unsigned char *out, uint32_t v)
+{
+    size_t n = 0;
+    while (v >= 0x80u) { out[n++] = (unsigned char)(v | 0x80u); v >>= 7; }
+    out[n++] = (unsigned char)v;
+    return n;
+}
+
+static uint32_t adaslice__rle_stride(uint32_t width, int bits)
+{
+    return bits == 1 ? (width + 7u) / 8u : width;
+}
+
+static int adaslice__rle_pixel(const unsigned char *row, uint32_t x, int bits)
+{
+    return bits == 1 ? (row[x >> 3] >> (7u - (x & 7u))) & 1 : row[x];
+}
+
+ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits)
+{
+    /* the worst row alternates every pixel: a header and, per pixel, a
+       length of 1 byte (plus the value byte at 8 bits) */
+    size_t per_row = 5u + (size_t)width * (bits == 1 ? 1u : 2u) + 1u;
+    return per_row * height;
+}
+
+/* The runs of one row into out (NULL: only counted); returns the runs. */
+static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int bits, unsigned char *out, size_t *size)
+{
+    uint32_t x = 0, runs = 0;
+    int current = 0;
+    size_t n = 0;
+    while (x < width) {
+        uint32_t start = x;
+        if (bits == 8) current = row[x];
+        while (x < width && adaslice__rle_pixel(row, x, bits) == current) x++;
+        if (bits == 8 && out) out[n] = (unsigned char)current;
+        if (bits == 8) n++;
+        if (out) n += adaslice__varint_put(out + n, x - start);
+        else { uint32_t v = x - start; do { n++; v >>= 7; } while (v); }
+        runs++;
+        if (bits == 1) current ^= 1;
+    }
+    *size = n;
+    return runs;
+}
+
+ADASLICE_DEF size_t adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width, uint32_t height,
+                                        int bits, unsigned char *out, size_t capacity)
+{
+    size_t n = 0, row_bytes;
+    uint32_t y = 0, repeat = 0, rs = adaslice__rle_stride(width, bits);
+    const unsigned char *prev = NULL;
+    unsigned char header[5];
+    if (!image || !out || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) ||
+        height >= (1u << 24) || stride < rs)
+        return 0;
+    for (y = 0; y <= height; y++) {
+        const unsigned char *row = y < height ? image + (size_t)y * stride : NULL;
+        int same;
+        if (row && prev) {
+            uint32_t x;
+            same = 1;
+            /* compare pixels, not bytes: 1-bit padding bits may hold anything */
+            for (x = 0; x < width && same; x++)
+                same = adaslice__rle_pixel(row, x, bits) == adaslice__rle_pixel(prev, x, bits);
+        } else if (row) {
+            uint32_t x;
+            same = 1; /* before the first row, the previous row is dark */
+            for (x = 0; x < width && same; x++) same = adaslice__rle_pixel(row, x, bits) == 0;
+        } else {
+            same = 0;
+        }
+        if (same) { repeat++; if (row) prev = row; continue; }
+        if (repeat) {
+            size_t h = adaslice__varint_put(header, ((repeat - 1u) << 1) | 1u);
+            if (capacity - n < h) return 0;
+            memcpy(out + n, header, h); n += h;
+            repeat = 0;
+        }
+        if (!row) break;
+        {
+            uint32_t runs = adaslice__rle_runs(row, width, bits, NULL, &row_bytes);
+            size_t h = adaslice__varint_put(header, runs << 1);
+            if (capacity - n < h + row_bytes) return 0;
+            memcpy(out + n, header, h); n += h;
+            (void)adaslice__rle_runs(row, width, bits, out + n, &row_bytes);
+            n += row_bytes;
+        }
+        prev = row;
+    }
+    return n;
+}
+
+ADASLICE_DEF int adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height, int bits,
+                                           unsigned char *row, size_t row_size)
+{
+    if (!dec) return 0;
+    memset(dec, 0, sizeof *dec);
+    if (!row || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) || height >= (1u << 24) ||
+        row_size < adaslice__rle_stride(width, bits))
+        return 0;
+    dec->width = width;
+    dec->height = height;
+    dec->bits = (uint32_t)bits;
+    dec->stride = adaslice__rle_stride(width, bits);
+    dec->row = row;
+    memset(row, 0, dec->stride);
+    return 1;
+}
+
+enum { ADASLICE__RLE_HEADER = 0, ADASLICE__RLE_VALUE, ADASLICE__RLE_LENGTH };
+
+static void adaslice__rle_fill(adaslice_rle_decoder *dec, uint32_t len)
+{
+    uint32_t x = dec->x, end = x + len;
+    if (dec->bits == 8) { memset(dec->row + x, dec->pixel, len); return; }
+    if (!dec->pixel) return; /* rows start dark */
+    while (x < end && (x & 7u)) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
+    if (end - x >= 8) { memset(dec->row + (x >> 3), 0xff, (end - x) >> 3); x += (end - x) & ~7u; }
+    while (x < end) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
+}
+
+static void adaslice__rle_emit(adaslice_rle_decoder *dec, void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+{
+    dec->crc = adaslice_crc32(dec->crc, dec->row, dec->stride);
+    if (emit) emit(ctx, dec->rows, dec->row);
+    dec->rows++;
+}
+
+/* One whole number read: what it means depends on the state. */
+static int adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t v,
+                                void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+{
+    if (dec->state == ADASLICE__RLE_HEADER) {
+        if (v & 1u) {
+            uint32_t times = (v >> 1) + 1u;
+            if (times > dec->height - dec->rows) return ADASLICE_RLE_ERR_ROWS;
+            while (times--) adaslice__rle_emit(dec, emit, ctx);
+            return ADASLICE_RLE_OK;
+        }
+        if (dec->rows >= dec->height) return ADASLICE_RLE_ERR_ROWS;
+        dec->runs = v >> 1;
+        if (!dec->runs) return ADASLICE_RLE_ERR_RUN;
+        dec->x = 0;
+        dec->pixel = 0;
+        memset(dec->row, 0, dec->stride);
+        dec->state = dec->bits == 8 ? ADASLICE__RLE_VALUE : ADASLICE__RLE_LENGTH;
+        return ADASLICE_RLE_OK;
+    }
+    /* a run's length */
+    if (v > dec->width - dec->x || (v == 0 && (dec->bits == 8 || dec->x > 0 || dec->pixel))) return ADASLICE_RLE_ERR_RUN;
+    adaslice__rle_fill(dec, v);
+    dec->x += v;
+    dec->runs--;
+    if (dec->bits == 1) dec->pixel ^= 1u;
+    if (!dec->runs) {
+        if (dec->x != dec->width) return ADASLICE_RLE_ERR_RUN;
+        adaslice__rle_emit(dec, emit, ctx);
+        dec->state = ADASLICE__RLE_HEADER;
+    } else {
+        if (dec->x == dec->width) return ADASLICE_RLE_ERR_RUN;
+        dec->state = dec->bits == 8 ? ADASLICE__RLE_VALUE : ADASLICE__RLE_LENGTH;
+    }
+    return ADASLICE_RLE_OK;
+}
+
+ADASLICE_DEF int adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                     void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx)
+{
+    size_t i;
+    if (!dec->row) return dec->error = ADASLICE_RLE_ERR_ARGUMENT;
+    for (i = 0; i < size && !dec->error; i++) {
+        unsigned char c = data[i];
+        if (dec->state == ADASLICE__RLE_VALUE) {
+            dec->pixel = c;
+            dec->state = ADASLICE__RLE_LENGTH;
+        } else {
+            /* the fifth byte may carry only the top 4 bits of 32 */
+            if (dec->shift == 28 && (c & 0xf0u)) { dec->error = ADASLICE_RLE_ERR_VARINT; break; }
+            dec->value |= (uint32_t)(c & 0x7fu) << dec->shift;
+            if (c & 0x80u) { dec->shift += 7; dec->offset++; continue; }
+            {
+                uint32_t v = dec->value;
+                dec->value = 0;
+                dec->shift = 0;
+                dec->error = adaslice__rle_number(dec, v, emit, ctx);
+                if (dec->error) break;
+            }
+        }
+        dec->offset++;
+    }
+    return dec->error;
+}
+
+ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec)
+{
+    return !dec->error && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->shift == 0;
+}
+
+#ifndef ADASLICE_FIRMWARE
 
 /* ------------------------------------------------------- results, messages */
 
@@ -2895,168 +3432,6 @@ ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)
 
 
 /* ================================================================= planner */
-/* The optimal plan (§3.3, Procedure 1) runs on integers: each bin's error
-   b*phi[i] is quantised to a count of units q, so prefix sums are exact, plans
-   do not depend on summation order, and a microcontroller fed the same
-   integers makes the same plan. The core is streaming: bins arrive one at a
-   time and only the last tmax/b planes are kept, plus one back-pointer per
-   plane (the bottom layer's length in bins). */
-
-#define ADASLICE__UNREACHED ADASLICE_UNREACHED
-
-
-
-static uint32_t adaslice__dp_queue_at(const adaslice_dp *dp, uint32_t k)
-{
-    return dp->queue[(dp->head + k) & (dp->cap - 1)];
-}
-
-static void adaslice__dp_set_back(adaslice_dp *dp, uint32_t plane, uint32_t len)
-{
-    if (dp->width == 1) dp->back[plane] = (unsigned char)len;
-    else { dp->back[2 * (size_t)plane] = (unsigned char)(len & 255u); dp->back[2 * (size_t)plane + 1] = (unsigned char)(len >> 8); }
-}
-
-static uint32_t adaslice__dp_back(const adaslice_dp *dp, uint32_t plane)
-{
-    if (dp->width == 1) return dp->back[plane];
-    return (uint32_t)dp->back[2 * (size_t)plane] | ((uint32_t)dp->back[2 * (size_t)plane + 1] << 8);
-}
-
-/* Layer from plane l to the current plane: its error in units. */
-static uint64_t adaslice__dp_sum(const adaslice_dp *dp, uint32_t l)
-{
-    return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
-}
-
-static uint64_t adaslice__dp_error(const adaslice_dp *dp, uint32_t l)
-{
-    return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
-}
-
-/* (layers, worst) of plane a is at least that of plane b, lexicographically */
-static int adaslice__dp_no_better(const adaslice_dp *dp, uint32_t a, uint32_t b)
-{
-    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
-    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
-}
-
-static void adaslice__dp_start(adaslice_dp *dp)
-{
-    dp->plane = 0;
-    dp->floor = 0;
-    dp->reach = 0;
-    dp->head = dp->count = dp->scan = 0;
-    dp->prefix[0] = 0;
-    dp->layers[0] = 0;
-    dp->worst[0] = 0;
-    adaslice__dp_set_back(dp, 0, 0);
-}
-
-/* Additive metrics: the feasible predecessors of plane i are a window of
-   planes whose both ends only move up (prefix sums never decrease), so a
-   queue ordered by plane with strictly increasing (layers, worst) holds every
-   candidate that can still win: a newer plane with no more layers and no
-   larger worst error beats an older one for good, its layer being shorter.
-   The front block (fewest layers) has worst[] increasing and layer error
-   decreasing along the queue, so the best max(worst, error) sits where the two
-   cross; `scan` finds that point and only moves forward: O(1) amortised. */
-static void adaslice__dp_choose_additive(adaslice_dp *dp, uint32_t *best)
-{
-    uint32_t i = dp->plane, kf, a, b, pos;
-    uint64_t va, vb;
-    if (i >= dp->lo) {
-        uint32_t l = i - dp->lo;
-        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
-            while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
-            if (dp->scan > dp->count) dp->scan = dp->count;
-            ADASLICE_ASSERT(dp->count < dp->cap);
-            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
-        }
-    }
-    while (dp->count) {
-        uint32_t f = adaslice__dp_queue_at(dp, 0);
-        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
-        dp->head = (dp->head + 1) & (dp->cap - 1);
-        dp->count--;
-        if (dp->scan) dp->scan--;
-    }
-    *best = ADASLICE__UNREACHED;
-    if (!dp->count) return;
-    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
-    while (dp->scan < dp->count) {
-        uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
-        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
-        dp->scan++;
-    }
-    pos = dp->scan;
-    /* candidate before the crossing: its layer error dominates */
-    a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
-    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
-    /* candidate at the crossing: its worst so far dominates */
-    b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
-    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
-    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
-    *best = va <= vb ? a : b;
-}
-
-/* Volume deviation (eq. 20) is not additive: every plane in the window is
-   tried, O(w) per plane. */
-static void adaslice__dp_choose_volume(adaslice_dp *dp, uint32_t *best)
-{
-    uint32_t i = dp->plane, l, start;
-    uint32_t best_k = ADASLICE__UNREACHED;
-    uint64_t best_w = 0;
-    *best = ADASLICE__UNREACHED;
-    if (i < dp->lo) return;
-    start = i > dp->hi ? i - dp->hi : 0;
-    if (start < dp->floor) start = dp->floor;
-    for (l = start; l + dp->lo <= i; l++) {
-        uint32_t k = dp->layers[l & (dp->cap - 1)];
-        uint64_t e = dp->run[l & (dp->cap - 1)], w;
-        if (k == ADASLICE__UNREACHED || e > dp->eps) continue;
-        w = dp->worst[l & (dp->cap - 1)] > e ? dp->worst[l & (dp->cap - 1)] : e;
-        if (k < best_k || (k == best_k && w < best_w)) { best_k = k; best_w = w; *best = l; }
-    }
-}
-
-/* Feeds the next bin's units; decides the plane on top of it. `forced` makes
-   that plane part of every plan (§3.3 sharp changes). */
-ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced)
-{
-    uint32_t i = dp->plane + 1, best;
-    uint32_t c = dp->cap;
-    dp->plane = i;
-    if (dp->volume) {
-        uint32_t l = i > dp->hi ? i - dp->hi : 0;
-        dp->first[(i - 1) & (c - 1)] = units;
-        dp->run[(i - 1) & (c - 1)] = 0;
-        for (; l < i; l++) {
-            uint64_t f = dp->first[l & (c - 1)];
-            dp->run[l & (c - 1)] += (units > f ? units - f : f - units) + dp->slack;
-        }
-        adaslice__dp_choose_volume(dp, &best);
-    } else {
-        dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
-        adaslice__dp_choose_additive(dp, &best);
-    }
-    if (best == ADASLICE__UNREACHED) {
-        dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;
-        dp->worst[i & (c - 1)] = 0;
-        adaslice__dp_set_back(dp, i, 0);
-    } else {
-        uint64_t e = adaslice__dp_error(dp, best);
-        dp->layers[i & (c - 1)] = dp->layers[best & (c - 1)] + 1;
-        dp->worst[i & (c - 1)] = dp->worst[best & (c - 1)] > e ? dp->worst[best & (c - 1)] : e;
-        adaslice__dp_set_back(dp, i, i - best);
-        dp->reach = i;
-    }
-    if (forced) {
-        dp->floor = i;
-        dp->head = dp->count = dp->scan = 0;
-    }
-}
-
 /* ------------------------------------------------- the planner on a profile */
 
 typedef struct adaslice__job {
@@ -3069,59 +3444,6 @@ typedef struct adaslice__job {
     unsigned char *forced;    /* per plane, or NULL */
     adaslice_dp dp;
 } adaslice__job;
-
-static uint32_t adaslice__ring_size(uint32_t bins_max)
-{
-    uint32_t cap = 2;
-    while (cap <= bins_max) cap *= 2;
-    return cap;
-}
-
-ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
-{
-    size_t cap = adaslice__ring_size(bins_max), width = bins_max <= 255 ? 1 : 2;
-    return cap * ((volume ? 4 : 2) * sizeof(uint64_t) + 2 * sizeof(uint32_t)) + width * ((size_t)bins + 1);
-}
-
-ADASLICE_DEF int adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins, uint32_t bins_min,
-                                  uint32_t bins_max, uint64_t eps, int volume, uint64_t slack)
-{
-    unsigned char *mem = ADASLICE__CAST(unsigned char *, workspace);
-    uint32_t c;
-    if (!dp || !mem || bins_min < 1 || bins_min > bins_max || bins_max > 65535 || bins > 0x7ffffffeu ||
-        size < adaslice_dp_workspace(bins, bins_max, volume))
-        return 0;
-    memset(dp, 0, sizeof *dp);
-    dp->lo = bins_min;
-    dp->hi = bins_max;
-    dp->cap = c = adaslice__ring_size(bins_max);
-    dp->eps = eps;
-    dp->volume = volume != 0;
-    dp->slack = slack;
-    dp->width = bins_max <= 255 ? 1 : 2;
-    /* the 8-byte arrays first, so they stay aligned */
-    dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
-    dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
-    if (volume) {
-        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
-        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
-    }
-    dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
-    dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
-    dp->back = mem;
-    adaslice__dp_start(dp);
-    return 1;
-}
-
-ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
-{
-    return dp->layers[dp->plane & (dp->cap - 1)];
-}
-
-ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
-{
-    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
-}
 
 /* Runs the DP with the given eps in units; returns the layer count or
    ADASLICE__UNREACHED. */
@@ -3184,6 +3506,16 @@ static void adaslice__quantise(adaslice__job *job)
     } else {
         for (i = 0; i < job->n; i++) job->units[i] = (uint64_t)ceil(p->phi[i] * per_unit);
     }
+}
+
+/* A printer's units: eps is exactly eps_units of them. Rounded up (with a
+   margin of 2^-40 for the division's rounding) so a plan feasible in units is
+   feasible in mm; capped at eps_units + 1 to keep them small on the wire. */
+static uint32_t adaslice__printer_units(double phi, double bin, double eps, uint32_t eps_units)
+{
+    double x = phi * bin / eps * eps_units;
+    x += x * 0x1p-40;
+    return x >= eps_units + 1.0 ? eps_units + 1u : (uint32_t)ceil(x);
 }
 
 static uint64_t adaslice__eps_units(double eps, double quantum)
@@ -3314,8 +3646,12 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     uint32_t layers, i, k;
     uint32_t *planes;
     adaslice_result r;
-    adaslice__quantise(job);
-    if (opt->budget) {
+    if (opt->eps_units) {
+        for (i = 0; i < job->n; i++) job->units[i] = adaslice__printer_units(p->phi[i], p->bin, eps, opt->eps_units);
+        job->quantum = eps / opt->eps_units;
+        job->slack = 0;
+        eps_units = opt->eps_units;
+    } else if (adaslice__quantise(job), opt->budget) {
         uint32_t budget = opt->budget > 0xfffffffeu ? 0xfffffffeu : (uint32_t)opt->budget;
         eps_units = adaslice__job_min_eps(job, budget);
         if (eps_units == UINT64_MAX) {
@@ -3335,7 +3671,12 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     layers = adaslice__job_run(job, eps_units);
     if (layers == ADASLICE__UNREACHED) {
         uint32_t reach = job->dp.reach;
-        uint64_t need = adaslice__job_min_eps(job, ADASLICE__UNREACHED);
+        uint64_t need;
+        /* printer units are capped above eps: search the smallest eps in fine
+           units, and allow for the printer's coarser rounding */
+        double margin = opt->eps_units ? 1e-6 + (double)job->hi / opt->eps_units : 1e-6;
+        if (opt->eps_units) adaslice__quantise(job);
+        need = adaslice__job_min_eps(job, ADASLICE__UNREACHED);
         if (need == UINT64_MAX) {
             r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
                                "plan: no plan covers the part above z = %g mm for any eps: layers of %u to %u bins "
@@ -3346,7 +3687,7 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
             return r;
         } else {
             /* rounded up so that passing the printed value back succeeds */
-            double min_eps = (double)need * job->quantum * (1 + 1e-6);
+            double min_eps = (double)need * job->quantum * (1 + margin);
             r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
                                "plan: eps %g is too small: no plan covers the part above z = %g mm; "
                                "the smallest feasible eps is %g", eps, reach * p->bin, min_eps);
@@ -3401,6 +3742,39 @@ static adaslice_result adaslice__layer_bins(const adaslice_profile *p, double tm
     return ADASLICE_OK;
 }
 
+/* Defaults and the checks every plan needs. */
+static adaslice_result adaslice__plan_setup(const adaslice_profile *p, const adaslice_plan_options *options,
+                                            adaslice_plan_options *opt, uint32_t *lo, uint32_t *hi, adaslice_error *err)
+{
+    adaslice_result r;
+    size_t i;
+    if (!p || !p->phi || !p->bin_count)
+        return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "plan: the profile is empty");
+    if (options) *opt = *options; else memset(opt, 0, sizeof *opt);
+    if (opt->eps == 0) opt->eps = ADASLICE_DEFAULT_EPS;
+    if (opt->tmin == 0) opt->tmin = ADASLICE_DEFAULT_TMIN;
+    if (opt->tmax == 0) opt->tmax = ADASLICE_DEFAULT_TMAX;
+    if (opt->sharp == 0) opt->sharp = ADASLICE_DEFAULT_SHARP;
+    if (!(opt->eps > 0) || opt->eps > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: eps %g is not a positive number", opt->eps);
+    if ((r = adaslice__layer_bins(p, opt->tmin, opt->tmax, lo, hi, err)) != ADASLICE_OK) return r;
+    if ((unsigned)opt->method > ADASLICE_METHOD_COARSEST)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: unknown method %d", (int)opt->method);
+    if (opt->eps_units && (opt->method != ADASLICE_METHOD_OPTIMAL || opt->budget || p->metric == ADASLICE_METRIC_VOLUME))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: printer units (eps_units) need the optimal method, an additive metric and no budget");
+    if (opt->eps_units && *hi > 255)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: a printer plans layers of at most 255 bins; tmax / bin is %u", (unsigned)*hi);
+    for (i = 0; i < p->bin_count; i++)
+        if (!(p->phi[i] >= 0) || p->phi[i] > DBL_MAX)
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                                  "plan: profile value %g at bin %zu (z = %g mm) is not a finite number >= 0",
+                                  p->phi[i], i, (double)i * p->bin);
+
+    return ADASLICE_OK;
+}
+
 ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, const adaslice_plan_options *options,
                                                    adaslice_plan *plan, adaslice_error *err)
 {
@@ -3408,30 +3782,13 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     adaslice__job job;
     adaslice_allocator al;
     adaslice_result r = ADASLICE_OK;
-    size_t i;
     unsigned char *ok = NULL;
     uint32_t *planes = NULL, count, forced = 0, lo, hi;
     void *ring = NULL;
 
     if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
     memset(plan, 0, sizeof *plan);
-    if (!p || !p->phi || !p->bin_count)
-        return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "plan: the profile is empty");
-    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
-    if (opt.eps == 0) opt.eps = ADASLICE_DEFAULT_EPS;
-    if (opt.tmin == 0) opt.tmin = ADASLICE_DEFAULT_TMIN;
-    if (opt.tmax == 0) opt.tmax = ADASLICE_DEFAULT_TMAX;
-    if (opt.sharp == 0) opt.sharp = ADASLICE_DEFAULT_SHARP;
-    if (!(opt.eps > 0) || opt.eps > DBL_MAX)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: eps %g is not a positive number", opt.eps);
-    if ((r = adaslice__layer_bins(p, opt.tmin, opt.tmax, &lo, &hi, err)) != ADASLICE_OK) return r;
-    if ((unsigned)opt.method > ADASLICE_METHOD_COARSEST)
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: unknown method %d", (int)opt.method);
-    for (i = 0; i < p->bin_count; i++)
-        if (!(p->phi[i] >= 0) || p->phi[i] > DBL_MAX)
-            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                                  "plan: profile value %g at bin %zu (z = %g mm) is not a finite number >= 0",
-                                  p->phi[i], i, (double)i * p->bin);
+    if ((r = adaslice__plan_setup(p, options, &opt, &lo, &hi, err)) != ADASLICE_OK) return r;
 
     memset(&job, 0, sizeof job);
     job.profile = p;
@@ -3506,6 +3863,39 @@ done:
         adaslice_plan_free(plan);
         return r;
     }
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_plan_units(const adaslice_profile *p, const adaslice_plan_options *options,
+                                                 uint32_t *units, unsigned char *forced, adaslice_error *err)
+{
+    adaslice_plan_options opt;
+    adaslice_allocator al;
+    adaslice_result r;
+    unsigned char *ok, *planes;
+    uint32_t lo, hi, i, n;
+    if ((r = adaslice__plan_setup(p, options, &opt, &lo, &hi, err)) != ADASLICE_OK) return r;
+    if (!opt.eps_units || !units || !forced)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan units: need eps_units and the two outputs");
+    n = (uint32_t)p->bin_count;
+    for (i = 0; i < n; i++) units[i] = adaslice__printer_units(p->phi[i], p->bin, opt.eps, opt.eps_units);
+    memset(forced, 0, n);
+    if (!(opt.sharp > 0)) { adaslice__ok(err); return ADASLICE_OK; }
+    al = adaslice__allocator(opt.allocator);
+    ok = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)n + 1, 1));
+    planes = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)n + 1, 1));
+    if (!ok || !planes) {
+        adaslice__free(&al, ok);
+        adaslice__free(&al, planes);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan units: out of memory");
+    }
+    adaslice__tileable(ok, n, lo, hi);
+    (void)adaslice__sharp_planes(p, n, opt.sharp, ok, planes);
+    /* the plane on top of bin i is plane i + 1; the top plane is never forced */
+    for (i = 0; i + 1 < n; i++) forced[i] = planes[i + 1];
+    adaslice__free(&al, ok);
+    adaslice__free(&al, planes);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
@@ -5215,6 +5605,7 @@ done:
     return ADASLICE_OK;
 }
 
+#endif /* ADASLICE_FIRMWARE */
 #endif /* ADASLICE_IMPLEMENTATION_DONE */
 #endif /* ADASLICE_IMPLEMENTATION */
 

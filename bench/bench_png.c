@@ -2,6 +2,8 @@
    tests/maskgen.h) at 2560x1440 and 3840x2400, 1-bit and anti-aliased 8-bit.
    Only png_encode_gray is timed; prints medians over the layers.
    usage: bench_png [layers per size, default 300] */
+#define ADASLICE_IMPLEMENTATION
+#include "../adaslice.h"
 #include "../host/png.h"
 #include "../tests/maskgen.h"
 #include <stdio.h>

@@ -10,24 +10,9 @@
    symbols is then coded as the smallest of dynamic Huffman (code lengths
    limited to 15 bits by package-merge), fixed Huffman or stored. */
 #include "png.h"
+#include "../adaslice.h"
 #include <stdlib.h>
 #include <string.h>
-
-uint32_t png_crc32(uint32_t crc, const void *data, size_t size)
-{
-    /* A table of 256 takes about 2k steps to build: cheaper to redo per call
-       than to share state between threads. */
-    uint32_t table[256];
-    const unsigned char *p = (const unsigned char *)data;
-    for (uint32_t i = 0; i < 256; i++) {
-        uint32_t c = i;
-        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        table[i] = c;
-    }
-    crc = ~crc;
-    while (size--) crc = table[(crc ^ *p++) & 0xff] ^ (crc >> 8);
-    return ~crc;
-}
 
 uint32_t png_adler32(uint32_t adler, const void *data, size_t size)
 {
@@ -499,7 +484,7 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     put_be32(d.out + 20, (uint32_t)height);
     d.out[24] = (unsigned char)bits;
     memset(d.out + 25, 0, 4); /* grayscale, deflate, adaptive filters, no interlace */
-    put_be32(d.out + 29, png_crc32(0, d.out + 12, 17));
+    put_be32(d.out + 29, adaslice_crc32(0, d.out + 12, 17));
     memcpy(d.out + 37, "IDAT", 4);
     d.out[41] = 0x78; /* deflate, 32K window; 0x7801 is a multiple of 31 */
     d.out[42] = 0x01;
@@ -509,11 +494,11 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
     put_be32(d.out + d.size, png_adler32(1, filtered, d.n));
     d.size += 4;
     put_be32(d.out + 33, (uint32_t)(d.size - head));
-    put_be32(d.out + d.size, png_crc32(0, d.out + 37, d.size - 37));
+    put_be32(d.out + d.size, adaslice_crc32(0, d.out + 37, d.size - 37));
     d.size += 4;
     put_be32(d.out + d.size, 0);
     memcpy(d.out + d.size + 4, "IEND", 4);
-    put_be32(d.out + d.size + 8, png_crc32(0, "IEND", 4));
+    put_be32(d.out + d.size + 8, adaslice_crc32(0, "IEND", 4));
     d.size += 12;
 
     *out = (unsigned char *)realloc(d.out, d.size); /* give back the spare room */

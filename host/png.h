@@ -15,10 +15,8 @@
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
                     unsigned char **out, size_t *out_size);
 
-/* Running checksums as PNG and zlib use them: crc = png_crc32(0, data, n)
-   (CRC-32, IEEE polynomial); adler = png_adler32(1, data, n) (Adler-32).
-   Feeding the result back in continues the checksum over more data. */
-uint32_t png_crc32(uint32_t crc, const void *data, size_t size);
+/* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
+   result back in continues it over more data. (CRC-32 is adaslice_crc32.) */
 uint32_t png_adler32(uint32_t adler, const void *data, size_t size);
 
 #endif

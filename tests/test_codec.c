@@ -1,0 +1,268 @@
+/* The trimmed build's parts the host shares with the printer: CRC-32, the
+   mask run-length code, and the integers a printer plans on. */
+#include "../adaslice.h"
+#include "check.h"
+#include "maskgen.h"
+#include <stdlib.h>
+#include <string.h>
+
+static unsigned codec_rng_state = 777u;
+static unsigned codec_rng(void) { codec_rng_state = codec_rng_state * 1103515245u + 12345u; return (codec_rng_state >> 8) & 0xffffffu; }
+
+static void crc32_known_values(void)
+{
+    unsigned char zeros[32] = {0};
+    CHECK(adaslice_crc32(0, "123456789", 9) == 0xCBF43926u);
+    CHECK(adaslice_crc32(0, "", 0) == 0);
+    CHECK(adaslice_crc32(adaslice_crc32(0, "1234", 4), "56789", 5) == 0xCBF43926u);
+    CHECK(adaslice_crc32(0, zeros, sizeof zeros) == 0x190A55ADu);
+    CHECK(adaslice_crc32(0, "The quick brown fox jumps over the lazy dog", 43) == 0x414FA339u);
+}
+
+/* An independent reader of the code, written from the format's description
+   as a whole-buffer parser, to check the streaming decoder against. */
+static int reference_decode(const unsigned char *code, size_t size, uint32_t w, uint32_t h, int bits,
+                            unsigned char *image, size_t stride)
+{
+    size_t at = 0;
+    uint32_t rows = 0;
+    memset(image, 0, stride * h);
+    while (at < size) {
+        uint64_t v = 0;
+        int s = 0;
+        do { if (at >= size || s > 28) return 0; v |= (uint64_t)(code[at] & 127) << s; s += 7; } while (code[at++] & 128);
+        if (v & 1) {
+            uint64_t t = (v >> 1) + 1;
+            for (; t; t--, rows++) {
+                if (rows >= h) return 0;
+                if (rows) memcpy(image + rows * stride, image + (rows - 1) * stride, stride);
+            }
+        } else {
+            uint64_t runs = v >> 1, x = 0;
+            int lit = 0;
+            if (rows >= h || !runs) return 0;
+            while (runs--) {
+                unsigned value = 0;
+                uint64_t len = 0;
+                if (bits == 8) { if (at >= size) return 0; value = code[at++]; }
+                s = 0;
+                do { if (at >= size || s > 28) return 0; len |= (uint64_t)(code[at] & 127) << s; s += 7; } while (code[at++] & 128);
+                if (x + len > w) return 0;
+                for (uint64_t i = x; i < x + len; i++) {
+                    if (bits == 8) image[rows * stride + i] = (unsigned char)value;
+                    else if (lit) image[rows * stride + i / 8] |= (unsigned char)(0x80 >> (i % 8));
+                }
+                x += len;
+                lit = !lit;
+            }
+            if (x != w) return 0;
+            rows++;
+        }
+    }
+    return rows == h;
+}
+
+typedef struct collected { unsigned char *image; size_t stride; uint32_t next; int out_of_order; } collected;
+
+static void collect_row(void *ctx, uint32_t y, const unsigned char *row)
+{
+    collected *c = (collected *)ctx;
+    if (y != c->next) c->out_of_order = 1;
+    memcpy(c->image + (size_t)y * c->stride, row, c->stride);
+    c->next = y + 1;
+}
+
+/* Masks of every kind (synthetic scenes, noise, full, empty, odd widths,
+   garbage in 1-bit padding) round-trip through the encoder and the streaming
+   decoder fed in random pieces, and both agree with the reference reader. */
+static void masks_round_trip(void)
+{
+    int trial, failures = 0;
+    for (trial = 0; trial < 120; trial++) {
+        int bits = trial % 3 == 2 ? 8 : 1;
+        uint32_t w = 1 + codec_rng() % 300, h = 1 + codec_rng() % 120, x, y;
+        size_t stride = bits == 1 ? (w + 7) / 8 : w, cap = adaslice_rle_bound(w, h, bits), n, at;
+        size_t in_stride = stride + trial % 3;
+        unsigned char *grey = (unsigned char *)calloc((size_t)w * h, 1);
+        unsigned char *image = (unsigned char *)calloc(in_stride * h, 1);
+        unsigned char *clean = (unsigned char *)calloc(stride * h, 1);
+        unsigned char *code = (unsigned char *)malloc(cap);
+        unsigned char *back = (unsigned char *)calloc(stride * h, 1);
+        unsigned char *ref = (unsigned char *)calloc(stride * h, 1);
+        unsigned char row[400];
+        adaslice_rle_decoder dec;
+        collected c;
+        int kind = trial % 5;
+        if (kind == 0) mask_scene(grey, (int)w, (int)h, trial);
+        for (y = 0; y < h; y++)
+            for (x = 0; x < w; x++) {
+                unsigned char *g = grey + (size_t)y * w + x;
+                if (kind == 1) *g = (unsigned char)(codec_rng() % 4 == 0 ? 255 : 0);
+                if (kind == 2) *g = 255;
+                if (kind == 3) *g = (unsigned char)(codec_rng() % 7 == 0 ? codec_rng() : 0);
+                if (kind == 4 && (y / 5) % 3 == 0 && x > w / 3) *g = 200;
+            }
+        if (bits == 1) mask_pack(grey, (int)w, (int)h, clean, stride);
+        for (y = 0; y < h; y++) {
+            if (bits == 8) { memcpy(image + y * in_stride, grey + (size_t)y * w, w); memcpy(clean + y * stride, grey + (size_t)y * w, w); continue; }
+            memcpy(image + y * in_stride, clean + y * stride, stride);
+            /* the encoder must ignore padding bits and bytes */
+            if (w % 8) image[y * in_stride + stride - 1] |= (unsigned char)(0xff >> (w % 8));
+            for (x = (uint32_t)stride; x < in_stride; x++) image[y * in_stride + x] = 0xa5;
+        }
+        n = adaslice_rle_encode(image, in_stride, w, h, bits, code, cap);
+        CHECKF(n > 0 && n <= cap, "trial %d: encoded %zu of bound %zu", trial, n, cap);
+        CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, n - 1) == 0 || n == 0);
+        n = adaslice_rle_encode(image, in_stride, w, h, bits, code, cap);
+        CHECK(adaslice_rle_decoder_init(&dec, w, h, bits, row, sizeof row));
+        c.image = back; c.stride = stride; c.next = 0; c.out_of_order = 0;
+        for (at = 0; at < n;) {
+            size_t piece = 1 + codec_rng() % 17;
+            if (piece > n - at) piece = n - at;
+            CHECK(adaslice_rle_decode(&dec, code + at, piece, collect_row, &c) == ADASLICE_RLE_OK);
+            at += piece;
+        }
+        CHECK(adaslice_rle_finished(&dec) && !c.out_of_order);
+        CHECK(reference_decode(code, n, w, h, bits, ref, stride));
+        if (memcmp(back, clean, stride * h) || memcmp(ref, clean, stride * h)) failures++;
+        CHECK(ADASLICE_RLE_CRC(&dec) == adaslice_crc32(0, clean, stride * h));
+        free(grey); free(image); free(clean); free(code); free(back); free(ref);
+    }
+    CHECKF(failures == 0, "%d masks did not survive the round trip", failures);
+}
+
+static void empty_and_full_masks_are_tiny(void)
+{
+    static unsigned char image[1440][320];
+    unsigned char code[64];
+    memset(image, 0, sizeof image);
+    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code) == 2);
+    memset(image, 0xff, sizeof image);
+    /* a new row: header, a 0 dark run and a lit run of 2560 (2 bytes); then a repeat */
+    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code) == 1 + 1 + 2 + 2);
+}
+
+static int decode_all(const unsigned char *code, size_t n, uint32_t w, uint32_t h, int bits, adaslice_rle_decoder *dec)
+{
+    static unsigned char row[64];
+    CHECK(adaslice_rle_decoder_init(dec, w, h, bits, row, sizeof row));
+    return adaslice_rle_decode(dec, code, n, NULL, NULL);
+}
+
+/* Every malformed input is refused with its class and the byte at fault. */
+static void malformed_code_is_refused(void)
+{
+    adaslice_rle_decoder dec;
+    unsigned char row[8];
+    static const unsigned char too_long[] = {0x80, 0x80, 0x80, 0x80, 0x10};
+    static const unsigned char overrun[] = {0x04, 0x03, 0x06};      /* 2 runs: 3 + 6 > 8 */
+    static const unsigned char short_row[] = {0x02, 0x05};           /* 1 run of 5 < 8 */
+    static const unsigned char zero_run[] = {0x06, 0x02, 0x00, 0x06}; /* a 0 run after the first */
+    static const unsigned char too_many[] = {0x02, 0x08, 0x03};      /* 1 row, then 2 repeats of 2 rows */
+    static const unsigned char zero_runs[] = {0x00};
+    static const unsigned char grey_zero[] = {0x02, 0x7f, 0x00};
+    CHECK(decode_all(too_long, sizeof too_long, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_VARINT && dec.offset == 4);
+    CHECK(decode_all(overrun, sizeof overrun, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
+    CHECK(decode_all(short_row, sizeof short_row, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 1);
+    CHECK(decode_all(zero_run, sizeof zero_run, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
+    CHECK(decode_all(too_many, sizeof too_many, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_ROWS && dec.offset == 2);
+    CHECK(decode_all(zero_runs, sizeof zero_runs, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 0);
+    CHECK(decode_all(grey_zero, sizeof grey_zero, 8, 2, 8, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
+    /* the error sticks; a truncated code is not finished */
+    CHECK(adaslice_rle_decode(&dec, zero_runs, 0, NULL, NULL) == ADASLICE_RLE_ERR_RUN && !adaslice_rle_finished(&dec));
+    CHECK(decode_all(short_row, 1, 8, 2, 1, &dec) == ADASLICE_RLE_OK && !adaslice_rle_finished(&dec));
+    CHECK(!adaslice_rle_decoder_init(&dec, 8, 2, 4, row, sizeof row));
+    CHECK(!adaslice_rle_decoder_init(&dec, 100, 2, 1, row, sizeof row));
+    CHECK(!adaslice_rle_decoder_init(&dec, 0, 2, 1, row, sizeof row));
+}
+
+/* A printer's integers planned by adaslice_dp give adaslice_plan_profile's
+   planes with the same options, bit for bit, with and without the pre-pass;
+   and such a plan never exceeds eps in mm. */
+static void printer_units_plan_like_the_tool(void)
+{
+    static uint64_t workspace[4096];
+    int trial, mismatches = 0, over = 0, plans = 0, infeasible = 0;
+    for (trial = 0; trial < 3000; trial++) {
+        double phi[600];
+        uint32_t units[600];
+        unsigned char forced[600];
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        adaslice_dp dp;
+        int n = 30 + (int)(codec_rng() % 560), i;
+        memset(&p, 0, sizeof p);
+        for (i = 0; i < n; i++) phi[i] = (codec_rng() % 50 == 0) ? 3.0 + (codec_rng() % 100) / 10.0 : 0.05 + (codec_rng() % 100000) / 99991.0;
+        p.metric = trial % 3 == 0 ? ADASLICE_METRIC_ROUGHNESS : ADASLICE_METRIC_CUSP;
+        p.bin_count = (size_t)n; p.bin = 0.002; p.phi = phi; p.height = n * p.bin;
+        memset(&o, 0, sizeof o);
+        o.eps_units = ADASLICE_PRINTER_EPS_UNITS;
+        o.eps = 0.02 + (codec_rng() % 100) / 1000.0;
+        o.sharp = trial % 2 ? ADASLICE_SHARP_OFF : 1.5;
+        CHECK(adaslice_plan_units(&p, &o, units, forced, NULL) == ADASLICE_OK);
+        CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, (uint32_t)n, 25, 75, o.eps_units, 0, 0));
+        for (i = 0; i < n; i++) adaslice_dp_push(&dp, units[i], forced[i]);
+        if (adaslice_plan_profile(&p, &o, &plan, NULL) != ADASLICE_OK) {
+            infeasible++;
+            if (adaslice_dp_layers(&dp) != ADASLICE_UNREACHED) mismatches++;
+            continue;
+        }
+        plans++;
+        if (adaslice_dp_layers(&dp) != plan.layer_count) mismatches++;
+        else {
+            uint32_t at = (uint32_t)n;
+            size_t k;
+            for (k = plan.layer_count; k > 0; k--) {
+                if (plan.planes[k] != at) { mismatches++; break; }
+                at -= adaslice_dp_layer_below(&dp, at);
+            }
+        }
+        {
+            size_t k;
+            for (k = 0; k < plan.layer_count; k++) over += adaslice_layer_error(&p, plan.planes[k], plan.planes[k + 1]) > o.eps;
+        }
+        adaslice_plan_free(&plan);
+    }
+    CHECKF(mismatches == 0 && over == 0 && plans > 1000 && infeasible > 10,
+           "%d mismatches, %d layers over eps, %d plans, %d infeasible", mismatches, over, plans, infeasible);
+}
+
+static void printer_units_refuse_what_a_printer_cannot_plan(void)
+{
+    double phi[100];
+    uint32_t units[100];
+    unsigned char forced[100];
+    adaslice_profile p;
+    adaslice_plan_options o;
+    adaslice_plan plan;
+    adaslice_error e;
+    int i;
+    for (i = 0; i < 100; i++) phi[i] = 1;
+    memset(&p, 0, sizeof p);
+    p.metric = ADASLICE_METRIC_VOLUME; p.bin_count = 100; p.bin = 0.002; p.phi = phi; p.height = 0.2;
+    memset(&o, 0, sizeof o);
+    o.eps_units = ADASLICE_PRINTER_EPS_UNITS;
+    CHECK(adaslice_plan_units(&p, &o, units, forced, &e) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "additive"));
+    p.metric = ADASLICE_METRIC_CUSP;
+    o.tmax = 0.6; /* 300 bins per layer */
+    CHECK(adaslice_plan_units(&p, &o, units, forced, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "255"));
+    o.tmax = 0; o.budget = 3;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_ARGUMENT);
+    o.budget = 0; o.eps = 0.01; /* 25 bins of 0.002 mm at phi 1 exceed 0.01: infeasible, and the message says what works */
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_INFEASIBLE && e.min_eps > 0.05);
+    o.eps = e.min_eps;
+    CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_OK);
+    if (e.result == ADASLICE_OK) adaslice_plan_free(&plan);
+}
+
+void test_codec(void)
+{
+    RUN(crc32_known_values);
+    RUN(masks_round_trip);
+    RUN(empty_and_full_masks_are_tiny);
+    RUN(malformed_code_is_refused);
+    RUN(printer_units_plan_like_the_tool);
+    RUN(printer_units_refuse_what_a_printer_cannot_plan);
+}
