@@ -9,15 +9,20 @@ CSTD     = -std=c99 $(WARN) -D_POSIX_C_SOURCE=200809L
 CFLAGS  ?= -O2
 SAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 MODELS  ?= ../shared/models
-FUZZ_SECONDS ?= 20
+FUZZ_SECONDS ?= 15
 B        = build
 
-HOST_SRC  = host/adaslice.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
+FW_TEST_SRC = firmware/core.c firmware/motion.c firmware/gcode.c firmware/link.c
+HOST_SRC  = host/adaslice.c host/print.c firmware/link.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
             host/weights.c host/curvature.c host/saliency_cmd.c
 TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
-            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c
+            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c tests/test_motion.c tests/test_gcode.c \
+            tests/test_firmware.c tests/test_print.c $(FW_TEST_SRC)
 HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h tests/failing_alloc.h \
-            host/weights.h host/curvature.h tests/cli_run.h
+            host/weights.h host/curvature.h tests/cli_run.h tests/zcheck.h tests/fakeport.h \
+            firmware/fw.h firmware/motion.h firmware/gcode.h firmware/link.h firmware/protocol.h
+
+include firmware/firmware.mk
 
 .PHONY: all demo check check-models bench compile-checks fuzz clean
 
@@ -74,18 +79,32 @@ compile-checks: | $(B)
 	sed -n '/^```c$$/,/^```$$/p' README.md | sed '1d;$$d' | diff - examples/plan_model.c
 	@echo "compile checks: ok"
 
+FUZZ = $(CLANG) -std=c99 $(WARN) -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+
 $(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h | $(B)
-	$(CLANG) -std=c99 $(WARN) -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-	    tests/fuzz_loaders.c -o $@ -lm
+	$(FUZZ) tests/fuzz_loaders.c -o $@ -lm
 
-# A bounded libFuzzer run over the loaders; new inputs go to build/, not the repo.
-fuzz: $(B)/fuzz_loaders
-	mkdir -p $(B)/fuzz_work
-	$(B)/fuzz_loaders -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -max_len=4096 \
-	    -print_final_stats=1 $(B)/fuzz_work tests/fuzz_corpus > $(B)/fuzz.log 2>&1; \
-	    status=$$?; tail -n 12 $(B)/fuzz.log; exit $$status
+$(B)/fuzz_gcode: tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c $(FW_HDRS) | $(B)
+	$(FUZZ) tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c -o $@
 
-check: compile-checks fuzz $(B)/san/adaslice $(B)/san/run_tests
+$(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_CORE_SRC) $(FW_HDRS) | $(B)
+	$(FUZZ) tests/fuzz_firmware.c $(FW_CORE_SRC) -o $@ -lm
+
+# Bounded libFuzzer runs over the loaders, the G-code reader and the
+# firmware's frames and messages; new inputs go to build/, not the repo.
+fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
+	@for t in loaders gcode firmware; do \
+	    mkdir -p $(B)/fuzz_work/$$t; \
+	    $(B)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -max_len=4096 \
+	        -print_final_stats=1 $(B)/fuzz_work/$$t tests/fuzz_seeds/$$t > $(B)/fuzz_$$t.log 2>&1; \
+	    status=$$?; echo "fuzz $$t:"; tail -n 12 $(B)/fuzz_$$t.log | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY"; \
+	    if [ $$status -ne 0 ]; then tail -n 40 $(B)/fuzz_$$t.log; exit $$status; fi; \
+	done
+
+$(B)/relay: tests/relay.c | $(B)
+	$(CC) -std=c99 $(WARN) -O2 tests/relay.c -o $@
+
+check: compile-checks fuzz $(B)/san/adaslice $(B)/san/run_tests $(B)/fw-sim $(B)/relay
 	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 
 # --- the shared models (not in the repository) ---------------------------

@@ -247,6 +247,13 @@ ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
 /* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
    or a plane no plan reaches): follow it down from the top to read the plan. */
 ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
+/* When the last bin is in: turns the best plan around in place, so it reads
+   bottom-up with adaslice_dp_layer_above (no pushes after this). Returns the
+   layer count, or ADASLICE_UNREACHED (nothing changes). */
+ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp);
+/* After adaslice_dp_reverse: the bins of the layer whose bottom is `plane`
+   (0 for the top plane or a plane not in the plan). */
+ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane);
 
 /* CRC-32 (IEEE 802.3, as zlib's crc32 and PNG): crc = adaslice_crc32(0, data, n),
    and running: adaslice_crc32(crc, more, m). */
@@ -1076,6 +1083,36 @@ ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
 }
 
 ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
+{
+    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp)
+{
+    uint32_t layers = adaslice_dp_layers(dp), at = dp->plane, above = 0;
+    if (layers == ADASLICE__UNREACHED) return layers;
+    /* planes off the plan keep stale values: clear them so they read 0 */
+    {
+        uint32_t plane = dp->plane, next = dp->plane;
+        for (;;) {
+            uint32_t len = adaslice__dp_back(dp, plane);
+            if (plane == next) next = plane - len;
+            else adaslice__dp_set_back(dp, plane, 0);
+            if (!plane) break;
+            plane--;
+        }
+    }
+    while (at) {
+        uint32_t len = adaslice__dp_back(dp, at);
+        adaslice__dp_set_back(dp, at, above);
+        above = len;
+        at -= len;
+    }
+    adaslice__dp_set_back(dp, 0, above);
+    return layers;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane)
 {
     return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
 }
@@ -3514,7 +3551,7 @@ static void adaslice__quantise(adaslice__job *job)
 static uint32_t adaslice__printer_units(double phi, double bin, double eps, uint32_t eps_units)
 {
     double x = phi * bin / eps * eps_units;
-    x += x * 0x1p-40;
+    x += x * (1.0 / 1099511627776.0);
     return x >= eps_units + 1.0 ? eps_units + 1u : (uint32_t)ceil(x);
 }
 

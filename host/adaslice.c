@@ -461,6 +461,7 @@ void plan_options_of(const plan_args *a, adaslice_method method, adaslice_plan_o
     o->tmax = a->tmax;
     o->sharp = a->sharp > 0 ? a->sharp : ADASLICE_SHARP_OFF;
     o->budget = method == ADASLICE_METHOD_OPTIMAL ? a->budget : 0;
+    o->eps_units = method == ADASLICE_METHOD_OPTIMAL ? a->eps_units : 0;
 }
 
 static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_method method)
@@ -724,6 +725,7 @@ static const command COMMANDS[] = {
     {"slice", "plan a model and write its layer masks as a printable job", cmd_slice},
     {"orient", "search the build directions for the fewest layers and least error", cmd_orient},
     {"saliency", "per-face weights from mesh saliency, and the mesh coloured by them", cmd_saliency},
+    {"print", "print a model or a job on a printer running the adaslice firmware", cmd_print},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

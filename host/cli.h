@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include "../adaslice.h"
 #include "weights.h"
+#include "printer.h"
 
 enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
 enum { METRIC_COUNT = 4, METHOD_COUNT = 5 };
@@ -38,6 +39,7 @@ typedef struct plan_args {
     double scale;                  /* 0: not given */
     double sharp;                  /* 0: pre-pass off */
     size_t budget;                 /* 0: none */
+    uint32_t eps_units;            /* printer units for the optimal plan (print), 0: fine */
     int sampler;                   /* 0: exact, 1: LDI */
     size_t resolution;             /* LDI pixels across the largest extent */
     const char *orient;            /* --orient best|X,Y,Z, or NULL */
@@ -76,7 +78,44 @@ int run_plan(const plan_args *a, plan_job *j);
 int write_outputs(const plan_args *a, const plan_job *j);
 void job_free(plan_job *j);
 
+typedef struct slice_args {
+    const char *dir;
+    const printer *preset;       /* or the three below */
+    int width, height;
+    double pitch;
+    int supersample;             /* --aa S; 1: 1-bit masks */
+    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
+    int placed;                  /* --place X,Y given */
+    double place[2];             /* the part's centre, mm from the plate's centre */
+    int mirror_x, mirror_y;
+    int rotate;                  /* quarter turns of the image, counter-clockwise */
+    double display[2];           /* --display WxH in mm, or 0 */
+    int svg;                     /* also the contours of each layer as SVG */
+    int geometry_given;          /* --printer, --pixels, --pitch or --display */
+} slice_args;
+/* Takes the slice options out of argv; what is left (argv[0] first) goes to
+   parse_plan. need_dir: -o JOBDIR is required. -1 after --help. */
+int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir);
+void slice_options_usage(FILE *f);
+
+/* Layer masks as the display shows them, rendered bottom-up in one sweep. */
+typedef struct layer_masks {
+    const slice_args *s;
+    const plan_job *j;
+    adaslice_masker masker;
+    adaslice_grid grid;
+    unsigned char *image;          /* width x height, rows of `stride` bytes */
+    size_t stride;
+    int width, height, bits;
+    double part[3];                /* the part's size, mm */
+} layer_masks;
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
+/* Layer k's (0-based; k never decreasing) mask into m->image. */
+int layer_masks_render(layer_masks *m, size_t k);
+void layer_masks_close(layer_masks *m);
+
 int cmd_slice(int argc, char **argv);
+int cmd_print(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
 int cmd_saliency(int argc, char **argv);
 /* The library's plan options for method m from the command line's. */

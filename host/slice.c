@@ -16,36 +16,15 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-typedef struct slice_args {
-    const char *dir;
-    const printer *preset;       /* or the three below */
-    int width, height;
-    double pitch;
-    int supersample;             /* --aa S; 1: 1-bit masks */
-    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
-    int placed;                  /* --place X,Y given */
-    double place[2];             /* the part's centre, mm from the plate's centre */
-    int mirror_x, mirror_y;
-    int rotate;                  /* quarter turns of the image, counter-clockwise */
-    double display[2];           /* --display WxH in mm, or 0 */
-    int svg;                     /* also the contours of each layer as SVG */
-} slice_args;
 
 static const char *const SLICE_AT[] = {"bottom", "middle", "top"};
 static const char *const MIRRORS[] = {"none", "x", "y", "xy"};
 static const char *const ROTATIONS[] = {"0", "90", "180", "270"};
 
-static void slice_usage(FILE *f)
+void slice_options_usage(FILE *f)
 {
     int i;
-    fputs("usage: adaslice slice MODEL -o JOBDIR [printer] [masks] [plan options]\n"
-          "\n"
-          "Plans MODEL (as adaslice plan does) and writes JOBDIR/plan.csv, JOBDIR/plot.svg,\n"
-          "one PNG mask per layer (JOBDIR/layer_00001.png, ...) and, last, JOBDIR/manifest.json.\n"
-          "A pixel is lit when the winding number of its vertical ray below the slicing\n"
-          "height is positive.\n"
-          "\n"
-          "printer\n"
+    fputs("printer\n"
           "  --printer NAME      a preset (below)                            [2k-5.5]\n"
           "  --pixels WxH        pixels of the display, with --pitch\n"
           "  --pitch MM          pixel size\n"
@@ -59,17 +38,29 @@ static void slice_usage(FILE *f)
           "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
-          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
-          "\n", f);
-    plan_options_usage(f);
-    fputs("\nprinter presets\n", f);
+          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n", f);
+    fputs("printer presets\n", f);
     for (i = 0; i < PRINTER_COUNT; i++)
         fprintf(f, "  %-16s %d x %d px of %g mm: %s\n", PRINTERS[i].name, PRINTERS[i].width, PRINTERS[i].height,
                 PRINTERS[i].pitch, PRINTERS[i].about);
 }
 
-/* Takes the slice options out of argv; what is left goes to parse_plan. */
-static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest)
+static void slice_usage(FILE *f)
+{
+    fputs("usage: adaslice slice MODEL -o JOBDIR [printer] [masks] [plan options]\n"
+          "\n"
+          "Plans MODEL (as adaslice plan does) and writes JOBDIR/plan.csv, JOBDIR/plot.svg,\n"
+          "one PNG mask per layer (JOBDIR/layer_00001.png, ...), the masks as a printer takes\n"
+          "them (JOBDIR/masks.rle, for adaslice print) and, last, JOBDIR/manifest.json.\n"
+          "A pixel is lit when the winding number of its vertical ray below the slicing\n"
+          "height is positive.\n"
+          "\n", f);
+    slice_options_usage(f);
+    fputc('\n', f);
+    plan_options_usage(f);
+}
+
+int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir)
 {
     int i, rc = RC_OK;
     memset(s, 0, sizeof *s);
@@ -125,7 +116,8 @@ static int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, cha
         } else rest[(*rest_argc)++] = argv[i];
     }
     if (rc) return rc;
-    if (!s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
+    s->geometry_given = s->preset || s->width || s->pitch || s->display[0];
+    if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
     if (s->preset && (s->width || s->pitch || s->display[0]))
         return complain(RC_USAGE, "--printer %s and --pixels/--pitch/--display: give one or the other", s->preset->name);
     if (s->pitch && s->display[0]) return complain(RC_USAGE, "--pitch and --display: give one or the other");
@@ -365,39 +357,110 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
     return rc;
 }
 
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
+{
+    adaslice_error err;
+    int rc;
+    memset(m, 0, sizeof *m);
+    m->s = s;
+    m->j = j;
+    if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
+    if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, s->supersample, NULL, &err) != ADASLICE_OK)
+        return library_error(&err);
+    m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
+    m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
+    m->bits = s->supersample > 1 ? 8 : 1;
+    m->stride = m->bits == 8 ? (size_t)m->width : ((size_t)m->width + 7) / 8;
+    if (!(m->image = (unsigned char *)malloc(m->stride * (size_t)m->height))) {
+        adaslice_masker_free(&m->masker);
+        return complain(RC_FAIL, "out of memory for a %d x %d mask", m->width, m->height);
+    }
+    return RC_OK;
+}
+
+int layer_masks_render(layer_masks *m, size_t k)
+{
+    adaslice_error err;
+    if (adaslice_masker_slice(&m->masker, m->j->profile.z0 + slice_height(m->s, m->j, k), &err) != ADASLICE_OK)
+        return library_error(&err);
+    orient_image(&m->masker, m->s, m->image, m->stride);
+    return RC_OK;
+}
+
+void layer_masks_close(layer_masks *m)
+{
+    adaslice_masker_free(&m->masker);
+    free(m->image);
+    m->image = NULL;
+}
+
+/* JOBDIR/masks.rle: what adaslice print streams from a job. Little-endian:
+   "ADASMSK1", u32 width, height, bits, layers, bin_nm; then per layer u32
+   bins (its thickness), u32 CRC-32 of the mask, u32 code bytes, the code. */
+typedef struct rle_file {
+    const layer_masks *m;
+    unsigned char **codes;
+    const size_t *sizes;
+    const uint32_t *crcs;
+    const adaslice_plan *plan;
+    uint32_t bin_nm;
+} rle_file;
+
+static void put_u32(FILE *f, uint32_t v)
+{
+    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
+    fwrite(b, 1, 4, f);
+}
+
+static void write_rle_file(FILE *f, const void *ctx)
+{
+    const rle_file *r = (const rle_file *)ctx;
+    size_t k;
+    fwrite("ADASMSK1", 1, 8, f);
+    put_u32(f, (uint32_t)r->m->width);
+    put_u32(f, (uint32_t)r->m->height);
+    put_u32(f, (uint32_t)r->m->bits);
+    put_u32(f, (uint32_t)r->plan->layer_count);
+    put_u32(f, r->bin_nm);
+    for (k = 0; k < r->plan->layer_count; k++) {
+        put_u32(f, r->plan->planes[k + 1] - r->plan->planes[k]);
+        put_u32(f, r->crcs[k]);
+        put_u32(f, (uint32_t)r->sizes[k]);
+        fwrite(r->codes[k], 1, r->sizes[k], f);
+    }
+}
+
 static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
 {
     const adaslice_plan *p = &j->plan[a->method];
-    adaslice_masker mk;
-    adaslice_error err;
-    adaslice_grid grid;
+    layer_masks m;
     manifest man;
+    rle_file rf;
     job_layer *layers = NULL;
-    unsigned char *image = NULL;
+    unsigned char **codes = NULL;
+    size_t *sizes = NULL, k, path_size = strlen(s->dir) + 64, count = p->layer_count;
+    uint32_t *crcs = NULL;
     char *path = NULL;
-    size_t k, path_size = strlen(s->dir) + 64, out_stride;
-    double started = now_ms(), last = 0;
-    int rc, out_w, out_h;
+    double started = now_ms(), last = 0, bin_nm = j->profile.bin * 1e6;
+    int rc;
 
     memset(&man, 0, sizeof man);
-    if ((rc = place_part(s, &j->mesh, &grid, man.part))) return rc;
-    if (adaslice_masker_init(&mk, &j->mesh, &grid, s->supersample, NULL, &err) != ADASLICE_OK) return library_error(&err);
-    layers = (job_layer *)calloc(p->layer_count ? p->layer_count : 1, sizeof *layers);
-    out_w = (s->rotate & 1) ? grid.height : grid.width;
-    out_h = (s->rotate & 1) ? grid.width : grid.height;
-    out_stride = s->supersample > 1 ? (size_t)out_w : ((size_t)out_w + 7) / 8;
-    image = (unsigned char *)malloc(out_stride * (size_t)out_h);
+    if ((rc = layer_masks_open(&m, s, j))) return rc;
+    memcpy(man.part, m.part, sizeof man.part);
+    layers = (job_layer *)calloc(count ? count : 1, sizeof *layers);
+    codes = (unsigned char **)calloc(count ? count : 1, sizeof *codes);
+    sizes = (size_t *)calloc(count ? count : 1, sizeof *sizes);
+    crcs = (uint32_t *)calloc(count ? count : 1, sizeof *crcs);
     path = (char *)malloc(path_size);
-    if (!layers || !image || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
-    man.digits = layer_digits(p->layer_count);
+    if (!layers || !codes || !sizes || !crcs || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
+    man.digits = layer_digits(count);
     if (s->svg && (rc = write_contours(s, a, j))) goto done;
-    for (k = 0; k < p->layer_count; k++) {
-        double h = slice_height(s, j, k);
+    for (k = 0; k < count; k++) {
         png_file png;
         unsigned char *data = NULL;
-        if (adaslice_masker_slice(&mk, j->profile.z0 + h, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
-        orient_image(&mk, s, image, out_stride);
-        if (png_encode_gray(image, out_w, out_h, out_stride, s->supersample > 1 ? 8 : 1, &data, &png.size)) {
+        size_t bound = adaslice_rle_bound((uint32_t)m.width, (uint32_t)m.height, m.bits);
+        if ((rc = layer_masks_render(&m, k))) goto done;
+        if (png_encode_gray(m.image, m.width, m.height, m.stride, m.bits, &data, &png.size)) {
             rc = complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
             goto done;
         }
@@ -406,23 +469,38 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
         rc = write_atomic(path, write_png_bytes, &png);
         free(data);
         if (rc) goto done;
+        if (!(codes[k] = (unsigned char *)malloc(bound))) { rc = complain(RC_FAIL, "out of memory coding layer %zu", k + 1); goto done; }
+        sizes[k] = adaslice_rle_encode(m.image, m.stride, (uint32_t)m.width, (uint32_t)m.height, m.bits, codes[k], bound);
+        crcs[k] = adaslice_crc32(0, m.image, m.stride * (size_t)m.height);
         layers[k].z_bottom = p->layers[k].z_bottom;
         layers[k].z_top = p->layers[k].z_top;
         layers[k].thickness = p->layers[k].thickness;
-        layers[k].lit_mm2 = mk.lit * grid.pitch * grid.pitch;
-        progress(k + 1, p->layer_count, started, &last);
+        layers[k].lit_mm2 = m.masker.lit * m.grid.pitch * m.grid.pitch;
+        progress(k + 1, count, started, &last);
     }
+    rf.m = &m;
+    rf.codes = codes;
+    rf.sizes = sizes;
+    rf.crcs = crcs;
+    rf.plan = p;
+    rf.bin_nm = (uint32_t)(bin_nm + 0.5);
+    snprintf(path, path_size, "%s/masks.rle", s->dir);
+    if (fabs(bin_nm - rf.bin_nm) > 1e-6 * bin_nm) remove(path); /* a printer counts whole nanometres */
+    else if ((rc = write_atomic(path, write_rle_file, &rf))) goto done;
     man.s = s;
     man.a = a;
     man.j = j;
     man.layers = layers;
-    man.count = p->layer_count;
+    man.count = count;
     snprintf(path, path_size, "%s/manifest.json", s->dir);
     rc = write_atomic(path, write_manifest, &man);
 done:
-    adaslice_masker_free(&mk);
+    layer_masks_close(&m);
+    for (k = 0; codes && k < count; k++) free(codes[k]);
+    free(codes);
+    free(sizes);
+    free(crcs);
     free(layers);
-    free(image);
     free(path);
     return rc;
 }
@@ -439,7 +517,7 @@ int cmd_slice(int argc, char **argv)
 
     memset(&j, 0, sizeof j);
     if (!rest) return complain(RC_FAIL, "out of memory");
-    rc = parse_slice(argc, argv, &s, &rest_argc, rest);
+    rc = parse_slice(argc, argv, &s, &rest_argc, rest, 1);
     if (rc < 0) { free(rest); return RC_OK; }
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }

@@ -2,7 +2,7 @@
    each format; a mesh that loads must be usable, and a failure must leave a zeroed
    mesh and a one-line message.
    clang -g -O1 -fsanitize=fuzzer,address,undefined tests/fuzz_loaders.c -lm -o fuzz_loaders
-   mkdir -p /tmp/corpus && ./fuzz_loaders -max_total_time=60 /tmp/corpus tests/fuzz_corpus
+   mkdir -p /tmp/corpus && ./fuzz_loaders -max_total_time=60 /tmp/corpus tests/fuzz_seeds/loaders
    (new inputs go to the first directory, so the seeds stay as they are) */
 #define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"

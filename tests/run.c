@@ -36,6 +36,10 @@ void test_orient(void);
 void test_saliency(void);
 void test_cli_weights(void);
 void test_codec(void);
+void test_motion(void);
+void test_gcode(void);
+void test_firmware(void);
+void test_print(void);
 
 int main(int argc, char **argv)
 {
@@ -43,7 +47,8 @@ int main(int argc, char **argv)
     int i, all = argc < 2;
     struct { const char *name; void (*fn)(void); } groups[] = {
         {"planner", test_planner}, {"profiles", test_profiles}, {"ldi", test_ldi}, {"contours", test_contours}, {"masks", test_masks}, {"png", test_png}, {"orient", test_orient}, {"loaders", test_loaders}, {"cli", test_cli},
-        {"saliency", test_saliency}, {"cli_weights", test_cli_weights}, {"codec", test_codec}};
+        {"saliency", test_saliency}, {"cli_weights", test_cli_weights}, {"codec", test_codec}, {"motion", test_motion}, {"gcode", test_gcode}, {"firmware", test_firmware},
+        {"print", test_print}};
     for (i = 0; i < (int)(sizeof groups / sizeof groups[0]); i++) {
         int j, want = all;
         for (j = 1; j < argc; j++) if (!strcmp(argv[j], groups[i].name)) want = 1;

@@ -42,6 +42,11 @@ static void fig3_k_and_d_arrays(void)
             CHECKF((int)(i - adaslice_dp_layer_below(&dp, (uint32_t)i)) == D[i], "D[%d] = %d, paper %d", i,
                    (int)(i - adaslice_dp_layer_below(&dp, (uint32_t)i)), D[i]);
     }
+    /* turned around, the plan reads bottom-up: 0, 2, 4, 6, 8; planes off it read 0 */
+    CHECK(adaslice_dp_reverse(&dp) == 4);
+    for (i = 0; i <= 8; i++)
+        CHECKF(adaslice_dp_layer_above(&dp, (uint32_t)i) == (i % 2 == 0 && i < 8 ? 2u : 0u), "above plane %d: %u", i,
+               adaslice_dp_layer_above(&dp, (uint32_t)i));
 }
 
 static void fig3_plan_and_stuck_greedy(void)

@@ -1,0 +1,55 @@
+# The firmware images: included by the top Makefile, which sets B, CC, CSTD
+# and ARM_CC.
+#   $(B)/fw-sim               the core on a pseudo-terminal (firmware/sim)
+#   $(B)/fw-mps2.elf          the Cortex-M3 image QEMU's mps2-an385 runs
+#   $(B)/fw-mps2-busy.elf     the same, idling by spinning: for -icount runs
+#                             (a core asleep in WFI there can wake a period late)
+#   $(B)/fw-stm32f103.elf     an STM32F103C8 printer board, built, not run
+#   firmware                  all three, and each image's flash and RAM;
+#                             fails if one needs more than 20 KiB of RAM
+
+FW_CORE_SRC = firmware/core.c firmware/motion.c firmware/gcode.c firmware/link.c firmware/adaslice_fw.c
+FW_HDRS     = $(wildcard firmware/*.h) adaslice.h
+FW_CM3_SRC  = firmware/cm3/cm3.c firmware/cm3/serve.c
+FW_CM3_HDRS = firmware/cm3/cm3.h
+FW_RAM_MAX  = 20480
+
+ARM_SIZE ?= arm-none-eabi-size
+# No C library: cm3.c has the few functions gcc and the core call; libgcc
+# for 64-bit division. Loop-to-memset rewriting is off so that memset itself
+# cannot become a call to memset.
+FW_ARM_FLAGS = -mcpu=cortex-m3 -mthumb -Os -std=c99 -Wall -Wextra -Wpedantic -Werror \
+               -ffreestanding -fno-tree-loop-distribute-patterns -ffunction-sections -fdata-sections \
+               -nostdlib -Wl,--gc-sections
+FW_ARM_LIBS  = -lgcc
+
+.PHONY: firmware
+
+$(B)/fw-sim: firmware/sim/sim.c $(FW_CORE_SRC) $(FW_HDRS) | $(B)
+	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c $(FW_CORE_SRC) -o $@ -lm
+
+FW_MPS2_SRC = firmware/mps2/main.c firmware/mps2/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
+FW_MPS2_DEPS = $(FW_MPS2_SRC) firmware/mps2/board.h firmware/mps2/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)
+
+$(B)/fw-mps2.elf: $(FW_MPS2_DEPS) | $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -T firmware/mps2/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+
+$(B)/fw-mps2-busy.elf: $(FW_MPS2_DEPS) | $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_BUSY_WAIT -T firmware/mps2/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+
+# The receive ring holds the protocol's window of 4 full frames (4 x 255
+# bytes): a real USART cannot hold the line the way QEMU's does.
+FW_STM32_SRC = firmware/stm32f103/main.c firmware/stm32f103/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
+
+$(B)/fw-stm32f103.elf: $(FW_STM32_SRC) firmware/stm32f103/board.h firmware/stm32f103/stm32f103.ld $(FW_CM3_HDRS) $(FW_HDRS) | $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_RX_SIZE=1024u -DSTM32_WINDOW=4u -T firmware/stm32f103/stm32f103.ld \
+	    $(FW_STM32_SRC) -o $@ $(FW_ARM_LIBS)
+
+# flash = text + data (.data's image lives in flash), RAM = data + bss
+# (.bss includes the stack).
+firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf
+	@for elf in $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf; do \
+	    $(ARM_SIZE) $$elf | awk -v elf=$$elf -v max=$(FW_RAM_MAX) 'NR == 2 { \
+	        printf "%s: %d bytes of flash, %d bytes of RAM (of %d)\n", elf, $$1 + $$2, $$2 + $$3, max; \
+	        if ($$2 + $$3 > max) { print elf ": over the RAM budget"; exit 1 } }' || exit 1; \
+	done

@@ -1,0 +1,122 @@
+/* adaslice firmware core: the part of the printer's MCU code that every port
+   shares (protocol, planner from the trimmed adaslice.h, Z motion, the print
+   state machine, the mask sink, G-code mode). Portable C99 with no float, no
+   libm, no malloc and no stdio; all state lives in one fw_state the port owns.
+
+   A port supplies the hardware through fw_port and runs one loop:
+
+       fw_init(&fw, &config, &port);
+       for (;;) {
+           feed received bytes:         fw_receive(&fw, bytes, n);
+           when now >= deadline:        deadline = fw_run(&fw, now);
+           otherwise sleep until a byte arrives or the deadline
+       }
+
+   fw_run issues every step whose time has come (each with its scheduled
+   tick), ends exposures, notices a silent link, and returns the tick of the
+   next thing it must do (FW_NEVER: nothing until a byte arrives). Nothing in
+   the core blocks; fw_receive may call fw_port.write. The wire protocol is in
+   firmware/PROTOCOL.md. */
+#ifndef FW_H
+#define FW_H
+#include <stddef.h>
+#include <stdint.h>
+#include "../adaslice.h"
+#include "link.h"
+#include "protocol.h"
+#include "motion.h"
+#include "gcode.h"
+
+#define FW_VERSION 1
+
+typedef struct fw_port {
+    void *ctx;
+    /* bytes to the host; may block until sent */
+    void (*write)(void *ctx, const uint8_t *data, size_t size);
+    /* one step pulse, dir +1 (up) or -1, scheduled for tick `when` */
+    void (*step)(void *ctx, int dir, uint64_t when);
+    /* 1 while the Z endstop is closed */
+    int (*endstop)(void *ctx);
+    /* the UV light source on or off, at tick `when` */
+    void (*uv)(void *ctx, int on, uint64_t when);
+    /* stepper driver enable (M17/M18) */
+    void (*motor)(void *ctx, int on);
+    /* a decoded mask row into display buffer `slot` (0 or 1): row y of the
+       picture as shown, top first; 1-bit rows are packed MSB first, 8-bit
+       rows one byte per pixel */
+    void (*mask_row)(void *ctx, int slot, uint32_t y, const uint8_t *row, uint32_t size);
+    /* display buffer `slot` on the screen (a verified mask), or -1: dark */
+    void (*show)(void *ctx, int slot, uint64_t when);
+    /* emulators only (NULL on a real board): end the program with `code` */
+    void (*exit)(void *ctx, int code);
+} fw_port;
+
+typedef struct fw_config {
+    uint32_t tick_hz;          /* ticks per second of the port's clock */
+    fw_axis_config axis;
+    uint16_t display_width, display_height;
+    uint8_t display_bits;      /* 1 or 8 */
+    uint32_t pitch_nm;         /* display pixel pitch */
+    uint32_t max_bins;         /* the planner's limit; bins_max <= 255 */
+    uint32_t link_timeout_ms;  /* printing pauses when the host is silent this long;
+                                  5 times as long outside a print hands the port to G-code */
+    uint8_t window;            /* frames the host may have unacknowledged */
+} fw_config;
+
+/* Layers of up to 127 bins: the planner's rings have 128 entries of 24
+   bytes, plus 1 byte of back-pointer per bin. */
+#define FW_MAX_LAYER_BINS 127u
+#define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
+
+/* A display row at most this many bytes (1-bit: 8 pixels a byte). */
+#ifndef FW_ROW_BYTES
+#define FW_ROW_BYTES 480u
+#endif
+
+typedef struct fw_state {
+    fw_config config;
+    fw_port port;
+    fw_axis axis;
+    /* link */
+    fw_deframer deframer;
+    uint8_t expect;            /* the host's next sequence number */
+    uint8_t binary;            /* a good frame arrived: G-code mode is off */
+    uint64_t heard;            /* tick of the last good frame */
+    /* planner: the profile streams through the DP, never stored */
+    unsigned char *workspace;
+    size_t workspace_size;
+    adaslice_dp dp;
+    uint32_t bins, bins_in, bin_nm;
+    uint32_t varint;
+    uint8_t varint_shift;
+    uint8_t plan_kind;         /* 0 none, 1 from the profile, 2 given by the host */
+    uint32_t layers;           /* K */
+    uint32_t cursor_layer, cursor_plane; /* reading the plan bottom-up */
+    /* masks: decoded into display buffer (layer & 1) as they stream */
+    adaslice_rle_decoder decoder;
+    uint8_t row[FW_ROW_BYTES];
+    uint32_t mask_layer, mask_size, mask_got, mask_crc;
+    uint32_t mask_ready;       /* highest layer whose mask passed its CRC */
+    uint16_t masks_refused;
+    /* print */
+    uint8_t state, phase, error, error_seq, pause_wanted, paused_by_link;
+    uint32_t layer;            /* the layer being printed (1-based), 0 before */
+    uint32_t top_plane;        /* its top, in bins */
+    uint32_t exposure_ms, bottom_exposure_ms, bottom_layers, peel_nm, peel_speed, return_speed, settle_ms;
+    uint64_t phase_end;        /* tick when a timed phase ends */
+    uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
+    uint8_t uv_on;
+    /* G-code mode, until a good frame arrives */
+    fw_gcode gcode;
+    uint8_t gcode_held[2 * FW_GCODE_LINE_MAX]; /* bytes G-code could not take yet */
+    uint16_t gcode_held_len;
+    uint8_t gcode_overflow;    /* dropping the rest of a line that did not fit */
+} fw_state;
+
+/* plan_workspace: FW_PLAN_WORKSPACE(config->max_bins) bytes, 8-byte aligned. */
+void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *plan_workspace, size_t workspace_size);
+/* Bytes from the host, in order, from the main loop (not an interrupt). */
+void fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
+/* Does what is due at tick `now`; returns the tick of the next deadline. */
+uint64_t fw_run(fw_state *fw, uint64_t now);
+#endif

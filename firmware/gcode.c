@@ -1,0 +1,521 @@
+/* G-code mode; the dialect and the decisions behind it are in gcode.h. */
+#include "gcode.h"
+
+enum { WAIT_NONE, WAIT_MOVE, WAIT_HOME, WAIT_DWELL };
+
+/* Every number fits in millionths within int64 with room to add two. */
+#define NUMBER_MAX 10000000
+#define MILLION 1000000u
+
+/* One reply line, sent with one write so a port can hand it to DMA whole;
+   the longest is the echo of a whole line. */
+typedef struct reply {
+    char b[FW_GCODE_LINE_MAX + 32];
+    size_t n;
+} reply;
+
+static void put(reply *r, const char *s)
+{
+    /* one byte stays free for the newline */
+    while (*s && r->n < sizeof r->b - 1) r->b[r->n++] = *s++;
+}
+
+static void put_char(reply *r, char c)
+{
+    if (r->n < sizeof r->b - 1) r->b[r->n++] = c;
+}
+
+static uint64_t magnitude(int64_t v)
+{
+    /* INT64_MIN has no positive int64 */
+    return v < 0 ? 0 - (uint64_t)v : (uint64_t)v;
+}
+
+static void put_uint(reply *r, uint64_t u)
+{
+    char d[20];
+    int k = 0;
+    do { d[k++] = (char)('0' + u % 10); u /= 10; } while (u);
+    while (k) put_char(r, d[--k]);
+}
+
+static void put_int(reply *r, int64_t v)
+{
+    if (v < 0) put_char(r, '-');
+    put_uint(r, magnitude(v));
+}
+
+/* thousandths as "-12.345" */
+static void put_milli(reply *r, int64_t v)
+{
+    uint64_t u = magnitude(v);
+    if (v < 0) put_char(r, '-');
+    put_uint(r, u / 1000);
+    put_char(r, '.');
+    put_char(r, (char)('0' + u / 100 % 10));
+    put_char(r, (char)('0' + u / 10 % 10));
+    put_char(r, (char)('0' + u % 10));
+}
+
+static void send(fw_gcode *g, reply *r)
+{
+    r->b[r->n++] = '\n';
+    if (g->io.write) g->io.write(g->io.ctx, (const uint8_t *)r->b, r->n);
+    r->n = 0;
+}
+
+static void say(fw_gcode *g, const char *s)
+{
+    reply r;
+    r.n = 0;
+    put(&r, s);
+    send(g, &r);
+}
+
+/* a * b / d, rounded down (round 0), to nearest (1) or up (2), without the
+   128-bit product: a is split at d, which is exact while a / d * b and
+   d * b stay below 2^64. Here a < 2^44 (a number in millionths, or a
+   position), b < 2^32 and d * b < 2^62. */
+static uint64_t muldiv(uint64_t a, uint32_t b, uint32_t d, int round)
+{
+    uint64_t q = a / d, r = a % d, add = round == 1 ? d / 2 : round == 2 ? d - 1 : 0;
+    return q * b + (r * b + add) / d;
+}
+
+static uint32_t steps_per_mm(const fw_gcode *g)
+{
+    return g->axis->config.steps_per_mm;
+}
+
+/* nm >= 0; the axis's own rounding, so G-code and the core agree on every
+   height. It saturates far above any soft limit. */
+static int64_t steps_of_nm(const fw_gcode *g, int64_t nm)
+{
+    return fw_axis_steps_of_nm(g->axis, (uint64_t)nm);
+}
+
+/* steps to units of 1/scale mm, rounded to nearest */
+static int64_t mm_of_steps(const fw_gcode *g, int32_t steps, uint32_t scale)
+{
+    uint64_t u;
+    if (!steps_per_mm(g)) return 0;
+    u = muldiv(magnitude(steps), scale, steps_per_mm(g), 1);
+    return steps < 0 ? -(int64_t)u : (int64_t)u;
+}
+
+/* Where Z is, in nm: the commanded value while the axis stands on its step,
+   so relative moves of a fraction of a step add up without drift; what the
+   steps say once anything else (a halt, the core's own moves) moved it. */
+static int64_t z_now(const fw_gcode *g)
+{
+    if (g->z_nm >= 0 && steps_of_nm(g, g->z_nm) == g->axis->position) return g->z_nm;
+    return mm_of_steps(g, g->axis->position, MILLION);
+}
+
+static int is_digit(uint8_t c) { return c >= '0' && c <= '9'; }
+static int is_alpha(uint8_t c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'); }
+static int is_blank(uint8_t c) { return c == ' ' || c == '\t'; }
+static int is_value(uint8_t c) { return is_digit(c) || c == '.' || c == '-' || c == '+'; }
+static int upper(uint8_t c) { return c >= 'a' && c <= 'z' ? c - 'a' + 'A' : c; }
+
+/* "[+-]digits[.digits]" in millionths: 1, 0 when malformed, -1 when beyond
+   NUMBER_MAX. Decimals past the sixth round at the seventh. */
+static int parse_fixed(const uint8_t *s, size_t n, int64_t *out)
+{
+    size_t i = 0;
+    int neg = 0, digits = 0, round = -1;
+    int64_t whole = 0, frac = 0, scale = MILLION / 10, v;
+    if (i < n && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
+    for (; i < n && is_digit(s[i]); i++, digits++)
+        if (whole <= NUMBER_MAX) whole = whole * 10 + (s[i] - '0');
+    if (i < n && s[i] == '.')
+        for (i++; i < n && is_digit(s[i]); i++, digits++) {
+            if (scale) { frac += (s[i] - '0') * scale; scale /= 10; }
+            else if (round < 0) round = s[i] >= '5';
+        }
+    if (i != n || !digits) return 0;
+    if (whole > NUMBER_MAX) return -1;
+    v = whole * (int64_t)MILLION + frac + (round > 0);
+    if (v > (int64_t)NUMBER_MAX * MILLION) return -1;
+    *out = neg ? -v : v;
+    return 1;
+}
+
+/* "[+-]digits" within int32 */
+static int parse_int32(const uint8_t *s, size_t n, int32_t *out)
+{
+    size_t i = 0;
+    int neg = 0;
+    int64_t v = 0;
+    if (i < n && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
+    if (i == n) return 0;
+    for (; i < n; i++) {
+        if (!is_digit(s[i])) return 0;
+        v = v * 10 + (s[i] - '0');
+        if (v > INT32_MAX) return 0;
+    }
+    *out = (int32_t)(neg ? -v : v);
+    return 1;
+}
+
+/* The next word of b[*i..end), a letter and its run of value characters,
+   after blanks and (comments): 1, 0 at the end, -1 at a byte that starts
+   no word. */
+static int word(const uint8_t *b, size_t *i, size_t end, int *letter, size_t *at, size_t *len)
+{
+    size_t k = *i;
+    for (;;) {
+        while (k < end && is_blank(b[k])) k++;
+        if (k == end || b[k] != '(') break;
+        while (k < end && b[k] != ')') k++;
+        if (k < end) k++;
+    }
+    *i = k;
+    if (k == end) return 0;
+    if (!is_alpha(b[k])) return -1;
+    *letter = upper(b[k]);
+    *at = ++k;
+    while (k < end && is_value(b[k])) k++;
+    *len = k - *at;
+    *i = k;
+    return 1;
+}
+
+/* Where each letter's value is in the line. */
+typedef struct words {
+    uint8_t at[26], len[26];
+    uint32_t seen;
+} words;
+
+static int seen(const words *w, int letter)
+{
+    return (int)(w->seen >> (letter - 'A') & 1u);
+}
+
+/* The value of `letter` in millionths; replies the Error: line and returns
+   0 when it is malformed or out of range. *has: whether the word is there. */
+static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
+{
+    reply r;
+    int k;
+    *has = seen(w, letter);
+    if (!*has) return 1;
+    k = parse_fixed(g->line + w->at[letter - 'A'], w->len[letter - 'A'], v);
+    if (k == 1) return 1;
+    r.n = 0;
+    put(&r, k < 0 ? "Error:Number out of range for " : "Error:Bad number for ");
+    put_char(&r, (char)letter);
+    send(g, &r);
+    return 0;
+}
+
+static void out_of_range(fw_gcode *g, int letter)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "Error:Number out of range for ");
+    put_char(&r, (char)letter);
+    send(g, &r);
+}
+
+static void line_error(fw_gcode *g, const char *what, int resend)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "Error:");
+    put(&r, what);
+    put(&r, ", Last Line: ");
+    put_int(&r, g->last_line);
+    send(g, &r);
+    if (resend) {
+        put(&r, "Resend: ");
+        put_int(&r, (int64_t)g->last_line + 1);
+        send(g, &r);
+    }
+    say(g, "ok");
+}
+
+static void motor(fw_gcode *g, int on)
+{
+    if (g->io.motor) g->io.motor(g->io.ctx, on);
+    g->motor_on = (uint8_t)on;
+}
+
+/* G0 / G1; 1: ok now */
+static int move(fw_gcode *g, const words *w, uint64_t now)
+{
+    fw_axis *a = g->axis;
+    int64_t z = 0, f = 0, target, steps;
+    int has_z, has_f;
+    reply r;
+    if (!number(g, w, 'Z', &z, &has_z) || !number(g, w, 'F', &f, &has_f)) return 1;
+    if (has_f) {
+        uint64_t speed;
+        if (f <= 0) { out_of_range(g, 'F'); return 1; }
+        speed = muldiv((uint64_t)f, steps_per_mm(g), 60u * MILLION, 0);
+        if (speed > a->config.max_speed) speed = a->config.max_speed;
+        /* 0 would mean max_speed to fw_axis_move_to */
+        g->speed = speed ? (uint32_t)speed : 1;
+    }
+    if (!has_z) return 1;
+    if (!a->homed) { say(g, "Error:Home Z first"); return 1; }
+    target = (g->relative ? z_now(g) : 0) + z;
+    steps = target < 0 ? -1 : steps_of_nm(g, target);
+    if (steps < 0 || steps > a->config.max_steps) {
+        r.n = 0;
+        put(&r, "Error:Z outside soft limits 0.000..");
+        put_milli(&r, mm_of_steps(g, a->config.max_steps, 1000));
+        send(g, &r);
+        return 1;
+    }
+    /* lines run only while the axis is idle, so this is not refused */
+    if (fw_axis_move_to(a, (int32_t)steps, g->speed, now) != FW_AXIS_OK) { say(g, "Error:Axis busy"); return 1; }
+    if (!g->motor_on) motor(g, 1);
+    g->z_nm = target;
+    g->target = (int32_t)steps;
+    g->wait = WAIT_MOVE;
+    return 1;
+}
+
+/* G4; 1: ok now */
+static int dwell(fw_gcode *g, const words *w, uint64_t now)
+{
+    int64_t p = 0, s = 0;
+    int has_p, has_s;
+    uint64_t ticks;
+    if (!number(g, w, 'P', &p, &has_p) || !number(g, w, 'S', &s, &has_s)) return 1;
+    if (p < 0 || s < 0) { out_of_range(g, p < 0 ? 'P' : 'S'); return 1; }
+    /* at least the time asked for, so round up */
+    ticks = has_s ? muldiv((uint64_t)s, g->axis->tick_hz, MILLION, 2)
+                  : muldiv((uint64_t)p, g->axis->tick_hz, 1000u * MILLION, 2);
+    if (!ticks) return 1;
+    g->deadline = now < FW_NEVER - 1 && ticks < FW_NEVER - 1 - now ? now + ticks : FW_NEVER - 1;
+    g->wait = WAIT_DWELL;
+    return 0;
+}
+
+static void report_position(fw_gcode *g)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "X:0.00 Y:0.00 Z:");
+    put_milli(&r, mm_of_steps(g, g->axis->position, 1000));
+    put(&r, " E:0.00 Count Z:");
+    put_int(&r, g->axis->position);
+    send(g, &r);
+}
+
+static void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
+{
+    reply r;
+    while (end > from && is_blank(b[end - 1])) end--;
+    r.n = 0;
+    put(&r, "echo:Unknown command: \"");
+    for (; from < end; from++)
+        put_char(&r, b[from] >= 0x20 && b[from] <= 0x7e ? (char)b[from] : '?');
+    put_char(&r, '"');
+    send(g, &r);
+}
+
+/* The decimal checksum after b[star] is the XOR of b[0..star); blanks and
+   a ;comment may follow it. */
+static int checksum_ok(const uint8_t *b, size_t star, size_t n)
+{
+    size_t i;
+    unsigned x = 0, want = 0;
+    for (i = 0; i < star; i++) x ^= b[i];
+    for (i = star + 1; i < n && is_digit(b[i]); i++)
+        if ((want = want * 10 + (unsigned)(b[i] - '0')) > 255) return 0;
+    if (i == star + 1) return 0;
+    while (i < n && is_blank(b[i])) i++;
+    return (i == n || b[i] == ';') && want == x;
+}
+
+/* Whether the switch in execute() has a case for code (G codes as they are,
+   M codes plus 10000): only those reject stray bytes, since unknown ones
+   such as M117 carry free text that goes back in the echo. */
+static int known(int code)
+{
+    static const int16_t codes[] = {0, 1, 4, 28, 90, 91, 10017, 10018, 10084, 10105, 10106, 10107, 10110, 10114, 10115, 10400};
+    size_t i;
+    for (i = 0; i < sizeof codes / sizeof codes[0]; i++)
+        if (codes[i] == code) return 1;
+    return 0;
+}
+
+/* Runs the complete line in g->line and sends its replies. */
+static void execute(fw_gcode *g, uint64_t now)
+{
+    const uint8_t *b = g->line;
+    size_t n = g->len, end = n, star = n, i, at = 0, len = 0, from;
+    int letter = 0, k, paren = 0, numbered, code = -1, ok = 1;
+    int32_t line = 0;
+    words w;
+    if (g->too_long) { line_error(g, "Line too long", 0); return; }
+    for (i = 0; i < n; i++) {
+        if (paren) { paren = b[i] != ')'; continue; }
+        if (b[i] == '(') paren = 1;
+        else if (b[i] == ';' || b[i] == '*') { end = i; star = b[i] == '*' ? i : n; break; }
+    }
+    i = 0;
+    k = word(b, &i, end, &letter, &at, &len);
+    if (k == 0 && star == n) return; /* blank or only comments: Marlin is silent */
+    numbered = k == 1 && letter == 'N';
+    if (star < n) {
+        if (!checksum_ok(b, star, n)) { line_error(g, "checksum mismatch", numbered); return; }
+    } else if (numbered) {
+        line_error(g, "No Checksum with line number", 1);
+        return;
+    }
+    from = 0;
+    if (numbered) {
+        if (!parse_int32(b + at, len, &line)) {
+            line_error(g, "Line Number is not Last Line Number+1", 1);
+            return;
+        }
+        from = i;
+        k = word(b, &i, end, &letter, &at, &len);
+    }
+    while (from < end && is_blank(b[from])) from++;
+    if (k == 1 && (letter == 'G' || letter == 'M') && len >= 1 && len <= 4) {
+        size_t j;
+        for (code = 0, j = 0; j < len && code >= 0; j++)
+            code = is_digit(b[at + j]) ? code * 10 + (b[at + j] - '0') : -1;
+        if (code >= 0 && letter == 'M') code += 10000;
+    }
+    if (numbered) {
+        if (code != 10110 && (int64_t)line != (int64_t)g->last_line + 1) {
+            line_error(g, "Line Number is not Last Line Number+1", 1);
+            return;
+        }
+        g->last_line = line;
+    }
+    if (k == 0) { say(g, "ok"); return; } /* "N5*cs": a line number alone */
+    w.seen = 0;
+    while (code >= 0 && (k = word(b, &i, end, &letter, &at, &len)) == 1) {
+        w.seen |= 1u << (letter - 'A');
+        w.at[letter - 'A'] = (uint8_t)at;
+        w.len[letter - 'A'] = (uint8_t)len;
+    }
+    if (k < 0 && known(code)) {
+        say(g, "Error:Unexpected character in command");
+        say(g, "ok");
+        return;
+    }
+    switch (code) {
+    case 0: case 1: ok = move(g, &w, now); break;
+    case 4: ok = dwell(g, &w, now); break;
+    case 28:
+        if (fw_axis_home(g->axis, now) == FW_AXIS_OK) {
+            if (!g->motor_on) motor(g, 1);
+            g->wait = WAIT_HOME;
+            ok = 0;
+        } else say(g, "Error:Homing refused");
+        break;
+    case 90: g->relative = 0; break;
+    case 91: g->relative = 1; break;
+    case 10017: motor(g, 1); break;
+    case 10018: case 10084: motor(g, 0); break;
+    case 10105: case 10400: break; /* nothing to report; moves have ended */
+    case 10106: case 10107: {
+        int64_t s = 0;
+        int has_s = 0;
+        if (code == 10106 && !number(g, &w, 'S', &s, &has_s)) break;
+        if (s < 0) { out_of_range(g, 'S'); break; }
+        if (g->io.uv) g->io.uv(g->io.ctx, code == 10106 && (!has_s || s > 0), now);
+        break;
+    }
+    case 10110:
+        if (seen(&w, 'N')) {
+            if (parse_int32(b + w.at['N' - 'A'], w.len['N' - 'A'], &line)) g->last_line = line;
+            else say(g, "Error:Bad line number");
+        }
+        break;
+    case 10114: report_position(g); break;
+    case 10115: say(g, "FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0"); break;
+    default: unknown(g, b, from, end); break;
+    }
+    if (ok) say(g, "ok");
+}
+
+/* What a move or homing left to say once the axis stands still. */
+static void finish(fw_gcode *g)
+{
+    fw_axis *a = g->axis;
+    reply r;
+    if (g->wait == WAIT_HOME) {
+        if (a->homed && a->error == FW_AXIS_OK) {
+            g->z_nm = mm_of_steps(g, a->position, MILLION);
+            say(g, "Z_move_comp");
+        } else say(g, "Error:Homing failed");
+        say(g, "ok");
+    } else if (a->position == g->target) {
+        say(g, "Z_move_comp");
+    } else {
+        r.n = 0;
+        put(&r, "Error:Z move stopped at ");
+        put_milli(&r, mm_of_steps(g, a->position, 1000));
+        send(g, &r);
+    }
+    g->wait = WAIT_NONE;
+}
+
+/* Ends what has ended and runs the held line, as often as that frees it. */
+static void advance(fw_gcode *g, uint64_t now)
+{
+    for (;;) {
+        if (g->wait == WAIT_DWELL) {
+            if (now < g->deadline) return;
+            g->wait = WAIT_NONE;
+            say(g, "ok");
+        } else if (g->wait != WAIT_NONE) {
+            if (fw_axis_busy(g->axis)) return;
+            finish(g);
+        }
+        if (!g->held || fw_axis_busy(g->axis)) return;
+        execute(g, now);
+        g->held = 0;
+        g->len = 0;
+        g->too_long = 0;
+    }
+}
+
+void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io)
+{
+    g->axis = axis;
+    g->io = *io;
+    g->len = g->too_long = g->held = g->relative = g->motor_on = 0;
+    g->wait = WAIT_NONE;
+    g->last_line = 0;
+    g->target = 0;
+    g->speed = 0;
+    g->z_nm = -1; /* unknown until homed */
+    g->deadline = 0;
+}
+
+size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size, uint64_t now)
+{
+    size_t i;
+    advance(g, now);
+    for (i = 0; i < size && !g->held; i++) {
+        uint8_t c = data[i];
+        if (c == '\n' || c == '\r') {
+            if (!g->len && !g->too_long) continue; /* blank, or the \n of \r\n */
+            g->held = 1;
+            advance(g, now);
+        } else if (g->len < FW_GCODE_LINE_MAX) {
+            g->line[g->len++] = c;
+        } else {
+            g->too_long = 1;
+        }
+    }
+    return i;
+}
+
+uint64_t fw_gcode_run(fw_gcode *g, uint64_t now)
+{
+    advance(g, now);
+    if (g->wait == WAIT_DWELL) return g->deadline;
+    if (g->wait != WAIT_NONE || g->held) return fw_axis_next(g->axis);
+    return FW_NEVER;
+}

@@ -1,0 +1,126 @@
+/* G-code mode: lets existing resin hosts (NanoDLP, printrun's printcore,
+   Pronterface) drive the Z axis with Marlin-style G-code over serial.
+   Portable C99: no float, no libm, no malloc, no stdio; all state lives in
+   one fw_gcode the caller owns. The caller owns the fw_axis and steps it;
+   this module only starts moves and homing and watches fw_axis_busy.
+
+   The caller's loop:
+       fw_gcode_init(&g, &axis, &io);
+       for (;;) {
+           used = fw_gcode_receive(&g, bytes, n, now);   keep bytes[used..n)
+           step the axis while steps are due (fw_axis_next / fw_axis_step)
+           deadline = fw_gcode_run(&g, now);             after stepping
+           offer the kept bytes again; sleep until a byte or the deadline
+       }
+
+   Commands (units mm and mm/min; Z is the only axis, X/Y/E words are
+   ignored):
+       G28            home Z; ok when homing has ended
+       G90 / G91      absolute / relative Z
+       G0/G1 Z F      move; F is remembered and clamped to max_speed
+                      (before any F: max_speed)
+       G4 P<ms>|S<s>  dwell after the moves before it; ok when it ends
+                      (S wins when both are given)
+       M17 / M18 M84  stepper driver on / off (a move turns it on)
+       M106 [S] M107  UV on / off; M106 S0 is off
+       M105           plain "ok" (no heaters; printcore's handshake)
+       M110 [N]       set the line number
+       M114           "X:0.00 Y:0.00 Z:12.345 E:0.00 Count Z:4938"
+       M115           "FIRMWARE_NAME:adaslice ..."
+       M400           wait for moves
+   Anything else: echo:Unknown command: "..." then ok.
+
+   Replies. Every line that is not blank gets exactly one "ok", after any
+   Error:/echo: line of its own. Blank and comment-only lines (";...",
+   "(...)") get nothing, as in Marlin, which is also what makes "\r\n" one
+   line end. printcore never sends blank lines while printing and only
+   counts "ok" then.
+     - G0/G1: ok as soon as the move has started (Marlin's "queued");
+       "Z_move_comp" once the axis is idle after the move's last step, for
+       every started move including one of zero length (NanoDLP waits for it).
+       A refused move (not homed, soft limits, bad number) gets Error: and ok
+       and no Z_move_comp, nor does a move the core cut short (Error: with
+       the position instead), so a host waiting for it stops rather than
+       exposing at the wrong height.
+     - G28: ok when homing has ended, after "Z_move_comp" on success or
+       "Error:Homing failed".
+     - G4: ok when the dwell has ended.
+   Commands run strictly in order: a line that arrives while a move, homing
+   or dwell is under way is held and runs when it has ended, so a UV or
+   dwell command never overlaps motion.
+
+   Flow control. The module holds one complete line. While a line is held,
+   fw_gcode_receive consumes nothing more and returns how many bytes it took;
+   the caller keeps the rest (in its receive ring, where Marlin keeps them
+   too) and offers them again after fw_gcode_run. printcore has one line in
+   flight while printing, occasionally two after a resend; commands it sends
+   outside a print (Pronterface's jog buttons: G91, G1, G90) are not paced,
+   so they wait in the caller's buffer.
+
+   Line numbers and checksums: "N<n> <command>*<cs>", cs the XOR of every
+   byte before '*', in decimal. A numbered line without '*', with a wrong
+   checksum, or whose n is not the last line + 1 (M110 excepted) is not run:
+       Error:checksum mismatch, Last Line: <last>
+       Error:No Checksum with line number, Last Line: <last>
+       Error:Line Number is not Last Line Number+1, Last Line: <last>
+   then "Resend: <last + 1>" and "ok", as Marlin. A '*' on an unnumbered
+   line is checked too (Error: and ok, no Resend). The last line number
+   starts at 0; printcore begins every print with "N-1 M110*15".
+   Lines longer than FW_GCODE_LINE_MAX bytes are dropped whole with
+   "Error:Line too long" and ok; the line number does not advance, so a
+   numbered host is asked to resend when its next line arrives.
+
+   Numbers are decimal fixed point, at most 10^7 in magnitude and 6
+   decimals (a 7th rounds), so lengths are exact to the nanometre; anything
+   else is an Error: reply. Replies are plain ASCII: bytes echoed from the
+   host outside 0x20..0x7e become '?' (printcore stops reading at the
+   first reply that is not UTF-8). */
+#ifndef FW_GCODE_H
+#define FW_GCODE_H
+#include <stddef.h>
+#include <stdint.h>
+#include "motion.h"
+
+/* Marlin's MAX_CMD_SIZE: the longest line, without its line end. */
+#define FW_GCODE_LINE_MAX 96
+
+typedef struct fw_gcode_io {
+    void *ctx;
+    /* replies to the host, one line per call; may be NULL */
+    void (*write)(void *ctx, const uint8_t *data, size_t size);
+    /* UV light on or off at tick `when` (M106 / M107); may be NULL */
+    void (*uv)(void *ctx, int on, uint64_t when);
+    /* stepper driver enable (M17 / M18 / M84); may be NULL */
+    void (*motor)(void *ctx, int on);
+} fw_gcode_io;
+
+typedef struct fw_gcode { /* fields private to gcode.c */
+    fw_axis *axis;
+    fw_gcode_io io;
+    uint8_t line[FW_GCODE_LINE_MAX];
+    uint8_t len;             /* bytes in line */
+    uint8_t too_long;        /* the line outgrew `line`; its rest was dropped */
+    uint8_t held;            /* line is complete and waits to run */
+    uint8_t relative;        /* G91 */
+    uint8_t wait;            /* what the last command still waits for */
+    uint8_t motor_on;        /* as last set through io.motor */
+    int32_t last_line;       /* N of the last numbered line accepted */
+    int32_t target;          /* steps: where the move under way ends */
+    uint32_t speed;          /* steps/s from the last F; 0: max_speed */
+    int64_t z_nm;            /* commanded Z, nm, valid while the axis is at it */
+    uint64_t deadline;       /* tick a dwell ends */
+} fw_gcode;
+
+/* The axis must outlive g; io is copied. Sends nothing. */
+void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io);
+/* Bytes from the host, in order. Runs every line it can at tick `now` and
+   returns how many bytes it consumed: all of them unless a line is held
+   (see Flow control above). */
+size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size, uint64_t now);
+/* Call after stepping the axis and at the returned deadline: ends dwells,
+   sends Z_move_comp and the ok of G28, then runs the held line. Returns the
+   tick it next needs a call: the dwell's end, or the axis's next step while
+   a move (its own or the core's) keeps a command or a held line waiting;
+   FW_NEVER when only a byte from the host can change anything. */
+uint64_t fw_gcode_run(fw_gcode *g, uint64_t now);
+#endif

@@ -1,0 +1,423 @@
+/* The Z axis: see motion.h for the interface.
+
+   A move of n steps is the ideal trapezoid over n - 1 steps of distance,
+   sampled where it crosses each whole step and rounded up to a tick: the
+   first step is at the move's start, where the axis is at rest, and the
+   last one where it comes to rest again. With T = tick_hz, a = accel and a
+   cruising interval of c ticks (speed T/c), step j is at
+
+       accelerating, j <= ramp:   ceil(sqrt(2 j T^2 / a))
+       cruising:                  j c + ceil(T^2 / (2 a c))
+       decelerating:              end - t(n - 1 - j),  end = (n-1) c + 2 ceil(T^2 / (2 a c))
+
+   where ramp = floor(T^2 / (2 a c^2)) is the last step before the ideal
+   trapezoid reaches its speed. Each form is the ceiling of the ideal time,
+   and ceil(x + c) = ceil(x) + c for whole c: where the ideal allows no
+   interval under c ticks, none of the rounded intervals is under c either.
+   So no clamp is needed. The deceleration is the acceleration's exact
+   mirror; `end` is chosen so that mirroring the cruise reproduces it.
+
+   A move too short to reach its speed cruises at the smallest longer
+   interval whose ramps fit (ramp <= (n - 2) / 2) instead of being cut into
+   a triangle: mirroring rounded ramps about a peak between two steps can
+   leave the middle interval a tick under c, while this keeps the forms
+   above and their proof. When the ideal would peak between the middle
+   steps, their interval comes out a little longer than c: the axis slows
+   slightly there, which the limit allows.
+
+   Bounds: T^2 < 2^64 as T is 32 bits. The accelerating form needs
+   2 j T^2 / a < 2^64 for j <= ramp, that is (T^2 / (a c))^2 < 2^64; init
+   keeps c large enough that T^2 / (a c) < 2^32 (a ramp lasts under 2^32
+   ticks). Cruising ticks j c stay below 2^62 since moves are under 2^30
+   steps (FW_AXIS_MAX_TRAVEL) and c <= T < 2^32. */
+#include "motion.h"
+
+enum { PHASE_NONE, PHASE_PROBE, PHASE_APPROACH, PHASE_BACKOFF, PHASE_SLOW };
+
+/* floor(sqrt(x)), one result bit per round: no division, which the
+   Cortex-M3 has only for 32 bits. */
+static uint64_t floor_sqrt(uint64_t x)
+{
+    uint64_t root = 0, bit = (uint64_t)1 << 62;
+    while (bit > x) bit >>= 2;
+    while (bit) {
+        if (x >= root + bit) {
+            x -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    return root;
+}
+
+/* Smallest t with t * t >= x; x < 2^64 so t <= 2^32 and t * t for the
+   floor fits. */
+static uint64_t ceil_sqrt(uint64_t x)
+{
+    uint64_t s = floor_sqrt(x);
+    return s * s < x ? s + 1 : s;
+}
+
+static uint64_t ceil_div(uint64_t x, uint64_t y) { return x / y + (x % y != 0); }
+
+/* The same, searched from `guess` when that is within a few ticks: the
+   result is still the least t with t * t >= x. Past a ramp's first few
+   dozen steps a step's tick is its extrapolation from the three before
+   give or take a few ticks, and checking that costs a few multiplications
+   where the root costs 30 rounds. */
+static uint64_t ceil_sqrt_near(uint64_t x, uint64_t guess)
+{
+    int tries;
+    if (guess == 0 || guess >= 0xFFFFFFFFu) return ceil_sqrt(x);
+    for (tries = 0; tries < 4; tries++) {
+        if (guess * guess < x) guess++;
+        else if ((guess - 1) * (guess - 1) >= x) guess--;
+        else return guess;
+        if (guess == 0 || guess >= 0xFFFFFFFFu) break;
+    }
+    return ceil_sqrt(x);
+}
+
+/* Ticks from the start to accelerating step j: the least t with
+   t^2 >= 2 j T^2 / a. T^2 is split as k_quot a + k_rem so that the
+   ceiling of 2 j T^2 / a is exact without a 128-bit product; 2 j k_rem
+   < T^2 / c^2 fits as j <= ramp (or j = 1). `guess` only saves time (0:
+   none). */
+static uint64_t accel_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+{
+    uint64_t twice = 2u * (uint64_t)j;
+    return ceil_sqrt_near(twice * axis->k_quot + ceil_div(twice * axis->k_rem, axis->config.accel), guess);
+}
+
+/* The first half's form: accelerating, then cruising. */
+static uint64_t rising_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+{
+    if (j <= axis->ramp) return accel_ticks(axis, j, guess);
+    return (uint64_t)j * axis->interval + axis->offset;
+}
+
+/* `guess`: roughly step j's ticks, or 0. */
+static uint64_t step_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+{
+    uint32_t last = axis->steps - 1;
+    if (2u * (uint64_t)j <= last) return rising_ticks(axis, j, guess);
+    return axis->end - rising_ticks(axis, last - j, guess && guess < axis->end ? axis->end - guess : 0);
+}
+
+/* Step `done`'s ticks, guessed from the three steps before it (the last
+   at `latest`) by their second difference, which changes slowly. */
+static uint64_t next_ticks(const fw_axis *axis, uint64_t latest)
+{
+    uint64_t guess = 0;
+    if (axis->done >= 3) {
+        uint64_t up = latest + 2 * (latest - axis->latest), down = axis->latest - axis->earlier;
+        if (up > down) guess = up - down;
+    }
+    return step_ticks(axis, axis->done, guess);
+}
+
+/* The trapezoid's constants for cruising at `interval` ticks per step. */
+static void shape(fw_axis *axis, uint64_t interval)
+{
+    uint32_t distance = axis->steps - 1;
+    if (distance > 0) {
+        /* the smallest interval whose ramps fit: half_k / c^2 < m + 1 */
+        uint32_t m = (distance - 1) / 2;
+        uint64_t fit = ceil_sqrt(axis->half_k / ((uint64_t)m + 1) + 1);
+        if (interval < fit) interval = fit;
+    }
+    axis->interval = (uint32_t)interval;
+    axis->ramp = (uint32_t)(axis->half_k / interval / interval);
+    axis->offset = ceil_div(axis->half_k_up, interval);
+    axis->end = (uint64_t)distance * interval + 2u * axis->offset;
+}
+
+static void go_idle(fw_axis *axis)
+{
+    axis->dir = 0;
+    axis->steps = axis->done = 0;
+    axis->next = FW_NEVER;
+    axis->phase = PHASE_NONE;
+}
+
+/* At rest the axis has just stepped: the next step is a step from rest, so
+   it waits at least the interval that a step from rest needs. */
+static uint64_t earliest(const fw_axis *axis, uint64_t now)
+{
+    if (axis->stepped && now < axis->last + axis->rest_interval) return axis->last + axis->rest_interval;
+    return now;
+}
+
+static void begin_move(fw_axis *axis, int dir, uint32_t steps, uint64_t interval, uint64_t now)
+{
+    axis->dir = dir;
+    axis->steps = steps;
+    axis->done = 0;
+    shape(axis, interval);
+    axis->start = earliest(axis, now);
+    axis->next = axis->start;
+}
+
+static uint64_t interval_of(const fw_axis *axis, uint32_t speed)
+{
+    uint64_t c;
+    if (speed == 0 || speed > axis->config.max_speed) speed = axis->config.max_speed;
+    c = ceil_div(axis->tick_hz, speed);
+    return c < axis->min_interval ? axis->min_interval : c;
+}
+
+static void fail_homing(fw_axis *axis)
+{
+    axis->error = FW_AXIS_HOME_FAILED;
+    axis->homed = 0;
+    go_idle(axis);
+}
+
+/* A move's last step has been taken, or a halt left nothing to take. */
+static void move_over(fw_axis *axis)
+{
+    if (axis->phase == PHASE_APPROACH) {
+        /* the switch is read once more at rest: it may have closed on the
+           last step, and backing off starts from rest */
+        axis->phase = PHASE_BACKOFF;
+        axis->count = 0;
+        axis->steps = axis->done = 0;
+        axis->next = earliest(axis, axis->last);
+    } else {
+        go_idle(axis);
+    }
+}
+
+static int take_step(fw_axis *axis)
+{
+    int dir = axis->dir;
+    axis->position += dir;
+    axis->last = axis->next;
+    axis->stepped = 1;
+    axis->done++;
+    if (axis->done >= axis->steps) {
+        move_over(axis);
+    } else {
+        uint64_t latest = axis->next - axis->start;
+        axis->next = axis->start + next_ticks(axis, latest);
+        axis->earlier = axis->latest;
+        axis->latest = latest;
+    }
+    return dir;
+}
+
+/* Shortens the move so it decelerates from its latest step on. The steps
+   already taken keep their ticks under the new shape, so the velocity the
+   axis has is the one the deceleration starts from. */
+static void brake(fw_axis *axis)
+{
+    uint32_t p, distance;
+    if (axis->done == 0) { /* not started: nothing moves */
+        axis->steps = 0;
+        move_over(axis);
+        return;
+    }
+    p = axis->done - 1;
+    distance = axis->steps - 1;
+    if (distance - p <= axis->ramp) return; /* decelerating already */
+    if (p <= axis->ramp) {
+        /* accelerating: the way down mirrors the way up about step p, which
+           is exactly the braking distance from the speed reached at p */
+        axis->steps = 2 * p + 1;
+        axis->end = 2 * accel_ticks(axis, p, axis->latest);
+    } else {
+        /* cruising: the deceleration's first step follows step p */
+        uint32_t stop = p + axis->ramp + 1;
+        if (stop >= distance) return;
+        axis->steps = stop + 1;
+        axis->end = (uint64_t)stop * axis->interval + 2u * axis->offset;
+    }
+    if (axis->done >= axis->steps) move_over(axis);
+    else axis->next = axis->start + step_ticks(axis, axis->done, 0);
+}
+
+void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
+{
+    uint64_t t2, min_c, ramp_c;
+    fw_axis_config *c = &axis->config;
+    axis->config = *config;
+    axis->tick_hz = tick_hz ? tick_hz : 1;
+    /* accel 1 could make 2 T^2 / a overflow; 2 steps/s^2 is slow enough */
+    if (c->accel < 2) c->accel = 2;
+    if (c->max_speed == 0) c->max_speed = 1;
+    if (c->max_steps < 0) c->max_steps = 0;
+    if (c->max_steps > FW_AXIS_MAX_TRAVEL) c->max_steps = FW_AXIS_MAX_TRAVEL;
+    if (c->home_travel < 0) c->home_travel = 0;
+    if (c->home_travel > FW_AXIS_MAX_TRAVEL) c->home_travel = FW_AXIS_MAX_TRAVEL;
+    t2 = (uint64_t)axis->tick_hz * axis->tick_hz;
+    axis->k_quot = t2 / c->accel;
+    axis->k_rem = t2 % c->accel;
+    axis->half_k = t2 / (2u * (uint64_t)c->accel);
+    axis->half_k_up = ceil_div(t2, 2u * (uint64_t)c->accel);
+    /* T^2 / (a c) <= 2^32 - 1 keeps the accelerating form in 64 bits */
+    min_c = ceil_div(axis->tick_hz, c->max_speed);
+    ramp_c = ceil_div(ceil_div(t2, c->accel), 0xFFFFFFFFu);
+    if (ramp_c > min_c) {
+        min_c = ramp_c;
+        c->max_speed = (uint32_t)(axis->tick_hz / min_c);
+    }
+    axis->min_interval = (uint32_t)min_c;
+    if (c->home_speed == 0 || c->home_speed > c->max_speed) c->home_speed = c->max_speed;
+    axis->home_interval = (uint32_t)interval_of(axis, c->home_speed);
+    /* a step from rest, then one after t: the mean speed 1/t over the
+       interval is reached at t/2, which needs 2/t^2 <= a */
+    axis->rest_interval = (uint32_t)accel_ticks(axis, 1, 0);
+    if (axis->rest_interval < min_c) axis->rest_interval = (uint32_t)min_c;
+    {
+        /* the approach brakes over about its ramp, then the switch may
+           need some travel to open again */
+        uint64_t limit = axis->half_k / axis->home_interval / axis->home_interval + 2u +
+                         (uint64_t)FW_AXIS_HOME_BACKOFF_MM * c->steps_per_mm;
+        axis->backoff_limit = limit > FW_AXIS_MAX_TRAVEL ? (uint32_t)FW_AXIS_MAX_TRAVEL : (uint32_t)limit;
+    }
+    axis->position = 0;
+    axis->homed = 0;
+    axis->error = FW_AXIS_OK;
+    axis->last = 0;
+    axis->stepped = 0;
+    axis->start = 0;
+    axis->seen = 0;
+    axis->count = 0;
+    axis->interval = (uint32_t)min_c;
+    axis->offset = axis->end = axis->latest = axis->earlier = 0;
+    go_idle(axis);
+}
+
+int fw_axis_move_to(fw_axis *axis, int32_t target, uint32_t speed, uint64_t now)
+{
+    int64_t delta;
+    if (fw_axis_busy(axis)) return FW_AXIS_BUSY;
+    if (!axis->homed) return FW_AXIS_NOT_HOMED;
+    if (target < 0 || target > axis->config.max_steps) return FW_AXIS_LIMIT;
+    delta = (int64_t)target - axis->position;
+    if (delta == 0) return FW_AXIS_OK;
+    begin_move(axis, delta > 0 ? 1 : -1, (uint32_t)(delta > 0 ? delta : -delta), interval_of(axis, speed), now);
+    return FW_AXIS_OK;
+}
+
+/* Homing invalidates the position until it finds the switch again, so a
+   homing that fails or is halted leaves the axis unhomed. */
+int fw_axis_home(fw_axis *axis, uint64_t now)
+{
+    if (fw_axis_busy(axis)) return FW_AXIS_BUSY;
+    axis->homed = 0;
+    axis->error = FW_AXIS_OK;
+    axis->position = 0;
+    axis->phase = PHASE_PROBE;
+    axis->seen = 0;
+    axis->count = 0;
+    axis->dir = 0;
+    axis->steps = axis->done = 0;
+    axis->next = earliest(axis, now);
+    return FW_AXIS_OK;
+}
+
+/* The schedule hangs on the latest step, not on `now`: the axis has not
+   moved since it, however late the halt comes. */
+void fw_axis_halt(fw_axis *axis, uint64_t now)
+{
+    (void)now;
+    if (!fw_axis_busy(axis)) return;
+    if (axis->phase == PHASE_APPROACH) {
+        axis->phase = PHASE_NONE;
+        brake(axis);
+    } else if (axis->phase != PHASE_NONE) {
+        /* probing or creeping at the speed that may stop dead */
+        go_idle(axis);
+    } else {
+        brake(axis);
+    }
+}
+
+int fw_axis_busy(const fw_axis *axis) { return axis->next != FW_NEVER; }
+
+uint64_t fw_axis_next(const fw_axis *axis) { return axis->next; }
+
+/* One step of homing's slow phases, at the speed that may start and stop
+   dead. */
+static int creep(fw_axis *axis, int dir)
+{
+    axis->position += dir;
+    axis->last = axis->next;
+    axis->stepped = 1;
+    axis->count++;
+    axis->next += axis->rest_interval;
+    return dir;
+}
+
+int fw_axis_step(fw_axis *axis, int endstop)
+{
+    if (!fw_axis_busy(axis)) return 0;
+    switch (axis->phase) {
+    case PHASE_PROBE:
+        if (endstop) { /* on the switch already: off it first */
+            axis->seen = 1;
+            axis->phase = PHASE_BACKOFF;
+            axis->count = 0;
+            return creep(axis, 1);
+        }
+        if (axis->config.home_travel == 0) {
+            fail_homing(axis);
+            return 0;
+        }
+        axis->phase = PHASE_APPROACH;
+        begin_move(axis, -1, (uint32_t)axis->config.home_travel, axis->home_interval, axis->next);
+        return take_step(axis);
+    case PHASE_APPROACH:
+        if (endstop && !axis->seen) {
+            /* this step waits: the braking schedule decides when */
+            axis->seen = 1;
+            brake(axis);
+            return 0;
+        }
+        return take_step(axis);
+    case PHASE_BACKOFF:
+        if (endstop) {
+            axis->seen = 1;
+            if (axis->count >= axis->backoff_limit) {
+                fail_homing(axis);
+                return 0;
+            }
+            return creep(axis, 1);
+        }
+        if (!axis->seen) { /* the approach ran out without the switch */
+            fail_homing(axis);
+            return 0;
+        }
+        axis->phase = PHASE_SLOW;
+        axis->count = 0;
+        return creep(axis, -1);
+    case PHASE_SLOW:
+        if (endstop) {
+            axis->position = 0;
+            axis->homed = 1;
+            go_idle(axis);
+            return 0;
+        }
+        if (axis->count >= axis->backoff_limit) {
+            fail_homing(axis);
+            return 0;
+        }
+        return creep(axis, -1);
+    default:
+        return take_step(axis);
+    }
+}
+
+int32_t fw_axis_steps_of_nm(const fw_axis *axis, uint64_t nm)
+{
+    uint64_t per_mm = axis->config.steps_per_mm;
+    uint64_t mm = nm / 1000000u, rest = nm % 1000000u, steps;
+    /* whole millimetres exactly, then the rest rounded: rest * per_mm
+       < 10^6 * 2^32 fits */
+    if (per_mm != 0 && mm > (uint64_t)INT32_MAX / per_mm) return INT32_MAX;
+    steps = mm * per_mm + (rest * per_mm + 500000u) / 1000000u;
+    return steps > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)steps;
+}

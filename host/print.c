@@ -1,0 +1,860 @@
+/* adaslice print: drives a printer running the adaslice firmware over a
+   serial port (POSIX termios only), after firmware/PROTOCOL.md. The printer
+   plans from the quantised profile (or takes the host's plan), then the host
+   streams mask k+1 while layer k exposes. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "cli.h"
+#include "../firmware/link.h"
+#include "../firmware/protocol.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+enum { RC_PAUSED = 3 };
+
+typedef struct print_args {
+    const char *port, *report;
+    long baud;
+    size_t resume_from;
+    double exposure, bottom_exposure, peel, peel_speed, return_speed, settle;
+    size_t bottom_layers;
+    int plan_on_host;
+    double give_up_s;       /* a printer silent this long ends the print */
+} print_args;
+
+/* ------------------------------------------------------------ the port */
+
+static const struct { long baud; speed_t code; } BAUDS[] = {
+    {9600, B9600}, {19200, B19200}, {38400, B38400}, {57600, B57600}, {115200, B115200}, {230400, B230400}};
+
+static int serial_open(const char *dev, long baud, int *fd_out)
+{
+    struct termios t;
+    size_t i;
+    int fd;
+    for (i = 0; i < sizeof BAUDS / sizeof *BAUDS && BAUDS[i].baud != baud; i++) {}
+    if (i == sizeof BAUDS / sizeof *BAUDS)
+        return complain(RC_USAGE, "--baud %ld: not a standard rate (9600, 19200, 38400, 57600, 115200, 230400)", baud);
+    fd = open(dev, O_RDWR | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) return complain(RC_FAIL, "cannot open %s: %s", dev, strerror(errno));
+    if (tcgetattr(fd, &t) != 0) {
+        close(fd);
+        return complain(RC_FAIL, "%s is not a serial port: %s", dev, strerror(errno));
+    }
+    /* raw 8N1: no line editing, no translation, no flow control */
+    t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF | IXANY | INPCK);
+    t.c_oflag &= ~(tcflag_t)OPOST;
+    t.c_lflag &= ~(tcflag_t)(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
+    t.c_cflag &= ~(tcflag_t)(CSIZE | PARENB | CSTOPB);
+    t.c_cflag |= CS8 | CREAD | CLOCAL;
+    t.c_cc[VMIN] = 0;
+    t.c_cc[VTIME] = 0;
+    if (cfsetispeed(&t, BAUDS[i].code) != 0 || cfsetospeed(&t, BAUDS[i].code) != 0 || tcsetattr(fd, TCSANOW, &t) != 0) {
+        close(fd);
+        return complain(RC_FAIL, "cannot set %s to %ld 8N1: %s", dev, baud, strerror(errno));
+    }
+    /* what a previous session left unread must not pass for replies */
+    tcflush(fd, TCIOFLUSH);
+    *fd_out = fd;
+    return RC_OK;
+}
+
+/* ------------------------------------------------------------- the link */
+
+#define LINK_QUEUE 16
+
+typedef struct status {
+    uint8_t state, phase, error, error_seq, flags, window;
+    uint32_t layer, layers, mask_ready, mask_layer, mask_got, bins_in, bad_frames;
+    uint16_t masks_refused;
+    int32_t z_nm;
+} status;
+
+typedef struct identity {
+    uint8_t version, window, max_layer_bins, bits;
+    uint32_t max_bins, steps_per_mm, pitch_nm, z_max_nm, tick_hz, link_timeout_ms;
+    uint16_t width, height;
+} identity;
+
+typedef struct serial_link {
+    int fd;
+    const char *dev;
+    fw_deframer rx;
+    uint8_t next_seq, base;     /* frames base .. next_seq - 1 await their ack */
+    int count, window;
+    uint8_t frames[LINK_QUEUE][FW_FRAME_MAX];
+    size_t lens[LINK_QUEUE];
+    double rto_ms, last_progress, last_heard, give_up_ms;
+    /* the latest replies, each with a count so a caller sees a fresh one */
+    status st;
+    unsigned long status_count, identify_count, plan_count;
+    identity id;
+    uint8_t plan[FW_FRAME_MAX];
+    size_t plan_size;
+    unsigned long retransmits, naks, bytes_out, bytes_in;
+    /* bulk data frames shrink when frames are lost and grow back when the
+       line is clean: a frame's chance to arrive falls with its length */
+    size_t data_max;
+    unsigned clean;
+    double resent_at, holdoff_ms;
+    uint8_t resent_from;
+    double srtt, rttvar;        /* request-to-reply times, as TCP keeps them (RFC 6298) */
+} serial_link;
+
+/* A STATUS round trip of `rtt` ms: the retransmission timeout follows the
+   line (a pty answers in a millisecond, a loaded 9600 baud line in seconds),
+   and NAKs within two round trips of a resend are the resend's own echo. */
+static void link_rtt(serial_link *l, double rtt)
+{
+    if (!l->srtt) { l->srtt = rtt; l->rttvar = rtt / 2; }
+    else {
+        l->rttvar = 0.75 * l->rttvar + 0.25 * fabs(l->srtt - rtt);
+        l->srtt = 0.875 * l->srtt + 0.125 * rtt;
+    }
+    l->rto_ms = l->srtt + 4 * l->rttvar;
+    if (l->rto_ms < 60) l->rto_ms = 60;
+    if (l->rto_ms > 3000) l->rto_ms = 3000;
+    l->holdoff_ms = 2 * l->srtt < 20 ? 20 : 2 * l->srtt;
+    if (l->holdoff_ms > l->rto_ms) l->holdoff_ms = l->rto_ms;
+}
+
+static volatile sig_atomic_t interrupted;
+static void on_sigint(int sig) { (void)sig; interrupted = 1; }
+
+static int link_write(serial_link *l, const uint8_t *data, size_t size)
+{
+    while (size) {
+        ssize_t n = write(l->fd, data, size);
+        if (n > 0) { data += n; size -= (size_t)n; l->bytes_out += (unsigned long)n; continue; }
+        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+            return complain(RC_FAIL, "writing %s: %s", l->dev, strerror(errno));
+        {
+            struct pollfd p = {l->fd, POLLOUT, 0};
+            (void)poll(&p, 1, 100);
+        }
+    }
+    return RC_OK;
+}
+
+/* Go back N: everything unacknowledged again, and smaller data frames. */
+static int resend_all(serial_link *l)
+{
+    int i;
+    for (i = 0; i < l->count; i++) if (link_write(l, l->frames[i], l->lens[i])) return RC_FAIL;
+    l->retransmits += (unsigned long)l->count;
+    l->resent_at = l->last_progress = now_ms();
+    l->resent_from = l->base;
+    l->clean = 0;
+    if (l->data_max > 32) l->data_max /= 2;
+    return RC_OK;
+}
+
+static void take_reply(serial_link *l, const uint8_t *f, size_t n)
+{
+    const uint8_t *p = f + 3;
+    size_t size = n - FW_FRAME_MIN;
+    uint8_t ack = f[1], acked = (uint8_t)(ack - l->base);
+    /* every reply acknowledges what came before ack */
+    if (acked && acked <= l->count) {
+        memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
+        memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
+        l->count -= acked;
+        l->base = ack;
+        l->last_progress = now_ms();
+        l->clean += acked;
+        if (l->clean >= 32 && l->data_max < FW_PAYLOAD_MAX) {
+            l->data_max = l->data_max * 2 > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : l->data_max * 2;
+            l->clean = 0;
+        }
+    }
+    switch (f[2]) {
+    case FW_MSG_ACK:
+        /* frames sent before our last resend still draw NAKs: those are answered */
+        if (size >= 1 && p[0] && l->count) {
+            l->naks++;
+            if (l->resent_from != l->base || now_ms() - l->resent_at > l->holdoff_ms) (void)resend_all(l);
+        }
+        break;
+    case FW_MSG_STATUS_REPLY:
+        if (size < 40) break;
+        l->st.state = p[0]; l->st.phase = p[1]; l->st.error = p[2]; l->st.error_seq = p[3]; l->st.flags = p[4];
+        l->st.layer = fw_get32(p + 5); l->st.layers = fw_get32(p + 9); l->st.mask_ready = fw_get32(p + 13);
+        l->st.mask_layer = fw_get32(p + 17); l->st.mask_got = fw_get32(p + 21); l->st.masks_refused = fw_get16(p + 25);
+        l->st.z_nm = (int32_t)fw_get32(p + 27); l->st.bins_in = fw_get32(p + 31); l->st.bad_frames = fw_get32(p + 35);
+        l->st.window = p[39];
+        l->status_count++;
+        break;
+    case FW_MSG_IDENTIFY:
+        if (size < 32) break;
+        l->id.version = p[0]; l->id.window = p[1]; l->id.max_bins = fw_get32(p + 2); l->id.max_layer_bins = p[6];
+        l->id.steps_per_mm = fw_get32(p + 7); l->id.width = fw_get16(p + 11); l->id.height = fw_get16(p + 13);
+        l->id.bits = p[15]; l->id.pitch_nm = fw_get32(p + 16); l->id.z_max_nm = fw_get32(p + 20);
+        l->id.tick_hz = fw_get32(p + 24); l->id.link_timeout_ms = fw_get32(p + 28);
+        l->identify_count++;
+        break;
+    case FW_MSG_PLAN:
+        memcpy(l->plan, p, size);
+        l->plan_size = size;
+        l->plan_count++;
+        break;
+    default:
+        break;
+    }
+}
+
+/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. */
+static int link_pump(serial_link *l, int wait_ms)
+{
+    uint8_t buf[4096];
+    struct pollfd p = {l->fd, POLLIN, 0};
+    double t;
+    if (poll(&p, 1, wait_ms) > 0) {
+        ssize_t n = read(l->fd, buf, sizeof buf), i;
+        if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO)
+            return complain(RC_FAIL, "reading %s: %s", l->dev, strerror(errno));
+        for (i = 0; i < n; i++) {
+            size_t m;
+            fw_deframe_push(&l->rx, buf[i]);
+            while ((m = fw_deframe_next(&l->rx)) != 0) {
+                l->last_heard = now_ms();
+                take_reply(l, l->rx.buf, m);
+                fw_deframe_consume(&l->rx);
+            }
+        }
+        if (n > 0) l->bytes_in += (unsigned long)n;
+    }
+    t = now_ms();
+    if (l->count && t - l->last_progress > l->rto_ms && resend_all(l)) return RC_FAIL;
+    if (t - l->last_heard > l->give_up_ms)
+        return complain(RC_FAIL, "the printer on %s has been silent for %.0f s", l->dev, l->give_up_ms / 1000);
+    return RC_OK;
+}
+
+/* Queues a frame, waiting while the printer's window is full. */
+static int link_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size)
+{
+    int rc;
+    while (l->count >= l->window || l->count >= LINK_QUEUE)
+        if ((rc = link_pump(l, 20))) return rc;
+    l->lens[l->count] = fw_frame_build(l->frames[l->count], l->next_seq, type, payload, size);
+    if (!l->count) l->last_progress = now_ms();
+    rc = link_write(l, l->frames[l->count], l->lens[l->count]);
+    l->count++;
+    l->next_seq++;
+    return rc;
+}
+
+/* A fresh STATUS: asked again if its reply is lost. */
+static int link_status(serial_link *l)
+{
+    unsigned long seen = l->status_count;
+    int rc;
+    for (;;) {
+        double asked = now_ms();
+        if ((rc = link_send(l, FW_MSG_STATUS, NULL, 0))) return rc;
+        while (l->status_count == seen && now_ms() - asked < l->rto_ms * 2)
+            if ((rc = link_pump(l, 2))) return rc;
+        if (l->status_count != seen) { link_rtt(l, now_ms() - asked); return RC_OK; }
+    }
+}
+
+static int link_hello(serial_link *l)
+{
+    uint8_t version = FW_PROTOCOL_VERSION, frame[FW_FRAME_MAX];
+    double start = now_ms(), sent = 0;
+    size_t n = fw_frame_build(frame, l->next_seq, FW_MSG_HELLO, &version, 1);
+    int rc;
+    l->last_heard = start;
+    /* an emulator may drop what arrives before it looks at the port: say hello until answered */
+    while (!l->identify_count) {
+        if (now_ms() - start > 10000) return complain(RC_FAIL, "no adaslice printer answers on %s", l->dev);
+        if (now_ms() - sent > 250) {
+            if ((rc = link_write(l, frame, n))) return rc;
+            sent = now_ms();
+        }
+        if ((rc = link_pump(l, 20))) return rc;
+        l->last_heard = now_ms();
+    }
+    if (l->id.version != FW_PROTOCOL_VERSION)
+        return complain(RC_FAIL, "the printer speaks protocol %u; this tool speaks %u", l->id.version, FW_PROTOCOL_VERSION);
+    l->next_seq++;
+    l->base = l->next_seq;
+    l->count = 0;
+    l->window = l->id.window ? l->id.window : 1;
+    return RC_OK;
+}
+
+static const char *const ERRORS[] = {
+    "none", "bad message", "bad profile header", "bad profile data", "no plan meets eps", "no plan",
+    "mask out of order", "malformed mask code", "mask CRC mismatch", "outside the soft limits", "not homed",
+    "homing failed", "busy", "more bins than the printer takes"};
+
+static const char *error_name(uint8_t e) { return e < sizeof ERRORS / sizeof *ERRORS ? ERRORS[e] : "unknown error"; }
+
+/* Waits until a STATUS shows `done` true. */
+static int link_wait(serial_link *l, int (*done)(const status *, const void *), const void *ctx, double timeout_ms)
+{
+    double start = now_ms();
+    int rc;
+    for (;;) {
+        if ((rc = link_status(l))) return rc;
+        if (done(&l->st, ctx)) return RC_OK;
+        if (now_ms() - start > timeout_ms) return RC_FAIL;
+        if ((rc = link_pump(l, 20))) return rc;
+    }
+}
+
+/* ------------------------------------------------------------- the job */
+
+/* What is printed: a plan (layer lengths in bins) and a source of masks. */
+typedef struct print_job {
+    uint32_t layers, bin_nm;
+    uint32_t *lengths;             /* bins per layer */
+    /* masks: rendered from the model, or read from JOBDIR/masks.rle */
+    layer_masks masks;
+    int from_model;
+    unsigned char *file;           /* masks.rle */
+    size_t file_size, *offsets;    /* each layer's code in file */
+    uint32_t width, height, bits;
+    /* the current mask */
+    unsigned char *code;
+    size_t code_size, code_cap, rendered;
+    uint32_t crc;
+} print_job;
+
+static uint32_t get_le32(const unsigned char *p) { return fw_get32(p); }
+
+static int read_rle_file(const char *dir, print_job *pj)
+{
+    size_t n = strlen(dir) + 16, at, k;
+    char *path = (char *)malloc(n);
+    FILE *f;
+    long size;
+    if (!path) return complain(RC_FAIL, "out of memory");
+    snprintf(path, n, "%s/masks.rle", dir);
+    f = fopen(path, "rb");
+    if (!f) { complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno)); free(path); return RC_FAIL; }
+    if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0 ||
+        !(pj->file = (unsigned char *)malloc((size_t)size + 1)) || fread(pj->file, 1, (size_t)size, f) != (size_t)size) {
+        fclose(f);
+        complain(RC_FAIL, "cannot read %s", path);
+        free(path);
+        return RC_FAIL;
+    }
+    fclose(f);
+    pj->file_size = (size_t)size;
+    if (pj->file_size < 28 || memcmp(pj->file, "ADASMSK1", 8)) {
+        complain(RC_FAIL, "%s: not an adaslice mask file (bad magic at byte 0)", path);
+        free(path);
+        return RC_FAIL;
+    }
+    pj->width = get_le32(pj->file + 8);
+    pj->height = get_le32(pj->file + 12);
+    pj->bits = get_le32(pj->file + 16);
+    pj->layers = get_le32(pj->file + 20);
+    pj->bin_nm = get_le32(pj->file + 24);
+    if (!pj->layers || pj->layers > pj->file_size / 12 || !pj->bin_nm) {
+        complain(RC_FAIL, "%s: byte 20: %u layers of %u nm do not fit the file", path, pj->layers, pj->bin_nm);
+        free(path);
+        return RC_FAIL;
+    }
+    pj->lengths = (uint32_t *)calloc(pj->layers, sizeof *pj->lengths);
+    pj->offsets = (size_t *)calloc(pj->layers, sizeof *pj->offsets);
+    if (!pj->lengths || !pj->offsets) { free(path); return complain(RC_FAIL, "out of memory"); }
+    for (at = 28, k = 0; k < pj->layers; k++) {
+        uint32_t code;
+        if (pj->file_size - at < 12 || (code = get_le32(pj->file + at + 8)) > pj->file_size - at - 12) {
+            complain(RC_FAIL, "%s: byte %zu: layer %zu runs past the end of the file", path, at, k + 1);
+            free(path);
+            return RC_FAIL;
+        }
+        pj->lengths[k] = get_le32(pj->file + at);
+        pj->offsets[k] = at;
+        at += 12 + code;
+    }
+    if (at != pj->file_size) {
+        complain(RC_FAIL, "%s: byte %zu: %zu bytes after the last layer", path, at, pj->file_size - at);
+        free(path);
+        return RC_FAIL;
+    }
+    free(path);
+    return RC_OK;
+}
+
+/* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
+static int job_mask(print_job *pj, uint32_t k)
+{
+    if (!pj->from_model) {
+        const unsigned char *rec = pj->file + pj->offsets[k - 1];
+        pj->crc = get_le32(rec + 4);
+        pj->code_size = get_le32(rec + 8);
+        pj->code = (unsigned char *)rec + 12;
+        return RC_OK;
+    }
+    {
+        int rc;
+        size_t bound = adaslice_rle_bound(pj->width, pj->height, (int)pj->bits);
+        if (k - 1 < pj->rendered) return complain(RC_FAIL, "layer %u: masks render bottom-up only", k);
+        if (bound > pj->code_cap) {
+            unsigned char *c = (unsigned char *)realloc(pj->code, bound);
+            if (!c) return complain(RC_FAIL, "out of memory for a mask's code");
+            pj->code = c;
+            pj->code_cap = bound;
+        }
+        /* the masker sweeps upwards; layers below k were passed on the way */
+        if ((rc = layer_masks_render(&pj->masks, k - 1))) return rc;
+        pj->rendered = k;
+        pj->code_size = adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits,
+                                            pj->code, pj->code_cap);
+        pj->crc = adaslice_crc32(0, pj->masks.image, pj->masks.stride * pj->height);
+        return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
+    }
+}
+
+/* ------------------------------------------------------------ planning */
+
+static int plan_ready(const status *s, const void *ctx) { (void)ctx; return s->state != FW_PLANNING; }
+
+/* The profile goes to the printer as varints; its plan must equal ours. */
+static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_plan_options *o, const print_job *pj)
+{
+    const adaslice_profile *p = &j->profile;
+    uint32_t n = (uint32_t)p->bin_count, i, k;
+    uint32_t *units = (uint32_t *)malloc(n * sizeof *units);
+    unsigned char *forced = (unsigned char *)malloc(n);
+    uint8_t buf[FW_PAYLOAD_MAX];
+    adaslice_error err;
+    size_t used = 0;
+    int rc = RC_OK;
+    if (!units || !forced) { free(units); free(forced); return complain(RC_FAIL, "out of memory"); }
+    if (adaslice_plan_units(p, o, units, forced, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
+    fw_put32(buf, n);
+    buf[4] = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_min;
+    buf[5] = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_max;
+    fw_put32(buf + 6, o->eps_units);
+    fw_put32(buf + 10, pj->bin_nm);
+    if ((rc = link_send(l, FW_MSG_PROFILE, buf, 14))) goto done;
+    for (i = 0; i < n; i++) {
+        uint32_t v = units[i] << 1 | (forced[i] ? 1u : 0u);
+        if (used + 5 > l->data_max) { if ((rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done; used = 0; }
+        while (v >= 0x80u) { buf[used++] = (uint8_t)(v | 0x80u); v >>= 7; }
+        buf[used++] = (uint8_t)v;
+    }
+    if (used && (rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done;
+    if ((rc = link_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
+    if (l->st.state != FW_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", error_name(l->st.error)); goto done; }
+    if (l->st.layers != pj->layers) {
+        rc = complain(RC_FAIL, "the printer planned %u layers, the host %u: the planners disagree", l->st.layers, pj->layers);
+        goto done;
+    }
+    /* read the plan back, page by page, and compare it layer by layer */
+    for (k = 1; k <= pj->layers;) {
+        unsigned long seen = l->plan_count;
+        size_t m;
+        fw_put32(buf, k);
+        if ((rc = link_send(l, FW_MSG_PLAN_GET, buf, 4))) goto done;
+        {
+            double asked = now_ms();
+            while (l->plan_count == seen && now_ms() - asked < l->rto_ms * 2)
+                if ((rc = link_pump(l, 10))) goto done;
+        }
+        if (l->plan_count == seen || l->plan_size < 12 || fw_get32(l->plan) != k) continue;
+        for (m = 12; m < l->plan_size && k <= pj->layers; m++, k++)
+            if (l->plan[m] != pj->lengths[k - 1]) {
+                rc = complain(RC_FAIL, "layer %u: the printer planned %u bins, the host %u", k, l->plan[m], pj->lengths[k - 1]);
+                goto done;
+            }
+    }
+done:
+    free(units);
+    free(forced);
+    return rc;
+}
+
+static int plan_given(serial_link *l, const print_job *pj)
+{
+    uint8_t buf[FW_PAYLOAD_MAX];
+    uint32_t k;
+    size_t used = 0;
+    int rc;
+    for (k = 0; k < pj->layers; k++)
+        if (pj->lengths[k] > 255) return complain(RC_FAIL, "layer %u is %u bins: a printer takes at most 255", k + 1, pj->lengths[k]);
+    fw_put32(buf, pj->layers);
+    fw_put32(buf + 4, pj->bin_nm);
+    if ((rc = link_send(l, FW_MSG_PLAN_SET, buf, 8))) return rc;
+    for (k = 0; k < pj->layers; k++) {
+        if (used >= l->data_max) { if ((rc = link_send(l, FW_MSG_PLAN_DATA, buf, used))) return rc; used = 0; }
+        buf[used++] = (uint8_t)pj->lengths[k];
+    }
+    if (used && (rc = link_send(l, FW_MSG_PLAN_DATA, buf, used))) return rc;
+    if ((rc = link_status(l))) return rc;
+    if (l->st.state != FW_READY || l->st.layers != pj->layers)
+        return complain(RC_FAIL, "the printer refused the plan: %s", error_name(l->st.error));
+    return RC_OK;
+}
+
+/* -------------------------------------------------------------- print */
+
+static int homed(const status *s, const void *ctx) { (void)ctx; return s->state != FW_HOMING; }
+
+static void progress_bar(const print_job *pj, const status *s, double started, uint32_t first)
+{
+    double t = now_ms(), per, eta;
+    uint32_t done = s->state == FW_DONE ? pj->layers : (s->layer > first ? s->layer - first : 0);
+    uint32_t todo = pj->layers - first + 1;
+    int filled = todo ? (int)(30.0 * done / todo) : 30, i;
+    static double last;
+    if (!isatty(2) || (t - last < 200 && s->state != FW_DONE)) return;
+    last = t;
+    per = done ? (t - started) / done : 0;
+    eta = per * (todo - done) / 1000;
+    fputs("\r[", stderr);
+    for (i = 0; i < 30; i++) fputc(i < filled ? '#' : ' ', stderr);
+    fprintf(stderr, "] layer %u/%u, z %.3f mm, %.0f s left ", s->layer, pj->layers, s->z_nm / 1e6, eta);
+    if (s->state == FW_DONE) fputc('\n', stderr);
+}
+
+typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
+
+static int print_loop(serial_link *l, const print_args *pa, print_job *pj, report_layer *rep, unsigned long *mask_bytes)
+{
+    uint8_t buf[FW_PAYLOAD_MAX];
+    uint32_t first = pa->resume_from ? (uint32_t)pa->resume_from : 1, next = first, tries = 0;
+    double started = now_ms(), polled = 0;
+    int rc, sending = 0;
+    size_t sent = 0;
+    uint16_t refused = 0;
+    fw_put32(buf, first);
+    fw_put32(buf + 4, (uint32_t)(pa->exposure * 1000 + 0.5));
+    fw_put32(buf + 8, (uint32_t)pa->bottom_layers);
+    fw_put32(buf + 12, (uint32_t)(pa->bottom_exposure * 1000 + 0.5));
+    fw_put32(buf + 16, (uint32_t)(pa->peel * 1e6 + 0.5));
+    fw_put32(buf + 20, (uint32_t)(pa->peel_speed * 1000 + 0.5));
+    fw_put32(buf + 24, (uint32_t)(pa->return_speed * 1000 + 0.5));
+    fw_put32(buf + 28, (uint32_t)(pa->settle * 1000 + 0.5));
+    if ((rc = link_send(l, FW_MSG_PRINT, buf, 32)) || (rc = link_status(l))) return rc;
+    if (l->st.state != FW_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", error_name(l->st.error));
+    refused = l->st.masks_refused;
+    for (;;) {
+        if (interrupted) {
+            if ((rc = link_send(l, FW_MSG_PAUSE, NULL, 0)) || (rc = link_status(l))) return rc;
+            while (l->st.state == FW_PRINTING) if ((rc = link_pump(l, 50)) || (rc = link_status(l))) return rc;
+            fprintf(stderr, "\nadaslice: paused at layer %u of %u (UV off, Z held at %.3f mm); "
+                            "continue with --resume-from %u\n", l->st.layer, pj->layers, l->st.z_nm / 1e6, l->st.layer);
+            return RC_PAUSED;
+        }
+        /* between masks, and once a mask is all sent, the next STATUS decides what comes next */
+        if (now_ms() - polled > 100 || !sending || sent == pj->code_size) {
+            if ((rc = link_status(l))) return rc;
+            polled = now_ms();
+            progress_bar(pj, &l->st, started, first);
+            if (l->st.state == FW_DONE) return RC_OK;
+            if (l->st.state == FW_PAUSED && (l->st.flags & FW_FLAG_LINK_LOST)) {
+                /* the link came back: the pause was not the operator's */
+                if ((rc = link_send(l, FW_MSG_RESUME, NULL, 0))) return rc;
+                continue;
+            }
+            if (l->st.state != FW_PRINTING && l->st.state != FW_PAUSED)
+                return complain(RC_FAIL, "the printer stopped printing (state %u): %s", l->st.state, error_name(l->st.error));
+            if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {
+                if (l->st.mask_ready >= next) { next++; tries = 0; }
+                else if (++tries > 5) return complain(RC_FAIL, "layer %u: the printer refused the mask %u times", next, tries);
+                refused = l->st.masks_refused;
+                sending = 0;
+            }
+        }
+        if (!sending && next <= pj->layers && l->st.mask_ready + 1 == next && next <= l->st.layer + 1) {
+            if (!tries && (rc = job_mask(pj, next))) return rc;
+            fw_put32(buf, next);
+            fw_put32(buf + 4, (uint32_t)pj->code_size);
+            fw_put32(buf + 8, pj->crc);
+            if ((rc = link_send(l, FW_MSG_MASK, buf, 12))) return rc;
+            rep[next - 1].crc = pj->crc;
+            rep[next - 1].code_bytes = (uint32_t)pj->code_size;
+            sending = 1;
+            sent = 0;
+        }
+        if (sending && sent < pj->code_size) {
+            size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
+            if ((rc = link_send(l, FW_MSG_MASK_DATA, pj->code + sent, chunk))) return rc;
+            sent += chunk;
+            *mask_bytes += chunk;
+            continue;
+        }
+        if ((rc = link_pump(l, 20))) return rc;
+    }
+}
+
+static void write_report(FILE *f, const void *ctx);
+
+typedef struct report {
+    const print_job *pj;
+    const report_layer *layers;
+    const serial_link *l;
+    uint32_t first;
+    double seconds;
+    unsigned long mask_bytes;
+    int planned_by_printer;
+} report;
+
+static void write_report(FILE *f, const void *ctx)
+{
+    const report *r = (const report *)ctx;
+    uint32_t k, z = 0;
+    fprintf(f, "{\n  \"layers\": %u,\n  \"first_layer\": %u,\n  \"bin_nm\": %u,\n  \"planned_by_printer\": %s,\n",
+            r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
+    fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
+               "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n  \"masks\": [",
+            r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
+            r->l->retransmits, r->l->naks);
+    for (k = 0; k < r->pj->layers; k++) {
+        z += r->pj->lengths[k];
+        fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u}", k ? "," : "", k + 1,
+                z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes);
+    }
+    fputs("\n  ]\n}\n", f);
+}
+
+/* -------------------------------------------------------------- options */
+
+static void print_usage(FILE *f)
+{
+    fputs("usage: adaslice print MODEL|JOBDIR --port DEV [print options] [masks] [plan options]\n"
+          "\n"
+          "Prints on a printer running the adaslice firmware (firmware/PROTOCOL.md). With a\n"
+          "MODEL the printer plans from the quantised profile and the host checks that the\n"
+          "plan equals its own; masks are rendered as they are needed. A JOBDIR from\n"
+          "adaslice slice is printed with its plan and JOBDIR/masks.rle. Ctrl-C pauses\n"
+          "(UV off, Z held) and exits 3; --resume-from K continues at layer K.\n"
+          "\n"
+          "print options\n"
+          "  --port DEV            the printer's serial port (required)\n"
+          "  --baud B              9600 ... 230400                               [115200]\n"
+          "  --resume-from K       start at layer K (the printer must be homed)  [1]\n"
+          "  --exposure S          seconds per layer                             [2.5]\n"
+          "  --bottom-layers N     layers exposed longer, to stick to the plate  [3]\n"
+          "  --bottom-exposure S   their seconds                                 [25]\n"
+          "  --peel MM             lift after each layer                         [5]\n"
+          "  --peel-speed MM/S     lift speed                                    [2]\n"
+          "  --return-speed MM/S   speed back down                               [4]\n"
+          "  --settle S            wait before exposing                          [0.5]\n"
+          "  --plan-on-host        send the host's plan instead of the profile\n"
+          "  --give-up S           a printer silent this long ends the print     [30]\n"
+          "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
+          "\n"
+          "masks (the display's size and pitch come from the printer)\n"
+          "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
+          "\n", f);
+    plan_options_usage(f);
+}
+
+static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, char **rest)
+{
+    int i, rc = RC_OK;
+    memset(pa, 0, sizeof *pa);
+    pa->baud = 115200;
+    pa->exposure = 2.5;
+    pa->bottom_layers = 3;
+    pa->bottom_exposure = 25;
+    pa->peel = 5;
+    pa->peel_speed = 2;
+    pa->return_speed = 4;
+    pa->settle = 0.5;
+    pa->give_up_s = 30;
+    rest[(*rest_argc)++] = argv[0];
+    for (i = 1; i < argc && !rc; i++) {
+        const char *o = argv[i];
+        double d = 0;
+        size_t n = 0;
+        if (!strcmp(o, "--port")) rc = file_option(argc, argv, &i, &pa->port);
+        else if (!strcmp(o, "--report")) rc = file_option(argc, argv, &i, &pa->report);
+        else if (!strcmp(o, "--baud")) { if (!(rc = count_option(argc, argv, &i, &n))) pa->baud = (long)n; }
+        else if (!strcmp(o, "--resume-from")) rc = count_option(argc, argv, &i, &pa->resume_from);
+        else if (!strcmp(o, "--exposure")) rc = number_option(argc, argv, &i, 0, &pa->exposure);
+        else if (!strcmp(o, "--bottom-layers")) { if (i + 1 < argc && !strcmp(argv[i + 1], "0")) { i++; pa->bottom_layers = 0; } else rc = count_option(argc, argv, &i, &pa->bottom_layers); }
+        else if (!strcmp(o, "--bottom-exposure")) rc = number_option(argc, argv, &i, 0, &pa->bottom_exposure);
+        else if (!strcmp(o, "--peel")) rc = number_option(argc, argv, &i, 1, &pa->peel);
+        else if (!strcmp(o, "--peel-speed")) rc = number_option(argc, argv, &i, 0, &pa->peel_speed);
+        else if (!strcmp(o, "--return-speed")) rc = number_option(argc, argv, &i, 0, &pa->return_speed);
+        else if (!strcmp(o, "--settle")) rc = number_option(argc, argv, &i, 1, &pa->settle);
+        else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
+        else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
+        else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
+        else rest[(*rest_argc)++] = argv[i];
+        (void)d;
+    }
+    if (rc) return rc;
+    if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
+    /* the firmware counts milliseconds, nanometres and micrometres per second in 32 bits */
+    if (pa->exposure > 4e6 || pa->bottom_exposure > 4e6 || pa->settle > 4e6)
+        return complain(RC_USAGE, "exposures and settle times are limited to 4e6 s");
+    if (pa->peel > 4000 || pa->peel_speed > 4e6 || pa->return_speed > 4e6)
+        return complain(RC_USAGE, "--peel is limited to 4000 mm and speeds to 4e6 mm/s");
+    return RC_OK;
+}
+
+static int is_dir(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+int cmd_print(int argc, char **argv)
+{
+    print_args pa;
+    slice_args s;
+    plan_args a;
+    plan_job j;
+    print_job pj;
+    serial_link l;
+    report_layer *rep = NULL;
+    adaslice_plan_options o;
+    char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), **rest2 = (char **)malloc(((size_t)argc + 4) * sizeof *rest2);
+    int rest_argc = 0, rest2_argc = 0, rc, planned_by_printer = 0, fd = -1;
+    unsigned long mask_bytes = 0;
+    double started;
+    const char *target = NULL;
+    struct sigaction sa;
+
+    memset(&j, 0, sizeof j);
+    memset(&pj, 0, sizeof pj);
+    memset(&l, 0, sizeof l);
+    memset(&a, 0, sizeof a);
+    if (!rest || !rest2) { free(rest); free(rest2); return complain(RC_FAIL, "out of memory"); }
+    rc = parse_print(argc, argv, &pa, &rest_argc, rest);
+    if (!rc) rc = parse_slice(rest_argc, rest, &s, &rest2_argc, rest2, 0);
+    if (rc < 0) { rc = RC_OK; goto done; }
+    if (rc) goto done;
+    if (s.geometry_given) { rc = complain(RC_USAGE, "print: the printer reports its display; drop --printer/--pixels/--pitch/--display"); goto done; }
+    if (rest2_argc >= 2 && rest2[1][0] != '-' && is_dir(rest2[1])) {
+        target = rest2[1];
+        if (rest2_argc > 2) { rc = complain(RC_USAGE, "print JOBDIR: %s: plan and mask options belong to adaslice slice", rest2[2]); goto done; }
+        pj.from_model = 0;
+        if ((rc = read_rle_file(target, &pj))) goto done;
+    } else {
+        if ((rc = parse_plan(rest2_argc, rest2, &a))) goto done;
+        if (a.help) { print_usage(stdout); goto done; }
+        if (!a.model) { rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR"); goto done; }
+        target = a.model;
+        pj.from_model = 1;
+    }
+
+    if ((rc = serial_open(pa.port, pa.baud, &fd))) goto done;
+    l.fd = fd;
+    l.dev = pa.port;
+    fw_deframer_init(&l.rx, fw_mcu_to_host_type);
+    l.give_up_ms = pa.give_up_s * 1000;
+    /* a window of frames at the line rate, with room for the printer's turnaround */
+    l.rto_ms = 200 + 2000.0 * FW_FRAME_MAX * 10 / (double)pa.baud;
+    if ((rc = link_hello(&l))) goto done;
+    l.rto_ms += 2000.0 * FW_FRAME_MAX * 10 * l.window / (double)pa.baud;
+    l.holdoff_ms = 50 + 1000.0 * FW_FRAME_MAX * 10 * l.window / (double)pa.baud;
+    l.data_max = FW_PAYLOAD_MAX;
+    printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
+           l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
+    fflush(stdout);
+
+    if (pj.from_model) {
+        s.width = (s.rotate & 1) ? l.id.height : l.id.width;
+        s.height = (s.rotate & 1) ? l.id.width : l.id.height;
+        s.pitch = l.id.pitch_nm / 1e6;
+        if (l.id.bits == 8 && s.supersample < 2) s.supersample = 4;
+        if (l.id.bits == 1 && s.supersample > 1) { rc = complain(RC_USAGE, "--aa: the printer's display is 1-bit"); goto done; }
+        a.method = ADASLICE_METHOD_OPTIMAL;
+        a.compare = 0;
+        /* printer units wherever the printer can plan, so both plans are one */
+        a.eps_units = a.metric != ADASLICE_METRIC_VOLUME && !a.budget ? ADASLICE_PRINTER_EPS_UNITS : 0;
+        j.args = &a;
+        j.keep_mesh = 1;
+        if ((rc = run_plan(&a, &j))) goto done;
+        {
+            const adaslice_plan *p = &j.plan[ADASLICE_METHOD_OPTIMAL];
+            uint32_t k;
+            double nm = j.profile.bin * 1e6;
+            pj.layers = (uint32_t)p->layer_count;
+            pj.bin_nm = (uint32_t)(nm + 0.5);
+            if (fabs(nm - pj.bin_nm) > 1e-6 * nm) { rc = complain(RC_USAGE, "--bin %g mm: a printer counts whole nanometres", j.profile.bin); goto done; }
+            if (!(pj.lengths = (uint32_t *)malloc(pj.layers * sizeof *pj.lengths))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+            for (k = 0; k < pj.layers; k++) pj.lengths[k] = p->planes[k + 1] - p->planes[k];
+            if ((rc = layer_masks_open(&pj.masks, &s, &j))) goto done;
+            pj.width = (uint32_t)pj.masks.width;
+            pj.height = (uint32_t)pj.masks.height;
+            pj.bits = (uint32_t)pj.masks.bits;
+            plan_options_of(&a, ADASLICE_METHOD_OPTIMAL, &o);
+            planned_by_printer = !pa.plan_on_host && a.eps_units && j.profile.bin_count <= l.id.max_bins &&
+                                 p->bins_max <= l.id.max_layer_bins;
+            if (!planned_by_printer && !pa.plan_on_host)
+                fprintf(stderr, "adaslice: the printer plans at most %u bins of layers up to %u bins (this part: %zu, %u%s): "
+                                "the host plans\n", l.id.max_bins, l.id.max_layer_bins, j.profile.bin_count, p->bins_max,
+                        a.eps_units ? "" : ", and volume or --budget plans are the host's");
+        }
+    }
+    if (pj.width != l.id.width || pj.height != l.id.height || pj.bits != l.id.bits) {
+        rc = complain(RC_FAIL, "the masks are %u x %u px, %u-bit; the printer shows %u x %u px, %u-bit", pj.width, pj.height,
+                      pj.bits, l.id.width, l.id.height, l.id.bits);
+        goto done;
+    }
+    if (pa.resume_from > pj.layers) { rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layers", pa.resume_from, pj.layers); goto done; }
+    if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    started = now_ms();
+
+    /* a print paused earlier is put down first: the plan goes again */
+    if ((rc = link_status(&l))) goto done;
+    if (l.st.state == FW_PRINTING || l.st.state == FW_PAUSED) {
+        if (!pa.resume_from) { rc = complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from", l.st.layer); goto done; }
+        if ((rc = link_send(&l, FW_MSG_ABORT, NULL, 0))) goto done;
+    }
+    rc = planned_by_printer ? plan_on_printer(&l, &j, &o, &pj) : plan_given(&l, &pj);
+    if (rc) goto done;
+    printf("%s: %u layers, %s\n", base_name(target), pj.layers,
+           planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
+    fflush(stdout);
+    if ((rc = link_status(&l))) goto done;
+    if (!(l.st.flags & FW_FLAG_HOMED)) {
+        if ((rc = link_send(&l, FW_MSG_HOME, NULL, 0)) || (rc = link_wait(&l, homed, NULL, 600000))) goto done;
+        if (!(l.st.flags & FW_FLAG_HOMED)) { rc = complain(RC_FAIL, "homing failed: %s", error_name(l.st.error)); goto done; }
+    }
+    rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
+    if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
+                    pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
+                    mask_bytes, l.retransmits);
+    if (pa.report && (rc == RC_OK || rc == RC_PAUSED)) {
+        report r;
+        int wrc;
+        r.pj = &pj;
+        r.layers = rep;
+        r.l = &l;
+        r.first = pa.resume_from ? (uint32_t)pa.resume_from : 1;
+        r.seconds = (now_ms() - started) / 1000;
+        r.mask_bytes = mask_bytes;
+        r.planned_by_printer = planned_by_printer;
+        if ((wrc = write_atomic(pa.report, write_report, &r))) rc = wrc;
+    }
+done:
+    if (fd >= 0) close(fd);
+    if (pj.masks.image) layer_masks_close(&pj.masks);
+    if (pj.from_model) free(pj.code);
+    free(pj.file);
+    free(pj.offsets);
+    free(pj.lengths);
+    free(rep);
+    job_free(&j);
+    free(rest);
+    free(rest2);
+    return rc;
+}

@@ -1,0 +1,173 @@
+/* The firmware core on a make-believe printer, in process: a port that keeps
+   what the core did (steps with their ticks, UV, masks shown with the CRC-32
+   of the display buffer, bytes sent) and a host side that frames messages.
+   For tests/test_firmware.c and tests/fuzz_firmware.c. One includer per
+   program (static functions). */
+#ifndef ADASLICE_FAKEPORT_H
+#define ADASLICE_FAKEPORT_H
+#include "../firmware/fw.h"
+#include "zcheck.h"
+#include <stdlib.h>
+#include <string.h>
+
+#define FAKE_TICK_HZ 10000000u
+#define FAKE_MAX_BINS 12000u
+
+
+typedef struct fake_printer {
+    fw_state fw;
+    fw_config config;
+    uint64_t workspace[(FW_PLAN_WORKSPACE(FAKE_MAX_BINS) + 7) / 8];
+    uint64_t now;
+    int32_t true_position;       /* steps above the endstop's switching point */
+    uint8_t display[2][64 * 1024];
+    /* what the core did */
+    zevent *events;
+    size_t event_count, event_cap;
+    int keep_events;
+    int exit_code;
+    /* the host's side */
+    uint8_t seq;
+    fw_deframer rx;
+    uint8_t status[64];
+    uint8_t plan[FW_FRAME_MAX];
+    size_t plan_size;
+    int acks, naks, statuses, identifies, plans;
+    char text[16384];            /* everything sent, as text (G-code replies) */
+    size_t text_len;
+    uint64_t heartbeat, last_beat; /* a STATUS every `heartbeat` ticks while running, if set */
+} fake_printer;
+
+static inline void fake_record(fake_printer *p, uint64_t when, int kind, int value, uint32_t crc)
+{
+    if (!p->keep_events) return;
+    if (p->event_count == p->event_cap) {
+        size_t cap = p->event_cap ? 2 * p->event_cap : 4096;
+        zevent *e = (zevent *)realloc(p->events, cap * sizeof *e);
+        if (!e) return;
+        p->events = e;
+        p->event_cap = cap;
+    }
+    p->events[p->event_count].when = when;
+    p->events[p->event_count].kind = kind;
+    p->events[p->event_count].value = value;
+    p->events[p->event_count].crc = crc;
+    p->event_count++;
+}
+
+static inline void fake_write(void *ctx, const uint8_t *data, size_t size)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    size_t i, n;
+    for (i = 0; i < size; i++) {
+        if (p->text_len + 1 < sizeof p->text) { p->text[p->text_len++] = (char)data[i]; p->text[p->text_len] = 0; }
+        fw_deframe_push(&p->rx, data[i]);
+        while ((n = fw_deframe_next(&p->rx)) != 0) {
+            const uint8_t *f = p->rx.buf;
+            switch (f[2]) {
+            case FW_MSG_ACK: if (f[3]) p->naks++; else p->acks++; break;
+            case FW_MSG_STATUS_REPLY: memcpy(p->status, f + 3, n - FW_FRAME_MIN); p->statuses++; break;
+            case FW_MSG_IDENTIFY: p->identifies++; break;
+            case FW_MSG_PLAN: memcpy(p->plan, f + 3, n - FW_FRAME_MIN); p->plan_size = n - FW_FRAME_MIN; p->plans++; break;
+            default: break;
+            }
+            fw_deframe_consume(&p->rx);
+        }
+    }
+}
+
+static inline void fake_step(void *ctx, int dir, uint64_t when)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    p->true_position += dir;
+    fake_record(p, when, ZEV_STEP, dir, 0);
+}
+
+static inline int fake_endstop(void *ctx) { return ((fake_printer *)ctx)->true_position <= 0; }
+
+static inline void fake_uv(void *ctx, int on, uint64_t when) { fake_record((fake_printer *)ctx, when, ZEV_UV, on, 0); }
+
+static inline void fake_motor(void *ctx, int on) { (void)ctx; (void)on; }
+
+static inline void fake_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, uint32_t size)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    if ((size_t)(y + 1) * size <= sizeof p->display[0]) memcpy(p->display[slot] + (size_t)y * size, row, size);
+}
+
+static inline void fake_show(void *ctx, int slot, uint64_t when)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    const fw_config *c = &p->config;
+    size_t stride = c->display_bits == 1 ? (c->display_width + 7u) / 8u : c->display_width;
+    uint32_t crc = slot >= 0 ? adaslice_crc32(0, p->display[slot], stride * c->display_height) : 0;
+    fake_record(p, when, ZEV_SHOW, slot, crc);
+}
+
+static inline void fake_exit(void *ctx, int code) { ((fake_printer *)ctx)->exit_code = code; }
+
+/* A printer of 400 steps/mm, 10 mm/s, 50 mm/s^2 with a w x h display. */
+static inline void fake_init(fake_printer *p, uint16_t w, uint16_t h, uint8_t bits)
+{
+    fw_port port;
+    memset(p, 0, sizeof *p);
+    p->config.tick_hz = FAKE_TICK_HZ;
+    p->config.axis.steps_per_mm = 400;
+    p->config.axis.max_speed = 4000;
+    p->config.axis.accel = 20000;
+    p->config.axis.home_speed = 2000;
+    p->config.axis.max_steps = 400 * 200;
+    p->config.axis.home_travel = 400 * 220;
+    p->config.display_width = w;
+    p->config.display_height = h;
+    p->config.display_bits = bits;
+    p->config.pitch_nm = 50000;
+    p->config.max_bins = FAKE_MAX_BINS;
+    p->config.link_timeout_ms = 1000;
+    p->config.window = 8;
+    p->true_position = 400 * 37 + 123;
+    port.ctx = p;
+    port.write = fake_write;
+    port.step = fake_step;
+    port.endstop = fake_endstop;
+    port.uv = fake_uv;
+    port.motor = fake_motor;
+    port.mask_row = fake_mask_row;
+    port.show = fake_show;
+    port.exit = fake_exit;
+    fw_deframer_init(&p->rx, fw_mcu_to_host_type);
+    fw_init(&p->fw, &p->config, &port, p->workspace, sizeof p->workspace);
+}
+
+static inline void fake_free(fake_printer *p) { free(p->events); p->events = NULL; }
+
+static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size) { fw_receive(&p->fw, data, size, p->now); }
+
+/* Frames a message from the host with the next sequence number. */
+static inline void fake_send(fake_printer *p, uint8_t type, const uint8_t *payload, size_t size)
+{
+    uint8_t frame[FW_FRAME_MAX];
+    size_t n = fw_frame_build(frame, p->seq++, type, payload, size);
+    fake_bytes(p, frame, n);
+}
+
+/* Runs the core until `until` (ticks), jumping from deadline to deadline. */
+static inline void fake_run(fake_printer *p, uint64_t until)
+{
+    for (;;) {
+        uint64_t next = fw_run(&p->fw, p->now);
+        if (p->heartbeat) {
+            if (p->now - p->last_beat >= p->heartbeat) { fake_send(p, FW_MSG_STATUS, NULL, 0); p->last_beat = p->now; continue; }
+            if (next > p->last_beat + p->heartbeat) next = p->last_beat + p->heartbeat;
+        }
+        if (next > until) { p->now = until; fw_run(&p->fw, p->now); return; }
+        if (next > p->now) p->now = next;
+    }
+}
+
+static inline uint8_t fake_state(fake_printer *p)
+{
+    fake_send(p, FW_MSG_STATUS, NULL, 0);
+    return p->status[0];
+}
+#endif

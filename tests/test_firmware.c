@@ -1,0 +1,399 @@
+/* The firmware core in process, on a make-believe printer (tests/fakeport.h):
+   its plans against the host's bit for bit, the link's recovery, masks
+   checked before they are shown, and a 1,000-layer print's motion. */
+#include "fakeport.h"
+#include "../adaslice.h"
+#include "check.h"
+#include <stdlib.h>
+#include <string.h>
+
+static unsigned fw_rng_state = 4242u;
+static unsigned fw_rng(void) { fw_rng_state = fw_rng_state * 1103515245u + 12345u; return (fw_rng_state >> 8) & 0xffffffu; }
+
+static size_t put_varint(uint8_t *out, uint32_t v)
+{
+    size_t n = 0;
+    while (v >= 0x80u) { out[n++] = (uint8_t)(v | 0x80u); v >>= 7; }
+    out[n++] = (uint8_t)v;
+    return n;
+}
+
+/* Sends a quantised profile in frames of random size (varints split across
+   frames), as a host would. */
+static void send_profile(fake_printer *p, const uint32_t *units, const unsigned char *forced, uint32_t n, uint8_t lo,
+                         uint8_t hi, uint32_t eps_units, uint32_t bin_nm)
+{
+    uint8_t hdr[14], *code = (uint8_t *)malloc((size_t)n * 5 + 1);
+    size_t size = 0, at = 0;
+    uint32_t i;
+    fw_put32(hdr, n);
+    hdr[4] = lo;
+    hdr[5] = hi;
+    fw_put32(hdr + 6, eps_units);
+    fw_put32(hdr + 10, bin_nm);
+    fake_send(p, FW_MSG_PROFILE, hdr, 14);
+    for (i = 0; i < n; i++) size += put_varint(code + size, units[i] << 1 | (forced && forced[i] ? 1u : 0u));
+    while (at < size) {
+        size_t chunk = 1 + fw_rng() % FW_PAYLOAD_MAX;
+        if (chunk > size - at) chunk = size - at;
+        fake_send(p, FW_MSG_PROFILE_DATA, code + at, chunk);
+        at += chunk;
+    }
+    free(code);
+}
+
+/* The printer's plan, page by page; returns the layer count. */
+static uint32_t read_plan(fake_printer *p, uint32_t *lengths, uint32_t cap)
+{
+    uint32_t k = 1, layers = 0;
+    do {
+        uint8_t req[4];
+        size_t m;
+        fw_put32(req, k);
+        fake_send(p, FW_MSG_PLAN_GET, req, 4);
+        if (p->plan_size < 12 || fw_get32(p->plan) != k) return 0;
+        layers = fw_get32(p->plan + 4);
+        for (m = 12; m < p->plan_size && k <= layers && k <= cap; m++) lengths[k++ - 1] = p->plan[m];
+    } while (k <= layers && k <= cap);
+    return layers;
+}
+
+/* Thousands of random profiles: the MCU's plan, made from the integers on
+   the wire, equals adaslice_plan_profile's with the same options, layer by
+   layer; where the host finds no plan, neither does the MCU. */
+static void mcu_plans_like_the_host(void)
+{
+    static fake_printer p;
+    static double phi[3000];
+    static uint32_t units[3000], lengths[3000];
+    static unsigned char forced[3000];
+    int trial, mismatches = 0, plans = 0, infeasible = 0;
+    for (trial = 0; trial < 2000; trial++) {
+        adaslice_profile prof;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        uint32_t n = 40 + fw_rng() % (trial % 10 == 0 ? 2900 : 400), i, k, layers;
+        double bin = 0.002;
+        int feasible;
+        fake_init(&p, 8, 8, 1);
+        memset(&prof, 0, sizeof prof);
+        for (i = 0; i < n; i++) phi[i] = fw_rng() % 60 == 0 ? 2.0 + (fw_rng() % 100) / 20.0 : (fw_rng() % 100000) / 99991.0;
+        prof.metric = trial % 3 ? ADASLICE_METRIC_CUSP : ADASLICE_METRIC_AREA;
+        prof.bin_count = n; prof.bin = bin; prof.phi = phi; prof.height = n * bin;
+        memset(&o, 0, sizeof o);
+        o.eps_units = ADASLICE_PRINTER_EPS_UNITS;
+        o.eps = 0.02 + (fw_rng() % 80) / 1000.0;
+        o.tmin = 0.05; o.tmax = trial % 4 == 0 ? 0.25 : 0.15;
+        o.sharp = trial % 2 ? ADASLICE_SHARP_OFF : 1.0;
+        CHECK(adaslice_plan_units(&prof, &o, units, forced, NULL) == ADASLICE_OK);
+        feasible = adaslice_plan_profile(&prof, &o, &plan, NULL) == ADASLICE_OK;
+        send_profile(&p, units, forced, n, 25, (uint8_t)(o.tmax / bin + 0.5), o.eps_units, 2000);
+        if (!feasible) {
+            infeasible++;
+            if (fake_state(&p) != FW_IDLE || p.status[2] != FW_ERR_INFEASIBLE) mismatches++;
+            continue;
+        }
+        plans++;
+        layers = fake_state(&p) == FW_READY ? read_plan(&p, lengths, 3000) : 0;
+        if (layers != plan.layer_count) mismatches++;
+        else for (k = 0; k < layers; k++) if (lengths[k] != plan.planes[k + 1] - plan.planes[k]) { mismatches++; break; }
+        adaslice_plan_free(&plan);
+    }
+    CHECKF(mismatches == 0 && plans > 1000 && infeasible > 20, "%d of %d plans differ (%d infeasible)", mismatches,
+           plans + infeasible, infeasible);
+}
+
+/* N = 12,000 bins plan in the MCU's workspace, which is under 16 KiB. */
+static void twelve_thousand_bins_fit(void)
+{
+    static fake_printer p;
+    static uint32_t units[12000];
+    uint32_t i;
+    CHECKF(FW_PLAN_WORKSPACE(12000) <= 16384, "workspace %zu bytes", (size_t)FW_PLAN_WORKSPACE(12000));
+    CHECK(adaslice_dp_workspace(12000, FW_MAX_LAYER_BINS, 0) <= FW_PLAN_WORKSPACE(12000));
+    fake_init(&p, 8, 8, 1);
+    for (i = 0; i < 12000; i++) units[i] = 1000 + fw_rng() % 30000;
+    send_profile(&p, units, NULL, 12000, 25, 75, ADASLICE_PRINTER_EPS_UNITS, 2000);
+    CHECK(fake_state(&p) == FW_READY && fw_get32(p.status + 31) == 12000 && fw_get32(p.status + 9) >= 160);
+    {
+        uint8_t hdr[14];
+        fw_put32(hdr, 12001);
+        hdr[4] = 25;
+        hdr[5] = 75;
+        fw_put32(hdr + 6, ADASLICE_PRINTER_EPS_UNITS);
+        fw_put32(hdr + 10, 2000);
+        fake_send(&p, FW_MSG_PROFILE, hdr, 14);
+        /* refused, and the plan made before is kept */
+        CHECK(fake_state(&p) == FW_READY && p.status[2] == FW_ERR_PLAN_SIZE);
+    }
+}
+
+/* Damaged, repeated and missing frames. */
+static void link_recovers(void)
+{
+    static fake_printer p;
+    uint8_t frame[FW_FRAME_MAX], hello = FW_PROTOCOL_VERSION;
+    size_t n;
+    int acks;
+    fake_init(&p, 8, 8, 1);
+    n = fw_frame_build(frame, 77, FW_MSG_HELLO, &hello, 1);
+    fake_bytes(&p, (const uint8_t *)"\x7e\x00\x03garbage~", 11);
+    fake_bytes(&p, frame, n);
+    CHECK(p.identifies == 1 && p.fw.deframer.bad == 1); /* the garbage: a frame of no known type */
+    p.seq = 78;
+    /* a corrupted STATUS is ignored and counted; the next one is answered */
+    n = fw_frame_build(frame, p.seq, FW_MSG_STATUS, NULL, 0);
+    frame[2] ^= 0x10;
+    fake_bytes(&p, frame, n);
+    CHECK(p.statuses == 0 && p.fw.deframer.bad == 2);
+    CHECK(fake_state(&p) == FW_IDLE && p.statuses == 1);
+    /* frames from the future (one was lost): each draws a NAK, none is run */
+    n = fw_frame_build(frame, (uint8_t)(p.seq + 1), FW_MSG_STATUS, NULL, 0);
+    fake_bytes(&p, frame, n);
+    fake_bytes(&p, frame, n);
+    CHECK(p.naks == 2 && p.statuses == 1);
+    /* a repeat of a frame already taken is acknowledged, not run again */
+    acks = p.acks;
+    n = fw_frame_build(frame, (uint8_t)(p.seq - 1), FW_MSG_HOME, NULL, 0);
+    fake_bytes(&p, frame, n);
+    CHECK(p.acks == acks + 1 && p.fw.state == FW_IDLE);
+    /* sequence numbers wrap */
+    for (n = 0; n < 300; n++) fake_send(&p, FW_MSG_STATUS, NULL, 0);
+    CHECK(p.statuses == 301 && p.naks == 2);
+    /* a wrong payload size is refused with its sequence number */
+    fake_send(&p, FW_MSG_MOVE, frame, 3);
+    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_MESSAGE && p.status[3] == (uint8_t)(p.seq - 2));
+    fake_free(&p);
+}
+
+static void send_plan(fake_printer *p, const uint8_t *lengths, uint32_t layers, uint32_t bin_nm)
+{
+    uint8_t hdr[8];
+    uint32_t at = 0;
+    fw_put32(hdr, layers);
+    fw_put32(hdr + 4, bin_nm);
+    fake_send(p, FW_MSG_PLAN_SET, hdr, 8);
+    while (at < layers) {
+        uint32_t chunk = layers - at > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : layers - at;
+        fake_send(p, FW_MSG_PLAN_DATA, lengths + at, chunk);
+        at += chunk;
+    }
+}
+
+static void send_mask(fake_printer *p, uint32_t layer, const uint8_t *code, size_t size, uint32_t crc)
+{
+    uint8_t hdr[12];
+    size_t at = 0;
+    fw_put32(hdr, layer);
+    fw_put32(hdr + 4, (uint32_t)size);
+    fw_put32(hdr + 8, crc);
+    fake_send(p, FW_MSG_MASK, hdr, 12);
+    while (at < size) {
+        size_t chunk = size - at > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : size - at;
+        fake_send(p, FW_MSG_MASK_DATA, code + at, chunk);
+        at += chunk;
+    }
+}
+
+static void start_print(fake_printer *p, uint32_t first, uint32_t exposure_ms, uint32_t bottom, uint32_t bottom_ms)
+{
+    uint8_t pr[32];
+    fw_put32(pr, first);
+    fw_put32(pr + 4, exposure_ms);
+    fw_put32(pr + 8, bottom);
+    fw_put32(pr + 12, bottom_ms);
+    fw_put32(pr + 16, 5000000);  /* peel 5 mm */
+    fw_put32(pr + 20, 3000);     /* 3 mm/s up */
+    fw_put32(pr + 24, 0);        /* down as fast as the axis goes */
+    fw_put32(pr + 28, 200);      /* settle */
+    fake_send(p, FW_MSG_PRINT, pr, 32);
+}
+
+static void home(fake_printer *p)
+{
+    fake_send(p, FW_MSG_HOME, NULL, 0);
+    fake_run(p, p->now + 60ull * FAKE_TICK_HZ);
+    CHECK(fake_state(p) == FW_IDLE || p->status[0] == FW_READY);
+    CHECK((p->status[4] & FW_FLAG_HOMED) && p->true_position == 0);
+}
+
+/* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
+   waits with UV off until a good copy arrives. */
+static void bad_masks_are_never_shown(void)
+{
+    static fake_printer p;
+    static uint8_t image[64 * 48 / 8], code[4096];
+    uint8_t lengths[2] = {30, 30};
+    size_t n, k;
+    uint32_t crc;
+    fake_init(&p, 64, 48, 1);
+    p.keep_events = 1;
+    p.heartbeat = FAKE_TICK_HZ / 5;
+    for (k = 0; k < sizeof image; k++) image[k] = (uint8_t)(k * 37 % 7 == 0 ? 0xf0 : 0);
+    n = adaslice_rle_encode(image, 8, 64, 48, 1, code, sizeof code);
+    crc = adaslice_crc32(0, image, sizeof image);
+    send_plan(&p, lengths, 2, 2000);
+    home(&p);
+    start_print(&p, 1, 1000, 0, 0);
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == FW_PRINTING && p.status[1] == FW_PHASE_WAIT_MASK);
+    send_mask(&p, 1, code, n, crc ^ 1);             /* the sender's CRC is wrong */
+    CHECK(fake_state(&p) == FW_PRINTING && p.status[2] == FW_ERR_MASK_CRC && fw_get16(p.status + 25) == 1);
+    code[n / 2] ^= 0x01;                            /* the code is damaged */
+    send_mask(&p, 1, code, n, crc);
+    code[n / 2] ^= 0x01;
+    CHECK(fake_state(&p) == FW_PRINTING && fw_get16(p.status + 25) == 2 && fw_get32(p.status + 13) == 0);
+    send_mask(&p, 2, code, n, crc);                 /* out of order */
+    CHECK(fake_state(&p) == FW_PRINTING && p.status[2] == FW_ERR_MASK_ORDER);
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    for (k = 0; k < p.event_count; k++) CHECK(p.events[k].kind != ZEV_UV && !(p.events[k].kind == ZEV_SHOW && p.events[k].value >= 0));
+    send_mask(&p, 1, code, n, crc);
+    fake_run(&p, p.now + FAKE_TICK_HZ / 10);
+    CHECK(fake_state(&p) == FW_PRINTING && fw_get32(p.status + 13) == 1 && p.status[1] >= FW_PHASE_SETTLE);
+    send_mask(&p, 2, code, n, crc);
+    fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == FW_DONE);
+    {
+        int shown = 0;
+        for (k = 0; k < p.event_count; k++)
+            if (p.events[k].kind == ZEV_SHOW && p.events[k].value >= 0) { shown++; CHECK(p.events[k].crc == crc); }
+        CHECK(shown == 2);
+    }
+    fake_free(&p);
+}
+
+/* A 1,000-layer print, masks streamed one layer ahead: the pins' record
+   passes tests/zcheck.h (Z exact at every exposure, no UV while moving,
+   speed and acceleration within limits, exposure times exact). */
+static void thousand_layers_without_drift(void)
+{
+    static fake_printer p;
+    static uint8_t lengths[1000], image[32 * 16 / 8], code[1024];
+    static uint32_t tops[1000], crcs[1000];
+    uint32_t k, sent = 0, top = 0;
+    zexpect e;
+    zsummary s;
+    fake_init(&p, 32, 16, 1);
+    p.keep_events = 1;
+    p.heartbeat = FAKE_TICK_HZ / 4;
+    for (k = 0; k < 1000; k++) { lengths[k] = (uint8_t)(25 + fw_rng() % 51); top += lengths[k]; tops[k] = top; }
+    send_plan(&p, lengths, 1000, 2000);
+    home(&p);
+    start_print(&p, 1, 300, 3, 2000);
+    CHECKF(fake_state(&p) == FW_PRINTING, "state %u error %u", p.status[0], p.status[2]);
+    while (fake_state(&p) == FW_PRINTING) {
+        uint32_t layer = fw_get32(p.status + 5), ready = fw_get32(p.status + 13);
+        if (ready == sent && sent < 1000 && sent + 1 <= layer + 1) {
+            size_t n, b;
+            for (b = 0; b < sizeof image; b++) image[b] = (uint8_t)((sent + 1) * 31 + b * 7);
+            n = adaslice_rle_encode(image, 4, 32, 16, 1, code, sizeof code);
+            crcs[sent] = adaslice_crc32(0, image, sizeof image);
+            send_mask(&p, sent + 1, code, n, crcs[sent]);
+            sent++;
+        }
+        fake_run(&p, p.now + FAKE_TICK_HZ / 20);
+    }
+    CHECKF(p.status[0] == FW_DONE && sent == 1000, "state %u after %u masks", p.status[0], sent);
+    memset(&e, 0, sizeof e);
+    e.tick_hz = FAKE_TICK_HZ;
+    e.steps_per_mm = 400;
+    e.max_speed = 4000;
+    e.accel = 20000;
+    e.start_position = 400 * 37 + 123;
+    e.layers = 1000;
+    e.first = 1;
+    e.top_bins = tops;
+    e.bin_nm = 2000;
+    e.crcs = crcs;
+    e.exposure_ticks = FAKE_TICK_HZ * 300ull / 1000;
+    e.bottom_ticks = FAKE_TICK_HZ * 2ull;
+    e.bottom_layers = 3;
+    s = zcheck_record(p.events, p.event_count, &e);
+    /* after the last peel: its top plus 5 mm, exactly */
+    CHECKF(p.true_position == zcheck_steps_of(&e, top) + 2000, "ends at %d steps", (int)p.true_position);
+    CHECKF(s.worst_accel_ratio > 0.95 && s.worst_speed_ratio > 0.95, "the limits were never approached: %.3f, %.3f",
+           s.worst_accel_ratio, s.worst_speed_ratio);
+    fake_free(&p);
+}
+
+/* Pause takes the UV off at once and keeps the rest of the exposure; a
+   silent host pauses the print by itself; resume finishes the layer. */
+static void pause_and_link_loss(void)
+{
+    static fake_printer p;
+    static uint8_t image[8], code[64];
+    uint8_t lengths[3] = {40, 40, 40};
+    uint64_t on = 0, total = 0;
+    size_t n, k;
+    uint32_t crc;
+    int uv = 0;
+    fake_init(&p, 8, 8, 1);
+    p.keep_events = 1;
+    p.heartbeat = FAKE_TICK_HZ / 5;
+    n = adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code);
+    crc = adaslice_crc32(0, image, sizeof image);
+    send_plan(&p, lengths, 3, 2000);
+    home(&p);
+    start_print(&p, 1, 4000, 0, 0);
+    send_mask(&p, 1, code, n, crc);
+    while (fake_state(&p) == FW_PRINTING && p.status[1] != FW_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 100);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    fake_send(&p, FW_MSG_PAUSE, NULL, 0);
+    CHECK(fake_state(&p) == FW_PAUSED && !(p.status[4] & FW_FLAG_UV));
+    fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
+    fake_send(&p, FW_MSG_RESUME, NULL, 0);
+    send_mask(&p, 2, code, n, crc);
+    /* the host falls silent during layer 2: UV off, Z held, a pause flagged as link loss */
+    while (fake_state(&p) == FW_PRINTING && !(fw_get32(p.status + 5) == 2 && p.status[1] == FW_PHASE_EXPOSE))
+        fake_run(&p, p.now + FAKE_TICK_HZ / 100);
+    p.heartbeat = 0;
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    p.heartbeat = FAKE_TICK_HZ / 5;
+    CHECK(fake_state(&p) == FW_PAUSED && (p.status[4] & FW_FLAG_LINK_LOST) && !(p.status[4] & FW_FLAG_UV));
+    fake_send(&p, FW_MSG_RESUME, NULL, 0);
+    send_mask(&p, 3, code, n, crc);
+    fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == FW_DONE);
+    /* every layer got its full 4 s of light, in pieces where it was paused */
+    for (k = 0; k < p.event_count; k++)
+        if (p.events[k].kind == ZEV_UV) {
+            if (p.events[k].value && !uv) on = p.events[k].when;
+            if (!p.events[k].value && uv) total += p.events[k].when - on;
+            uv = p.events[k].value;
+        }
+    CHECKF(total == 3 * 4ull * FAKE_TICK_HZ, "%llu ticks of light for 3 layers of 4 s", (unsigned long long)total);
+    fake_free(&p);
+}
+
+/* G-code mode through the core: an unpaced burst larger than the core holds
+   loses whole lines or has them refused, but never runs two spliced into a
+   different move. */
+static void gcode_burst_never_splices(void)
+{
+    static fake_printer p;
+    char burst[1024];
+    size_t n = 0;
+    int k;
+    fake_init(&p, 8, 8, 1);
+    fake_bytes(&p, (const uint8_t *)"G28\n", 4);
+    fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
+    CHECK(p.fw.axis.homed && strstr(p.text, "ok") != NULL);
+    for (k = 1; k <= 40; k++) n += (size_t)snprintf(burst + n, sizeof burst - n, "G1 Z%d.000 F600\n", k);
+    fake_bytes(&p, (const uint8_t *)burst, n);
+    fake_run(&p, p.now + 600ull * FAKE_TICK_HZ);
+    CHECKF(p.fw.axis.position % 400 == 0 && p.fw.axis.position > 0 && p.fw.axis.position <= 40 * 400,
+           "ends at %d steps", (int)p.fw.axis.position);
+    CHECK(strstr(p.text, "Error") != NULL || strstr(p.text, "Unknown") != NULL);
+    CHECK(!p.fw.binary);
+}
+
+void test_firmware(void)
+{
+    RUN(gcode_burst_never_splices);
+    RUN(mcu_plans_like_the_host);
+    RUN(twelve_thousand_bins_fit);
+    RUN(link_recovers);
+    RUN(bad_masks_are_never_shown);
+    RUN(thousand_layers_without_drift);
+    RUN(pause_and_link_loss);
+}

@@ -1,0 +1,299 @@
+/* adaslice print against the firmware over pseudo-terminals: the simulator
+   port (firmware/sim), a faulty line between them (tests/relay.c), the
+   Cortex-M3 image under qemu-system-arm, and printrun's printcore in G-code
+   mode. Each check reads what the printer's pins did from the simulator's
+   log (tests/zcheck.h) and the host's --report. */
+#include "cli_run.h"
+#include "zcheck.h"
+#include <errno.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdint.h>
+#include <time.h>
+
+#define SIM_BIN "build/fw-sim"
+#define RELAY_BIN "build/relay"
+#define SIM_SPEED "100"
+
+typedef struct child { pid_t pid; int out; char line[256]; } child;
+
+/* Starts argv[0] with stdout on a pipe and reads lines until one starts with
+   `prefix` (within `seconds`); that line is kept in c->line. */
+static int child_start(child *c, char *const argv[], const char *prefix, double seconds)
+{
+    int fds[2];
+    size_t len = 0;
+    struct timespec t0, t;
+    memset(c, 0, sizeof *c);
+    if (pipe(fds) != 0) return 0;
+    fflush(NULL);
+    c->pid = fork();
+    if (c->pid == 0) {
+        int null = open("/dev/null", O_RDONLY);
+        dup2(null, 0);
+        dup2(fds[1], 1);
+        close(fds[0]);
+        execv(argv[0], argv);
+        _exit(127);
+    }
+    close(fds[1]);
+    c->out = fds[0];
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (;;) {
+        struct pollfd p = {c->out, POLLIN, 0};
+        char ch;
+        clock_gettime(CLOCK_MONOTONIC, &t);
+        if ((t.tv_sec - t0.tv_sec) + (t.tv_nsec - t0.tv_nsec) / 1e9 > seconds) return 0;
+        if (poll(&p, 1, 100) <= 0) continue;
+        if (read(c->out, &ch, 1) != 1) return 0;
+        if (ch != '\n') { if (len + 1 < sizeof c->line) c->line[len++] = ch; continue; }
+        c->line[len] = 0;
+        if (!strncmp(c->line, prefix, strlen(prefix))) return 1;
+        len = 0;
+    }
+}
+
+/* SIGTERM, then the exit status (-1 if it did not exit normally). */
+static int child_stop(child *c)
+{
+    int st, i;
+    if (c->pid <= 0) return -1;
+    kill(c->pid, SIGTERM);
+    for (i = 0; i < 100; i++) {
+        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); c->pid = 0; return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
+        { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
+    }
+    kill(c->pid, SIGKILL);
+    waitpid(c->pid, &st, 0);
+    close(c->out);
+    c->pid = 0;
+    return -1;
+}
+
+/* The simulator's log: events, and its configuration from the "#" header. */
+typedef struct sim_log {
+    zevent *ev;
+    size_t count;
+    unsigned long tick_hz, steps_per_mm, max_speed, accel;
+    long start_steps;
+    size_t link_pauses;            /* state lines: paused with the link-lost flag */
+    uint64_t pause_begin, pause_end;
+    int steps_while_paused, uv_while_paused;
+} sim_log;
+
+static int read_sim_log(const char *path, sim_log *l)
+{
+    char *text = cli_read(path), *line, *save = NULL;
+    size_t cap = 0;
+    int paused = 0;
+    memset(l, 0, sizeof *l);
+    if (!text) return 0;
+    for (line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        unsigned long long when;
+        char what[16], arg[32];
+        int n;
+        if (line[0] == '#') {
+            const char *f;
+            if ((f = strstr(line, "tick_hz="))) l->tick_hz = strtoul(f + 8, NULL, 10);
+            if ((f = strstr(line, "steps_per_mm="))) l->steps_per_mm = strtoul(f + 13, NULL, 10);
+            if ((f = strstr(line, "max_speed="))) l->max_speed = strtoul(f + 10, NULL, 10);
+            if ((f = strstr(line, "accel="))) l->accel = strtoul(f + 6, NULL, 10);
+            if ((f = strstr(line, "start_steps="))) l->start_steps = strtol(f + 12, NULL, 10);
+            continue;
+        }
+        n = sscanf(line, "%llu %15s %31s", &when, what, arg);
+        if (n < 2) continue;
+        if (l->count == cap) {
+            zevent *e = (zevent *)realloc(l->ev, (cap = cap ? 2 * cap : 65536) * sizeof *e);
+            if (!e) break;
+            l->ev = e;
+        }
+        if (!strcmp(what, "step")) {
+            l->ev[l->count].kind = ZEV_STEP;
+            l->ev[l->count].value = arg[0] == '-' ? -1 : 1;
+            if (paused) l->steps_while_paused++;
+        } else if (!strcmp(what, "uv")) {
+            l->ev[l->count].kind = ZEV_UV;
+            l->ev[l->count].value = atoi(arg);
+            if (paused && l->ev[l->count].value) l->uv_while_paused++;
+        } else if (!strcmp(what, "show")) {
+            unsigned crc = 0;
+            int slot = atoi(arg);
+            if (slot >= 0) sscanf(line, "%*u %*s %*d %x", &crc);
+            l->ev[l->count].kind = ZEV_SHOW;
+            l->ev[l->count].value = slot;
+            l->ev[l->count].crc = crc;
+        } else if (!strcmp(what, "state")) {
+            unsigned state = 0, flags = 0;
+            sscanf(line, "%*u %*s %u %u", &state, &flags);
+            if (state == 6 && (flags & 8) && !paused) { paused = 1; l->link_pauses++; l->pause_begin = when; }
+            if (state != 6 && paused) { paused = 0; l->pause_end = when; }
+            continue;
+        } else continue;
+        l->ev[l->count].when = when;
+        l->count++;
+    }
+    free(text);
+    return l->tick_hz && l->steps_per_mm && l->max_speed && l->accel;
+}
+
+/* The host's --report: each layer's top (bins) and mask CRC. */
+typedef struct report { uint32_t layers, first, bin_nm, *tops, *crcs; unsigned long retransmits, mask_bytes; int by_printer; } report;
+
+static int read_report(const char *path, report *r)
+{
+    char *text = cli_read(path), *at;
+    uint32_t k = 0;
+    const char *f;
+    memset(r, 0, sizeof *r);
+    if (!text) return 0;
+    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
+    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"retransmitted_frames\": "))) r->retransmits = strtoul(f + 24, NULL, 10);
+    if ((f = strstr(text, "\"mask_code_bytes\": "))) r->mask_bytes = strtoul(f + 19, NULL, 10);
+    r->by_printer = strstr(text, "\"planned_by_printer\": true") != NULL;
+    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
+    r->crcs = (uint32_t *)calloc(r->layers + 1, sizeof *r->crcs);
+    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
+        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
+        at = strstr(at, "\"crc32\": \"");
+        if (!at) break;
+        r->crcs[k] = (uint32_t)strtoul(at + 10, &at, 16);
+    }
+    free(text);
+    return r->layers && k == r->layers;
+}
+
+static void report_free(report *r) { free(r->tops); free(r->crcs); }
+
+/* The record against the report: every layer shown once with the host's
+   mask, at its exact height, the motion within limits. */
+static void check_print(const char *log_path, const char *report_path, int expect_link_pause)
+{
+    sim_log l;
+    report r;
+    zexpect e;
+    zsummary s;
+    CHECKF(read_sim_log(log_path, &l), "cannot read the simulator's log %s", log_path);
+    CHECKF(read_report(report_path, &r), "cannot read the report %s", report_path);
+    if (check_case_failed()) { free(l.ev); report_free(&r); return; }
+    memset(&e, 0, sizeof e);
+    e.tick_hz = l.tick_hz;
+    e.steps_per_mm = (uint32_t)l.steps_per_mm;
+    e.max_speed = (uint32_t)l.max_speed;
+    e.accel = (uint32_t)l.accel;
+    e.start_position = l.start_steps;
+    e.layers = r.layers;
+    e.first = r.first;
+    e.top_bins = r.tops;
+    e.bin_nm = r.bin_nm;
+    e.crcs = r.crcs;
+    e.exposure_ticks = l.tick_hz / 10;   /* --exposure 0.1 */
+    e.bottom_ticks = l.tick_hz / 2;      /* --bottom-exposure 0.5 */
+    e.bottom_layers = 2;
+    s = zcheck_record(l.ev, l.count, &e);
+    CHECKF(s.shows == r.layers, "%zu masks shown for %u layers", s.shows, r.layers);
+    if (expect_link_pause) {
+        CHECKF(l.link_pauses >= 1, "no pause for the lost link in the log");
+        CHECKF(!l.steps_while_paused && !l.uv_while_paused, "%d steps and %d UV-on while paused", l.steps_while_paused,
+               l.uv_while_paused);
+    }
+    free(l.ev);
+    report_free(&r);
+}
+
+static const char *MODEL = "examples/models/hand_closed.obj";
+
+static int start_sim(child *sim, const char *log)
+{
+    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)log, (char *)"--speed", (char *)SIM_SPEED,
+                    (char *)"--display", (char *)"240x200", (char *)"--pitch-um", (char *)"100", NULL};
+    int ok = child_start(sim, argv, "pty ", 10);
+    CHECKF(ok, "the simulator %s did not start (make builds it)", SIM_BIN);
+    return ok;
+}
+
+static cli_result run_print(const char *port, const char *report)
+{
+    return cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--bottom-layers", "2",
+                   "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
+                   "0.05", "--report", report, NULL);
+}
+
+/* A whole print of the bundled hand over a pty: the printer plans, the host
+   agrees, every mask reaches the display intact. */
+static void full_print_on_the_simulator(void)
+{
+    child sim;
+    cli_result r;
+    if (!start_sim(&sim, cli_path("sim.log"))) return;
+    r = run_print(sim.line + 4, cli_path("report.json"));
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0);
+    cli_free(&r);
+}
+
+/* 1 % of the bytes dropped or flipped both ways: the print still completes
+   with every mask intact, no layer skipped or repeated. */
+static void print_through_a_faulty_line(void)
+{
+    child sim, relay;
+    cli_result r;
+    char mcu[256];
+    if (!start_sim(&sim, cli_path("sim2.log"))) return;
+    snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
+    {
+        char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--drop", (char *)"0.005", (char *)"--corrupt", (char *)"0.005",
+                        (char *)"--seed", (char *)"7", (char *)"--stats", (char *)cli_path("relay.txt"), NULL};
+        if (!child_start(&relay, argv, "pty ", 10)) { CHECK(!"the relay did not start"); child_stop(&sim); return; }
+    }
+    r = run_print(relay.line + 4, cli_path("report2.json"));
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    child_stop(&relay);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (r.status == 0) {
+        char *stats = cli_read(cli_path("relay.txt"));
+        unsigned long up = 0, up_drop = 0, up_bad = 0, down = 0, down_drop = 0, down_bad = 0;
+        CHECK(stats && sscanf(stats, "up %lu %lu %lu\ndown %lu %lu %lu", &up, &up_drop, &up_bad, &down, &down_drop, &down_bad) == 6);
+        /* the faults happened, at about the rate asked */
+        CHECKF(up_drop + up_bad > up / 200 && down_drop + down_bad > down / 200, "faults up %lu+%lu of %lu, down %lu+%lu of %lu",
+               up_drop, up_bad, up, down_drop, down_bad, down);
+        free(stats);
+        check_print(cli_path("sim2.log"), cli_path("report2.json"), 0);
+    }
+    cli_free(&r);
+}
+
+/* The line goes dead for 5 s mid-print: the printer pauses itself (UV off, Z
+   held), and the print resumes and completes when the line is back. */
+static void print_survives_a_lost_link(void)
+{
+    child sim, relay;
+    cli_result r;
+    char mcu[256];
+    if (!start_sim(&sim, cli_path("sim3.log"))) return;
+    snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
+    {
+        char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--outage-after", (char *)"12000", (char *)"--outage-for",
+                        (char *)"5", (char *)"--stats", (char *)cli_path("relay3.txt"), NULL};
+        if (!child_start(&relay, argv, "pty ", 10)) { CHECK(!"the relay did not start"); child_stop(&sim); return; }
+    }
+    r = run_print(relay.line + 4, cli_path("report3.json"));
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    child_stop(&relay);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1);
+    cli_free(&r);
+}
+
+void test_print(void)
+{
+    if (!cli_begin("adaslice-print")) { CHECK(!"no temporary directory"); return; }
+    RUN(full_print_on_the_simulator);
+    RUN(print_through_a_faulty_line);
+    RUN(print_survives_a_lost_link);
+    cli_end();
+}
