@@ -95,7 +95,7 @@ $(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_C
 fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
 	@for t in loaders gcode firmware; do \
 	    mkdir -p $(B)/fuzz_work/$$t; \
-	    $(B)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -max_len=4096 \
+	    $(B)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
 	        -print_final_stats=1 $(B)/fuzz_work/$$t tests/fuzz_seeds/$$t > $(B)/fuzz_$$t.log 2>&1; \
 	    status=$$?; echo "fuzz $$t:"; tail -n 12 $(B)/fuzz_$$t.log | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY"; \
 	    if [ $$status -ne 0 ]; then tail -n 40 $(B)/fuzz_$$t.log; exit $$status; fi; \
@@ -104,12 +104,12 @@ fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
 $(B)/relay: tests/relay.c | $(B)
 	$(CC) -std=c99 $(WARN) -O2 tests/relay.c -o $@
 
-check: compile-checks fuzz $(B)/san/adaslice $(B)/san/run_tests $(B)/fw-sim $(B)/relay
+check: compile-checks firmware fuzz $(B)/san/adaslice $(B)/san/run_tests $(B)/fw-sim $(B)/relay
 	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 
 # --- the shared models (not in the repository) ---------------------------
-$(B)/test_models: tests/test_models.c adaslice.h | $(B)
-	$(CC) $(CSTD) $(SAN) tests/test_models.c -o $@ -lm
+$(B)/test_models: tests/test_models.c adaslice.h tests/fakeport.h tests/zcheck.h $(FW_TEST_SRC) $(FW_HDRS) | $(B)
+	$(CC) $(CSTD) $(SAN) tests/test_models.c $(FW_TEST_SRC) -o $@ -lm
 
 check-models: $(B)/test_models
 	$(B)/test_models $(MODELS)
@@ -124,10 +124,27 @@ $(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/mas
 $(B)/bench_saliency: bench/bench_saliency.c bench/timing.h adaslice.h | $(B)
 	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench_saliency.c -o $@ -lm
 
-bench: $(B)/bench $(B)/bench_png $(B)/bench_saliency $(B)/adaslice
+ARM_NM ?= arm-none-eabi-nm
+BENCH_PLAN_SRC = firmware/mps2/bench_plan.c firmware/mps2/board.c firmware/cm3/cm3.c firmware/adaslice_fw.c
+
+$(B)/bench_wire: bench/bench_wire.c bench/timing.h adaslice.h | $(B)
+	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench_wire.c -o $@ -lm
+
+# The planner bench image: the mps2 board code and cm3 reset/tick with its
+# own main, built as the firmware is (-Os, 20 KiB of RAM by mps2.ld).
+$(B)/bench-plan-mps2.elf: $(BENCH_PLAN_SRC) bench/mcu_profile.h firmware/mps2/board.h firmware/mps2/mps2.ld \
+                          $(FW_CM3_HDRS) $(FW_HDRS) | $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -T firmware/mps2/mps2.ld $(BENCH_PLAN_SRC) -o $@ $(FW_ARM_LIBS)
+
+$(B)/bench_mcu_plan: bench/bench_mcu_plan.c bench/mcu_profile.h bench/timing.h adaslice.h | $(B)
+	$(CC) $(CSTD) -O2 bench/bench_mcu_plan.c -o $@ -lm
+
+bench: $(B)/bench $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf
 	$(B)/bench $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
+	$(B)/bench_wire $(MODELS)
+	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
 
 clean:
 	rm -rf $(B)

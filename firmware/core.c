@@ -17,9 +17,10 @@ static void send(fw_state *fw, uint8_t type, const uint8_t *payload, size_t size
     if (n) fw->port.write(fw->port.ctx, frame, n);
 }
 
+/* nak: 1 | the round bit of the frame that showed the gap (PROTOCOL.md) */
 static void send_ack(fw_state *fw, int nak)
 {
-    uint8_t flag = (uint8_t)(nak != 0);
+    uint8_t flag = (uint8_t)nak;
     send(fw, FW_MSG_ACK, &flag, 1);
 }
 
@@ -107,6 +108,7 @@ static int32_t steps_of_plane(const fw_state *fw, uint32_t plane, uint32_t extra
 
 static void drop_plan(fw_state *fw)
 {
+    fw->receiving = 0;
     fw->plan_kind = 0;
     fw->layers = 0;
     fw->cursor_layer = 0;
@@ -156,13 +158,14 @@ static void profile_begin(fw_state *fw, const uint8_t *p, uint8_t seq)
     fw->bin_nm = bin_nm;
     fw->varint = 0;
     fw->varint_shift = 0;
+    fw->receiving = FW_MSG_PROFILE_DATA;
     fw->state = FW_PLANNING;
 }
 
 static void profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 {
     size_t i;
-    if (fw->state != FW_PLANNING || fw->plan_kind) { fail(fw, FW_ERR_BUSY, seq); return; }
+    if (fw->state != FW_PLANNING || fw->receiving != FW_MSG_PROFILE_DATA) { fail(fw, FW_ERR_BUSY, seq); return; }
     for (i = 0; i < size; i++) {
         uint32_t v;
         if (fw->varint_shift == 28 && (p[i] & 0xf0u)) break;
@@ -175,6 +178,7 @@ static void profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t se
         adaslice_dp_push(&fw->dp, v >> 1, (v & 1u) && fw->bins_in + 1 < fw->bins);
         if (++fw->bins_in == fw->bins) {
             uint32_t k = adaslice_dp_reverse(&fw->dp);
+            fw->receiving = 0;
             if (k == ADASLICE_UNREACHED) { fw->state = FW_IDLE; fail(fw, FW_ERR_INFEASIBLE, seq); return; }
             fw->layers = k;
             fw->plan_kind = 1;
@@ -182,7 +186,7 @@ static void profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t se
             fw->state = FW_READY;
         }
     }
-    if (i < size) { fw->state = FW_IDLE; fail(fw, FW_ERR_PROFILE_DATA, seq); }
+    if (i < size) { fw->receiving = 0; fw->state = FW_IDLE; fail(fw, FW_ERR_PROFILE_DATA, seq); }
 }
 
 static void plan_set(fw_state *fw, const uint8_t *p, uint8_t seq)
@@ -197,13 +201,14 @@ static void plan_set(fw_state *fw, const uint8_t *p, uint8_t seq)
     fw->bin_nm = bin_nm;
     fw->bins = 0;
     fw->bins_in = 0; /* counts layers received here */
+    fw->receiving = FW_MSG_PLAN_DATA;
     fw->state = FW_PLANNING;
 }
 
 static void plan_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 {
     size_t i;
-    if (fw->state != FW_PLANNING || fw->plan_kind || !fw->layers) { fail(fw, FW_ERR_BUSY, seq); return; }
+    if (fw->state != FW_PLANNING || fw->receiving != FW_MSG_PLAN_DATA) { fail(fw, FW_ERR_BUSY, seq); return; }
     for (i = 0; i < size; i++) {
         if (fw->bins_in >= fw->layers || !p[i]) {
             drop_plan(fw);
@@ -214,7 +219,7 @@ static void plan_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
         fw->workspace[fw->bins_in++] = p[i];
         fw->bins += p[i];
     }
-    if (fw->bins_in == fw->layers) { fw->plan_kind = 2; fw->state = FW_READY; }
+    if (fw->bins_in == fw->layers) { fw->receiving = 0; fw->plan_kind = 2; fw->state = FW_READY; }
 }
 
 static void plan_get(fw_state *fw, const uint8_t *p, uint8_t seq)
@@ -310,7 +315,10 @@ static void print_start(fw_state *fw, const uint8_t *p, uint8_t seq, uint64_t no
 {
     uint32_t first = fw_get32(p);
     if (!fw->plan_kind) { fail(fw, FW_ERR_NO_PLAN, seq); return; }
-    if (fw->state != FW_READY && fw->state != FW_DONE) { fail(fw, FW_ERR_BUSY, seq); return; }
+    if ((fw->state != FW_READY && fw->state != FW_DONE) || fw->uv_on || fw_axis_busy(&fw->axis)) {
+        fail(fw, FW_ERR_BUSY, seq);
+        return;
+    }
     if (!fw->axis.homed) { fail(fw, FW_ERR_NOT_HOMED, seq); return; }
     if (first < 1 || first > fw->layers) { fail(fw, FW_ERR_MESSAGE, seq); return; }
     fw->exposure_ms = fw_get32(p + 4);
@@ -429,6 +437,7 @@ static void resume(fw_state *fw, uint8_t seq, uint64_t now)
 
 static void abort_all(fw_state *fw, uint64_t now)
 {
+    fw->exposing = 0;
     if (fw->uv_on) uv(fw, 0, now);
     fw->port.show(fw->port.ctx, -1, now);
     fw_axis_halt(&fw->axis, now);
@@ -469,7 +478,7 @@ static int payload_size(uint8_t type)
 
 static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 {
-    uint8_t seq = f[1], type = f[2];
+    uint8_t seq = f[1], type = (uint8_t)(f[2] & ~FW_ROUND_BIT), round = f[2] & FW_ROUND_BIT;
     const uint8_t *p = f + 3;
     size_t size = n - FW_FRAME_MIN;
     int want = payload_size(type);
@@ -486,7 +495,7 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
         uint8_t behind = (uint8_t)(fw->expect - seq);
         /* a repeat whose ack was lost, or a frame past a lost one: the host
            resends from the ack (and ignores NAKs its resending already answers) */
-        send_ack(fw, !(behind >= 1 && behind <= 128));
+        send_ack(fw, behind >= 1 && behind <= 128 ? 0 : 1 | round);
         return;
     }
     fw->expect++;
@@ -528,6 +537,7 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
         }
         fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
         uv(fw, 1, now);
+        fw->exposing = 1;
         fw->phase_end = now + FW_MS(fw, fw_get32(p));
         break;
     case FW_MSG_PRINT: print_start(fw, p, seq, now); break;
@@ -647,7 +657,8 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         else print_step(fw, now);
     }
     /* a manual exposure */
-    if (fw->uv_on && fw->state != FW_PRINTING && fw->state != FW_PAUSED && now >= fw->phase_end) {
+    if (fw->exposing && now >= fw->phase_end) {
+        fw->exposing = 0;
         uv(fw, 0, fw->phase_end);
         fw->port.show(fw->port.ctx, -1, fw->phase_end);
     }
@@ -662,8 +673,9 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
     if (fw->state == FW_PRINTING) {
         if (fw->phase == FW_PHASE_SETTLE || fw->phase == FW_PHASE_EXPOSE) next = earliest(next, fw->phase_end);
-        next = earliest(next, fw->heard + FW_MS(fw, fw->config.link_timeout_ms));
-    } else if (fw->uv_on && fw->state != FW_PAUSED) {
+        /* once the pause is asked for, the silence has done its work */
+        if (!fw->pause_wanted) next = earliest(next, fw->heard + FW_MS(fw, fw->config.link_timeout_ms));
+    } else if (fw->exposing) {
         next = earliest(next, fw->phase_end);
     }
     if (fw->binary && fw->state != FW_PRINTING && fw->state != FW_PAUSED)

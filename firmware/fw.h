@@ -90,6 +90,7 @@ typedef struct fw_state {
     uint32_t varint;
     uint8_t varint_shift;
     uint8_t plan_kind;         /* 0 none, 1 from the profile, 2 given by the host */
+    uint8_t receiving;         /* FW_MSG_PROFILE_DATA or FW_MSG_PLAN_DATA while one arrives */
     uint32_t layers;           /* K */
     uint32_t cursor_layer, cursor_plane; /* reading the plan bottom-up */
     /* masks: decoded into display buffer (layer & 1) as they stream */
@@ -106,6 +107,7 @@ typedef struct fw_state {
     uint64_t phase_end;        /* tick when a timed phase ends */
     uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
     uint8_t uv_on;
+    uint8_t exposing;          /* an EXPOSE message's light, until phase_end */
     /* G-code mode, until a good frame arrives */
     fw_gcode gcode;
     uint8_t gcode_held[2 * FW_GCODE_LINE_MAX]; /* bytes G-code could not take yet */

@@ -38,6 +38,7 @@ void fw_deframer_init(fw_deframer *d, int (*accept)(uint8_t type))
 
 int fw_host_to_mcu_type(uint8_t type)
 {
+    type &= (uint8_t)~FW_ROUND_BIT;
     return type == FW_MSG_HELLO || type == FW_MSG_STATUS || (type >= FW_MSG_PROFILE && type <= FW_MSG_PLAN_DATA) ||
            type == FW_MSG_MASK || type == FW_MSG_MASK_DATA || (type >= FW_MSG_HOME && type <= FW_MSG_ABORT) ||
            type == FW_MSG_EXIT;

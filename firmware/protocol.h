@@ -27,9 +27,14 @@ enum {
     FW_MSG_EXIT = 0x3f          /* emulators: end the program (u8 code) */
 };
 
+/* Bit 6 of a host frame's TYPE: the host's resend round (flips at each go-back-N
+   resend); a NAK echoes it, so the host can tell a NAK its resend drew from one
+   an older copy drew. */
+#define FW_ROUND_BIT 0x40u
+
 /* MCU -> host; byte 1 of every frame acknowledges: the next sequence number expected */
 enum {
-    FW_MSG_ACK = 0x80,          /* u8 1 if NAK: a frame was out of order, resend from the ack */
+    FW_MSG_ACK = 0x80,          /* u8 0, or a NAK: 1 | the round bit of the frame past the gap */
     FW_MSG_IDENTIFY = 0x81,
     FW_MSG_STATUS_REPLY = 0x82,
     FW_MSG_PLAN = 0x83          /* u32 first layer, u32 layers in all, u32 bin_nm, u8 lengths... */

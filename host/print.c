@@ -29,6 +29,7 @@ typedef struct print_args {
     double exposure, bottom_exposure, peel, peel_speed, return_speed, settle;
     size_t bottom_layers;
     int plan_on_host;
+    int then_exit;          /* emulators: EXIT after the print */
     double give_up_s;       /* a printer silent this long ends the print */
 } print_args;
 
@@ -106,14 +107,12 @@ typedef struct serial_link {
        line is clean: a frame's chance to arrive falls with its length */
     size_t data_max;
     unsigned clean;
-    double resent_at, holdoff_ms;
-    uint8_t resent_from;
+    uint8_t round;              /* FW_ROUND_BIT of the frames sent now */
     double srtt, rttvar;        /* request-to-reply times, as TCP keeps them (RFC 6298) */
 } serial_link;
 
 /* A STATUS round trip of `rtt` ms: the retransmission timeout follows the
-   line (a pty answers in a millisecond, a loaded 9600 baud line in seconds),
-   and NAKs within two round trips of a resend are the resend's own echo. */
+   line (a pty answers in a millisecond, a loaded 9600 baud line in seconds). */
 static void link_rtt(serial_link *l, double rtt)
 {
     if (!l->srtt) { l->srtt = rtt; l->rttvar = rtt / 2; }
@@ -123,9 +122,7 @@ static void link_rtt(serial_link *l, double rtt)
     }
     l->rto_ms = l->srtt + 4 * l->rttvar;
     if (l->rto_ms < 60) l->rto_ms = 60;
-    if (l->rto_ms > 3000) l->rto_ms = 3000;
-    l->holdoff_ms = 2 * l->srtt < 20 ? 20 : 2 * l->srtt;
-    if (l->holdoff_ms > l->rto_ms) l->holdoff_ms = l->rto_ms;
+    if (l->rto_ms > 1000) l->rto_ms = 1000;
 }
 
 static volatile sig_atomic_t interrupted;
@@ -146,14 +143,24 @@ static int link_write(serial_link *l, const uint8_t *data, size_t size)
     return RC_OK;
 }
 
-/* Go back N: everything unacknowledged again, and smaller data frames. */
+/* Go back N: everything unacknowledged again, in a new round (its NAKs are
+   told apart from those older copies draw), and smaller data frames. */
 static int resend_all(serial_link *l)
 {
     int i;
-    for (i = 0; i < l->count; i++) if (link_write(l, l->frames[i], l->lens[i])) return RC_FAIL;
+    l->round ^= FW_ROUND_BIT;
+    for (i = 0; i < l->count; i++) {
+        uint8_t *f = l->frames[i];
+        size_t n = l->lens[i];
+        uint16_t crc;
+        f[2] = (uint8_t)((f[2] & ~FW_ROUND_BIT) | l->round);
+        crc = fw_crc16(f, n - 3);
+        f[n - 3] = (uint8_t)(crc >> 8);
+        f[n - 2] = (uint8_t)crc;
+        if (link_write(l, f, n)) return RC_FAIL;
+    }
     l->retransmits += (unsigned long)l->count;
-    l->resent_at = l->last_progress = now_ms();
-    l->resent_from = l->base;
+    l->last_progress = now_ms();
     l->clean = 0;
     if (l->data_max > 32) l->data_max /= 2;
     return RC_OK;
@@ -182,7 +189,7 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
         /* frames sent before our last resend still draw NAKs: those are answered */
         if (size >= 1 && p[0] && l->count) {
             l->naks++;
-            if (l->resent_from != l->base || now_ms() - l->resent_at > l->holdoff_ms) (void)resend_all(l);
+            if ((p[0] & FW_ROUND_BIT) == l->round) (void)resend_all(l);
         }
         break;
     case FW_MSG_STATUS_REPLY:
@@ -246,7 +253,7 @@ static int link_send(serial_link *l, uint8_t type, const uint8_t *payload, size_
     int rc;
     while (l->count >= l->window || l->count >= LINK_QUEUE)
         if ((rc = link_pump(l, 20))) return rc;
-    l->lens[l->count] = fw_frame_build(l->frames[l->count], l->next_seq, type, payload, size);
+    l->lens[l->count] = fw_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
     if (!l->count) l->last_progress = now_ms();
     rc = link_write(l, l->frames[l->count], l->lens[l->count]);
     l->count++;
@@ -260,11 +267,17 @@ static int link_status(serial_link *l)
     unsigned long seen = l->status_count;
     int rc;
     for (;;) {
-        double asked = now_ms();
+        double asked;
+        unsigned long resends;
         if ((rc = link_send(l, FW_MSG_STATUS, NULL, 0))) return rc;
+        asked = now_ms(); /* after any wait for the window: that is not the line's round trip */
+        resends = l->retransmits;
         while (l->status_count == seen && now_ms() - asked < l->rto_ms * 2)
             if ((rc = link_pump(l, 2))) return rc;
-        if (l->status_count != seen) { link_rtt(l, now_ms() - asked); return RC_OK; }
+        if (l->status_count != seen) {
+            if (l->retransmits == resends) link_rtt(l, now_ms() - asked); /* Karn: no sample across a resend */
+            return RC_OK;
+        }
     }
 }
 
@@ -651,6 +664,8 @@ static void print_usage(FILE *f)
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer silent this long ends the print     [30]\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
+          "  --then-exit           end the firmware after the print (emulators and the\n"
+          "                        simulator; a real board ignores it)\n"
           "\n"
           "masks (the display's size and pitch come from the printer)\n"
           "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
@@ -689,6 +704,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--settle")) rc = number_option(argc, argv, &i, 1, &pa->settle);
         else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
+        else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
         else rest[(*rest_argc)++] = argv[i];
         (void)d;
@@ -758,7 +774,6 @@ int cmd_print(int argc, char **argv)
     l.rto_ms = 200 + 2000.0 * FW_FRAME_MAX * 10 / (double)pa.baud;
     if ((rc = link_hello(&l))) goto done;
     l.rto_ms += 2000.0 * FW_FRAME_MAX * 10 * l.window / (double)pa.baud;
-    l.holdoff_ms = 50 + 1000.0 * FW_FRAME_MAX * 10 * l.window / (double)pa.baud;
     l.data_max = FW_PAYLOAD_MAX;
     printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
            l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
@@ -830,6 +845,13 @@ int cmd_print(int argc, char **argv)
         if (!(l.st.flags & FW_FLAG_HOMED)) { rc = complain(RC_FAIL, "homing failed: %s", error_name(l.st.error)); goto done; }
     }
     rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
+    if (!rc && pa.then_exit) {
+        uint8_t code = 0;
+        double asked = now_ms();
+        if ((rc = link_send(&l, FW_MSG_EXIT, &code, 1))) goto done;
+        /* the acknowledgement may be lost with the emulator: a short wait is enough */
+        while (l.count && now_ms() - asked < 1000 && !link_pump(&l, 20)) {}
+    }
     if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
                     pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
                     mask_bytes, l.retransmits);

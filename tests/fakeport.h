@@ -11,7 +11,9 @@
 #include <string.h>
 
 #define FAKE_TICK_HZ 10000000u
+#ifndef FAKE_MAX_BINS
 #define FAKE_MAX_BINS 12000u
+#endif
 
 
 typedef struct fake_printer {

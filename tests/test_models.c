@@ -3,6 +3,8 @@
    because that README is the independent source. */
 #define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#define FAKE_MAX_BINS 45000u /* the firmware core, given the RAM for these parts */
+#include "fakeport.h"
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -362,6 +364,87 @@ static int check_masks(const char *dir, const char *name, int watertight)
     return ok;
 }
 
+/* The printer's planner (the firmware core in process, fed the quantised
+   profile in frames) against the host's adaslice_plan_profile with printer
+   units: the same plan, layer by layer, for cusp with and without the §3.3
+   pre-pass and for roughness; the part 40 mm tall (20,000 bins). */
+static int check_printer_plans(const char *dir, const char *name)
+{
+    static fake_printer fp;
+    static uint32_t units[FAKE_MAX_BINS];
+    static unsigned char forced[FAKE_MAX_BINS];
+    char path[4096], why[256] = "";
+    adaslice_mesh m;
+    double a[3], b[3];
+    size_t i;
+    int c, ok = 1;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (adaslice_mesh_load_file(path, NULL, &m, NULL) != ADASLICE_OK) return 0;
+    adaslice_mesh_bounds(&m, a, b);
+    for (i = 0; i < 3 * m.vertex_count; i++) m.vertices[i] = (float)((m.vertices[i] - a[i % 3]) * 40.0 / (b[2] - a[2]));
+    for (c = 0; c < 3 && ok; c++) {
+        adaslice_profile_options po;
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        uint8_t hdr[14];
+        uint32_t n, k, layers, at = 0;
+        int feasible;
+        memset(&po, 0, sizeof po);
+        po.metric = c == 2 ? ADASLICE_METRIC_ROUGHNESS : ADASLICE_METRIC_CUSP;
+        if (adaslice_profile_exact(&m, &po, &p, NULL) != ADASLICE_OK || p.bin_count > FAKE_MAX_BINS) { ok = 0; break; }
+        memset(&o, 0, sizeof o);
+        o.eps_units = ADASLICE_PRINTER_EPS_UNITS;
+        o.eps = c == 2 ? 0.2 : 0;
+        o.sharp = c == 1 ? 0 : ADASLICE_SHARP_OFF;
+        n = (uint32_t)p.bin_count;
+        if (adaslice_plan_units(&p, &o, units, forced, NULL) != ADASLICE_OK) { ok = 0; adaslice_profile_free(&p); break; }
+        feasible = adaslice_plan_profile(&p, &o, &plan, NULL) == ADASLICE_OK;
+        fake_init(&fp, 8, 8, 1);
+        fw_put32(hdr, n);
+        hdr[4] = 25;
+        hdr[5] = 75;
+        fw_put32(hdr + 6, o.eps_units);
+        fw_put32(hdr + 10, 2000);
+        fake_send(&fp, FW_MSG_PROFILE, hdr, 14);
+        while (at < n) {
+            uint8_t buf[FW_PAYLOAD_MAX];
+            size_t used = 0;
+            for (; at < n && used + 5 <= sizeof buf; at++) {
+                uint32_t v = units[at] << 1 | forced[at];
+                while (v >= 0x80u) { buf[used++] = (uint8_t)(v | 0x80u); v >>= 7; }
+                buf[used++] = (uint8_t)v;
+            }
+            fake_send(&fp, FW_MSG_PROFILE_DATA, buf, used);
+        }
+        if (!feasible) {
+            if (fake_state(&fp) != FW_IDLE || fp.status[2] != FW_ERR_INFEASIBLE) { snprintf(why, sizeof why, "plan %d: the host finds none, the printer does", c); ok = 0; }
+        } else if (fake_state(&fp) != FW_READY || (layers = fw_get32(fp.status + 9)) != plan.layer_count) {
+            snprintf(why, sizeof why, "plan %d: %zu layers on the host, state %u on the printer", c, plan.layer_count, fp.status[0]);
+            ok = 0;
+        } else {
+            for (k = 1; k <= layers && ok;) {
+                uint8_t req[4];
+                size_t j;
+                fw_put32(req, k);
+                fake_send(&fp, FW_MSG_PLAN_GET, req, 4);
+                for (j = 12; j < fp.plan_size && k <= layers; j++, k++)
+                    if (fp.plan[j] != plan.planes[k] - plan.planes[k - 1]) {
+                        snprintf(why, sizeof why, "plan %d: layer %u is %u bins on the printer, %u on the host", c, k,
+                                 fp.plan[j], plan.planes[k] - plan.planes[k - 1]);
+                        ok = 0;
+                        break;
+                    }
+            }
+        }
+        if (feasible) adaslice_plan_free(&plan);
+        adaslice_profile_free(&p);
+    }
+    adaslice_mesh_free(&m);
+    printf("%s printer plan %s%s%s\n", ok ? "ok  " : "FAIL", name, ok ? "" : ": ", why);
+    return ok;
+}
+
 int main(int argc, char **argv)
 {
     DIR *d;
@@ -395,6 +478,8 @@ int main(int argc, char **argv)
         if (check_plans(argv[1], names[i])) passed++;
         else failed++;
         if (check_masks(argv[1], names[i], is_watertight(names[i]))) passed++;
+        else failed++;
+        if (check_printer_plans(argv[1], names[i])) passed++;
         else failed++;
         free(names[i]);
     }

@@ -32,6 +32,7 @@ static int child_start(child *c, char *const argv[], const char *prefix, double 
         int null = open("/dev/null", O_RDONLY);
         dup2(null, 0);
         dup2(fds[1], 1);
+        dup2(fds[1], 2);
         close(fds[0]);
         execv(argv[0], argv);
         _exit(127);
@@ -289,11 +290,109 @@ static void print_survives_a_lost_link(void)
     cli_free(&r);
 }
 
+/* The Cortex-M3 image (build/fw-mps2.elf, 20 KiB of RAM) under
+   qemu-system-arm prints a short job from the same host code; the image's
+   exit status (semihosting) says it ended cleanly. */
+static void short_print_under_qemu(void)
+{
+    child qemu;
+    cli_result r;
+    char *argv[] = {(char *)"/usr/bin/timeout", (char *)"300", (char *)"qemu-system-arm", (char *)"-M", (char *)"mps2-an385",
+                    (char *)"-nographic", (char *)"-monitor", (char *)"none", (char *)"-serial", (char *)"pty",
+                    (char *)"-semihosting-config", (char *)"enable=on,target=native", (char *)"-kernel",
+                    (char *)"build/fw-mps2.elf", NULL};
+    char port[64] = "", *at;
+    int st, status = -1, i;
+    if (!child_start(&qemu, argv, "char device redirected to ", 20)) {
+        CHECK(!"qemu-system-arm did not start with build/fw-mps2.elf (make firmware; apt-get install qemu-system-arm)");
+        child_stop(&qemu);
+        return;
+    }
+    at = strstr(qemu.line, "/dev/");
+    for (i = 0; at && at[i] && at[i] != ' ' && i < 63; i++) port[i] = at[i];
+    port[i] = 0;
+    r = cli_run("print", MODEL, "--scale", "5", "--port", port, "--exposure", "0.05", "--bottom-layers", "1",
+                "--bottom-exposure", "0.1", "--peel", "0.5", "--peel-speed", "10", "--return-speed", "10", "--settle",
+                "0.02", "--then-exit", NULL);
+    CHECKF(r.status == 0, "print on QEMU exited %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    for (i = 0; i < 250 && qemu.pid; i++) {
+        if (waitpid(qemu.pid, &st, WNOHANG) == qemu.pid) { status = WIFEXITED(st) ? WEXITSTATUS(st) : -1; qemu.pid = 0; }
+        else { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
+    }
+    if (qemu.pid) child_stop(&qemu);
+    else close(qemu.out);
+    CHECKF(status == 0, "QEMU ended with %d (0: the firmware exited cleanly on EXIT)", status);
+    cli_free(&r);
+}
+
+/* printrun's printcore sends a G-code file to the simulator in G-code mode:
+   every line is acknowledged, Z lands where the file says, the light is on
+   only while Z stands still. */
+static void printcore_drives_gcode_mode(void)
+{
+    child sim, pc;
+    char *text, *argv[6];
+    int sent = 0, oks = 0, status;
+    const char *line;
+    sim_log l;
+    size_t k;
+    int uv = 0, moving_lit = 0;
+    long pos;
+    cli_write(cli_path("job.gcode"), "; a layer by hand\nG28\nG90\nG1 Z5 F300\nG4 P100\nM106 S255\nG4 P300\nM107\n"
+                                     "G91\nG1 Z1.5 F600 ; relative\nG90\nM114\nG1 Z10\nM400\nM18\n");
+    {
+        char *sargv[] = {(char *)SIM_BIN, (char *)"--log", (char *)cli_path("sim4.log"), (char *)"--speed", (char *)"20", NULL};
+        if (!child_start(&sim, sargv, "pty ", 10)) { CHECK(!"the simulator did not start"); return; }
+    }
+    argv[0] = (char *)"/usr/bin/python3";
+    argv[1] = (char *)"/usr/bin/printcore";
+    argv[2] = (char *)"-v";
+    argv[3] = sim.line + 4;
+    argv[4] = (char *)cli_path("job.gcode");
+    argv[5] = NULL;
+    if (!child_start(&pc, argv, "SENT: N-1 M110*15", 10)) { CHECK(!"printcore (Debian printrun) did not start its print"); child_stop(&sim); return; }
+    /* the rest of its output, until it exits */
+    {
+        size_t cap = 1 << 16, n = 0;
+        ssize_t got;
+        text = (char *)calloc(cap, 1);
+        while (text && n + 1 < cap && (got = read(pc.out, text + n, cap - 1 - n)) > 0) n += (size_t)got;
+    }
+    status = -1;
+    {
+        int st;
+        if (waitpid(pc.pid, &st, 0) == pc.pid && WIFEXITED(st)) status = WEXITSTATUS(st);
+        close(pc.out);
+        pc.pid = 0;
+    }
+    CHECKF(status == 0, "printcore exited %d", status);
+    for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
+        if (!strncmp(line, "RECV: ok", 8)) oks++;
+        CHECKF(strncmp(line, "RECV: Error", 11), "printcore was told %.60s", line);
+    }
+    CHECKF(sent == 14 && oks >= sent, "%d lines sent, %d acknowledged", sent, oks);
+    CHECK(text && strstr(text, "Z:6.500") && strstr(text, "Z_move_comp"));
+    free(text);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    CHECK(read_sim_log(cli_path("sim4.log"), &l));
+    pos = l.start_steps;
+    for (k = 0; k < l.count; k++) {
+        if (l.ev[k].kind == ZEV_STEP) { pos += l.ev[k].value; moving_lit += uv; }
+        if (l.ev[k].kind == ZEV_UV) uv = l.ev[k].value;
+    }
+    CHECKF(pos == 10 * (long)l.steps_per_mm && !moving_lit && !uv, "ends at %ld steps; %d steps lit", pos, moving_lit);
+    free(l.ev);
+}
+
 void test_print(void)
 {
     if (!cli_begin("adaslice-print")) { CHECK(!"no temporary directory"); return; }
     RUN(full_print_on_the_simulator);
     RUN(print_through_a_faulty_line);
     RUN(print_survives_a_lost_link);
+    RUN(short_print_under_qemu);
+    RUN(printcore_drives_gcode_mode);
     cli_end();
 }
