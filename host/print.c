@@ -290,7 +290,7 @@ static int link_hello(serial_link *l)
     l->last_heard = start;
     /* an emulator may drop what arrives before it looks at the port: say hello until answered */
     while (!l->identify_count) {
-        if (now_ms() - start > 10000) return complain(RC_FAIL, "no adaslice printer answers on %s", l->dev);
+        if (now_ms() - start > 5000) return complain(RC_FAIL, "no adaslice printer answers on %s (5 s)", l->dev);
         if (now_ms() - sent > 250) {
             if ((rc = link_write(l, frame, n))) return rc;
             sent = now_ms();

@@ -3,8 +3,11 @@
    Cortex-M3 image under qemu-system-arm, and printrun's printcore in G-code
    mode. Each check reads what the printer's pins did from the simulator's
    log (tests/zcheck.h) and the host's --report. */
+#define _XOPEN_SOURCE 700 /* posix_openpt, ptsname */
 #include "cli_run.h"
 #include "zcheck.h"
+#include "../adaslice.h"
+#include "meshgen.h"
 #include <errno.h>
 #include <poll.h>
 #include <signal.h>
@@ -78,6 +81,7 @@ typedef struct sim_log {
     unsigned long tick_hz, steps_per_mm, max_speed, accel;
     long start_steps;
     size_t link_pauses;            /* state lines: paused with the link-lost flag */
+    size_t user_pauses;            /* paused without it (PAUSE, Ctrl-C) */
     uint64_t pause_begin, pause_end;
     int steps_while_paused, uv_while_paused;
 } sim_log;
@@ -127,7 +131,11 @@ static int read_sim_log(const char *path, sim_log *l)
         } else if (!strcmp(what, "state")) {
             unsigned state = 0, flags = 0;
             sscanf(line, "%*u %*s %u %u", &state, &flags);
-            if (state == 6 && (flags & 8) && !paused) { paused = 1; l->link_pauses++; l->pause_begin = when; }
+            if (state == 6 && !paused) {
+                paused = 1;
+                if (flags & 8) l->link_pauses++; else l->user_pauses++;
+                l->pause_begin = when;
+            }
             if (state != 6 && paused) { paused = 0; l->pause_end = when; }
             continue;
         } else continue;
@@ -206,9 +214,9 @@ static void check_print(const char *log_path, const char *report_path, int expec
 
 static const char *MODEL = "examples/models/hand_closed.obj";
 
-static int start_sim(child *sim, const char *log)
+static int start_sim(child *sim, const char *log, const char *speed)
 {
-    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)log, (char *)"--speed", (char *)SIM_SPEED,
+    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)log, (char *)"--speed", (char *)speed,
                     (char *)"--display", (char *)"240x200", (char *)"--pitch-um", (char *)"100", NULL};
     int ok = child_start(sim, argv, "pty ", 10);
     CHECKF(ok, "the simulator %s did not start (make builds it)", SIM_BIN);
@@ -228,7 +236,7 @@ static void full_print_on_the_simulator(void)
 {
     child sim;
     cli_result r;
-    if (!start_sim(&sim, cli_path("sim.log"))) return;
+    if (!start_sim(&sim, cli_path("sim.log"), SIM_SPEED)) return;
     r = run_print(sim.line + 4, cli_path("report.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
@@ -244,7 +252,7 @@ static void print_through_a_faulty_line(void)
     child sim, relay;
     cli_result r;
     char mcu[256];
-    if (!start_sim(&sim, cli_path("sim2.log"))) return;
+    if (!start_sim(&sim, cli_path("sim2.log"), SIM_SPEED)) return;
     snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
     {
         char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--drop", (char *)"0.005", (char *)"--corrupt", (char *)"0.005",
@@ -275,7 +283,7 @@ static void print_survives_a_lost_link(void)
     child sim, relay;
     cli_result r;
     char mcu[256];
-    if (!start_sim(&sim, cli_path("sim3.log"))) return;
+    if (!start_sim(&sim, cli_path("sim3.log"), SIM_SPEED)) return;
     snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
     {
         char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--outage-after", (char *)"12000", (char *)"--outage-for",
@@ -288,6 +296,216 @@ static void print_survives_a_lost_link(void)
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1);
     cli_free(&r);
+}
+
+/* Starts `adaslice print` in the background (for Ctrl-C). */
+static pid_t print_in_background(char *const extra[], const char *out_path)
+{
+    char *argv[48];
+    int n = 0, i;
+    pid_t pid;
+    argv[n++] = (char *)cli_tool;
+    for (i = 0; extra[i] && n < 47; i++) argv[n++] = extra[i];
+    argv[n] = NULL;
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        int o = open(out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
+        dup2(null, 0);
+        dup2(o, 1);
+        dup2(o, 2);
+        execv(cli_tool, argv);
+        _exit(127);
+    }
+    return pid;
+}
+
+/* Events from the show of `layer` in the second run on: where a resumed
+   print's record begins. */
+static size_t nth_show_from_end(const sim_log *l, size_t shows_from_end)
+{
+    size_t k = l->count, seen = 0;
+    while (k > 0) {
+        k--;
+        if (l->ev[k].kind == ZEV_SHOW && l->ev[k].value >= 0 && ++seen == shows_from_end) return k;
+    }
+    return 0;
+}
+
+/* Ctrl-C mid-print: the host pauses the printer (UV off at once, Z held) and
+   exits 3 naming the layer; a second run with --resume-from K finishes the
+   print from layer K, every layer from K on shown once with its mask at its
+   exact height. */
+static void ctrl_c_pauses_and_resume_finishes(void)
+{
+    child sim;
+    char port[256], *out, *at;
+    char *args[] = {(char *)"print", (char *)MODEL, (char *)"--scale", (char *)"15", (char *)"--port", port,
+                    (char *)"--exposure", (char *)"0.1", (char *)"--bottom-layers", (char *)"2", (char *)"--bottom-exposure",
+                    (char *)"0.5", (char *)"--peel", (char *)"2", (char *)"--peel-speed", (char *)"10", (char *)"--return-speed",
+                    (char *)"10", (char *)"--settle", (char *)"0.05", NULL};
+    pid_t pid;
+    int st, status = -1, i;
+    unsigned layer = 0;
+    cli_result r;
+    sim_log l;
+    report rep;
+    if (!start_sim(&sim, cli_path("sim5.log"), "10")) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = print_in_background(args, cli_path("print5.out"));
+    /* into the print: the log shows a few exposures */
+    for (i = 0; i < 600; i++) {
+        char *log = cli_read(cli_path("sim5.log"));
+        int lit = 0;
+        for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
+        free(log);
+        if (lit >= 6) break;
+        { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
+    }
+    kill(pid, SIGINT);
+    if (waitpid(pid, &st, 0) == pid && WIFEXITED(st)) status = WEXITSTATUS(st);
+    out = cli_read(cli_path("print5.out"));
+    CHECKF(status == 3, "Ctrl-C: exit %d: %s", status, out ? out : "");
+    at = out ? strstr(out, "--resume-from ") : NULL;
+    CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
+    free(out);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    {
+        char k[16];
+        snprintf(k, sizeof k, "%u", layer);
+        r = cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--bottom-layers", "2",
+                    "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
+                    "0.05", "--resume-from", k, "--report", cli_path("report5.json"), NULL);
+    }
+    CHECKF(r.status == 0, "resume: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (check_case_failed()) return;
+    CHECK(read_sim_log(cli_path("sim5.log"), &l) && read_report(cli_path("report5.json"), &rep));
+    if (!check_case_failed()) {
+        /* the resumed run's record: from its first layer's show to the end */
+        size_t from = nth_show_from_end(&l, rep.layers - layer + 1), k;
+        long pos = l.start_steps;
+        zexpect e;
+        for (k = 0; k < from; k++) if (l.ev[k].kind == ZEV_STEP) pos += l.ev[k].value;
+        memset(&e, 0, sizeof e);
+        e.tick_hz = l.tick_hz;
+        e.steps_per_mm = (uint32_t)l.steps_per_mm;
+        e.max_speed = (uint32_t)l.max_speed;
+        e.accel = (uint32_t)l.accel;
+        e.start_position = pos;
+        e.layers = rep.layers;
+        e.first = layer;
+        e.top_bins = rep.tops;
+        e.bin_nm = rep.bin_nm;
+        e.crcs = rep.crcs;
+        e.exposure_ticks = l.tick_hz / 10;
+        e.bottom_ticks = l.tick_hz / 2;
+        e.bottom_layers = 2;
+        CHECK(rep.first == layer);
+        (void)zcheck_record(l.ev + from, l.count - from, &e);
+        /* between the Ctrl-C and the resume: the light off, Z still */
+        CHECKF(l.user_pauses == 1 && !l.steps_while_paused && !l.uv_while_paused,
+               "%zu pauses; %d steps and %d UV-on while paused", l.user_pauses, l.steps_while_paused, l.uv_while_paused);
+    }
+    free(l.ev);
+    report_free(&rep);
+}
+
+/* adaslice slice writes masks.rle; print JOBDIR sends its plan (PLAN_SET)
+   and streams its masks: the display shows exactly the job's masks. */
+static void print_a_sliced_job(void)
+{
+    child sim;
+    cli_result r;
+    char *text;
+    if (!start_sim(&sim, cli_path("sim6.log"), SIM_SPEED)) return;
+    r = cli_run("slice", MODEL, "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "-o", cli_path("job"), NULL);
+    CHECKF(r.status == 0, "slice: %s", r.err);
+    cli_free(&r);
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--exposure", "0.1", "--bottom-layers", "2",
+                "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05",
+                "--report", cli_path("report6.json"), NULL);
+    CHECKF(r.status == 0, "print JOBDIR: exit %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "the host's plan") != NULL);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0);
+    /* a damaged job: the message names the file and the byte */
+    text = cli_read(cli_path("job/masks.rle"));
+    if (text) {
+        FILE *f = fopen(cli_path("job/masks.rle"), "r+b");
+        if (f) { fseek(f, 36, SEEK_SET); fputc(0xff, f); fputc(0xff, f); fputc(0xff, f); fputc(0x7f, f); fclose(f); }
+        free(text);
+    }
+    r = cli_run("print", cli_path("job"), "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "masks.rle: byte 28"), "damaged job: %d %s", r.status, r.err);
+    cli_free(&r);
+}
+
+/* Bad ports and arguments: one clear message, a non-zero exit. */
+static void bad_ports_are_named(void)
+{
+    cli_result r = cli_run("print", MODEL, "--port", "/nonexistent/tty", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/nonexistent/tty"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "not a serial port"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, "--port", "/dev/null", "--baud", "12345", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "12345"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "--port"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, "--port", "/dev/null", "--printer", "2k-5.5", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "reports its display"), "%d %s", r.status, r.err);
+    cli_free(&r);
+}
+
+/* A silent port: no printer answers within the hello's time. */
+static void silent_port_is_named(void)
+{
+    cli_result r;
+    {
+        int master = posix_openpt(O_RDWR | O_NOCTTY);
+        CHECK(master >= 0 && !grantpt(master) && !unlockpt(master));
+        if (master < 0) return;
+        r = cli_run("print", MODEL, "--scale", "15", "--port", ptsname(master), NULL);
+        CHECKF(r.status == 1 && strstr(r.err, "no adaslice printer answers"), "%d %s", r.status, r.err);
+        cli_free(&r);
+        close(master);
+    }
+}
+
+/* A thousand layers on the simulator: a cylinder 100 mm tall in layers of
+   0.1 mm, planned on the host (50,000 bins are more than the printer takes)
+   and sent as a plan; the pins' record shows Z exactly at every layer's top,
+   no drift, the motion within its limits and every mask shown once. */
+static void thousand_layers_on_the_simulator(void)
+{
+    adaslice_mesh m = gen_cylinder(3, 100, 24, 0);
+    FILE *f = fopen(cli_path("column.obj"), "w");
+    child sim;
+    cli_result r;
+    size_t i;
+    CHECK(f != NULL);
+    if (!f) { gen_free(&m); return; }
+    for (i = 0; i < m.vertex_count; i++)
+        fprintf(f, "v %.9g %.9g %.9g\n", m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2]);
+    for (i = 0; i < m.triangle_count; i++)
+        fprintf(f, "f %u %u %u\n", m.triangles[3 * i] + 1, m.triangles[3 * i + 1] + 1, m.triangles[3 * i + 2] + 1);
+    fclose(f);
+    gen_free(&m);
+    if (!start_sim(&sim, cli_path("sim7.log"), "1000")) return;
+    r = cli_run("print", cli_path("column.obj"), "--tmax", "0.1", "--port", sim.line + 4, "--exposure", "0.1",
+                "--bottom-layers", "2", "--bottom-exposure", "0.5", "--peel", "0.5", "--peel-speed", "10",
+                "--return-speed", "10", "--settle", "0.02", "--report", cli_path("report7.json"), NULL);
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "1000 layers, the host's plan") != NULL);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_print(cli_path("sim7.log"), cli_path("report7.json"), 0);
 }
 
 /* The Cortex-M3 image (build/fw-mps2.elf, 20 KiB of RAM) under
@@ -392,6 +610,11 @@ void test_print(void)
     RUN(full_print_on_the_simulator);
     RUN(print_through_a_faulty_line);
     RUN(print_survives_a_lost_link);
+    RUN(thousand_layers_on_the_simulator);
+    RUN(ctrl_c_pauses_and_resume_finishes);
+    RUN(print_a_sliced_job);
+    RUN(bad_ports_are_named);
+    RUN(silent_port_is_named);
     RUN(short_print_under_qemu);
     RUN(printcore_drives_gcode_mode);
     cli_end();
