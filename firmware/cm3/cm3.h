@@ -87,4 +87,8 @@ struct fw_state;
 /* Runs the core for ever: received bytes to fw_receive, fw_run at each
    deadline, idle in between, the stack canary checked on every pass. */
 void cm3_serve(struct fw_state *fw) __attribute__((noreturn));
+/* The Z axis both boards drive (10 mm/s, 50 mm/s^2, homing at 5 mm/s,
+   200 mm of travel) and a 1 s link timeout, at tick_hz and steps_per_mm. */
+struct fw_config;
+void cm3_z_config(struct fw_config *config, uint32_t tick_hz, uint32_t steps_per_mm);
 #endif

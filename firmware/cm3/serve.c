@@ -28,3 +28,15 @@ void cm3_serve(fw_state *fw)
         else if (!n) cm3_idle(deadline);
     }
 }
+
+void cm3_z_config(fw_config *config, uint32_t tick_hz, uint32_t steps_per_mm)
+{
+    config->tick_hz = tick_hz;
+    config->axis.steps_per_mm = steps_per_mm;
+    config->axis.max_speed = 10u * steps_per_mm;
+    config->axis.accel = 50u * steps_per_mm;
+    config->axis.home_speed = 5u * steps_per_mm;
+    config->axis.max_steps = (int32_t)(200u * steps_per_mm);
+    config->axis.home_travel = (int32_t)(220u * steps_per_mm);
+    config->link_timeout_ms = 1000;
+}

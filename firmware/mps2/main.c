@@ -113,19 +113,12 @@ int main(void)
     fw_port port;
     board_init();
     pins.true_position = (int32_t)(MPS2_Z_START_MM * MPS2_STEPS_PER_MM);
-    config.tick_hz = MPS2_CLOCK_HZ;
-    config.axis.steps_per_mm = MPS2_STEPS_PER_MM;
-    config.axis.max_speed = 10u * MPS2_STEPS_PER_MM;   /* 10 mm/s */
-    config.axis.accel = 50u * MPS2_STEPS_PER_MM;       /* 50 mm/s^2 */
-    config.axis.home_speed = 5u * MPS2_STEPS_PER_MM;   /* 5 mm/s */
-    config.axis.max_steps = (int32_t)(200u * MPS2_STEPS_PER_MM);
-    config.axis.home_travel = (int32_t)(220u * MPS2_STEPS_PER_MM);
+    cm3_z_config(&config, MPS2_CLOCK_HZ, MPS2_STEPS_PER_MM);
     config.display_width = MPS2_DISPLAY_W;
     config.display_height = MPS2_DISPLAY_H;
     config.display_bits = MPS2_DISPLAY_BITS;
     config.pitch_nm = MPS2_PITCH_NM;
     config.max_bins = MPS2_MAX_BINS;
-    config.link_timeout_ms = 1000;
     /* QEMU's UART holds the line while the ring is full, so no window
        overruns it; 8 frames keep the link busy. */
     config.window = 8;

@@ -97,19 +97,12 @@ int main(void)
     fw_config config;
     fw_port port;
     board_init();
-    config.tick_hz = STM32_CLOCK_HZ;
-    config.axis.steps_per_mm = STM32_STEPS_PER_MM;
-    config.axis.max_speed = 10u * STM32_STEPS_PER_MM;   /* 10 mm/s */
-    config.axis.accel = 50u * STM32_STEPS_PER_MM;       /* 50 mm/s^2 */
-    config.axis.home_speed = 5u * STM32_STEPS_PER_MM;   /* 5 mm/s */
-    config.axis.max_steps = (int32_t)(200u * STM32_STEPS_PER_MM);
-    config.axis.home_travel = (int32_t)(220u * STM32_STEPS_PER_MM);
+    cm3_z_config(&config, STM32_CLOCK_HZ, STM32_STEPS_PER_MM);
     config.display_width = STM32_DISPLAY_W;
     config.display_height = STM32_DISPLAY_H;
     config.display_bits = STM32_DISPLAY_BITS;
     config.pitch_nm = STM32_PITCH_NM;
     config.max_bins = STM32_MAX_BINS;
-    config.link_timeout_ms = 1000;
     config.window = STM32_WINDOW;
     port.ctx = NULL;
     port.write = port_write;
