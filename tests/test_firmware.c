@@ -399,8 +399,49 @@ static void gcode_burst_never_splices(void)
     CHECK(!p.fw.binary);
 }
 
+/* MOVE, HOME and EXPOSE outside a print: refused until homed and outside
+   the soft limits; a move lands on its exact step; EXPOSE lights the last
+   verified mask for its time, then the display goes dark. */
+static void manual_commands(void)
+{
+    static fake_printer p;
+    static uint8_t image[8], code[64];
+    uint8_t mv[8], ms[4], lengths[1] = {40};
+    size_t n, k;
+    uint64_t on = 0, off = 0;
+    fake_init(&p, 8, 8, 1);
+    p.keep_events = 1;
+    fw_put32(mv, 12345678);
+    fw_put32(mv + 4, 0);
+    fake_send(&p, FW_MSG_MOVE, mv, 8);
+    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_NOT_HOMED);
+    home(&p);
+    fake_send(&p, FW_MSG_MOVE, mv, 8);
+    fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
+    CHECKF(fake_state(&p) == FW_IDLE && p.true_position == 4938 && (int32_t)fw_get32(p.status + 27) == 12345000,
+           "at %d steps, %d nm", (int)p.true_position, (int)fw_get32(p.status + 27));
+    fw_put32(mv, 250000000); /* 250 mm: past the 200 mm of travel */
+    fake_send(&p, FW_MSG_MOVE, mv, 8);
+    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_LIMIT && p.true_position == 4938);
+    fw_put32(ms, 1500);
+    fake_send(&p, FW_MSG_EXPOSE, ms, 4);
+    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_BUSY); /* no verified mask yet */
+    send_plan(&p, lengths, 1, 2000);
+    n = adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code);
+    send_mask(&p, 1, code, n, adaslice_crc32(0, image, sizeof image));
+    fake_send(&p, FW_MSG_EXPOSE, ms, 4);
+    CHECK(fake_state(&p) == FW_READY && (p.status[4] & FW_FLAG_UV));
+    fake_run(&p, p.now + 2ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == FW_READY && !(p.status[4] & FW_FLAG_UV));
+    for (k = 0; k < p.event_count; k++)
+        if (p.events[k].kind == ZEV_UV) { if (p.events[k].value) on = p.events[k].when; else off = p.events[k].when; }
+    CHECKF(off - on == FAKE_TICK_HZ * 15ull / 10, "lit for %llu ticks", (unsigned long long)(off - on));
+    fake_free(&p);
+}
+
 void test_firmware(void)
 {
+    RUN(manual_commands);
     RUN(gcode_burst_never_splices);
     RUN(mcu_plans_like_the_host);
     RUN(twelve_thousand_bins_fit);
