@@ -25,8 +25,8 @@ FW_ARM_LIBS  = -lgcc
 
 .PHONY: firmware
 
-$(B)/fw-sim: firmware/sim/sim.c $(FW_CORE_SRC) $(FW_HDRS) | $(B)
-	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c $(FW_CORE_SRC) -o $@ -lm
+$(B)/fw-sim: firmware/sim/sim.c host/tty.c host/tty.h $(FW_CORE_SRC) $(FW_HDRS) | $(B)
+	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c host/tty.c $(FW_CORE_SRC) -o $@ -lm
 
 FW_MPS2_SRC = firmware/mps2/main.c firmware/mps2/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
 FW_MPS2_DEPS = $(FW_MPS2_SRC) firmware/mps2/board.h firmware/mps2/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)

@@ -89,3 +89,20 @@ void fw_deframe_consume(fw_deframer *d)
 {
     if (d->len && d->buf[0] <= d->len) drop(d, d->buf[0]);
 }
+
+size_t fw_varint_put(uint8_t *out, uint32_t v)
+{
+    size_t n = 0;
+    while (v >= 0x80u) { out[n++] = (uint8_t)(v | 0x80u); v >>= 7; }
+    out[n++] = (uint8_t)v;
+    return n;
+}
+
+size_t fw_profile_chunk(uint8_t *out, size_t max, const uint32_t *units, const unsigned char *forced, uint32_t n,
+                        uint32_t *at)
+{
+    size_t used = 0;
+    for (; *at < n && used + 5 <= max; (*at)++)
+        used += fw_varint_put(out + used, units[*at] << 1 | (forced && forced[*at] ? 1u : 0u));
+    return used;
+}

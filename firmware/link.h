@@ -42,6 +42,14 @@ void fw_deframe_push(fw_deframer *d, uint8_t byte);
 size_t fw_deframe_next(fw_deframer *d);
 void fw_deframe_consume(fw_deframer *d);
 
+/* A LEB128 varint (7 bits a byte, low first; at most 5 bytes) into out. */
+size_t fw_varint_put(uint8_t *out, uint32_t v);
+/* PROFILE_DATA's payload: bins from *at on, each the varint of
+   units << 1 | forced, as many whole ones as fit in `max` bytes (>= 5);
+   advances *at and returns the bytes written. forced may be NULL. */
+size_t fw_profile_chunk(uint8_t *out, size_t max, const uint32_t *units, const unsigned char *forced, uint32_t n,
+                        uint32_t *at);
+
 /* Little-endian fields of payloads. */
 static inline uint32_t fw_get32(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
 static inline uint16_t fw_get16(const uint8_t *p) { return (uint16_t)(p[0] | p[1] << 8); }

@@ -8,6 +8,7 @@
 #include "cli.h"
 #include "../firmware/link.h"
 #include "../firmware/protocol.h"
+#include "tty.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -35,16 +36,11 @@ typedef struct print_args {
 
 /* ------------------------------------------------------------ the port */
 
-static const struct { long baud; speed_t code; } BAUDS[] = {
-    {9600, B9600}, {19200, B19200}, {38400, B38400}, {57600, B57600}, {115200, B115200}, {230400, B230400}};
-
 static int serial_open(const char *dev, long baud, int *fd_out)
 {
     struct termios t;
-    size_t i;
     int fd;
-    for (i = 0; i < sizeof BAUDS / sizeof *BAUDS && BAUDS[i].baud != baud; i++) {}
-    if (i == sizeof BAUDS / sizeof *BAUDS)
+    if (!tty_baud_ok(baud))
         return complain(RC_USAGE, "--baud %ld: not a standard rate (9600, 19200, 38400, 57600, 115200, 230400)", baud);
     fd = open(dev, O_RDWR | O_NOCTTY | O_NONBLOCK);
     if (fd < 0) return complain(RC_FAIL, "cannot open %s: %s", dev, strerror(errno));
@@ -52,15 +48,7 @@ static int serial_open(const char *dev, long baud, int *fd_out)
         close(fd);
         return complain(RC_FAIL, "%s is not a serial port: %s", dev, strerror(errno));
     }
-    /* raw 8N1: no line editing, no translation, no flow control */
-    t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF | IXANY | INPCK);
-    t.c_oflag &= ~(tcflag_t)OPOST;
-    t.c_lflag &= ~(tcflag_t)(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
-    t.c_cflag &= ~(tcflag_t)(CSIZE | PARENB | CSTOPB);
-    t.c_cflag |= CS8 | CREAD | CLOCAL;
-    t.c_cc[VMIN] = 0;
-    t.c_cc[VTIME] = 0;
-    if (cfsetispeed(&t, BAUDS[i].code) != 0 || cfsetospeed(&t, BAUDS[i].code) != 0 || tcsetattr(fd, TCSANOW, &t) != 0) {
+    if (tty_raw(fd, baud) != 0) {
         close(fd);
         return complain(RC_FAIL, "cannot set %s to %ld 8N1: %s", dev, baud, strerror(errno));
     }
@@ -345,8 +333,6 @@ typedef struct print_job {
     uint32_t crc;
 } print_job;
 
-static uint32_t get_le32(const unsigned char *p) { return fw_get32(p); }
-
 static int read_rle_file(const char *dir, print_job *pj)
 {
     size_t n = strlen(dir) + 16, at, k;
@@ -371,11 +357,11 @@ static int read_rle_file(const char *dir, print_job *pj)
         free(path);
         return RC_FAIL;
     }
-    pj->width = get_le32(pj->file + 8);
-    pj->height = get_le32(pj->file + 12);
-    pj->bits = get_le32(pj->file + 16);
-    pj->layers = get_le32(pj->file + 20);
-    pj->bin_nm = get_le32(pj->file + 24);
+    pj->width = fw_get32(pj->file + 8);
+    pj->height = fw_get32(pj->file + 12);
+    pj->bits = fw_get32(pj->file + 16);
+    pj->layers = fw_get32(pj->file + 20);
+    pj->bin_nm = fw_get32(pj->file + 24);
     if (!pj->layers || pj->layers > pj->file_size / 12 || !pj->bin_nm) {
         complain(RC_FAIL, "%s: byte 20: %u layers of %u nm do not fit the file", path, pj->layers, pj->bin_nm);
         free(path);
@@ -386,12 +372,12 @@ static int read_rle_file(const char *dir, print_job *pj)
     if (!pj->lengths || !pj->offsets) { free(path); return complain(RC_FAIL, "out of memory"); }
     for (at = 28, k = 0; k < pj->layers; k++) {
         uint32_t code;
-        if (pj->file_size - at < 12 || (code = get_le32(pj->file + at + 8)) > pj->file_size - at - 12) {
+        if (pj->file_size - at < 12 || (code = fw_get32(pj->file + at + 8)) > pj->file_size - at - 12) {
             complain(RC_FAIL, "%s: byte %zu: layer %zu runs past the end of the file", path, at, k + 1);
             free(path);
             return RC_FAIL;
         }
-        pj->lengths[k] = get_le32(pj->file + at);
+        pj->lengths[k] = fw_get32(pj->file + at);
         pj->offsets[k] = at;
         at += 12 + code;
     }
@@ -409,8 +395,8 @@ static int job_mask(print_job *pj, uint32_t k)
 {
     if (!pj->from_model) {
         const unsigned char *rec = pj->file + pj->offsets[k - 1];
-        pj->crc = get_le32(rec + 4);
-        pj->code_size = get_le32(rec + 8);
+        pj->crc = fw_get32(rec + 4);
+        pj->code_size = fw_get32(rec + 8);
         pj->code = (unsigned char *)rec + 12;
         return RC_OK;
     }
@@ -447,7 +433,6 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     unsigned char *forced = (unsigned char *)malloc(n);
     uint8_t buf[FW_PAYLOAD_MAX];
     adaslice_error err;
-    size_t used = 0;
     int rc = RC_OK;
     if (!units || !forced) { free(units); free(forced); return complain(RC_FAIL, "out of memory"); }
     if (adaslice_plan_units(p, o, units, forced, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
@@ -457,13 +442,10 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     fw_put32(buf + 6, o->eps_units);
     fw_put32(buf + 10, pj->bin_nm);
     if ((rc = link_send(l, FW_MSG_PROFILE, buf, 14))) goto done;
-    for (i = 0; i < n; i++) {
-        uint32_t v = units[i] << 1 | (forced[i] ? 1u : 0u);
-        if (used + 5 > l->data_max) { if ((rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done; used = 0; }
-        while (v >= 0x80u) { buf[used++] = (uint8_t)(v | 0x80u); v >>= 7; }
-        buf[used++] = (uint8_t)v;
+    for (i = 0; i < n;) {
+        size_t used = fw_profile_chunk(buf, l->data_max, units, forced, n, &i);
+        if ((rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done;
     }
-    if (used && (rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done;
     if ((rc = link_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
     if (l->st.state != FW_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", error_name(l->st.error)); goto done; }
     if (l->st.layers != pj->layers) {
@@ -608,8 +590,6 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
     }
 }
 
-static void write_report(FILE *f, const void *ctx);
-
 typedef struct report {
     const print_job *pj;
     const report_layer *layers;
@@ -689,7 +669,6 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
-        double d = 0;
         size_t n = 0;
         if (!strcmp(o, "--port")) rc = file_option(argc, argv, &i, &pa->port);
         else if (!strcmp(o, "--report")) rc = file_option(argc, argv, &i, &pa->report);
@@ -707,7 +686,6 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
         else rest[(*rest_argc)++] = argv[i];
-        (void)d;
     }
     if (rc) return rc;
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");

@@ -153,6 +153,59 @@ static inline void fake_send(fake_printer *p, uint8_t type, const uint8_t *paylo
     fake_bytes(p, frame, n);
 }
 
+/* Sends `size` bytes as messages of `type`, at most `max` a frame. */
+static inline void fake_send_chunks(fake_printer *p, uint8_t type, const uint8_t *data, size_t size, size_t max)
+{
+    size_t at = 0;
+    while (at < size) {
+        size_t chunk = size - at > max ? max : size - at;
+        fake_send(p, type, data + at, chunk);
+        at += chunk;
+    }
+}
+
+/* A quantised profile as a host sends it. With `rng`, frames of random size
+   split varints across frames; without, frames are full. */
+static inline void fake_send_profile(fake_printer *p, const uint32_t *units, const unsigned char *forced, uint32_t n,
+                                     uint8_t lo, uint8_t hi, uint32_t eps_units, uint32_t bin_nm, unsigned (*rng)(void))
+{
+    uint8_t hdr[14], *code = (uint8_t *)malloc((size_t)n * 5 + 1);
+    size_t size = 0, at = 0;
+    uint32_t i = 0;
+    fw_put32(hdr, n);
+    hdr[4] = lo;
+    hdr[5] = hi;
+    fw_put32(hdr + 6, eps_units);
+    fw_put32(hdr + 10, bin_nm);
+    fake_send(p, FW_MSG_PROFILE, hdr, 14);
+    if (!code) return;
+    size = fw_profile_chunk(code, (size_t)n * 5 + 1, units, forced, n, &i);
+    while (at < size) {
+        size_t chunk = rng ? 1 + rng() % FW_PAYLOAD_MAX : FW_PAYLOAD_MAX;
+        if (chunk > size - at) chunk = size - at;
+        fake_send(p, FW_MSG_PROFILE_DATA, code + at, chunk);
+        at += chunk;
+    }
+    free(code);
+}
+
+/* The printer's plan, page by page, into lengths[0 .. cap); returns its
+   layer count, 0 if a page did not come. */
+static inline uint32_t fake_read_plan(fake_printer *p, uint32_t *lengths, uint32_t cap)
+{
+    uint32_t k = 1, layers = 0;
+    do {
+        uint8_t req[4];
+        size_t m;
+        fw_put32(req, k);
+        fake_send(p, FW_MSG_PLAN_GET, req, 4);
+        if (p->plan_size < 12 || fw_get32(p->plan) != k) return 0;
+        layers = fw_get32(p->plan + 4);
+        for (m = 12; m < p->plan_size && k <= layers && k <= cap; m++) lengths[k++ - 1] = p->plan[m];
+    } while (k <= layers && k <= cap);
+    return layers;
+}
+
 /* Runs the core until `until` (ticks), jumping from deadline to deadline. */
 static inline void fake_run(fake_printer *p, uint64_t until)
 {

@@ -9,6 +9,7 @@
    outage's start and end (seconds since start). The outage begins once BYTES
    have gone from the host to the MCU. */
 #define _XOPEN_SOURCE 600
+#include "../host/tty.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -16,7 +17,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -28,20 +28,6 @@ static double now_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + ts.tv_nsec / 1e9;
-}
-
-static int raw(int fd)
-{
-    struct termios t;
-    if (tcgetattr(fd, &t) != 0) return -1;
-    t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF | IXANY);
-    t.c_oflag &= ~(tcflag_t)OPOST;
-    t.c_lflag &= ~(tcflag_t)(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
-    t.c_cflag &= ~(tcflag_t)(CSIZE | PARENB);
-    t.c_cflag |= CS8 | CREAD | CLOCAL;
-    t.c_cc[VMIN] = 0;
-    t.c_cc[VTIME] = 0;
-    return tcsetattr(fd, TCSANOW, &t);
 }
 
 static unsigned long long rng_state = 88172645463325252ull;
@@ -104,13 +90,13 @@ int main(int argc, char **argv)
     }
     mcu = open(argv[1], O_RDWR | O_NOCTTY | O_NONBLOCK);
     master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (mcu < 0 || master < 0 || grantpt(master) || unlockpt(master) || raw(mcu)) {
+    if (mcu < 0 || master < 0 || grantpt(master) || unlockpt(master) || tty_raw(mcu, 0)) {
         fprintf(stderr, "relay: cannot open %s or a pty: %s\n", argv[1], strerror(errno));
         return 1;
     }
     /* keep the host's side open ourselves so its hang-ups do not end the relay */
     slave = open(ptsname(master), O_RDWR | O_NOCTTY);
-    if (slave < 0 || raw(slave)) { fprintf(stderr, "relay: cannot open %s\n", ptsname(master)); return 1; }
+    if (slave < 0 || tty_raw(slave, 0)) { fprintf(stderr, "relay: cannot open %s\n", ptsname(master)); return 1; }
     fcntl(master, F_SETFL, O_NONBLOCK);
     printf("pty %s\n", ptsname(master));
     fflush(stdout);

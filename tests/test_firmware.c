@@ -10,54 +10,6 @@
 static unsigned fw_rng_state = 4242u;
 static unsigned fw_rng(void) { fw_rng_state = fw_rng_state * 1103515245u + 12345u; return (fw_rng_state >> 8) & 0xffffffu; }
 
-static size_t put_varint(uint8_t *out, uint32_t v)
-{
-    size_t n = 0;
-    while (v >= 0x80u) { out[n++] = (uint8_t)(v | 0x80u); v >>= 7; }
-    out[n++] = (uint8_t)v;
-    return n;
-}
-
-/* Sends a quantised profile in frames of random size (varints split across
-   frames), as a host would. */
-static void send_profile(fake_printer *p, const uint32_t *units, const unsigned char *forced, uint32_t n, uint8_t lo,
-                         uint8_t hi, uint32_t eps_units, uint32_t bin_nm)
-{
-    uint8_t hdr[14], *code = (uint8_t *)malloc((size_t)n * 5 + 1);
-    size_t size = 0, at = 0;
-    uint32_t i;
-    fw_put32(hdr, n);
-    hdr[4] = lo;
-    hdr[5] = hi;
-    fw_put32(hdr + 6, eps_units);
-    fw_put32(hdr + 10, bin_nm);
-    fake_send(p, FW_MSG_PROFILE, hdr, 14);
-    for (i = 0; i < n; i++) size += put_varint(code + size, units[i] << 1 | (forced && forced[i] ? 1u : 0u));
-    while (at < size) {
-        size_t chunk = 1 + fw_rng() % FW_PAYLOAD_MAX;
-        if (chunk > size - at) chunk = size - at;
-        fake_send(p, FW_MSG_PROFILE_DATA, code + at, chunk);
-        at += chunk;
-    }
-    free(code);
-}
-
-/* The printer's plan, page by page; returns the layer count. */
-static uint32_t read_plan(fake_printer *p, uint32_t *lengths, uint32_t cap)
-{
-    uint32_t k = 1, layers = 0;
-    do {
-        uint8_t req[4];
-        size_t m;
-        fw_put32(req, k);
-        fake_send(p, FW_MSG_PLAN_GET, req, 4);
-        if (p->plan_size < 12 || fw_get32(p->plan) != k) return 0;
-        layers = fw_get32(p->plan + 4);
-        for (m = 12; m < p->plan_size && k <= layers && k <= cap; m++) lengths[k++ - 1] = p->plan[m];
-    } while (k <= layers && k <= cap);
-    return layers;
-}
-
 /* Thousands of random profiles: the MCU's plan, made from the integers on
    the wire, equals adaslice_plan_profile's with the same options, layer by
    layer; where the host finds no plan, neither does the MCU. */
@@ -87,14 +39,14 @@ static void mcu_plans_like_the_host(void)
         o.sharp = trial % 2 ? ADASLICE_SHARP_OFF : 1.0;
         CHECK(adaslice_plan_units(&prof, &o, units, forced, NULL) == ADASLICE_OK);
         feasible = adaslice_plan_profile(&prof, &o, &plan, NULL) == ADASLICE_OK;
-        send_profile(&p, units, forced, n, 25, (uint8_t)(o.tmax / bin + 0.5), o.eps_units, 2000);
+        fake_send_profile(&p, units, forced, n, 25, (uint8_t)(o.tmax / bin + 0.5), o.eps_units, 2000, fw_rng);
         if (!feasible) {
             infeasible++;
             if (fake_state(&p) != FW_IDLE || p.status[2] != FW_ERR_INFEASIBLE) mismatches++;
             continue;
         }
         plans++;
-        layers = fake_state(&p) == FW_READY ? read_plan(&p, lengths, 3000) : 0;
+        layers = fake_state(&p) == FW_READY ? fake_read_plan(&p, lengths, 3000) : 0;
         if (layers != plan.layer_count) mismatches++;
         else for (k = 0; k < layers; k++) if (lengths[k] != plan.planes[k + 1] - plan.planes[k]) { mismatches++; break; }
         adaslice_plan_free(&plan);
@@ -113,7 +65,7 @@ static void twelve_thousand_bins_fit(void)
     CHECK(adaslice_dp_workspace(12000, FW_MAX_LAYER_BINS, 0) <= FW_PLAN_WORKSPACE(12000));
     fake_init(&p, 8, 8, 1);
     for (i = 0; i < 12000; i++) units[i] = 1000 + fw_rng() % 30000;
-    send_profile(&p, units, NULL, 12000, 25, 75, ADASLICE_PRINTER_EPS_UNITS, 2000);
+    fake_send_profile(&p, units, NULL, 12000, 25, 75, ADASLICE_PRINTER_EPS_UNITS, 2000, fw_rng);
     CHECK(fake_state(&p) == FW_READY && fw_get32(p.status + 31) == 12000 && fw_get32(p.status + 9) >= 160);
     {
         uint8_t hdr[14];
@@ -181,30 +133,20 @@ static void link_recovers(void)
 static void send_plan(fake_printer *p, const uint8_t *lengths, uint32_t layers, uint32_t bin_nm)
 {
     uint8_t hdr[8];
-    uint32_t at = 0;
     fw_put32(hdr, layers);
     fw_put32(hdr + 4, bin_nm);
     fake_send(p, FW_MSG_PLAN_SET, hdr, 8);
-    while (at < layers) {
-        uint32_t chunk = layers - at > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : layers - at;
-        fake_send(p, FW_MSG_PLAN_DATA, lengths + at, chunk);
-        at += chunk;
-    }
+    fake_send_chunks(p, FW_MSG_PLAN_DATA, lengths, layers, FW_PAYLOAD_MAX);
 }
 
 static void send_mask(fake_printer *p, uint32_t layer, const uint8_t *code, size_t size, uint32_t crc)
 {
     uint8_t hdr[12];
-    size_t at = 0;
     fw_put32(hdr, layer);
     fw_put32(hdr + 4, (uint32_t)size);
     fw_put32(hdr + 8, crc);
     fake_send(p, FW_MSG_MASK, hdr, 12);
-    while (at < size) {
-        size_t chunk = size - at > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : size - at;
-        fake_send(p, FW_MSG_MASK_DATA, code + at, chunk);
-        at += chunk;
-    }
+    fake_send_chunks(p, FW_MSG_MASK_DATA, code, size, FW_PAYLOAD_MAX);
 }
 
 static void start_print(fake_printer *p, uint32_t first, uint32_t exposure_ms, uint32_t bottom, uint32_t bottom_ms)

@@ -373,6 +373,7 @@ static int check_printer_plans(const char *dir, const char *name)
     static fake_printer fp;
     static uint32_t units[FAKE_MAX_BINS];
     static unsigned char forced[FAKE_MAX_BINS];
+    static uint32_t lengths[FAKE_MAX_BINS];
     char path[4096], why[256] = "";
     adaslice_mesh m;
     double a[3], b[3];
@@ -387,8 +388,7 @@ static int check_printer_plans(const char *dir, const char *name)
         adaslice_profile p;
         adaslice_plan_options o;
         adaslice_plan plan;
-        uint8_t hdr[14];
-        uint32_t n, k, layers, at = 0;
+        uint32_t n, k, layers;
         int feasible;
         memset(&po, 0, sizeof po);
         po.metric = c == 2 ? ADASLICE_METRIC_ROUGHNESS : ADASLICE_METRIC_CUSP;
@@ -401,41 +401,24 @@ static int check_printer_plans(const char *dir, const char *name)
         if (adaslice_plan_units(&p, &o, units, forced, NULL) != ADASLICE_OK) { ok = 0; adaslice_profile_free(&p); break; }
         feasible = adaslice_plan_profile(&p, &o, &plan, NULL) == ADASLICE_OK;
         fake_init(&fp, 8, 8, 1);
-        fw_put32(hdr, n);
-        hdr[4] = 25;
-        hdr[5] = 75;
-        fw_put32(hdr + 6, o.eps_units);
-        fw_put32(hdr + 10, 2000);
-        fake_send(&fp, FW_MSG_PROFILE, hdr, 14);
-        while (at < n) {
-            uint8_t buf[FW_PAYLOAD_MAX];
-            size_t used = 0;
-            for (; at < n && used + 5 <= sizeof buf; at++) {
-                uint32_t v = units[at] << 1 | forced[at];
-                while (v >= 0x80u) { buf[used++] = (uint8_t)(v | 0x80u); v >>= 7; }
-                buf[used++] = (uint8_t)v;
-            }
-            fake_send(&fp, FW_MSG_PROFILE_DATA, buf, used);
-        }
+        fake_send_profile(&fp, units, forced, n, 25, 75, o.eps_units, 2000, NULL);
         if (!feasible) {
             if (fake_state(&fp) != FW_IDLE || fp.status[2] != FW_ERR_INFEASIBLE) { snprintf(why, sizeof why, "plan %d: the host finds none, the printer does", c); ok = 0; }
         } else if (fake_state(&fp) != FW_READY || (layers = fw_get32(fp.status + 9)) != plan.layer_count) {
             snprintf(why, sizeof why, "plan %d: %zu layers on the host, state %u on the printer", c, plan.layer_count, fp.status[0]);
             ok = 0;
         } else {
-            for (k = 1; k <= layers && ok;) {
-                uint8_t req[4];
-                size_t j;
-                fw_put32(req, k);
-                fake_send(&fp, FW_MSG_PLAN_GET, req, 4);
-                for (j = 12; j < fp.plan_size && k <= layers; j++, k++)
-                    if (fp.plan[j] != plan.planes[k] - plan.planes[k - 1]) {
-                        snprintf(why, sizeof why, "plan %d: layer %u is %u bins on the printer, %u on the host", c, k,
-                                 fp.plan[j], plan.planes[k] - plan.planes[k - 1]);
-                        ok = 0;
-                        break;
-                    }
+            if (fake_read_plan(&fp, lengths, FAKE_MAX_BINS) != layers) {
+                snprintf(why, sizeof why, "plan %d: the printer's plan did not read back", c);
+                ok = 0;
             }
+            for (k = 1; k <= layers && ok; k++)
+                if (lengths[k - 1] != plan.planes[k] - plan.planes[k - 1]) {
+                    snprintf(why, sizeof why, "plan %d: layer %u is %u bins on the printer, %u on the host", c, k,
+                             lengths[k - 1], plan.planes[k] - plan.planes[k - 1]);
+                    ok = 0;
+                    break;
+                }
         }
         if (feasible) adaslice_plan_free(&plan);
         adaslice_profile_free(&p);

@@ -223,6 +223,28 @@ static int start_sim(child *sim, const char *log, const char *speed)
     return ok;
 }
 
+/* The simulator behind tests/relay.c, which damages the line as `faults`
+   (relay options) ask and writes what it did to `stats`; the host talks to
+   relay->line + 4. */
+static int start_relayed(child *sim, child *relay, const char *log, const char *stats, const char *const *faults)
+{
+    char mcu[256], *argv[16];
+    int n = 0;
+    if (!start_sim(sim, log, SIM_SPEED)) return 0;
+    snprintf(mcu, sizeof mcu, "%s", sim->line + 4);
+    argv[n++] = (char *)RELAY_BIN;
+    argv[n++] = mcu;
+    while (*faults && n < 12) argv[n++] = (char *)*faults++;
+    argv[n++] = (char *)"--stats";
+    argv[n++] = (char *)stats;
+    argv[n] = NULL;
+    if (child_start(relay, argv, "pty ", 10)) return 1;
+    CHECK(!"the relay did not start");
+    child_stop(relay);
+    child_stop(sim);
+    return 0;
+}
+
 static cli_result run_print(const char *port, const char *report)
 {
     return cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--bottom-layers", "2",
@@ -251,14 +273,8 @@ static void print_through_a_faulty_line(void)
 {
     child sim, relay;
     cli_result r;
-    char mcu[256];
-    if (!start_sim(&sim, cli_path("sim2.log"), SIM_SPEED)) return;
-    snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
-    {
-        char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--drop", (char *)"0.005", (char *)"--corrupt", (char *)"0.005",
-                        (char *)"--seed", (char *)"7", (char *)"--stats", (char *)cli_path("relay.txt"), NULL};
-        if (!child_start(&relay, argv, "pty ", 10)) { CHECK(!"the relay did not start"); child_stop(&sim); return; }
-    }
+    const char *faults[] = {"--drop", "0.005", "--corrupt", "0.005", "--seed", "7", NULL};
+    if (!start_relayed(&sim, &relay, cli_path("sim2.log"), cli_path("relay.txt"), faults)) return;
     r = run_print(relay.line + 4, cli_path("report2.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     child_stop(&relay);
@@ -282,14 +298,8 @@ static void print_survives_a_lost_link(void)
 {
     child sim, relay;
     cli_result r;
-    char mcu[256];
-    if (!start_sim(&sim, cli_path("sim3.log"), SIM_SPEED)) return;
-    snprintf(mcu, sizeof mcu, "%s", sim.line + 4);
-    {
-        char *argv[] = {(char *)RELAY_BIN, mcu, (char *)"--outage-after", (char *)"12000", (char *)"--outage-for",
-                        (char *)"5", (char *)"--stats", (char *)cli_path("relay3.txt"), NULL};
-        if (!child_start(&relay, argv, "pty ", 10)) { CHECK(!"the relay did not start"); child_stop(&sim); return; }
-    }
+    const char *faults[] = {"--outage-after", "12000", "--outage-for", "5", NULL};
+    if (!start_relayed(&sim, &relay, cli_path("sim3.log"), cli_path("relay3.txt"), faults)) return;
     r = run_print(relay.line + 4, cli_path("report3.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     child_stop(&relay);

@@ -26,6 +26,7 @@
 /* posix_openpt, grantpt, unlockpt and ptsname are XSI in POSIX.1-2008 */
 #define _XOPEN_SOURCE 700
 #include "../fw.h"
+#include "../../host/tty.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -34,7 +35,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 #include <sys/ioctl.h>
@@ -424,22 +424,6 @@ static int make_config(const sim_options *o, fw_config *c)
 
 /* ------------------------------------------------------------ the terminal */
 
-/* Raw bytes both ways: no echo (the core would read its own replies), no
-   line editing, no CR/LF translation, no XON/XOFF. */
-static int make_raw(int fd)
-{
-    struct termios t;
-    if (tcgetattr(fd, &t) != 0) return 0;
-    t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF);
-    t.c_oflag &= ~(tcflag_t)OPOST;
-    t.c_lflag &= ~(tcflag_t)(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
-    t.c_cflag &= ~(tcflag_t)(CSIZE | PARENB);
-    t.c_cflag |= CS8 | CREAD | CLOCAL;
-    t.c_cc[VMIN] = 1;
-    t.c_cc[VTIME] = 0;
-    return tcsetattr(fd, TCSANOW, &t) == 0;
-}
-
 /* Opens a pty; keeps its slave side open too, so that while no host has it
    open the master does not report a hangup (poll would spin on it) and the
    line settings stay. Returns the slave's fd, -1 on failure. */
@@ -455,7 +439,8 @@ static int open_pty(int *master, char *name, size_t name_size)
     if (fcntl(*master, F_SETFL, fcntl(*master, F_GETFL) | O_NONBLOCK) != 0) return -1;
     slave = open(name, O_RDWR | O_NOCTTY);
     if (slave < 0) return -1;
-    if (!make_raw(slave)) return -1;
+    /* no echo: the core would read its own replies */
+    if (tty_raw(slave, 0) != 0) return -1;
     return slave;
 }
 
