@@ -87,7 +87,8 @@ static plan_check host_plan(double *ns_per_bin)
     }
     for (r = 0; r < 31; r++) {
         double t0 = now();
-        if (!adaslice_dp_init(&dp, ws, need, MCU_BINS, MCU_BINS_MIN, MCU_BINS_MAX, MCU_EPS_UNITS, 0, 0)) fail("adaslice_dp_init");
+        if (adaslice_dp_init(&dp, ws, need, MCU_BINS, MCU_BINS_MIN, MCU_BINS_MAX, MCU_EPS_UNITS, 0, 0) != ADASLICE_OK)
+            fail("adaslice_dp_init");
         for (i = 0; i < MCU_BINS; i++) adaslice_dp_push(&dp, v[i] >> 1, (int)(v[i] & 1u) && i + 1 < MCU_BINS);
         c.layers = adaslice_dp_reverse(&dp);
         t[r] = now() - t0;

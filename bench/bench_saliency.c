@@ -42,7 +42,7 @@ int main(int argc, char **argv)
         char path[1024];
         adaslice_mesh mesh;
         adaslice_error e;
-        adaslice_saliency_options o;
+        adaslice_surface_options o;
         adaslice_allocator al;
         counter c = {0, 0};
         struct rusage ru;

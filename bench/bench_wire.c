@@ -192,7 +192,7 @@ static void bench_model(const char *dir, const char *name, row *r)
 
     /* every layer's mask, coded */
     g = adaslice_grid_plate(&m, PX_W, PX_H, PITCH, NULL);
-    if (adaslice_masker_init(&mk, &m, &g, 1, NULL, &e) != ADASLICE_OK) fail(name, "masker", &e);
+    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){1, NULL}, &e) != ADASLICE_OK) fail(name, "masker", &e);
     if (mk.stride != STRIDE) fail(name, "unexpected mask stride", NULL);
     top = (unsigned char *)malloc(RAW);
     copy = (unsigned char *)malloc(RAW);
@@ -211,7 +211,7 @@ static void bench_model(const char *dir, const char *name, row *r)
         t0 = now();
         memcpy(copy, top, RAW);
         t1 = now();
-        n = adaslice_rle_encode(copy, STRIDE, PX_W, PX_H, 1, code, cap);
+        if (adaslice_rle_encode(copy, STRIDE, PX_W, PX_H, 1, code, cap, &n) != ADASLICE_OK) n = 0;
         t2 = now();
         if (!n) fail(name, "adaslice_rle_encode returned 0", NULL);
         r->memcpy_s += t1 - t0;
@@ -224,8 +224,8 @@ static void bench_model(const char *dir, const char *name, row *r)
         if (n > best) {
             adaslice_rle_decoder dec;
             best = n;
-            if (!adaslice_rle_decoder_init(&dec, PX_W, PX_H, 1, row_buf, sizeof row_buf) ||
-                adaslice_rle_decode(&dec, code, n, NULL, NULL) != ADASLICE_RLE_OK || !adaslice_rle_finished(&dec) ||
+            if (adaslice_rle_decoder_init(&dec, PX_W, PX_H, 1, row_buf, sizeof row_buf) != ADASLICE_OK ||
+                adaslice_rle_decode(&dec, code, n, NULL, NULL) != ADASLICE_OK || !adaslice_rle_finished(&dec) ||
                 ADASLICE_RLE_CRC(&dec) != adaslice_crc32(0, top, RAW))
                 r->decoded_ok = 0;
         }

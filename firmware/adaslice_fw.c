@@ -1,6 +1,5 @@
-/* The trimmed build of adaslice.h that firmware images link: the integer
-   planner, CRC-32 and the mask run-length code (no float, libm, malloc or
-   stdio). Host programs that link the full library leave this file out. */
-#define ADASLICE_FIRMWARE
-#define ADASLICE_IMPLEMENTATION
-#include "../adaslice.h"
+/* adaslice_mcu.h's implementation, as firmware images link it: the integer
+   planner, CRC-32, varints and the mask run-length code (no float, libm,
+   malloc or stdio). Programs that link adaslice.h's implementation have it. */
+#define ADASLICE_MCU_IMPLEMENTATION
+#include "../adaslice_mcu.h"

@@ -1,6 +1,5 @@
 /* The firmware core every port shares: link, planner, masks, the print.
    See fw.h for the port's side and PROTOCOL.md for the wire. */
-#define ADASLICE_FIRMWARE /* the trimmed build's declarations: firmware/adaslice_fw.c implements them */
 #include "fw.h"
 #include <string.h>
 
@@ -149,15 +148,14 @@ static void profile_begin(fw_state *fw, const uint8_t *p, uint8_t seq)
     drop_plan(fw);
     fw->state = FW_IDLE;
     if (!bins || !bin_nm || !eps || lo < 1 || lo > hi || hi > FW_MAX_LAYER_BINS ||
-        !adaslice_dp_init(&fw->dp, fw->workspace, fw->workspace_size, bins, lo, hi, eps, 0, 0)) {
+        adaslice_dp_init(&fw->dp, fw->workspace, fw->workspace_size, bins, lo, hi, eps, 0, 0) != ADASLICE_OK) {
         fail(fw, FW_ERR_PROFILE, seq);
         return;
     }
     fw->bins = bins;
     fw->bins_in = 0;
     fw->bin_nm = bin_nm;
-    fw->varint = 0;
-    fw->varint_shift = 0;
+    memset(&fw->varint, 0, sizeof fw->varint);
     fw->receiving = FW_MSG_PROFILE_DATA;
     fw->state = FW_PLANNING;
 }
@@ -167,13 +165,10 @@ static void profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t se
     size_t i;
     if (fw->state != FW_PLANNING || fw->receiving != FW_MSG_PROFILE_DATA) { fail(fw, FW_ERR_BUSY, seq); return; }
     for (i = 0; i < size; i++) {
-        uint32_t v;
-        if (fw->varint_shift == 28 && (p[i] & 0xf0u)) break;
-        fw->varint |= (uint32_t)(p[i] & 0x7fu) << fw->varint_shift;
-        if (p[i] & 0x80u) { fw->varint_shift = (uint8_t)(fw->varint_shift + 7); continue; }
-        v = fw->varint;
-        fw->varint = 0;
-        fw->varint_shift = 0;
+        uint32_t v = 0;
+        int done;
+        if (adaslice_varint_push(&fw->varint, p[i], &done, &v) != ADASLICE_OK) break;
+        if (!done) continue;
         if (fw->bins_in >= fw->bins) break;
         adaslice_dp_push(&fw->dp, v >> 1, (v & 1u) && fw->bins_in + 1 < fw->bins);
         if (++fw->bins_in == fw->bins) {
@@ -261,8 +256,8 @@ static void mask_begin(fw_state *fw, const uint8_t *p, uint8_t seq)
         fail(fw, FW_ERR_MASK_ORDER, seq);
         return;
     }
-    if (!adaslice_rle_decoder_init(&fw->decoder, c->display_width, c->display_height, c->display_bits, fw->row,
-                                   sizeof fw->row)) {
+    if (adaslice_rle_decoder_init(&fw->decoder, c->display_width, c->display_height, c->display_bits, fw->row,
+                                  sizeof fw->row) != ADASLICE_OK) {
         fail(fw, FW_ERR_MASK_CODE, seq);
         return;
     }
@@ -277,7 +272,7 @@ static void mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 {
     if (!fw->mask_layer) { fail(fw, FW_ERR_MASK_ORDER, seq); return; }
     if (size > fw->mask_size - fw->mask_got ||
-        adaslice_rle_decode(&fw->decoder, p, size, mask_row, fw) != ADASLICE_RLE_OK) {
+        adaslice_rle_decode(&fw->decoder, p, size, mask_row, fw) != ADASLICE_OK) {
         mask_refuse(fw, FW_ERR_MASK_CODE, seq);
         return;
     }

@@ -21,7 +21,7 @@
 #define FW_H
 #include <stddef.h>
 #include <stdint.h>
-#include "../adaslice.h"
+#include "../adaslice_mcu.h"
 #include "link.h"
 #include "protocol.h"
 #include "motion.h"
@@ -87,8 +87,7 @@ typedef struct fw_state {
     size_t workspace_size;
     adaslice_dp dp;
     uint32_t bins, bins_in, bin_nm;
-    uint32_t varint;
-    uint8_t varint_shift;
+    adaslice_varint varint;    /* the profile's next number */
     uint8_t plan_kind;         /* 0 none, 1 from the profile, 2 given by the host */
     uint8_t receiving;         /* FW_MSG_PROFILE_DATA or FW_MSG_PLAN_DATA while one arrives */
     uint32_t layers;           /* K */

@@ -309,9 +309,9 @@ int parse_plan(int argc, char **argv, plan_args *a)
     if (a->profile && a->scale) return complain(RC_USAGE, "--scale applies to a MODEL, not to --profile");
     if (a->profile && weights_given(&a->weights))
         return complain(RC_USAGE, "--saliency, --weights and --weight weight a MODEL's faces, not --profile");
-    if (a->profile && a->method == METHOD_CURVATURE)
+    if (a->profile && a->method == ADASLICE_METHOD_CURVATURE)
         return complain(RC_USAGE, "--method curvature needs a MODEL's curvature, not --profile");
-    if (a->method == METHOD_CURVATURE && a->orient && !strcmp(a->orient, "best"))
+    if (a->method == ADASLICE_METHOD_CURVATURE && a->orient && !strcmp(a->orient, "best"))
         return complain(RC_USAGE, "--orient best searches with the library's methods, not curvature");
     if (a->tmin > a->tmax) return complain(RC_USAGE, "--tmin %g is larger than --tmax %g", a->tmin, a->tmax);
     if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
@@ -375,7 +375,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
                    : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
     free(weights);
-    if (r == ADASLICE_OK && (a->method == METHOD_CURVATURE || a->compare))
+    if (r == ADASLICE_OK && (a->method == ADASLICE_METHOD_CURVATURE || a->compare))
         rc = curvature_for_plan(&mesh, &j->profile, &j->kappa);
     j->ms_profile = now_ms() - t0 + ms_weights;
     if (j->keep_mesh) j->mesh = mesh;
@@ -469,7 +469,7 @@ static adaslice_result plan_with(const plan_args *a, plan_job *j, adaslice_metho
     adaslice_plan_options o;
     adaslice_result r;
     plan_options_of(a, method, &o);
-    r = method == METHOD_CURVATURE ? plan_curvature_with(a, j, &j->plan[method], &j->why[method])
+    r = method == ADASLICE_METHOD_CURVATURE ? plan_curvature_with(a, j, &j->plan[method], &j->why[method])
                                    : adaslice_plan_profile(&j->profile, &o, &j->plan[method], &j->why[method]);
     j->why[method].result = r;
     j->planned[method] = 1;
@@ -488,7 +488,7 @@ int run_plan(const plan_args *a, plan_job *j)
     j->ms_plan = now_ms() - t0;
     for (m = 0; a->compare && m < METHOD_COUNT; m++) {
         adaslice_result r;
-        if (m == METHOD_CURVATURE && !j->kappa) continue; /* a --profile has no curvature */
+        if (m == ADASLICE_METHOD_CURVATURE && !j->kappa) continue; /* a --profile has no curvature */
         r = j->planned[m] ? ADASLICE_OK : plan_with(a, j, (adaslice_method)m);
         if (r != ADASLICE_OK && r != ADASLICE_ERR_INFEASIBLE) return library_error(&j->why[m]);
     }
@@ -553,7 +553,7 @@ int write_outputs(const plan_args *a, const plan_job *j)
 /* The rows of the paper's Table 3, in its order. */
 static const adaslice_method TABLE3[] = {
     ADASLICE_METHOD_COARSEST, ADASLICE_METHOD_OPTIMAL, ADASLICE_METHOD_GREEDY, ADASLICE_METHOD_FINEST,
-    METHOD_CURVATURE};
+    ADASLICE_METHOD_CURVATURE};
 static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest", "Curvature"};
 enum { TABLE3_ROWS = sizeof TABLE3 / sizeof *TABLE3 };
 
@@ -601,7 +601,7 @@ static void print_summary(const plan_args *a, const plan_job *j)
                a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION, j->profile.unsampled_bins);
     printf("\n");
     printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
-    if (a->method == METHOD_CURVATURE)
+    if (a->method == ADASLICE_METHOD_CURVATURE)
         printf(" (%s mapping; eps only counts the layers over it)", MAPPING_NAMES[a->mapping]);
     if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
     printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);

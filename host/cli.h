@@ -9,8 +9,6 @@
 
 enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2 };
 enum { METRIC_COUNT = 4, METHOD_COUNT = 5 };
-/* the tool's fifth method, after the library's four (host/curvature.h) */
-#define METHOD_CURVATURE ((adaslice_method)(ADASLICE_METHOD_COARSEST + 1))
 
 extern const char *const METRIC_NAMES[];
 extern const char *const METHOD_NAMES[];

@@ -21,11 +21,9 @@ int curvature_for_plan(const adaslice_mesh *mesh, const adaslice_profile *profil
 
 adaslice_result plan_curvature_with(const plan_args *a, const plan_job *j, adaslice_plan *plan, adaslice_error *why)
 {
-    adaslice_curvature_options o;
-    memset(&o, 0, sizeof o);
+    adaslice_plan_options o;
+    plan_options_of(a, ADASLICE_METHOD_CURVATURE, &o);
+    o.curvature = j->kappa;
     o.mapping = (adaslice_mapping)a->mapping;
-    o.tmin = a->tmin;
-    o.tmax = a->tmax;
-    o.eps = a->eps;
-    return adaslice_plan_curvature(&j->profile, j->kappa, &o, plan, why);
+    return adaslice_plan_profile(&j->profile, &o, plan, why);
 }

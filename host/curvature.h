@@ -1,5 +1,5 @@
 /* The curvature-based planner of the notes as the tool's fifth plan method,
-   METHOD_CURVATURE (cli.h). */
+   ADASLICE_METHOD_CURVATURE (cli.h). */
 #ifndef ADASLICE_HOST_CURVATURE_H
 #define ADASLICE_HOST_CURVATURE_H
 #include "cli.h"

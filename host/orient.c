@@ -369,7 +369,7 @@ int cmd_orient(int argc, char **argv)
     if (a.help) { orient_usage(stdout); return RC_OK; }
     if (!a.model) return complain(RC_USAGE, "orient needs a MODEL");
     if (a.orient) return complain(RC_USAGE, "orient searches the directions itself: drop --orient");
-    if (a.method == METHOD_CURVATURE || weights_given(&a.weights))
+    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
     memset(&lo, 0, sizeof lo);
     lo.scale = a.scale;

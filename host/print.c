@@ -413,8 +413,8 @@ static int job_mask(print_job *pj, uint32_t k)
         /* the masker sweeps upwards; layers below k were passed on the way */
         if ((rc = layer_masks_render(&pj->masks, k - 1))) return rc;
         pj->rendered = k;
-        pj->code_size = adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits,
-                                            pj->code, pj->code_cap);
+        (void)adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits, pj->code,
+                                  pj->code_cap, &pj->code_size);
         pj->crc = adaslice_crc32(0, pj->masks.image, pj->masks.stride * pj->height);
         return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
     }

@@ -339,7 +339,7 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
     int rc = RC_OK, digits = layer_digits(p->layer_count);
     if (!heights || !path) { free(heights); free(path); return complain(RC_FAIL, "out of memory for the contours"); }
     for (k = 0; k < p->layer_count; k++) heights[k] = j->profile.z0 + slice_height(s, j, k);
-    if (adaslice_mesh_weld(&j->mesh, &err) != ADASLICE_OK ||
+    if (adaslice_mesh_weld(&j->mesh, NULL, &err) != ADASLICE_OK ||
         adaslice_contours_slice(&j->mesh, heights, p->layer_count, NULL, &c, &err) != ADASLICE_OK) {
         free(heights);
         free(path);
@@ -359,13 +359,16 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
 
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
 {
+    adaslice_mask_options mo;
     adaslice_error err;
     int rc;
     memset(m, 0, sizeof *m);
     m->s = s;
     m->j = j;
     if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
-    if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, s->supersample, NULL, &err) != ADASLICE_OK)
+    memset(&mo, 0, sizeof mo);
+    mo.supersample = s->supersample;
+    if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK)
         return library_error(&err);
     m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
@@ -470,7 +473,8 @@ static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
         free(data);
         if (rc) goto done;
         if (!(codes[k] = (unsigned char *)malloc(bound))) { rc = complain(RC_FAIL, "out of memory coding layer %zu", k + 1); goto done; }
-        sizes[k] = adaslice_rle_encode(m.image, m.stride, (uint32_t)m.width, (uint32_t)m.height, m.bits, codes[k], bound);
+        (void)adaslice_rle_encode(m.image, m.stride, (uint32_t)m.width, (uint32_t)m.height, m.bits, codes[k], bound,
+                                  &sizes[k]);
         crcs[k] = adaslice_crc32(0, m.image, m.stride * (size_t)m.height);
         layers[k].z_bottom = p->layers[k].z_bottom;
         layers[k].z_top = p->layers[k].z_top;

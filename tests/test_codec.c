@@ -81,7 +81,7 @@ static void masks_round_trip(void)
     for (trial = 0; trial < 120; trial++) {
         int bits = trial % 3 == 2 ? 8 : 1;
         uint32_t w = 1 + codec_rng() % 300, h = 1 + codec_rng() % 120, x, y;
-        size_t stride = bits == 1 ? (w + 7) / 8 : w, cap = adaslice_rle_bound(w, h, bits), n, at;
+        size_t stride = bits == 1 ? (w + 7) / 8 : w, cap = adaslice_rle_bound(w, h, bits), n, at, got;
         size_t in_stride = stride + trial % 3;
         unsigned char *grey = (unsigned char *)calloc((size_t)w * h, 1);
         unsigned char *image = (unsigned char *)calloc(in_stride * h, 1);
@@ -110,16 +110,16 @@ static void masks_round_trip(void)
             if (w % 8) image[y * in_stride + stride - 1] |= (unsigned char)(0xff >> (w % 8));
             for (x = (uint32_t)stride; x < in_stride; x++) image[y * in_stride + x] = 0xa5;
         }
-        n = adaslice_rle_encode(image, in_stride, w, h, bits, code, cap);
+        CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, cap, &n) == ADASLICE_OK);
         CHECKF(n > 0 && n <= cap, "trial %d: encoded %zu of bound %zu", trial, n, cap);
-        CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, n - 1) == 0 || n == 0);
-        n = adaslice_rle_encode(image, in_stride, w, h, bits, code, cap);
-        CHECK(adaslice_rle_decoder_init(&dec, w, h, bits, row, sizeof row));
+        CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, n - 1, &got) == ADASLICE_ERR_OVERFLOW || n == 0);
+        CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, cap, &n) == ADASLICE_OK);
+        CHECK(adaslice_rle_decoder_init(&dec, w, h, bits, row, sizeof row) == ADASLICE_OK);
         c.image = back; c.stride = stride; c.next = 0; c.out_of_order = 0;
         for (at = 0; at < n;) {
             size_t piece = 1 + codec_rng() % 17;
             if (piece > n - at) piece = n - at;
-            CHECK(adaslice_rle_decode(&dec, code + at, piece, collect_row, &c) == ADASLICE_RLE_OK);
+            CHECK(adaslice_rle_decode(&dec, code + at, piece, collect_row, &c) == ADASLICE_OK);
             at += piece;
         }
         CHECK(adaslice_rle_finished(&dec) && !c.out_of_order);
@@ -135,17 +135,19 @@ static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
     unsigned char code[64];
+    size_t n;
     memset(image, 0, sizeof image);
-    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code) == 2);
+    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code, &n) == ADASLICE_OK && n == 2);
     memset(image, 0xff, sizeof image);
     /* a new row: header, a 0 dark run and a lit run of 2560 (2 bytes); then a repeat */
-    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code) == 1 + 1 + 2 + 2);
+    CHECK(adaslice_rle_encode(&image[0][0], 320, 2560, 1440, 1, code, sizeof code, &n) == ADASLICE_OK &&
+          n == 1 + 1 + 2 + 2);
 }
 
 static int decode_all(const unsigned char *code, size_t n, uint32_t w, uint32_t h, int bits, adaslice_rle_decoder *dec)
 {
     static unsigned char row[64];
-    CHECK(adaslice_rle_decoder_init(dec, w, h, bits, row, sizeof row));
+    CHECK(adaslice_rle_decoder_init(dec, w, h, bits, row, sizeof row) == ADASLICE_OK);
     return adaslice_rle_decode(dec, code, n, NULL, NULL);
 }
 
@@ -161,19 +163,19 @@ static void malformed_code_is_refused(void)
     static const unsigned char too_many[] = {0x02, 0x08, 0x03};      /* 1 row, then 2 repeats of 2 rows */
     static const unsigned char zero_runs[] = {0x00};
     static const unsigned char grey_zero[] = {0x02, 0x7f, 0x00};
-    CHECK(decode_all(too_long, sizeof too_long, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_VARINT && dec.offset == 4);
-    CHECK(decode_all(overrun, sizeof overrun, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
-    CHECK(decode_all(short_row, sizeof short_row, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 1);
-    CHECK(decode_all(zero_run, sizeof zero_run, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
-    CHECK(decode_all(too_many, sizeof too_many, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_ROWS && dec.offset == 2);
-    CHECK(decode_all(zero_runs, sizeof zero_runs, 8, 2, 1, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 0);
-    CHECK(decode_all(grey_zero, sizeof grey_zero, 8, 2, 8, &dec) == ADASLICE_RLE_ERR_RUN && dec.offset == 2);
+    CHECK(decode_all(too_long, sizeof too_long, 8, 2, 1, &dec) == ADASLICE_ERR_VARINT && dec.offset == 4);
+    CHECK(decode_all(overrun, sizeof overrun, 8, 2, 1, &dec) == ADASLICE_ERR_RUN && dec.offset == 2);
+    CHECK(decode_all(short_row, sizeof short_row, 8, 2, 1, &dec) == ADASLICE_ERR_RUN && dec.offset == 1);
+    CHECK(decode_all(zero_run, sizeof zero_run, 8, 2, 1, &dec) == ADASLICE_ERR_RUN && dec.offset == 2);
+    CHECK(decode_all(too_many, sizeof too_many, 8, 2, 1, &dec) == ADASLICE_ERR_ROWS && dec.offset == 2);
+    CHECK(decode_all(zero_runs, sizeof zero_runs, 8, 2, 1, &dec) == ADASLICE_ERR_RUN && dec.offset == 0);
+    CHECK(decode_all(grey_zero, sizeof grey_zero, 8, 2, 8, &dec) == ADASLICE_ERR_RUN && dec.offset == 2);
     /* the error sticks; a truncated code is not finished */
-    CHECK(adaslice_rle_decode(&dec, zero_runs, 0, NULL, NULL) == ADASLICE_RLE_ERR_RUN && !adaslice_rle_finished(&dec));
-    CHECK(decode_all(short_row, 1, 8, 2, 1, &dec) == ADASLICE_RLE_OK && !adaslice_rle_finished(&dec));
-    CHECK(!adaslice_rle_decoder_init(&dec, 8, 2, 4, row, sizeof row));
-    CHECK(!adaslice_rle_decoder_init(&dec, 100, 2, 1, row, sizeof row));
-    CHECK(!adaslice_rle_decoder_init(&dec, 0, 2, 1, row, sizeof row));
+    CHECK(adaslice_rle_decode(&dec, zero_runs, 0, NULL, NULL) == ADASLICE_ERR_RUN && !adaslice_rle_finished(&dec));
+    CHECK(decode_all(short_row, 1, 8, 2, 1, &dec) == ADASLICE_OK && !adaslice_rle_finished(&dec));
+    CHECK(adaslice_rle_decoder_init(&dec, 8, 2, 4, row, sizeof row) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_rle_decoder_init(&dec, 100, 2, 1, row, sizeof row) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_rle_decoder_init(&dec, 0, 2, 1, row, sizeof row) == ADASLICE_ERR_ARGUMENT);
 }
 
 /* A printer's integers planned by adaslice_dp give adaslice_plan_profile's
@@ -201,7 +203,7 @@ static void printer_units_plan_like_the_tool(void)
         o.eps = 0.02 + (codec_rng() % 100) / 1000.0;
         o.sharp = trial % 2 ? ADASLICE_SHARP_OFF : 1.5;
         CHECK(adaslice_plan_units(&p, &o, units, forced, NULL) == ADASLICE_OK);
-        CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, (uint32_t)n, 25, 75, o.eps_units, 0, 0));
+        CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, (uint32_t)n, 25, 75, o.eps_units, 0, 0) == ADASLICE_OK);
         for (i = 0; i < n; i++) adaslice_dp_push(&dp, units[i], forced[i]);
         if (adaslice_plan_profile(&p, &o, &plan, NULL) != ADASLICE_OK) {
             infeasible++;

@@ -323,7 +323,7 @@ static void welded_soup_slices_like_the_indexed_mesh(void)
     a = slice(&s, h, 40); /* unwelded: every cut is its own open piece */
     CHECK(open_polygons(&a) == a.polygon_count && a.polygon_count == a.segment_count);
     adaslice_contours_free(&a);
-    CHECK(adaslice_mesh_weld(&s, &e) == ADASLICE_OK);
+    CHECK(adaslice_mesh_weld(&s, NULL, &e) == ADASLICE_OK);
     CHECK(s.vertex_count == m.vertex_count && s.triangle_count == m.triangle_count);
     a = slice(&m, h, 40);
     b = slice(&s, h, 40);
@@ -350,14 +350,14 @@ static void weld_merges_signed_zeros_and_keeps_order(void)
     gen_vertex(&m, 7, 8, 9);
     gen_triangle(&m, 0, 1, 2);
     gen_triangle(&m, 3, 4, 5);
-    CHECK(adaslice_mesh_weld(&m, &e) == ADASLICE_OK);
+    CHECK(adaslice_mesh_weld(&m, NULL, &e) == ADASLICE_OK);
     CHECK(m.vertex_count == 4);
     CHECK(m.triangles[0] == 0 && m.triangles[1] == 1 && m.triangles[2] == 2);
     CHECK(m.triangles[3] == 1 && m.triangles[4] == 0 && m.triangles[5] == 3);
     CHECK(m.vertices[9] == 7 && m.vertices[11] == 9);
     m.triangles[5] = 4;
-    CHECK(adaslice_mesh_weld(&m, &e) == ADASLICE_ERR_INDEX && strstr(e.message, "triangle 1") != NULL);
-    CHECK(adaslice_mesh_weld(NULL, &e) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_mesh_weld(&m, NULL, &e) == ADASLICE_ERR_INDEX && strstr(e.message, "triangle 1") != NULL);
+    CHECK(adaslice_mesh_weld(NULL, NULL, &e) == ADASLICE_ERR_ARGUMENT);
     gen_free(&m);
 }
 
@@ -553,6 +553,7 @@ static void running_out_of_memory_leaks_nothing(void)
     failing f;
     adaslice_allocator a;
     adaslice_contour_options o;
+    adaslice_weld_options wo = {0, NULL};
     adaslice_contours c;
     adaslice_error e;
     double h[50];
@@ -578,12 +579,12 @@ static void running_out_of_memory_leaks_nothing(void)
     CHECK(done && n > 8); /* the output grew more than once on the way */
     f.left = 0;
     f.live = 0;
-    s.allocator = a;
-    CHECK(adaslice_mesh_weld(&s, &e) == ADASLICE_ERR_NOMEM && s.vertex_count == 3 * s.triangle_count);
+    wo.allocator = &a;
+    CHECK(adaslice_mesh_weld(&s, &wo, &e) == ADASLICE_ERR_NOMEM && s.vertex_count == 3 * s.triangle_count);
     f.left = 1;
-    CHECK(adaslice_mesh_weld(&s, &e) == ADASLICE_ERR_NOMEM && f.live == 0);
+    CHECK(adaslice_mesh_weld(&s, &wo, &e) == ADASLICE_ERR_NOMEM && f.live == 0);
     f.left = 2;
-    CHECK(adaslice_mesh_weld(&s, &e) == ADASLICE_OK && f.live == 0 && s.vertex_count == m.vertex_count);
+    CHECK(adaslice_mesh_weld(&s, &wo, &e) == ADASLICE_OK && f.live == 0 && s.vertex_count == m.vertex_count);
     gen_free(&m);
     gen_free(&s);
 }

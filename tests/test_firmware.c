@@ -184,7 +184,7 @@ static void bad_masks_are_never_shown(void)
     p.keep_events = 1;
     p.heartbeat = FAKE_TICK_HZ / 5;
     for (k = 0; k < sizeof image; k++) image[k] = (uint8_t)(k * 37 % 7 == 0 ? 0xf0 : 0);
-    n = adaslice_rle_encode(image, 8, 64, 48, 1, code, sizeof code);
+    CHECK(adaslice_rle_encode(image, 8, 64, 48, 1, code, sizeof code, &n) == ADASLICE_OK);
     crc = adaslice_crc32(0, image, sizeof image);
     send_plan(&p, lengths, 2, 2000);
     home(&p);
@@ -240,7 +240,7 @@ static void thousand_layers_without_drift(void)
         if (ready == sent && sent < 1000 && sent + 1 <= layer + 1) {
             size_t n, b;
             for (b = 0; b < sizeof image; b++) image[b] = (uint8_t)((sent + 1) * 31 + b * 7);
-            n = adaslice_rle_encode(image, 4, 32, 16, 1, code, sizeof code);
+            CHECK(adaslice_rle_encode(image, 4, 32, 16, 1, code, sizeof code, &n) == ADASLICE_OK);
             crcs[sent] = adaslice_crc32(0, image, sizeof image);
             send_mask(&p, sent + 1, code, n, crcs[sent]);
             sent++;
@@ -284,7 +284,7 @@ static void pause_and_link_loss(void)
     fake_init(&p, 8, 8, 1);
     p.keep_events = 1;
     p.heartbeat = FAKE_TICK_HZ / 5;
-    n = adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code);
+    CHECK(adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code, &n) == ADASLICE_OK);
     crc = adaslice_crc32(0, image, sizeof image);
     send_plan(&p, lengths, 3, 2000);
     home(&p);
@@ -369,7 +369,7 @@ static void manual_commands(void)
     fake_send(&p, FW_MSG_EXPOSE, ms, 4);
     CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_BUSY); /* no verified mask yet */
     send_plan(&p, lengths, 1, 2000);
-    n = adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code);
+    CHECK(adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code, &n) == ADASLICE_OK);
     send_mask(&p, 1, code, n, adaslice_crc32(0, image, sizeof image));
     fake_send(&p, FW_MSG_EXPOSE, ms, 4);
     CHECK(fake_state(&p) == FW_READY && (p.status[4] & FW_FLAG_UV));

@@ -38,8 +38,8 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double pi
     for (k = 0; k < heights; k++) z[k] = lo[2] + (hi[2] - lo[2]) * (k + 0.37) / heights;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
-    CHECKF(adaslice_masker_init(&mk, m, &g, 1, NULL, &e) == ADASLICE_OK, "%s: %s", what, e.message);
-    CHECK(adaslice_mesh_weld(m, &e) == ADASLICE_OK);
+    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    CHECK(adaslice_mesh_weld(m, NULL, &e) == ADASLICE_OK);
     CHECK(adaslice_contours_slice(m, z, (size_t)heights, NULL, &c, &e) == ADASLICE_OK);
     CHECK(adaslice_profile_exact(m, &po, &prof, &e) == ADASLICE_OK);
     for (k = 0; k < heights; k++) {
@@ -129,7 +129,7 @@ static void rays_through_edges_light_exactly_once(void)
     g.pitch = 0.5;
     g.origin[0] = g.origin[1] = -10.25; /* centres at multiples of 0.5 */
     g.width = g.height = 41;
-    CHECK(adaslice_masker_init(&mk, &box, &g, 1, NULL, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK);
     for (j = 0; j < g.height; j++)
         for (i = 0; i < g.width; i++) {
@@ -152,7 +152,7 @@ static void antialiased_masks_cover_the_area(void)
     adaslice_masker mk;
     size_t p, sum = 0;
     double poly = 256 / 2.0 * 25 * sin(2 * M_PI / 256);
-    CHECK(adaslice_masker_init(&mk, &m, &g, 4, NULL, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 2, NULL) == ADASLICE_OK);
     for (p = 0; p < (size_t)g.width * g.height; p++) sum += mk.image[p];
     /* rays: 0.025 mm apart; the circle's 31.4 mm of edge misjudges at most a ray's diagonal */
@@ -173,7 +173,7 @@ static void open_meshes_never_light_a_column(void)
     adaslice_grid g = plate_around(&box, 0.1, 120, 100);
     adaslice_masker mk;
     size_t t, kept = 0;
-    CHECK(adaslice_masker_init(&mk, &box, &g, 1, NULL, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK && fabs(mk.lit * 0.01 - 48) < 1.5);
     adaslice_masker_free(&mk);
     for (t = 0; t < box.triangle_count; t++) { /* drop the two triangles at z = 2 */
@@ -183,7 +183,7 @@ static void open_meshes_never_light_a_column(void)
     }
     CHECK(kept == 10);
     box.triangle_count = kept;
-    CHECK(adaslice_masker_init(&mk, &box, &g, 1, NULL, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK && mk.lit == 0);
     CHECK(adaslice_masker_slice(&mk, 3, NULL) == ADASLICE_OK && mk.lit == 0);
     adaslice_masker_free(&mk);

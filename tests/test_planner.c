@@ -31,10 +31,10 @@ static void fig3_k_and_d_arrays(void)
     adaslice_dp dp;
     int i;
     CHECK(adaslice_dp_workspace(8, 3, 0) <= sizeof workspace);
-    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0));
-    CHECK(!adaslice_dp_init(&dp, workspace, 8, 8, 2, 3, 6, 0, 0)); /* too little memory */
-    CHECK(!adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 3, 2, 6, 0, 0));
-    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0));
+    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0) == ADASLICE_OK);
+    CHECK(adaslice_dp_init(&dp, workspace, 8, 8, 2, 3, 6, 0, 0) == ADASLICE_ERR_ARGUMENT); /* too little memory */
+    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 3, 2, 6, 0, 0) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, 8, 2, 3, 6, 0, 0) == ADASLICE_OK);
     for (i = 1; i <= 8; i++) {
         adaslice_dp_push(&dp, (uint64_t)(fig3_phi[i - 1] * 10 + 0.5), 0);
         CHECKF(adaslice_dp_layers(&dp) == K[i], "K[%d] = %u, paper %u", i, adaslice_dp_layers(&dp), K[i]);

@@ -110,6 +110,14 @@ static adaslice_mesh copy_mesh(const adaslice_mesh *m, size_t spare)
 
 /* ---------------------------------------------------------------- welding */
 
+static adaslice_result weld(adaslice_mesh *m, double tolerance, adaslice_error *e)
+{
+    adaslice_weld_options o;
+    memset(&o, 0, sizeof o);
+    o.tolerance = tolerance;
+    return adaslice_mesh_weld(m, &o, e);
+}
+
 static void weld_within_merges_into_the_first_vertex_in_reach(void)
 {
     /* along x with tolerance 1: 0 | 1.5 | 0.8 (within reach of both 0 and
@@ -126,7 +134,7 @@ static void weld_within_merges_into_the_first_vertex_in_reach(void)
     memset(&m, 0, sizeof m);
     for (i = 0; i < 7; i++) { v[3 * i] = xs[i]; v[3 * i + 1] = 0; v[3 * i + 2] = 0; }
     m.vertices = v; m.vertex_count = 7; m.triangles = tri; m.triangle_count = 5;
-    CHECK(adaslice_mesh_weld_within(&m, 1.0, &e) == ADASLICE_OK);
+    CHECK(weld(&m, 1.0, &e) == ADASLICE_OK);
     CHECKF(m.vertex_count == 4, "kept %zu vertices", m.vertex_count);
     CHECK(v[0] == 0 && v[3] == 1.5f && v[6] == 3.3f && v[9] == 9.9995f);
     {
@@ -151,14 +159,14 @@ static void weld_within_zero_is_the_exact_weld(void)
         gen_triangle(&soup, (uint32_t)(3 * t), (uint32_t)(3 * t + 1), (uint32_t)(3 * t + 2));
     }
     again = copy_mesh(&soup, 0);
-    CHECK(adaslice_mesh_weld_within(&soup, 0, &e) == ADASLICE_OK && soup.vertex_count == sphere.vertex_count);
+    CHECK(weld(&soup, 0, &e) == ADASLICE_OK && soup.vertex_count == sphere.vertex_count);
     /* a tolerance far below the edge length welds the same */
-    CHECK(adaslice_mesh_weld_within(&again, 1e-4, &e) == ADASLICE_OK && again.vertex_count == sphere.vertex_count);
+    CHECK(weld(&again, 1e-4, &e) == ADASLICE_OK && again.vertex_count == sphere.vertex_count);
     CHECK(memcmp(soup.triangles, again.triangles, 3 * soup.triangle_count * sizeof(uint32_t)) == 0);
-    CHECK(adaslice_mesh_weld_within(&again, -1, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "-1"));
-    CHECK(adaslice_mesh_weld_within(&again, NAN, &e) == ADASLICE_ERR_ARGUMENT);
-    CHECK(adaslice_mesh_weld_within(&again, 1e-300, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "too small"));
-    CHECK(adaslice_mesh_weld_within(NULL, 1, &e) == ADASLICE_ERR_ARGUMENT);
+    CHECK(weld(&again, -1, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "-1"));
+    CHECK(weld(&again, NAN, &e) == ADASLICE_ERR_ARGUMENT);
+    CHECK(weld(&again, 1e-300, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "too small"));
+    CHECK(weld(NULL, 1, &e) == ADASLICE_ERR_ARGUMENT);
     gen_free(&sphere);
     gen_free(&soup);
     gen_free(&again);
@@ -497,6 +505,17 @@ static void weighted_plan_is_thinner_at_the_bump(void)
 
 /* ---------------------------------------------------- the curvature planner */
 
+/* The curvature method with these options (NULL: the defaults). */
+static adaslice_result plan_curvature(const adaslice_profile *p, const double *kappa, const adaslice_plan_options *o,
+                                      adaslice_plan *plan, adaslice_error *e)
+{
+    adaslice_plan_options po;
+    if (o) po = *o; else memset(&po, 0, sizeof po);
+    po.method = ADASLICE_METHOD_CURVATURE;
+    po.curvature = kappa;
+    return adaslice_plan_profile(p, &po, plan, e);
+}
+
 /* Planes on bin boundaries from 0 to N, every layer within tmin..tmax and its
    error the metric profile's. */
 static void check_plan(const adaslice_profile *p, const adaslice_plan *plan, double eps)
@@ -526,7 +545,7 @@ static void curvature_plan_of_a_bent_sheet(void)
     adaslice_mesh m = bent_sheet(2);
     adaslice_profile p;
     adaslice_profile_options po;
-    adaslice_curvature_options co;
+    adaslice_plan_options co;
     adaslice_plan plan;
     adaslice_error e;
     double *kappa;
@@ -541,7 +560,7 @@ static void curvature_plan_of_a_bent_sheet(void)
     for (i = 0; i < 3; i++) {
         memset(&co, 0, sizeof co);
         co.mapping = maps[i];
-        CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK);
+        CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK);
         check_plan(&p, &plan, ADASLICE_DEFAULT_EPS);
         for (k = 0; k + 1 < plan.layer_count; k++) { /* the last layer holds the rest */
             const adaslice_layer *l = &plan.layers[k];
@@ -568,7 +587,7 @@ static void curvature_plan_of_a_capped_cylinder(void)
 {
     adaslice_mesh m = capped_cylinder(5, 10, 96);
     adaslice_profile p;
-    adaslice_curvature_options co;
+    adaslice_plan_options co;
     adaslice_plan plan;
     adaslice_error e;
     double *kappa, wall, cap;
@@ -577,7 +596,7 @@ static void curvature_plan_of_a_capped_cylinder(void)
     kappa = (double *)malloc(p.bin_count * sizeof *kappa);
     CHECK(adaslice_curvature_profile(&m, &p, NULL, kappa, &e) == ADASLICE_OK);
     memset(&co, 0, sizeof co);
-    CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK);
+    CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK);
     check_plan(&p, &plan, ADASLICE_DEFAULT_EPS);
     wall = mean_thickness(&plan, 1, 9.5, &n_wall);
     cap = mean_thickness(&plan, 10.5, 14.5, &n_cap);
@@ -593,7 +612,7 @@ static void curvature_plan_arguments(void)
 {
     adaslice_mesh m = capped_cylinder(5, 10, 24);
     adaslice_profile p;
-    adaslice_curvature_options co;
+    adaslice_plan_options co;
     adaslice_plan plan;
     adaslice_error e;
     double *kappa;
@@ -602,19 +621,19 @@ static void curvature_plan_arguments(void)
     CHECK(adaslice_curvature_profile(&m, &p, NULL, NULL, &e) == ADASLICE_ERR_ARGUMENT);
     CHECK(adaslice_curvature_profile(&m, NULL, NULL, kappa, &e) == ADASLICE_ERR_ARGUMENT);
     CHECK(adaslice_curvature_profile(&m, &p, NULL, kappa, &e) == ADASLICE_OK);
-    CHECK(adaslice_plan_curvature(&p, NULL, NULL, &plan, &e) == ADASLICE_ERR_ARGUMENT && plan.layers == NULL);
+    CHECK(plan_curvature(&p, NULL, NULL, &plan, &e) == ADASLICE_ERR_ARGUMENT && plan.layers == NULL);
     memset(&co, 0, sizeof co);
     co.tmin = 0.001;
-    CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin size"));
+    CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin size"));
     co.tmin = 0;
     co.mapping = (adaslice_mapping)7;
-    CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "mapping 7"));
+    CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "mapping 7"));
     co.mapping = ADASLICE_MAPPING_LINEAR;
     kappa[3] = -1;
-    CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin 3"));
+    CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "bin 3"));
     kappa[3] = 0;
     co.kappa_max = 1e-9; /* everything curved: tmin throughout */
-    CHECK(adaslice_plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK && plan.layer_count == p.bin_count / 25);
+    CHECK(plan_curvature(&p, kappa, &co, &plan, &e) == ADASLICE_OK && plan.layer_count == p.bin_count / 25);
     adaslice_plan_free(&plan);
     free(kappa);
     adaslice_profile_free(&p);
@@ -631,8 +650,8 @@ static void nothing_leaks_when_memory_runs_out(void)
 {
     adaslice_mesh m = bumped_sphere(4, 12, BUMP_DIR, 0.4, 0.2), w;
     adaslice_allocator al;
-    adaslice_saliency_options so;
-    adaslice_curvature_options co;
+    adaslice_surface_options so;
+    adaslice_plan_options co;
     adaslice_profile p;
     adaslice_plan plan;
     adaslice_error e;
@@ -653,16 +672,17 @@ static void nothing_leaks_when_memory_runs_out(void)
             memset(&co, 0, sizeof co);
             so.allocator = co.allocator = &al;
             if (step == 0) {
+                adaslice_weld_options wo = {0.01, NULL};
+                wo.allocator = &al;
                 w = copy_mesh(&m, 0);
-                w.allocator = al;
-                r = adaslice_mesh_weld_within(&w, 0.01, &e);
+                r = adaslice_mesh_weld(&w, &wo, &e);
                 gen_free(&w);
             } else if (step == 1) {
                 r = adaslice_saliency(&m, weight, &so, &e);
             } else if (step == 2) {
-                r = adaslice_curvature_profile(&m, &p, &co, kappa, &e);
+                r = adaslice_curvature_profile(&m, &p, &so, kappa, &e);
             } else {
-                r = adaslice_plan_curvature(&p, kappa, &co, &plan, &e);
+                r = plan_curvature(&p, kappa, &co, &plan, &e);
                 if (r == ADASLICE_OK) adaslice_plan_free(&plan);
             }
             CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "step %d, failing at %d: %s", step, fail_at, e.message);

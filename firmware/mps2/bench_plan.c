@@ -141,8 +141,8 @@ int main(void)
     /* the planner: init, then the bins CHUNK at a time (generated untimed),
        each pushed as the firmware does with a PROFILE_DATA varint */
     t0 = cm3_ticks();
-    if (!adaslice_dp_init(&dp, workspace, FW_PLAN_WORKSPACE(MCU_BINS), MCU_BINS, MCU_BINS_MIN, MCU_BINS_MAX,
-                          MCU_EPS_UNITS, 0, 0))
+    if (adaslice_dp_init(&dp, workspace, FW_PLAN_WORKSPACE(MCU_BINS), MCU_BINS, MCU_BINS_MIN, MCU_BINS_MAX,
+                         MCU_EPS_UNITS, 0, 0) != ADASLICE_OK)
         return 2;
     init = cm3_ticks() - t0;
     mcu_gen_init(&g, MCU_BINS, MCU_SEED);

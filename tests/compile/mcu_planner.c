@@ -1,11 +1,9 @@
-/* The integer planner built for a Cortex-M3 with no malloc and no stdio:
+/* The integer planner (adaslice_mcu.h) built for a Cortex-M3:
    N = 12,000 bins, layers of 25 to 75 bins, its whole state in a static
    workspace. make check fails if that workspace passes 16 KiB. */
-#define ADASLICE_NO_STDIO
-#define ADASLICE_NO_MALLOC
 #define ADASLICE_STATIC
-#define ADASLICE_IMPLEMENTATION
-#include "../../adaslice.h"
+#define ADASLICE_MCU_IMPLEMENTATION
+#include "../../adaslice_mcu.h"
 
 #define BINS 12000u
 #define BINS_MIN 25u
@@ -19,7 +17,7 @@ uint32_t plan_on_mcu(const uint16_t *units, uint64_t eps)
 {
     adaslice_dp dp;
     uint32_t i;
-    if (!adaslice_dp_init(&dp, workspace, sizeof workspace, BINS, BINS_MIN, BINS_MAX, eps, 0, 0)) return 0;
+    if (adaslice_dp_init(&dp, workspace, sizeof workspace, BINS, BINS_MIN, BINS_MAX, eps, 0, 0) != ADASLICE_OK) return 0;
     for (i = 0; i < BINS; i++) adaslice_dp_push(&dp, units[i], 0);
     return adaslice_dp_layers(&dp);
 }

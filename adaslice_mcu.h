@@ -1,0 +1,716 @@
+/* adaslice_mcu.h v0.1.0 — what a resin printer's microcontroller needs of
+   adaslice: the integer planner, CRC-32, varints and the mask run-length code.
+   MIT No Attribution or public domain: see the end of adaslice.h.
+
+   No float, no libm, no malloc, no stdio: memset, memcpy and memmove from
+   <string.h> are all it calls. adaslice.h includes this file (the host plans
+   with the very same integer code), a firmware includes only this one.
+
+   DO THIS in exactly one C or C++ file of the firmware:
+       #define ADASLICE_MCU_IMPLEMENTATION
+       #include "adaslice_mcu.h"
+   adaslice.h's implementation brings this one with it: a program that builds
+   adaslice.h's must not build this one again in another file.
+
+   REFERENCE, in the order of the data's path
+     results
+       adaslice_result                  what every call that can fail returns
+     plans: the integer planner (Procedure 1 of the paper, on integers)
+       adaslice_dp_workspace            bytes of workspace for N bins
+       adaslice_dp_init                 a planner in the caller's workspace
+       adaslice_dp_push                 the next bin's error units (and a forced plane)
+       adaslice_dp_layers               fewest layers up to the last bin pushed
+       adaslice_dp_layer_below          read the plan top-down
+       adaslice_dp_reverse              turn it around in place
+       adaslice_dp_layer_above          read it bottom-up
+     job output: what travels to a printer
+       adaslice_crc32                   CRC-32 (IEEE 802.3, as zlib and PNG)
+       adaslice_varint_put              a LEB128 varint
+       adaslice_varint_push             read one, a byte at a time
+       adaslice_rle_bound               bytes of mask code an image can need
+       adaslice_rle_encode              code a mask
+       adaslice_rle_decoder_init        a streaming decoder
+       adaslice_rle_decode              decode the next bytes, row by row
+       adaslice_rle_finished            every row decoded
+       ADASLICE_RLE_CRC                 CRC-32 of the rows decoded
+
+   THE INTEGER PLANNER  Bins arrive one at a time as integer error units
+   (b * phi rounded up) with eps in the same units. It keeps the last tmax/b
+   planes in rings and one back-pointer byte per bin (two when tmax/b > 255):
+   12,000 bins with layers of at most 127 bins plan in 15,073 bytes. Among the
+   plans with the fewest layers it keeps one whose worst layer is smallest.
+   adaslice.h's adaslice_plan_units makes the units a printer is sent, so the
+   printer's plan equals the host's bit for bit.
+
+   MASK RUN-LENGTH CODE  How masks travel to a printer. A mask is `height`
+   rows of `width` pixels, 1 bit per pixel (rows of (width + 7) / 8 bytes,
+   most significant bit first, 1 = lit, padding bits 0) or 8 bits (rows of
+   width bytes). The code is a sequence of row records; every number is a
+   LEB128 varint (7 bits per byte, low bits first, at most 5 bytes, < 2^32):
+       h odd    the previous row again, (h >> 1) + 1 times (before the first
+                row the previous row is dark)
+       h even   a new row of h >> 1 runs covering exactly width pixels:
+                1-bit: a length per run, runs alternating dark, lit, dark...
+                       (only the first may be 0, for a row that starts lit)
+                8-bit: a value byte and a length (>= 1) per run
+   An empty 2560 x 1440 mask is 2 bytes. A decoder checks the CRC-32 of the
+   rows it rebuilt, in the layout above, against the sender's.
+
+   OPTIONS (define before including the implementation)
+     ADASLICE_MCU_IMPLEMENTATION  the implementation, in one file
+     ADASLICE_STATIC              every function static (private to the file)
+     ADASLICE_DEF                 the linkage of public functions
+     ADASLICE_ASSERT(x)           internal invariant checks (off by default here;
+                                  adaslice.h turns them on with assert)
+   LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; masks below 2^24
+   pixels a side.
+*/
+#ifndef ADASLICE_MCU_H
+#define ADASLICE_MCU_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifndef ADASLICE_DEF
+#ifdef ADASLICE_STATIC
+#define ADASLICE_DEF static
+#else
+#define ADASLICE_DEF extern
+#endif
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------- results */
+
+/* What every call that can fail returns (adaslice.h adds a message). */
+typedef enum adaslice_result {
+    ADASLICE_OK = 0,
+    ADASLICE_ERR_ARGUMENT,    /* a parameter is out of range; the message names it */
+    ADASLICE_ERR_NOMEM,       /* the allocator returned NULL */
+    ADASLICE_ERR_IO,          /* a file could not be read (stdio wrappers only) */
+    ADASLICE_ERR_FORMAT,      /* not a mesh we can read: bad magic, header or keyword */
+    ADASLICE_ERR_TRUNCATED,   /* the data ends before the header says it should */
+    ADASLICE_ERR_COUNT,       /* binary STL: triangle count disagrees with the size */
+    ADASLICE_ERR_NUMBER,      /* a number that does not parse */
+    ADASLICE_ERR_NONFINITE,   /* a NaN or infinite coordinate (also after scaling) */
+    ADASLICE_ERR_INDEX,       /* a face index outside the vertex list */
+    ADASLICE_ERR_OVERFLOW,    /* a count whose size would overflow, or output that
+                                 does not fit the room given */
+    ADASLICE_ERR_EMPTY,       /* no triangles (or none left after dropping degenerate ones) */
+    ADASLICE_ERR_UNSUPPORTED, /* well-formed, but a feature we do not read */
+    ADASLICE_ERR_INFEASIBLE,  /* no plan meets eps, tmin and tmax */
+    ADASLICE_ERR_VARINT,      /* mask code: a number longer than 5 bytes or >= 2^32 */
+    ADASLICE_ERR_RUN,         /* mask code: runs that overrun the row, leave it short,
+                                 or are 0 long */
+    ADASLICE_ERR_ROWS         /* mask code: more rows than the mask has */
+} adaslice_result;
+
+/* ---------------------------------------------- plans: the integer planner */
+
+#define ADASLICE_UNREACHED 0xffffffffu
+
+typedef struct adaslice_dp { /* its fields are private */
+    uint32_t lo, hi;          /* bins per layer: ceil(tmin/b), floor(tmax/b) */
+    uint32_t cap;             /* ring size: a power of two above hi, so % is a mask */
+    uint64_t eps;             /* allowed error per layer, in units */
+    int volume;               /* eq. 20 instead of an additive sum */
+    uint64_t slack;           /* volume: units added per bin for rounding */
+    uint32_t plane;           /* the last plane decided */
+    uint32_t floor;           /* no layer may start below this plane (last forced plane) */
+    uint32_t reach;           /* highest plane any plan reaches */
+    uint64_t *prefix;         /* [cap] sum of units below the plane (additive) */
+    uint64_t *first;          /* [cap] volume: units of the first bin above the plane */
+    uint64_t *run;            /* [cap] volume: error of the layer from the plane up to now */
+    uint32_t *layers;         /* [cap] fewest layers reaching the plane, or UNREACHED */
+    uint64_t *worst;          /* [cap] smallest worst layer error with that many layers */
+    uint32_t *queue;          /* [cap] candidate planes, oldest first (a ring) */
+    uint32_t head, count;     /* the queue's first slot and length */
+    uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
+    unsigned char *back;      /* (planes + 1) * width bytes */
+    uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
+} adaslice_dp;
+
+/* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume);
+/* ADASLICE_ERR_ARGUMENT if the workspace (8-byte aligned) is too small or the
+   bounds are wrong (1 <= bins_min <= bins_max <= 65535). volume: eq. 20
+   instead of sums, with `slack` units added per bin. */
+ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
+                                             uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
+                                             uint64_t slack);
+/* The next bin; `forced` puts a plane on top of it in every plan (§3.3). */
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
+/* Fewest layers from the bottom to the plane on the last bin pushed, or ADASLICE_UNREACHED. */
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
+/* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
+   or a plane no plan reaches): follow it down from the top to read the plan. */
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
+/* When the last bin is in: turns the best plan around in place, so it reads
+   bottom-up with adaslice_dp_layer_above (no pushes after this). Returns the
+   layer count, or ADASLICE_UNREACHED (nothing changes). */
+ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp);
+/* After adaslice_dp_reverse: the bins of the layer whose bottom is `plane`
+   (0 for the top plane or a plane not in the plan). */
+ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane);
+
+/* ------------------------------------------------------------- job output */
+
+/* CRC-32 (IEEE 802.3, as zlib's crc32 and PNG): crc = adaslice_crc32(0, data, n),
+   and running: adaslice_crc32(crc, more, m). */
+ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
+
+/* A LEB128 varint: 7 bits a byte, low bits first, at most 5 bytes. */
+typedef struct adaslice_varint { uint32_t value; int shift; } adaslice_varint; /* a reader: zero it */
+/* The bytes of v's varint into out (NULL: only counted); returns how many. */
+ADASLICE_DEF size_t adaslice_varint_put(unsigned char *out, uint32_t v);
+/* Reads a varint a byte at a time. ADASLICE_ERR_VARINT when the byte would
+   make it longer than 5 bytes or >= 2^32; else ADASLICE_OK, and when this
+   byte ends the number *done = 1, *value = the number and the reader starts
+   afresh (*done = 0 otherwise). */
+ADASLICE_DEF adaslice_result adaslice_varint_push(adaslice_varint *reader, unsigned char byte, int *done,
+                                                  uint32_t *value);
+
+/* The mask run-length code (see the manual above). */
+/* Bytes of code an image can need at most. */
+ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits);
+/* Codes an image (rows `stride` bytes apart) into out, its length in *size;
+   ADASLICE_ERR_OVERFLOW if it would exceed `capacity`, ADASLICE_ERR_ARGUMENT
+   for a wrong image. */
+ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width,
+                                                 uint32_t height, int bits, unsigned char *out, size_t capacity,
+                                                 size_t *size);
+
+typedef struct adaslice_rle_decoder { /* its fields are private */
+    uint32_t width, height, stride, bits;
+    unsigned char *row;     /* the caller's buffer of stride bytes */
+    uint32_t rows;          /* rows emitted */
+    uint32_t x;             /* pixels of the current row decoded */
+    uint32_t runs;          /* runs left in the current row */
+    adaslice_varint number; /* the varint being read */
+    int state;              /* what the next varint or byte is */
+    unsigned char pixel;    /* 8-bit: the current run's value; 1-bit: 0 or 1 */
+    uint32_t crc;           /* CRC-32 of the rows emitted */
+    uint32_t offset;        /* bytes consumed; at an error, the byte at fault */
+    adaslice_result error;
+} adaslice_rle_decoder;
+
+/* ADASLICE_ERR_ARGUMENT unless 1 <= width, height < 2^24, bits is 1 or 8 and
+   row_size holds a row. */
+ADASLICE_DEF adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height,
+                                                       int bits, unsigned char *row, size_t row_size);
+/* Decodes the next `size` bytes of code, calling emit(ctx, y, row) for each
+   finished row, in order. Returns ADASLICE_OK or the error (sticky; the byte
+   at fault is dec->offset): ADASLICE_ERR_VARINT, _RUN or _ROWS. */
+ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                                 void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                 void *ctx);
+/* 1 when every row has been emitted and no record is half read. */
+ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec);
+/* CRC-32 of the rows emitted so far. */
+#define ADASLICE_RLE_CRC(dec) ((dec)->crc)
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* ADASLICE_MCU_H */
+
+/* ======================================================================== */
+/*                              IMPLEMENTATION                              */
+/* ======================================================================== */
+#ifdef ADASLICE_MCU_IMPLEMENTATION
+#ifndef ADASLICE_MCU_IMPLEMENTATION_DONE
+#define ADASLICE_MCU_IMPLEMENTATION_DONE
+
+#include <string.h>
+
+#ifndef ADASLICE_ASSERT
+#define ADASLICE_ASSERT(x) ((void)0)
+#endif
+
+#ifdef __cplusplus
+#define ADASLICE__CAST(type, x) static_cast<type>(x)
+#else
+#define ADASLICE__CAST(type, x) ((type)(x))
+#endif
+
+/* ---------------------------------------------- plans: the integer planner */
+/* The optimal plan (§3.3, Procedure 1) runs on integers: each bin's error
+   b*phi[i] is quantised to a count of units q, so prefix sums are exact, plans
+   do not depend on summation order, and a microcontroller fed the same
+   integers makes the same plan. The core is streaming: bins arrive one at a
+   time and only the last tmax/b planes are kept, plus one back-pointer per
+   plane (the bottom layer's length in bins). */
+
+#define ADASLICE__UNREACHED ADASLICE_UNREACHED
+
+static uint32_t adaslice__dp_queue_at(const adaslice_dp *dp, uint32_t k)
+{
+    return dp->queue[(dp->head + k) & (dp->cap - 1)];
+}
+
+static void adaslice__dp_set_back(adaslice_dp *dp, uint32_t plane, uint32_t len)
+{
+    if (dp->width == 1) dp->back[plane] = (unsigned char)len;
+    else { dp->back[2 * (size_t)plane] = (unsigned char)(len & 255u); dp->back[2 * (size_t)plane + 1] = (unsigned char)(len >> 8); }
+}
+
+static uint32_t adaslice__dp_back(const adaslice_dp *dp, uint32_t plane)
+{
+    if (dp->width == 1) return dp->back[plane];
+    return (uint32_t)dp->back[2 * (size_t)plane] | ((uint32_t)dp->back[2 * (size_t)plane + 1] << 8);
+}
+
+/* Layer from plane l to the current plane: its error in units. */
+static uint64_t adaslice__dp_sum(const adaslice_dp *dp, uint32_t l)
+{
+    return dp->prefix[dp->plane & (dp->cap - 1)] - dp->prefix[l & (dp->cap - 1)];
+}
+
+static uint64_t adaslice__dp_error(const adaslice_dp *dp, uint32_t l)
+{
+    return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
+}
+
+/* (layers, worst) of plane a is at least that of plane b, lexicographically */
+static int adaslice__dp_no_better(const adaslice_dp *dp, uint32_t a, uint32_t b)
+{
+    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
+    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
+}
+
+static void adaslice__dp_start(adaslice_dp *dp)
+{
+    dp->plane = 0;
+    dp->floor = 0;
+    dp->reach = 0;
+    dp->head = dp->count = dp->scan = 0;
+    dp->prefix[0] = 0;
+    dp->layers[0] = 0;
+    dp->worst[0] = 0;
+    adaslice__dp_set_back(dp, 0, 0);
+}
+
+/* Additive metrics: the feasible predecessors of plane i are a window of
+   planes whose both ends only move up (prefix sums never decrease), so a
+   queue ordered by plane with strictly increasing (layers, worst) holds every
+   candidate that can still win: a newer plane with no more layers and no
+   larger worst error beats an older one for good, its layer being shorter.
+   The front block (fewest layers) has worst[] increasing and layer error
+   decreasing along the queue, so the best max(worst, error) sits where the two
+   cross; `scan` finds that point and only moves forward: O(1) amortised. */
+static void adaslice__dp_choose_additive(adaslice_dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, kf, a, b, pos;
+    uint64_t va, vb;
+    if (i >= dp->lo) {
+        uint32_t l = i - dp->lo;
+        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
+            while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
+            if (dp->scan > dp->count) dp->scan = dp->count;
+            ADASLICE_ASSERT(dp->count < dp->cap);
+            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
+        }
+    }
+    while (dp->count) {
+        uint32_t f = adaslice__dp_queue_at(dp, 0);
+        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
+        dp->head = (dp->head + 1) & (dp->cap - 1);
+        dp->count--;
+        if (dp->scan) dp->scan--;
+    }
+    *best = ADASLICE__UNREACHED;
+    if (!dp->count) return;
+    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
+    while (dp->scan < dp->count) {
+        uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
+        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
+        dp->scan++;
+    }
+    pos = dp->scan;
+    /* candidate before the crossing: its layer error dominates */
+    a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
+    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
+    /* candidate at the crossing: its worst so far dominates */
+    b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
+    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
+    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
+    *best = va <= vb ? a : b;
+}
+
+/* Volume deviation (eq. 20) is not additive: every plane in the window is
+   tried, O(w) per plane. */
+static void adaslice__dp_choose_volume(adaslice_dp *dp, uint32_t *best)
+{
+    uint32_t i = dp->plane, l, start;
+    uint32_t best_k = ADASLICE__UNREACHED;
+    uint64_t best_w = 0;
+    *best = ADASLICE__UNREACHED;
+    if (i < dp->lo) return;
+    start = i > dp->hi ? i - dp->hi : 0;
+    if (start < dp->floor) start = dp->floor;
+    for (l = start; l + dp->lo <= i; l++) {
+        uint32_t k = dp->layers[l & (dp->cap - 1)];
+        uint64_t e = dp->run[l & (dp->cap - 1)], w;
+        if (k == ADASLICE__UNREACHED || e > dp->eps) continue;
+        w = dp->worst[l & (dp->cap - 1)] > e ? dp->worst[l & (dp->cap - 1)] : e;
+        if (k < best_k || (k == best_k && w < best_w)) { best_k = k; best_w = w; *best = l; }
+    }
+}
+
+/* Feeds the next bin's units; decides the plane on top of it. `forced` makes
+   that plane part of every plan (§3.3 sharp changes). */
+ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced)
+{
+    uint32_t i = dp->plane + 1, best;
+    uint32_t c = dp->cap;
+    dp->plane = i;
+    if (dp->volume) {
+        uint32_t l = i > dp->hi ? i - dp->hi : 0;
+        dp->first[(i - 1) & (c - 1)] = units;
+        dp->run[(i - 1) & (c - 1)] = 0;
+        for (; l < i; l++) {
+            uint64_t f = dp->first[l & (c - 1)];
+            dp->run[l & (c - 1)] += (units > f ? units - f : f - units) + dp->slack;
+        }
+        adaslice__dp_choose_volume(dp, &best);
+    } else {
+        dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
+        adaslice__dp_choose_additive(dp, &best);
+    }
+    if (best == ADASLICE__UNREACHED) {
+        dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;
+        dp->worst[i & (c - 1)] = 0;
+        adaslice__dp_set_back(dp, i, 0);
+    } else {
+        uint64_t e = adaslice__dp_error(dp, best);
+        dp->layers[i & (c - 1)] = dp->layers[best & (c - 1)] + 1;
+        dp->worst[i & (c - 1)] = dp->worst[best & (c - 1)] > e ? dp->worst[best & (c - 1)] : e;
+        adaslice__dp_set_back(dp, i, i - best);
+        dp->reach = i;
+    }
+    if (forced) {
+        dp->floor = i;
+        dp->head = dp->count = dp->scan = 0;
+    }
+}
+
+static uint32_t adaslice__ring_size(uint32_t bins_max)
+{
+    uint32_t cap = 2;
+    while (cap <= bins_max) cap *= 2;
+    return cap;
+}
+
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
+{
+    size_t cap = adaslice__ring_size(bins_max), width = bins_max <= 255 ? 1 : 2;
+    return cap * ((volume ? 4 : 2) * sizeof(uint64_t) + 2 * sizeof(uint32_t)) + width * ((size_t)bins + 1);
+}
+
+ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
+                                             uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
+                                             uint64_t slack)
+{
+    unsigned char *mem = ADASLICE__CAST(unsigned char *, workspace);
+    uint32_t c;
+    if (!dp || !mem || bins_min < 1 || bins_min > bins_max || bins_max > 65535 || bins > 0x7ffffffeu ||
+        size < adaslice_dp_workspace(bins, bins_max, volume))
+        return ADASLICE_ERR_ARGUMENT;
+    memset(dp, 0, sizeof *dp);
+    dp->lo = bins_min;
+    dp->hi = bins_max;
+    dp->cap = c = adaslice__ring_size(bins_max);
+    dp->eps = eps;
+    dp->volume = volume != 0;
+    dp->slack = slack;
+    dp->width = bins_max <= 255 ? 1 : 2;
+    /* the 8-byte arrays first, so they stay aligned */
+    dp->prefix = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    dp->worst = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    if (volume) {
+        dp->first = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+        dp->run = ADASLICE__CAST(uint64_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint64_t);
+    }
+    dp->layers = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->queue = ADASLICE__CAST(uint32_t *, ADASLICE__CAST(void *, mem)); mem += c * sizeof(uint32_t);
+    dp->back = mem;
+    adaslice__dp_start(dp);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
+{
+    return dp->layers[dp->plane & (dp->cap - 1)];
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
+{
+    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp)
+{
+    uint32_t layers = adaslice_dp_layers(dp), at = dp->plane, above = 0;
+    if (layers == ADASLICE__UNREACHED) return layers;
+    /* planes off the plan keep stale values: clear them so they read 0 */
+    {
+        uint32_t plane = dp->plane, next = dp->plane;
+        for (;;) {
+            uint32_t len = adaslice__dp_back(dp, plane);
+            if (plane == next) next = plane - len;
+            else adaslice__dp_set_back(dp, plane, 0);
+            if (!plane) break;
+            plane--;
+        }
+    }
+    while (at) {
+        uint32_t len = adaslice__dp_back(dp, at);
+        adaslice__dp_set_back(dp, at, above);
+        above = len;
+        at -= len;
+    }
+    adaslice__dp_set_back(dp, 0, above);
+    return layers;
+}
+
+ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane)
+{
+    return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
+}
+/* ------------------------------------------------------------- job output */
+
+ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size)
+{
+    /* a nibble table: 64 bytes of flash instead of 1 KiB, at half the speed */
+    static const uint32_t nibble[16] = {
+        0x00000000u, 0x1db71064u, 0x3b6e20c8u, 0x26d930acu, 0x76dc4190u, 0x6b6b51f4u, 0x4db26158u, 0x5005713cu,
+        0xedb88320u, 0xf00f9344u, 0xd6d6a3e8u, 0xcb61b38cu, 0x9b64c2b0u, 0x86d3d2d4u, 0xa00ae278u, 0xbdbdf21cu};
+    const unsigned char *p = ADASLICE__CAST(const unsigned char *, data);
+    crc = ~crc;
+    while (size--) {
+        crc ^= *p++;
+        crc = (crc >> 4) ^ nibble[crc & 15u];
+        crc = (crc >> 4) ^ nibble[crc & 15u];
+    }
+    return ~crc;
+}
+
+ADASLICE_DEF size_t adaslice_varint_put(unsigned char *out, uint32_t v)
+{
+    size_t n = 0;
+    while (v >= 0x80u) {
+        if (out) out[n] = (unsigned char)(v | 0x80u);
+        n++;
+        v >>= 7;
+    }
+    if (out) out[n] = (unsigned char)v;
+    return n + 1;
+}
+
+ADASLICE_DEF adaslice_result adaslice_varint_push(adaslice_varint *r, unsigned char byte, int *done, uint32_t *value)
+{
+    *done = 0;
+    /* the fifth byte may carry only the top 4 bits of 32 */
+    if (r->shift == 28 && (byte & 0xf0u)) return ADASLICE_ERR_VARINT;
+    r->value |= (uint32_t)(byte & 0x7fu) << r->shift;
+    if (byte & 0x80u) { r->shift += 7; return ADASLICE_OK; }
+    *value = r->value;
+    *done = 1;
+    r->value = 0;
+    r->shift = 0;
+    return ADASLICE_OK;
+}
+
+static uint32_t adaslice__rle_stride(uint32_t width, int bits)
+{
+    return bits == 1 ? (width + 7u) / 8u : width;
+}
+
+static int adaslice__rle_pixel(const unsigned char *row, uint32_t x, int bits)
+{
+    return bits == 1 ? (row[x >> 3] >> (7u - (x & 7u))) & 1 : row[x];
+}
+
+ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits)
+{
+    /* the worst row alternates every pixel: a header and, per pixel, a
+       length of 1 byte (plus the value byte at 8 bits) */
+    size_t per_row = 5u + (size_t)width * (bits == 1 ? 1u : 2u) + 1u;
+    return per_row * height;
+}
+
+/* The runs of one row into out (NULL: only counted); returns the runs. */
+static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int bits, unsigned char *out, size_t *size)
+{
+    uint32_t x = 0, runs = 0;
+    int current = 0;
+    size_t n = 0;
+    while (x < width) {
+        uint32_t start = x;
+        if (bits == 8) current = row[x];
+        while (x < width && adaslice__rle_pixel(row, x, bits) == current) x++;
+        if (bits == 8 && out) out[n] = (unsigned char)current;
+        if (bits == 8) n++;
+        n += adaslice_varint_put(out ? out + n : NULL, x - start);
+        runs++;
+        if (bits == 1) current ^= 1;
+    }
+    *size = n;
+    return runs;
+}
+
+ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width,
+                                                 uint32_t height, int bits, unsigned char *out, size_t capacity,
+                                                 size_t *size)
+{
+    size_t n = 0, row_bytes;
+    uint32_t y = 0, repeat = 0, rs = adaslice__rle_stride(width, bits);
+    const unsigned char *prev = NULL;
+    unsigned char header[5];
+    if (size) *size = 0;
+    if (!image || !out || !size || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) ||
+        height >= (1u << 24) || stride < rs)
+        return ADASLICE_ERR_ARGUMENT;
+    for (y = 0; y <= height; y++) {
+        const unsigned char *row = y < height ? image + (size_t)y * stride : NULL;
+        int same;
+        if (row && prev) {
+            uint32_t x;
+            same = 1;
+            /* compare pixels, not bytes: 1-bit padding bits may hold anything */
+            for (x = 0; x < width && same; x++)
+                same = adaslice__rle_pixel(row, x, bits) == adaslice__rle_pixel(prev, x, bits);
+        } else if (row) {
+            uint32_t x;
+            same = 1; /* before the first row, the previous row is dark */
+            for (x = 0; x < width && same; x++) same = adaslice__rle_pixel(row, x, bits) == 0;
+        } else {
+            same = 0;
+        }
+        if (same) { repeat++; if (row) prev = row; continue; }
+        if (repeat) {
+            size_t h = adaslice_varint_put(header, ((repeat - 1u) << 1) | 1u);
+            if (capacity - n < h) return ADASLICE_ERR_OVERFLOW;
+            memcpy(out + n, header, h); n += h;
+            repeat = 0;
+        }
+        if (!row) break;
+        {
+            uint32_t runs = adaslice__rle_runs(row, width, bits, NULL, &row_bytes);
+            size_t h = adaslice_varint_put(header, runs << 1);
+            if (capacity - n < h + row_bytes) return ADASLICE_ERR_OVERFLOW;
+            memcpy(out + n, header, h); n += h;
+            (void)adaslice__rle_runs(row, width, bits, out + n, &row_bytes);
+            n += row_bytes;
+        }
+        prev = row;
+    }
+    *size = n;
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height,
+                                                       int bits, unsigned char *row, size_t row_size)
+{
+    if (!dec) return ADASLICE_ERR_ARGUMENT;
+    memset(dec, 0, sizeof *dec);
+    if (!row || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) || height >= (1u << 24) ||
+        row_size < adaslice__rle_stride(width, bits))
+        return dec->error = ADASLICE_ERR_ARGUMENT;
+    dec->width = width;
+    dec->height = height;
+    dec->bits = (uint32_t)bits;
+    dec->stride = adaslice__rle_stride(width, bits);
+    dec->row = row;
+    memset(row, 0, dec->stride);
+    return ADASLICE_OK;
+}
+
+enum { ADASLICE__RLE_HEADER = 0, ADASLICE__RLE_VALUE, ADASLICE__RLE_LENGTH };
+
+static void adaslice__rle_fill(adaslice_rle_decoder *dec, uint32_t len)
+{
+    uint32_t x = dec->x, end = x + len;
+    if (dec->bits == 8) { memset(dec->row + x, dec->pixel, len); return; }
+    if (!dec->pixel) return; /* rows start dark */
+    while (x < end && (x & 7u)) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
+    if (end - x >= 8) { memset(dec->row + (x >> 3), 0xff, (end - x) >> 3); x += (end - x) & ~7u; }
+    while (x < end) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
+}
+
+static void adaslice__rle_emit(adaslice_rle_decoder *dec, void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+{
+    dec->crc = adaslice_crc32(dec->crc, dec->row, dec->stride);
+    if (emit) emit(ctx, dec->rows, dec->row);
+    dec->rows++;
+}
+
+/* One whole number read: what it means depends on the state. */
+static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t v,
+                                            void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+{
+    if (dec->state == ADASLICE__RLE_HEADER) {
+        if (v & 1u) {
+            uint32_t times = (v >> 1) + 1u;
+            if (times > dec->height - dec->rows) return ADASLICE_ERR_ROWS;
+            while (times--) adaslice__rle_emit(dec, emit, ctx);
+            return ADASLICE_OK;
+        }
+        if (dec->rows >= dec->height) return ADASLICE_ERR_ROWS;
+        dec->runs = v >> 1;
+        if (!dec->runs) return ADASLICE_ERR_RUN;
+        dec->x = 0;
+        dec->pixel = 0;
+        memset(dec->row, 0, dec->stride);
+        dec->state = dec->bits == 8 ? ADASLICE__RLE_VALUE : ADASLICE__RLE_LENGTH;
+        return ADASLICE_OK;
+    }
+    /* a run's length */
+    if (v > dec->width - dec->x || (v == 0 && (dec->bits == 8 || dec->x > 0 || dec->pixel))) return ADASLICE_ERR_RUN;
+    adaslice__rle_fill(dec, v);
+    dec->x += v;
+    dec->runs--;
+    if (dec->bits == 1) dec->pixel ^= 1u;
+    if (!dec->runs) {
+        if (dec->x != dec->width) return ADASLICE_ERR_RUN;
+        adaslice__rle_emit(dec, emit, ctx);
+        dec->state = ADASLICE__RLE_HEADER;
+    } else {
+        if (dec->x == dec->width) return ADASLICE_ERR_RUN;
+        dec->state = dec->bits == 8 ? ADASLICE__RLE_VALUE : ADASLICE__RLE_LENGTH;
+    }
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                                 void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                 void *ctx)
+{
+    size_t i;
+    if (!dec->row) return dec->error = ADASLICE_ERR_ARGUMENT;
+    for (i = 0; i < size && !dec->error; i++) {
+        unsigned char c = data[i];
+        if (dec->state == ADASLICE__RLE_VALUE) {
+            dec->pixel = c;
+            dec->state = ADASLICE__RLE_LENGTH;
+        } else {
+            uint32_t v = 0;
+            int done;
+            if ((dec->error = adaslice_varint_push(&dec->number, c, &done, &v)) != ADASLICE_OK) break;
+            if (done && (dec->error = adaslice__rle_number(dec, v, emit, ctx)) != ADASLICE_OK) break;
+        }
+        dec->offset++;
+    }
+    return dec->error;
+}
+
+ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec)
+{
+    return !dec->error && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->number.shift == 0;
+}
+
+#endif /* ADASLICE_MCU_IMPLEMENTATION_DONE */
+#endif /* ADASLICE_MCU_IMPLEMENTATION */
