@@ -12,15 +12,15 @@ MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 15
 B        = build
 
-FW_TEST_SRC = firmware/core.c firmware/motion.c firmware/gcode.c firmware/link.c
-HOST_SRC  = host/adaslice.c host/print.c host/tty.c firmware/link.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
+FW_TEST_SRC = firmware/core.c firmware/motion.c firmware/gcode.c link/frame.c link/messages.c
+HOST_SRC  = host/adaslice.c host/print.c host/serial.c link/tty.c link/frame.c link/messages.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
             host/weights.c host/curvature.c host/saliency_cmd.c
 TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
-            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c tests/test_motion.c tests/test_gcode.c \
+            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c tests/test_link.c tests/test_motion.c tests/test_gcode.c \
             tests/test_firmware.c tests/test_print.c $(FW_TEST_SRC)
 HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h tests/failing_alloc.h \
-            host/weights.h host/curvature.h host/tty.h tests/cli_run.h tests/zcheck.h tests/fakeport.h \
-            firmware/fw.h firmware/motion.h firmware/gcode.h firmware/link.h firmware/protocol.h
+            host/weights.h host/curvature.h host/serial.h link/tty.h link/frame.h link/messages.h tests/cli_run.h tests/zcheck.h tests/fakeport.h \
+            firmware/fw.h firmware/motion.h firmware/gcode.h
 
 include firmware/firmware.mk
 
@@ -101,8 +101,8 @@ fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
 	    if [ $$status -ne 0 ]; then tail -n 40 $(B)/fuzz_$$t.log; exit $$status; fi; \
 	done
 
-$(B)/relay: tests/relay.c host/tty.c host/tty.h | $(B)
-	$(CC) -std=c99 $(WARN) -O2 tests/relay.c host/tty.c -o $@
+$(B)/relay: tests/relay.c link/tty.c link/tty.h | $(B)
+	$(CC) -std=c99 $(WARN) -O2 tests/relay.c link/tty.c -o $@
 
 check: compile-checks firmware fuzz $(B)/san/adaslice $(B)/san/run_tests $(B)/fw-sim $(B)/relay
 	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests

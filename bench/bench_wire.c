@@ -12,7 +12,7 @@
    bench/bench.c's scales; a part still wider than 95 % of the plate along x
    or y is scaled down uniformly to 95 % (the table says by how much).
 
-   On the wire (firmware/PROTOCOL.md), host to MCU: frames of at most 255
+   On the wire (link/PROTOCOL.md), host to MCU: frames of at most 255
    bytes carry 249 of payload and 6 of overhead; a mask is one MASK frame
    (12 bytes of payload: 18 on the wire) and MASK_DATA frames of 249 bytes of
    code (adaslice print sends full frames while the line is clean). At

@@ -8,8 +8,8 @@
 #   firmware                  all three, and each image's flash and RAM;
 #                             fails if one needs more than 20 KiB of RAM
 
-FW_CORE_SRC = firmware/core.c firmware/motion.c firmware/gcode.c firmware/link.c firmware/adaslice_fw.c
-FW_HDRS     = $(wildcard firmware/*.h) adaslice.h
+FW_CORE_SRC = firmware/core.c firmware/motion.c firmware/gcode.c link/frame.c link/messages.c firmware/adaslice_fw.c
+FW_HDRS     = $(wildcard firmware/*.h) $(wildcard link/*.h) adaslice_mcu.h
 FW_CM3_SRC  = firmware/cm3/cm3.c firmware/cm3/serve.c
 FW_CM3_HDRS = firmware/cm3/cm3.h
 FW_RAM_MAX  = 20480
@@ -25,8 +25,8 @@ FW_ARM_LIBS  = -lgcc
 
 .PHONY: firmware
 
-$(B)/fw-sim: firmware/sim/sim.c host/tty.c host/tty.h $(FW_CORE_SRC) $(FW_HDRS) | $(B)
-	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c host/tty.c $(FW_CORE_SRC) -o $@ -lm
+$(B)/fw-sim: firmware/sim/sim.c link/tty.c $(FW_CORE_SRC) $(FW_HDRS) | $(B)
+	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c link/tty.c $(FW_CORE_SRC) -o $@ -lm
 
 FW_MPS2_SRC = firmware/mps2/main.c firmware/mps2/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
 FW_MPS2_DEPS = $(FW_MPS2_SRC) firmware/mps2/board.h firmware/mps2/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)

@@ -1,13 +1,13 @@
 /* adaslice firmware core: the part of the printer's MCU code that every port
-   shares (protocol, planner from the trimmed adaslice.h, Z motion, the print
-   state machine, the mask sink, G-code mode). Portable C99 with no float, no
-   libm, no malloc and no stdio; all state lives in one fw_state the port owns.
+   shares (protocol, planner from adaslice_mcu.h, Z motion, the print state
+   machine, the mask sink, G-code mode). Portable C99 with no float, no libm,
+   no malloc and no stdio; all state lives in one fw_state the port owns.
 
    A port supplies the hardware through fw_port and runs one loop:
 
-       fw_init(&fw, &config, &port);
+       fw_init(&fw, &config, &port, workspace, sizeof workspace);
        for (;;) {
-           feed received bytes:         fw_receive(&fw, bytes, n);
+           feed received bytes:         fw_receive(&fw, bytes, n, now);
            when now >= deadline:        deadline = fw_run(&fw, now);
            otherwise sleep until a byte arrives or the deadline
        }
@@ -16,18 +16,17 @@
    tick), ends exposures, notices a silent link, and returns the tick of the
    next thing it must do (FW_NEVER: nothing until a byte arrives). Nothing in
    the core blocks; fw_receive may call fw_port.write. The wire protocol is in
-   firmware/PROTOCOL.md. */
+   link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>
 #include <stdint.h>
 #include "../adaslice_mcu.h"
-#include "link.h"
-#include "protocol.h"
+#include "../link/frame.h"
+#include "../link/messages.h"
 #include "motion.h"
 #include "gcode.h"
 
-#define FW_VERSION 1
 
 typedef struct fw_port {
     void *ctx;
@@ -78,7 +77,7 @@ typedef struct fw_state {
     fw_port port;
     fw_axis axis;
     /* link */
-    fw_deframer deframer;
+    link_deframer deframer;
     uint8_t expect;            /* the host's next sequence number */
     uint8_t binary;            /* a good frame arrived: G-code mode is off */
     uint64_t heard;            /* tick of the last good frame */
@@ -89,7 +88,7 @@ typedef struct fw_state {
     uint32_t bins, bins_in, bin_nm;
     adaslice_varint varint;    /* the profile's next number */
     uint8_t plan_kind;         /* 0 none, 1 from the profile, 2 given by the host */
-    uint8_t receiving;         /* FW_MSG_PROFILE_DATA or FW_MSG_PLAN_DATA while one arrives */
+    uint8_t receiving;         /* LINK_MSG_PROFILE_DATA or LINK_MSG_PLAN_DATA while one arrives */
     uint32_t layers;           /* K */
     uint32_t cursor_layer, cursor_plane; /* reading the plan bottom-up */
     /* masks: decoded into display buffer (layer & 1) as they stream */

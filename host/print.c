@@ -1,14 +1,14 @@
 /* adaslice print: drives a printer running the adaslice firmware over a
-   serial port (POSIX termios only), after firmware/PROTOCOL.md. The printer
+   serial port (POSIX termios only), after link/PROTOCOL.md. The printer
    plans from the quantised profile (or takes the host's plan), then the host
    streams mask k+1 while layer k exposes. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "cli.h"
-#include "../firmware/link.h"
-#include "../firmware/protocol.h"
-#include "tty.h"
+#include "../link/frame.h"
+#include "../link/messages.h"
+#include "serial.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -23,6 +23,9 @@
 
 enum { RC_PAUSED = 3 };
 
+static volatile sig_atomic_t interrupted;
+static void on_sigint(int sig) { (void)sig; interrupted = 1; }
+
 typedef struct print_args {
     const char *port, *report;
     long baud;
@@ -33,287 +36,6 @@ typedef struct print_args {
     int then_exit;          /* emulators: EXIT after the print */
     double give_up_s;       /* a printer silent this long ends the print */
 } print_args;
-
-/* ------------------------------------------------------------ the port */
-
-static int serial_open(const char *dev, long baud, int *fd_out)
-{
-    struct termios t;
-    int fd;
-    if (!tty_baud_ok(baud))
-        return complain(RC_USAGE, "--baud %ld: not a standard rate (9600, 19200, 38400, 57600, 115200, 230400)", baud);
-    fd = open(dev, O_RDWR | O_NOCTTY | O_NONBLOCK);
-    if (fd < 0) return complain(RC_FAIL, "cannot open %s: %s", dev, strerror(errno));
-    if (tcgetattr(fd, &t) != 0) {
-        close(fd);
-        return complain(RC_FAIL, "%s is not a serial port: %s", dev, strerror(errno));
-    }
-    if (tty_raw(fd, baud) != 0) {
-        close(fd);
-        return complain(RC_FAIL, "cannot set %s to %ld 8N1: %s", dev, baud, strerror(errno));
-    }
-    /* what a previous session left unread must not pass for replies */
-    tcflush(fd, TCIOFLUSH);
-    *fd_out = fd;
-    return RC_OK;
-}
-
-/* ------------------------------------------------------------- the link */
-
-#define LINK_QUEUE 16
-
-typedef struct status {
-    uint8_t state, phase, error, error_seq, flags, window;
-    uint32_t layer, layers, mask_ready, mask_layer, mask_got, bins_in, bad_frames;
-    uint16_t masks_refused;
-    int32_t z_nm;
-} status;
-
-typedef struct identity {
-    uint8_t version, window, max_layer_bins, bits;
-    uint32_t max_bins, steps_per_mm, pitch_nm, z_max_nm, tick_hz, link_timeout_ms;
-    uint16_t width, height;
-} identity;
-
-typedef struct serial_link {
-    int fd;
-    const char *dev;
-    fw_deframer rx;
-    uint8_t next_seq, base;     /* frames base .. next_seq - 1 await their ack */
-    int count, window;
-    uint8_t frames[LINK_QUEUE][FW_FRAME_MAX];
-    size_t lens[LINK_QUEUE];
-    double rto_ms, last_progress, last_heard, give_up_ms;
-    /* the latest replies, each with a count so a caller sees a fresh one */
-    status st;
-    unsigned long status_count, identify_count, plan_count;
-    identity id;
-    uint8_t plan[FW_FRAME_MAX];
-    size_t plan_size;
-    unsigned long retransmits, naks, bytes_out, bytes_in;
-    /* bulk data frames shrink when frames are lost and grow back when the
-       line is clean: a frame's chance to arrive falls with its length */
-    size_t data_max;
-    unsigned clean;
-    uint8_t round;              /* FW_ROUND_BIT of the frames sent now */
-    double srtt, rttvar;        /* request-to-reply times, as TCP keeps them (RFC 6298) */
-} serial_link;
-
-/* A STATUS round trip of `rtt` ms: the retransmission timeout follows the
-   line (a pty answers in a millisecond, a loaded 9600 baud line in seconds). */
-static void link_rtt(serial_link *l, double rtt)
-{
-    if (!l->srtt) { l->srtt = rtt; l->rttvar = rtt / 2; }
-    else {
-        l->rttvar = 0.75 * l->rttvar + 0.25 * fabs(l->srtt - rtt);
-        l->srtt = 0.875 * l->srtt + 0.125 * rtt;
-    }
-    l->rto_ms = l->srtt + 4 * l->rttvar;
-    if (l->rto_ms < 60) l->rto_ms = 60;
-    if (l->rto_ms > 1000) l->rto_ms = 1000;
-}
-
-static volatile sig_atomic_t interrupted;
-static void on_sigint(int sig) { (void)sig; interrupted = 1; }
-
-static int link_write(serial_link *l, const uint8_t *data, size_t size)
-{
-    while (size) {
-        ssize_t n = write(l->fd, data, size);
-        if (n > 0) { data += n; size -= (size_t)n; l->bytes_out += (unsigned long)n; continue; }
-        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
-            return complain(RC_FAIL, "writing %s: %s", l->dev, strerror(errno));
-        {
-            struct pollfd p = {l->fd, POLLOUT, 0};
-            (void)poll(&p, 1, 100);
-        }
-    }
-    return RC_OK;
-}
-
-/* Go back N: everything unacknowledged again, in a new round (its NAKs are
-   told apart from those older copies draw), and smaller data frames. */
-static int resend_all(serial_link *l)
-{
-    int i;
-    l->round ^= FW_ROUND_BIT;
-    for (i = 0; i < l->count; i++) {
-        uint8_t *f = l->frames[i];
-        size_t n = l->lens[i];
-        uint16_t crc;
-        f[2] = (uint8_t)((f[2] & ~FW_ROUND_BIT) | l->round);
-        crc = fw_crc16(f, n - 3);
-        f[n - 3] = (uint8_t)(crc >> 8);
-        f[n - 2] = (uint8_t)crc;
-        if (link_write(l, f, n)) return RC_FAIL;
-    }
-    l->retransmits += (unsigned long)l->count;
-    l->last_progress = now_ms();
-    l->clean = 0;
-    if (l->data_max > 32) l->data_max /= 2;
-    return RC_OK;
-}
-
-static void take_reply(serial_link *l, const uint8_t *f, size_t n)
-{
-    const uint8_t *p = f + 3;
-    size_t size = n - FW_FRAME_MIN;
-    uint8_t ack = f[1], acked = (uint8_t)(ack - l->base);
-    /* every reply acknowledges what came before ack */
-    if (acked && acked <= l->count) {
-        memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
-        memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
-        l->count -= acked;
-        l->base = ack;
-        l->last_progress = now_ms();
-        l->clean += acked;
-        if (l->clean >= 32 && l->data_max < FW_PAYLOAD_MAX) {
-            l->data_max = l->data_max * 2 > FW_PAYLOAD_MAX ? FW_PAYLOAD_MAX : l->data_max * 2;
-            l->clean = 0;
-        }
-    }
-    switch (f[2]) {
-    case FW_MSG_ACK:
-        /* frames sent before our last resend still draw NAKs: those are answered */
-        if (size >= 1 && p[0] && l->count) {
-            l->naks++;
-            if ((p[0] & FW_ROUND_BIT) == l->round) (void)resend_all(l);
-        }
-        break;
-    case FW_MSG_STATUS_REPLY:
-        if (size < 40) break;
-        l->st.state = p[0]; l->st.phase = p[1]; l->st.error = p[2]; l->st.error_seq = p[3]; l->st.flags = p[4];
-        l->st.layer = fw_get32(p + 5); l->st.layers = fw_get32(p + 9); l->st.mask_ready = fw_get32(p + 13);
-        l->st.mask_layer = fw_get32(p + 17); l->st.mask_got = fw_get32(p + 21); l->st.masks_refused = fw_get16(p + 25);
-        l->st.z_nm = (int32_t)fw_get32(p + 27); l->st.bins_in = fw_get32(p + 31); l->st.bad_frames = fw_get32(p + 35);
-        l->st.window = p[39];
-        l->status_count++;
-        break;
-    case FW_MSG_IDENTIFY:
-        if (size < 32) break;
-        l->id.version = p[0]; l->id.window = p[1]; l->id.max_bins = fw_get32(p + 2); l->id.max_layer_bins = p[6];
-        l->id.steps_per_mm = fw_get32(p + 7); l->id.width = fw_get16(p + 11); l->id.height = fw_get16(p + 13);
-        l->id.bits = p[15]; l->id.pitch_nm = fw_get32(p + 16); l->id.z_max_nm = fw_get32(p + 20);
-        l->id.tick_hz = fw_get32(p + 24); l->id.link_timeout_ms = fw_get32(p + 28);
-        l->identify_count++;
-        break;
-    case FW_MSG_PLAN:
-        memcpy(l->plan, p, size);
-        l->plan_size = size;
-        l->plan_count++;
-        break;
-    default:
-        break;
-    }
-}
-
-/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. */
-static int link_pump(serial_link *l, int wait_ms)
-{
-    uint8_t buf[4096];
-    struct pollfd p = {l->fd, POLLIN, 0};
-    double t;
-    if (poll(&p, 1, wait_ms) > 0) {
-        ssize_t n = read(l->fd, buf, sizeof buf), i;
-        if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO)
-            return complain(RC_FAIL, "reading %s: %s", l->dev, strerror(errno));
-        for (i = 0; i < n; i++) {
-            size_t m;
-            fw_deframe_push(&l->rx, buf[i]);
-            while ((m = fw_deframe_next(&l->rx)) != 0) {
-                l->last_heard = now_ms();
-                take_reply(l, l->rx.buf, m);
-                fw_deframe_consume(&l->rx);
-            }
-        }
-        if (n > 0) l->bytes_in += (unsigned long)n;
-    }
-    t = now_ms();
-    if (l->count && t - l->last_progress > l->rto_ms && resend_all(l)) return RC_FAIL;
-    if (t - l->last_heard > l->give_up_ms)
-        return complain(RC_FAIL, "the printer on %s has been silent for %.0f s", l->dev, l->give_up_ms / 1000);
-    return RC_OK;
-}
-
-/* Queues a frame, waiting while the printer's window is full. */
-static int link_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size)
-{
-    int rc;
-    while (l->count >= l->window || l->count >= LINK_QUEUE)
-        if ((rc = link_pump(l, 20))) return rc;
-    l->lens[l->count] = fw_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
-    if (!l->count) l->last_progress = now_ms();
-    rc = link_write(l, l->frames[l->count], l->lens[l->count]);
-    l->count++;
-    l->next_seq++;
-    return rc;
-}
-
-/* A fresh STATUS: asked again if its reply is lost. */
-static int link_status(serial_link *l)
-{
-    unsigned long seen = l->status_count;
-    int rc;
-    for (;;) {
-        double asked;
-        unsigned long resends;
-        if ((rc = link_send(l, FW_MSG_STATUS, NULL, 0))) return rc;
-        asked = now_ms(); /* after any wait for the window: that is not the line's round trip */
-        resends = l->retransmits;
-        while (l->status_count == seen && now_ms() - asked < l->rto_ms * 2)
-            if ((rc = link_pump(l, 2))) return rc;
-        if (l->status_count != seen) {
-            if (l->retransmits == resends) link_rtt(l, now_ms() - asked); /* Karn: no sample across a resend */
-            return RC_OK;
-        }
-    }
-}
-
-static int link_hello(serial_link *l)
-{
-    uint8_t version = FW_PROTOCOL_VERSION, frame[FW_FRAME_MAX];
-    double start = now_ms(), sent = 0;
-    size_t n = fw_frame_build(frame, l->next_seq, FW_MSG_HELLO, &version, 1);
-    int rc;
-    l->last_heard = start;
-    /* an emulator may drop what arrives before it looks at the port: say hello until answered */
-    while (!l->identify_count) {
-        if (now_ms() - start > 5000) return complain(RC_FAIL, "no adaslice printer answers on %s (5 s)", l->dev);
-        if (now_ms() - sent > 250) {
-            if ((rc = link_write(l, frame, n))) return rc;
-            sent = now_ms();
-        }
-        if ((rc = link_pump(l, 20))) return rc;
-        l->last_heard = now_ms();
-    }
-    if (l->id.version != FW_PROTOCOL_VERSION)
-        return complain(RC_FAIL, "the printer speaks protocol %u; this tool speaks %u", l->id.version, FW_PROTOCOL_VERSION);
-    l->next_seq++;
-    l->base = l->next_seq;
-    l->count = 0;
-    l->window = l->id.window ? l->id.window : 1;
-    return RC_OK;
-}
-
-static const char *const ERRORS[] = {
-    "none", "bad message", "bad profile header", "bad profile data", "no plan meets eps", "no plan",
-    "mask out of order", "malformed mask code", "mask CRC mismatch", "outside the soft limits", "not homed",
-    "homing failed", "busy", "more bins than the printer takes"};
-
-static const char *error_name(uint8_t e) { return e < sizeof ERRORS / sizeof *ERRORS ? ERRORS[e] : "unknown error"; }
-
-/* Waits until a STATUS shows `done` true. */
-static int link_wait(serial_link *l, int (*done)(const status *, const void *), const void *ctx, double timeout_ms)
-{
-    double start = now_ms();
-    int rc;
-    for (;;) {
-        if ((rc = link_status(l))) return rc;
-        if (done(&l->st, ctx)) return RC_OK;
-        if (now_ms() - start > timeout_ms) return RC_FAIL;
-        if ((rc = link_pump(l, 20))) return rc;
-    }
-}
 
 /* ------------------------------------------------------------- the job */
 
@@ -357,11 +79,11 @@ static int read_rle_file(const char *dir, print_job *pj)
         free(path);
         return RC_FAIL;
     }
-    pj->width = fw_get32(pj->file + 8);
-    pj->height = fw_get32(pj->file + 12);
-    pj->bits = fw_get32(pj->file + 16);
-    pj->layers = fw_get32(pj->file + 20);
-    pj->bin_nm = fw_get32(pj->file + 24);
+    pj->width = link_get32(pj->file + 8);
+    pj->height = link_get32(pj->file + 12);
+    pj->bits = link_get32(pj->file + 16);
+    pj->layers = link_get32(pj->file + 20);
+    pj->bin_nm = link_get32(pj->file + 24);
     if (!pj->layers || pj->layers > pj->file_size / 12 || !pj->bin_nm) {
         complain(RC_FAIL, "%s: byte 20: %u layers of %u nm do not fit the file", path, pj->layers, pj->bin_nm);
         free(path);
@@ -372,12 +94,12 @@ static int read_rle_file(const char *dir, print_job *pj)
     if (!pj->lengths || !pj->offsets) { free(path); return complain(RC_FAIL, "out of memory"); }
     for (at = 28, k = 0; k < pj->layers; k++) {
         uint32_t code;
-        if (pj->file_size - at < 12 || (code = fw_get32(pj->file + at + 8)) > pj->file_size - at - 12) {
+        if (pj->file_size - at < 12 || (code = link_get32(pj->file + at + 8)) > pj->file_size - at - 12) {
             complain(RC_FAIL, "%s: byte %zu: layer %zu runs past the end of the file", path, at, k + 1);
             free(path);
             return RC_FAIL;
         }
-        pj->lengths[k] = fw_get32(pj->file + at);
+        pj->lengths[k] = link_get32(pj->file + at);
         pj->offsets[k] = at;
         at += 12 + code;
     }
@@ -395,8 +117,8 @@ static int job_mask(print_job *pj, uint32_t k)
 {
     if (!pj->from_model) {
         const unsigned char *rec = pj->file + pj->offsets[k - 1];
-        pj->crc = fw_get32(rec + 4);
-        pj->code_size = fw_get32(rec + 8);
+        pj->crc = link_get32(rec + 4);
+        pj->code_size = link_get32(rec + 8);
         pj->code = (unsigned char *)rec + 12;
         return RC_OK;
     }
@@ -422,7 +144,7 @@ static int job_mask(print_job *pj, uint32_t k)
 
 /* ------------------------------------------------------------ planning */
 
-static int plan_ready(const status *s, const void *ctx) { (void)ctx; return s->state != FW_PLANNING; }
+static int plan_ready(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_PLANNING; }
 
 /* The profile goes to the printer as varints; its plan must equal ours. */
 static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_plan_options *o, const print_job *pj)
@@ -431,40 +153,33 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     uint32_t n = (uint32_t)p->bin_count, i, k;
     uint32_t *units = (uint32_t *)malloc(n * sizeof *units);
     unsigned char *forced = (unsigned char *)malloc(n);
-    uint8_t buf[FW_PAYLOAD_MAX];
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_profile hdr;
     adaslice_error err;
     int rc = RC_OK;
     if (!units || !forced) { free(units); free(forced); return complain(RC_FAIL, "out of memory"); }
     if (adaslice_plan_units(p, o, units, forced, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
-    fw_put32(buf, n);
-    buf[4] = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_min;
-    buf[5] = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_max;
-    fw_put32(buf + 6, o->eps_units);
-    fw_put32(buf + 10, pj->bin_nm);
-    if ((rc = link_send(l, FW_MSG_PROFILE, buf, 14))) goto done;
+    hdr.bins = n;
+    hdr.bins_min = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_min;
+    hdr.bins_max = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_max;
+    hdr.eps_units = o->eps_units;
+    hdr.bin_nm = pj->bin_nm;
+    if ((rc = serial_send(l, LINK_MSG_PROFILE, buf, link_put_profile(buf, &hdr)))) goto done;
     for (i = 0; i < n;) {
-        size_t used = fw_profile_chunk(buf, l->data_max, units, forced, n, &i);
-        if ((rc = link_send(l, FW_MSG_PROFILE_DATA, buf, used))) goto done;
+        size_t used = link_profile_chunk(buf, l->data_max, units, forced, n, &i);
+        if ((rc = serial_send(l, LINK_MSG_PROFILE_DATA, buf, used))) goto done;
     }
-    if ((rc = link_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
-    if (l->st.state != FW_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", error_name(l->st.error)); goto done; }
+    if ((rc = serial_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
+    if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
     if (l->st.layers != pj->layers) {
         rc = complain(RC_FAIL, "the printer planned %u layers, the host %u: the planners disagree", l->st.layers, pj->layers);
         goto done;
     }
     /* read the plan back, page by page, and compare it layer by layer */
     for (k = 1; k <= pj->layers;) {
-        unsigned long seen = l->plan_count;
         size_t m;
-        fw_put32(buf, k);
-        if ((rc = link_send(l, FW_MSG_PLAN_GET, buf, 4))) goto done;
-        {
-            double asked = now_ms();
-            while (l->plan_count == seen && now_ms() - asked < l->rto_ms * 2)
-                if ((rc = link_pump(l, 10))) goto done;
-        }
-        if (l->plan_count == seen || l->plan_size < 12 || fw_get32(l->plan) != k) continue;
-        for (m = 12; m < l->plan_size && k <= pj->layers; m++, k++)
+        if (!serial_plan_page(l, k, &rc)) { if (rc) goto done; continue; }
+        for (m = LINK_SIZE_PLAN; m < l->plan_size && k <= pj->layers; m++, k++)
             if (l->plan[m] != pj->lengths[k - 1]) {
                 rc = complain(RC_FAIL, "layer %u: the printer planned %u bins, the host %u", k, l->plan[m], pj->lengths[k - 1]);
                 goto done;
@@ -478,89 +193,91 @@ done:
 
 static int plan_given(serial_link *l, const print_job *pj)
 {
-    uint8_t buf[FW_PAYLOAD_MAX];
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_plan_set m;
     uint32_t k;
     size_t used = 0;
     int rc;
     for (k = 0; k < pj->layers; k++)
         if (pj->lengths[k] > 255) return complain(RC_FAIL, "layer %u is %u bins: a printer takes at most 255", k + 1, pj->lengths[k]);
-    fw_put32(buf, pj->layers);
-    fw_put32(buf + 4, pj->bin_nm);
-    if ((rc = link_send(l, FW_MSG_PLAN_SET, buf, 8))) return rc;
+    m.layers = pj->layers;
+    m.bin_nm = pj->bin_nm;
+    if ((rc = serial_send(l, LINK_MSG_PLAN_SET, buf, link_put_plan_set(buf, &m)))) return rc;
     for (k = 0; k < pj->layers; k++) {
-        if (used >= l->data_max) { if ((rc = link_send(l, FW_MSG_PLAN_DATA, buf, used))) return rc; used = 0; }
+        if (used >= l->data_max) { if ((rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc; used = 0; }
         buf[used++] = (uint8_t)pj->lengths[k];
     }
-    if (used && (rc = link_send(l, FW_MSG_PLAN_DATA, buf, used))) return rc;
-    if ((rc = link_status(l))) return rc;
-    if (l->st.state != FW_READY || l->st.layers != pj->layers)
-        return complain(RC_FAIL, "the printer refused the plan: %s", error_name(l->st.error));
+    if (used && (rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc;
+    if ((rc = serial_status(l))) return rc;
+    if (l->st.state != LINK_STATE_READY || l->st.layers != pj->layers)
+        return complain(RC_FAIL, "the printer refused the plan: %s", link_error_name(l->st.error));
     return RC_OK;
 }
 
 /* -------------------------------------------------------------- print */
 
-static int homed(const status *s, const void *ctx) { (void)ctx; return s->state != FW_HOMING; }
+static int homed(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_HOMING; }
 
-static void progress_bar(const print_job *pj, const status *s, double started, uint32_t first)
+static void progress_bar(const print_job *pj, const link_status *s, double started, uint32_t first)
 {
     double t = now_ms(), per, eta;
-    uint32_t done = s->state == FW_DONE ? pj->layers : (s->layer > first ? s->layer - first : 0);
+    uint32_t done = s->state == LINK_STATE_DONE ? pj->layers : (s->layer > first ? s->layer - first : 0);
     uint32_t todo = pj->layers - first + 1;
     int filled = todo ? (int)(30.0 * done / todo) : 30, i;
     static double last;
-    if (!isatty(2) || (t - last < 200 && s->state != FW_DONE)) return;
+    if (!isatty(2) || (t - last < 200 && s->state != LINK_STATE_DONE)) return;
     last = t;
     per = done ? (t - started) / done : 0;
     eta = per * (todo - done) / 1000;
     fputs("\r[", stderr);
     for (i = 0; i < 30; i++) fputc(i < filled ? '#' : ' ', stderr);
     fprintf(stderr, "] layer %u/%u, z %.3f mm, %.0f s left ", s->layer, pj->layers, s->z_nm / 1e6, eta);
-    if (s->state == FW_DONE) fputc('\n', stderr);
+    if (s->state == LINK_STATE_DONE) fputc('\n', stderr);
 }
 
 typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
 
 static int print_loop(serial_link *l, const print_args *pa, print_job *pj, report_layer *rep, unsigned long *mask_bytes)
 {
-    uint8_t buf[FW_PAYLOAD_MAX];
+    uint8_t buf[LINK_PAYLOAD_MAX];
     uint32_t first = pa->resume_from ? (uint32_t)pa->resume_from : 1, next = first, tries = 0;
     double started = now_ms(), polled = 0;
     int rc, sending = 0;
     size_t sent = 0;
     uint16_t refused = 0;
-    fw_put32(buf, first);
-    fw_put32(buf + 4, (uint32_t)(pa->exposure * 1000 + 0.5));
-    fw_put32(buf + 8, (uint32_t)pa->bottom_layers);
-    fw_put32(buf + 12, (uint32_t)(pa->bottom_exposure * 1000 + 0.5));
-    fw_put32(buf + 16, (uint32_t)(pa->peel * 1e6 + 0.5));
-    fw_put32(buf + 20, (uint32_t)(pa->peel_speed * 1000 + 0.5));
-    fw_put32(buf + 24, (uint32_t)(pa->return_speed * 1000 + 0.5));
-    fw_put32(buf + 28, (uint32_t)(pa->settle * 1000 + 0.5));
-    if ((rc = link_send(l, FW_MSG_PRINT, buf, 32)) || (rc = link_status(l))) return rc;
-    if (l->st.state != FW_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", error_name(l->st.error));
+    link_print m;
+    m.first_layer = first;
+    m.exposure_ms = (uint32_t)(pa->exposure * 1000 + 0.5);
+    m.bottom_layers = (uint32_t)pa->bottom_layers;
+    m.bottom_exposure_ms = (uint32_t)(pa->bottom_exposure * 1000 + 0.5);
+    m.peel_nm = (uint32_t)(pa->peel * 1e6 + 0.5);
+    m.peel_speed_um_s = (uint32_t)(pa->peel_speed * 1000 + 0.5);
+    m.return_speed_um_s = (uint32_t)(pa->return_speed * 1000 + 0.5);
+    m.settle_ms = (uint32_t)(pa->settle * 1000 + 0.5);
+    if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
+    if (l->st.state != LINK_STATE_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", link_error_name(l->st.error));
     refused = l->st.masks_refused;
     for (;;) {
         if (interrupted) {
-            if ((rc = link_send(l, FW_MSG_PAUSE, NULL, 0)) || (rc = link_status(l))) return rc;
-            while (l->st.state == FW_PRINTING) if ((rc = link_pump(l, 50)) || (rc = link_status(l))) return rc;
+            if ((rc = serial_send(l, LINK_MSG_PAUSE, NULL, 0)) || (rc = serial_status(l))) return rc;
+            while (l->st.state == LINK_STATE_PRINTING) if ((rc = serial_pump(l, 50)) || (rc = serial_status(l))) return rc;
             fprintf(stderr, "\nadaslice: paused at layer %u of %u (UV off, Z held at %.3f mm); "
                             "continue with --resume-from %u\n", l->st.layer, pj->layers, l->st.z_nm / 1e6, l->st.layer);
             return RC_PAUSED;
         }
         /* between masks, and once a mask is all sent, the next STATUS decides what comes next */
         if (now_ms() - polled > 100 || !sending || sent == pj->code_size) {
-            if ((rc = link_status(l))) return rc;
+            if ((rc = serial_status(l))) return rc;
             polled = now_ms();
             progress_bar(pj, &l->st, started, first);
-            if (l->st.state == FW_DONE) return RC_OK;
-            if (l->st.state == FW_PAUSED && (l->st.flags & FW_FLAG_LINK_LOST)) {
+            if (l->st.state == LINK_STATE_DONE) return RC_OK;
+            if (l->st.state == LINK_STATE_PAUSED && (l->st.flags & LINK_FLAG_LINK_LOST)) {
                 /* the link came back: the pause was not the operator's */
-                if ((rc = link_send(l, FW_MSG_RESUME, NULL, 0))) return rc;
+                if ((rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
                 continue;
             }
-            if (l->st.state != FW_PRINTING && l->st.state != FW_PAUSED)
-                return complain(RC_FAIL, "the printer stopped printing (state %u): %s", l->st.state, error_name(l->st.error));
+            if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_PAUSED)
+                return complain(RC_FAIL, "the printer stopped printing (state %u): %s", l->st.state, link_error_name(l->st.error));
             if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {
                 if (l->st.mask_ready >= next) { next++; tries = 0; }
                 else if (++tries > 5) return complain(RC_FAIL, "layer %u: the printer refused the mask %u times", next, tries);
@@ -570,10 +287,11 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
         }
         if (!sending && next <= pj->layers && l->st.mask_ready + 1 == next && next <= l->st.layer + 1) {
             if (!tries && (rc = job_mask(pj, next))) return rc;
-            fw_put32(buf, next);
-            fw_put32(buf + 4, (uint32_t)pj->code_size);
-            fw_put32(buf + 8, pj->crc);
-            if ((rc = link_send(l, FW_MSG_MASK, buf, 12))) return rc;
+            link_mask mask;
+            mask.layer = next;
+            mask.code_bytes = (uint32_t)pj->code_size;
+            mask.crc32 = pj->crc;
+            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask)))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
             sending = 1;
@@ -581,12 +299,12 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
         }
         if (sending && sent < pj->code_size) {
             size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
-            if ((rc = link_send(l, FW_MSG_MASK_DATA, pj->code + sent, chunk))) return rc;
+            if ((rc = serial_send(l, LINK_MSG_MASK_DATA, pj->code + sent, chunk))) return rc;
             sent += chunk;
             *mask_bytes += chunk;
             continue;
         }
-        if ((rc = link_pump(l, 20))) return rc;
+        if ((rc = serial_pump(l, 20))) return rc;
     }
 }
 
@@ -624,7 +342,7 @@ static void print_usage(FILE *f)
 {
     fputs("usage: adaslice print MODEL|JOBDIR --port DEV [print options] [masks] [plan options]\n"
           "\n"
-          "Prints on a printer running the adaslice firmware (firmware/PROTOCOL.md). With a\n"
+          "Prints on a printer running the adaslice firmware (link/PROTOCOL.md). With a\n"
           "MODEL the printer plans from the quantised profile and the host checks that the\n"
           "plan equals its own; masks are rendered as they are needed. A JOBDIR from\n"
           "adaslice slice is printed with its plan and JOBDIR/masks.rle. Ctrl-C pauses\n"
@@ -714,7 +432,7 @@ int cmd_print(int argc, char **argv)
     report_layer *rep = NULL;
     adaslice_plan_options o;
     char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), **rest2 = (char **)malloc(((size_t)argc + 4) * sizeof *rest2);
-    int rest_argc = 0, rest2_argc = 0, rc, planned_by_printer = 0, fd = -1;
+    int rest_argc = 0, rest2_argc = 0, rc, planned_by_printer = 0;
     unsigned long mask_bytes = 0;
     double started;
     const char *target = NULL;
@@ -723,6 +441,7 @@ int cmd_print(int argc, char **argv)
     memset(&j, 0, sizeof j);
     memset(&pj, 0, sizeof pj);
     memset(&l, 0, sizeof l);
+    l.fd = -1;
     memset(&a, 0, sizeof a);
     if (!rest || !rest2) { free(rest); free(rest2); return complain(RC_FAIL, "out of memory"); }
     rc = parse_print(argc, argv, &pa, &rest_argc, rest);
@@ -743,16 +462,7 @@ int cmd_print(int argc, char **argv)
         pj.from_model = 1;
     }
 
-    if ((rc = serial_open(pa.port, pa.baud, &fd))) goto done;
-    l.fd = fd;
-    l.dev = pa.port;
-    fw_deframer_init(&l.rx, fw_mcu_to_host_type);
-    l.give_up_ms = pa.give_up_s * 1000;
-    /* a window of frames at the line rate, with room for the printer's turnaround */
-    l.rto_ms = 200 + 2000.0 * FW_FRAME_MAX * 10 / (double)pa.baud;
-    if ((rc = link_hello(&l))) goto done;
-    l.rto_ms += 2000.0 * FW_FRAME_MAX * 10 * l.window / (double)pa.baud;
-    l.data_max = FW_PAYLOAD_MAX;
+    if ((rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
     printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
            l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
     fflush(stdout);
@@ -807,28 +517,29 @@ int cmd_print(int argc, char **argv)
     started = now_ms();
 
     /* a print paused earlier is put down first: the plan goes again */
-    if ((rc = link_status(&l))) goto done;
-    if (l.st.state == FW_PRINTING || l.st.state == FW_PAUSED) {
+    if ((rc = serial_status(&l))) goto done;
+    if (l.st.state == LINK_STATE_PRINTING || l.st.state == LINK_STATE_PAUSED) {
         if (!pa.resume_from) { rc = complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from", l.st.layer); goto done; }
-        if ((rc = link_send(&l, FW_MSG_ABORT, NULL, 0))) goto done;
+        if ((rc = serial_send(&l, LINK_MSG_ABORT, NULL, 0))) goto done;
     }
     rc = planned_by_printer ? plan_on_printer(&l, &j, &o, &pj) : plan_given(&l, &pj);
     if (rc) goto done;
     printf("%s: %u layers, %s\n", base_name(target), pj.layers,
            planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
     fflush(stdout);
-    if ((rc = link_status(&l))) goto done;
-    if (!(l.st.flags & FW_FLAG_HOMED)) {
-        if ((rc = link_send(&l, FW_MSG_HOME, NULL, 0)) || (rc = link_wait(&l, homed, NULL, 600000))) goto done;
-        if (!(l.st.flags & FW_FLAG_HOMED)) { rc = complain(RC_FAIL, "homing failed: %s", error_name(l.st.error)); goto done; }
+    if ((rc = serial_status(&l))) goto done;
+    if (!(l.st.flags & LINK_FLAG_HOMED)) {
+        if ((rc = serial_send(&l, LINK_MSG_HOME, NULL, 0)) || (rc = serial_wait(&l, homed, NULL, 600000))) goto done;
+        if (!(l.st.flags & LINK_FLAG_HOMED)) { rc = complain(RC_FAIL, "homing failed: %s", link_error_name(l.st.error)); goto done; }
     }
     rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
     if (!rc && pa.then_exit) {
-        uint8_t code = 0;
+        uint8_t code[LINK_SIZE_EXIT];
+        link_exit m = {0};
         double asked = now_ms();
-        if ((rc = link_send(&l, FW_MSG_EXIT, &code, 1))) goto done;
+        if ((rc = serial_send(&l, LINK_MSG_EXIT, code, link_put_exit(code, &m)))) goto done;
         /* the acknowledgement may be lost with the emulator: a short wait is enough */
-        while (l.count && now_ms() - asked < 1000 && !link_pump(&l, 20)) {}
+        while (l.count && now_ms() - asked < 1000 && !serial_pump(&l, 20)) {}
     }
     if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
                     pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
@@ -846,7 +557,7 @@ int cmd_print(int argc, char **argv)
         if ((wrc = write_atomic(pa.report, write_report, &r))) rc = wrc;
     }
 done:
-    if (fd >= 0) close(fd);
+    serial_close(&l);
     if (pj.masks.image) layer_masks_close(&pj.masks);
     if (pj.from_model) free(pj.code);
     free(pj.file);

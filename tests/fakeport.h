@@ -30,9 +30,9 @@ typedef struct fake_printer {
     int exit_code;
     /* the host's side */
     uint8_t seq;
-    fw_deframer rx;
-    uint8_t status[64];
-    uint8_t plan[FW_FRAME_MAX];
+    link_deframer rx;
+    link_status status;          /* the latest STATUS reply */
+    uint8_t plan[LINK_FRAME_MAX];
     size_t plan_size;
     int acks, naks, statuses, identifies, plans;
     char text[16384];            /* everything sent, as text (G-code replies) */
@@ -63,17 +63,17 @@ static inline void fake_write(void *ctx, const uint8_t *data, size_t size)
     size_t i, n;
     for (i = 0; i < size; i++) {
         if (p->text_len + 1 < sizeof p->text) { p->text[p->text_len++] = (char)data[i]; p->text[p->text_len] = 0; }
-        fw_deframe_push(&p->rx, data[i]);
-        while ((n = fw_deframe_next(&p->rx)) != 0) {
+        link_deframe_push(&p->rx, data[i]);
+        while ((n = link_deframe_next(&p->rx)) != 0) {
             const uint8_t *f = p->rx.buf;
             switch (f[2]) {
-            case FW_MSG_ACK: if (f[3]) p->naks++; else p->acks++; break;
-            case FW_MSG_STATUS_REPLY: memcpy(p->status, f + 3, n - FW_FRAME_MIN); p->statuses++; break;
-            case FW_MSG_IDENTIFY: p->identifies++; break;
-            case FW_MSG_PLAN: memcpy(p->plan, f + 3, n - FW_FRAME_MIN); p->plan_size = n - FW_FRAME_MIN; p->plans++; break;
+            case LINK_MSG_ACK: if (f[3]) p->naks++; else p->acks++; break;
+            case LINK_MSG_STATUS_REPLY: if (link_get_status(&p->status, f + 3, n - LINK_FRAME_MIN)) p->statuses++; break;
+            case LINK_MSG_IDENTIFY: p->identifies++; break;
+            case LINK_MSG_PLAN: memcpy(p->plan, f + 3, n - LINK_FRAME_MIN); p->plan_size = n - LINK_FRAME_MIN; p->plans++; break;
             default: break;
             }
-            fw_deframe_consume(&p->rx);
+            link_deframe_consume(&p->rx);
         }
     }
 }
@@ -137,7 +137,7 @@ static inline void fake_init(fake_printer *p, uint16_t w, uint16_t h, uint8_t bi
     port.mask_row = fake_mask_row;
     port.show = fake_show;
     port.exit = fake_exit;
-    fw_deframer_init(&p->rx, fw_mcu_to_host_type);
+    link_deframer_init(&p->rx, link_mcu_to_host_type);
     fw_init(&p->fw, &p->config, &port, p->workspace, sizeof p->workspace);
 }
 
@@ -148,8 +148,8 @@ static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size)
 /* Frames a message from the host with the next sequence number. */
 static inline void fake_send(fake_printer *p, uint8_t type, const uint8_t *payload, size_t size)
 {
-    uint8_t frame[FW_FRAME_MAX];
-    size_t n = fw_frame_build(frame, p->seq++, type, payload, size);
+    uint8_t frame[LINK_FRAME_MAX];
+    size_t n = link_frame_build(frame, p->seq++, type, payload, size);
     fake_bytes(p, frame, n);
 }
 
@@ -169,21 +169,22 @@ static inline void fake_send_chunks(fake_printer *p, uint8_t type, const uint8_t
 static inline void fake_send_profile(fake_printer *p, const uint32_t *units, const unsigned char *forced, uint32_t n,
                                      uint8_t lo, uint8_t hi, uint32_t eps_units, uint32_t bin_nm, unsigned (*rng)(void))
 {
-    uint8_t hdr[14], *code = (uint8_t *)malloc((size_t)n * 5 + 1);
+    uint8_t hdr[LINK_SIZE_PROFILE], *code = (uint8_t *)malloc((size_t)n * 5 + 1);
     size_t size = 0, at = 0;
     uint32_t i = 0;
-    fw_put32(hdr, n);
-    hdr[4] = lo;
-    hdr[5] = hi;
-    fw_put32(hdr + 6, eps_units);
-    fw_put32(hdr + 10, bin_nm);
-    fake_send(p, FW_MSG_PROFILE, hdr, 14);
+    link_profile m;
+    m.bins = n;
+    m.bins_min = lo;
+    m.bins_max = hi;
+    m.eps_units = eps_units;
+    m.bin_nm = bin_nm;
+    fake_send(p, LINK_MSG_PROFILE, hdr, link_put_profile(hdr, &m));
     if (!code) return;
-    size = fw_profile_chunk(code, (size_t)n * 5 + 1, units, forced, n, &i);
+    size = link_profile_chunk(code, (size_t)n * 5 + 1, units, forced, n, &i);
     while (at < size) {
-        size_t chunk = rng ? 1 + rng() % FW_PAYLOAD_MAX : FW_PAYLOAD_MAX;
+        size_t chunk = rng ? 1 + rng() % LINK_PAYLOAD_MAX : LINK_PAYLOAD_MAX;
         if (chunk > size - at) chunk = size - at;
-        fake_send(p, FW_MSG_PROFILE_DATA, code + at, chunk);
+        fake_send(p, LINK_MSG_PROFILE_DATA, code + at, chunk);
         at += chunk;
     }
     free(code);
@@ -195,13 +196,15 @@ static inline uint32_t fake_read_plan(fake_printer *p, uint32_t *lengths, uint32
 {
     uint32_t k = 1, layers = 0;
     do {
-        uint8_t req[4];
+        uint8_t req[LINK_SIZE_PLAN_GET];
+        link_plan_get get;
+        link_plan page;
         size_t m;
-        fw_put32(req, k);
-        fake_send(p, FW_MSG_PLAN_GET, req, 4);
-        if (p->plan_size < 12 || fw_get32(p->plan) != k) return 0;
-        layers = fw_get32(p->plan + 4);
-        for (m = 12; m < p->plan_size && k <= layers && k <= cap; m++) lengths[k++ - 1] = p->plan[m];
+        get.first = k;
+        fake_send(p, LINK_MSG_PLAN_GET, req, link_put_plan_get(req, &get));
+        if (!link_get_plan(&page, p->plan, p->plan_size) || page.first != k) return 0;
+        layers = page.layers;
+        for (m = LINK_SIZE_PLAN; m < p->plan_size && k <= layers && k <= cap; m++) lengths[k++ - 1] = p->plan[m];
     } while (k <= layers && k <= cap);
     return layers;
 }
@@ -212,7 +215,7 @@ static inline void fake_run(fake_printer *p, uint64_t until)
     for (;;) {
         uint64_t next = fw_run(&p->fw, p->now);
         if (p->heartbeat) {
-            if (p->now - p->last_beat >= p->heartbeat) { fake_send(p, FW_MSG_STATUS, NULL, 0); p->last_beat = p->now; continue; }
+            if (p->now - p->last_beat >= p->heartbeat) { fake_send(p, LINK_MSG_STATUS, NULL, 0); p->last_beat = p->now; continue; }
             if (next > p->last_beat + p->heartbeat) next = p->last_beat + p->heartbeat;
         }
         if (next > until) { p->now = until; fw_run(&p->fw, p->now); return; }
@@ -222,7 +225,7 @@ static inline void fake_run(fake_printer *p, uint64_t until)
 
 static inline uint8_t fake_state(fake_printer *p)
 {
-    fake_send(p, FW_MSG_STATUS, NULL, 0);
-    return p->status[0];
+    fake_send(p, LINK_MSG_STATUS, NULL, 0);
+    return p->status.state;
 }
 #endif

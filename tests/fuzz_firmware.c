@@ -26,7 +26,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break;
         case 1: /* a message the core will take: type from op */
         case 2:
-            if (n > FW_PAYLOAD_MAX) n = FW_PAYLOAD_MAX;
+            if (n > LINK_PAYLOAD_MAX) n = LINK_PAYLOAD_MAX;
             fake_send(&printer, (uint8_t)(op >> 2 | (op & 2 ? 0x20 : 0)), data + at, n);
             break;
         default: /* time passes */

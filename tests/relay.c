@@ -9,7 +9,7 @@
    outage's start and end (seconds since start). The outage begins once BYTES
    have gone from the host to the MCU. */
 #define _XOPEN_SOURCE 600
-#include "../host/tty.h"
+#include "../link/tty.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>

@@ -40,6 +40,7 @@ void test_motion(void);
 void test_gcode(void);
 void test_firmware(void);
 void test_print(void);
+void test_link(void);
 
 int main(int argc, char **argv)
 {
@@ -47,7 +48,7 @@ int main(int argc, char **argv)
     int i, all = argc < 2;
     struct { const char *name; void (*fn)(void); } groups[] = {
         {"planner", test_planner}, {"profiles", test_profiles}, {"ldi", test_ldi}, {"contours", test_contours}, {"masks", test_masks}, {"png", test_png}, {"orient", test_orient}, {"loaders", test_loaders}, {"cli", test_cli},
-        {"saliency", test_saliency}, {"cli_weights", test_cli_weights}, {"codec", test_codec}, {"motion", test_motion}, {"gcode", test_gcode}, {"firmware", test_firmware},
+        {"saliency", test_saliency}, {"cli_weights", test_cli_weights}, {"codec", test_codec}, {"link", test_link}, {"motion", test_motion}, {"gcode", test_gcode}, {"firmware", test_firmware},
         {"print", test_print}};
     for (i = 0; i < (int)(sizeof groups / sizeof groups[0]); i++) {
         int j, want = all;

@@ -42,11 +42,11 @@ static void mcu_plans_like_the_host(void)
         fake_send_profile(&p, units, forced, n, 25, (uint8_t)(o.tmax / bin + 0.5), o.eps_units, 2000, fw_rng);
         if (!feasible) {
             infeasible++;
-            if (fake_state(&p) != FW_IDLE || p.status[2] != FW_ERR_INFEASIBLE) mismatches++;
+            if (fake_state(&p) != LINK_STATE_IDLE || p.status.error != LINK_ERR_INFEASIBLE) mismatches++;
             continue;
         }
         plans++;
-        layers = fake_state(&p) == FW_READY ? fake_read_plan(&p, lengths, 3000) : 0;
+        layers = fake_state(&p) == LINK_STATE_READY ? fake_read_plan(&p, lengths, 3000) : 0;
         if (layers != plan.layer_count) mismatches++;
         else for (k = 0; k < layers; k++) if (lengths[k] != plan.planes[k + 1] - plan.planes[k]) { mismatches++; break; }
         adaslice_plan_free(&plan);
@@ -66,17 +66,13 @@ static void twelve_thousand_bins_fit(void)
     fake_init(&p, 8, 8, 1);
     for (i = 0; i < 12000; i++) units[i] = 1000 + fw_rng() % 30000;
     fake_send_profile(&p, units, NULL, 12000, 25, 75, ADASLICE_PRINTER_EPS_UNITS, 2000, fw_rng);
-    CHECK(fake_state(&p) == FW_READY && fw_get32(p.status + 31) == 12000 && fw_get32(p.status + 9) >= 160);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.bins_in == 12000 && p.status.layers >= 160);
     {
-        uint8_t hdr[14];
-        fw_put32(hdr, 12001);
-        hdr[4] = 25;
-        hdr[5] = 75;
-        fw_put32(hdr + 6, ADASLICE_PRINTER_EPS_UNITS);
-        fw_put32(hdr + 10, 2000);
-        fake_send(&p, FW_MSG_PROFILE, hdr, 14);
+        uint8_t hdr[LINK_SIZE_PROFILE];
+        link_profile m = {12001, 25, 75, ADASLICE_PRINTER_EPS_UNITS, 2000};
+        fake_send(&p, LINK_MSG_PROFILE, hdr, link_put_profile(hdr, &m));
         /* refused, and the plan made before is kept */
-        CHECK(fake_state(&p) == FW_READY && p.status[2] == FW_ERR_PLAN_SIZE);
+        CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_PLAN_SIZE);
     }
 }
 
@@ -84,91 +80,95 @@ static void twelve_thousand_bins_fit(void)
 static void link_recovers(void)
 {
     static fake_printer p;
-    uint8_t frame[FW_FRAME_MAX], hello = FW_PROTOCOL_VERSION;
+    uint8_t frame[LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
     size_t n;
     int acks;
     fake_init(&p, 8, 8, 1);
-    n = fw_frame_build(frame, 77, FW_MSG_HELLO, &hello, 1);
+    n = link_frame_build(frame, 77, LINK_MSG_HELLO, &hello, 1);
     fake_bytes(&p, (const uint8_t *)"\x7e\x00\x03garbage~", 11);
     fake_bytes(&p, frame, n);
     CHECK(p.identifies == 1 && p.fw.deframer.bad == 1); /* the garbage: a frame of no known type */
     p.seq = 78;
     /* a corrupted STATUS is ignored and counted; the next one is answered */
-    n = fw_frame_build(frame, p.seq, FW_MSG_STATUS, NULL, 0);
+    n = link_frame_build(frame, p.seq, LINK_MSG_STATUS, NULL, 0);
     frame[2] ^= 0x10;
     fake_bytes(&p, frame, n);
     CHECK(p.statuses == 0 && p.fw.deframer.bad == 2);
-    CHECK(fake_state(&p) == FW_IDLE && p.statuses == 1);
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.statuses == 1);
     /* frames from the future (one was lost): each draws a NAK, none is run */
-    n = fw_frame_build(frame, (uint8_t)(p.seq + 1), FW_MSG_STATUS, NULL, 0);
+    n = link_frame_build(frame, (uint8_t)(p.seq + 1), LINK_MSG_STATUS, NULL, 0);
     fake_bytes(&p, frame, n);
     fake_bytes(&p, frame, n);
     CHECK(p.naks == 2 && p.statuses == 1);
     /* a repeat of a frame already taken is acknowledged, not run again */
     acks = p.acks;
-    n = fw_frame_build(frame, (uint8_t)(p.seq - 1), FW_MSG_HOME, NULL, 0);
+    n = link_frame_build(frame, (uint8_t)(p.seq - 1), LINK_MSG_HOME, NULL, 0);
     fake_bytes(&p, frame, n);
-    CHECK(p.acks == acks + 1 && p.fw.state == FW_IDLE);
+    CHECK(p.acks == acks + 1 && p.fw.state == LINK_STATE_IDLE);
     /* sequence numbers wrap */
-    for (n = 0; n < 300; n++) fake_send(&p, FW_MSG_STATUS, NULL, 0);
+    for (n = 0; n < 300; n++) fake_send(&p, LINK_MSG_STATUS, NULL, 0);
     CHECK(p.statuses == 301 && p.naks == 2);
     /* data out of place is refused, never pushed into a planner not set up for it
        (fuzzing found PROFILE_DATA after PLAN_SET doing that) */
     {
-        uint8_t hdr[8] = {3, 0, 0, 0, 0xd0, 0x07, 0, 0}, data[4] = {0x81, 0x02, 0x03, 0x04};
-        fake_send(&p, FW_MSG_PLAN_SET, hdr, 8);
-        fake_send(&p, FW_MSG_PROFILE_DATA, data, 4);
-        CHECK(fake_state(&p) == FW_PLANNING && p.status[2] == FW_ERR_BUSY);
-        fake_send(&p, FW_MSG_PLAN_DATA, data + 1, 3);
-        CHECK(fake_state(&p) == FW_READY && fw_get32(p.status + 9) == 3);
-        fake_send(&p, FW_MSG_PLAN_DATA, data + 1, 3);
-        CHECK(fake_state(&p) == FW_READY && p.status[2] == FW_ERR_BUSY);
+        uint8_t hdr[LINK_SIZE_PLAN_SET], data[4] = {0x81, 0x02, 0x03, 0x04};
+        link_plan_set m = {3, 2000};
+        fake_send(&p, LINK_MSG_PLAN_SET, hdr, link_put_plan_set(hdr, &m));
+        fake_send(&p, LINK_MSG_PROFILE_DATA, data, 4);
+        CHECK(fake_state(&p) == LINK_STATE_PLANNING && p.status.error == LINK_ERR_BUSY);
+        fake_send(&p, LINK_MSG_PLAN_DATA, data + 1, 3);
+        CHECK(fake_state(&p) == LINK_STATE_READY && p.status.layers == 3);
+        fake_send(&p, LINK_MSG_PLAN_DATA, data + 1, 3);
+        CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_BUSY);
     }
     /* a wrong payload size is refused with its sequence number */
-    fake_send(&p, FW_MSG_MOVE, frame, 3);
-    CHECK(fake_state(&p) == FW_READY && p.status[2] == FW_ERR_MESSAGE && p.status[3] == (uint8_t)(p.seq - 2));
+    fake_send(&p, LINK_MSG_MOVE, frame, 3);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_MESSAGE && p.status.error_seq == (uint8_t)(p.seq - 2));
     fake_free(&p);
 }
 
 static void send_plan(fake_printer *p, const uint8_t *lengths, uint32_t layers, uint32_t bin_nm)
 {
-    uint8_t hdr[8];
-    fw_put32(hdr, layers);
-    fw_put32(hdr + 4, bin_nm);
-    fake_send(p, FW_MSG_PLAN_SET, hdr, 8);
-    fake_send_chunks(p, FW_MSG_PLAN_DATA, lengths, layers, FW_PAYLOAD_MAX);
+    uint8_t hdr[LINK_SIZE_PLAN_SET];
+    link_plan_set m;
+    m.layers = layers;
+    m.bin_nm = bin_nm;
+    fake_send(p, LINK_MSG_PLAN_SET, hdr, link_put_plan_set(hdr, &m));
+    fake_send_chunks(p, LINK_MSG_PLAN_DATA, lengths, layers, LINK_PAYLOAD_MAX);
 }
 
 static void send_mask(fake_printer *p, uint32_t layer, const uint8_t *code, size_t size, uint32_t crc)
 {
-    uint8_t hdr[12];
-    fw_put32(hdr, layer);
-    fw_put32(hdr + 4, (uint32_t)size);
-    fw_put32(hdr + 8, crc);
-    fake_send(p, FW_MSG_MASK, hdr, 12);
-    fake_send_chunks(p, FW_MSG_MASK_DATA, code, size, FW_PAYLOAD_MAX);
+    uint8_t hdr[LINK_SIZE_MASK];
+    link_mask m;
+    m.layer = layer;
+    m.code_bytes = (uint32_t)size;
+    m.crc32 = crc;
+    fake_send(p, LINK_MSG_MASK, hdr, link_put_mask(hdr, &m));
+    fake_send_chunks(p, LINK_MSG_MASK_DATA, code, size, LINK_PAYLOAD_MAX);
 }
 
 static void start_print(fake_printer *p, uint32_t first, uint32_t exposure_ms, uint32_t bottom, uint32_t bottom_ms)
 {
-    uint8_t pr[32];
-    fw_put32(pr, first);
-    fw_put32(pr + 4, exposure_ms);
-    fw_put32(pr + 8, bottom);
-    fw_put32(pr + 12, bottom_ms);
-    fw_put32(pr + 16, 5000000);  /* peel 5 mm */
-    fw_put32(pr + 20, 3000);     /* 3 mm/s up */
-    fw_put32(pr + 24, 0);        /* down as fast as the axis goes */
-    fw_put32(pr + 28, 200);      /* settle */
-    fake_send(p, FW_MSG_PRINT, pr, 32);
+    uint8_t pr[LINK_SIZE_PRINT];
+    link_print m;
+    m.first_layer = first;
+    m.exposure_ms = exposure_ms;
+    m.bottom_layers = bottom;
+    m.bottom_exposure_ms = bottom_ms;
+    m.peel_nm = 5000000;        /* peel 5 mm */
+    m.peel_speed_um_s = 3000;   /* 3 mm/s up */
+    m.return_speed_um_s = 0;    /* down as fast as the axis goes */
+    m.settle_ms = 200;
+    fake_send(p, LINK_MSG_PRINT, pr, link_put_print(pr, &m));
 }
 
 static void home(fake_printer *p)
 {
-    fake_send(p, FW_MSG_HOME, NULL, 0);
+    fake_send(p, LINK_MSG_HOME, NULL, 0);
     fake_run(p, p->now + 60ull * FAKE_TICK_HZ);
-    CHECK(fake_state(p) == FW_IDLE || p->status[0] == FW_READY);
-    CHECK((p->status[4] & FW_FLAG_HOMED) && p->true_position == 0);
+    CHECK(fake_state(p) == LINK_STATE_IDLE || p->status.state == LINK_STATE_READY);
+    CHECK((p->status.flags & LINK_FLAG_HOMED) && p->true_position == 0);
 }
 
 /* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
@@ -190,23 +190,23 @@ static void bad_masks_are_never_shown(void)
     home(&p);
     start_print(&p, 1, 1000, 0, 0);
     fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
-    CHECK(fake_state(&p) == FW_PRINTING && p.status[1] == FW_PHASE_WAIT_MASK);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_WAIT_MASK);
     send_mask(&p, 1, code, n, crc ^ 1);             /* the sender's CRC is wrong */
-    CHECK(fake_state(&p) == FW_PRINTING && p.status[2] == FW_ERR_MASK_CRC && fw_get16(p.status + 25) == 1);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_CRC && p.status.masks_refused == 1);
     code[n / 2] ^= 0x01;                            /* the code is damaged */
     send_mask(&p, 1, code, n, crc);
     code[n / 2] ^= 0x01;
-    CHECK(fake_state(&p) == FW_PRINTING && fw_get16(p.status + 25) == 2 && fw_get32(p.status + 13) == 0);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.masks_refused == 2 && p.status.mask_ready == 0);
     send_mask(&p, 2, code, n, crc);                 /* out of order */
-    CHECK(fake_state(&p) == FW_PRINTING && p.status[2] == FW_ERR_MASK_ORDER);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_ORDER);
     fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
     for (k = 0; k < p.event_count; k++) CHECK(p.events[k].kind != ZEV_UV && !(p.events[k].kind == ZEV_SHOW && p.events[k].value >= 0));
     send_mask(&p, 1, code, n, crc);
     fake_run(&p, p.now + FAKE_TICK_HZ / 10);
-    CHECK(fake_state(&p) == FW_PRINTING && fw_get32(p.status + 13) == 1 && p.status[1] >= FW_PHASE_SETTLE);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.mask_ready == 1 && p.status.phase >= LINK_PHASE_SETTLE);
     send_mask(&p, 2, code, n, crc);
     fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
-    CHECK(fake_state(&p) == FW_DONE);
+    CHECK(fake_state(&p) == LINK_STATE_DONE);
     {
         int shown = 0;
         for (k = 0; k < p.event_count; k++)
@@ -234,9 +234,9 @@ static void thousand_layers_without_drift(void)
     send_plan(&p, lengths, 1000, 2000);
     home(&p);
     start_print(&p, 1, 300, 3, 2000);
-    CHECKF(fake_state(&p) == FW_PRINTING, "state %u error %u", p.status[0], p.status[2]);
-    while (fake_state(&p) == FW_PRINTING) {
-        uint32_t layer = fw_get32(p.status + 5), ready = fw_get32(p.status + 13);
+    CHECKF(fake_state(&p) == LINK_STATE_PRINTING, "state %u error %u", p.status.state, p.status.error);
+    while (fake_state(&p) == LINK_STATE_PRINTING) {
+        uint32_t layer = p.status.layer, ready = p.status.mask_ready;
         if (ready == sent && sent < 1000 && sent + 1 <= layer + 1) {
             size_t n, b;
             for (b = 0; b < sizeof image; b++) image[b] = (uint8_t)((sent + 1) * 31 + b * 7);
@@ -247,7 +247,7 @@ static void thousand_layers_without_drift(void)
         }
         fake_run(&p, p.now + FAKE_TICK_HZ / 20);
     }
-    CHECKF(p.status[0] == FW_DONE && sent == 1000, "state %u after %u masks", p.status[0], sent);
+    CHECKF(p.status.state == LINK_STATE_DONE && sent == 1000, "state %u after %u masks", p.status.state, sent);
     memset(&e, 0, sizeof e);
     e.tick_hz = FAKE_TICK_HZ;
     e.steps_per_mm = 400;
@@ -290,24 +290,24 @@ static void pause_and_link_loss(void)
     home(&p);
     start_print(&p, 1, 4000, 0, 0);
     send_mask(&p, 1, code, n, crc);
-    while (fake_state(&p) == FW_PRINTING && p.status[1] != FW_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 100);
+    while (fake_state(&p) == LINK_STATE_PRINTING && p.status.phase != LINK_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 100);
     fake_run(&p, p.now + FAKE_TICK_HZ);
-    fake_send(&p, FW_MSG_PAUSE, NULL, 0);
-    CHECK(fake_state(&p) == FW_PAUSED && !(p.status[4] & FW_FLAG_UV));
+    fake_send(&p, LINK_MSG_PAUSE, NULL, 0);
+    CHECK(fake_state(&p) == LINK_STATE_PAUSED && !(p.status.flags & LINK_FLAG_UV));
     fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
-    fake_send(&p, FW_MSG_RESUME, NULL, 0);
+    fake_send(&p, LINK_MSG_RESUME, NULL, 0);
     send_mask(&p, 2, code, n, crc);
     /* the host falls silent during layer 2: UV off, Z held, a pause flagged as link loss */
-    while (fake_state(&p) == FW_PRINTING && !(fw_get32(p.status + 5) == 2 && p.status[1] == FW_PHASE_EXPOSE))
+    while (fake_state(&p) == LINK_STATE_PRINTING && !(p.status.layer == 2 && p.status.phase == LINK_PHASE_EXPOSE))
         fake_run(&p, p.now + FAKE_TICK_HZ / 100);
     p.heartbeat = 0;
     fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
     p.heartbeat = FAKE_TICK_HZ / 5;
-    CHECK(fake_state(&p) == FW_PAUSED && (p.status[4] & FW_FLAG_LINK_LOST) && !(p.status[4] & FW_FLAG_UV));
-    fake_send(&p, FW_MSG_RESUME, NULL, 0);
+    CHECK(fake_state(&p) == LINK_STATE_PAUSED && (p.status.flags & LINK_FLAG_LINK_LOST) && !(p.status.flags & LINK_FLAG_UV));
+    fake_send(&p, LINK_MSG_RESUME, NULL, 0);
     send_mask(&p, 3, code, n, crc);
     fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
-    CHECK(fake_state(&p) == FW_DONE);
+    CHECK(fake_state(&p) == LINK_STATE_DONE);
     /* every layer got its full 4 s of light, in pieces where it was paused */
     for (k = 0; k < p.event_count; k++)
         if (p.events[k].kind == ZEV_UV) {
@@ -348,33 +348,32 @@ static void manual_commands(void)
 {
     static fake_printer p;
     static uint8_t image[8], code[64];
-    uint8_t mv[8], ms[4], lengths[1] = {40};
+    uint8_t mv[LINK_SIZE_MOVE], ms[LINK_SIZE_EXPOSE], lengths[1] = {40};
+    link_move move = {12345678, 0};
+    link_expose expose = {1500};
     size_t n, k;
     uint64_t on = 0, off = 0;
     fake_init(&p, 8, 8, 1);
     p.keep_events = 1;
-    fw_put32(mv, 12345678);
-    fw_put32(mv + 4, 0);
-    fake_send(&p, FW_MSG_MOVE, mv, 8);
-    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_NOT_HOMED);
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_NOT_HOMED);
     home(&p);
-    fake_send(&p, FW_MSG_MOVE, mv, 8);
+    fake_send(&p, LINK_MSG_MOVE, mv, LINK_SIZE_MOVE);
     fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
-    CHECKF(fake_state(&p) == FW_IDLE && p.true_position == 4938 && (int32_t)fw_get32(p.status + 27) == 12345000,
-           "at %d steps, %d nm", (int)p.true_position, (int)fw_get32(p.status + 27));
-    fw_put32(mv, 250000000); /* 250 mm: past the 200 mm of travel */
-    fake_send(&p, FW_MSG_MOVE, mv, 8);
-    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_LIMIT && p.true_position == 4938);
-    fw_put32(ms, 1500);
-    fake_send(&p, FW_MSG_EXPOSE, ms, 4);
-    CHECK(fake_state(&p) == FW_IDLE && p.status[2] == FW_ERR_BUSY); /* no verified mask yet */
+    CHECKF(fake_state(&p) == LINK_STATE_IDLE && p.true_position == 4938 && p.status.z_nm == 12345000,
+           "at %d steps, %d nm", (int)p.true_position, (int)p.status.z_nm);
+    move.z_nm = 250000000; /* 250 mm: past the 200 mm of travel */
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_LIMIT && p.true_position == 4938);
+    fake_send(&p, LINK_MSG_EXPOSE, ms, link_put_expose(ms, &expose));
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_BUSY); /* no verified mask yet */
     send_plan(&p, lengths, 1, 2000);
     CHECK(adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code, &n) == ADASLICE_OK);
     send_mask(&p, 1, code, n, adaslice_crc32(0, image, sizeof image));
-    fake_send(&p, FW_MSG_EXPOSE, ms, 4);
-    CHECK(fake_state(&p) == FW_READY && (p.status[4] & FW_FLAG_UV));
+    fake_send(&p, LINK_MSG_EXPOSE, ms, LINK_SIZE_EXPOSE);
+    CHECK(fake_state(&p) == LINK_STATE_READY && (p.status.flags & LINK_FLAG_UV));
     fake_run(&p, p.now + 2ull * FAKE_TICK_HZ);
-    CHECK(fake_state(&p) == FW_READY && !(p.status[4] & FW_FLAG_UV));
+    CHECK(fake_state(&p) == LINK_STATE_READY && !(p.status.flags & LINK_FLAG_UV));
     for (k = 0; k < p.event_count; k++)
         if (p.events[k].kind == ZEV_UV) { if (p.events[k].value) on = p.events[k].when; else off = p.events[k].when; }
     CHECKF(off - on == FAKE_TICK_HZ * 15ull / 10, "lit for %llu ticks", (unsigned long long)(off - on));

@@ -403,9 +403,9 @@ static int check_printer_plans(const char *dir, const char *name)
         fake_init(&fp, 8, 8, 1);
         fake_send_profile(&fp, units, forced, n, 25, 75, o.eps_units, 2000, NULL);
         if (!feasible) {
-            if (fake_state(&fp) != FW_IDLE || fp.status[2] != FW_ERR_INFEASIBLE) { snprintf(why, sizeof why, "plan %d: the host finds none, the printer does", c); ok = 0; }
-        } else if (fake_state(&fp) != FW_READY || (layers = fw_get32(fp.status + 9)) != plan.layer_count) {
-            snprintf(why, sizeof why, "plan %d: %zu layers on the host, state %u on the printer", c, plan.layer_count, fp.status[0]);
+            if (fake_state(&fp) != LINK_STATE_IDLE || fp.status.error != LINK_ERR_INFEASIBLE) { snprintf(why, sizeof why, "plan %d: the host finds none, the printer does", c); ok = 0; }
+        } else if (fake_state(&fp) != LINK_STATE_READY || (layers = fp.status.layers) != plan.layer_count) {
+            snprintf(why, sizeof why, "plan %d: %zu layers on the host, state %u on the printer", c, plan.layer_count, fp.status.state);
             ok = 0;
         } else {
             if (fake_read_plan(&fp, lengths, FAKE_MAX_BINS) != layers) {

@@ -13,7 +13,7 @@
        <tick> show -1                    the screen dark
        <tick> motor 1 | motor 0          the stepper driver enabled
        <tick> state <state> <flags>      the print state and STATUS flags
-                                         (protocol.h) whenever they change
+                                         (link/messages.h) whenever they change
 
    Time is virtual: 10 MHz ticks, running --speed times faster than the wall
    clock, so tests can print with real exposure times in a fraction of the
@@ -26,7 +26,7 @@
 /* posix_openpt, grantpt, unlockpt and ptsname are XSI in POSIX.1-2008 */
 #define _XOPEN_SOURCE 700
 #include "../fw.h"
-#include "../../host/tty.h"
+#include "../../link/tty.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -245,10 +245,10 @@ static void log_state(sim *s, const fw_state *fw)
 {
     int flags = 0;
     char line[32];
-    if (fw->axis.homed) flags |= FW_FLAG_HOMED;
-    if (fw->uv_on) flags |= FW_FLAG_UV;
-    if (fw_axis_busy(&fw->axis)) flags |= FW_FLAG_MOVING;
-    if (fw->paused_by_link) flags |= FW_FLAG_LINK_LOST;
+    if (fw->axis.homed) flags |= LINK_FLAG_HOMED;
+    if (fw->uv_on) flags |= LINK_FLAG_UV;
+    if (fw_axis_busy(&fw->axis)) flags |= LINK_FLAG_MOVING;
+    if (fw->paused_by_link) flags |= LINK_FLAG_LINK_LOST;
     if (fw->state == s->logged_state && flags == s->logged_flags) return;
     s->logged_state = fw->state;
     s->logged_flags = flags;

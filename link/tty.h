@@ -1,7 +1,8 @@
-/* A serial line or pseudo-terminal in raw mode, shared by adaslice print, the
-   firmware simulator and the test relay (POSIX termios only). */
-#ifndef ADASLICE_HOST_TTY_H
-#define ADASLICE_HOST_TTY_H
+/* A serial line or pseudo-terminal in raw mode: the POSIX end of the link,
+   shared by adaslice print, the firmware simulator and the test relay
+   (termios only; never part of an MCU image). */
+#ifndef LINK_TTY_H
+#define LINK_TTY_H
 /* Raw bytes both ways, 8N1: no echo, no line editing, no CR/LF translation,
    no parity check, no XON/XOFF, modem lines ignored; reads return what has
    arrived. baud: a standard rate, or 0 to leave the speed. 0 on success,

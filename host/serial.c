@@ -1,0 +1,280 @@
+/* The host's end of the serial link: see serial.h and link/PROTOCOL.md. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "serial.h"
+#include "cli.h"
+#include "../link/tty.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <poll.h>
+#include <string.h>
+#include <termios.h>
+#include <unistd.h>
+
+/* ------------------------------------------------------------ the port */
+
+static int serial_open_port(const char *dev, long baud, int *fd_out)
+{
+    struct termios t;
+    int fd;
+    if (!tty_baud_ok(baud))
+        return complain(RC_USAGE, "--baud %ld: not a standard rate (9600, 19200, 38400, 57600, 115200, 230400)", baud);
+    fd = open(dev, O_RDWR | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) return complain(RC_FAIL, "cannot open %s: %s", dev, strerror(errno));
+    if (tcgetattr(fd, &t) != 0) {
+        close(fd);
+        return complain(RC_FAIL, "%s is not a serial port: %s", dev, strerror(errno));
+    }
+    if (tty_raw(fd, baud) != 0) {
+        close(fd);
+        return complain(RC_FAIL, "cannot set %s to %ld 8N1: %s", dev, baud, strerror(errno));
+    }
+    /* what a previous session left unread must not pass for replies */
+    tcflush(fd, TCIOFLUSH);
+    *fd_out = fd;
+    return RC_OK;
+}
+
+/* ------------------------------------------------------------- the link */
+
+/* A STATUS round trip of `rtt` ms: the retransmission timeout follows the
+   line (a pty answers in a millisecond, a loaded 9600 baud line in seconds). */
+static void serial_rtt(serial_link *l, double rtt)
+{
+    if (!l->srtt) { l->srtt = rtt; l->rttvar = rtt / 2; }
+    else {
+        l->rttvar = 0.75 * l->rttvar + 0.25 * fabs(l->srtt - rtt);
+        l->srtt = 0.875 * l->srtt + 0.125 * rtt;
+    }
+    l->rto_ms = l->srtt + 4 * l->rttvar;
+    if (l->rto_ms < 60) l->rto_ms = 60;
+    if (l->rto_ms > 1000) l->rto_ms = 1000;
+}
+
+static int serial_write(serial_link *l, const uint8_t *data, size_t size)
+{
+    while (size) {
+        ssize_t n = write(l->fd, data, size);
+        if (n > 0) { data += n; size -= (size_t)n; l->bytes_out += (unsigned long)n; continue; }
+        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+            return complain(RC_FAIL, "writing %s: %s", l->dev, strerror(errno));
+        {
+            struct pollfd p = {l->fd, POLLOUT, 0};
+            (void)poll(&p, 1, 100);
+        }
+    }
+    return RC_OK;
+}
+
+/* Go back N: everything unacknowledged again, in a new round (its NAKs are
+   told apart from those older copies draw), and smaller data frames. */
+static int serial_resend_all(serial_link *l)
+{
+    int i;
+    l->round ^= LINK_ROUND_BIT;
+    for (i = 0; i < l->count; i++) {
+        uint8_t *f = l->frames[i];
+        size_t n = l->lens[i];
+        uint16_t crc;
+        f[2] = (uint8_t)((f[2] & ~LINK_ROUND_BIT) | l->round);
+        crc = link_crc16(f, n - 3);
+        f[n - 3] = (uint8_t)(crc >> 8);
+        f[n - 2] = (uint8_t)crc;
+        if (serial_write(l, f, n)) return RC_FAIL;
+    }
+    l->retransmits += (unsigned long)l->count;
+    l->last_progress = now_ms();
+    l->clean = 0;
+    if (l->data_max > 32) l->data_max /= 2;
+    return RC_OK;
+}
+
+static void take_reply(serial_link *l, const uint8_t *f, size_t n)
+{
+    const uint8_t *p = f + 3;
+    size_t size = n - LINK_FRAME_MIN;
+    uint8_t ack = f[1], acked = (uint8_t)(ack - l->base);
+    /* every reply acknowledges what came before ack */
+    if (acked && acked <= l->count) {
+        memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
+        memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
+        l->count -= acked;
+        l->base = ack;
+        l->last_progress = now_ms();
+        l->clean += acked;
+        if (l->clean >= 32 && l->data_max < LINK_PAYLOAD_MAX) {
+            l->data_max = l->data_max * 2 > LINK_PAYLOAD_MAX ? LINK_PAYLOAD_MAX : l->data_max * 2;
+            l->clean = 0;
+        }
+    }
+    switch (f[2]) {
+    case LINK_MSG_ACK: {
+        link_ack m;
+        /* frames sent before our last resend still draw NAKs: those are answered */
+        if (link_get_ack(&m, p, size) && (m.nak & LINK_NAK) && l->count) {
+            l->naks++;
+            if ((m.nak & LINK_ROUND_BIT) == l->round) (void)serial_resend_all(l);
+        }
+        break;
+    }
+    case LINK_MSG_STATUS_REPLY:
+        if (link_get_status(&l->st, p, size)) l->status_count++;
+        break;
+    case LINK_MSG_IDENTIFY:
+        if (link_get_identify(&l->id, p, size)) l->identify_count++;
+        break;
+    case LINK_MSG_PLAN:
+        memcpy(l->plan, p, size);
+        l->plan_size = size;
+        l->plan_count++;
+        break;
+    default:
+        break;
+    }
+}
+
+/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. */
+int serial_pump(serial_link *l, int wait_ms)
+{
+    uint8_t buf[4096];
+    struct pollfd p = {l->fd, POLLIN, 0};
+    double t;
+    if (poll(&p, 1, wait_ms) > 0) {
+        ssize_t n = read(l->fd, buf, sizeof buf), i;
+        if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO)
+            return complain(RC_FAIL, "reading %s: %s", l->dev, strerror(errno));
+        for (i = 0; i < n; i++) {
+            size_t m;
+            link_deframe_push(&l->rx, buf[i]);
+            while ((m = link_deframe_next(&l->rx)) != 0) {
+                l->last_heard = now_ms();
+                take_reply(l, l->rx.buf, m);
+                link_deframe_consume(&l->rx);
+            }
+        }
+        if (n > 0) l->bytes_in += (unsigned long)n;
+    }
+    t = now_ms();
+    if (l->count && t - l->last_progress > l->rto_ms && serial_resend_all(l)) return RC_FAIL;
+    if (t - l->last_heard > l->give_up_ms)
+        return complain(RC_FAIL, "the printer on %s has been silent for %.0f s", l->dev, l->give_up_ms / 1000);
+    return RC_OK;
+}
+
+/* Queues a frame, waiting while the printer's window is full. */
+int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size)
+{
+    int rc;
+    while (l->count >= l->window || l->count >= SERIAL_QUEUE)
+        if ((rc = serial_pump(l, 20))) return rc;
+    l->lens[l->count] = link_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
+    if (!l->count) l->last_progress = now_ms();
+    rc = serial_write(l, l->frames[l->count], l->lens[l->count]);
+    l->count++;
+    l->next_seq++;
+    return rc;
+}
+
+/* A fresh STATUS: asked again if its reply is lost. */
+int serial_status(serial_link *l)
+{
+    unsigned long seen = l->status_count;
+    int rc;
+    for (;;) {
+        double asked;
+        unsigned long resends;
+        if ((rc = serial_send(l, LINK_MSG_STATUS, NULL, 0))) return rc;
+        asked = now_ms(); /* after any wait for the window: that is not the line's round trip */
+        resends = l->retransmits;
+        while (l->status_count == seen && now_ms() - asked < l->rto_ms * 2)
+            if ((rc = serial_pump(l, 2))) return rc;
+        if (l->status_count != seen) {
+            if (l->retransmits == resends) serial_rtt(l, now_ms() - asked); /* Karn: no sample across a resend */
+            return RC_OK;
+        }
+    }
+}
+
+static int serial_hello(serial_link *l)
+{
+    uint8_t payload[LINK_SIZE_HELLO], frame[LINK_FRAME_MAX];
+    double start = now_ms(), sent = 0;
+    link_hello m;
+    size_t n;
+    int rc;
+    m.version = LINK_PROTOCOL_VERSION;
+    n = link_frame_build(frame, l->next_seq, LINK_MSG_HELLO, payload, link_put_hello(payload, &m));
+    l->last_heard = start;
+    /* an emulator may drop what arrives before it looks at the port: say hello until answered */
+    while (!l->identify_count) {
+        if (now_ms() - start > 5000) return complain(RC_FAIL, "no adaslice printer answers on %s (5 s)", l->dev);
+        if (now_ms() - sent > 250) {
+            if ((rc = serial_write(l, frame, n))) return rc;
+            sent = now_ms();
+        }
+        if ((rc = serial_pump(l, 20))) return rc;
+        l->last_heard = now_ms();
+    }
+    if (l->id.version != LINK_PROTOCOL_VERSION)
+        return complain(RC_FAIL, "the printer speaks protocol %u; this tool speaks %u", l->id.version, LINK_PROTOCOL_VERSION);
+    l->next_seq++;
+    l->base = l->next_seq;
+    l->count = 0;
+    l->window = l->id.window ? l->id.window : 1;
+    return RC_OK;
+}
+
+/* Waits until a STATUS shows `done` true. */
+int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms)
+{
+    double start = now_ms();
+    int rc;
+    for (;;) {
+        if ((rc = serial_status(l))) return rc;
+        if (done(&l->st, ctx)) return RC_OK;
+        if (now_ms() - start > timeout_ms) return RC_FAIL;
+        if ((rc = serial_pump(l, 20))) return rc;
+    }
+}
+
+
+int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s)
+{
+    int rc;
+    memset(l, 0, sizeof *l);
+    l->fd = -1;
+    if ((rc = serial_open_port(dev, baud, &l->fd))) return rc;
+    l->dev = dev;
+    link_deframer_init(&l->rx, link_mcu_to_host_type);
+    l->give_up_ms = give_up_s * 1000;
+    /* a window of frames at the line rate, with room for the printer's turnaround */
+    l->rto_ms = 200 + 2000.0 * LINK_FRAME_MAX * 10 / (double)baud;
+    if ((rc = serial_hello(l))) return rc;
+    l->rto_ms += 2000.0 * LINK_FRAME_MAX * 10 * l->window / (double)baud;
+    l->data_max = LINK_PAYLOAD_MAX;
+    return RC_OK;
+}
+
+void serial_close(serial_link *l)
+{
+    if (l->fd >= 0) close(l->fd);
+    l->fd = -1;
+}
+
+int serial_plan_page(serial_link *l, uint32_t first, int *rc)
+{
+    uint8_t buf[LINK_SIZE_PLAN_GET];
+    unsigned long seen = l->plan_count;
+    link_plan_get m;
+    link_plan page;
+    double asked;
+    m.first = first;
+    if ((*rc = serial_send(l, LINK_MSG_PLAN_GET, buf, link_put_plan_get(buf, &m)))) return 0;
+    asked = now_ms();
+    while (l->plan_count == seen && now_ms() - asked < l->rto_ms * 2)
+        if ((*rc = serial_pump(l, 10))) return 0;
+    return l->plan_count != seen && link_get_plan(&page, l->plan, l->plan_size) && page.first == first;
+}
