@@ -1,38 +1,64 @@
-# adaslice: make | make demo | make check | make check-models | make bench
-CC      ?= gcc
+# adaslice
+#   make               the tool, build/adaslice
+#   make demo          plan, plot and slice a bundled model
+#   make test          the unit and command-line tests: needs gcc only
+#   make check         everything: compile checks (gcc, clang, g++, clang++, the
+#                      ARM cross compiler), the firmware images, bounded fuzzing,
+#                      and every test, those with real clients and emulators too
+#   make check-models  tests over ../shared/models (MODELS=DIR for another place)
+#   make bench         the benchmarks
+#   make firmware      the firmware images and their flash and RAM
+# CC and CFLAGS are honoured (the warnings and the C standard are always on).
+
+ifeq ($(origin CC),default)
+CC = gcc
+endif
+ifeq ($(origin CXX),default)
+CXX = g++
+endif
 CLANG   ?= clang
-CXX     ?= g++
 CLANGXX ?= clang++
 ARM_CC  ?= arm-none-eabi-gcc
+CFLAGS  ?= -O2
 WARN     = -Wall -Wextra -Wpedantic -Werror
 CSTD     = -std=c99 $(WARN) -D_POSIX_C_SOURCE=200809L
-CFLAGS  ?= -O2
 SAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+BENCH_CFLAGS ?= -O2 -march=x86-64-v2
 MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 15
 B        = build
 
-FW_TEST_SRC = firmware/core.c firmware/motion.c firmware/gcode.c link/frame.c link/messages.c
-HOST_SRC  = host/adaslice.c host/print.c host/serial.c link/tty.c link/frame.c link/messages.c host/svg.c host/slice.c host/orient.c host/printer.c host/png.c host/contour_svg.c \
-            host/weights.c host/curvature.c host/saliency_cmd.c
-TEST_SRC  = tests/run.c tests/test_planner.c tests/test_profiles.c tests/test_ldi.c tests/test_contours.c tests/test_masks.c tests/test_orient.c tests/test_png.c tests/test_loaders.c tests/test_cli.c host/png.c \
-            tests/test_saliency.c tests/test_cli_weights.c tests/test_codec.c tests/test_link.c tests/test_motion.c tests/test_gcode.c \
-            tests/test_firmware.c tests/test_print.c $(FW_TEST_SRC)
-HDRS      = adaslice.h host/cli.h host/svg.h host/png.h host/printer.h host/contour_svg.h tests/check.h tests/meshgen.h tests/maskgen.h tests/failing_alloc.h \
-            host/weights.h host/curvature.h host/serial.h link/tty.h link/frame.h link/messages.h tests/cli_run.h tests/zcheck.h tests/fakeport.h \
-            firmware/fw.h firmware/motion.h firmware/gcode.h
-
-include firmware/firmware.mk
-
-.PHONY: all demo check check-models bench compile-checks fuzz clean
+.PHONY: all demo test check check-models bench firmware compile-checks fuzz clean FORCE
 
 all: $(B)/adaslice
 
-$(B):
-	mkdir -p $(B)
+# ---- sources -------------------------------------------------------------
+# host/library.c is the library's implementation (adaslice.h and
+# adaslice_mcu.h): one object per configuration, linked by every program.
+LIB_SRC   = host/library.c
+LINK_SRC  = link/frame.c link/messages.c
+HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c)) link/tty.c $(LINK_SRC)
+FW_SRC    = firmware/core.c firmware/motion.c firmware/gcode.c $(LINK_SRC)
+# The one list of test groups: tests/test_NAME.c defines test_NAME().
+TESTS     = $(sort $(wildcard tests/test_*.c))
+TEST_SRC  = tests/run.c $(TESTS) host/png.c $(FW_SRC) $(LIB_SRC)
 
-$(B)/adaslice: $(HOST_SRC) $(HDRS) | $(B)
-	$(CC) $(CSTD) $(CFLAGS) -pthread $(HOST_SRC) -o $@ -lm
+# Objects, built once per configuration: build/rel (the tool, CFLAGS),
+# build/san (the tests, ASan + UBSan), build/bench (BENCH_CFLAGS).
+objs = $(patsubst %.c,$(B)/$(1)/%.o,$(2))
+$(B)/rel/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CSTD) $(CFLAGS) -pthread -MMD -MP -c $< -o $@
+$(B)/san/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CSTD) $(SAN) -pthread -MMD -MP -c $< -o $@
+$(B)/bench/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CSTD) $(BENCH_CFLAGS) -pthread -MMD -MP -c $< -o $@
+-include $(shell find $(B) -name '*.d' 2>/dev/null)
+
+$(B)/adaslice: $(call objs,rel,$(HOST_SRC) $(LIB_SRC))
+	$(CC) $(CFLAGS) -pthread $^ -o $@ -lm
 
 # The main job on a bundled example: plan the hand (CC BY 4.0, see
 # examples/models/README.md) scaled to the paper's 23.8 mm, plot it, and
@@ -43,22 +69,44 @@ demo: $(B)/adaslice
 	$(B)/adaslice slice examples/models/hand_closed.obj --scale 88.7 --printer photon-mono-4k -o $(B)/hand_job
 	@echo "wrote $(B)/hand_plan.csv, $(B)/hand_plot.svg and the job $(B)/hand_job/"
 
-# --- make check ----------------------------------------------------------
-# Sanitized builds of the tool and the test runner; the runner prints the
-# final "N passed, N failed".
-$(B)/san/adaslice: $(HOST_SRC) $(HDRS) | $(B)
-	mkdir -p $(B)/san
-	$(CC) $(CSTD) $(SAN) -pthread $(HOST_SRC) -o $@ -lm
+include firmware/firmware.mk
 
-$(B)/san/run_tests: $(TEST_SRC) $(HDRS) | $(B)
-	mkdir -p $(B)/san
-	$(CC) $(CSTD) $(SAN) $(TEST_SRC) -o $@ -lm
+# ---- the tests -------------------------------------------------------------
+# The runner's group table, made from TESTS; rewritten only when the list changes.
+$(B)/test_groups.h: FORCE
+	@mkdir -p $(B)
+	@printf '%s\n' $(patsubst tests/test_%.c,'TEST_GROUP(%)',$(TESTS)) > $@.new
+	@cmp -s $@.new $@ || mv $@.new $@; rm -f $@.new
+$(B)/san/tests/run.o: $(B)/test_groups.h
+$(B)/san/tests/run.o: CSTD += -I$(B)
+
+$(B)/san/adaslice: $(call objs,san,$(HOST_SRC) $(LIB_SRC))
+	$(CC) $(SAN) -pthread $^ -o $@ -lm
+$(B)/san/run_tests: $(call objs,san,$(TEST_SRC))
+	$(CC) $(SAN) -pthread $^ -o $@ -lm
+$(B)/relay: $(call objs,rel,tests/relay.c link/tty.c)
+	$(CC) $^ -o $@
+
+# What the test runner starts: the tool (sanitized), the firmware simulator
+# and the faulty-line relay; make check adds the Cortex-M3 image for QEMU.
+TEST_PROGRAMS = $(B)/san/run_tests $(B)/san/adaslice $(B)/fw-sim $(B)/relay
+RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
+
+# gcc alone: cases that need a real client or an emulator are left to make
+# check, and the runner names them.
+test: $(TEST_PROGRAMS)
+	$(RUN_TESTS) --without-tools
+
+check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf
+	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two
-# translation units linked together (plain and ADASLICE_STATIC), and the
-# README's example.
-compile-checks: | $(B)
-	mkdir -p $(B)/cc
+# translation units linked together (plain and ADASLICE_STATIC), every
+# ADASLICE_NO_* switch, the README's example, and the integer planner for a
+# Cortex-M3 (under 16 KiB of RAM for 12,000 bins).
+NO_SWITCHES = LOADERS SAMPLED WEIGHTS ORIENT CONTOURS STDIO
+compile-checks:
+	@mkdir -p $(B)/cc
 	$(CC) $(CSTD) -c tests/compile/one.c -o $(B)/cc/one_gcc.o
 	$(CLANG) $(CSTD) -c tests/compile/one.c -o $(B)/cc/one_clang.o
 	$(CXX) -x c++ -std=c++11 $(WARN) -c tests/compile/one.c -o $(B)/cc/one_gxx.o
@@ -66,7 +114,9 @@ compile-checks: | $(B)
 	$(CC) $(CSTD) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu -lm
 	$(CLANG) $(CSTD) -Wno-unused-function -DTWO_STATIC tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_static -lm
 	$(CXX) -x c++ -std=c++11 $(WARN) tests/compile/one.c tests/compile/two.c -o $(B)/cc/two_tu_cxx -lm
-	$(CC) $(CSTD) -DADASLICE_NO_STDIO -c tests/compile/one.c -o $(B)/cc/one_nostdio.o
+	for s in $(NO_SWITCHES); do $(CC) $(CSTD) -DADASLICE_NO_$$s -c tests/compile/one.c -o $(B)/cc/one_no.o || exit 1; done
+	$(CLANG) $(CSTD) $(patsubst %,-DADASLICE_NO_%,$(NO_SWITCHES)) -c tests/compile/one.c -o $(B)/cc/one_no_all.o
+	$(CXX) -x c++ -std=c++11 $(WARN) -c link/messages.c -o $(B)/cc/messages_cxx.o
 	$(CC) $(CSTD) -O2 examples/plan_model.c -o $(B)/plan_model -lm
 	$(CLANG) $(CSTD) -O2 examples/plan_model.c -o $(B)/cc/plan_model_clang -lm
 	$(ARM_CC) -mcpu=cortex-m3 -mthumb -Os -std=c99 $(WARN) -Wno-unused-function -c tests/compile/mcu_planner.c \
@@ -81,13 +131,14 @@ compile-checks: | $(B)
 
 FUZZ = $(CLANG) -std=c99 $(WARN) -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
 
-$(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h | $(B)
+$(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h adaslice_mcu.h
+	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_loaders.c -o $@ -lm
-
-$(B)/fuzz_gcode: tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c $(FW_HDRS) | $(B)
+$(B)/fuzz_gcode: tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c $(FW_HDRS)
+	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c -o $@
-
-$(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_CORE_SRC) $(FW_HDRS) | $(B)
+$(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_CORE_SRC) $(FW_HDRS)
+	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_firmware.c $(FW_CORE_SRC) -o $@ -lm
 
 # Bounded libFuzzer runs over the loaders, the G-code reader and the
@@ -101,46 +152,29 @@ fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
 	    if [ $$status -ne 0 ]; then tail -n 40 $(B)/fuzz_$$t.log; exit $$status; fi; \
 	done
 
-$(B)/relay: tests/relay.c link/tty.c link/tty.h | $(B)
-	$(CC) -std=c99 $(WARN) -O2 tests/relay.c link/tty.c -o $@
+# ---- the shared models (not in the repository) ---------------------------
+$(B)/check_models: $(call objs,san,tests/check_models.c $(FW_SRC) $(LIB_SRC))
+	$(CC) $(SAN) $^ -o $@ -lm
 
-check: compile-checks firmware fuzz $(B)/san/adaslice $(B)/san/run_tests $(B)/fw-sim $(B)/relay
-	ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
+check-models: $(B)/check_models
+	$(B)/check_models $(MODELS)
 
-# --- the shared models (not in the repository) ---------------------------
-$(B)/test_models: tests/test_models.c adaslice.h tests/fakeport.h tests/zcheck.h $(FW_TEST_SRC) $(FW_HDRS) | $(B)
-	$(CC) $(CSTD) $(SAN) tests/test_models.c $(FW_TEST_SRC) -o $@ -lm
+# ---- make bench -----------------------------------------------------------
+BENCH_LIB = $(call objs,bench,$(LIB_SRC))
+$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
+$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
+$(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
+$(B)/bench_wire: $(call objs,bench,bench/bench_wire.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
+$(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
 
-check-models: $(B)/test_models
-	$(B)/test_models $(MODELS)
-
-# --- make bench -----------------------------------------------------------
-$(B)/bench: bench/bench.c bench/timing.h host/png.c adaslice.h host/png.h | $(B)
-	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench.c host/png.c -o $@ -lm
-
-$(B)/bench_png: bench/bench_png.c bench/timing.h host/png.c host/png.h tests/maskgen.h adaslice.h | $(B)
-	$(CC) $(CSTD) -O2 bench/bench_png.c host/png.c -o $@ -lm
-
-$(B)/bench_saliency: bench/bench_saliency.c bench/timing.h adaslice.h | $(B)
-	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench_saliency.c -o $@ -lm
-
-ARM_NM ?= arm-none-eabi-nm
-BENCH_PLAN_SRC = firmware/mps2/bench_plan.c firmware/mps2/board.c firmware/cm3/cm3.c firmware/adaslice_fw.c
-
-$(B)/bench_wire: bench/bench_wire.c bench/timing.h adaslice.h | $(B)
-	$(CC) $(CSTD) -O2 -march=x86-64-v2 bench/bench_wire.c -o $@ -lm
-
-# The planner bench image: the mps2 board code and cm3 reset/tick with its
-# own main, built as the firmware is (-Os, 20 KiB of RAM by mps2.ld).
-$(B)/bench-plan-mps2.elf: $(BENCH_PLAN_SRC) bench/mcu_profile.h firmware/mps2/board.h firmware/mps2/mps2.ld \
-                          $(FW_CM3_HDRS) $(FW_HDRS) | $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -T firmware/mps2/mps2.ld $(BENCH_PLAN_SRC) -o $@ $(FW_ARM_LIBS)
-
-$(B)/bench_mcu_plan: bench/bench_mcu_plan.c bench/mcu_profile.h bench/timing.h adaslice.h | $(B)
-	$(CC) $(CSTD) -O2 bench/bench_mcu_plan.c -o $@ -lm
-
-bench: $(B)/bench $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf
-	$(B)/bench $(MODELS)
+bench: $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan \
+       $(B)/bench-plan-mps2.elf
+	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
 	$(B)/bench_wire $(MODELS)

@@ -1,7 +1,11 @@
 /* make bench: the planner against Procedure 1 as printed, in the same process,
    and the exact profiles on the largest shared models. Medians of repeated runs. */
-#define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "../host/png.h"
 #include <stdio.h>
 #include "timing.h"

@@ -2,7 +2,7 @@
 
        bench_mcu_plan IMAGE.elf [arm-none-eabi-size [arm-none-eabi-nm]]
 
-   IMAGE is firmware/mps2/bench_plan.c built for QEMU's mps2-an385. This
+   IMAGE is bench/mcu_plan_mps2.c built for QEMU's mps2-an385. This
    program plans bench/mcu_profile.h's profile with the host build of
    adaslice_dp, runs the image under QEMU with -icount shift=0 (every
    instruction is 1 ns of virtual time; SysTick counts the 25 MHz core clock,
@@ -10,8 +10,12 @@
    length and this program fails unless it holds), and checks that the MCU's
    plan is the host's: the same K and the same hash of the layer lengths, or
    it fails loudly. RAM comes from arm-none-eabi-size and -nm on the image. */
-#define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "mcu_profile.h"
 #include "timing.h"
 #include <stdio.h>

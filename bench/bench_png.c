@@ -2,8 +2,12 @@
    tests/maskgen.h) at 2560x1440 and 3840x2400, 1-bit and anti-aliased 8-bit.
    Only png_encode_gray is timed; prints medians over the layers.
    usage: bench_png [layers per size, default 300] */
-#define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "../host/png.h"
 #include "../tests/maskgen.h"
 #include <stdio.h>

@@ -2,8 +2,12 @@
    median of 3 runs; memory as the library's peak of live allocations (a
    counting allocator) and the process's peak resident size.
    usage: bench_saliency [MODELS_DIR]   (default ../shared/models) */
-#define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "timing.h"
 #include <stdio.h>
 #include <stdlib.h>

@@ -29,8 +29,12 @@
    firmware images take at most 12,000 bins; above that the tool plans and
    sends the plan (PLAN_SET, 8 bytes, and PLAN_DATA, a byte per layer),
    shown alongside. */
-#define ADASLICE_IMPLEMENTATION
 #include "../adaslice.h"
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include "timing.h"
 #include <dirent.h>
 #include <stdio.h>
@@ -170,7 +174,7 @@ static void bench_model(const char *dir, const char *name, row *r)
     r->bins = p.bin_count;
     r->bins_max = plan.bins_max;
 
-    /* the profile upload, cut into frames as host/print.c cuts it */
+    /* the profile upload, cut into frames as host/cmd_print.c cuts it */
     units = (uint32_t *)malloc(p.bin_count * sizeof *units);
     forced = (unsigned char *)malloc(p.bin_count);
     if (!units || !forced) fail(name, "out of memory", NULL);

@@ -1,5 +1,5 @@
 /* The deterministic quantised profile of make bench's MCU planner run
-   (bench/bench_mcu_plan.c on the host, firmware/mps2/bench_plan.c on the
+   (bench/bench_mcu_plan.c on the host, bench/mcu_plan_mps2.c on the
    Cortex-M3): the same code on both sides, 32-bit integers only (the M3 has
    UMULL and UDIV), no C library.
 

@@ -1,6 +1,6 @@
-# The firmware images: included by the top Makefile, which sets B, CC, CSTD
-# and ARM_CC.
-#   $(B)/fw-sim               the core on a pseudo-terminal (firmware/sim)
+# The firmware images: included by the top Makefile, which sets B, CC, CSTD,
+# CFLAGS, ARM_CC and the objs function.
+#   $(B)/fw-sim               the core on a pseudo-terminal (ports/sim)
 #   $(B)/fw-mps2.elf          the Cortex-M3 image QEMU's mps2-an385 runs
 #   $(B)/fw-mps2-busy.elf     the same, idling by spinning: for -icount runs
 #                             (a core asleep in WFI there can wake a period late)
@@ -8,13 +8,16 @@
 #   firmware                  all three, and each image's flash and RAM;
 #                             fails if one needs more than 20 KiB of RAM
 
+# The core every port links: adaslice_fw.c is adaslice_mcu.h's implementation.
 FW_CORE_SRC = firmware/core.c firmware/motion.c firmware/gcode.c link/frame.c link/messages.c firmware/adaslice_fw.c
 FW_HDRS     = $(wildcard firmware/*.h) $(wildcard link/*.h) adaslice_mcu.h
-FW_CM3_SRC  = firmware/cm3/cm3.c firmware/cm3/serve.c
-FW_CM3_HDRS = firmware/cm3/cm3.h
+FW_CM3      = firmware/ports/cm3
+FW_CM3_SRC  = $(FW_CM3)/cm3.c $(FW_CM3)/serve.c
+FW_CM3_HDRS = $(FW_CM3)/cm3.h
 FW_RAM_MAX  = 20480
 
 ARM_SIZE ?= arm-none-eabi-size
+ARM_NM   ?= arm-none-eabi-nm
 # No C library: cm3.c has the few functions gcc and the core call; libgcc
 # for 64-bit division. Loop-to-memset rewriting is off so that memset itself
 # cannot become a call to memset.
@@ -25,25 +28,40 @@ FW_ARM_LIBS  = -lgcc
 
 .PHONY: firmware
 
-$(B)/fw-sim: firmware/sim/sim.c link/tty.c $(FW_CORE_SRC) $(FW_HDRS) | $(B)
-	$(CC) $(CSTD) $(CFLAGS) firmware/sim/sim.c link/tty.c $(FW_CORE_SRC) -o $@ -lm
+$(B)/fw-sim: $(call objs,rel,firmware/ports/sim/sim.c link/tty.c $(FW_CORE_SRC))
+	$(CC) $(CFLAGS) $^ -o $@ -lm
 
-FW_MPS2_SRC = firmware/mps2/main.c firmware/mps2/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
-FW_MPS2_DEPS = $(FW_MPS2_SRC) firmware/mps2/board.h firmware/mps2/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)
+# A Cortex-M3 image: cm3/main.c with the board's board.h, its board.c and
+# linker script.
+FW_MPS2 = firmware/ports/mps2
+FW_MPS2_SRC = $(FW_CM3)/main.c $(FW_MPS2)/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
+FW_MPS2_DEPS = $(FW_MPS2_SRC) $(FW_MPS2)/board.h $(FW_MPS2)/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)
 
-$(B)/fw-mps2.elf: $(FW_MPS2_DEPS) | $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -T firmware/mps2/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+$(B)/fw-mps2.elf: $(FW_MPS2_DEPS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
 
-$(B)/fw-mps2-busy.elf: $(FW_MPS2_DEPS) | $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_BUSY_WAIT -T firmware/mps2/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+$(B)/fw-mps2-busy.elf: $(FW_MPS2_DEPS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_BUSY_WAIT -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
 
 # The receive ring holds the protocol's window of 4 full frames (4 x 255
 # bytes): a real USART cannot hold the line the way QEMU's does.
-FW_STM32_SRC = firmware/stm32f103/main.c firmware/stm32f103/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
+FW_STM32 = firmware/ports/stm32f103
+FW_STM32_SRC = $(FW_CM3)/main.c $(FW_STM32)/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
 
-$(B)/fw-stm32f103.elf: $(FW_STM32_SRC) firmware/stm32f103/board.h firmware/stm32f103/stm32f103.ld $(FW_CM3_HDRS) $(FW_HDRS) | $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_RX_SIZE=1024u -DSTM32_WINDOW=4u -T firmware/stm32f103/stm32f103.ld \
+$(B)/fw-stm32f103.elf: $(FW_STM32_SRC) $(FW_STM32)/board.h $(FW_STM32)/stm32f103.ld $(FW_CM3_HDRS) $(FW_HDRS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_RX_SIZE=1024u -DBOARD_WINDOW=4u -I$(FW_STM32) -T $(FW_STM32)/stm32f103.ld \
 	    $(FW_STM32_SRC) -o $@ $(FW_ARM_LIBS)
+
+# The planner bench image: the mps2 board code and cm3 reset/tick with its
+# own main, built as the firmware is (-Os, 20 KiB of RAM by mps2.ld).
+BENCH_PLAN_SRC = bench/mcu_plan_mps2.c $(FW_MPS2)/board.c $(FW_CM3)/cm3.c firmware/adaslice_fw.c
+$(B)/bench-plan-mps2.elf: $(BENCH_PLAN_SRC) bench/mcu_profile.h $(FW_MPS2)/board.h $(FW_MPS2)/mps2.ld \
+                          $(FW_CM3_HDRS) $(FW_HDRS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_ARM_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(BENCH_PLAN_SRC) -o $@ $(FW_ARM_LIBS)
 
 # flash = text + data (.data's image lives in flash), RAM = data + bss
 # (.bss includes the stack).

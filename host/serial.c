@@ -3,7 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "serial.h"
-#include "cli.h"
+#include "report.h"
 #include "../link/tty.h"
 
 #include <errno.h>

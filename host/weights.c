@@ -3,7 +3,9 @@
 #define _POSIX_C_SOURCE 200809L /* getline */
 #endif
 #include "weights.h"
-#include "cli.h"
+#include "options.h"
+#include "output.h"
+#include "report.h"
 
 #include <errno.h>
 #include <math.h>

@@ -13,10 +13,17 @@ int check_case_failed(void);
 #define CHECKF(cond, ...) do { if (!(cond)) { char check_msg_[512]; \
     snprintf(check_msg_, sizeof check_msg_, __VA_ARGS__); check_fail(__FILE__, __LINE__, check_msg_); } } while (0)
 
-/* Every test file exports its cases through one registration function. */
+/* Every test file tests/test_NAME.c exports its cases through one function,
+   test_NAME(void), which RUNs them; the Makefile finds the file and the
+   runner calls the function (build/test_groups.h). Tests run from the
+   repository's root. */
 typedef void (*check_case_fn)(void);
 void check_run(const char *name, check_case_fn fn);
 #define RUN(fn) check_run(#fn, fn)
-
-/* Path to a file in the repository (tests run from the repository root). */
+/* A case that needs a program besides the C compiler (a real client, an
+   emulator, a cross compiler's image): make check runs it, and it fails
+   there when the program is missing; make test (--without-tools) does not
+   run it and says so. */
+void check_run_needing(const char *name, check_case_fn fn, const char *tools);
+#define RUN_NEEDING(tools, fn) check_run_needing(#fn, fn, tools)
 #endif

@@ -113,7 +113,7 @@ int main(int argc, char **argv)
         if (poll(p, 2, 20) < 0) continue;
         if (p[0].revents & POLLIN) pass(master, mcu, &up, drop, corrupt, cut);
         if (p[1].revents & POLLIN) pass(mcu, master, &down, drop, corrupt, cut);
-        if ((p[0].revents | p[1].revents) & (POLLHUP | POLLERR)) usleep(10000);
+        if ((p[0].revents | p[1].revents) & (POLLHUP | POLLERR)) (void)poll(NULL, 0, 10);
     }
     if (stats) {
         FILE *f = fopen(stats, "w");

@@ -1,11 +1,15 @@
-/* The test runner: every group of cases, then "N passed, N failed". */
-#define ADASLICE_IMPLEMENTATION
+/* The test runner: every group of cases, then "N passed, N failed".
+
+   run_tests [--without-tools] [GROUP ...]
+   GROUPs (the NAME of tests/test_NAME.c) select what runs; --without-tools
+   leaves out the cases that need programs besides the C compiler and lists
+   them. */
 #include "../adaslice.h"
 #include "check.h"
 #include <stdlib.h>
 #include <string.h>
 
-static int passed, failed, case_failures;
+static int passed, failed, left, case_failures, without_tools;
 
 void check_fail(const char *file, int line, const char *what)
 {
@@ -24,37 +28,38 @@ void check_run(const char *name, check_case_fn fn)
     fflush(stdout);
 }
 
-void test_planner(void);
-void test_profiles(void);
-void test_loaders(void);
-void test_cli(void);
-void test_ldi(void);
-void test_contours(void);
-void test_masks(void);
-void test_png(void);
-void test_orient(void);
-void test_saliency(void);
-void test_cli_weights(void);
-void test_codec(void);
-void test_motion(void);
-void test_gcode(void);
-void test_firmware(void);
-void test_print(void);
-void test_link(void);
+void check_run_needing(const char *name, check_case_fn fn, const char *tools)
+{
+    if (!without_tools) { check_run(name, fn); return; }
+    left++;
+    printf("--   %s: needs %s, left to make check\n", name, tools);
+    fflush(stdout);
+}
+
+#define TEST_GROUP(name) void test_##name(void);
+#include "test_groups.h"
+#undef TEST_GROUP
 
 int main(int argc, char **argv)
 {
-    /* optional group names select what runs */
-    int i, all = argc < 2;
-    struct { const char *name; void (*fn)(void); } groups[] = {
-        {"planner", test_planner}, {"profiles", test_profiles}, {"ldi", test_ldi}, {"contours", test_contours}, {"masks", test_masks}, {"png", test_png}, {"orient", test_orient}, {"loaders", test_loaders}, {"cli", test_cli},
-        {"saliency", test_saliency}, {"cli_weights", test_cli_weights}, {"codec", test_codec}, {"link", test_link}, {"motion", test_motion}, {"gcode", test_gcode}, {"firmware", test_firmware},
-        {"print", test_print}};
+#define TEST_GROUP(name) {#name, test_##name},
+    static const struct { const char *name; void (*fn)(void); } groups[] = {
+#include "test_groups.h"
+    };
+#undef TEST_GROUP
+    int i, j, chosen = 0;
+    for (j = 1; j < argc; j++) {
+        if (!strcmp(argv[j], "--without-tools")) { without_tools = 1; continue; }
+        for (i = 0; i < (int)(sizeof groups / sizeof groups[0]) && strcmp(argv[j], groups[i].name); i++) {}
+        if (i == (int)(sizeof groups / sizeof groups[0])) { printf("no test group %s\n", argv[j]); return 2; }
+        chosen++;
+    }
     for (i = 0; i < (int)(sizeof groups / sizeof groups[0]); i++) {
-        int j, want = all;
+        int want = !chosen;
         for (j = 1; j < argc; j++) if (!strcmp(argv[j], groups[i].name)) want = 1;
         if (want) groups[i].fn();
     }
-    printf("%d passed, %d failed\n", passed, failed);
+    if (left) printf("%d passed, %d failed (%d left to make check: they need programs besides gcc)\n", passed, failed, left);
+    else printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

@@ -101,7 +101,7 @@ static const char *sphere_stl(void)
 
 /* ------------------------------------------------------------------ cases */
 
-static void test_cli_help_and_version(void)
+static void help_and_version(void)
 {
     cli_result r = cli_run("--help", NULL);
     CHECK(r.status == 0 && strstr(r.out, "plan") && !*r.err);
@@ -120,7 +120,7 @@ static void test_cli_help_and_version(void)
     cli_free(&r);
 }
 
-static void test_cli_bad_arguments(void)
+static void bad_arguments_exit_2(void)
 {
     /* the model does not exist: arguments are checked before anything is read */
     static const struct { const char *args[8]; const char *named[2]; } cases[] = {
@@ -165,7 +165,7 @@ static void test_cli_bad_arguments(void)
 
 /* The plan of a sphere: the CSV tiles [0, N*b] with layers inside the bounds
    and error limits, and agrees with the JSON report. */
-static void test_cli_plan_sphere(void)
+static void plan_of_a_sphere(void)
 {
     const char *plan_csv = cli_path("plan.csv"), *profile_csv = cli_path("profile.csv"), *svg = cli_path("plot.svg");
     cli_result r = cli_run("plan", sphere_stl(), "--json", "--out", plan_csv, "--profile-out", profile_csv,
@@ -213,7 +213,7 @@ done:
 
 /* --sampler ldi plans from the paper's sampled profile: on a sphere it
    agrees with the exact profile's plan to within 2 % of the layers. */
-static void test_cli_sampler(void)
+static void sampler_choice(void)
 {
     cli_result a = cli_run("plan", sphere_stl(), "--json", NULL), b = cli_run("plan", sphere_stl(), "--json", "--sampler", "ldi",
                                                                        "--res", "1024", NULL);
@@ -231,7 +231,7 @@ static void test_cli_sampler(void)
     cli_free(&a);
 }
 
-static void test_cli_profile_input(void)
+static void profile_input(void)
 {
     const char *csv = cli_path("p.csv"), *plain = cli_path("p.txt");
     FILE *f = fopen(csv, "w");
@@ -269,7 +269,7 @@ static void test_cli_profile_input(void)
     cli_free(&r);
 }
 
-static void test_cli_profile_bad_lines(void)
+static void bad_profile_lines_are_named(void)
 {
     static const struct { const char *text, *named; } cases[] = {
         {"phi\n0.1\n0.2\nabc\n0.3\n", ":4"},
@@ -291,14 +291,14 @@ static void test_cli_profile_bad_lines(void)
     }
 }
 
-static void test_cli_infeasible(void)
+static void infeasible_eps_names_the_smallest(void)
 {
     cli_result r = cli_run("plan", sphere_stl(), "--eps", "0.0001", NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "eps"), "exit %d, '%s'", r.status, r.err);
     cli_free(&r);
 }
 
-static void test_cli_compare(void)
+static void compare_prints_table_3(void)
 {
     cli_result r = cli_run("plan", sphere_stl(), "--compare", NULL);
     CHECK(r.status == 0 && strstr(r.out, "Coarsest") && strstr(r.out, "Optimal") && strstr(r.out, "Greedy") &&
@@ -311,7 +311,7 @@ static void test_cli_compare(void)
 /* adaslice slice: a complete job directory, its manifest agreeing with the
    plan and the PNGs; a part too big for the plate, an unknown printer, and a
    run that fails part-way leaving no manifest behind. */
-static void test_cli_slice(void)
+static void slice_writes_a_job(void)
 {
     char job[600], path[1000], *manifest, *csv, *png;
     cli_result r;
@@ -422,7 +422,7 @@ static void test_cli_slice(void)
 
 /* adaslice orient: a long box lies down; plan --orient with the direction
    found plans the same layers; bad counts and weights are usage errors. */
-static void test_cli_orient(void)
+static void orient_finds_directions(void)
 {
     const char *box = cli_path("box.stl"), *bad[][2] = {{"--dirs", "0"}, {"--dirs", "-3"}, {"--dirs", "2000000"},
                                                      {"--dirs", "1.5"}, {"--alpha", "1.5"}, {"--alpha", "-0.1"},
@@ -459,7 +459,7 @@ static void test_cli_orient(void)
     cli_free(&r);
 }
 
-static void test_cli_unwritable_output(void)
+static void unwritable_output_fails_cleanly(void)
 {
     const char *missing = cli_path("missing/plan.csv");
     cli_result r = cli_run("plan", sphere_stl(), "--out", missing, NULL);
@@ -480,7 +480,7 @@ static void test_cli_unwritable_output(void)
     rmdir(cli_path("taken"));
 }
 
-static void test_cli_bad_model(void)
+static void bad_model_is_named(void)
 {
     const char *path = cli_path("truncated.stl");
     adaslice_mesh m = gen_sphere(5, 16, 8, 0);
@@ -504,17 +504,17 @@ static void test_cli_bad_model(void)
 void test_cli(void)
 {
     if (!cli_begin("adaslice-cli")) return;
-    RUN(test_cli_help_and_version);
-    RUN(test_cli_bad_arguments);
-    RUN(test_cli_plan_sphere);
-    RUN(test_cli_sampler);
-    RUN(test_cli_profile_input);
-    RUN(test_cli_profile_bad_lines);
-    RUN(test_cli_infeasible);
-    RUN(test_cli_compare);
-    RUN(test_cli_slice);
-    RUN(test_cli_orient);
-    RUN(test_cli_unwritable_output);
-    RUN(test_cli_bad_model);
+    RUN(help_and_version);
+    RUN(bad_arguments_exit_2);
+    RUN(plan_of_a_sphere);
+    RUN(sampler_choice);
+    RUN(profile_input);
+    RUN(bad_profile_lines_are_named);
+    RUN(infeasible_eps_names_the_smallest);
+    RUN(compare_prints_table_3);
+    RUN(slice_writes_a_job);
+    RUN(orient_finds_directions);
+    RUN(unwritable_output_fails_cleanly);
+    RUN(bad_model_is_named);
     cli_end();
 }

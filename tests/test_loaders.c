@@ -279,7 +279,7 @@ static void write_ply(buf *b, const adaslice_mesh *m, const ply_style *s)
 
 /* --------------------------------------------------------- round trips */
 
-static void case_stl_binary_roundtrip(void)
+static void binary_stl_round_trips(void)
 {
     adaslice_mesh sphere = gen_sphere(3, 16, 9, 1);
     buf b = {0, 0, 0};
@@ -293,7 +293,7 @@ static void case_stl_binary_roundtrip(void)
     free(b.p);
 }
 
-static void case_stl_binary_no_welding(void)
+static void binary_stl_keeps_its_corners(void)
 {
     adaslice_mesh box = gen_box(0, 0, 0, 1, 2, 3), m;
     adaslice_error e;
@@ -307,7 +307,7 @@ static void case_stl_binary_no_welding(void)
     free(b.p);
 }
 
-static void case_stl_ascii_roundtrip(void)
+static void ascii_stl_round_trips(void)
 {
     adaslice_mesh sphere = gen_cone(2.5, 4, 12, 0.5);
     buf b = {0, 0, 0};
@@ -334,7 +334,7 @@ static adaslice_mesh pentagon_fan(uint32_t apex)
     return m;
 }
 
-static void case_stl_ascii_polygon_fan(void)
+static void ascii_stl_polygons_are_fanned(void)
 {
     adaslice_mesh want = pentagon_fan(0), m;
     adaslice_error e;
@@ -349,7 +349,7 @@ static void case_stl_ascii_polygon_fan(void)
     free(b.p);
 }
 
-static void case_obj_roundtrip(void)
+static void obj_round_trips(void)
 {
     adaslice_mesh sphere = gen_sphere(1.25, 10, 6, 2), cylinder = gen_cylinder(0.5, 3, 9, 0);
     buf b = {0, 0, 0};
@@ -362,7 +362,7 @@ static void case_obj_roundtrip(void)
     free(b.p);
 }
 
-static void case_obj_polygons_and_statements(void)
+static void obj_polygons_and_statements_load(void)
 {
     adaslice_mesh want = gen_alloc(8, 6), m;
     adaslice_error e;
@@ -394,7 +394,7 @@ static void case_obj_polygons_and_statements(void)
     free(b.p);
 }
 
-static void case_ply_roundtrip(void)
+static void ply_round_trips(void)
 {
     static const ply_style styles[] = {
         {0, "float", "float", "float", "uchar", "int", 0},
@@ -419,7 +419,7 @@ static void case_ply_roundtrip(void)
 }
 
 /* Coordinates of integer types: a box with integer corners. */
-static void case_ply_integer_coordinates(void)
+static void ply_integer_coordinates_load(void)
 {
     static const ply_style styles[] = {
         {0, "int8", "int16", "uint32", "uchar", "uint8", 1},
@@ -439,7 +439,7 @@ static void case_ply_integer_coordinates(void)
     free(b.p);
 }
 
-static void case_ply_polygons(void)
+static void ply_polygons_are_fanned(void)
 {
     adaslice_mesh want = pentagon_fan(4), m;
     adaslice_error e;
@@ -463,7 +463,7 @@ static void case_ply_polygons(void)
 /* Two strips: 0 1 2 3 and, after a -1 restart, 2 3 4 5; the second triangle of each
    runs backwards so that all face the same way. The repeated last index makes a
    degenerate stitching triangle, which is dropped. */
-static void case_ply_tristrips(void)
+static void ply_triangle_strips_load(void)
 {
     adaslice_mesh want = gen_alloc(6, 4), m;
     adaslice_error e;
@@ -501,7 +501,7 @@ static void case_ply_tristrips(void)
 
 /* ------------------------------------------------------------- options */
 
-static void case_scale(void)
+static void scale_multiplies_coordinates(void)
 {
     adaslice_mesh sphere = gen_sphere(0.1, 8, 5, 0), m;
     adaslice_error e;
@@ -525,7 +525,7 @@ static void case_scale(void)
     free(b.p);
 }
 
-static void case_degenerate_dropped(void)
+static void degenerate_triangles_are_dropped_and_counted(void)
 {
     adaslice_mesh m;
     adaslice_error e;
@@ -542,7 +542,7 @@ static void case_degenerate_dropped(void)
     free(b.p);
 }
 
-static void case_free_and_bounds(void)
+static void free_and_bounds(void)
 {
     adaslice_mesh m;
     double lo[3], hi[3];
@@ -558,7 +558,7 @@ static void case_free_and_bounds(void)
 
 /* ----------------------------------------------------------- malformed */
 
-static void case_stl_binary_malformed(void)
+static void malformed_binary_stl_is_refused(void)
 {
     adaslice_mesh sphere = gen_sphere(1, 8, 5, 0);
     buf b = {0, 0, 0};
@@ -590,7 +590,7 @@ static void case_stl_binary_malformed(void)
 
 #define STL_HEAD "solid t\n facet normal 0 0 1\n  outer loop\n"
 
-static void case_stl_ascii_malformed(void)
+static void malformed_ascii_stl_is_refused(void)
 {
     buf b = {0, 0, 0};
     text(&b, STL_HEAD "   vertex 0 0 0\n   vertex 1 1.2.3 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid t\n");
@@ -612,7 +612,7 @@ static void case_stl_ascii_malformed(void)
     free(b.p);
 }
 
-static void case_obj_malformed(void)
+static void malformed_obj_is_refused(void)
 {
     buf b = {0, 0, 0};
     text(&b, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n");
@@ -657,7 +657,7 @@ static size_t ply_binary_triangle(buf *b)
     return strlen(PLY_BIN_HEAD);
 }
 
-static void case_ply_malformed(void)
+static void malformed_ply_is_refused(void)
 {
     buf b = {0, 0, 0};
     size_t head = ply_binary_triangle(&b), face = head + 36;
@@ -704,7 +704,7 @@ static void case_ply_malformed(void)
     free(b.p);
 }
 
-static void case_ply_header_malformed(void)
+static void malformed_ply_headers_are_refused(void)
 {
     buf b = {0, 0, 0};
     text(&b, "ply\nformat binary_middle_endian 1.0\nelement vertex 0\nend_header\n");
@@ -747,7 +747,7 @@ static void case_ply_header_malformed(void)
 #define PLY_ASCII_HEAD "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n" \
                        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
 
-static void case_ply_ascii_malformed(void)
+static void malformed_ascii_ply_is_refused(void)
 {
     buf b = {0, 0, 0};
     text(&b, PLY_ASCII_HEAD "0 0 0\n1 0 0\n0 1 1.2.3\n3 0 1 2\n");
@@ -763,7 +763,7 @@ static void case_ply_ascii_malformed(void)
     free(b.p);
 }
 
-static void case_detection(void)
+static void formats_are_detected(void)
 {
     buf b = {0, 0, 0};
     expect_fail("empty data", &b, ADASLICE_FORMAT_AUTO, ADASLICE_ERR_EMPTY, 0, 0);
@@ -782,7 +782,7 @@ static void case_detection(void)
     free(b.p);
 }
 
-static void case_allocator(void)
+static void the_allocator_is_used(void)
 {
     adaslice_mesh sphere = gen_sphere(1, 8, 5, 0), m;
     adaslice_error e;
@@ -808,7 +808,7 @@ static void *failing_alloc(void *user, size_t size)
     return count_alloc(user, size);
 }
 
-static void case_out_of_memory(void)
+static void running_out_of_memory_leaks_nothing(void)
 {
     const adaslice_allocator failing = {failing_alloc, count_free, NULL};
     adaslice_mesh sphere = gen_sphere(1, 30, 20, 0), m;
@@ -836,7 +836,7 @@ static void case_out_of_memory(void)
 
 /* -------------------------------------------------------------- files */
 
-static void case_file_errors(void)
+static void file_errors_are_named(void)
 {
     adaslice_mesh m;
     adaslice_error e;
@@ -848,7 +848,7 @@ static void case_file_errors(void)
     CHECK(e.offset == 80);
 }
 
-static void case_bundled_models(void)
+static void bundled_models_load(void)
 {
     adaslice_mesh m;
     adaslice_error e;
@@ -872,28 +872,28 @@ static void case_bundled_models(void)
 
 void test_loaders(void)
 {
-    RUN(case_stl_binary_roundtrip);
-    RUN(case_stl_binary_no_welding);
-    RUN(case_stl_ascii_roundtrip);
-    RUN(case_stl_ascii_polygon_fan);
-    RUN(case_obj_roundtrip);
-    RUN(case_obj_polygons_and_statements);
-    RUN(case_ply_roundtrip);
-    RUN(case_ply_integer_coordinates);
-    RUN(case_ply_polygons);
-    RUN(case_ply_tristrips);
-    RUN(case_scale);
-    RUN(case_degenerate_dropped);
-    RUN(case_free_and_bounds);
-    RUN(case_stl_binary_malformed);
-    RUN(case_stl_ascii_malformed);
-    RUN(case_obj_malformed);
-    RUN(case_ply_malformed);
-    RUN(case_ply_header_malformed);
-    RUN(case_ply_ascii_malformed);
-    RUN(case_detection);
-    RUN(case_allocator);
-    RUN(case_out_of_memory);
-    RUN(case_file_errors);
-    RUN(case_bundled_models);
+    RUN(binary_stl_round_trips);
+    RUN(binary_stl_keeps_its_corners);
+    RUN(ascii_stl_round_trips);
+    RUN(ascii_stl_polygons_are_fanned);
+    RUN(obj_round_trips);
+    RUN(obj_polygons_and_statements_load);
+    RUN(ply_round_trips);
+    RUN(ply_integer_coordinates_load);
+    RUN(ply_polygons_are_fanned);
+    RUN(ply_triangle_strips_load);
+    RUN(scale_multiplies_coordinates);
+    RUN(degenerate_triangles_are_dropped_and_counted);
+    RUN(free_and_bounds);
+    RUN(malformed_binary_stl_is_refused);
+    RUN(malformed_ascii_stl_is_refused);
+    RUN(malformed_obj_is_refused);
+    RUN(malformed_ply_is_refused);
+    RUN(malformed_ply_headers_are_refused);
+    RUN(malformed_ascii_ply_is_refused);
+    RUN(formats_are_detected);
+    RUN(the_allocator_is_used);
+    RUN(running_out_of_memory_leaks_nothing);
+    RUN(file_errors_are_named);
+    RUN(bundled_models_load);
 }

@@ -260,7 +260,7 @@ static void fill_skewed(image *im)
 
 /* ---- cases -------------------------------------------------------------- */
 
-static void test_png_checksums(void)
+static void crc32_and_adler32_match_their_definitions(void)
 {
     static unsigned char data[70000];
     uint32_t crc_table[256], crc = 0xffffffffu, a = 1, b = 0;
@@ -290,7 +290,7 @@ static void test_png_checksums(void)
     CHECK(adaslice_crc32(0, data, sizeof data) == ~crc);
 }
 
-static void test_png_bad_arguments(void)
+static void bad_arguments_are_refused(void)
 {
     unsigned char px[64] = {0}, *out = px;
     size_t size = 1;
@@ -310,7 +310,7 @@ static uint32_t be32(const unsigned char *p)
 
 /* The file's layout: signature, IHDR, IDAT with a zlib header, IEND, every
    chunk's CRC; and the padding past the width and the stride do not matter. */
-static void test_png_layout(void)
+static void chunks_are_laid_out_as_the_specification_says(void)
 {
     static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
     batch b = {0};
@@ -349,7 +349,7 @@ static void test_png_layout(void)
     round_trip(&b);
 }
 
-static void test_png_small_images(void)
+static void small_and_odd_images_decode_in_oiiotool(void)
 {
     static const int widths[] = {1, 7, 8, 9, 15, 17, 31, 33};
     batch b = {0};
@@ -371,7 +371,7 @@ static void test_png_small_images(void)
     round_trip(&b);
 }
 
-static void test_png_masks(void)
+static void masks_decode_in_oiiotool(void)
 {
     const int w = 2560, h = 1440;
     unsigned char *disc = disc_coverage(w, h, 0.25), *scene = (unsigned char *)malloc(2561 * 1440);
@@ -401,7 +401,7 @@ static void test_png_masks(void)
     free(scene);
 }
 
-static void test_png_patterns(void)
+static void patterns_decode_in_oiiotool(void)
 {
     const int w = 2560, h = 1440;
     batch b = {0};
@@ -428,7 +428,7 @@ static void test_png_patterns(void)
 }
 
 /* Noise does not compress: stored blocks, a little larger than the data. */
-static void test_png_noise(void)
+static void noise_decodes_in_oiiotool(void)
 {
     const int w = 2560, h = 1440;
     batch b = {0};
@@ -448,7 +448,7 @@ static void test_png_noise(void)
    must come out at a few KB. The limits are about 1.3-1.5 times the sizes
    measured when they were set (a disc over 25 %: 4.4 KB 1-bit, 13.2 KB 8-bit;
    the bench scene at 30 %: 11.3 KB and 31.7 KB). */
-static void test_png_compression(void)
+static void compression_stays_within_its_bounds(void)
 {
     const int w = 2560, h = 1440;
     static const struct { const char *what; int bits; double share; size_t limit; } cases[] = {
@@ -508,7 +508,7 @@ static void remove_dir(void)
 /* The masks adaslice slice writes: the masker's in-memory images, 1-bit and
    4 x 4 anti-aliased, of the bundled hand on a 2560 x 1440 plate, read back
    through OpenImageIO bit for bit. */
-static void test_png_masker_images(void)
+static void the_maskers_images_decode_in_oiiotool(void)
 {
     adaslice_load_options lo;
     adaslice_mesh m;
@@ -550,14 +550,14 @@ void test_png(void)
         perror("test_png: mkdtemp");
         return;
     }
-    RUN(test_png_checksums);
-    RUN(test_png_bad_arguments);
-    RUN(test_png_layout);
-    RUN(test_png_small_images);
-    RUN(test_png_masks);
-    RUN(test_png_patterns);
-    RUN(test_png_noise);
-    RUN(test_png_compression);
-    RUN(test_png_masker_images);
+    RUN(crc32_and_adler32_match_their_definitions);
+    RUN(bad_arguments_are_refused);
+    RUN(chunks_are_laid_out_as_the_specification_says);
+    RUN_NEEDING("oiiotool", small_and_odd_images_decode_in_oiiotool);
+    RUN_NEEDING("oiiotool", masks_decode_in_oiiotool);
+    RUN_NEEDING("oiiotool", patterns_decode_in_oiiotool);
+    RUN_NEEDING("oiiotool", noise_decodes_in_oiiotool);
+    RUN(compression_stays_within_its_bounds);
+    RUN_NEEDING("oiiotool", the_maskers_images_decode_in_oiiotool);
     remove_dir();
 }

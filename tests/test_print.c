@@ -1,5 +1,5 @@
 /* adaslice print against the firmware over pseudo-terminals: the simulator
-   port (firmware/sim), a faulty line between them (tests/relay.c), the
+   port (firmware/ports/sim), a faulty line between them (tests/relay.c), the
    Cortex-M3 image under qemu-system-arm, and printrun's printcore in G-code
    mode. Each check reads what the printer's pins did from the simulator's
    log (tests/zcheck.h) and the host's --report. */
@@ -625,7 +625,7 @@ void test_print(void)
     RUN(print_a_sliced_job);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);
-    RUN(short_print_under_qemu);
-    RUN(printcore_drives_gcode_mode);
+    RUN_NEEDING("qemu-system-arm and build/fw-mps2.elf (arm-none-eabi-gcc)", short_print_under_qemu);
+    RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
     cli_end();
 }

@@ -1,0 +1,112 @@
+/* What the Cortex-M3 ports share: the reset path (.data, .bss, a stack
+   canary), the system half of the vector table and the fault handler, a
+   64-bit tick counted on SysTick, the receive ring that a UART interrupt
+   fills, the idle wait, and main (main.c) with the core's port. A board
+   (mps2/, stm32f103/) supplies board.h (the printer's figures, BOARD_*), its
+   interrupt vectors (CM3_IRQ_VECTORS), its linker script and the board_*
+   functions below; the serving loop that runs the core is in serve.c.
+
+   Registers are the ARMv7-M architecture's (ARMv7-M ARM, B3.2-B3.4), the same
+   on every Cortex-M3. */
+#ifndef FW_CM3_H
+#define FW_CM3_H
+#include <stddef.h>
+#include <stdint.h>
+
+#define CM3_REG(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
+
+#define SYST_CSR  CM3_REG(0xE000E010u)
+#define SYST_RVR  CM3_REG(0xE000E014u)
+#define SYST_CVR  CM3_REG(0xE000E018u)
+#define SCB_ICSR  CM3_REG(0xE000ED04u)
+#define SCB_AIRCR CM3_REG(0xE000ED0Cu)
+#define NVIC_ISER(n) CM3_REG(0xE000E100u + 4u * (n))
+#define NVIC_ICER(n) CM3_REG(0xE000E180u + 4u * (n))
+#define NVIC_ISPR(n) CM3_REG(0xE000E200u + 4u * (n))
+#define NVIC_ICPR(n) CM3_REG(0xE000E280u + 4u * (n))
+
+#define SCB_ICSR_PENDSTSET (1u << 26)
+#define SCB_AIRCR_SYSRESETREQ 0x05FA0004u /* VECTKEY and SYSRESETREQ */
+
+static inline void cm3_irq_enable(unsigned irq) { NVIC_ISER(irq / 32u) = 1u << (irq % 32u); }
+static inline void cm3_irq_pend(unsigned irq) { NVIC_ISPR(irq / 32u) = 1u << (irq % 32u); }
+static inline void cm3_irq_unpend(unsigned irq) { NVIC_ICPR(irq / 32u) = 1u << (irq % 32u); }
+static inline void cm3_interrupts_off(void) { __asm__ volatile("cpsid i" ::: "memory"); }
+static inline void cm3_interrupts_on(void) { __asm__ volatile("cpsie i" ::: "memory"); }
+
+/* Why a board stops itself (board_fault). */
+enum { CM3_FAULT_STACK = 1, CM3_FAULT_HARD = 2, CM3_FAULT_CLOCK = 3 };
+
+/* ---- supplied by the board ------------------------------------------- */
+/* Clocks, UART, timers, pins; SysTick is started by cm3_tick_start. */
+void board_init(void);
+/* Sends bytes to the host, waiting for room in the UART. */
+void board_write(const uint8_t *data, size_t size);
+/* Arms the wake-up timer to interrupt at or after tick `deadline` (or
+   earlier when the delay is past its range; the loop arms it again) and to
+   call cm3_wake() then; UINT64_MAX (FW_NEVER) disarms it. */
+void board_wake_at(uint64_t deadline, uint64_t now);
+/* Makes the UART receive interrupt run again (cm3_rx_consume calls this
+   after the ring had stalled). */
+void board_rx_resume(void);
+/* Leaves the firmware: semihosting exit under QEMU, a reset on a board. */
+void board_exit(int code) __attribute__((noreturn));
+/* Stops everything safely after a fault (UV off first). */
+void board_fault(int why) __attribute__((noreturn));
+/* The printer's pins: a Z step (dir +1 up, -1 down), the endstop (1 closed),
+   the UV light, the stepper driver's enable. */
+void board_step(int dir);
+int board_endstop(void);
+void board_uv(int on);
+void board_motor(int on);
+/* A decoded mask row into display buffer `slot`; a buffer shown, -1 dark. */
+void board_mask_row(int slot, uint32_t y, const uint8_t *row, uint32_t size);
+void board_show(int slot);
+
+/* The external interrupts' vectors, in the board's order: place this table
+   after the system vectors (the linker scripts keep .vectors.irq there);
+   entries without a handler take cm3_fault_handler. */
+typedef void (*cm3_vector)(void);
+void cm3_fault_handler(void);
+#define CM3_IRQ_VECTORS __attribute__((section(".vectors.irq"), used)) static const cm3_vector
+
+/* ---- provided here ------------------------------------------------------ */
+/* SysTick free-running at the core clock, reload 2^24: the tick. */
+void cm3_tick_start(void);
+/* Ticks since cm3_tick_start: exact and monotonic, also with interrupts off
+   as long as they were off for less than half a SysTick period. */
+uint64_t cm3_ticks(void);
+
+/* The receive ring. The UART interrupt pushes while there is room; when the
+   ring is full it leaves the byte in the UART (which then holds the line:
+   QEMU stops reading the pty) and calls cm3_rx_stall. */
+int cm3_rx_full(void);
+void cm3_rx_push(uint8_t byte);
+void cm3_rx_stall(void);
+/* The oldest received bytes, contiguous (0 when empty); the pointer stays
+   valid until cm3_rx_consume. */
+size_t cm3_rx_peek(const uint8_t **data);
+void cm3_rx_consume(size_t n);
+/* Bytes the ring had to refuse since reset (only a board whose UART cannot
+   hold the line counts these, through cm3_rx_lost). */
+void cm3_rx_lost(void);
+uint32_t cm3_rx_lost_count(void);
+
+/* Called by the board's wake-up timer interrupt. */
+void cm3_wake(void);
+/* Sleeps until a byte arrives or the tick reaches `deadline`. */
+void cm3_idle(uint64_t deadline);
+
+/* 1 while the word at the bottom of the stack is intact. */
+int cm3_stack_ok(void);
+
+/* ---- serve.c ---------------------------------------------------------------- */
+struct fw_state;
+/* Runs the core for ever: received bytes to fw_receive, fw_run at each
+   deadline, idle in between, the stack canary checked on every pass. */
+void cm3_serve(struct fw_state *fw) __attribute__((noreturn));
+/* The Z axis both boards drive (10 mm/s, 50 mm/s^2, homing at 5 mm/s,
+   200 mm of travel) and a 1 s link timeout, at tick_hz and steps_per_mm. */
+struct fw_config;
+void cm3_z_config(struct fw_config *config, uint32_t tick_hz, uint32_t steps_per_mm);
+#endif

@@ -1,0 +1,42 @@
+/* The loop fw.h asks of a port, on a Cortex-M3 board. */
+#include "cm3.h"
+#include "../../fw.h"
+
+/* Bytes handed to the core at a time: between chunks the loop looks at the
+   clock, so a long burst from the host delays a due step by at most the
+   core's work on this many bytes. */
+#define CHUNK 64u
+
+void cm3_serve(fw_state *fw)
+{
+    uint64_t deadline = 0;
+    for (;;) {
+        const uint8_t *data;
+        size_t n = cm3_rx_peek(&data);
+        uint64_t now;
+        if (!cm3_stack_ok()) board_fault(CM3_FAULT_STACK);
+        if (n) {
+            if (n > CHUNK) n = CHUNK;
+            fw_receive(fw, data, n, cm3_ticks());
+            cm3_rx_consume(n);
+            /* fw_receive returns no deadline, and what the bytes started
+               (a move, an exposure) may be due before the old one */
+            deadline = 0;
+        }
+        now = cm3_ticks();
+        if (now >= deadline) deadline = fw_run(fw, now);
+        else if (!n) cm3_idle(deadline);
+    }
+}
+
+void cm3_z_config(fw_config *config, uint32_t tick_hz, uint32_t steps_per_mm)
+{
+    config->tick_hz = tick_hz;
+    config->axis.steps_per_mm = steps_per_mm;
+    config->axis.max_speed = 10u * steps_per_mm;
+    config->axis.accel = 50u * steps_per_mm;
+    config->axis.home_speed = 5u * steps_per_mm;
+    config->axis.max_steps = (int32_t)(200u * steps_per_mm);
+    config->axis.home_travel = (int32_t)(220u * steps_per_mm);
+    config->link_timeout_ms = 1000;
+}

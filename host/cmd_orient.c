@@ -1,0 +1,245 @@
+/* adaslice orient: the build-direction search of §4.3. Every direction of a
+   spherical Fibonacci lattice is planned (threads share the work), scored by
+   F(O) = alpha K/max K + (1 - alpha) eps/max eps, and the best direction and
+   the best local minima are reported as directions and as rotations. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "commands.h"
+#include "options.h"
+#include "output.h"
+#include "plan_job.h"
+#include "report.h"
+#include "search.h"
+#include "svg.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define ORIENT_MAX_DIRS 1000000
+
+/* The rotation that brings d up, as an axis and an angle in degrees. */
+static void axis_angle(const double d[3], double axis[3], double *degrees)
+{
+    double len = sqrt(d[0] * d[0] + d[1] * d[1]);
+    axis[0] = len > 0 ? d[1] / len : 1;
+    axis[1] = len > 0 ? -d[0] / len : 0;
+    axis[2] = 0;
+    *degrees = acos(d[2] < -1 ? -1 : d[2] > 1 ? 1 : d[2]) * 180 / 3.14159265358979;
+}
+
+typedef struct orient_args {
+    size_t dirs;
+    double alpha;
+    const char *map;
+} orient_args;
+
+typedef struct map_ctx {
+    const adaslice_direction_score *scores;
+    size_t count;
+    const size_t *minima;
+    size_t minima_count;
+    const char *model;
+    double alpha;
+} map_ctx;
+
+/* Blue (low F, good) through white to red (high F); grey: infeasible. */
+static void score_colour(double f, double lo, double hi, char out[8])
+{
+    double t = hi > lo ? (f - lo) / (hi - lo) : 0;
+    int r, g, b;
+    if (f > 1.5) { strcpy(out, "#b0b0b0"); return; }
+    if (t < 0.5) { r = (int)(40 + 430 * t); g = (int)(90 + 330 * t); b = 220; }
+    else { r = 255; g = (int)(255 - 360 * (t - 0.5)); b = (int)(255 - 420 * (t - 0.5)); }
+    snprintf(out, 8, "#%02x%02x%02x", r > 255 ? 255 : r, g > 255 ? 255 : g < 0 ? 0 : g, b > 255 ? 255 : b < 0 ? 0 : b);
+}
+
+/* The paper's Fig. 8 flattened: F of the nearest lattice direction over an
+   equirectangular grid of longitude and latitude, runs of equal colour merged. */
+static void write_map(FILE *f, const void *ctx)
+{
+    const map_ctx *m = (const map_ctx *)ctx;
+    enum { W = 180, H = 90, CELL = 4, LEFT = 60, TOP = 50 };
+    double lo = 2, hi = 0;
+    size_t i;
+    int x, y;
+    for (i = 0; i < m->count; i++)
+        if (m->scores[i].score <= 1.5) {
+            if (m->scores[i].score < lo) lo = m->scores[i].score;
+            if (m->scores[i].score > hi) hi = m->scores[i].score;
+        }
+    fprintf(f, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-family=\"sans-serif\" font-size=\"12\">\n",
+            LEFT + W * CELL + 30, TOP + H * CELL + 60);
+    fputs("<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n", f);
+    fprintf(f, "<text x=\"%d\" y=\"22\" font-size=\"15\" font-weight=\"bold\">", LEFT);
+    xml_text(f, m->model);
+    fprintf(f, ": F over build directions (alpha %g, %zu directions)</text>\n", m->alpha, m->count);
+    fprintf(f, "<text x=\"%d\" y=\"40\" fill=\"#555\">blue: low F (good), red: high F; F from %.4g to %.4g; "
+               "circles: the best direction and local minima</text>\n", LEFT, lo, hi);
+    for (y = 0; y < H; y++) {
+        double lat = (90 - (y + 0.5) * 180.0 / H) * 3.14159265358979 / 180;
+        char run[8] = "", c[8];
+        int start = 0;
+        for (x = 0; x <= W; x++) {
+            if (x < W) {
+                double lon = (-180 + (x + 0.5) * 360.0 / W) * 3.14159265358979 / 180, best = -2;
+                double p[3];
+                size_t k, near = 0;
+                p[0] = cos(lat) * cos(lon); p[1] = cos(lat) * sin(lon); p[2] = sin(lat);
+                for (k = 0; k < m->count; k++) {
+                    const double *d = m->scores[k].direction;
+                    double dot = d[0] * p[0] + d[1] * p[1] + d[2] * p[2];
+                    if (dot > best) { best = dot; near = k; }
+                }
+                score_colour(m->scores[near].score, lo, hi, c);
+            }
+            if (x == W || strcmp(c, run)) {
+                if (x > 0)
+                    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"%s\"/>\n", LEFT + start * CELL,
+                            TOP + y * CELL, (x - start) * CELL, CELL, run);
+                if (x < W) { strcpy(run, c); start = x; }
+            }
+        }
+    }
+    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"none\" stroke=\"black\"/>\n", LEFT, TOP, W * CELL, H * CELL);
+    for (x = -180; x <= 180; x += 60)
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%d&#176;</text>\n", LEFT + (x + 180) * CELL * W / 360,
+                TOP + H * CELL + 16, x);
+    for (y = -90; y <= 90; y += 45)
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%d&#176;</text>\n", LEFT - 6, TOP + (90 - y) * CELL * H / 180 + 4, y);
+    fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">longitude of the build direction (atan2(y, x))</text>\n",
+            LEFT + W * CELL / 2, TOP + H * CELL + 36);
+    fprintf(f, "<text transform=\"translate(16 %d) rotate(-90)\" text-anchor=\"middle\">latitude (asin z)</text>\n",
+            TOP + H * CELL / 2);
+    for (i = 0; i < m->minima_count; i++) {
+        const double *d = m->scores[m->minima[i]].direction;
+        double lon = atan2(d[1], d[0]) * 180 / 3.14159265358979, lat = asin(d[2]) * 180 / 3.14159265358979;
+        double cx = LEFT + (lon + 180) * CELL * W / 360, cy = TOP + (90 - lat) * CELL * H / 180;
+        fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"7\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/>"
+                   "<text x=\"%.1f\" y=\"%.1f\" font-weight=\"bold\">%s</text>\n",
+                cx, cy, cx + 9, cy - 8, i == 0 ? "best" : i == 1 ? "2" : i == 2 ? "3" : "4");
+    }
+    fputs("</svg>\n", f);
+}
+
+static void orient_usage(FILE *f)
+{
+    fputs("usage: adaslice orient MODEL [--dirs N] [--alpha A] [plan options] [--map map.svg] [--json]\n"
+          "\n"
+          "Plans MODEL along N build directions of a spherical Fibonacci lattice and scores each\n"
+          "by F = A K/max K + (1 - A) eps/max eps (eq. 25), eps being the plan's worst layer\n"
+          "error; prints the best direction and the best other local minima, each with the\n"
+          "rotation that brings it up (apply it with adaslice plan|slice --orient X,Y,Z).\n"
+          "\n"
+          "  --dirs N            directions on the sphere, 1 to 1000000           [1000]\n"
+          "  --alpha A           weight of the layer count against the error, 0..1  [0.5]\n"
+          "  --map FILE          SVG map of F over the sphere (longitude, latitude)\n"
+          "\n", f);
+    plan_options_usage(f);
+}
+
+/* Takes the orient options out of argv; the rest goes to parse_plan. */
+static int parse_orient(int argc, char **argv, orient_args *o, int *rest_argc, char **rest)
+{
+    int i, rc = RC_OK;
+    o->dirs = 1000;
+    o->alpha = 0.5;
+    o->map = NULL;
+    rest[(*rest_argc)++] = argv[0];
+    for (i = 1; i < argc && !rc; i++) {
+        if (!strcmp(argv[i], "--dirs")) rc = count_option(argc, argv, &i, ORIENT_MAX_DIRS, &o->dirs);
+        else if (!strcmp(argv[i], "--alpha")) {
+            if (!(rc = number_option(argc, argv, &i, 1, &o->alpha)) && o->alpha > 1)
+                rc = complain(RC_USAGE, "--alpha %s: the weight of the layer count is at most 1", argv[i]);
+        } else if (!strcmp(argv[i], "--map")) rc = file_option(argc, argv, &i, &o->map);
+        else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            orient_usage(stdout);
+            return -1;
+        } else rest[(*rest_argc)++] = argv[i];
+    }
+    return rc;
+}
+
+int cmd_orient(int argc, char **argv)
+{
+    orient_args o;
+    plan_args a;
+    adaslice_mesh mesh;
+    adaslice_load_options lo;
+    adaslice_error e;
+    adaslice_direction_score *scores = NULL;
+    size_t minima[SEARCH_MINIMA + 1], count = 0, i;
+    char **rest = (char **)malloc(((size_t)argc + 1) * sizeof *rest);
+    int rest_argc = 0, rc;
+    double t0;
+
+    if (!rest) return complain(RC_FAIL, "out of memory");
+    rc = parse_orient(argc, argv, &o, &rest_argc, rest);
+    if (rc < 0) { free(rest); return RC_OK; }
+    if (!rc) rc = parse_plan(rest_argc, rest, &a);
+    free(rest);
+    if (rc) return rc;
+    if (a.help) { orient_usage(stdout); return RC_OK; }
+    if (!a.model) return complain(RC_USAGE, "orient needs a MODEL");
+    if (a.orient) return complain(RC_USAGE, "orient searches the directions itself: drop --orient");
+    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
+        return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
+    memset(&lo, 0, sizeof lo);
+    lo.scale = a.scale;
+    if (adaslice_mesh_load_file(a.model, &lo, &mesh, &e) != ADASLICE_OK) return library_error(&e);
+    t0 = now_ms();
+    rc = plan_orient_search(&a, &mesh, o.dirs, o.alpha, &scores, minima, &count);
+    if (!rc && o.map) {
+        map_ctx m;
+        m.scores = scores;
+        m.count = o.dirs;
+        m.minima = minima;
+        m.minima_count = count;
+        m.model = base_name(a.model);
+        m.alpha = o.alpha;
+        rc = write_atomic(o.map, write_map, &m);
+    }
+    if (!rc && a.json) {
+        printf("{\n  \"model\": ");
+        json_string(stdout, a.model);
+        printf(",\n  \"directions\": %zu,\n  \"alpha\": ", o.dirs);
+        json_number(stdout, o.alpha);
+        printf(",\n  \"metric\": \"%s\",\n  \"seconds\": %.3f,\n  \"best\": [", METRIC_NAMES[a.metric], (now_ms() - t0) / 1000);
+        for (i = 0; i < count; i++) {
+            const adaslice_direction_score *s = &scores[minima[i]];
+            double r[9], axis[3], deg;
+            int k;
+            adaslice_rotation_to_z(s->direction, r);
+            axis_angle(s->direction, axis, &deg);
+            printf("%s\n    {\"direction\": [%.9g, %.9g, %.9g], \"layers\": %zu, \"mean_error\": ", i ? "," : "",
+                   s->direction[0], s->direction[1], s->direction[2], s->layers);
+            json_number(stdout, s->mean_error);
+            printf(", \"worst_error\": ");
+            json_number(stdout, s->worst_error);
+            printf(", \"F\": ");
+            json_number(stdout, s->score);
+            printf(", \"rotation\": [");
+            for (k = 0; k < 9; k++) printf("%s%.9g", k ? ", " : "", r[k]);
+            printf("], \"axis\": [%.9g, %.9g, %.9g], \"angle_deg\": %.9g}", axis[0], axis[1], axis[2], deg);
+        }
+        printf("\n  ]\n}\n");
+    } else if (!rc) {
+        size_t feasible = 0;
+        for (i = 0; i < o.dirs; i++) feasible += scores[i].feasible;
+        printf("%s: %zu directions (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst layer error)\n",
+               base_name(a.model), o.dirs, feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
+        printf("rank  direction (x, y, z)           rotate about (x, y, z)   by deg   layers  mean err   worst err        F\n");
+        for (i = 0; i < count && i <= SEARCH_MINIMA; i++) {
+            const adaslice_direction_score *s = &scores[minima[i]];
+            double axis[3], deg;
+            axis_angle(s->direction, axis, &deg);
+            printf("%-5s (%7.4f, %7.4f, %7.4f)   (%6.3f, %6.3f, %6.3f)  %7.2f  %7zu  %9.5f  %9.5f  %7.4f\n",
+                   i == 0 ? "best" : i == 1 ? "2" : i == 2 ? "3" : "4", s->direction[0], s->direction[1], s->direction[2],
+                   axis[0], axis[1], axis[2], deg, s->layers, s->mean_error, s->worst_error, s->score);
+        }
+    }
+    free(scores);
+    adaslice_mesh_free(&mesh);
+    return rc;
+}

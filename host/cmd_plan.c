@@ -1,0 +1,200 @@
+/* adaslice plan: the fewest layers within eps for a mesh or a metric profile,
+   printed as a summary (with the paper's Table 3 on request) or as JSON. */
+#include "commands.h"
+#include "output.h"
+#include "plan_job.h"
+#include "report.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const char *format_name(adaslice_format f)
+{
+    static const char *const names[] = {"unknown format", "binary STL", "ASCII STL", "OBJ", "PLY"};
+    return (unsigned)f < sizeof names / sizeof *names ? names[f] : names[0];
+}
+
+/* " mm" or "" for a dimensionless value */
+static const char *unit_suffix(const char *unit, char buf[16])
+{
+    snprintf(buf, 16, "%s%s", *unit ? " " : "", unit);
+    return buf;
+}
+
+
+static void plan_usage(FILE *f)
+{
+    fputs("usage: adaslice plan MODEL [options]\n"
+          "       adaslice plan --profile FILE [options]\n"
+          "\n"
+          "Finds the slicing plan with the fewest layers whose every layer error stays\n"
+          "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
+          "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
+          "\n", f);
+    plan_options_usage(f);
+}
+
+
+/* The rows of the paper's Table 3, in its order. */
+static const adaslice_method TABLE3[] = {
+    ADASLICE_METHOD_COARSEST, ADASLICE_METHOD_OPTIMAL, ADASLICE_METHOD_GREEDY, ADASLICE_METHOD_FINEST,
+    ADASLICE_METHOD_CURVATURE};
+static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest", "Curvature"};
+enum { TABLE3_ROWS = sizeof TABLE3 / sizeof *TABLE3 };
+
+static void print_compare(const plan_args *a, const plan_job *j)
+{
+    const char *unit = METRICS[a->metric].eps_unit;
+    char u[16], head[40];
+    int r;
+    snprintf(head, sizeof head, "worst error%s%s%s", *unit ? " (" : "", unit, *unit ? ")" : "");
+    printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
+           METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
+    printf("%-10s %8s %18s %10s\n", "method", "layers", head, "over eps");
+    for (r = 0; r < TABLE3_ROWS; r++) {
+        const adaslice_plan *p = &j->plan[TABLE3[r]];
+        const adaslice_error *e = &j->why[TABLE3[r]];
+        if (!j->planned[TABLE3[r]]) continue; /* curvature, from a --profile */
+        if (e->result == ADASLICE_OK)
+            printf("%-10s %8zu %18.6g %10zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
+        else if (e->min_eps > 0)
+            printf("%-10s %8s   (feasible from eps %g)\n", TABLE3_NAMES[r], "none", e->min_eps);
+        else
+            printf("%-10s %8s   (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
+    }
+    if (a->budget)
+        printf("(Optimal with a budget of %zu layers: eps %g%s)\n", a->budget, j->plan[ADASLICE_METHOD_OPTIMAL].eps, u);
+}
+
+static void print_summary(const plan_args *a, const plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    const adaslice_profile *pr = &j->profile;
+    char u[16];
+    const char *eu = unit_suffix(METRICS[a->metric].eps_unit, u);
+    if (a->model) {
+        printf("model      %s: %s, %zu triangles", a->model, format_name(j->format), j->triangles);
+        if (j->degenerate) printf(" (%zu degenerate dropped)", j->degenerate);
+        printf("\n");
+    } else {
+        printf("profile    %s: %zu values\n", a->profile, pr->bin_count);
+    }
+    printf("height     %g mm, %zu bins of %g mm\n", pr->height, pr->bin_count, pr->bin);
+    printf("metric     %s", METRICS[a->metric].label);
+    if (a->model && a->sampler)
+        printf(", sampled by LDIs of %d pixels across (%zu bins no ray reached take their neighbours' value)",
+               a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION, j->profile.unsampled_bins);
+    printf("\n");
+    printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
+    if (a->method == ADASLICE_METHOD_CURVATURE)
+        printf(" (%s mapping; eps only counts the layers over it)", MAPPING_NAMES[a->mapping]);
+    if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
+    printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);
+    printf("layers     %zu\n", p->layer_count);
+    printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
+    if (p->over_eps) printf(", %zu layers over eps", p->over_eps);
+    printf("\n");
+    /* the section 3.3 pre-pass belongs to the optimal method only */
+    if (a->method == ADASLICE_METHOD_OPTIMAL && a->sharp > 0)
+        printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes,
+               p->forced_planes == 1 ? "" : "s", a->sharp);
+    else if (a->method == ADASLICE_METHOD_OPTIMAL)
+        printf("forced     none (sharp-change pre-pass off)\n");
+    printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
+    if (a->compare) print_compare(a, j);
+}
+
+static void print_json_plan_fields(FILE *f, const adaslice_plan *p)
+{
+    fprintf(f, "\"layers\": %zu, \"worst_error\": ", p->layer_count);
+    json_number(f, p->worst_error);
+    fputs(", \"total_error\": ", f);
+    json_number(f, p->total_error);
+    fprintf(f, ", \"over_eps\": %zu", p->over_eps);
+}
+
+static void print_json(const plan_args *a, const plan_job *j)
+{
+    const adaslice_plan *p = &j->plan[a->method];
+    const adaslice_profile *pr = &j->profile;
+    size_t k;
+    int r;
+    printf("{\n  \"model\": ");
+    json_string(stdout, a->model ? a->model : a->profile);
+    printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
+    if (a->model) json_string(stdout, format_name(j->format));
+    else printf("null");
+    if (a->model) printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu", j->triangles, j->degenerate);
+    else printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null");
+    printf(",\n  \"metric\": \"%s\",\n  \"sampler\": \"%s\",\n  \"unsampled_bins\": %zu,\n  \"method\": \"%s\",\n  \"eps\": ",
+           METRIC_NAMES[a->metric], SAMPLER_NAMES[a->sampler], j->profile.unsampled_bins, METHOD_NAMES[a->method]);
+    json_number(stdout, p->eps);
+    printf(",\n  \"tmin\": ");
+    json_number(stdout, a->tmin);
+    printf(",\n  \"tmax\": ");
+    json_number(stdout, a->tmax);
+    printf(",\n  \"bin\": ");
+    json_number(stdout, pr->bin);
+    printf(",\n  \"bins\": %zu,\n  \"bins_min\": %u,\n  \"bins_max\": %u,\n  \"height_mm\": ",
+           pr->bin_count, p->bins_min, p->bins_max);
+    json_number(stdout, pr->height);
+    if (a->budget) printf(",\n  \"budget\": %zu", a->budget);
+    printf(",\n  \"sharp\": ");
+    if (a->sharp > 0) json_number(stdout, a->sharp);
+    else printf("null");
+    printf(",\n  ");
+    print_json_plan_fields(stdout, p);
+    printf(",\n  \"forced_planes\": %zu,\n  \"time_ms\": {\"load\": %.3f, \"profile\": %.3f, \"plan\": %.3f}",
+           p->forced_planes, j->ms_load, j->ms_profile, j->ms_plan);
+    printf(",\n  \"layer_list\": [");
+    for (k = 0; k < p->layer_count; k++) {
+        const adaslice_layer *l = &p->layers[k];
+        printf("%s\n    {\"z_bottom\": ", k ? "," : "");
+        json_number(stdout, l->z_bottom);
+        printf(", \"z_top\": ");
+        json_number(stdout, l->z_top);
+        printf(", \"thickness\": ");
+        json_number(stdout, l->thickness);
+        printf(", \"error\": ");
+        json_number(stdout, l->error);
+        printf("}");
+    }
+    printf("\n  ]");
+    if (a->compare) {
+        printf(",\n  \"compare\": [");
+        for (r = 0; r < TABLE3_ROWS; r++) {
+            const adaslice_error *e = &j->why[TABLE3[r]];
+            if (!j->planned[TABLE3[r]]) continue;
+            printf("%s\n    {\"method\": \"%s\", ", r ? "," : "", METHOD_NAMES[TABLE3[r]]);
+            if (e->result == ADASLICE_OK) {
+                print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
+            } else {
+                printf("\"layers\": null, \"min_eps\": ");
+                json_number(stdout, e->min_eps);
+            }
+            printf("}");
+        }
+        printf("\n  ]");
+    }
+    printf("\n}\n");
+}
+
+int cmd_plan(int argc, char **argv)
+{
+    plan_args a;
+    plan_job j;
+    int rc = parse_plan(argc, argv, &a);
+    if (rc) return rc;
+    if (a.help) {
+        plan_usage(stdout);
+        return RC_OK;
+    }
+    memset(&j, 0, sizeof j);
+    j.args = &a;
+    rc = run_plan(&a, &j);
+    if (!rc) rc = write_outputs(&a, &j);
+    if (!rc) (a.json ? print_json : print_summary)(&a, &j);
+    job_free(&j);
+    return rc;
+}
+

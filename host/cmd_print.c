@@ -1,0 +1,540 @@
+/* adaslice print: drives a printer running the adaslice firmware over a
+   serial port (host/serial.h: POSIX termios only), after link/PROTOCOL.md.
+   The printer plans from the quantised profile (or takes the host's plan),
+   then the host streams mask k+1 while layer k exposes. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "commands.h"
+#include "jobdir.h"
+#include "layers.h"
+#include "options.h"
+#include "output.h"
+#include "plan_job.h"
+#include "report.h"
+#include "serial.h"
+
+#include <math.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static volatile sig_atomic_t interrupted;
+static void on_sigint(int sig) { (void)sig; interrupted = 1; }
+
+typedef struct print_args {
+    const char *port, *report;
+    long baud;
+    size_t resume_from;
+    double exposure, bottom_exposure, peel, peel_speed, return_speed, settle;
+    size_t bottom_layers;
+    int plan_on_host;
+    int then_exit;          /* emulators: EXIT after the print */
+    double give_up_s;       /* a printer silent this long ends the print */
+} print_args;
+
+/* ------------------------------------------------------------- the job */
+
+/* What is printed: a plan (layer lengths in bins) and a source of masks. */
+typedef struct print_job {
+    uint32_t layers, bin_nm;
+    uint32_t *lengths;             /* bins per layer: the plan's, or the job's */
+    uint32_t width, height, bits;
+    int from_model;
+    layer_masks masks;             /* a MODEL: rendered as they are needed */
+    job_masks file;                /* a JOBDIR: its masks.rle */
+    /* the current mask */
+    unsigned char *code;
+    size_t code_size, code_cap, rendered;
+    uint32_t crc;
+} print_job;
+
+/* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
+static int job_mask(print_job *pj, uint32_t k)
+{
+    int rc;
+    size_t bound = adaslice_rle_bound(pj->width, pj->height, (int)pj->bits);
+    if (!pj->from_model) {
+        pj->crc = pj->file.crcs[k - 1];
+        pj->code_size = pj->file.sizes[k - 1];
+        pj->code = pj->file.codes[k - 1];
+        return RC_OK;
+    }
+    if (k - 1 < pj->rendered) return complain(RC_FAIL, "layer %u: masks render bottom-up only", k);
+    if (bound > pj->code_cap) {
+        unsigned char *c = (unsigned char *)realloc(pj->code, bound);
+        if (!c) return complain(RC_FAIL, "out of memory for a mask's code");
+        pj->code = c;
+        pj->code_cap = bound;
+    }
+    /* the masker sweeps upwards; layers below k were passed on the way */
+    if ((rc = layer_masks_render(&pj->masks, k - 1))) return rc;
+    pj->rendered = k;
+    (void)adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits, pj->code,
+                              pj->code_cap, &pj->code_size);
+    pj->crc = adaslice_crc32(0, pj->masks.image, pj->masks.stride * pj->height);
+    return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
+}
+
+static void print_job_free(print_job *pj)
+{
+    if (pj->masks.image) layer_masks_close(&pj->masks);
+    if (pj->from_model) { free(pj->code); free(pj->lengths); }
+    job_masks_free(&pj->file);
+    memset(pj, 0, sizeof *pj);
+}
+
+/* ------------------------------------------------------------ planning */
+
+static int plan_ready(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_PLANNING; }
+
+/* The profile goes to the printer as varints; its plan must equal ours. */
+static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_plan_options *o, const print_job *pj)
+{
+    const adaslice_profile *p = &j->profile;
+    uint32_t n = (uint32_t)p->bin_count, i, k;
+    uint32_t *units = (uint32_t *)malloc(n * sizeof *units);
+    unsigned char *forced = (unsigned char *)malloc(n);
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_profile hdr;
+    adaslice_error err;
+    int rc = RC_OK;
+    if (!units || !forced) { free(units); free(forced); return complain(RC_FAIL, "out of memory"); }
+    if (adaslice_plan_units(p, o, units, forced, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
+    hdr.bins = n;
+    hdr.bins_min = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_min;
+    hdr.bins_max = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_max;
+    hdr.eps_units = o->eps_units;
+    hdr.bin_nm = pj->bin_nm;
+    if ((rc = serial_send(l, LINK_MSG_PROFILE, buf, link_put_profile(buf, &hdr)))) goto done;
+    for (i = 0; i < n;) {
+        size_t used = link_profile_chunk(buf, l->data_max, units, forced, n, &i);
+        if ((rc = serial_send(l, LINK_MSG_PROFILE_DATA, buf, used))) goto done;
+    }
+    if ((rc = serial_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
+    if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
+    if (l->st.layers != pj->layers) {
+        rc = complain(RC_FAIL, "the printer planned %u layers, the host %u: the planners disagree", l->st.layers, pj->layers);
+        goto done;
+    }
+    /* read the plan back, page by page, and compare it layer by layer */
+    for (k = 1; k <= pj->layers;) {
+        size_t m;
+        if (!serial_plan_page(l, k, &rc)) { if (rc) goto done; continue; }
+        for (m = LINK_SIZE_PLAN; m < l->plan_size && k <= pj->layers; m++, k++)
+            if (l->plan[m] != pj->lengths[k - 1]) {
+                rc = complain(RC_FAIL, "layer %u: the printer planned %u bins, the host %u", k, l->plan[m], pj->lengths[k - 1]);
+                goto done;
+            }
+    }
+done:
+    free(units);
+    free(forced);
+    return rc;
+}
+
+static int plan_given(serial_link *l, const print_job *pj)
+{
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_plan_set m;
+    uint32_t k;
+    size_t used = 0;
+    int rc;
+    for (k = 0; k < pj->layers; k++)
+        if (pj->lengths[k] > 255) return complain(RC_FAIL, "layer %u is %u bins: a printer takes at most 255", k + 1, pj->lengths[k]);
+    m.layers = pj->layers;
+    m.bin_nm = pj->bin_nm;
+    if ((rc = serial_send(l, LINK_MSG_PLAN_SET, buf, link_put_plan_set(buf, &m)))) return rc;
+    for (k = 0; k < pj->layers; k++) {
+        if (used >= l->data_max) { if ((rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc; used = 0; }
+        buf[used++] = (uint8_t)pj->lengths[k];
+    }
+    if (used && (rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc;
+    if ((rc = serial_status(l))) return rc;
+    if (l->st.state != LINK_STATE_READY || l->st.layers != pj->layers)
+        return complain(RC_FAIL, "the printer refused the plan: %s", link_error_name(l->st.error));
+    return RC_OK;
+}
+
+
+/* -------------------------------------------------------------- print */
+
+static int homed(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_HOMING; }
+
+/* Layers done since the first, with the height Z is at. */
+static void print_progress(progress *bar, const print_job *pj, const link_status *s, uint32_t first)
+{
+    char z[32];
+    uint32_t done = s->state == LINK_STATE_DONE ? pj->layers - first + 1 : (s->layer > first ? s->layer - first : 0);
+    snprintf(z, sizeof z, "z %.3f mm", s->z_nm / 1e6);
+    progress_show(bar, done, pj->layers - first + 1, "layers", z);
+}
+
+typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
+
+static int print_loop(serial_link *l, const print_args *pa, print_job *pj, report_layer *rep, unsigned long *mask_bytes)
+{
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    uint32_t first = pa->resume_from ? (uint32_t)pa->resume_from : 1, next = first, tries = 0;
+    double polled = 0;
+    progress bar;
+    int rc, sending = 0;
+    size_t sent = 0;
+    uint16_t refused = 0;
+    link_print m;
+    memset(&bar, 0, sizeof bar);
+    m.first_layer = first;
+    m.exposure_ms = (uint32_t)(pa->exposure * 1000 + 0.5);
+    m.bottom_layers = (uint32_t)pa->bottom_layers;
+    m.bottom_exposure_ms = (uint32_t)(pa->bottom_exposure * 1000 + 0.5);
+    m.peel_nm = (uint32_t)(pa->peel * 1e6 + 0.5);
+    m.peel_speed_um_s = (uint32_t)(pa->peel_speed * 1000 + 0.5);
+    m.return_speed_um_s = (uint32_t)(pa->return_speed * 1000 + 0.5);
+    m.settle_ms = (uint32_t)(pa->settle * 1000 + 0.5);
+    if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
+    if (l->st.state != LINK_STATE_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", link_error_name(l->st.error));
+    refused = l->st.masks_refused;
+    for (;;) {
+        if (interrupted) {
+            if ((rc = serial_send(l, LINK_MSG_PAUSE, NULL, 0)) || (rc = serial_status(l))) return rc;
+            while (l->st.state == LINK_STATE_PRINTING) if ((rc = serial_pump(l, 50)) || (rc = serial_status(l))) return rc;
+            fprintf(stderr, "\nadaslice: paused at layer %u of %u (UV off, Z held at %.3f mm); "
+                            "continue with --resume-from %u\n", l->st.layer, pj->layers, l->st.z_nm / 1e6, l->st.layer);
+            return RC_PAUSED;
+        }
+        /* between masks, and once a mask is all sent, the next STATUS decides what comes next */
+        if (now_ms() - polled > 100 || !sending || sent == pj->code_size) {
+            if ((rc = serial_status(l))) return rc;
+            polled = now_ms();
+            print_progress(&bar, pj, &l->st, first);
+            if (l->st.state == LINK_STATE_DONE) return RC_OK;
+            if (l->st.state == LINK_STATE_PAUSED && (l->st.flags & LINK_FLAG_LINK_LOST)) {
+                /* the link came back: the pause was not the operator's */
+                if ((rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
+                continue;
+            }
+            if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_PAUSED)
+                return complain(RC_FAIL, "the printer stopped printing (state %u): %s", l->st.state, link_error_name(l->st.error));
+            if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {
+                if (l->st.mask_ready >= next) { next++; tries = 0; }
+                else if (++tries > 5) return complain(RC_FAIL, "layer %u: the printer refused the mask %u times", next, tries);
+                refused = l->st.masks_refused;
+                sending = 0;
+            }
+        }
+        if (!sending && next <= pj->layers && l->st.mask_ready + 1 == next && next <= l->st.layer + 1) {
+            if (!tries && (rc = job_mask(pj, next))) return rc;
+            link_mask mask;
+            mask.layer = next;
+            mask.code_bytes = (uint32_t)pj->code_size;
+            mask.crc32 = pj->crc;
+            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask)))) return rc;
+            rep[next - 1].crc = pj->crc;
+            rep[next - 1].code_bytes = (uint32_t)pj->code_size;
+            sending = 1;
+            sent = 0;
+        }
+        if (sending && sent < pj->code_size) {
+            size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
+            if ((rc = serial_send(l, LINK_MSG_MASK_DATA, pj->code + sent, chunk))) return rc;
+            sent += chunk;
+            *mask_bytes += chunk;
+            continue;
+        }
+        if ((rc = serial_pump(l, 20))) return rc;
+    }
+}
+
+typedef struct report {
+    const print_job *pj;
+    const report_layer *layers;
+    const serial_link *l;
+    uint32_t first;
+    double seconds;
+    unsigned long mask_bytes;
+    int planned_by_printer;
+} report;
+
+static void write_report(FILE *f, const void *ctx)
+{
+    const report *r = (const report *)ctx;
+    uint32_t k, z = 0;
+    fprintf(f, "{\n  \"layers\": %u,\n  \"first_layer\": %u,\n  \"bin_nm\": %u,\n  \"planned_by_printer\": %s,\n",
+            r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
+    fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
+               "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n  \"masks\": [",
+            r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
+            r->l->retransmits, r->l->naks);
+    for (k = 0; k < r->pj->layers; k++) {
+        z += r->pj->lengths[k];
+        fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u}", k ? "," : "", k + 1,
+                z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes);
+    }
+    fputs("\n  ]\n}\n", f);
+}
+
+/* -------------------------------------------------------------- options */
+
+static void print_usage(FILE *f)
+{
+    fputs("usage: adaslice print MODEL|JOBDIR --port DEV [print options] [masks] [plan options]\n"
+          "\n"
+          "Prints on a printer running the adaslice firmware (link/PROTOCOL.md). With a\n"
+          "MODEL the printer plans from the quantised profile and the host checks that the\n"
+          "plan equals its own; masks are rendered as they are needed. A JOBDIR from\n"
+          "adaslice slice is printed with its plan and JOBDIR/masks.rle. Ctrl-C pauses\n"
+          "(UV off, Z held) and exits 3; --resume-from K continues at layer K.\n"
+          "\n"
+          "print options\n"
+          "  --port DEV            the printer's serial port (required)\n"
+          "  --baud B              9600 ... 230400                               [115200]\n"
+          "  --resume-from K       start at layer K (the printer must be homed)  [1]\n"
+          "  --exposure S          seconds per layer                             [2.5]\n"
+          "  --bottom-layers N     layers exposed longer, to stick to the plate  [3]\n"
+          "  --bottom-exposure S   their seconds                                 [25]\n"
+          "  --peel MM             lift after each layer                         [5]\n"
+          "  --peel-speed MM/S     lift speed                                    [2]\n"
+          "  --return-speed MM/S   speed back down                               [4]\n"
+          "  --settle S            wait before exposing                          [0.5]\n"
+          "  --plan-on-host        send the host's plan instead of the profile\n"
+          "  --give-up S           a printer silent this long ends the print     [30]\n"
+          "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
+          "  --then-exit           end the firmware after the print (emulators and the\n"
+          "                        simulator; a real board ignores it)\n"
+          "\n"
+          "masks (the display's size and pitch come from the printer)\n"
+          "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
+          "\n", f);
+    plan_options_usage(f);
+}
+
+static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, char **rest)
+{
+    int i, rc = RC_OK;
+    memset(pa, 0, sizeof *pa);
+    pa->baud = 115200;
+    pa->exposure = 2.5;
+    pa->bottom_layers = 3;
+    pa->bottom_exposure = 25;
+    pa->peel = 5;
+    pa->peel_speed = 2;
+    pa->return_speed = 4;
+    pa->settle = 0.5;
+    pa->give_up_s = 30;
+    rest[(*rest_argc)++] = argv[0];
+    for (i = 1; i < argc && !rc; i++) {
+        const char *o = argv[i];
+        size_t n = 115200;
+        if (!strcmp(o, "--port")) rc = file_option(argc, argv, &i, &pa->port);
+        else if (!strcmp(o, "--report")) rc = file_option(argc, argv, &i, &pa->report);
+        else if (!strcmp(o, "--baud")) { if (!(rc = count_option(argc, argv, &i, 4000000, &n))) pa->baud = (long)n; }
+        else if (!strcmp(o, "--resume-from")) rc = count_option(argc, argv, &i, UINT32_MAX, &pa->resume_from);
+        else if (!strcmp(o, "--exposure")) rc = number_option(argc, argv, &i, 0, &pa->exposure);
+        else if (!strcmp(o, "--bottom-layers")) { if (i + 1 < argc && !strcmp(argv[i + 1], "0")) { i++; pa->bottom_layers = 0; } else rc = count_option(argc, argv, &i, UINT32_MAX, &pa->bottom_layers); }
+        else if (!strcmp(o, "--bottom-exposure")) rc = number_option(argc, argv, &i, 0, &pa->bottom_exposure);
+        else if (!strcmp(o, "--peel")) rc = number_option(argc, argv, &i, 1, &pa->peel);
+        else if (!strcmp(o, "--peel-speed")) rc = number_option(argc, argv, &i, 0, &pa->peel_speed);
+        else if (!strcmp(o, "--return-speed")) rc = number_option(argc, argv, &i, 0, &pa->return_speed);
+        else if (!strcmp(o, "--settle")) rc = number_option(argc, argv, &i, 1, &pa->settle);
+        else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
+        else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
+        else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
+        else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
+        else rest[(*rest_argc)++] = argv[i];
+    }
+    if (rc) return rc;
+    if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
+    /* the firmware counts milliseconds, nanometres and micrometres per second in 32 bits */
+    if (pa->exposure > 4e6 || pa->bottom_exposure > 4e6 || pa->settle > 4e6)
+        return complain(RC_USAGE, "exposures and settle times are limited to 4e6 s");
+    if (pa->peel > 4000 || pa->peel_speed > 4e6 || pa->return_speed > 4e6)
+        return complain(RC_USAGE, "--peel is limited to 4000 mm and speeds to 4e6 mm/s");
+    return RC_OK;
+}
+
+/* ------------------------------------------------------------ the steps */
+
+/* The printer's display decides the masks; the model is planned in printer
+   units wherever the printer can plan it too. */
+static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *s, const serial_link *l,
+                          const print_args *pa, int *planned_by_printer)
+{
+    const adaslice_plan *p;
+    uint32_t k;
+    double nm;
+    int rc;
+    s->width = (s->rotate & 1) ? l->id.height : l->id.width;
+    s->height = (s->rotate & 1) ? l->id.width : l->id.height;
+    s->pitch = l->id.pitch_nm / 1e6;
+    if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
+    if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
+    a->method = ADASLICE_METHOD_OPTIMAL;
+    a->compare = 0;
+    /* printer units wherever the printer can plan, so both plans are one */
+    a->eps_units = a->metric != ADASLICE_METRIC_VOLUME && !a->budget ? ADASLICE_PRINTER_EPS_UNITS : 0;
+    j->args = a;
+    j->keep_mesh = 1;
+    if ((rc = run_plan(a, j))) return rc;
+    p = &j->plan[ADASLICE_METHOD_OPTIMAL];
+    nm = j->profile.bin * 1e6;
+    pj->layers = (uint32_t)p->layer_count;
+    pj->bin_nm = (uint32_t)(nm + 0.5);
+    if (fabs(nm - pj->bin_nm) > 1e-6 * nm) return complain(RC_USAGE, "--bin %g mm: a printer counts whole nanometres", j->profile.bin);
+    if (!(pj->lengths = (uint32_t *)malloc(pj->layers * sizeof *pj->lengths))) return complain(RC_FAIL, "out of memory");
+    for (k = 0; k < pj->layers; k++) pj->lengths[k] = p->planes[k + 1] - p->planes[k];
+    if ((rc = layer_masks_open(&pj->masks, s, j))) return rc;
+    pj->width = (uint32_t)pj->masks.width;
+    pj->height = (uint32_t)pj->masks.height;
+    pj->bits = (uint32_t)pj->masks.bits;
+    *planned_by_printer = !pa->plan_on_host && a->eps_units && j->profile.bin_count <= l->id.max_bins &&
+                          p->bins_max <= l->id.max_layer_bins;
+    if (!*planned_by_printer && !pa->plan_on_host)
+        fprintf(stderr, "adaslice: the printer plans at most %u bins of layers up to %u bins (this part: %zu, %u%s): "
+                        "the host plans\n", l->id.max_bins, l->id.max_layer_bins, j->profile.bin_count, p->bins_max,
+                a->eps_units ? "" : ", and volume or --budget plans are the host's");
+    return RC_OK;
+}
+
+static int job_from_dir(print_job *pj, const char *dir)
+{
+    int rc = jobdir_read_masks(dir, &pj->file);
+    if (rc) return rc;
+    pj->layers = pj->file.layers;
+    pj->bin_nm = pj->file.bin_nm;
+    pj->lengths = pj->file.lengths;
+    pj->width = pj->file.width;
+    pj->height = pj->file.height;
+    pj->bits = pj->file.bits;
+    return RC_OK;
+}
+
+/* A print paused earlier is put down, the plan goes (again), and Z is homed
+   unless it is. */
+static int prepare(serial_link *l, const print_args *pa, const plan_job *j, print_job *pj, int planned_by_printer,
+                   const char *name)
+{
+    adaslice_plan_options o;
+    int rc;
+    if ((rc = serial_status(l))) return rc;
+    if (l->st.state == LINK_STATE_PRINTING || l->st.state == LINK_STATE_PAUSED) {
+        if (!pa->resume_from) return complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from", l->st.layer);
+        if ((rc = serial_send(l, LINK_MSG_ABORT, NULL, 0))) return rc;
+    }
+    if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
+    rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
+    if (rc) return rc;
+    printf("%s: %u layers, %s\n", name, pj->layers, planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
+    fflush(stdout);
+    if ((rc = serial_status(l))) return rc;
+    if (!(l->st.flags & LINK_FLAG_HOMED)) {
+        if ((rc = serial_send(l, LINK_MSG_HOME, NULL, 0)) || (rc = serial_wait(l, homed, NULL, 600000))) return rc;
+        if (!(l->st.flags & LINK_FLAG_HOMED)) return complain(RC_FAIL, "homing failed: %s", link_error_name(l->st.error));
+    }
+    return RC_OK;
+}
+
+/* Emulators end with the print; the acknowledgement may be lost with them. */
+static int end_emulator(serial_link *l)
+{
+    uint8_t code[LINK_SIZE_EXIT];
+    link_exit m = {0};
+    double asked = now_ms();
+    int rc = serial_send(l, LINK_MSG_EXIT, code, link_put_exit(code, &m));
+    while (!rc && l->count && now_ms() - asked < 1000 && !serial_pump(l, 20)) {}
+    return rc;
+}
+
+static int is_dir(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* print's own options, then the mask options, then a JOBDIR or a MODEL and
+   its plan options; -1 after --help. */
+static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, plan_args *a, const char **jobdir)
+{
+    char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), **rest2 = (char **)malloc(((size_t)argc + 4) * sizeof *rest2);
+    int rest_argc = 0, rest2_argc = 0, rc;
+    *jobdir = NULL;
+    if (!rest || !rest2) { free(rest); free(rest2); return complain(RC_FAIL, "out of memory"); }
+    rc = parse_print(argc, argv, pa, &rest_argc, rest);
+    if (!rc) rc = parse_slice(rest_argc, rest, s, &rest2_argc, rest2, 0);
+    if (!rc && s->geometry_given) rc = complain(RC_USAGE, "print: the printer reports its display; drop --printer/--pixels/--pitch/--display");
+    if (!rc && rest2_argc >= 2 && rest2[1][0] != '-' && is_dir(rest2[1])) {
+        *jobdir = rest2[1];
+        if (rest2_argc > 2) rc = complain(RC_USAGE, "print JOBDIR: %s: plan and mask options belong to adaslice slice", rest2[2]);
+    } else if (!rc) {
+        if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
+        if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
+    }
+    free(rest);
+    free(rest2);
+    return rc;
+}
+
+int cmd_print(int argc, char **argv)
+{
+    print_args pa;
+    slice_args s;
+    plan_args a;
+    plan_job j;
+    print_job pj;
+    serial_link l;
+    report_layer *rep = NULL;
+    int rc, planned_by_printer = 0;
+    unsigned long mask_bytes = 0;
+    double started;
+    const char *jobdir;
+    struct sigaction sa;
+
+    memset(&j, 0, sizeof j);
+    memset(&pj, 0, sizeof pj);
+    memset(&a, 0, sizeof a);
+    memset(&l, 0, sizeof l);
+    l.fd = -1;
+    if ((rc = parse_target(argc, argv, &pa, &s, &a, &jobdir))) return rc < 0 ? RC_OK : rc;
+    pj.from_model = !jobdir;
+    if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
+    printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
+           l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
+    fflush(stdout);
+    if (!jobdir && (rc = job_from_model(&pj, &a, &j, &s, &l, &pa, &planned_by_printer))) goto done;
+    if (pj.width != l.id.width || pj.height != l.id.height || pj.bits != l.id.bits) {
+        rc = complain(RC_FAIL, "the masks are %u x %u px, %u-bit; the printer shows %u x %u px, %u-bit", pj.width, pj.height,
+                      pj.bits, l.id.width, l.id.height, l.id.bits);
+        goto done;
+    }
+    if (pa.resume_from > pj.layers) { rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layers", pa.resume_from, pj.layers); goto done; }
+    if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    started = now_ms();
+    if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model)))) goto done;
+    rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
+    if (!rc && pa.then_exit) rc = end_emulator(&l);
+    if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
+                    pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
+                    mask_bytes, l.retransmits);
+    if (pa.report && (rc == RC_OK || rc == RC_PAUSED)) {
+        report r;
+        int wrc;
+        r.pj = &pj;
+        r.layers = rep;
+        r.l = &l;
+        r.first = pa.resume_from ? (uint32_t)pa.resume_from : 1;
+        r.seconds = (now_ms() - started) / 1000;
+        r.mask_bytes = mask_bytes;
+        r.planned_by_printer = planned_by_printer;
+        if ((wrc = write_atomic(pa.report, write_report, &r))) rc = wrc;
+    }
+done:
+    serial_close(&l);
+    print_job_free(&pj);
+    free(rep);
+    job_free(&j);
+    return rc;
+}

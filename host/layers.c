@@ -1,0 +1,221 @@
+/* The display and mask options and the layer masks: see layers.h. */
+#include "layers.h"
+#include "options.h"
+#include "report.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const SLICE_AT[] = {"bottom", "middle", "top"};
+const char *const MIRRORS[] = {"none", "x", "y", "xy"};
+const char *const ROTATIONS[] = {"0", "90", "180", "270"};
+
+void slice_options_usage(FILE *f)
+{
+    int i;
+    fputs("printer\n"
+          "  --printer NAME      a preset (below)                            [2k-5.5]\n"
+          "  --pixels WxH        pixels of the display, with --pitch\n"
+          "  --pitch MM          pixel size\n"
+          "  --display WxH       the display's size in mm, instead of --pitch\n"
+          "  --mirror M          none, x, y or xy: flip the image as the display needs [none]\n"
+          "  --rotate A          0, 90, 180 or 270: turn the image counter-clockwise for a\n"
+          "                      display mounted turned (90, 270: W and H are the image's)  [0]\n"
+          "masks\n"
+          "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
+          "                      (1: 1-bit masks)                            [1]\n"
+          "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
+          "                      first, middle or last bin)                  [middle]\n"
+          "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
+          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n", f);
+    fputs("printer presets\n", f);
+    for (i = 0; i < PRINTER_COUNT; i++)
+        fprintf(f, "  %-16s %d x %d px of %g mm: %s\n", PRINTERS[i].name, PRINTERS[i].width, PRINTERS[i].height,
+                PRINTERS[i].pitch, PRINTERS[i].about);
+}
+
+
+int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir)
+{
+    int i, rc = RC_OK;
+    memset(s, 0, sizeof *s);
+    s->supersample = 1;
+    s->slice_at = 1;
+    rest[(*rest_argc)++] = argv[0];
+    for (i = 1; i < argc && !rc; i++) {
+        const char *o = argv[i];
+        if (!strcmp(o, "-o") || !strcmp(o, "--output")) rc = file_option(argc, argv, &i, &s->dir);
+        else if (!strcmp(o, "--printer")) {
+            const char *name = NULL;
+            if (!(rc = file_option(argc, argv, &i, &name)) && !(s->preset = printer_find(name)))
+                rc = complain(RC_USAGE, "--printer %s: unknown (see adaslice slice --help for the presets)", name);
+        } else if (!strcmp(o, "--pixels")) {
+            double wh[2];
+            if (!(rc = numbers_option(argc, argv, &i, 'x', 2, "WxH, each 1 to 65536", wh))) {
+                if (wh[0] != floor(wh[0]) || wh[1] != floor(wh[1]) || wh[0] < 1 || wh[1] < 1 || wh[0] > 65536 ||
+                    wh[1] > 65536)
+                    rc = complain(RC_USAGE, "--pixels %s: expected WxH, each 1 to 65536", argv[i]);
+                s->width = (int)wh[0];
+                s->height = (int)wh[1];
+            }
+        } else if (!strcmp(o, "--pitch")) rc = number_option(argc, argv, &i, 0, &s->pitch);
+        else if (!strcmp(o, "--display")) {
+            if (!(rc = numbers_option(argc, argv, &i, 'x', 2, "WxH in mm", s->display)) &&
+                (!(s->display[0] > 0) || !(s->display[1] > 0)))
+                rc = complain(RC_USAGE, "--display %s: expected WxH in mm", argv[i]);
+        } else if (!strcmp(o, "--rotate")) rc = name_option(argc, argv, &i, ROTATIONS, 4, "0, 90, 180 or 270", &s->rotate);
+        else if (!strcmp(o, "--aa")) {
+            size_t n = 1;
+            rc = count_option(argc, argv, &i, 16, &n);
+            s->supersample = (int)n;
+        } else if (!strcmp(o, "--slice-at")) rc = name_option(argc, argv, &i, SLICE_AT, 3, "bottom, middle or top", &s->slice_at);
+        else if (!strcmp(o, "--mirror")) {
+            int m = 0;
+            rc = name_option(argc, argv, &i, MIRRORS, 4, "none, x, y or xy", &m);
+            s->mirror_x = m & 1;
+            s->mirror_y = (m >> 1) & 1;
+        } else if (!strcmp(o, "--place")) {
+            rc = numbers_option(argc, argv, &i, ',', 2, "X,Y in mm", s->place);
+            s->placed = 1;
+        } else if (!strcmp(o, "--svg")) {
+            s->svg = 1;
+        } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
+            return -1;
+        } else rest[(*rest_argc)++] = argv[i];
+    }
+    if (rc) return rc;
+    s->geometry_given = s->preset || s->width || s->pitch || s->display[0];
+    if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
+    if (s->preset && (s->width || s->pitch || s->display[0]))
+        return complain(RC_USAGE, "--printer %s and --pixels/--pitch/--display: give one or the other", s->preset->name);
+    if (s->pitch && s->display[0]) return complain(RC_USAGE, "--pitch and --display: give one or the other");
+    if (!s->preset && !s->width && !s->pitch && !s->display[0]) s->preset = &PRINTERS[0];
+    if (s->preset) {
+        s->width = s->preset->width;
+        s->height = s->preset->height;
+        s->pitch = s->preset->pitch;
+    } else if (!s->width || (!s->pitch && !s->display[0])) {
+        return complain(RC_USAGE, "--pixels WxH goes with --pitch MM or --display WxH");
+    } else if (s->display[0]) {
+        /* square pixels: the two sides must agree */
+        double px = s->display[0] / s->width, py = s->display[1] / s->height;
+        if (fabs(px - py) > 0.01 * px)
+            return complain(RC_USAGE, "--display %gx%g over %dx%d pixels: pixels of %g x %g mm are not square", s->display[0],
+                            s->display[1], s->width, s->height, px, py);
+        s->pitch = px;
+    }
+    if (s->rotate & 1) { /* the plate is the image turned a quarter */
+        int t = s->width;
+        s->width = s->height;
+        s->height = t;
+    }
+    return RC_OK;
+}
+
+
+/* The masker's image (row 0 at the lowest y) as the display shows it: PNG
+   row 0 is the top, so +y points up unless mirrored; columns flip with x;
+   then the image turns by quarter turns. out holds out_w x out_h pixels. */
+static int mask_pixel(const adaslice_masker *mk, int x, int y)
+{
+    const unsigned char *row = mk->image + (size_t)y * mk->stride;
+    return mk->supersample > 1 ? row[x] : (row[x >> 3] >> (7 - (x & 7))) & 1;
+}
+
+static void orient_image(const adaslice_masker *mk, const slice_args *s, unsigned char *out, size_t out_stride)
+{
+    int w = mk->grid.width, h = mk->grid.height, r, i;
+    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h;
+    if (!s->rotate && !s->mirror_x) { /* the common case: whole rows */
+        for (r = 0; r < h; r++) memcpy(out + (size_t)r * out_stride, mk->image + (size_t)(s->mirror_y ? r : h - 1 - r) * mk->stride, mk->stride);
+        return;
+    }
+    memset(out, 0, out_stride * (size_t)out_h);
+    for (r = 0; r < out_h; r++) {
+        unsigned char *dst = out + (size_t)r * out_stride;
+        for (i = 0; i < out_w; i++) {
+            /* (i, r) in the turned picture back to (x, y) of the upright picture, then to the grid */
+            int x, y, v;
+            switch (s->rotate) {
+            case 1: x = w - 1 - r; y = i; break;
+            case 2: x = w - 1 - i; y = h - 1 - r; break;
+            case 3: x = r; y = h - 1 - i; break;
+            default: x = i; y = r; break;
+            }
+            if (s->mirror_x) x = w - 1 - x;
+            v = mask_pixel(mk, x, s->mirror_y ? y : h - 1 - y);
+            if (mk->supersample > 1) dst[i] = (unsigned char)v;
+            else if (v) dst[i >> 3] |= (unsigned char)(0x80u >> (i & 7));
+        }
+    }
+}
+
+/* Where the grid's pixel (0, 0) lies in the model's coordinates, after
+   checking that the part fits on the plate. */
+static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_grid *g, double size[3])
+{
+    double lo[3], hi[3], plate[2], over[2];
+    int k;
+    adaslice_mesh_bounds(mesh, lo, hi);
+    plate[0] = s->width * s->pitch;
+    plate[1] = s->height * s->pitch;
+    for (k = 0; k < 3; k++) size[k] = hi[k] - lo[k];
+    for (k = 0; k < 2; k++) over[k] = fabs(s->place[k]) + size[k] / 2 - plate[k] / 2;
+    if (over[0] > 0 || over[1] > 0)
+        return complain(RC_FAIL, "the part (%g x %g mm%s) does not fit the %g x %g mm plate: %g mm too wide along %s",
+                        size[0], size[1], s->placed ? ", placed off centre" : "", plate[0], plate[1],
+                        over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
+    *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch, s->place);
+    return RC_OK;
+}
+
+/* Where layer k is sliced, mm above the part's bottom. */
+double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
+{
+    const adaslice_layer *l = &j->plan[j->args->method].layers[k];
+    if (s->slice_at == 0) return l->z_bottom + j->profile.bin / 2;
+    if (s->slice_at == 2) return l->z_top - j->profile.bin / 2;
+    return 0.5 * (l->z_bottom + l->z_top);
+}
+
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
+{
+    adaslice_mask_options mo;
+    adaslice_error err;
+    int rc;
+    memset(m, 0, sizeof *m);
+    m->s = s;
+    m->j = j;
+    if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
+    memset(&mo, 0, sizeof mo);
+    mo.supersample = s->supersample;
+    if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK)
+        return library_error(&err);
+    m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
+    m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
+    m->bits = s->supersample > 1 ? 8 : 1;
+    m->stride = m->bits == 8 ? (size_t)m->width : ((size_t)m->width + 7) / 8;
+    if (!(m->image = (unsigned char *)malloc(m->stride * (size_t)m->height))) {
+        adaslice_masker_free(&m->masker);
+        return complain(RC_FAIL, "out of memory for a %d x %d mask", m->width, m->height);
+    }
+    return RC_OK;
+}
+
+int layer_masks_render(layer_masks *m, size_t k)
+{
+    adaslice_error err;
+    if (adaslice_masker_slice(&m->masker, m->j->profile.z0 + layer_slice_height(m->s, m->j, k), &err) != ADASLICE_OK)
+        return library_error(&err);
+    orient_image(&m->masker, m->s, m->image, m->stride);
+    return RC_OK;
+}
+
+void layer_masks_close(layer_masks *m)
+{
+    adaslice_masker_free(&m->masker);
+    free(m->image);
+    m->image = NULL;
+}
+

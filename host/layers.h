@@ -1,0 +1,56 @@
+/* Layer masks as a printer's display shows them: the display and mask
+   options of the command line (slice and print), the part placed on the
+   plate, and the masker's images turned and mirrored for the display,
+   rendered bottom-up in one sweep. */
+#ifndef ADASLICE_HOST_LAYERS_H
+#define ADASLICE_HOST_LAYERS_H
+#include <stdio.h>
+#include "../adaslice.h"
+#include "plan_job.h"
+#include "printer.h"
+
+extern const char *const SLICE_AT[];   /* bottom, middle, top */
+extern const char *const MIRRORS[];    /* none, x, y, xy */
+extern const char *const ROTATIONS[];  /* 0, 90, 180, 270 */
+
+typedef struct slice_args {
+    const char *dir;
+    const printer *preset;       /* or the three below */
+    int width, height;
+    double pitch;
+    int supersample;             /* --aa S; 1: 1-bit masks */
+    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
+    int placed;                  /* --place X,Y given */
+    double place[2];             /* the part's centre, mm from the plate's centre */
+    int mirror_x, mirror_y;
+    int rotate;                  /* quarter turns of the image, counter-clockwise */
+    double display[2];           /* --display WxH in mm, or 0 */
+    int svg;                     /* also the contours of each layer as SVG */
+    int geometry_given;          /* --printer, --pixels, --pitch or --display */
+} slice_args;
+
+/* Takes the slice options out of argv; what is left (argv[0] first) goes to
+   parse_plan. need_dir: -o JOBDIR is required. -1 for --help (the caller
+   prints its usage). */
+int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir);
+void slice_options_usage(FILE *f);
+
+typedef struct layer_masks {
+    const slice_args *s;
+    const plan_job *j;
+    adaslice_masker masker;
+    adaslice_grid grid;
+    unsigned char *image;          /* width x height, rows of `stride` bytes */
+    size_t stride;
+    int width, height, bits;
+    double part[3];                /* the part's size, mm */
+} layer_masks;
+/* Places the part on the plate (a complaint if it does not fit) and sets up
+   the masker. */
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
+/* Layer k's (0-based; k never decreasing) mask into m->image. */
+int layer_masks_render(layer_masks *m, size_t k);
+/* Where layer k is sliced, mm above the part's bottom. */
+double layer_slice_height(const slice_args *s, const plan_job *j, size_t k);
+void layer_masks_close(layer_masks *m);
+#endif

@@ -1,0 +1,87 @@
+/* Command-line values: see options.h. */
+#include "options.h"
+#include "report.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The value after option argv[*i]; NULL, said so, if there is none. */
+static const char *value_of(int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc || !strncmp(argv[*i + 1], "--", 2)) {
+        complain(RC_USAGE, "option %s needs a value", argv[*i]);
+        return NULL;
+    }
+    return argv[++*i];
+}
+
+int file_option(int argc, char **argv, int *i, const char **out)
+{
+    *out = value_of(argc, argv, i);
+    return *out ? RC_OK : RC_USAGE;
+}
+
+int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    char *end;
+    double d;
+    if (!v) return RC_USAGE;
+    d = strtod(v, &end);
+    if (end == v || *end || !isfinite(d) || d < 0 || (d == 0 && !zero_ok))
+        return complain(RC_USAGE, "%s %s: not a %s finite number", opt, v, zero_ok ? "non-negative" : "positive");
+    *out = d;
+    return RC_OK;
+}
+
+int count_option(int argc, char **argv, int *i, size_t max, size_t *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    char *end;
+    unsigned long long n;
+    if (!v) return RC_USAGE;
+    errno = 0;
+    n = strtoull(v, &end, 10);
+    if (*v < '0' || *v > '9' || *end || errno == ERANGE || n == 0 || n > max)
+        return complain(RC_USAGE, "%s %s: not a whole number from 1 to %zu", opt, v, max);
+    *out = (size_t)n;
+    return RC_OK;
+}
+
+int name_option(int argc, char **argv, int *i, const char *const *names, int count, const char *choices, int *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    int k;
+    if (!v) return RC_USAGE;
+    for (k = 0; k < count; k++)
+        if (!strcmp(v, names[k])) {
+            *out = k;
+            return RC_OK;
+        }
+    return complain(RC_USAGE, "%s %s: unknown, expected %s", opt, v, choices);
+}
+
+int parse_numbers(const char *text, char sep, int n, double *out)
+{
+    const char *p = text;
+    int k;
+    for (k = 0; k < n; k++) {
+        char *end;
+        if (*p == ' ' || *p == '\t') return 0; /* strtod would skip it */
+        out[k] = strtod(p, &end);
+        if (end == p || !isfinite(out[k]) || *end != (k + 1 < n ? sep : '\0')) return 0;
+        p = end + 1;
+    }
+    return 1;
+}
+
+int numbers_option(int argc, char **argv, int *i, char sep, int n, const char *form, double *out)
+{
+    const char *opt = argv[*i], *v = value_of(argc, argv, i);
+    if (!v) return RC_USAGE;
+    if (!parse_numbers(v, sep, n, out)) return complain(RC_USAGE, "%s %s: expected %s", opt, v, form);
+    return RC_OK;
+}

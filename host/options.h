@@ -1,0 +1,22 @@
+/* The command line's values, read one way for every command: each parser
+   takes the value after argv[*i] (moving *i past it), checks it, and on a bad
+   or missing value complains in one line naming the option and returns
+   RC_USAGE. */
+#ifndef ADASLICE_HOST_OPTIONS_H
+#define ADASLICE_HOST_OPTIONS_H
+#include <stddef.h>
+
+/* Any text (a path), not starting with "--". */
+int file_option(int argc, char **argv, int *i, const char **out);
+/* A finite number > 0, or >= 0 when zero_ok. */
+int number_option(int argc, char **argv, int *i, int zero_ok, double *out);
+/* A whole number from 1 to max. */
+int count_option(int argc, char **argv, int *i, size_t max, size_t *out);
+/* One of `count` names; `choices` lists them for the message. */
+int name_option(int argc, char **argv, int *i, const char *const *names, int count, const char *choices, int *out);
+/* Exactly n finite numbers separated by `sep` ("2560x1440" with 'x',
+   "1,2,3" with ','); `form` shows the expected form in the message. */
+int numbers_option(int argc, char **argv, int *i, char sep, int n, const char *form, double *out);
+/* The same test without an option around it: 1 if text is n numbers. */
+int parse_numbers(const char *text, char sep, int n, double *out);
+#endif

@@ -1,0 +1,70 @@
+/* What plan, slice, print and orient share: the plan options of the command
+   line and the job they run (load, weight, turn and profile the model, or read
+   a profile; then plan), with its outputs (plan.csv, profile.csv, plot.svg). */
+#ifndef ADASLICE_HOST_PLAN_JOB_H
+#define ADASLICE_HOST_PLAN_JOB_H
+#include <stdio.h>
+#include "../adaslice.h"
+#include "weights.h"
+
+enum { METRIC_COUNT = 4, METHOD_COUNT = 5, MAPPING_COUNT = 3 };
+
+extern const char *const METRIC_NAMES[];  /* by adaslice_metric */
+extern const char *const METHOD_NAMES[];  /* by adaslice_method */
+extern const char *const SAMPLER_NAMES[];
+extern const char *const MAPPING_NAMES[]; /* by adaslice_mapping */
+typedef struct metric_info { const char *label, *phi_axis, *eps_unit; } metric_info;
+extern const metric_info METRICS[METRIC_COUNT];
+
+enum { ORIENT_NONE = 0, ORIENT_GIVEN, ORIENT_BEST };
+
+typedef struct plan_args {
+    const char *model, *profile;   /* exactly one is set */
+    adaslice_metric metric;
+    adaslice_method method;
+    double bin, eps, tmin, tmax;
+    double scale;                  /* 0: not given */
+    double sharp;                  /* 0: pre-pass off */
+    size_t budget;                 /* 0: none */
+    uint32_t eps_units;            /* printer units for the optimal plan (print), 0: fine */
+    int sampler;                   /* 0: exact, 1: LDI */
+    size_t resolution;             /* LDI pixels across the largest extent */
+    int orient;                    /* ORIENT_*: --orient X,Y,Z or best */
+    double orient_up[3];           /* ORIENT_GIVEN: the direction to turn up */
+    const char *out, *profile_out, *plot;
+    int json, compare, help;
+    int mapping;                   /* --mapping, an adaslice_mapping (--method curvature) */
+    weight_args weights;           /* --saliency, --weights, --weight (model only) */
+} plan_args;
+
+typedef struct plan_job {
+    const plan_args *args;
+    size_t triangles, degenerate;  /* model only */
+    adaslice_format format;
+    adaslice_profile profile;
+    int profiled;                  /* profile came from the library and needs freeing */
+    int keep_mesh;                 /* keep the model loaded (slice needs it) */
+    adaslice_mesh mesh;
+    double up[3];                  /* --orient: the direction turned up; else 0, 0, 1 */
+    adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all of them with --compare */
+    adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
+    int planned[METHOD_COUNT];
+    double *kappa;                 /* curvature per bin, for the curvature method (model only) */
+    double ms_load, ms_profile, ms_plan;
+} plan_job;
+
+/* The plan options of `plan` (argv[0] is the command's name); RC_OK or a
+   complaint made. */
+int parse_plan(int argc, char **argv, plan_args *a);
+void plan_options_usage(FILE *f);
+/* The library's plan options for method m from the command line's. */
+void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_options *o);
+/* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */
+int run_plan(const plan_args *a, plan_job *j);
+int write_outputs(const plan_args *a, const plan_job *j);
+/* The build-direction search (search.h) with these plan options: orient and
+   --orient best. */
+int plan_orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t count, double alpha,
+                       adaslice_direction_score **scores, size_t *minima, size_t *minima_count);
+void job_free(plan_job *j);
+#endif

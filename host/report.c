@@ -1,0 +1,49 @@
+/* The tool's messages: see report.h. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#endif
+#include "report.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <time.h>
+#include <unistd.h>
+
+int complain(int rc, const char *fmt, ...)
+{
+    va_list ap;
+    fputs("adaslice: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return rc;
+}
+
+/* A parameter the library rejects came from the command line, hence exit 2. */
+int library_error(const adaslice_error *e)
+{
+    return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s", e->message);
+}
+
+double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+void progress_show(progress *p, size_t done, size_t total, const char *what, const char *detail)
+{
+    double t = now_ms(), eta;
+    int filled, i;
+    if (!p->started) p->started = t;
+    if (!isatty(2) || (done < total && t - p->last < 100)) return;
+    p->last = t;
+    filled = total ? (int)(30.0 * (double)done / (double)total) : 30;
+    eta = done ? (t - p->started) * (double)(total - done) / (double)done / 1000 : 0;
+    fputs("\r[", stderr);
+    for (i = 0; i < 30; i++) fputc(i < filled ? '#' : ' ', stderr);
+    fprintf(stderr, "] %zu/%zu %s, %s%s%.1f s left ", done, total, what, detail ? detail : "", detail ? ", " : "", eta);
+    if (done == total) fputc('\n', stderr);
+}

@@ -1,0 +1,23 @@
+/* How the adaslice tool reports: exit codes, one-line complaints on stderr,
+   the library's messages, and a progress bar on a terminal. */
+#ifndef ADASLICE_HOST_REPORT_H
+#define ADASLICE_HOST_REPORT_H
+#include <stddef.h>
+#include "../adaslice.h"
+
+/* 0 done; 1 the work failed; 2 the command line is wrong; 3 a print paused */
+enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3 };
+
+/* "adaslice: " + the message on stderr; returns rc. */
+int complain(int rc, const char *fmt, ...);
+/* The library's message; exit 2 for an argument it rejects, else 1. */
+int library_error(const adaslice_error *e);
+/* A monotonic clock, ms. */
+double now_ms(void);
+
+/* A bar on stderr while it is a terminal, nothing otherwise:
+   "[####    ] 12/367 layers, <detail>, 3.1 s left", redrawn at most every
+   100 ms and always at the end. Zero it before the first call. */
+typedef struct progress { double started, last; } progress;
+void progress_show(progress *p, size_t done, size_t total, const char *what, const char *detail);
+#endif

@@ -1,0 +1,166 @@
+/* The build-direction search on all of the host's cores: see search.h. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "search.h"
+#include "report.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+typedef struct search {
+    const adaslice_orienter *o;
+    adaslice_direction_score *scores;
+    const double *dirs;
+    size_t count, next, done;    /* next direction to take, directions finished */
+    pthread_mutex_t lock;
+    adaslice_error err;
+    int failed;
+    progress bar;
+} search;
+
+/* Each direction allocates and frees the same large arrays: a worker keeps
+   its freed blocks for the next direction, since returning them to the system
+   (munmap) and faulting them back in serialises the threads in the kernel. */
+typedef struct block_cache {
+    void *block[8];
+    size_t size[8];
+} block_cache;
+
+typedef union block_head { size_t size; double align_d; void *align_p; } block_head;
+
+static void *cache_alloc(void *user, size_t size)
+{
+    block_cache *c = (block_cache *)user;
+    int i, best = -1;
+    block_head *h;
+    for (i = 0; i < 8; i++)
+        if (c->block[i] && c->size[i] >= size && (best < 0 || c->size[i] < c->size[best])) best = i;
+    if (best >= 0) {
+        void *p = c->block[best];
+        c->block[best] = NULL;
+        return p;
+    }
+    h = (block_head *)malloc(sizeof *h + size);
+    if (!h) return NULL;
+    h->size = size;
+    return h + 1;
+}
+
+static void cache_free(void *user, void *p)
+{
+    block_cache *c = (block_cache *)user;
+    block_head *h = (block_head *)p - 1;
+    int i, smallest = 0;
+    for (i = 0; i < 8; i++) {
+        if (!c->block[i]) { c->block[i] = p; c->size[i] = h->size; return; }
+        if (c->size[i] < c->size[smallest]) smallest = i;
+    }
+    if (c->size[smallest] < h->size) { /* keep the larger block */
+        free((block_head *)c->block[smallest] - 1);
+        c->block[smallest] = p;
+        c->size[smallest] = h->size;
+        return;
+    }
+    free(h);
+}
+
+static void cache_clear(block_cache *c)
+{
+    int i;
+    for (i = 0; i < 8; i++)
+        if (c->block[i]) free((block_head *)c->block[i] - 1);
+}
+
+/* Workers take directions in small batches until none are left. */
+static void *search_worker(void *arg)
+{
+    search *s = (search *)arg;
+    block_cache cache;
+    adaslice_allocator al;
+    adaslice_orienter mine = *s->o; /* the same options, this worker's allocator */
+    memset(&cache, 0, sizeof cache);
+    al.alloc = cache_alloc;
+    al.free = cache_free;
+    al.user = &cache;
+    mine.allocator = al;
+    mine.profile.allocator = &al;
+    mine.plan.allocator = &al;
+    for (;;) {
+        size_t first, end, i;
+        pthread_mutex_lock(&s->lock);
+        first = s->next;
+        end = s->failed ? first : (first + 8 < s->count ? first + 8 : s->count);
+        s->next = end;
+        pthread_mutex_unlock(&s->lock);
+        if (first == end) break;
+        for (i = first; i < end; i++) {
+            adaslice_error e;
+            if (adaslice_orienter_score(&mine, s->dirs + 3 * i, &s->scores[i], &e) != ADASLICE_OK) {
+                pthread_mutex_lock(&s->lock);
+                if (!s->failed) { s->failed = 1; s->err = e; }
+                s->next = s->count;
+                pthread_mutex_unlock(&s->lock);
+                break;
+            }
+        }
+        pthread_mutex_lock(&s->lock);
+        s->done += end - first;
+        progress_show(&s->bar, s->done, s->count, "directions", NULL);
+        pthread_mutex_unlock(&s->lock);
+    }
+    cache_clear(&cache);
+    return NULL;
+}
+
+/* Scores `count` lattice directions on all the host's cores; the minima come
+   best first. Returns RC_OK or a complaint made. */
+int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
+                  size_t count, double alpha, adaslice_direction_score **scores, size_t *minima, size_t *minima_count)
+{
+    adaslice_orienter o;
+    adaslice_error e;
+    pthread_t threads[16];
+    search s;
+    double *dirs;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int n_threads = cores < 1 ? 1 : cores > 16 ? 16 : (int)cores, t, started = 0;
+
+    if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error(&e);
+    memset(&s, 0, sizeof s);
+    dirs = (double *)malloc(3 * count * sizeof *dirs);
+    *scores = (adaslice_direction_score *)calloc(count, sizeof **scores);
+    if (!dirs || !*scores) {
+        free(dirs);
+        free(*scores);
+        *scores = NULL;
+        return complain(RC_FAIL, "out of memory for %zu directions", count);
+    }
+    adaslice_fibonacci_directions(count, dirs);
+    s.o = &o;
+    s.scores = *scores;
+    s.dirs = dirs;
+    s.count = count;
+    pthread_mutex_init(&s.lock, NULL);
+    for (t = 0; t < n_threads; t++)
+        if (pthread_create(&threads[t], NULL, search_worker, &s) == 0) started++;
+    if (!started) search_worker(&s); /* no threads to be had: do it here */
+    for (t = 0; t < started; t++) pthread_join(threads[t], NULL);
+    pthread_mutex_destroy(&s.lock);
+    free(dirs);
+    adaslice_orienter_free(&o);
+    if (s.failed) {
+        free(*scores);
+        *scores = NULL;
+        return library_error(&s.err);
+    }
+    adaslice_orient_scores(*scores, count, alpha);
+    /* neighbours: within 2.5 lattice spacings (the lattice's cells cover 4 pi / n) */
+    *minima_count = adaslice_orient_minima(*scores, count, 2.5 * sqrt(4 * 3.14159265358979 / (double)count), minima,
+                                           SEARCH_MINIMA + 1);
+    return RC_OK;
+}
+
