@@ -8,6 +8,7 @@
 #include <string.h>
 #include "../host/png.h"
 #include <stdio.h>
+#include "models.h"
 #include "timing.h"
 #include <stdlib.h>
 #include <string.h>
@@ -264,15 +265,7 @@ int main(int argc, char **argv)
     adaslice_profile_free(&p);
     adaslice_mesh_free(&hand);
 
-    {
-        static const char *sampled[] = {"counter.unitsmm.STL", "turbineblade.ply", "dragon_vrip_res2.ply", "lucy.ply",
-                                         "armadillo.obj", "stanford-bunny.obj", "hand_closed.obj",
-                                         "cprc_nyu_n0300_ULM3_WS_EDJ_GEO.ply", "geometry_bracelet_ring_1-70mmID_8mmT_40mmW_3x20deg_360deg_31scale.stl",
-                                         "teapot.obj", "conrod.stl", "Spider_ascii.stl"};
-        /* scans in metres or normalised units, scaled to tens of mm like the paper's parts */
-        static const double scale[] = {1, 1, 300, 0.05, 60, 300, 88.7, 5, 1, 10, 10, 10};
-        for (j = 0; j < sizeof sampled / sizeof *sampled; j++) bench_sampled(models, sampled[j], scale[j]);
-    }
+    for (j = 0; j < BENCH_MODEL_COUNT; j++) bench_sampled(models, BENCH_MODELS[j].name, BENCH_MODELS[j].scale);
     bench_masks(models, 1);
     bench_masks(models, 4);
     {

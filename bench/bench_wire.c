@@ -35,6 +35,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "models.h"
 #include "timing.h"
 #include <dirent.h>
 #include <stdio.h>
@@ -69,22 +70,6 @@ static double move_time(double d, double v, double a)
 {
     if (d >= v * v / a) return d / v + v / a;
     return 2.0 * sqrt(d / a);
-}
-
-/* bench/bench.c's scales for the shared models (bench_sampled): scans in
-   metres or normalised units brought to tens of mm. */
-static double model_scale(const char *name)
-{
-    static const struct { const char *name; double scale; } known[] = {
-        {"counter.unitsmm.STL", 1}, {"turbineblade.ply", 1}, {"dragon_vrip_res2.ply", 300}, {"lucy.ply", 0.05},
-        {"armadillo.obj", 60}, {"stanford-bunny.obj", 300}, {"hand_closed.obj", 88.7},
-        {"cprc_nyu_n0300_ULM3_WS_EDJ_GEO.ply", 5},
-        {"geometry_bracelet_ring_1-70mmID_8mmT_40mmW_3x20deg_360deg_31scale.stl", 1}, {"teapot.obj", 10},
-        {"conrod.stl", 10}, {"Spider_ascii.stl", 10}};
-    size_t i;
-    for (i = 0; i < sizeof known / sizeof known[0]; i++)
-        if (!strcmp(known[i].name, name)) return known[i].scale;
-    return 1;
 }
 
 static int is_model(const char *name)
@@ -150,7 +135,7 @@ static void bench_model(const char *dir, const char *name, row *r)
     memset(r, 0, sizeof *r);
     snprintf(r->name, sizeof r->name, "%.27s", name);
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    r->scale = model_scale(name);
+    r->scale = bench_model_scale(name);
     if (!load_scaled(path, r->scale, &m, &e)) fail(name, "load", &e);
     adaslice_mesh_bounds(&m, lo, hi);
     fit = 1;

@@ -310,21 +310,29 @@ static uint32_t be32(const unsigned char *p)
 
 /* The file's layout: signature, IHDR, IDAT with a zlib header, IEND, every
    chunk's CRC; and the padding past the width and the stride do not matter. */
+/* A 13 x 5 1-bit image, clean and with garbage in its row padding. */
+static void layout_images(batch *b, image **clean, image **padded)
+{
+    *clean = add(b, "clean", 13, 5, 1, 0);
+    *padded = add(b, "padded", 13, 5, 1, 3);
+    for (int y = 0; y < 5; y++)
+        for (int x = 0; x < 13; x++) {
+            int v = (x * y + x) % 3 ? 255 : 0;
+            set_pixel(*clean, x, y, v);
+            set_pixel(*padded, x, y, v);
+        }
+    for (int y = 0; y < 5; y++) (*clean)->pixels[y * (*clean)->stride + 1] &= 0xF8; /* zero padding bits */
+}
+
 static void chunks_are_laid_out_as_the_specification_says(void)
 {
     static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
     batch b = {0};
-    image *clean = add(&b, "clean", 13, 5, 1, 0), *padded = add(&b, "padded", 13, 5, 1, 3);
+    image *clean, *padded;
     unsigned char *png = NULL, *png2 = NULL;
     size_t size = 0, size2 = 0, pos = 8;
-    int chunks = 0;
-    for (int y = 0; y < 5; y++)
-        for (int x = 0; x < 13; x++) {
-            int v = (x * y + x) % 3 ? 255 : 0;
-            set_pixel(clean, x, y, v);
-            set_pixel(padded, x, y, v);
-        }
-    for (int y = 0; y < 5; y++) clean->pixels[y * clean->stride + 1] &= 0xF8; /* zero padding bits */
+    int chunks = 0, i;
+    layout_images(&b, &clean, &padded);
     CHECK(png_encode_gray(clean->pixels, 13, 5, clean->stride, 1, &png, &size) == 0);
     CHECK(png_encode_gray(padded->pixels, 13, 5, padded->stride, 1, &png2, &size2) == 0);
     CHECK(png && png2 && size == size2 && !memcmp(png, png2, size));
@@ -346,6 +354,15 @@ static void chunks_are_laid_out_as_the_specification_says(void)
     CHECK(chunks == 3);
     free(png);
     free(png2);
+    for (i = 0; i < b.count; i++) free(b.im[i].pixels);
+}
+
+/* The same two images, decoded by OpenImageIO. */
+static void laid_out_images_decode_in_oiiotool(void)
+{
+    batch b = {0};
+    image *clean, *padded;
+    layout_images(&b, &clean, &padded);
     round_trip(&b);
 }
 
@@ -553,6 +570,7 @@ void test_png(void)
     RUN(crc32_and_adler32_match_their_definitions);
     RUN(bad_arguments_are_refused);
     RUN(chunks_are_laid_out_as_the_specification_says);
+    RUN_NEEDING("oiiotool", laid_out_images_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", small_and_odd_images_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", masks_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", patterns_decode_in_oiiotool);
