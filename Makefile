@@ -167,7 +167,7 @@ $(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_wire: $(call objs,bench,bench/bench_wire.c) $(BENCH_LIB)
+$(B)/bench_wire: $(call objs,bench,bench/bench_wire.c $(LINK_SRC)) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm

@@ -35,6 +35,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "../link/frame.h"
+#include "../link/messages.h"
 #include "models.h"
 #include "timing.h"
 #include <dirent.h>
@@ -48,11 +50,11 @@
 #define MARGIN 0.95              /* parts fill at most this share of the plate */
 #define STRIDE ((PX_W + 7) / 8)  /* 320 bytes per 1-bit row */
 #define RAW ((size_t)STRIDE * PX_H)
-#define PAYLOAD_MAX 249
-#define FRAME_OVERHEAD 6
-#define MASK_FRAME (12 + FRAME_OVERHEAD)
-#define PROFILE_FRAME (14 + FRAME_OVERHEAD)
-#define PLAN_SET_FRAME (8 + FRAME_OVERHEAD)
+#define PAYLOAD_MAX LINK_PAYLOAD_MAX
+#define FRAME_OVERHEAD LINK_FRAME_MIN
+#define MASK_FRAME (LINK_SIZE_MASK + FRAME_OVERHEAD)
+#define PROFILE_FRAME (LINK_SIZE_PROFILE + FRAME_OVERHEAD)
+#define PLAN_SET_FRAME (LINK_SIZE_PLAN_SET + FRAME_OVERHEAD)
 #define BYTES_PER_S (115200.0 / 10.0)
 #define MCU_MAX_BINS 12000u
 
@@ -130,7 +132,7 @@ static void bench_model(const char *dir, const char *name, row *r)
     double lo[3], hi[3], fit, *code_sizes, *wire;
     unsigned char *top, *copy, *code, *forced, row_buf[STRIDE];
     uint32_t *units;
-    size_t k, cap = adaslice_rle_bound(PX_W, PX_H, 1), best = 0, used, frames, i;
+    size_t k, cap = adaslice_rle_bound(PX_W, PX_H, 1), best = 0, frames, i;
 
     memset(r, 0, sizeof *r);
     snprintf(r->name, sizeof r->name, "%.27s", name);
@@ -164,16 +166,15 @@ static void bench_model(const char *dir, const char *name, row *r)
     forced = (unsigned char *)malloc(p.bin_count);
     if (!units || !forced) fail(name, "out of memory", NULL);
     if (adaslice_plan_units(&p, &o, units, forced, &e) != ADASLICE_OK) fail(name, "plan units", &e);
-    used = frames = 0;
-    for (i = 0; i < p.bin_count; i++) {
-        uint32_t v = units[i] << 1 | (forced[i] ? 1u : 0u);
-        size_t n = 1;
-        while (v >= 0x80u) { n++; v >>= 7; }
-        if (used + 5 > PAYLOAD_MAX) { frames++; used = 0; }
-        used += n;
-        r->varint_bytes += n;
+    frames = 0;
+    {
+        uint8_t payload[LINK_PAYLOAD_MAX];
+        uint32_t at = 0;
+        while (at < p.bin_count) {
+            r->varint_bytes += link_profile_chunk(payload, LINK_PAYLOAD_MAX, units, forced, (uint32_t)p.bin_count, &at);
+            frames++;
+        }
     }
-    if (used) frames++;
     r->profile_wire = PROFILE_FRAME + (double)r->varint_bytes + FRAME_OVERHEAD * (double)frames;
     r->plan_wire = PLAN_SET_FRAME + (double)r->layers + FRAME_OVERHEAD * (double)((r->layers + PAYLOAD_MAX - 1) / PAYLOAD_MAX);
     free(units);
