@@ -42,6 +42,7 @@ FW_SRC    = firmware/core.c firmware/motion.c firmware/gcode.c $(LINK_SRC)
 # The one list of test groups: tests/test_NAME.c defines test_NAME().
 TESTS     = $(sort $(wildcard tests/test_*.c))
 TEST_SRC  = tests/run.c $(TESTS) host/png.c $(FW_SRC) $(LIB_SRC)
+TEST_SRC += tests/job_readers.c $(filter-out host/main.c,$(HOST_SRC))
 
 # Objects, built once per configuration: build/rel (the tool, CFLAGS),
 # build/san (the tests, ASan + UBSan), build/bench (BENCH_CFLAGS).
@@ -156,14 +157,14 @@ fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
 $(B)/check_models: $(call objs,san,tests/check_models.c $(FW_SRC) $(LIB_SRC))
 	$(CC) $(SAN) $^ -o $@ -lm
 
-check-models: $(B)/check_models
-	$(B)/check_models $(MODELS)
+check-models: $(B)/check_models $(B)/adaslice
+	ADASLICE_BIN=$(B)/adaslice $(B)/check_models $(MODELS)
 
 # ---- make bench -----------------------------------------------------------
 BENCH_LIB = $(call objs,bench,$(LIB_SRC))
-$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c) $(BENCH_LIB)
+$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c host/deflate.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c) $(BENCH_LIB)
+$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c host/deflate.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm

@@ -72,10 +72,13 @@
        adaslice_contours_winding        winding number of a point at one height
        adaslice_contours_distance       distance to the nearest edge at one height
        adaslice_contours_free
-     job output (adaslice_mcu.h)
-       adaslice_crc32                   CRC-32 as zlib and PNG
-       adaslice_varint_put/_push        LEB128 varints
-       adaslice_rle_encode, adaslice_rle_decode ...   the mask run-length code
+     job output
+       adaslice_cure_fit                the resin's working curve through two points
+       adaslice_cure_seconds            a layer's exposure for its thickness
+       adaslice_preview                 a shaded picture of the part for a job's preview
+       adaslice_crc32                   CRC-32 as zlib and PNG (adaslice_mcu.h)
+       adaslice_varint_put/_push        LEB128 varints (adaslice_mcu.h)
+       adaslice_rle_encode, adaslice_rle_decode ...   the mask run-length code (adaslice_mcu.h)
 
    CONVENTIONS  Every options struct may be NULL or zero-initialised: zero
    means the documented default (the paper's: cusp height, b = 0.002 mm,
@@ -232,8 +235,14 @@
    is the exact nonzero-rule winding number of a point (open polylines closed
    by their chord).
 
-   JOB OUTPUT  What a job carries to a printer lives in adaslice_mcu.h, which
-   the printer compiles too: CRC-32, varints and the mask run-length code.
+   JOB OUTPUT  A layer of thickness t needs the dose that cures t: Jacobs'
+   working curve, cure depth Cd = Dp ln(E / Ec), gives E(t) = S exp((t - T) /
+   Dp) from one calibrated point (S seconds cure T mm) and the resin's
+   penetration depth Dp, or Dp from two points (adaslice_cure_fit).
+   adaslice_preview draws the part for a job's previews from an LDI along the
+   view, no graphics library. What travels to a printer's MCU lives in
+   adaslice_mcu.h, which the printer compiles too: CRC-32, varints and the
+   mask run-length code.
 
    OPTIONS (define before including the implementation)
      ADASLICE_IMPLEMENTATION  the implementation, in one file (adaslice_mcu.h's
@@ -365,15 +374,16 @@ ADASLICE_DEF void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9]);
 /* =============================================================== sampling */
 
 /* A grid of parallel rays along +x, +y or +z. Pixel (i, j) has its centre at
-   (origin[0] + (i + 0.5) pitch, origin[1] + (j + 0.5) pitch) in the plane's
-   coordinates (u, v): (y, z) for rays along x, (z, x) along y, (x, y) along z
-   (a cyclic order, so u x v = the ray direction). */
+   (origin[0] + (i + 0.5) pitch[0], origin[1] + (j + 0.5) pitch[1]) in the
+   plane's coordinates (u, v): (y, z) for rays along x, (z, x) along y, (x, y)
+   along z (a cyclic order, so u x v = the ray direction). Pixels need not be
+   square: many printers' panels are not (19 x 24 um). */
 typedef enum adaslice_axis { ADASLICE_AXIS_X = 0, ADASLICE_AXIS_Y, ADASLICE_AXIS_Z } adaslice_axis;
 
 typedef struct adaslice_grid {
     adaslice_axis axis;
     double origin[2];   /* mm */
-    double pitch;       /* mm per pixel */
+    double pitch[2];    /* mm per pixel along u and along v */
     int width, height;  /* pixels, at most 2^21 each */
 } adaslice_grid;
 
@@ -660,11 +670,11 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
 
 /* ===================================================== masks and contours */
 
-/* A printer's plate as a grid of z rays: width x height pixels of `pitch` mm,
-   placed so that the centre of the mesh's box lies `offset` mm from the
-   plate's centre. */
-ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch,
-                                               const double offset[2]);
+/* A printer's plate as a grid of z rays: width x height pixels of pitch_x x
+   pitch_y mm, placed so that the centre of the mesh's box lies `offset` mm
+   from the plate's centre. */
+ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch_x,
+                                               double pitch_y, const double offset[2]);
 
 typedef struct adaslice_mask_options {
     int supersample;                     /* s; 0 or 1: 1-bit masks, else 8-bit from s x s
@@ -756,6 +766,41 @@ ADASLICE_DEF void adaslice_contours_free(adaslice_contours *contours);
 
 /* ============================================================= job output */
 /* CRC-32, varints and the mask run-length code: adaslice_mcu.h. */
+
+/* Jacobs' working curve: a resin cures to the depth Cd = Dp ln(E / Ec) under
+   a dose E, so a layer of thickness t needs E(t) = Ec exp(t / Dp). Calibrated
+   at one point (S seconds cure a layer of T mm), E(t) = S exp((t - T) / Dp). */
+typedef struct adaslice_cure {
+    double seconds;     /* S, the exposure that cures a layer of `thickness` */
+    double thickness;   /* T, mm */
+    double penetration; /* Dp, the resin's penetration depth, mm; 0: one exposure,
+                           S, for every thickness */
+} adaslice_cure;
+
+/* The curve through two calibrated points (s1 seconds cure t1 mm, s2 cure t2):
+   Dp = (t2 - t1) / ln(s2 / s1), the first point kept as S@T. The points must
+   be positive and the thicker layer need the longer exposure. */
+ADASLICE_DEF adaslice_result adaslice_cure_fit(double s1, double t1, double s2, double t2, adaslice_cure *cure,
+                                               adaslice_error *error);
+/* The exposure of a layer `thickness` mm thick, s. */
+ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *cure, double thickness);
+
+typedef struct adaslice_preview_options {
+    double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 35 and 45 */
+    unsigned char colour[3];             /* the part's; 0, 0, 0: a resin grey-blue */
+    unsigned char background[3];         /* 0, 0, 0: black */
+    const adaslice_allocator *allocator; /* NULL: default */
+} adaslice_preview_options;
+
+/* A shaded picture of the part for a job's preview: width x height pixels,
+   3 bytes (R, G, B) each, rows top first. The mesh is turned so the viewer
+   looks down at it (elevation above the plate, azimuth from +x towards +y),
+   rasterised into an LDI along the view at the picture's pixels (the part
+   fitted with a margin, pixels square), and each pixel takes the nearest
+   surface's normal, lit from the viewer's upper left. */
+ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
+                                              const adaslice_preview_options *options, unsigned char *rgb,
+                                              adaslice_error *error);
 
 #ifdef __cplusplus
 }
@@ -2227,8 +2272,8 @@ static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_m
     adaslice__span s;
     for (k = 0; k < 3; k++) {
         adaslice__project(g->axis, m->vertices + 3 * (size_t)m->triangles[3 * (size_t)t + k], P[k]);
-        U[k] = (P[k][0] - g->origin[0]) / g->pitch;
-        V[k] = (P[k][1] - g->origin[1]) / g->pitch;
+        U[k] = (P[k][0] - g->origin[0]) / g->pitch[0];
+        V[k] = (P[k][1] - g->origin[1]) / g->pitch[1];
         D[k] = P[k][2] - r->depth_origin;
         if (!(fabs(U[k]) < ADASLICE__GRID_LIMIT && fabs(V[k]) < ADASLICE__GRID_LIMIT)) return 1;
         X[k] = (int64_t)floor(U[k] * ADASLICE__SUBPIXEL + 0.5);
@@ -2387,11 +2432,12 @@ static adaslice_result adaslice__ldi_band(const adaslice_mesh *m, adaslice_ldi *
 static adaslice_result adaslice__grid_check(const adaslice_grid *g, adaslice_error *err)
 {
     if (!g || (unsigned)g->axis > ADASLICE_AXIS_Z || g->width < 1 || g->height < 1 ||
-        g->width > (int)ADASLICE__GRID_LIMIT || g->height > (int)ADASLICE__GRID_LIMIT || !(g->pitch > 0) ||
-        g->pitch > DBL_MAX || !(fabs(g->origin[0]) < DBL_MAX) || !(fabs(g->origin[1]) < DBL_MAX))
+        g->width > (int)ADASLICE__GRID_LIMIT || g->height > (int)ADASLICE__GRID_LIMIT || !(g->pitch[0] > 0) ||
+        g->pitch[0] > DBL_MAX || !(g->pitch[1] > 0) || g->pitch[1] > DBL_MAX || !(fabs(g->origin[0]) < DBL_MAX) ||
+        !(fabs(g->origin[1]) < DBL_MAX))
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
-                              "LDI: grid %d x %d pixels of %g mm is not valid (1 to 2^21 pixels a side)",
-                              g ? g->width : 0, g ? g->height : 0, g ? g->pitch : 0.0);
+                              "LDI: grid %d x %d pixels of %g x %g mm is not valid (1 to 2^21 pixels a side)",
+                              g ? g->width : 0, g ? g->height : 0, g ? g->pitch[0] : 0.0, g ? g->pitch[1] : 0.0);
     return ADASLICE_OK;
 }
 
@@ -2445,12 +2491,12 @@ ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice
     if (resolution < 1) resolution = 1;
     memset(&g, 0, sizeof g);
     g.axis = axis;
-    g.pitch = extent > 0 ? extent / resolution : 1;
+    g.pitch[0] = g.pitch[1] = extent > 0 ? extent / resolution : 1;
     g.origin[0] = lo[a];
     g.origin[1] = lo[(a + 1) % 3];
     /* one pixel more than the extent needs, so the far faces' centres are inside */
-    g.width = (int)ceil((hi[a] - lo[a]) / g.pitch) + 1;
-    g.height = (int)ceil((hi[(a + 1) % 3] - lo[(a + 1) % 3]) / g.pitch) + 1;
+    g.width = (int)ceil((hi[a] - lo[a]) / g.pitch[0]) + 1;
+    g.height = (int)ceil((hi[(a + 1) % 3] - lo[(a + 1) % 3]) / g.pitch[1]) + 1;
     return g;
 }
 
@@ -2960,7 +3006,7 @@ static void adaslice__direct_visit(void *ctx, const adaslice__span *span)
     const adaslice_grid *g = d->grid;
     int i;
     if (g->axis == ADASLICE_AXIS_X) { /* one height for the whole row */
-        adaslice__sample_one(d->s, g->origin[1] + (span->row + 0.5) * g->pitch, span->face);
+        adaslice__sample_one(d->s, g->origin[1] + (span->row + 0.5) * g->pitch[1], span->face);
     } else if (g->axis == ADASLICE_AXIS_Z && fabs(span->step) <= d->s->profile->bin) {
         /* depth moves at most a bin per pixel: the samples hit every bin
            between the span's two ends, and only those */
@@ -2970,7 +3016,7 @@ static void adaslice__direct_visit(void *ctx, const adaslice__span *span)
     } else {
         for (i = span->first; i < span->end; i++)
             adaslice__sample_one(d->s, g->axis == ADASLICE_AXIS_Z ? adaslice__span_depth(span, i) + d->depth_origin
-                                                                  : g->origin[0] + (i + 0.5) * g->pitch, span->face);
+                                                                  : g->origin[0] + (i + 0.5) * g->pitch[0], span->face);
     }
 }
 
@@ -2988,8 +3034,8 @@ static void adaslice__sample_band(adaslice__sampling *s, const adaslice_ldi *ldi
             for (k = a; k < b; k++) {
                 const adaslice_sample *smp = &ldi->samples[k];
                 double z = g->axis == ADASLICE_AXIS_Z ? smp->depth + ldi->depth_origin
-                         : g->axis == ADASLICE_AXIS_X ? g->origin[1] + (j + 0.5) * g->pitch
-                                                      : g->origin[0] + (i + 0.5) * g->pitch;
+                         : g->axis == ADASLICE_AXIS_X ? g->origin[1] + (j + 0.5) * g->pitch[1]
+                                                      : g->origin[0] + (i + 0.5) * g->pitch[0];
                 adaslice__sample_one(s, z, smp->face);
                 if (s->inside) {
                     /* eq. 13: pixels inside at each bin centre, from the ray's
@@ -3141,7 +3187,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         long long count = 0;
         double pixel = 0;
         adaslice_grid gz = adaslice_grid_fit(mesh, ADASLICE_AXIS_Z, opt.resolution);
-        pixel = gz.pitch * gz.pitch;
+        pixel = gz.pitch[0] * gz.pitch[1];
         for (i = 0; i < n; i++) {
             count += s.inside[i];
             profile->area[i] = (double)count * pixel;
@@ -4560,19 +4606,20 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     memset(mk, 0, sizeof *mk);
 }
 
-ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch,
-                                               const double offset[2])
+ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch_x,
+                                               double pitch_y, const double offset[2])
 {
     adaslice_grid g;
     double lo[3], hi[3];
     adaslice_mesh_bounds(mesh, lo, hi);
     memset(&g, 0, sizeof g);
     g.axis = ADASLICE_AXIS_Z;
-    g.pitch = pitch;
+    g.pitch[0] = pitch_x;
+    g.pitch[1] = pitch_y;
     g.width = width;
     g.height = height;
-    g.origin[0] = 0.5 * (lo[0] + hi[0]) - (offset ? offset[0] : 0) - 0.5 * width * pitch;
-    g.origin[1] = 0.5 * (lo[1] + hi[1]) - (offset ? offset[1] : 0) - 0.5 * height * pitch;
+    g.origin[0] = 0.5 * (lo[0] + hi[0]) - (offset ? offset[0] : 0) - 0.5 * width * pitch_x;
+    g.origin[1] = 0.5 * (lo[1] + hi[1]) - (offset ? offset[1] : 0) - 0.5 * height * pitch_y;
     return g;
 }
 
@@ -4607,7 +4654,8 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->grid = *grid;
     mk->supersample = s;
     mk->rays = *grid;
-    mk->rays.pitch = grid->pitch / s;
+    mk->rays.pitch[0] = grid->pitch[0] / s;
+    mk->rays.pitch[1] = grid->pitch[1] / s;
     mk->rays.width = grid->width * s;
     mk->rays.height = grid->height * s;
     mk->depth_origin = adaslice__depth_origin(mesh, ADASLICE_AXIS_Z);
@@ -5088,6 +5136,111 @@ ADASLICE_DEF double adaslice_contours_distance(const adaslice_contours *c, size_
 }
 
 #endif /* ADASLICE_NO_CONTOURS */
+
+/* ============================================================= job output */
+
+ADASLICE_DEF adaslice_result adaslice_cure_fit(double s1, double t1, double s2, double t2, adaslice_cure *cure,
+                                               adaslice_error *err)
+{
+    double dp;
+    if (!cure) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "exposure: no output given");
+    memset(cure, 0, sizeof *cure);
+    if (!(s1 > 0) || !(s2 > 0) || !(t1 > 0) || !(t2 > 0) || s1 > DBL_MAX || s2 > DBL_MAX || t1 > DBL_MAX || t2 > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "exposure %g s@%g mm, %g s@%g mm: seconds and thicknesses must be positive", s1, t1, s2, t2);
+    dp = (t2 - t1) / log(s2 / s1);
+    if (t1 == t2 || s1 == s2 || !(dp > 0) || dp > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "exposure %g s@%g mm, %g s@%g mm: the thicker layer must need the longer exposure",
+                              s1, t1, s2, t2);
+    cure->seconds = s1;
+    cure->thickness = t1;
+    cure->penetration = dp;
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *c, double thickness)
+{
+    if (!(c->penetration > 0)) return c->seconds;
+    return c->seconds * exp((thickness - c->thickness) / c->penetration);
+}
+
+ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
+                                              const adaslice_preview_options *options, unsigned char *rgb,
+                                              adaslice_error *err)
+{
+    static const unsigned char resin[3] = {96, 132, 168};
+    adaslice_preview_options opt;
+    adaslice_mesh turned;
+    adaslice_ldi ldi;
+    adaslice_ldi_options lo;
+    adaslice_grid g;
+    adaslice_allocator al;
+    adaslice_result r;
+    double el, az, d[3], rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
+    const unsigned char *part, *back;
+    size_t v, p;
+    int k;
+    if (!rgb || width < 1 || height < 1 || width > 16384 || height > 16384)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "preview: %d x %d pixels is not a picture (1 to 16384 a side)",
+                              width, height);
+    if ((r = adaslice__mesh_check(mesh, "preview", err)) != ADASLICE_OK) return r;
+    if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "preview: the mesh has no triangles");
+    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    el = (opt.elevation == 0 && opt.azimuth == 0 ? 35 : opt.elevation) * 3.14159265358979323846 / 180;
+    az = (opt.elevation == 0 && opt.azimuth == 0 ? 45 : opt.azimuth) * 3.14159265358979323846 / 180;
+    part = opt.colour[0] | opt.colour[1] | opt.colour[2] ? opt.colour : resin;
+    back = opt.background;
+    al = adaslice__allocator(opt.allocator);
+    /* the viewer's direction, turned onto +z: the LDI's last sample is the nearest */
+    d[0] = cos(el) * cos(az); d[1] = cos(el) * sin(az); d[2] = sin(el);
+    adaslice_rotation_to_z(d, rot);
+    turned = *mesh;
+    memset(&turned.allocator, 0, sizeof turned.allocator);
+    turned.vertices = ADASLICE__CAST(float *, adaslice__alloc(&al, mesh->vertex_count ? mesh->vertex_count : 1, 3 * sizeof(float)));
+    if (!turned.vertices) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "preview: out of memory");
+    for (v = 0; v < mesh->vertex_count; v++) adaslice__turn_vertex(rot, mesh->vertices + 3 * v, turned.vertices + 3 * v);
+    adaslice_mesh_bounds(&turned, lo3, hi3);
+    /* the part fills 90% of the picture's tighter side */
+    pitch = (hi3[0] - lo3[0]) / (0.9 * width);
+    if ((hi3[1] - lo3[1]) / (0.9 * height) > pitch) pitch = (hi3[1] - lo3[1]) / (0.9 * height);
+    if (!(pitch > 0)) pitch = 1;
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.pitch[0] = g.pitch[1] = pitch;
+    g.width = width;
+    g.height = height;
+    g.origin[0] = 0.5 * (lo3[0] + hi3[0]) - 0.5 * width * pitch;
+    g.origin[1] = 0.5 * (lo3[1] + hi3[1]) - 0.5 * height * pitch;
+    memset(&lo, 0, sizeof lo);
+    lo.allocator = &al;
+    r = adaslice_ldi_build(&turned, &g, &lo, &ldi, err);
+    if (r != ADASLICE_OK) { adaslice__free(&al, turned.vertices); return r; }
+    for (p = 0; p < (size_t)width * (size_t)height; p++) {
+        /* LDI row 0 is the lowest y: the picture's bottom row */
+        size_t px = (size_t)(height - 1 - (int)(p / (size_t)width)) * (size_t)width + p % (size_t)width;
+        unsigned char *out = rgb + 3 * p;
+        double a[3], b[3], c[3], n[3], len, shade;
+        if (ldi.first[px] == ldi.first[px + 1]) { memcpy(out, back, 3); continue; }
+        {
+            size_t t = ADASLICE_SAMPLE_FACE(ldi.samples[ldi.first[px + 1] - 1]);
+            adaslice__corner(&turned, t, 0, a);
+            adaslice__corner(&turned, t, 1, b);
+            adaslice__corner(&turned, t, 2, c);
+        }
+        adaslice__normal(a, b, c, n);
+        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        /* either side of a face may face the viewer (open or inside-out meshes) */
+        shade = len > 0 ? fabs(n[0] * light[0] + n[1] * light[1] + n[2] * light[2]) / len : 0;
+        shade = 0.35 + 0.65 * shade;
+        for (k = 0; k < 3; k++) out[k] = (unsigned char)(part[k] * shade + 0.5);
+    }
+    adaslice_ldi_free(&ldi);
+    adaslice__free(&al, turned.vertices);
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
 
 #endif /* ADASLICE_IMPLEMENTATION_DONE */
 #endif /* ADASLICE_IMPLEMENTATION */

@@ -152,7 +152,7 @@ static void bench_masks(const char *dir, int supersample)
     for (k = 0; k < 3 * m.vertex_count; k++) m.vertices[k] = (float)(m.vertices[k] * scale);
     adaslice_mesh_bounds(&m, a, b);
     if (adaslice_profile_exact(&m, NULL, &p, NULL) != ADASLICE_OK || adaslice_plan_profile(&p, NULL, &plan, NULL) != ADASLICE_OK) exit(1);
-    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
+    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
     t0 = now();
     if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){supersample, NULL}, NULL) != ADASLICE_OK) exit(1);
     t_mask += now() - t0;

@@ -269,8 +269,10 @@ static void mask_begin(fw_state *fw, const link_mask *m, uint8_t seq)
     fw->mask_layer = layer;
     fw->mask_size = m->code_bytes;
     fw->mask_crc = m->crc32;
+    fw->mask_exposure_ms = m->exposure_ms;
     fw->mask_got = 0;
     if (!fw->mask_size) mask_refuse(fw, LINK_ERR_MASK_CODE, seq);
+    else if (!m->exposure_ms || m->exposure_ms > FW_EXPOSURE_MAX_MS) mask_refuse(fw, LINK_ERR_MASK_EXPOSURE, seq);
 }
 
 static void mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
@@ -287,6 +289,7 @@ static void mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
         mask_refuse(fw, LINK_ERR_MASK_CRC, seq);
         return;
     }
+    fw->exposure_ms[fw->mask_layer & 1u] = fw->mask_exposure_ms;
     fw->mask_ready = fw->mask_layer;
     fw->mask_layer = 0;
 }
@@ -321,9 +324,6 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
     }
     if (!fw->axis.homed) { fail(fw, LINK_ERR_NOT_HOMED, seq); return; }
     if (first < 1 || first > fw->layers) { fail(fw, LINK_ERR_MESSAGE, seq); return; }
-    fw->exposure_ms = m->exposure_ms;
-    fw->bottom_layers = m->bottom_layers;
-    fw->bottom_exposure_ms = m->bottom_exposure_ms;
     fw->peel_nm = m->peel_nm;
     fw->peel_speed = m->peel_speed_um_s;
     fw->return_speed = m->return_speed_um_s;
@@ -348,7 +348,7 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
 
 static uint64_t exposure_ticks(const fw_state *fw)
 {
-    return FW_MS(fw, fw->layer <= fw->bottom_layers ? fw->bottom_exposure_ms : fw->exposure_ms);
+    return FW_MS(fw, fw->exposure_ms[fw->layer & 1u]);
 }
 
 /* Advances the layer cycle as far as `now` allows:

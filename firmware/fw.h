@@ -65,6 +65,8 @@ typedef struct fw_config {
 /* Layers of up to 127 bins: the planner's rings have 128 entries of 24
    bytes, plus 1 byte of back-pointer per bin. */
 #define FW_MAX_LAYER_BINS 127u
+/* The longest exposure a mask may ask for: an hour (as the host checks). */
+#define FW_EXPOSURE_MAX_MS 3600000u
 #define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
 
 /* A display row at most this many bytes (1-bit: 8 pixels a byte). */
@@ -94,14 +96,15 @@ typedef struct fw_state {
     /* masks: decoded into display buffer (layer & 1) as they stream */
     adaslice_rle_decoder decoder;
     uint8_t row[FW_ROW_BYTES];
-    uint32_t mask_layer, mask_size, mask_got, mask_crc;
+    uint32_t mask_layer, mask_size, mask_got, mask_crc, mask_exposure_ms;
+    uint32_t exposure_ms[2];   /* of the ready mask in each display buffer */
     uint32_t mask_ready;       /* highest layer whose mask passed its CRC */
     uint16_t masks_refused;
     /* print */
     uint8_t state, phase, error, error_seq, pause_wanted, paused_by_link;
     uint32_t layer;            /* the layer being printed (1-based), 0 before */
     uint32_t top_plane;        /* its top, in bins */
-    uint32_t exposure_ms, bottom_exposure_ms, bottom_layers, peel_nm, peel_speed, return_speed, settle_ms;
+    uint32_t peel_nm, peel_speed, return_speed, settle_ms;
     uint64_t phase_end;        /* tick when a timed phase ends */
     uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
     uint8_t uv_on;

@@ -4,8 +4,10 @@
 #include "output.h"
 #include "plan_job.h"
 #include "report.h"
+#include "threemf.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static const char *format_name(adaslice_format f)
@@ -32,6 +34,7 @@ static void plan_usage(FILE *f)
           "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
           "\n", f);
     plan_options_usage(f);
+    threemf_usage(f);
 }
 
 
@@ -183,18 +186,27 @@ int cmd_plan(int argc, char **argv)
 {
     plan_args a;
     plan_job j;
-    int rc = parse_plan(argc, argv, &a);
+    threemf_args t;
+    char **rest = (char **)malloc(((size_t)argc + 1) * sizeof *rest);
+    int rest_argc = 0, rc;
+    if (!rest) return complain(RC_FAIL, "out of memory");
+    rc = threemf_options(argc, argv, &t, &rest_argc, rest);
+    if (!rc) rc = parse_plan(rest_argc, rest, &a);
+    free(rest);
     if (rc) return rc;
     if (a.help) {
         plan_usage(stdout);
         return RC_OK;
     }
+    if (t.path && !a.model) return complain(RC_USAGE, "--3mf needs a MODEL, not --profile");
+    if (t.path && (rc = threemf_check_bounds(&t, &a))) return rc;
     memset(&j, 0, sizeof j);
     j.args = &a;
+    j.keep_mesh = t.path != NULL;
     rc = run_plan(&a, &j);
     if (!rc) rc = write_outputs(&a, &j);
+    if (!rc && t.path) rc = threemf_write(&t, &a, &j, a.json ? stderr : stdout);
     if (!rc) (a.json ? print_json : print_summary)(&a, &j);
     job_free(&j);
     return rc;
 }
-

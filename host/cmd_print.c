@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "commands.h"
+#include "cure.h"
 #include "jobdir.h"
 #include "layers.h"
 #include "options.h"
@@ -27,8 +28,6 @@ typedef struct print_args {
     const char *port, *report;
     long baud;
     size_t resume_from;
-    double exposure, bottom_exposure, peel, peel_speed, return_speed, settle;
-    size_t bottom_layers;
     int plan_on_host;
     int then_exit;          /* emulators: EXIT after the print */
     double give_up_s;       /* a printer silent this long ends the print */
@@ -36,10 +35,13 @@ typedef struct print_args {
 
 /* ------------------------------------------------------------- the job */
 
-/* What is printed: a plan (layer lengths in bins) and a source of masks. */
+/* What is printed: a plan (layer lengths in bins, exposures), the motion
+   and a source of masks. */
 typedef struct print_job {
     uint32_t layers, bin_nm;
     uint32_t *lengths;             /* bins per layer: the plan's, or the job's */
+    uint32_t *exposure_ms;         /* per layer */
+    link_print motion;             /* PRINT's fields but the first layer */
     uint32_t width, height, bits;
     int from_model;
     layer_masks masks;             /* a MODEL: rendered as they are needed */
@@ -80,7 +82,7 @@ static int job_mask(print_job *pj, uint32_t k)
 static void print_job_free(print_job *pj)
 {
     if (pj->masks.image) layer_masks_close(&pj->masks);
-    if (pj->from_model) { free(pj->code); free(pj->lengths); }
+    if (pj->from_model) { free(pj->code); free(pj->lengths); free(pj->exposure_ms); }
     job_masks_free(&pj->file);
     memset(pj, 0, sizeof *pj);
 }
@@ -171,7 +173,7 @@ static void print_progress(progress *bar, const print_job *pj, const link_status
     progress_show(bar, done, pj->layers - first + 1, "layers", z);
 }
 
-typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
+typedef struct report_layer { uint32_t crc, code_bytes, exposure_ms; } report_layer;
 
 static int print_loop(serial_link *l, const print_args *pa, print_job *pj, report_layer *rep, unsigned long *mask_bytes)
 {
@@ -182,16 +184,9 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
     int rc, sending = 0;
     size_t sent = 0;
     uint16_t refused = 0;
-    link_print m;
+    link_print m = pj->motion;
     memset(&bar, 0, sizeof bar);
     m.first_layer = first;
-    m.exposure_ms = (uint32_t)(pa->exposure * 1000 + 0.5);
-    m.bottom_layers = (uint32_t)pa->bottom_layers;
-    m.bottom_exposure_ms = (uint32_t)(pa->bottom_exposure * 1000 + 0.5);
-    m.peel_nm = (uint32_t)(pa->peel * 1e6 + 0.5);
-    m.peel_speed_um_s = (uint32_t)(pa->peel_speed * 1000 + 0.5);
-    m.return_speed_um_s = (uint32_t)(pa->return_speed * 1000 + 0.5);
-    m.settle_ms = (uint32_t)(pa->settle * 1000 + 0.5);
     if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
     if (l->st.state != LINK_STATE_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", link_error_name(l->st.error));
     refused = l->st.masks_refused;
@@ -229,9 +224,11 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
             mask.layer = next;
             mask.code_bytes = (uint32_t)pj->code_size;
             mask.crc32 = pj->crc;
+            mask.exposure_ms = pj->exposure_ms[next - 1];
             if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask)))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
+            rep[next - 1].exposure_ms = mask.exposure_ms;
             sending = 1;
             sent = 0;
         }
@@ -268,8 +265,9 @@ static void write_report(FILE *f, const void *ctx)
             r->l->retransmits, r->l->naks);
     for (k = 0; k < r->pj->layers; k++) {
         z += r->pj->lengths[k];
-        fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u}", k ? "," : "", k + 1,
-                z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes);
+        fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
+                k ? "," : "", k + 1, z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes,
+                (unsigned)r->layers[k].exposure_ms);
     }
     fputs("\n  ]\n}\n", f);
 }
@@ -282,21 +280,15 @@ static void print_usage(FILE *f)
           "\n"
           "Prints on a printer running the adaslice firmware (link/PROTOCOL.md). With a\n"
           "MODEL the printer plans from the quantised profile and the host checks that the\n"
-          "plan equals its own; masks are rendered as they are needed. A JOBDIR from\n"
-          "adaslice slice is printed with its plan and JOBDIR/masks.rle. Ctrl-C pauses\n"
+          "plan equals its own; masks are rendered as they are needed, and each layer's\n"
+          "exposure follows its thickness (below). A JOBDIR from adaslice slice is printed\n"
+          "with its plan, exposures and motion, from JOBDIR/masks.rle. Ctrl-C pauses\n"
           "(UV off, Z held) and exits 3; --resume-from K continues at layer K.\n"
           "\n"
           "print options\n"
           "  --port DEV            the printer's serial port (required)\n"
           "  --baud B              9600 ... 230400                               [115200]\n"
           "  --resume-from K       start at layer K (the printer must be homed)  [1]\n"
-          "  --exposure S          seconds per layer                             [2.5]\n"
-          "  --bottom-layers N     layers exposed longer, to stick to the plate  [3]\n"
-          "  --bottom-exposure S   their seconds                                 [25]\n"
-          "  --peel MM             lift after each layer                         [5]\n"
-          "  --peel-speed MM/S     lift speed                                    [2]\n"
-          "  --return-speed MM/S   speed back down                               [4]\n"
-          "  --settle S            wait before exposing                          [0.5]\n"
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer silent this long ends the print     [30]\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
@@ -306,6 +298,8 @@ static void print_usage(FILE *f)
           "masks (the display's size and pitch come from the printer)\n"
           "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
           "\n", f);
+    cure_usage(f);
+    fputc('\n', f);
     plan_options_usage(f);
 }
 
@@ -314,13 +308,6 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     int i, rc = RC_OK;
     memset(pa, 0, sizeof *pa);
     pa->baud = 115200;
-    pa->exposure = 2.5;
-    pa->bottom_layers = 3;
-    pa->bottom_exposure = 25;
-    pa->peel = 5;
-    pa->peel_speed = 2;
-    pa->return_speed = 4;
-    pa->settle = 0.5;
     pa->give_up_s = 30;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
@@ -330,13 +317,6 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--report")) rc = file_option(argc, argv, &i, &pa->report);
         else if (!strcmp(o, "--baud")) { if (!(rc = count_option(argc, argv, &i, 4000000, &n))) pa->baud = (long)n; }
         else if (!strcmp(o, "--resume-from")) rc = count_option(argc, argv, &i, UINT32_MAX, &pa->resume_from);
-        else if (!strcmp(o, "--exposure")) rc = number_option(argc, argv, &i, 0, &pa->exposure);
-        else if (!strcmp(o, "--bottom-layers")) { if (i + 1 < argc && !strcmp(argv[i + 1], "0")) { i++; pa->bottom_layers = 0; } else rc = count_option(argc, argv, &i, UINT32_MAX, &pa->bottom_layers); }
-        else if (!strcmp(o, "--bottom-exposure")) rc = number_option(argc, argv, &i, 0, &pa->bottom_exposure);
-        else if (!strcmp(o, "--peel")) rc = number_option(argc, argv, &i, 1, &pa->peel);
-        else if (!strcmp(o, "--peel-speed")) rc = number_option(argc, argv, &i, 0, &pa->peel_speed);
-        else if (!strcmp(o, "--return-speed")) rc = number_option(argc, argv, &i, 0, &pa->return_speed);
-        else if (!strcmp(o, "--settle")) rc = number_option(argc, argv, &i, 1, &pa->settle);
         else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
         else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
@@ -345,11 +325,6 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     }
     if (rc) return rc;
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
-    /* the firmware counts milliseconds, nanometres and micrometres per second in 32 bits */
-    if (pa->exposure > 4e6 || pa->bottom_exposure > 4e6 || pa->settle > 4e6)
-        return complain(RC_USAGE, "exposures and settle times are limited to 4e6 s");
-    if (pa->peel > 4000 || pa->peel_speed > 4e6 || pa->return_speed > 4e6)
-        return complain(RC_USAGE, "--peel is limited to 4000 mm and speeds to 4e6 mm/s");
     return RC_OK;
 }
 
@@ -361,12 +336,13 @@ static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *
                           const print_args *pa, int *planned_by_printer)
 {
     const adaslice_plan *p;
+    job_layer *layers;
     uint32_t k;
     double nm;
     int rc;
     s->width = (s->rotate & 1) ? l->id.height : l->id.width;
     s->height = (s->rotate & 1) ? l->id.width : l->id.height;
-    s->pitch = l->id.pitch_nm / 1e6;
+    s->pitch[0] = s->pitch[1] = l->id.pitch_nm / 1e6;
     if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
     if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
     a->method = ADASLICE_METHOD_OPTIMAL;
@@ -381,8 +357,21 @@ static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *
     pj->layers = (uint32_t)p->layer_count;
     pj->bin_nm = (uint32_t)(nm + 0.5);
     if (fabs(nm - pj->bin_nm) > 1e-6 * nm) return complain(RC_USAGE, "--bin %g mm: a printer counts whole nanometres", j->profile.bin);
-    if (!(pj->lengths = (uint32_t *)malloc(pj->layers * sizeof *pj->lengths))) return complain(RC_FAIL, "out of memory");
-    for (k = 0; k < pj->layers; k++) pj->lengths[k] = p->planes[k + 1] - p->planes[k];
+    if ((rc = cure_finish(&s->cure, a->tmin, a->tmax))) return rc;
+    pj->lengths = (uint32_t *)malloc(pj->layers * sizeof *pj->lengths);
+    pj->exposure_ms = (uint32_t *)malloc(pj->layers * sizeof *pj->exposure_ms);
+    layers = (job_layer *)malloc(pj->layers * sizeof *layers);
+    if (!pj->lengths || !pj->exposure_ms || !layers) { free(layers); return complain(RC_FAIL, "out of memory"); }
+    cure_layers(&s->cure, p, layers);
+    for (k = 0; k < pj->layers; k++) {
+        pj->lengths[k] = p->planes[k + 1] - p->planes[k];
+        pj->exposure_ms[k] = (uint32_t)(layers[k].exposure_s * 1000 + 0.5);
+    }
+    free(layers);
+    pj->motion.peel_nm = (uint32_t)(s->cure.motion.lift_mm * 1e6 + 0.5);
+    pj->motion.peel_speed_um_s = (uint32_t)(s->cure.motion.lift_speed * 1000 + 0.5);
+    pj->motion.return_speed_um_s = (uint32_t)(s->cure.motion.retract_speed * 1000 + 0.5);
+    pj->motion.settle_ms = (uint32_t)(s->cure.motion.wait_before_cure_s * 1000 + 0.5);
     if ((rc = layer_masks_open(&pj->masks, s, j))) return rc;
     pj->width = (uint32_t)pj->masks.width;
     pj->height = (uint32_t)pj->masks.height;
@@ -403,6 +392,11 @@ static int job_from_dir(print_job *pj, const char *dir)
     pj->layers = pj->file.layers;
     pj->bin_nm = pj->file.bin_nm;
     pj->lengths = pj->file.lengths;
+    pj->exposure_ms = pj->file.exposure_ms;
+    pj->motion.peel_nm = pj->file.peel_nm;
+    pj->motion.peel_speed_um_s = pj->file.peel_speed_um_s;
+    pj->motion.return_speed_um_s = pj->file.return_speed_um_s;
+    pj->motion.settle_ms = pj->file.settle_ms;
     pj->width = pj->file.width;
     pj->height = pj->file.height;
     pj->bits = pj->file.bits;
@@ -465,6 +459,8 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     if (!rc && rest2_argc >= 2 && rest2[1][0] != '-' && is_dir(rest2[1])) {
         *jobdir = rest2[1];
         if (rest2_argc > 2) rc = complain(RC_USAGE, "print JOBDIR: %s: plan and mask options belong to adaslice slice", rest2[2]);
+        else if (s->cure.given)
+            rc = complain(RC_USAGE, "print JOBDIR: the job holds its exposures and motion; slice it again to change them");
     } else if (!rc) {
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
         if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");

@@ -1,46 +1,47 @@
-/* adaslice slice: plan a model, then write its layer masks on a printer's
-   pixel grid as a job directory (jobdir.h): plan.csv, plot.svg, one PNG per
-   layer, masks.rle, and manifest.json, written last, so a job without one is
-   not complete. */
+/* adaslice slice: plan a model, then write its layers as the job a printer
+   reads: a ChiTuBox .ctb, an Elegoo .goo, a ChiTu G-code .zip, a Prusa .sl1
+   or a job directory (jobfile.h). One loop renders every layer once,
+   bottom-up, and hands it to the format. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "commands.h"
 #include "contour_svg.h"
+#include "cure.h"
 #include "jobdir.h"
+#include "jobfile.h"
 #include "layers.h"
 #include "output.h"
 #include "plan_job.h"
-#include "png.h"
 #include "report.h"
 
-#include <errno.h>
+#include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 static void slice_usage(FILE *f)
 {
-    fputs("usage: adaslice slice MODEL -o JOBDIR [printer] [masks] [plan options]\n"
+    int i;
+    fputs("usage: adaslice slice MODEL -o JOB [printer] [masks] [exposure] [motion] [plan options]\n"
           "\n"
-          "Plans MODEL (as adaslice plan does) and writes JOBDIR/plan.csv, JOBDIR/plot.svg,\n"
-          "one PNG mask per layer (JOBDIR/layer_00001.png, ...), the masks as a printer takes\n"
-          "them (JOBDIR/masks.rle, for adaslice print) and, last, JOBDIR/manifest.json.\n"
-          "A pixel is lit when the winding number of its vertical ray below the slicing\n"
-          "height is positive.\n"
-          "\n", f);
+          "Plans MODEL (as adaslice plan does) and writes the job the printer reads, by the\n"
+          "extension of -o or --format NAME:\n", f);
+    for (i = 0; JOB_FORMATS[i]; i++)
+        fprintf(f, "  %-6s %-10s %s\n", JOB_FORMATS[i]->extension ? JOB_FORMATS[i]->extension : "(none)",
+                JOB_FORMATS[i]->name, JOB_FORMATS[i]->what);
+    fputs("Without an extension a preset's printer gets its own format (-o job writes job.ctb\n"
+          "for a printer that reads .ctb); --format dir keeps a directory. A directory job\n"
+          "holds plan.csv, plot.svg, one PNG mask per layer (layer_00001.png, ...), preview.png,\n"
+          "masks.rle (for adaslice print) and, last, manifest.json. A pixel is lit when the\n"
+          "winding number of its vertical ray below the slicing height is positive.\n"
+          "\n"
+          "  -o JOB              the job file or directory (required)\n"
+          "  --format NAME       the format, whatever the extension\n", f);
     slice_options_usage(f);
+    cure_usage(f);
     fputc('\n', f);
     plan_options_usage(f);
-}
-
-
-typedef struct png_file { const unsigned char *data; size_t size; } png_file;
-
-static void write_png_bytes(FILE *f, const void *ctx)
-{
-    const png_file *p = (const png_file *)ctx;
-    fwrite(p->data, 1, p->size, f);
 }
 
 
@@ -52,8 +53,8 @@ static void write_contour_svg(FILE *f, const void *ctx)
     svg_write_contours(f, cf->c, cf->layer, 1);
 }
 
-/* The slice polygons at the masks' heights, one SVG per layer; chaining
-   needs shared vertices, so the mesh is welded first (STL has none). */
+/* The slice polygons at the masks' heights, one SVG per layer, from the
+   welded mesh (see cmd_slice). */
 static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
 {
     const adaslice_plan *p = &j->plan[a->method];
@@ -66,8 +67,7 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
     int rc = RC_OK, digits = layer_digits(p->layer_count);
     if (!heights || !path) { free(heights); free(path); return complain(RC_FAIL, "out of memory for the contours"); }
     for (k = 0; k < p->layer_count; k++) heights[k] = j->profile.z0 + layer_slice_height(s, j, k);
-    if (adaslice_mesh_weld(&j->mesh, NULL, &err) != ADASLICE_OK ||
-        adaslice_contours_slice(&j->mesh, heights, p->layer_count, NULL, &c, &err) != ADASLICE_OK) {
+    if (adaslice_contours_slice(&j->mesh, heights, p->layer_count, NULL, &c, &err) != ADASLICE_OK) {
         free(heights);
         free(path);
         return library_error(&err);
@@ -85,71 +85,189 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
 }
 
 
-/* Every layer's PNG, its code for masks.rle, then the manifest, last. */
-static int write_masks(const slice_args *s, const plan_args *a, plan_job *j)
+/* ------------------------------------------------------------ the format */
+
+/* By --format, else by the extension of -o; a path without one gets the
+   preset's format (and its extension). *path is s->dir or, extended, malloc'd. */
+static int choose_format(const slice_args *s, const job_format **fmt, char **path)
+{
+    const printer *preset = s->geometry_given ? s->preset : NULL; /* given, not the default */
+    *path = NULL;
+    if (s->format && !(*fmt = job_format_named(s->format))) {
+        char names[128] = "";
+        int i;
+        for (i = 0; JOB_FORMATS[i]; i++) {
+            size_t n = strlen(names);
+            snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", JOB_FORMATS[i]->name);
+        }
+        return complain(RC_USAGE, "--format %s: unknown (%s)", s->format, names);
+    }
+    if (!s->format && !(*fmt = job_format_for_path(s->dir)))
+        return complain(RC_USAGE, "-o %s: no job format has the extension %s (.ctb, .goo, .zip, .sl1, or none for a "
+                                  "directory)", s->dir, strrchr(s->dir, '.'));
+    if (!s->format && *fmt == &JOB_FORMAT_DIR && preset && !(*fmt = job_format_named(preset->format)))
+        return complain(RC_FAIL, "--printer %s: its format %s is not built in", preset->name, preset->format);
+    if (*fmt != &JOB_FORMAT_DIR && !s->geometry_given)
+        return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice slice --help lists them) or "
+                                  "--pixels WxH with --pitch MM", s->dir);
+    if (preset && *fmt != &JOB_FORMAT_DIR && strcmp(preset->format, (*fmt)->name))
+        return complain(RC_USAGE, "-o %s: the %s reads %s jobs, not %s (leave the extension out for its own)", s->dir,
+                        preset->name, preset->format, (*fmt)->name);
+    if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR) {
+        size_t n = strlen(s->dir) + strlen((*fmt)->extension) + 1;
+        if (!(*path = (char *)malloc(n))) return complain(RC_FAIL, "out of memory");
+        snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
+    }
+    return RC_OK;
+}
+
+/* What the format cannot hold, said before a byte is written. */
+static int check_plan(const job_format *f, const char *path, const adaslice_plan *p, const slice_args *s)
+{
+    size_t k, n = p->layer_count;
+    double lo = HUGE_VAL, hi = 0;
+    for (k = 0; k < n; k++) {
+        const adaslice_layer *l = &p->layers[k];
+        if (l->thickness < f->min_layer_mm * (1 - 1e-9))
+            return complain(RC_USAGE, "%s: layer %zu (z %g to %g mm) is %g mm thick; %s stores layers of %g mm or more",
+                            path, k + 1, l->z_bottom, l->z_top, l->thickness, f->what, f->min_layer_mm);
+        if (l->thickness < lo) lo = l->thickness;
+        if (l->thickness > hi) hi = l->thickness;
+    }
+    if (!f->adaptive && n > 1) {
+        double t = p->layers[0].thickness;
+        for (k = 1; k + 1 < n; k++)
+            if (fabs(p->layers[k].thickness - t) > 1e-9)
+                return complain(RC_USAGE, "%s: %s holds one layer height, and this plan's layers are %g to %g mm: plan "
+                                          "uniform layers with --method finest or --method coarsest, or --uniform T",
+                                path, f->what, lo, hi);
+        if (fabs(p->layers[n - 1].thickness - t) > 1e-9)
+            fprintf(stderr, "adaslice: warning: %s: the last layer is %g mm; %s holds one height, so it prints %g mm "
+                            "(the top %g mm higher)\n",
+                    path, p->layers[n - 1].thickness, f->what, t, t - p->layers[n - 1].thickness);
+    }
+    if (s->preset && n && p->layers[n - 1].z_top > s->preset->z_max)
+        return complain(RC_FAIL, "the part is %g mm tall: the %s builds %g mm", p->layers[n - 1].z_top, s->preset->name,
+                        s->preset->z_max);
+    return RC_OK;
+}
+
+static int draw_preview(void *ctx, int w, int h, unsigned char *rgb)
+{
+    adaslice_error err;
+    return adaslice_preview(&((const plan_job *)ctx)->mesh, w, h, NULL, rgb, &err) == ADASLICE_OK ? 0 : -1;
+}
+
+static volatile sig_atomic_t interrupted;
+static void on_sigint(int sig) { (void)sig; interrupted = 1; }
+
+
+/* ------------------------------------------------------------- the layers */
+
+typedef struct job_summary { double lo, hi, e_lo, e_hi; } job_summary;
+
+/* The job's description; every layer rendered once, in order, into the format. */
+static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const job_format *f, const char *path,
+                     job_desc *d, job_summary *sum)
 {
     const adaslice_plan *p = &j->plan[a->method];
+    size_t k, count = p->layer_count;
     layer_masks m;
-    job_manifest man;
-    job_masks codes;
-    job_layer *layers = NULL;
-    size_t k, path_size = strlen(s->dir) + 64, count = p->layer_count;
-    char *path = NULL;
+    job_layer *layers;
+    void *writer = NULL;
     progress bar;
-    int rc;
+    int rc, odd = s->rotate & 1;
+    void (*was)(int);
 
-    memset(&man, 0, sizeof man);
-    memset(&codes, 0, sizeof codes);
     memset(&bar, 0, sizeof bar);
     if ((rc = layer_masks_open(&m, s, j))) return rc;
-    memcpy(man.part, m.part, sizeof man.part);
-    layers = (job_layer *)calloc(count ? count : 1, sizeof *layers);
-    path = (char *)malloc(path_size);
-    if (!layers || !path) { rc = complain(RC_FAIL, "out of memory for the masks"); goto done; }
-    if ((rc = job_masks_alloc(&codes, (uint32_t)count))) goto done;
-    codes.width = (uint32_t)m.width;
-    codes.height = (uint32_t)m.height;
-    codes.bits = (uint32_t)m.bits;
-    man.digits = layer_digits(count);
-    if (s->svg && (rc = write_contours(s, a, j))) goto done;
+    if (!(layers = (job_layer *)calloc(count ? count : 1, sizeof *layers))) {
+        layer_masks_close(&m);
+        return complain(RC_FAIL, "out of memory for %zu layers", count);
+    }
+    cure_layers(&s->cure, p, layers);
+    memset(d, 0, sizeof *d);
+    d->preset = s->preset;
+    d->model = a->model;
+    d->width = m.width;
+    d->height = m.height;
+    d->pitch[0] = m.grid.pitch[odd];
+    d->pitch[1] = m.grid.pitch[!odd];
+    d->display_mm[0] = d->width * d->pitch[0];
+    d->display_mm[1] = d->height * d->pitch[1];
+    d->z_max_mm = s->preset ? s->preset->z_max : 0;
+    d->bits = m.bits;
+    d->supersample = s->supersample;
+    d->mirror_x = s->mirror_x;
+    d->mirror_y = s->mirror_y;
+    d->layer_count = count;
+    d->layers = layers;
+    d->bottom_layers = (unsigned)(s->cure.bottom_layers < count ? s->cure.bottom_layers : count);
+    d->bottom_exposure_s = s->cure.bottom_exposure_s;
+    d->exposure_s = s->cure.cure.seconds;
+    d->layer_height_mm = HUGE_VAL;
+    sum->lo = sum->e_lo = HUGE_VAL;
+    sum->hi = sum->e_hi = 0;
     for (k = 0; k < count; k++) {
-        png_file png;
-        unsigned char *data = NULL;
-        size_t bound = adaslice_rle_bound(codes.width, codes.height, m.bits);
-        if ((rc = layer_masks_render(&m, k))) goto done;
-        if (png_encode_gray(m.image, m.width, m.height, m.stride, m.bits, &data, &png.size)) {
-            rc = complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
-            goto done;
-        }
-        png.data = data;
-        layer_path(path, path_size, s->dir, k, man.digits, "png");
-        rc = write_atomic(path, write_png_bytes, &png);
-        free(data);
-        if (rc) goto done;
-        if (!(codes.codes[k] = (unsigned char *)malloc(bound))) { rc = complain(RC_FAIL, "out of memory coding layer %zu", k + 1); goto done; }
-        (void)adaslice_rle_encode(m.image, m.stride, codes.width, codes.height, m.bits, codes.codes[k], bound,
-                                  &codes.sizes[k]);
-        codes.crcs[k] = adaslice_crc32(0, m.image, m.stride * (size_t)m.height);
-        codes.lengths[k] = p->planes[k + 1] - p->planes[k];
-        layers[k].z_bottom = p->layers[k].z_bottom;
-        layers[k].z_top = p->layers[k].z_top;
-        layers[k].thickness = p->layers[k].thickness;
-        layers[k].lit_mm2 = m.masker.lit * m.grid.pitch * m.grid.pitch;
+        double t = layers[k].thickness, e = layers[k].exposure_s;
+        if (t < sum->lo) sum->lo = t;
+        if (t > sum->hi) sum->hi = t;
+        if (k < d->bottom_layers) continue;
+        if (t < d->layer_height_mm) { d->layer_height_mm = t; d->exposure_s = e; }
+        if (e < sum->e_lo) sum->e_lo = e;
+        if (e > sum->e_hi) sum->e_hi = e;
+    }
+    if (d->layer_height_mm == HUGE_VAL) d->layer_height_mm = count ? sum->lo : a->tmin;
+    d->motion = s->cure.motion;
+    d->print_time_s = cure_print_time(&d->motion, layers, count);
+    d->preview = draw_preview;
+    d->preview_ctx = j;
+    d->metric = METRIC_NAMES[a->metric];
+    d->method = METHOD_NAMES[a->method];
+    d->slice_at = SLICE_AT[s->slice_at];
+    d->eps = p->eps;
+    d->bin_mm = j->profile.bin;
+    d->cure[0] = s->cure.cure.seconds;
+    d->cure[1] = s->cure.cure.thickness;
+    d->cure[2] = s->cure.cure.penetration;
+    memcpy(d->part_mm, m.part, sizeof d->part_mm);
+    memcpy(d->place_mm, s->place, sizeof d->place_mm);
+    d->rotate = s->rotate;
+
+    interrupted = 0;
+    was = signal(SIGINT, on_sigint);
+    if ((rc = f->open(&writer, path, d))) goto done;
+    if (f == &JOB_FORMAT_DIR) {
+        if ((rc = write_outputs(a, j))) goto done;
+        if (s->svg && (rc = write_contours(s, a, j))) goto done;
+    }
+    for (k = 0; k < count && !rc; k++) {
+        if (interrupted) { rc = complain(RC_FAIL, "interrupted at layer %zu of %zu: %s not written", k + 1, count, path); break; }
+        if ((rc = layer_masks_render(&m, k))) break;
+        layers[k].lit_mm2 = m.masker.lit * m.grid.pitch[0] * m.grid.pitch[1];
+        d->volume_mm3 += layers[k].lit_mm2 * layers[k].thickness;
+        rc = f->layer(writer, k, m.image, m.stride);
         progress_show(&bar, k + 1, count, "layers", NULL);
     }
-    if ((rc = jobdir_write_masks(s->dir, &codes, j->profile.bin))) goto done;
-    man.s = s;
-    man.a = a;
-    man.j = j;
-    man.layers = layers;
-    man.count = count;
-    rc = jobdir_write_manifest(s->dir, &man);
 done:
+    if (writer) {
+        int closed = f->close(writer, rc == RC_OK);
+        if (!rc) rc = closed;
+    }
+    signal(SIGINT, was);
     layer_masks_close(&m);
-    job_masks_free(&codes);
     free(layers);
-    free(path);
+    d->layers = NULL;
     return rc;
+}
+
+/* "1 h 23 min", "12 min", "40 s" */
+static void duration(char *out, size_t size, double s)
+{
+    long m = (long)(s / 60 + 0.5);
+    if (s < 60) snprintf(out, size, "%.0f s", s);
+    else if (m < 60) snprintf(out, size, "%ld min", m);
+    else snprintf(out, size, "%ld h %02ld min", m / 60, m % 60);
 }
 
 int cmd_slice(int argc, char **argv)
@@ -157,12 +275,16 @@ int cmd_slice(int argc, char **argv)
     slice_args s;
     plan_args a;
     plan_job j;
-    char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *csv = NULL, *svg = NULL, *manifest = NULL;
+    job_desc d;
+    job_summary sum;
+    const job_format *f = NULL;
+    char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *path = NULL, *extended = NULL, *csv = NULL,
+         *svg = NULL, when[32];
     int rest_argc = 0, rc;
-    size_t n;
-    struct stat st;
 
     memset(&j, 0, sizeof j);
+    memset(&sum, 0, sizeof sum);
+    memset(&d, 0, sizeof d);
     if (!rest) return complain(RC_FAIL, "out of memory");
     rc = parse_slice(argc, argv, &s, &rest_argc, rest, 1);
     if (rc < 0) { slice_usage(stdout); free(rest); return RC_OK; }
@@ -170,33 +292,50 @@ int cmd_slice(int argc, char **argv)
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc && a.profile) rc = complain(RC_USAGE, "slice needs a MODEL, not --profile");
     free(rest);
-    if (rc) return rc;
-    if (mkdir(s.dir, 0777) != 0 && errno != EEXIST) return complain(RC_FAIL, "cannot create %s: %s", s.dir, strerror(errno));
-    if (stat(s.dir, &st) != 0 || !S_ISDIR(st.st_mode)) return complain(RC_FAIL, "%s is not a directory", s.dir);
-    n = strlen(s.dir) + 32;
-    csv = (char *)malloc(n);
-    svg = (char *)malloc(n);
-    manifest = (char *)malloc(n);
-    if (!csv || !svg || !manifest) { rc = complain(RC_FAIL, "out of memory"); goto done; }
-    snprintf(csv, n, "%s/plan.csv", s.dir);
-    snprintf(svg, n, "%s/plot.svg", s.dir);
-    snprintf(manifest, n, "%s/manifest.json", s.dir);
-    /* an earlier job's manifest must not vouch for layers about to change */
-    if (remove(manifest) != 0 && errno != ENOENT) { rc = complain(RC_FAIL, "cannot remove %s: %s", manifest, strerror(errno)); goto done; }
-    if (!a.out) a.out = csv;
-    if (!a.plot) a.plot = svg;
+    if (!rc) rc = choose_format(&s, &f, &extended);
+    if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
+    if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
+    if (rc) { free(extended); return rc; }
+    path = extended ? extended : (char *)s.dir;
+    if (f == &JOB_FORMAT_DIR) {
+        size_t n = strlen(path) + 32;
+        csv = (char *)malloc(n);
+        svg = (char *)malloc(n);
+        if (!csv || !svg) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+        snprintf(csv, n, "%s/plan.csv", path);
+        snprintf(svg, n, "%s/plot.svg", path);
+        if (!a.out) a.out = csv;
+        if (!a.plot) a.plot = svg;
+    }
     j.args = &a;
     j.keep_mesh = 1;
     rc = run_plan(&a, &j);
-    if (!rc) rc = write_outputs(&a, &j);
-    if (!rc) rc = write_masks(&s, &a, &j);
-    if (!rc) printf("%s: %zu layers for %s on %d x %d px of %g mm\n", s.dir, j.plan[a.method].layer_count,
-                    base_name(a.model), s.width, s.height, s.pitch);
+    if (!rc) rc = check_plan(f, path, &j.plan[a.method], &s);
+    /* chaining contours needs shared vertices (STL has none); welded before
+       the masker keeps a pointer to the mesh */
+    if (!rc && s.svg) {
+        adaslice_error err;
+        if (adaslice_mesh_weld(&j.mesh, NULL, &err) != ADASLICE_OK) rc = library_error(&err);
+    }
+    if (!rc && f != &JOB_FORMAT_DIR) rc = write_outputs(&a, &j);
+    if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
+    if (!rc) {
+        duration(when, sizeof when, d.print_time_s);
+        printf("%s: %zu layers of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
+               sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display", d.width, d.height,
+               d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
+        printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
+               sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
+        if (d.bottom_layers) printf(" (%u bottom layers of %g s)", d.bottom_layers, d.bottom_exposure_s);
+        printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
+        if (s.cure.typical)
+            printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "
+                   "--exposure S1@T1,S2@T2\n", d.cure[0], d.cure[1], d.cure[2]);
+    }
 done:
     job_free(&j);
+    free(extended);
     free(csv);
     free(svg);
-    free(manifest);
     return rc;
 }
-

@@ -1,9 +1,16 @@
 /* The job directory: see jobdir.h. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
 #include "jobdir.h"
+#include "jobfile.h"
+#include "layers.h"
 #include "output.h"
+#include "png.h"
 #include "report.h"
 
 #include <errno.h>
+#include <sys/stat.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,44 +43,75 @@ void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, 
     snprintf(path, size, "%s/%s", dir, name);
 }
 
+/* ------------------------------------------------------------ writing */
+
+typedef struct dir_writer {
+    const job_desc *d;
+    char *dir, *path;            /* the job; room for a file's path in it */
+    size_t path_size;
+    int digits;
+    job_masks masks;
+} dir_writer;
+
 static void write_manifest(FILE *f, const void *ctx)
 {
-    const job_manifest *m = (const job_manifest *)ctx;
-    const slice_args *s = m->s;
-    const adaslice_plan *p = &m->j->plan[m->a->method];
+    const job_desc *d = ((const dir_writer *)ctx)->d;
+    int digits = ((const dir_writer *)ctx)->digits;
     size_t k;
     fputs("{\n  \"format\": \"adaslice-job\",\n  \"version\": ", f);
     json_string(f, ADASLICE_VERSION);
     fputs(",\n  \"complete\": true,\n  \"model\": ", f);
-    json_string(f, m->a->model);
+    json_string(f, d->model);
     fputs(",\n  \"printer\": {\"name\": ", f);
-    if (s->preset) json_string(f, s->preset->name); else fputs("null", f);
-    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": ", (s->rotate & 1) ? s->height : s->width,
-            (s->rotate & 1) ? s->width : s->height);
-    json_number(f, s->pitch);
-    fprintf(f, ", \"mirror\": \"%s\", \"rotate\": %s},\n", MIRRORS[s->mirror_x | (s->mirror_y << 1)], ROTATIONS[s->rotate]);
-    fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n",
-            s->supersample > 1 ? 8 : 1, s->supersample, SLICE_AT[s->slice_at]);
-    fputs("  \"part_mm\": [", f);
-    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_number(f, m->part[k]); }
-    fputs("],\n  \"place_mm\": [", f);
-    json_number(f, s->place[0]);
+    if (d->preset) json_string(f, d->preset->name); else fputs("null", f);
+    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": [", d->width, d->height);
+    json_number(f, d->pitch[0]);
     fputs(", ", f);
-    json_number(f, s->place[1]);
-    fprintf(f, "],\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", METRIC_NAMES[m->a->metric],
-            METHOD_NAMES[m->a->method]);
-    json_number(f, p->eps);
-    fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", m->count);
-    for (k = 0; k < m->count; k++) {
-        const job_layer *l = &m->layers[k];
+    json_number(f, d->pitch[1]);
+    fprintf(f, "], \"mirror\": \"%s\", \"rotate\": %s},\n", MIRRORS[d->mirror_x | (d->mirror_y << 1)], ROTATIONS[d->rotate]);
+    fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n", d->bits, d->supersample,
+            d->slice_at);
+    fputs("  \"part_mm\": [", f);
+    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_number(f, d->part_mm[k]); }
+    fputs("],\n  \"place_mm\": [", f);
+    json_number(f, d->place_mm[0]);
+    fputs(", ", f);
+    json_number(f, d->place_mm[1]);
+    fprintf(f, "],\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", d->metric, d->method);
+    json_number(f, d->eps);
+    fputs(",\n  \"working_curve\": {\"seconds\": ", f);
+    json_number(f, d->cure[0]);
+    fputs(", \"thickness_mm\": ", f);
+    json_number(f, d->cure[1]);
+    fputs(", \"penetration_mm\": ", f);
+    if (d->cure[2] > 0) json_number(f, d->cure[2]); else fputs("null", f);
+    fprintf(f, "},\n  \"bottom_layers\": %u,\n  \"bottom_exposure_s\": ", d->bottom_layers);
+    json_number(f, d->bottom_exposure_s);
+    fputs(",\n  \"motion\": {\"peel_mm\": ", f);
+    json_number(f, d->motion.lift_mm);
+    fputs(", \"peel_speed_mm_s\": ", f);
+    json_number(f, d->motion.lift_speed);
+    fputs(", \"return_speed_mm_s\": ", f);
+    json_number(f, d->motion.retract_speed);
+    fputs(", \"settle_s\": ", f);
+    json_number(f, d->motion.wait_before_cure_s);
+    fputs("},\n  \"print_time_s\": ", f);
+    json_number(f, d->print_time_s);
+    fputs(",\n  \"volume_mm3\": ", f);
+    json_number(f, d->volume_mm3);
+    fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", d->layer_count);
+    for (k = 0; k < d->layer_count; k++) {
+        const job_layer *l = &d->layers[k];
         char name[40];
-        layer_name(name, k, m->digits, "png");
+        layer_name(name, k, digits, "png");
         fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"%s\", \"z_bottom\": ", k ? "," : "", k + 1, name);
         json_number(f, l->z_bottom);
         fputs(", \"z_top\": ", f);
         json_number(f, l->z_top);
         fputs(", \"thickness\": ", f);
         json_number(f, l->thickness);
+        fputs(", \"exposure_s\": ", f);
+        json_number(f, l->exposure_s);
         fputs(", \"lit_area_mm2\": ", f);
         json_number(f, l->lit_mm2);
         fputc('}', f);
@@ -92,23 +130,18 @@ static char *dir_file(const char *dir, const char *name)
     return path;
 }
 
-int jobdir_write_manifest(const char *dir, const job_manifest *m)
-{
-    char *path = dir_file(dir, "manifest.json");
-    int rc = path ? write_atomic(path, write_manifest, m) : RC_FAIL;
-    free(path);
-    return rc;
-}
-
 int job_masks_alloc(job_masks *m, uint32_t layers)
 {
     size_t n = layers ? layers : 1;
     m->layers = layers;
     m->lengths = (uint32_t *)calloc(n, sizeof *m->lengths);
+    m->exposure_ms = (uint32_t *)calloc(n, sizeof *m->exposure_ms);
     m->codes = (unsigned char **)calloc(n, sizeof *m->codes);
     m->sizes = (size_t *)calloc(n, sizeof *m->sizes);
     m->crcs = (uint32_t *)calloc(n, sizeof *m->crcs);
-    return m->lengths && m->codes && m->sizes && m->crcs ? RC_OK : complain(RC_FAIL, "out of memory for %u layers", layers);
+    return m->lengths && m->exposure_ms && m->codes && m->sizes && m->crcs
+               ? RC_OK
+               : complain(RC_FAIL, "out of memory for %u layers", layers);
 }
 
 void job_masks_free(job_masks *m)
@@ -116,6 +149,7 @@ void job_masks_free(job_masks *m)
     uint32_t k;
     for (k = 0; !m->file && m->codes && k < m->layers; k++) free(m->codes[k]);
     free(m->lengths);
+    free(m->exposure_ms);
     free(m->codes);
     free(m->sizes);
     free(m->crcs);
@@ -134,37 +168,153 @@ static uint32_t get_u32(const unsigned char *p)
     return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
+#define MASKS_HEADER 44   /* magic and nine u32 */
+#define MASKS_LAYER 16    /* bins, exposure, CRC, code bytes */
+
 static void write_mask_file(FILE *f, const void *ctx)
 {
     const job_masks *m = (const job_masks *)ctx;
     uint32_t k;
-    fwrite("ADASMSK1", 1, 8, f);
+    fwrite("ADASMSK2", 1, 8, f);
     put_u32(f, m->width);
     put_u32(f, m->height);
     put_u32(f, m->bits);
     put_u32(f, m->layers);
     put_u32(f, m->bin_nm);
+    put_u32(f, m->peel_nm);
+    put_u32(f, m->peel_speed_um_s);
+    put_u32(f, m->return_speed_um_s);
+    put_u32(f, m->settle_ms);
     for (k = 0; k < m->layers; k++) {
         put_u32(f, m->lengths[k]);
+        put_u32(f, m->exposure_ms[k]);
         put_u32(f, m->crcs[k]);
         put_u32(f, (uint32_t)m->sizes[k]);
         fwrite(m->codes[k], 1, m->sizes[k], f);
     }
 }
 
-int jobdir_write_masks(const char *dir, const job_masks *m, double bin_mm)
+static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
+
+static int dir_close(void *writer, int ok);
+
+static int dir_open(void **writer, const char *dir, const job_desc *d)
 {
-    char *path = dir_file(dir, "masks.rle");
-    double nm = bin_mm * 1e6;
-    job_masks out = *m;
-    int rc = RC_OK;
-    if (!path) return RC_FAIL;
-    out.bin_nm = (uint32_t)(nm + 0.5);
-    if (fabs(nm - out.bin_nm) > 1e-6 * nm) remove(path);
-    else rc = write_atomic(path, write_mask_file, &out);
-    free(path);
+    dir_writer *w = (dir_writer *)calloc(1, sizeof *w);
+    const char *stale[] = {"manifest.json", "masks.rle"};
+    struct stat st;
+    int i, rc = RC_OK;
+    *writer = NULL;
+    if (!w || !(w->dir = (char *)malloc(strlen(dir) + 1)) || !(w->path = (char *)malloc(strlen(dir) + 64))) {
+        rc = complain(RC_FAIL, "out of memory");
+        goto fail;
+    }
+    strcpy(w->dir, dir);
+    w->d = d;
+    w->digits = layer_digits(d->layer_count);
+    w->path_size = strlen(dir) + 64;
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) { rc = complain(RC_FAIL, "%s is not a directory", dir); goto fail; }
+    /* an earlier job's manifest and masks must not vouch for layers about to change */
+    for (i = 0; i < 2; i++) {
+        snprintf(w->path, w->path_size, "%s/%s", dir, stale[i]);
+        if (remove(w->path) != 0 && errno != ENOENT) { rc = complain(RC_FAIL, "cannot remove %s: %s", w->path, strerror(errno)); goto fail; }
+    }
+    if ((rc = job_masks_alloc(&w->masks, (uint32_t)d->layer_count))) goto fail;
+    w->masks.width = (uint32_t)d->width;
+    w->masks.height = (uint32_t)d->height;
+    w->masks.bits = (uint32_t)d->bits;
+    w->masks.peel_nm = (uint32_t)(d->motion.lift_mm * 1e6 + 0.5);
+    w->masks.peel_speed_um_s = milli(d->motion.lift_speed);
+    w->masks.return_speed_um_s = milli(d->motion.retract_speed);
+    w->masks.settle_ms = milli(d->motion.wait_before_cure_s);
+    *writer = w;
+    return RC_OK;
+fail:
+    if (w) dir_close(w, 0);
     return rc;
 }
+
+typedef struct bytes { const unsigned char *data; size_t size; } bytes;
+
+static void write_bytes(FILE *f, const void *ctx)
+{
+    const bytes *b = (const bytes *)ctx;
+    fwrite(b->data, 1, b->size, f);
+}
+
+static int write_png(const char *path, unsigned char *png, size_t size)
+{
+    bytes b;
+    int rc;
+    b.data = png;
+    b.size = size;
+    rc = write_atomic(path, write_bytes, &b);
+    free(png);
+    return rc;
+}
+
+static int dir_layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+{
+    dir_writer *w = (dir_writer *)writer;
+    job_masks *m = &w->masks;
+    const job_layer *l = &w->d->layers[k];
+    size_t bound = adaslice_rle_bound(m->width, m->height, (int)m->bits), size;
+    unsigned char *png = NULL;
+    int rc;
+    if (png_encode_gray(image, (int)m->width, (int)m->height, stride, (int)m->bits, &png, &size))
+        return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
+    layer_path(w->path, w->path_size, w->dir, k, w->digits, "png");
+    if ((rc = write_png(w->path, png, size))) return rc;
+    if (!(m->codes[k] = (unsigned char *)malloc(bound))) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
+    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, m->codes[k], bound, &m->sizes[k]);
+    m->crcs[k] = adaslice_crc32(0, image, stride * m->height);
+    m->lengths[k] = (uint32_t)(l->thickness / w->d->bin_mm + 0.5);
+    m->exposure_ms[k] = milli(l->exposure_s);
+    return RC_OK;
+}
+
+/* masks.rle (unless the bin is not a whole number of nanometres, which a
+   printer cannot count), preview.png, then the manifest. */
+static int dir_finish(dir_writer *w)
+{
+    const job_desc *d = w->d;
+    double nm = d->bin_mm * 1e6;
+    unsigned char *rgb, *png = NULL;
+    size_t size;
+    int rc = RC_OK, pw = 400, ph = 300;
+    w->masks.bin_nm = (uint32_t)(nm + 0.5);
+    if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
+        snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
+        if ((rc = write_atomic(w->path, write_mask_file, &w->masks))) return rc;
+    }
+    if (!(rgb = (unsigned char *)malloc((size_t)pw * ph * 3)) || d->preview(d->preview_ctx, pw, ph, rgb) ||
+        png_encode_rgb(rgb, pw, ph, &png, &size)) {
+        free(rgb);
+        return complain(RC_FAIL, "out of memory for the preview");
+    }
+    free(rgb);
+    snprintf(w->path, w->path_size, "%s/preview.png", w->dir);
+    if ((rc = write_png(w->path, png, size))) return rc;
+    snprintf(w->path, w->path_size, "%s/manifest.json", w->dir);
+    return write_atomic(w->path, write_manifest, w);
+}
+
+static int dir_close(void *writer, int ok)
+{
+    dir_writer *w = (dir_writer *)writer;
+    int rc = ok ? dir_finish(w) : RC_FAIL;
+    job_masks_free(&w->masks);
+    free(w->dir);
+    free(w->path);
+    free(w);
+    return rc;
+}
+
+const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
+                                   0, 1, dir_open, dir_layer, dir_close};
+
+/* ------------------------------------------------------------ reading */
 
 int jobdir_read_masks(const char *dir, job_masks *m)
 {
@@ -188,7 +338,11 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     }
     fclose(f);
     m->file_size = (size_t)size;
-    if (m->file_size < 28 || memcmp(m->file, "ADASMSK1", 8)) {
+    if (m->file_size >= 8 && !memcmp(m->file, "ADASMSK1", 8)) {
+        complain(RC_FAIL, "%s: a job from an adaslice before per-layer exposures: slice it again", path);
+        goto done;
+    }
+    if (m->file_size < MASKS_HEADER || memcmp(m->file, "ADASMSK2", 8)) {
         complain(RC_FAIL, "%s: not an adaslice mask file (bad magic at byte 0)", path);
         goto done;
     }
@@ -197,22 +351,32 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     m->bits = get_u32(m->file + 16);
     k = get_u32(m->file + 20);
     m->bin_nm = get_u32(m->file + 24);
-    if (!k || k > m->file_size / 12 || !m->bin_nm) {
+    m->peel_nm = get_u32(m->file + 28);
+    m->peel_speed_um_s = get_u32(m->file + 32);
+    m->return_speed_um_s = get_u32(m->file + 36);
+    m->settle_ms = get_u32(m->file + 40);
+    if (!k || k > m->file_size / MASKS_LAYER || !m->bin_nm) {
         complain(RC_FAIL, "%s: byte 20: %u layers of %u nm do not fit the file", path, k, m->bin_nm);
         goto done;
     }
     if (job_masks_alloc(m, k)) goto done;
-    for (at = 28, k = 0; k < m->layers; k++) {
+    for (at = MASKS_HEADER, k = 0; k < m->layers; k++) {
         uint32_t code;
-        if (m->file_size - at < 12 || (code = get_u32(m->file + at + 8)) > m->file_size - at - 12) {
+        if (m->file_size - at < MASKS_LAYER || (code = get_u32(m->file + at + 12)) > m->file_size - at - MASKS_LAYER) {
             complain(RC_FAIL, "%s: byte %zu: layer %u runs past the end of the file", path, at, k + 1);
             goto done;
         }
         m->lengths[k] = get_u32(m->file + at);
-        m->crcs[k] = get_u32(m->file + at + 4);
+        m->exposure_ms[k] = get_u32(m->file + at + 4);
+        if (!m->exposure_ms[k] || m->exposure_ms[k] > 3600000u) {
+            complain(RC_FAIL, "%s: byte %zu: layer %u's exposure of %u ms is not 1 ms to an hour", path, at + 4, k + 1,
+                     m->exposure_ms[k]);
+            goto done;
+        }
+        m->crcs[k] = get_u32(m->file + at + 8);
         m->sizes[k] = code;
-        m->codes[k] = m->file + at + 12;
-        at += 12 + code;
+        m->codes[k] = m->file + at + MASKS_LAYER;
+        at += MASKS_LAYER + code;
     }
     if (at != m->file_size) {
         complain(RC_FAIL, "%s: byte %zu: %zu bytes after the last layer", path, at, m->file_size - at);

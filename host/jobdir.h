@@ -1,15 +1,15 @@
-/* The job directory, written by adaslice slice and read by adaslice print:
-   layer files named layer_00001.EXT, manifest.json (written last: a job
-   without one is not complete) and masks.rle, the masks as a printer takes
-   them. Little-endian masks.rle: "ADASMSK1", u32 width, height, bits, layers,
-   bin_nm; then per layer u32 bins (its thickness), u32 CRC-32 of the mask,
+/* The job directory, written by adaslice slice (JOB_FORMAT_DIR of jobfile.h)
+   and read by adaslice print: one PNG per layer named layer_00001.png, a
+   shaded preview.png, masks.rle (the masks as a printer takes them) and,
+   written last, manifest.json: a job without one is not complete.
+   Little-endian masks.rle: "ADASMSK2", u32 width, height, bits, layers,
+   bin_nm, peel_nm, peel_speed_um_s, return_speed_um_s, settle_ms; then per
+   layer u32 bins (its thickness), u32 exposure_ms, u32 CRC-32 of the mask,
    u32 code bytes, the code (adaslice_mcu.h's run-length code). */
 #ifndef ADASLICE_HOST_JOBDIR_H
 #define ADASLICE_HOST_JOBDIR_H
 #include <stddef.h>
 #include <stdint.h>
-#include "layers.h"
-#include "plan_job.h"
 
 /* Digits of a layer's number: five, more from 100,000 layers on. */
 int layer_digits(size_t layers);
@@ -18,23 +18,12 @@ void layer_name(char name[40], size_t k, int digits, const char *ext);
 /* "DIR/layer_00001.EXT" */
 void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext);
 
-typedef struct job_layer { double z_bottom, z_top, thickness, lit_mm2; } job_layer;
-
-typedef struct job_manifest {
-    const slice_args *s;
-    const plan_args *a;
-    const plan_job *j;
-    const job_layer *layers;
-    size_t count;
-    int digits;
-    double part[3];              /* size of the part, mm */
-} job_manifest;
-int jobdir_write_manifest(const char *dir, const job_manifest *m);
-
-/* The masks of a job as a printer takes them. */
+/* The masks of a job as a printer takes them, with its exposures and motion. */
 typedef struct job_masks {
     uint32_t width, height, bits, layers, bin_nm;
+    uint32_t peel_nm, peel_speed_um_s, return_speed_um_s, settle_ms;
     uint32_t *lengths;           /* bins per layer */
+    uint32_t *exposure_ms;       /* per layer */
     unsigned char **codes;       /* per layer */
     size_t *sizes;
     uint32_t *crcs;
@@ -44,9 +33,6 @@ typedef struct job_masks {
 /* Room for `layers` layers (codes allocated by the caller, freed here). */
 int job_masks_alloc(job_masks *m, uint32_t layers);
 void job_masks_free(job_masks *m);
-/* DIR/masks.rle; none when the bin is not a whole number of nanometres (a
-   printer counts those), and any old one is removed. */
-int jobdir_write_masks(const char *dir, const job_masks *m, double bin_mm);
 /* Reads and checks DIR/masks.rle, naming the file and byte at fault. */
 int jobdir_read_masks(const char *dir, job_masks *m);
 #endif

@@ -17,11 +17,13 @@ void slice_options_usage(FILE *f)
     fputs("printer\n"
           "  --printer NAME      a preset (below)                            [2k-5.5]\n"
           "  --pixels WxH        pixels of the display, with --pitch\n"
-          "  --pitch MM          pixel size\n"
+          "  --pitch X[,Y]       pixel size in mm, across and down (one number: square)\n"
           "  --display WxH       the display's size in mm, instead of --pitch\n"
-          "  --mirror M          none, x, y or xy: flip the image as the display needs [none]\n"
+          "  --mirror M          none, x, y or xy: flip the image as the display needs\n"
+          "                      [the preset's, else none]\n"
           "  --rotate A          0, 90, 180 or 270: turn the image counter-clockwise for a\n"
-          "                      display mounted turned (90, 270: W and H are the image's)  [0]\n"
+          "                      display mounted turned (90, 270: W and H are the image's)\n"
+          "                      [the preset's, else 0]\n"
           "masks\n"
           "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
           "                      (1: 1-bit masks)                            [1]\n"
@@ -29,23 +31,29 @@ void slice_options_usage(FILE *f)
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n", f);
-    fputs("printer presets\n", f);
-    for (i = 0; i < PRINTER_COUNT; i++)
-        fprintf(f, "  %-16s %d x %d px of %g mm: %s\n", PRINTERS[i].name, PRINTERS[i].width, PRINTERS[i].height,
-                PRINTERS[i].pitch, PRINTERS[i].about);
+    fputs("printer presets (each writes the job its printer reads)\n", f);
+    for (i = 0; i < PRINTER_COUNT; i++) {
+        const printer *p = &PRINTERS[i];
+        fprintf(f, "  %-24s %s, %d x %d px of %g", p->name, p->format, p->width, p->height, p->pitch[0] * 1000);
+        if (p->pitch[1] != p->pitch[0]) fprintf(f, " x %g", p->pitch[1] * 1000);
+        fprintf(f, " um: %s\n", p->about);
+    }
 }
 
 
 int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir)
 {
     int i, rc = RC_OK;
+    int mirror = -1, rotate = -1;
     memset(s, 0, sizeof *s);
+    cure_defaults(&s->cure);
     s->supersample = 1;
     s->slice_at = 1;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
         if (!strcmp(o, "-o") || !strcmp(o, "--output")) rc = file_option(argc, argv, &i, &s->dir);
+        else if (!strcmp(o, "--format")) rc = file_option(argc, argv, &i, &s->format);
         else if (!strcmp(o, "--printer")) {
             const char *name = NULL;
             if (!(rc = file_option(argc, argv, &i, &name)) && !(s->preset = printer_find(name)))
@@ -59,56 +67,64 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
                 s->width = (int)wh[0];
                 s->height = (int)wh[1];
             }
-        } else if (!strcmp(o, "--pitch")) rc = number_option(argc, argv, &i, 0, &s->pitch);
+        } else if (!strcmp(o, "--pitch")) {
+            const char *v = i + 1 < argc ? argv[i + 1] : "";
+            if (!(rc = numbers_option(argc, argv, &i, ',', strchr(v, ',') ? 2 : 1, "X or X,Y in mm", s->pitch))) {
+                if (!strchr(v, ',')) s->pitch[1] = s->pitch[0];
+                if (!(s->pitch[0] > 0) || !(s->pitch[1] > 0))
+                    rc = complain(RC_USAGE, "--pitch %s: pixel sizes are positive mm", argv[i]);
+            }
+        }
         else if (!strcmp(o, "--display")) {
             if (!(rc = numbers_option(argc, argv, &i, 'x', 2, "WxH in mm", s->display)) &&
                 (!(s->display[0] > 0) || !(s->display[1] > 0)))
                 rc = complain(RC_USAGE, "--display %s: expected WxH in mm", argv[i]);
-        } else if (!strcmp(o, "--rotate")) rc = name_option(argc, argv, &i, ROTATIONS, 4, "0, 90, 180 or 270", &s->rotate);
+        } else if (!strcmp(o, "--rotate")) rc = name_option(argc, argv, &i, ROTATIONS, 4, "0, 90, 180 or 270", &rotate);
         else if (!strcmp(o, "--aa")) {
             size_t n = 1;
             rc = count_option(argc, argv, &i, 16, &n);
             s->supersample = (int)n;
         } else if (!strcmp(o, "--slice-at")) rc = name_option(argc, argv, &i, SLICE_AT, 3, "bottom, middle or top", &s->slice_at);
-        else if (!strcmp(o, "--mirror")) {
-            int m = 0;
-            rc = name_option(argc, argv, &i, MIRRORS, 4, "none, x, y or xy", &m);
-            s->mirror_x = m & 1;
-            s->mirror_y = (m >> 1) & 1;
-        } else if (!strcmp(o, "--place")) {
+        else if (!strcmp(o, "--mirror")) rc = name_option(argc, argv, &i, MIRRORS, 4, "none, x, y or xy", &mirror);
+        else if (!strcmp(o, "--place")) {
             rc = numbers_option(argc, argv, &i, ',', 2, "X,Y in mm", s->place);
             s->placed = 1;
         } else if (!strcmp(o, "--svg")) {
             s->svg = 1;
         } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
             return -1;
+        } else if (cure_option(argc, argv, &i, &s->cure, &rc)) {
+            continue;
         } else rest[(*rest_argc)++] = argv[i];
     }
     if (rc) return rc;
-    s->geometry_given = s->preset || s->width || s->pitch || s->display[0];
-    if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR");
-    if (s->preset && (s->width || s->pitch || s->display[0]))
+    s->geometry_given = s->preset || s->width || s->pitch[0] || s->display[0];
+    if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR or -o FILE (.ctb, .goo, .zip, .sl1)");
+    if (s->preset && (s->width || s->pitch[0] || s->display[0]))
         return complain(RC_USAGE, "--printer %s and --pixels/--pitch/--display: give one or the other", s->preset->name);
-    if (s->pitch && s->display[0]) return complain(RC_USAGE, "--pitch and --display: give one or the other");
-    if (!s->preset && !s->width && !s->pitch && !s->display[0]) s->preset = &PRINTERS[0];
+    if (s->pitch[0] && s->display[0]) return complain(RC_USAGE, "--pitch and --display: give one or the other");
+    if (!s->preset && !s->width && !s->pitch[0] && !s->display[0]) s->preset = &PRINTERS[0];
     if (s->preset) {
         s->width = s->preset->width;
         s->height = s->preset->height;
-        s->pitch = s->preset->pitch;
-    } else if (!s->width || (!s->pitch && !s->display[0])) {
+        s->pitch[0] = s->preset->pitch[0];
+        s->pitch[1] = s->preset->pitch[1];
+    } else if (!s->width || (!s->pitch[0] && !s->display[0])) {
         return complain(RC_USAGE, "--pixels WxH goes with --pitch MM or --display WxH");
     } else if (s->display[0]) {
-        /* square pixels: the two sides must agree */
-        double px = s->display[0] / s->width, py = s->display[1] / s->height;
-        if (fabs(px - py) > 0.01 * px)
-            return complain(RC_USAGE, "--display %gx%g over %dx%d pixels: pixels of %g x %g mm are not square", s->display[0],
-                            s->display[1], s->width, s->height, px, py);
-        s->pitch = px;
+        s->pitch[0] = s->display[0] / s->width;
+        s->pitch[1] = s->display[1] / s->height;
     }
+    s->rotate = rotate >= 0 ? rotate : s->preset ? s->preset->rotate : 0;
+    s->mirror_x = mirror >= 0 ? mirror & 1 : s->preset ? s->preset->mirror_x : 0;
+    s->mirror_y = mirror >= 0 ? (mirror >> 1) & 1 : s->preset ? s->preset->mirror_y : 0;
     if (s->rotate & 1) { /* the plate is the image turned a quarter */
         int t = s->width;
+        double p = s->pitch[0];
         s->width = s->height;
         s->height = t;
+        s->pitch[0] = s->pitch[1];
+        s->pitch[1] = p;
     }
     return RC_OK;
 }
@@ -158,15 +174,15 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
     double lo[3], hi[3], plate[2], over[2];
     int k;
     adaslice_mesh_bounds(mesh, lo, hi);
-    plate[0] = s->width * s->pitch;
-    plate[1] = s->height * s->pitch;
+    plate[0] = s->width * s->pitch[0];
+    plate[1] = s->height * s->pitch[1];
     for (k = 0; k < 3; k++) size[k] = hi[k] - lo[k];
     for (k = 0; k < 2; k++) over[k] = fabs(s->place[k]) + size[k] / 2 - plate[k] / 2;
     if (over[0] > 0 || over[1] > 0)
         return complain(RC_FAIL, "the part (%g x %g mm%s) does not fit the %g x %g mm plate: %g mm too wide along %s",
                         size[0], size[1], s->placed ? ", placed off centre" : "", plate[0], plate[1],
                         over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
-    *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch, s->place);
+    *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch[0], s->pitch[1], s->place);
     return RC_OK;
 }
 

@@ -6,6 +6,7 @@
 #define ADASLICE_HOST_LAYERS_H
 #include <stdio.h>
 #include "../adaslice.h"
+#include "cure.h"
 #include "plan_job.h"
 #include "printer.h"
 
@@ -14,10 +15,11 @@ extern const char *const MIRRORS[];    /* none, x, y, xy */
 extern const char *const ROTATIONS[];  /* 0, 90, 180, 270 */
 
 typedef struct slice_args {
-    const char *dir;
+    const char *dir;             /* -o: a job directory, or a job file */
+    const char *format;          /* --format, or NULL: by the extension of -o */
     const printer *preset;       /* or the three below */
-    int width, height;
-    double pitch;
+    int width, height;           /* the plate's pixels along x and y (turned back if --rotate) */
+    double pitch[2];             /* mm per plate pixel along x and y */
     int supersample;             /* --aa S; 1: 1-bit masks */
     int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
     int placed;                  /* --place X,Y given */
@@ -27,11 +29,12 @@ typedef struct slice_args {
     double display[2];           /* --display WxH in mm, or 0 */
     int svg;                     /* also the contours of each layer as SVG */
     int geometry_given;          /* --printer, --pixels, --pitch or --display */
+    cure_args cure;              /* exposure and motion (cure.h) */
 } slice_args;
 
-/* Takes the slice options out of argv; what is left (argv[0] first) goes to
-   parse_plan. need_dir: -o JOBDIR is required. -1 for --help (the caller
-   prints its usage). */
+/* Takes the slice options (with cure.h's) out of argv; what is left (argv[0]
+   first) goes to parse_plan. need_dir: -o JOBDIR is required. -1 for --help
+   (the caller prints its usage). */
 int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir);
 void slice_options_usage(FILE *f);
 

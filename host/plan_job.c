@@ -51,6 +51,7 @@ void plan_options_usage(FILE *f)
         "                      volume: mm^3)                               [%g]\n"
         "  --tmin MM           thinnest layer                              [%g]\n"
         "  --tmax MM           thickest layer                              [%g]\n"
+        "  --uniform T         every layer T mm (--method finest --tmin T --tmax T)\n"
         "  --sharp T           a plane at each phi jump above T; 0: off    [%g]\n"
         "  --budget K          at most K layers, with the smallest eps that allows it\n"
         "output\n"
@@ -67,8 +68,6 @@ void plan_options_usage(FILE *f)
     weights_usage(f);
 }
 
-/* The value after option argv[*i]; NULL, said so, if there is none. */
-
 /* --orient best, or a direction X,Y,Z that is not zero */
 static int orient_option(int argc, char **argv, int *i, plan_args *a)
 {
@@ -84,7 +83,8 @@ static int orient_option(int argc, char **argv, int *i, plan_args *a)
 
 int parse_plan(int argc, char **argv, plan_args *a)
 {
-    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = ADASLICE_METHOD_OPTIMAL, sampler = 0;
+    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0;
+    double uniform = 0;
     memset(a, 0, sizeof *a);
     a->bin = ADASLICE_DEFAULT_BIN;
     a->eps = ADASLICE_DEFAULT_EPS;
@@ -106,8 +106,9 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--plot")) rc = file_option(argc, argv, &i, &a->plot);
         else if (!strcmp(o, "--bin")) rc = number_option(argc, argv, &i, 0, &a->bin);
         else if (!strcmp(o, "--eps")) rc = number_option(argc, argv, &i, 0, &a->eps);
-        else if (!strcmp(o, "--tmin")) rc = number_option(argc, argv, &i, 0, &a->tmin);
-        else if (!strcmp(o, "--tmax")) rc = number_option(argc, argv, &i, 0, &a->tmax);
+        else if (!strcmp(o, "--tmin")) { rc = number_option(argc, argv, &i, 0, &a->tmin); bounds = 1; }
+        else if (!strcmp(o, "--tmax")) { rc = number_option(argc, argv, &i, 0, &a->tmax); bounds = 1; }
+        else if (!strcmp(o, "--uniform")) rc = number_option(argc, argv, &i, 0, &uniform);
         else if (!strcmp(o, "--scale")) rc = number_option(argc, argv, &i, 0, &a->scale);
         else if (!strcmp(o, "--sharp")) rc = number_option(argc, argv, &i, 1, &a->sharp);
         else if (!strcmp(o, "--budget")) rc = count_option(argc, argv, &i, UINT32_MAX, &a->budget);
@@ -125,8 +126,13 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else return complain(RC_USAGE, "unknown option %s (see adaslice plan --help)", o);
     }
     if (rc) return rc;
+    if (uniform) {
+        if (method >= 0 || bounds) return complain(RC_USAGE, "--uniform %g sets the method and both bounds: leave out --method, --tmin and --tmax", uniform);
+        method = ADASLICE_METHOD_FINEST;
+        a->tmin = a->tmax = uniform;
+    }
     a->metric = (adaslice_metric)metric;
-    a->method = (adaslice_method)method;
+    a->method = method < 0 ? ADASLICE_METHOD_OPTIMAL : (adaslice_method)method;
     a->sampler = sampler;
     if (a->resolution && !a->sampler) return complain(RC_USAGE, "--res applies to --sampler ldi");
     if (!a->model && !a->profile) return complain(RC_USAGE, "plan needs a MODEL or --profile FILE");

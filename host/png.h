@@ -1,5 +1,6 @@
-/* PNG writer for printer layer masks: grayscale, 1 or 8 bits per pixel, with
-   its own deflate tuned for mostly black images with a few smooth regions. */
+/* PNG writer for printer layer masks (grayscale, 1 or 8 bits per pixel) and
+   job previews (8-bit RGB), through deflate.h's deflate, which is tuned for
+   mostly black images with a few smooth regions. */
 #ifndef ADASLICE_HOST_PNG_H
 #define ADASLICE_HOST_PNG_H
 #include <stddef.h>
@@ -14,6 +15,12 @@
    2 GB of row data), with *out = NULL and *out_size = 0. */
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
                     unsigned char **out, size_t *out_size);
+
+/* The same for a width x height truecolour image (colour type 2, 8 bits a
+   channel): rows top first of 3 bytes (R, G, B) a pixel, 3 * width bytes
+   apart. -1 for width or height < 1, more than 2 GB of row data or out of
+   memory. */
+int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size);
 
 /* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
    result back in continues it over more data. (CRC-32 is adaslice_crc32.) */

@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LINK_PROTOCOL_VERSION 1
+#define LINK_PROTOCOL_VERSION 2
 
 /* ------------------------------------------------------------- the fields */
 
@@ -27,12 +27,11 @@
 #define LINK_FIELDS_PROFILE(F) F(u32, bins) F(u8, bins_min) F(u8, bins_max) F(u32, eps_units) F(u32, bin_nm)
 #define LINK_FIELDS_PLAN_GET(F) F(u32, first)
 #define LINK_FIELDS_PLAN_SET(F) F(u32, layers) F(u32, bin_nm)
-#define LINK_FIELDS_MASK(F) F(u32, layer) F(u32, code_bytes) F(u32, crc32)
+#define LINK_FIELDS_MASK(F) F(u32, layer) F(u32, code_bytes) F(u32, crc32) F(u32, exposure_ms)
 #define LINK_FIELDS_MOVE(F) F(i32, z_nm) F(u32, speed_um_s)
 #define LINK_FIELDS_EXPOSE(F) F(u32, ms)
 #define LINK_FIELDS_PRINT(F)                                                                                        \
-    F(u32, first_layer) F(u32, exposure_ms) F(u32, bottom_layers) F(u32, bottom_exposure_ms) F(u32, peel_nm)        \
-    F(u32, peel_speed_um_s) F(u32, return_speed_um_s) F(u32, settle_ms)
+    F(u32, first_layer) F(u32, peel_nm) F(u32, peel_speed_um_s) F(u32, return_speed_um_s) F(u32, settle_ms)
 #define LINK_FIELDS_EXIT(F) F(u8, code)
 /* MCU -> host */
 #define LINK_FIELDS_ACK(F) F(u8, nak)
@@ -108,7 +107,8 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(NOT_HOMED, "not homed")                                                                                       \
     S(HOME_FAILED, "homing failed")                                                                                 \
     S(BUSY, "busy")                             /* not in this state */                                             \
-    S(PLAN_SIZE, "more bins than the printer takes")
+    S(PLAN_SIZE, "more bins than the printer takes")                                                                \
+    S(MASK_EXPOSURE, "bad exposure")            /* a mask's exposure of 0 ms or over an hour */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,

@@ -2,8 +2,10 @@
    and bounding box against the table of ../shared/models/README.md, copied here
    because that README is the independent source. */
 #include "../adaslice.h"
+#include "../bench/models.h"
 #define FAKE_MAX_BINS 45000u /* the firmware core, given the RAM for these parts */
 #include "fakeport.h"
+#include "prusa_check.h"
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -308,7 +310,7 @@ static int check_masks(const char *dir, const char *name, int watertight)
     if (40 / (b[2] - a[2]) < s) s = 40 / (b[2] - a[2]);
     for (i = 0; i < 3 * m.vertex_count; i++) m.vertices[i] = (float)((m.vertices[i] - a[i % 3]) * s);
     adaslice_mesh_bounds(&m, a, b);
-    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
+    g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
     for (k = 0; k < 16; k++) z[k] = a[2] + (b[2] - a[2]) * (k + 0.5) / 16;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
@@ -327,9 +329,9 @@ static int check_masks(const char *dir, const char *name, int watertight)
         if (!watertight) continue;
         for (y = 3; y < g.height; y += 7)
             for (x = 3; x < g.width; x += 7) {
-                double px = g.origin[0] + (x + 0.5) * g.pitch, py = g.origin[1] + (y + 0.5) * g.pitch;
+                double px = g.origin[0] + (x + 0.5) * g.pitch[0], py = g.origin[1] + (y + 0.5) * g.pitch[1];
                 int bit = (mk.image[(size_t)y * mk.stride + (size_t)(x >> 3)] >> (7 - (x & 7))) & 1;
-                if (adaslice_contours_distance(&c, (size_t)k, px, py) <= g.pitch) continue;
+                if (adaslice_contours_distance(&c, (size_t)k, px, py) <= g.pitch[0]) continue;
                 wrong += (adaslice_contours_winding(&c, (size_t)k, px, py) > 0) != bit;
             }
         for (p = c.first_polygon[k]; p < c.first_polygon[k + 1]; p++) {
@@ -340,11 +342,11 @@ static int check_masks(const char *dir, const char *name, int watertight)
                 perimeter += hypot(v[0] - u[0], v[1] - u[1]);
             }
         }
-        lit = mk.lit * g.pitch * g.pitch;
+        lit = mk.lit * g.pitch[0] * g.pitch[1];
         area = prof.area[(size_t)((z[k] - prof.z0) / prof.bin)];
         d = fabs(lit - area);
         if (d / (area + 1) > worst_area) worst_area = d / (area + 1);
-        if (d > perimeter * g.pitch * sqrt(2.0) + perimeter * prof.bin + 1e-6) {
+        if (d > perimeter * g.pitch[0] * sqrt(2.0) + perimeter * prof.bin + 1e-6) {
             snprintf(why, sizeof why, "z %g: lit %g mm^2, A %g mm^2, contour %g mm", z[k], lit, area, perimeter);
             ok = 0;
         }
@@ -427,13 +429,59 @@ static int check_printer_plans(const char *dir, const char *name)
     return ok;
 }
 
+/* prusa_check.h's checks, counted per model */
+static int case_failures;
+void check_fail(const char *file, int line, const char *what)
+{
+    if (case_failures++ < 4) printf("    %s:%d: %s\n", file, line, what);
+}
+int check_case_failed(void) { return case_failures > 0; }
+
+/* PrusaSlicer slices the model's FDM project as planned, for every model
+   that fits a 250 x 210 mm bed at the benchmarks' scale. */
+static int check_fdm_project(const char *dir, const char *name, int *skipped)
+{
+    char path[4096];
+    double scale = bench_model_scale(name), a[3], b[3];
+    adaslice_load_options o;
+    adaslice_mesh m;
+    prusa_result r;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    memset(&o, 0, sizeof o);
+    o.scale = scale;
+    if (adaslice_mesh_load_file(path, &o, &m, NULL) != ADASLICE_OK) return 0;
+    adaslice_mesh_bounds(&m, a, b);
+    adaslice_mesh_free(&m);
+    if (b[0] - a[0] > 250 || b[1] - a[1] > 210 || b[2] - a[2] > 210) {
+        printf("--   fdm project %s: %.1f x %.1f x %.1f mm does not fit a 250 x 210 x 210 mm printer\n", name, b[0] - a[0],
+               b[1] - a[1], b[2] - a[2]);
+        ++*skipped;
+        return 1;
+    }
+    case_failures = 0;
+    if (!prusa_slices_the_plan(path, scale, &r)) {
+        printf("FAIL fdm project %s\n", name);
+        return 0;
+    }
+    if (r.unprintable) {
+        printf("--   fdm project %s: PrusaSlicer will not print the model itself (no extrusions in its first layer)\n", name);
+        ++*skipped;
+        return 1;
+    }
+    printf("ok   fdm project %s: %zu of %zu layers printed at their planned tops", name, r.printed, r.planned);
+    if (r.empty || r.above)
+        printf(" (%zu empty to PrusaSlicer, %zu above its last: an open or thin mesh)", r.empty, r.above);
+    printf("\n");
+    return 1;
+}
+
 int main(int argc, char **argv)
 {
     DIR *d;
     struct dirent *ent;
     char **names = NULL;
     size_t count = 0, i;
-    int passed = 0, failed = 0;
+    int passed = 0, failed = 0, skipped = 0;
     if (argc != 2) {
         fprintf(stderr, "usage: check_models DIR\n");
         return 2;
@@ -454,6 +502,7 @@ int main(int argc, char **argv)
         return 1;
     }
     qsort(names, count, sizeof *names, by_name);
+    if (!cli_begin("adaslice-models")) return 1;
     for (i = 0; i < count; i++) {
         if (check_file(argv[1], names[i])) passed++;
         else failed++;
@@ -463,9 +512,13 @@ int main(int argc, char **argv)
         else failed++;
         if (check_printer_plans(argv[1], names[i])) passed++;
         else failed++;
+        if (check_fdm_project(argv[1], names[i], &skipped)) passed++;
+        else failed++;
         free(names[i]);
     }
     free(names);
-    printf("%d passed, %d failed\n", passed, failed);
+    cli_end();
+    passed -= skipped;
+    printf("%d passed, %d failed (%d FDM projects left out, said why above)\n", passed, failed, skipped);
     return failed != 0;
 }

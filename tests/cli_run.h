@@ -8,13 +8,16 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #endif
 #include "check.h"
+#include "../adaslice.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -117,13 +120,61 @@ static inline int cli_one_message(const char *err)
     return !strncmp(err, "adaslice: ", 10) && nl && nl[1] == 0;
 }
 
-static inline void cli_end(void)
+static inline int cli_exists(const char *path)
 {
-    DIR *d = opendir(cli_dir);
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* The number after "key": in a JSON text (its first occurrence), or NAN. */
+static inline double cli_json_number(const char *json, const char *key)
+{
+    char pat[64];
+    const char *p;
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(json, pat);
+    return p ? strtod(p + strlen(pat), NULL) : NAN;
+}
+
+/* How often `what` occurs in s. */
+static inline size_t cli_count(const char *s, const char *what)
+{
+    size_t n = 0;
+    while ((s = strstr(s, what)) != NULL) n++, s++;
+    return n;
+}
+
+/* An OBJ of the mesh (the loader keeps the triangles' order). */
+static inline void cli_write_obj(const char *path, const adaslice_mesh *m)
+{
+    FILE *f = fopen(path, "w");
+    size_t i;
+    CHECKF(f != NULL, "cannot write %s", path);
+    if (!f) return;
+    for (i = 0; i < m->vertex_count; i++)
+        fprintf(f, "v %.9g %.9g %.9g\n", m->vertices[3 * i], m->vertices[3 * i + 1], m->vertices[3 * i + 2]);
+    for (i = 0; i < m->triangle_count; i++)
+        fprintf(f, "f %u %u %u\n", m->triangles[3 * i] + 1, m->triangles[3 * i + 1] + 1, m->triangles[3 * i + 2] + 1);
+    fclose(f);
+}
+
+/* Removes path, a directory with everything in it too. */
+static inline void cli_remove_all(const char *path)
+{
+    DIR *d = opendir(path);
     struct dirent *e;
     while (d && (e = readdir(d)) != NULL)
-        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) remove(cli_path(e->d_name));
-    if (d) closedir(d);
-    rmdir(cli_dir);
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) {
+            size_t n = strlen(path) + strlen(e->d_name) + 2;
+            char *sub = (char *)malloc(n);
+            if (!sub) break;
+            snprintf(sub, n, "%s/%s", path, e->d_name);
+            cli_remove_all(sub);
+            free(sub);
+        }
+    if (d) { closedir(d); rmdir(path); }
+    else remove(path);
 }
+
+static inline void cli_end(void) { cli_remove_all(cli_dir); }
 #endif

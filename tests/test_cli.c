@@ -25,12 +25,6 @@ static void write_all(const char *path, const void *data, size_t size)
     CHECKF(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "cannot write %s", path);
 }
 
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
 /* cli_run with an argument list: up to 8 arguments, NULL-terminated */
 static cli_result run_args(const char *const *a)
 {
@@ -38,23 +32,6 @@ static cli_result run_args(const char *const *a)
     int n;
     for (n = 0; n < 8 && a[n]; n++) v[n] = a[n];
     return cli_run(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], (const char *)NULL);
-}
-
-/* The number after "key": in a JSON text (its first occurrence), or NAN. */
-static double json_field(const char *json, const char *key)
-{
-    char pat[64];
-    const char *p;
-    snprintf(pat, sizeof pat, "\"%s\":", key);
-    p = strstr(json, pat);
-    return p ? strtod(p + strlen(pat), NULL) : NAN;
-}
-
-static size_t count_of(const char *s, const char *what)
-{
-    size_t n = 0;
-    while ((s = strstr(s, what)) != NULL) n++, s++;
-    return n;
 }
 
 static void put_u32(unsigned char *p, uint32_t v)
@@ -91,7 +68,7 @@ static void write_stl(const char *path, const adaslice_mesh *m, size_t keep)
 static const char *sphere_stl(void)
 {
     const char *path = cli_path("sphere.stl");
-    if (!exists(path)) {
+    if (!cli_exists(path)) {
         adaslice_mesh m = gen_sphere(5, 64, 32, 0);
         write_stl(path, &m, m.triangle_count);
         gen_free(&m);
@@ -171,15 +148,15 @@ static void plan_of_a_sphere(void)
     cli_result r = cli_run("plan", sphere_stl(), "--json", "--out", plan_csv, "--profile-out", profile_csv,
                        "--plot", svg, NULL);
     char *csv = cli_read(plan_csv), *prof = cli_read(profile_csv), *plot = cli_read(svg), *line, *save = NULL;
-    double layers = json_field(r.out, "layers"), bins = json_field(r.out, "bins"), bin = json_field(r.out, "bin");
-    double height = json_field(r.out, "height_mm"), eps = json_field(r.out, "eps");
-    double tmin = json_field(r.out, "tmin"), tmax = json_field(r.out, "tmax"), top = 0;
+    double layers = cli_json_number(r.out, "layers"), bins = cli_json_number(r.out, "bins"), bin = cli_json_number(r.out, "bin");
+    double height = cli_json_number(r.out, "height_mm"), eps = cli_json_number(r.out, "eps");
+    double tmin = cli_json_number(r.out, "tmin"), tmax = cli_json_number(r.out, "tmax"), top = 0;
     size_t rows = 0;
 
     CHECKF(r.status == 0 && !*r.err, "exit %d: %s", r.status, r.err);
     CHECK(layers > 0 && bins > 0 && bin == 0.002 && eps == 0.065 && tmin == 0.05 && tmax == 0.15);
-    CHECK(fabs(height - 10) < 1e-6 && json_field(r.out, "triangles") == 2 * 64 * 31);
-    CHECK(count_of(r.out, "\"z_bottom\"") == (size_t)layers);
+    CHECK(fabs(height - 10) < 1e-6 && cli_json_number(r.out, "triangles") == 2 * 64 * 31);
+    CHECK(cli_count(r.out, "\"z_bottom\"") == (size_t)layers);
     CHECK(csv && prof && plot);
     if (!csv || !prof || !plot) goto done;
 
@@ -197,7 +174,7 @@ static void plan_of_a_sphere(void)
     CHECK(rows == (size_t)layers);
     CHECKF(fabs(top - bins * bin) <= 1e-9 && top >= height - 1e-9 && top < height + bin, "top %.17g", top);
 
-    CHECK(!strncmp(prof, "z,phi\n", 6) && count_of(prof, "\n") == (size_t)bins + 1);
+    CHECK(!strncmp(prof, "z,phi\n", 6) && cli_count(prof, "\n") == (size_t)bins + 1);
     CHECK((!strncmp(plot, "<?xml", 5) || !strncmp(plot, "<svg", 4)) && strlen(plot) < 200000);
     CHECK(strstr(plot, "</svg>") && !strcmp(strstr(plot, "</svg>"), "</svg>\n"));
 done:
@@ -217,7 +194,7 @@ static void sampler_choice(void)
 {
     cli_result a = cli_run("plan", sphere_stl(), "--json", NULL), b = cli_run("plan", sphere_stl(), "--json", "--sampler", "ldi",
                                                                        "--res", "1024", NULL);
-    double ka = json_field(a.out, "layers"), kb = json_field(b.out, "layers");
+    double ka = cli_json_number(a.out, "layers"), kb = cli_json_number(b.out, "layers");
     CHECKF(a.status == 0 && b.status == 0, "%s %s", a.err, b.err);
     CHECKF(ka > 0 && fabs(ka - kb) <= 0.02 * ka, "exact %g layers, ldi %g", ka, kb);
     CHECK(strstr(b.out, "\"sampler\": \"ldi\"") != NULL);
@@ -246,14 +223,14 @@ static void profile_input(void)
     r = cli_run("plan", "--profile", csv, "--bin", "0.01", "--tmin", "0.02", "--tmax", "0.05", "--eps", "0.0105",
             "--json", NULL);
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
-    CHECK(json_field(r.out, "bins") == 300 && json_field(r.out, "layers") >= 115);
-    CHECK(json_field(r.out, "worst_error") <= 0.0105);
+    CHECK(cli_json_number(r.out, "bins") == 300 && cli_json_number(r.out, "layers") >= 115);
+    CHECK(cli_json_number(r.out, "worst_error") <= 0.0105);
     cli_free(&r);
 
     r = cli_run("plan", "--profile", csv, "--bin", "0.01", "--tmin", "0.02", "--tmax", "0.05", "--budget", "100",
             "--json", NULL);
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
-    CHECK(json_field(r.out, "layers") <= 100 && json_field(r.out, "eps") > 0.0105);
+    CHECK(cli_json_number(r.out, "layers") <= 100 && cli_json_number(r.out, "eps") > 0.0105);
     cli_free(&r);
 
     f = fopen(plain, "w");
@@ -265,7 +242,7 @@ static void profile_input(void)
     }
     r = cli_run("plan", "--profile", plain, "--json", "--sharp", "0", NULL);
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
-    CHECK(json_field(r.out, "bins") == 50 && json_field(r.out, "layers") >= 1);
+    CHECK(cli_json_number(r.out, "bins") == 50 && cli_json_number(r.out, "layers") >= 1);
     cli_free(&r);
 }
 
@@ -326,9 +303,9 @@ static void slice_writes_a_job(void)
     csv = cli_read(path);
     CHECK(manifest && csv);
     if (!manifest || !csv) { free(manifest); free(csv); return; }
-    layers = (size_t)json_field(manifest, "layer_count");
-    rows = count_of(csv, "\n") - 1;
-    CHECKF(layers > 50 && layers == rows && count_of(manifest, "\"lit_area_mm2\"") == layers, "%zu layers, %zu rows", layers, rows);
+    layers = (size_t)cli_json_number(manifest, "layer_count");
+    rows = cli_count(csv, "\n") - 1;
+    CHECKF(layers > 50 && layers == rows && cli_count(manifest, "\"lit_area_mm2\"") == layers, "%zu layers, %zu rows", layers, rows);
     CHECK(strstr(manifest, "\"complete\": true") && strstr(manifest, "\"width_px\": 2560") && strstr(manifest, "\"bits\": 1"));
     for (k = 1; k <= layers; k++) {
         snprintf(path, sizeof path, "%s/layer_%05zu.png", job, k);
@@ -336,10 +313,10 @@ static void slice_writes_a_job(void)
         CHECKF(png && !memcmp(png, "\x89PNG\r\n\x1a\n", 8) && png[24] == 1, "layer %zu: not a 1-bit PNG", k);
         free(png);
         snprintf(path, sizeof path, "%s/layer_%05zu.svg", job, k);
-        CHECKF(exists(path), "layer %zu: no contour SVG", k);
+        CHECKF(cli_exists(path), "layer %zu: no contour SVG", k);
     }
     snprintf(path, sizeof path, "%s/layer_%05zu.png", job, layers + 1);
-    CHECK(!exists(path));
+    CHECK(!cli_exists(path));
     free(manifest);
     free(csv);
 
@@ -381,13 +358,18 @@ static void slice_writes_a_job(void)
         CHECKF(*first && !strcmp(first, other), "lit areas differ: %s / %s", first, other);
     }
 
-    /* a 10 mm sphere on a 5 x 5 mm plate */
+    /* a 10 mm sphere on a 5 x 5 mm plate: refused before a byte is written,
+       so the job there stays whole */
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    manifest = cli_read(path);
     r = cli_run("slice", sphere_stl(), "-o", job, "--pixels", "100x100", "--pitch", "0.05", NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "does not fit") && strstr(r.err, "5 mm too wide"),
            "exit %d: %s", r.status, r.err);
     cli_free(&r);
-    snprintf(path, sizeof path, "%s/manifest.json", job);
-    CHECK(!exists(path));
+    csv = cli_read(path);
+    CHECK(manifest && csv && !strcmp(manifest, csv));
+    free(manifest);
+    free(csv);
     r = cli_run("slice", sphere_stl(), "-o", job, "--printer", "laser-9000", NULL);
     CHECK(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "laser-9000"));
     cli_free(&r);
@@ -397,7 +379,7 @@ static void slice_writes_a_job(void)
 
     /* a complete job, then a run that cannot write its third layer */
     r = cli_run("slice", sphere_stl(), "-o", job, NULL);
-    CHECK(r.status == 0 && exists(path));
+    CHECK(r.status == 0 && cli_exists(path));
     cli_free(&r);
     snprintf(path, sizeof path, "%s/layer_00003.png", job);
     remove(path);
@@ -407,7 +389,7 @@ static void slice_writes_a_job(void)
     cli_free(&r);
     rmdir(path);
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    CHECKF(!exists(path), "an interrupted job still has a manifest");
+    CHECKF(!cli_exists(path), "an interrupted job still has a manifest");
     {
         DIR *d = opendir(job);
         struct dirent *e;
@@ -439,14 +421,14 @@ static void orient_finds_directions(void)
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     p = strstr(r.out, "\"direction\": [");
     CHECK(p && sscanf(p, "\"direction\": [%lf, %lf, %lf]", &d[0], &d[1], &d[2]) == 3);
-    k = json_field(r.out, "layers");
+    k = cli_json_number(r.out, "layers");
     CHECKF(fabs(d[2]) < 0.1 && (fabs(d[0]) > 0.95 || fabs(d[1]) > 0.95) && k > 60 && k < 200, "best (%g, %g, %g), %g layers", d[0], d[1], d[2], k);
-    CHECK(exists(cli_path("map.svg")));
+    CHECK(cli_exists(cli_path("map.svg")));
     cli_free(&r);
     snprintf(dir_arg, sizeof dir_arg, "%.9g,%.9g,%.9g", d[0], d[1], d[2]);
     r = cli_run("plan", box, "--orient", dir_arg, "--json", NULL);
-    CHECKF(r.status == 0 && json_field(r.out, "layers") == k, "plan --orient %s: %g layers, orient said %g", dir_arg,
-           json_field(r.out, "layers"), k);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "layers") == k, "plan --orient %s: %g layers, orient said %g", dir_arg,
+           cli_json_number(r.out, "layers"), k);
     cli_free(&r);
     for (i = 0; i < sizeof bad / sizeof *bad; i++) {
         r = cli_run("orient", box, bad[i][0], bad[i][1], NULL);
@@ -466,7 +448,7 @@ static void unwritable_output_fails_cleanly(void)
     DIR *d;
     struct dirent *e;
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "missing/plan.csv"), "exit %d, '%s'", r.status, r.err);
-    CHECK(!exists(missing));
+    CHECK(!cli_exists(missing));
     cli_free(&r);
 
     /* a directory in the way: the temporary file is written, the rename fails */

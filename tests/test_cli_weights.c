@@ -6,20 +6,6 @@
 
 #include <math.h>
 
-/* An OBJ of the mesh (the loader keeps the triangles' order). */
-static void write_obj(const char *path, const adaslice_mesh *m)
-{
-    FILE *f = fopen(path, "w");
-    size_t i;
-    CHECKF(f != NULL, "cannot write %s", path);
-    if (!f) return;
-    for (i = 0; i < m->vertex_count; i++)
-        fprintf(f, "v %.9g %.9g %.9g\n", m->vertices[3 * i], m->vertices[3 * i + 1], m->vertices[3 * i + 2]);
-    for (i = 0; i < m->triangle_count; i++)
-        fprintf(f, "f %u %u %u\n", m->triangles[3 * i] + 1, m->triangles[3 * i + 1] + 1, m->triangles[3 * i + 2] + 1);
-    fclose(f);
-}
-
 /* A UV sphere of radius 5 with a bump at latitude 30 degrees. */
 static const char *bump_obj(void)
 {
@@ -32,7 +18,7 @@ static const char *bump_obj(void)
         double c = (d[0] * 0.866 + d[2] * 0.5) / len, a = acos(c > 1 ? 1 : c), s = (5 + 0.5 * exp(-a * a / 0.04)) / len;
         p[0] = (float)(d[0] * s); p[1] = (float)(d[1] * s); p[2] = (float)(d[2] * s + 5);
     }
-    write_obj(path, &m);
+    cli_write_obj(path, &m);
     gen_free(&m);
     return path;
 }
@@ -52,15 +38,6 @@ static double *read_values(const char *path, size_t *n)
     }
     free(text);
     return v;
-}
-
-static double json_number_at(const char *json, const char *key)
-{
-    char pat[64];
-    const char *p;
-    snprintf(pat, sizeof pat, "\"%s\":", key);
-    p = strstr(json, pat);
-    return p ? strtod(p + strlen(pat), NULL) : NAN;
 }
 
 /* The weights file has one value in [0,1] per triangle, 1 reached; the PLY
@@ -91,8 +68,8 @@ static void saliency_command_writes_weights_and_a_coloured_mesh(void)
     a = cli_run("plan", model, "--saliency", "--json", NULL);
     b = cli_run("plan", model, "--weights", weights, "--json", NULL);
     CHECKF(a.status == 0 && b.status == 0, "exits %d, %d: %s %s", a.status, b.status, a.err, b.err);
-    CHECK(json_number_at(a.out, "layers") == json_number_at(b.out, "layers"));
-    CHECK(json_number_at(a.out, "total_error") == json_number_at(b.out, "total_error"));
+    CHECK(cli_json_number(a.out, "layers") == cli_json_number(b.out, "layers"));
+    CHECK(cli_json_number(a.out, "total_error") == cli_json_number(b.out, "total_error"));
     cli_free(&a);
     cli_free(&b);
     /* with the sampled profile too */
@@ -215,7 +192,7 @@ static void curvature_method(void)
 {
     const char *model = bump_obj(), *profile = cli_path("p.csv");
     cli_result r = cli_run("plan", model, "--method", "curvature", "--mapping", "step", "--json", NULL);
-    CHECKF(r.status == 0 && json_number_at(r.out, "layers") > 0 && strstr(r.out, "\"method\": \"curvature\""),
+    CHECKF(r.status == 0 && cli_json_number(r.out, "layers") > 0 && strstr(r.out, "\"method\": \"curvature\""),
            "exit %d: %s", r.status, r.err);
     cli_free(&r);
     r = cli_run("plan", model, "--compare", NULL);
@@ -242,7 +219,7 @@ static void weights_and_orient(void)
 {
     const char *model = bump_obj();
     cli_result r = cli_run("plan", model, "--orient", "1,0,0", "--weight", "box:-6,-6,-1,6,6,12=0", "--json", NULL);
-    CHECKF(r.status == 0 && json_number_at(r.out, "worst_error") == 0, "exit %d: %s %s", r.status, r.out, r.err);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "worst_error") == 0, "exit %d: %s %s", r.status, r.out, r.err);
     cli_free(&r);
     r = cli_run("orient", model, "--method", "curvature", NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err), "exit %d, '%s'", r.status, r.err);

@@ -137,25 +137,23 @@ static void send_plan(fake_printer *p, const uint8_t *lengths, uint32_t layers, 
     fake_send_chunks(p, LINK_MSG_PLAN_DATA, lengths, layers, LINK_PAYLOAD_MAX);
 }
 
-static void send_mask(fake_printer *p, uint32_t layer, const uint8_t *code, size_t size, uint32_t crc)
+static void send_mask(fake_printer *p, uint32_t layer, const uint8_t *code, size_t size, uint32_t crc, uint32_t exposure_ms)
 {
     uint8_t hdr[LINK_SIZE_MASK];
     link_mask m;
     m.layer = layer;
     m.code_bytes = (uint32_t)size;
     m.crc32 = crc;
+    m.exposure_ms = exposure_ms;
     fake_send(p, LINK_MSG_MASK, hdr, link_put_mask(hdr, &m));
     fake_send_chunks(p, LINK_MSG_MASK_DATA, code, size, LINK_PAYLOAD_MAX);
 }
 
-static void start_print(fake_printer *p, uint32_t first, uint32_t exposure_ms, uint32_t bottom, uint32_t bottom_ms)
+static void start_print(fake_printer *p, uint32_t first)
 {
     uint8_t pr[LINK_SIZE_PRINT];
     link_print m;
     m.first_layer = first;
-    m.exposure_ms = exposure_ms;
-    m.bottom_layers = bottom;
-    m.bottom_exposure_ms = bottom_ms;
     m.peel_nm = 5000000;        /* peel 5 mm */
     m.peel_speed_um_s = 3000;   /* 3 mm/s up */
     m.return_speed_um_s = 0;    /* down as fast as the axis goes */
@@ -188,23 +186,39 @@ static void bad_masks_are_never_shown(void)
     crc = adaslice_crc32(0, image, sizeof image);
     send_plan(&p, lengths, 2, 2000);
     home(&p);
-    start_print(&p, 1, 1000, 0, 0);
+    start_print(&p, 1);
     fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
     CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_WAIT_MASK);
-    send_mask(&p, 1, code, n, crc ^ 1);             /* the sender's CRC is wrong */
+    send_mask(&p, 1, code, n, crc ^ 1, 1000);             /* the sender's CRC is wrong */
     CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_CRC && p.status.masks_refused == 1);
     code[n / 2] ^= 0x01;                            /* the code is damaged */
-    send_mask(&p, 1, code, n, crc);
+    send_mask(&p, 1, code, n, crc, 1000);
     code[n / 2] ^= 0x01;
     CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.masks_refused == 2 && p.status.mask_ready == 0);
-    send_mask(&p, 2, code, n, crc);                 /* out of order */
+    send_mask(&p, 2, code, n, crc, 1000);           /* out of order */
     CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_ORDER);
     fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
     for (k = 0; k < p.event_count; k++) CHECK(p.events[k].kind != ZEV_UV && !(p.events[k].kind == ZEV_SHOW && p.events[k].value >= 0));
-    send_mask(&p, 1, code, n, crc);
+    {   /* no light, or more than an hour of it: refused at the header */
+        uint8_t hdr[LINK_SIZE_MASK];
+        link_mask m;
+        uint32_t bad[2] = {0, FW_EXPOSURE_MAX_MS + 1};
+        int b;
+        for (b = 0; b < 2; b++) {
+            m.layer = 1;
+            m.code_bytes = (uint32_t)n;
+            m.crc32 = crc;
+            m.exposure_ms = bad[b];
+            fake_send(&p, LINK_MSG_MASK, hdr, link_put_mask(hdr, &m));
+            CHECKF(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_EXPOSURE &&
+                       p.status.masks_refused == 3 + b && p.status.mask_ready == 0,
+                   "exposure %u ms: error %u", bad[b], p.status.error);
+        }
+    }
+    send_mask(&p, 1, code, n, crc, 1000);
     fake_run(&p, p.now + FAKE_TICK_HZ / 10);
     CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.mask_ready == 1 && p.status.phase >= LINK_PHASE_SETTLE);
-    send_mask(&p, 2, code, n, crc);
+    send_mask(&p, 2, code, n, crc, 1000);
     fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
     CHECK(fake_state(&p) == LINK_STATE_DONE);
     {
@@ -223,17 +237,23 @@ static void thousand_layers_without_drift(void)
 {
     static fake_printer p;
     static uint8_t lengths[1000], image[32 * 16 / 8], code[1024];
-    static uint32_t tops[1000], crcs[1000];
+    static uint32_t tops[1000], crcs[1000], exposures[1000];
     uint32_t k, sent = 0, top = 0;
     zexpect e;
     zsummary s;
     fake_init(&p, 32, 16, 1);
     p.keep_events = 1;
     p.heartbeat = FAKE_TICK_HZ / 4;
-    for (k = 0; k < 1000; k++) { lengths[k] = (uint8_t)(25 + fw_rng() % 51); top += lengths[k]; tops[k] = top; }
+    for (k = 0; k < 1000; k++) {
+        lengths[k] = (uint8_t)(25 + fw_rng() % 51);
+        top += lengths[k];
+        tops[k] = top;
+        /* the bottom layers' long light, then each layer its own, as thickness asks */
+        exposures[k] = k < 3 ? 2000 : 200 + 4 * lengths[k];
+    }
     send_plan(&p, lengths, 1000, 2000);
     home(&p);
-    start_print(&p, 1, 300, 3, 2000);
+    start_print(&p, 1);
     CHECKF(fake_state(&p) == LINK_STATE_PRINTING, "state %u error %u", p.status.state, p.status.error);
     while (fake_state(&p) == LINK_STATE_PRINTING) {
         uint32_t layer = p.status.layer, ready = p.status.mask_ready;
@@ -242,7 +262,7 @@ static void thousand_layers_without_drift(void)
             for (b = 0; b < sizeof image; b++) image[b] = (uint8_t)((sent + 1) * 31 + b * 7);
             CHECK(adaslice_rle_encode(image, 4, 32, 16, 1, code, sizeof code, &n) == ADASLICE_OK);
             crcs[sent] = adaslice_crc32(0, image, sizeof image);
-            send_mask(&p, sent + 1, code, n, crcs[sent]);
+            send_mask(&p, sent + 1, code, n, crcs[sent], exposures[sent]);
             sent++;
         }
         fake_run(&p, p.now + FAKE_TICK_HZ / 20);
@@ -259,9 +279,7 @@ static void thousand_layers_without_drift(void)
     e.top_bins = tops;
     e.bin_nm = 2000;
     e.crcs = crcs;
-    e.exposure_ticks = FAKE_TICK_HZ * 300ull / 1000;
-    e.bottom_ticks = FAKE_TICK_HZ * 2ull;
-    e.bottom_layers = 3;
+    e.exposure_ms = exposures;
     s = zcheck_record(p.events, p.event_count, &e);
     /* after the last peel: its top plus 5 mm, exactly */
     CHECKF(p.true_position == zcheck_steps_of(&e, top) + 2000, "ends at %d steps", (int)p.true_position);
@@ -288,15 +306,15 @@ static void pause_and_link_loss(void)
     crc = adaslice_crc32(0, image, sizeof image);
     send_plan(&p, lengths, 3, 2000);
     home(&p);
-    start_print(&p, 1, 4000, 0, 0);
-    send_mask(&p, 1, code, n, crc);
+    start_print(&p, 1);
+    send_mask(&p, 1, code, n, crc, 4000);
     while (fake_state(&p) == LINK_STATE_PRINTING && p.status.phase != LINK_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 100);
     fake_run(&p, p.now + FAKE_TICK_HZ);
     fake_send(&p, LINK_MSG_PAUSE, NULL, 0);
     CHECK(fake_state(&p) == LINK_STATE_PAUSED && !(p.status.flags & LINK_FLAG_UV));
     fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
     fake_send(&p, LINK_MSG_RESUME, NULL, 0);
-    send_mask(&p, 2, code, n, crc);
+    send_mask(&p, 2, code, n, crc, 4000);
     /* the host falls silent during layer 2: UV off, Z held, a pause flagged as link loss */
     while (fake_state(&p) == LINK_STATE_PRINTING && !(p.status.layer == 2 && p.status.phase == LINK_PHASE_EXPOSE))
         fake_run(&p, p.now + FAKE_TICK_HZ / 100);
@@ -305,7 +323,7 @@ static void pause_and_link_loss(void)
     p.heartbeat = FAKE_TICK_HZ / 5;
     CHECK(fake_state(&p) == LINK_STATE_PAUSED && (p.status.flags & LINK_FLAG_LINK_LOST) && !(p.status.flags & LINK_FLAG_UV));
     fake_send(&p, LINK_MSG_RESUME, NULL, 0);
-    send_mask(&p, 3, code, n, crc);
+    send_mask(&p, 3, code, n, crc, 4000);
     fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
     CHECK(fake_state(&p) == LINK_STATE_DONE);
     /* every layer got its full 4 s of light, in pieces where it was paused */
@@ -369,7 +387,7 @@ static void manual_commands(void)
     CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_BUSY); /* no verified mask yet */
     send_plan(&p, lengths, 1, 2000);
     CHECK(adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code, &n) == ADASLICE_OK);
-    send_mask(&p, 1, code, n, adaslice_crc32(0, image, sizeof image));
+    send_mask(&p, 1, code, n, adaslice_crc32(0, image, sizeof image), 1000);
     fake_send(&p, LINK_MSG_EXPOSE, ms, LINK_SIZE_EXPOSE);
     CHECK(fake_state(&p) == LINK_STATE_READY && (p.status.flags & LINK_FLAG_UV));
     fake_run(&p, p.now + 2ull * FAKE_TICK_HZ);

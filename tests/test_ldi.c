@@ -43,7 +43,7 @@ static void rays_through_vertices_and_edges_are_watertight(void)
             size_t hit = 0, bad;
             memset(&g, 0, sizeof g);
             g.axis = (adaslice_axis)axis;
-            g.pitch = 0.5; /* centres at multiples of 0.5: every box vertex and edge, the poles */
+            g.pitch[0] = g.pitch[1] = 0.5; /* centres at multiples of 0.5: every box vertex and edge, the poles */
             g.origin[0] = g.origin[1] = -10.25;
             g.width = g.height = 41;
             CHECKF(adaslice_ldi_build(meshes[m], &g, NULL, &ldi, &e) == ADASLICE_OK, "%s", e.message);
@@ -54,7 +54,7 @@ static void rays_through_vertices_and_edges_are_watertight(void)
                 int i, j, leaks = 0;
                 for (j = 0; j < g.height; j++)
                     for (i = 0; i < g.width; i++) {
-                        double u = g.origin[0] + (i + 0.5) * g.pitch, v = g.origin[1] + (j + 0.5) * g.pitch;
+                        double u = g.origin[0] + (i + 0.5) * g.pitch[0], v = g.origin[1] + (j + 0.5) * g.pitch[1];
                         double half[3] = {4, 3, 2}; /* the box's half sizes along x, y, z */
                         int a = axis == 0 ? 1 : axis == 1 ? 2 : 0;
                         int inside = m == 0 ? fabs(u) < half[a] && fabs(v) < half[(a + 1) % 3] : u * u + v * v < 9;
@@ -80,7 +80,7 @@ static void box_rays_meet_the_faces(void)
     size_t p;
     memset(&g, 0, sizeof g);
     g.axis = ADASLICE_AXIS_Z;
-    g.pitch = 1;
+    g.pitch[0] = g.pitch[1] = 1;
     g.origin[0] = -4; g.origin[1] = -3;
     g.width = 8; g.height = 6;
     CHECK(adaslice_ldi_build(&box, &g, NULL, &ldi, NULL) == ADASLICE_OK);
@@ -208,9 +208,9 @@ static void bad_grids_are_refused(void)
     adaslice_ldi ldi;
     adaslice_error e;
     memset(&g, 0, sizeof g);
-    g.axis = ADASLICE_AXIS_Z; g.pitch = 0; g.width = 10; g.height = 10;
+    g.axis = ADASLICE_AXIS_Z; g.pitch[0] = g.pitch[1] = 0; g.width = 10; g.height = 10;
     CHECK(adaslice_ldi_build(&m, &g, NULL, &ldi, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "grid"));
-    g.pitch = 1e-9; /* the mesh lies 10^9 pixels away */
+    g.pitch[0] = g.pitch[1] = 1e-9; /* the mesh lies 10^9 pixels away */
     CHECK(adaslice_ldi_build(&m, &g, NULL, &ldi, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "2^21"));
     gen_free(&m);
 }

@@ -164,11 +164,12 @@ static void protocol_md_example_frames_are_exact(void)
     link_mask mask;
     int k;
     if (!text) { CHECKF(0, "cannot read %s", PROTOCOL_MD); return; }
-    hello.version = 1;
+    hello.version = 2;
     want_n[0] = link_frame_build(want[0], 0x2a, LINK_MSG_HELLO, payload, link_put_hello(payload, &hello));
     mask.layer = 7;
     mask.code_bytes = 1234;
     mask.crc32 = 0xdeadbeefu;
+    mask.exposure_ms = 2500;
     want_n[1] = link_frame_build(want[1], 0x2b, LINK_MSG_MASK | LINK_ROUND_BIT, payload, link_put_mask(payload, &mask));
     p = strstr(text, "Example: ");
     CHECKF(p != NULL, "%s has no example frame", PROTOCOL_MD);
@@ -218,7 +219,7 @@ static void messages_round_trip(void)
     CHECK(link_get_identify(&ib, buf, LINK_SIZE_IDENTIFY) && !memcmp(&ia, &ib, sizeof ia));
     memset(&pa, 0, sizeof pa);
     memset(&pb, 0, sizeof pb);
-    pa.first_layer = 5; pa.exposure_ms = 2500; pa.settle_ms = 0xffffffffu;
+    pa.first_layer = 5; pa.peel_nm = 2500000; pa.settle_ms = 0xffffffffu;
     CHECK(link_put_print(buf, &pa) == LINK_SIZE_PRINT && link_get_print(&pb, buf, LINK_SIZE_PRINT) && !memcmp(&pa, &pb, sizeof pa));
     /* PLAN has a tail: at least its fixed part */
     page.first = 1; page.layers = 2; page.bin_nm = 2000;

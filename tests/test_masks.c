@@ -12,21 +12,23 @@ static int mask_bit(const adaslice_masker *mk, int i, int j)
 }
 
 /* A third and a seventh of a pixel off centre, so centres rarely sit on edges. */
-static adaslice_grid plate_around(const adaslice_mesh *m, double pitch, int w, int h)
+static adaslice_grid plate_around(const adaslice_mesh *m, double px, double py, int w, int h)
 {
     double offset[2];
-    offset[0] = -pitch / 3;
-    offset[1] = -pitch / 7;
-    return adaslice_grid_plate(m, w, h, pitch, offset);
+    offset[0] = -px / 3;
+    offset[1] = -py / 7;
+    return adaslice_grid_plate(m, w, h, px, py, offset);
 }
 
 /* Every pixel whose centre is more than a pixel from every contour edge is lit
    exactly when the contours' winding number there is positive; the lit area is
-   within the contour's length times a pixel diagonal of the exact A(h). */
-static void check_against_contours(const char *what, adaslice_mesh *m, double pitch, int w, int h, int heights,
+   within the contour's length times a pixel diagonal of the exact A(h).
+   Pixels are px x py mm (many panels' are not square). */
+static void check_against_contours(const char *what, adaslice_mesh *m, double px, double py, int w, int h, int heights,
                                    int overlapping)
 {
-    adaslice_grid g = plate_around(m, pitch, w, h);
+    adaslice_grid g = plate_around(m, px, py, w, h);
+    double diagonal = hypot(px, py), reach = px > py ? px : py;
     adaslice_masker mk;
     adaslice_contours c;
     adaslice_profile_options po;
@@ -49,8 +51,8 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double pi
         CHECK(adaslice_masker_slice(&mk, z[k], &e) == ADASLICE_OK);
         for (j = 0; j < h; j++)
             for (i = 0; i < w; i++) {
-                double x = g.origin[0] + (i + 0.5) * pitch, y = g.origin[1] + (j + 0.5) * pitch;
-                if (adaslice_contours_distance(&c, (size_t)k, x, y) <= pitch) { near++; continue; }
+                double x = g.origin[0] + (i + 0.5) * px, y = g.origin[1] + (j + 0.5) * py;
+                if (adaslice_contours_distance(&c, (size_t)k, x, y) <= reach) { near++; continue; }
                 wrong += (adaslice_contours_winding(&c, (size_t)k, x, y) > 0) != mask_bit(&mk, i, j);
             }
         for (p = c.first_polygon[k]; p < c.first_polygon[k + 1]; p++) {
@@ -61,12 +63,12 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double pi
                 perimeter += hypot(b[0] - a[0], b[1] - a[1]);
             }
         }
-        lit = mk.lit * pitch * pitch;
+        lit = mk.lit * px * py;
         area = prof.area[(size_t)((z[k] - prof.z0) / prof.bin)];
         CHECKF(wrong == 0, "%s at z %g: %zu pixels differ from the contours (%zu near an edge skipped)", what, z[k], wrong, near);
         /* A is taken at the bin's centre: allow the area's change over a bin
            too. The exact A counts overlapping shells twice: no comparison there. */
-        CHECKF(overlapping || fabs(lit - area) <= perimeter * pitch * sqrt(2.0) + perimeter * prof.bin + 1e-9,
+        CHECKF(overlapping || fabs(lit - area) <= perimeter * diagonal + perimeter * prof.bin + 1e-9,
                "%s at z %g: lit %g mm^2, A %g mm^2, contour %g mm", what, z[k], lit, area, perimeter);
     }
     /* above the top no ray is left inside */
@@ -81,7 +83,16 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double pi
 static void sphere_masks_match_contours(void)
 {
     adaslice_mesh m = gen_sphere(10, 64, 32, 0);
-    check_against_contours("sphere", &m, 0.05, 480, 440, 12, 0);
+    check_against_contours("sphere", &m, 0.05, 0.05, 480, 440, 12, 0);
+    gen_free(&m);
+}
+
+/* A 12K panel's 19 x 24 um pixels, three times larger: the same checks, the
+   same tolerance (a pixel's diagonal along the contour). */
+static void sphere_masks_match_contours_on_oblong_pixels(void)
+{
+    adaslice_mesh m = gen_sphere(10, 64, 32, 0);
+    check_against_contours("sphere, 57 x 72 um pixels", &m, 0.057, 0.072, 400, 310, 12, 0);
     gen_free(&m);
 }
 
@@ -89,7 +100,7 @@ static void box_with_cylinder_masks_match_contours(void)
 {
     adaslice_mesh m = gen_box(-10, -6, 0, 10, 6, 5), c = gen_cylinder(4, 8, 48, 5);
     gen_append(&m, &c);
-    check_against_contours("box with cylinder", &m, 0.07, 320, 200, 10, 0);
+    check_against_contours("box with cylinder", &m, 0.07, 0.07, 320, 200, 10, 0);
     gen_free(&m);
     gen_free(&c);
 }
@@ -99,7 +110,7 @@ static void overlapping_boxes_stay_lit(void)
 {
     adaslice_mesh m = gen_box(0, 0, 0, 6, 4, 3), b = gen_box(3, 1, 1, 9, 6, 5);
     gen_append(&m, &b);
-    check_against_contours("overlapping boxes", &m, 0.05, 220, 160, 8, 1);
+    check_against_contours("overlapping boxes", &m, 0.05, 0.05, 220, 160, 8, 1);
     gen_free(&m);
     gen_free(&b);
 }
@@ -112,7 +123,7 @@ static void bundled_hand_masks_match_contours(void)
     memset(&lo, 0, sizeof lo);
     lo.scale = 88.7;
     CHECKF(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &m, &e) == ADASLICE_OK, "%s", e.message);
-    check_against_contours("hand", &m, 0.2, 350, 440, 6, 0);
+    check_against_contours("hand", &m, 0.2, 0.2, 350, 440, 6, 0);
     adaslice_mesh_free(&m);
 }
 
@@ -126,7 +137,7 @@ static void rays_through_edges_light_exactly_once(void)
     int i, j, wrong = 0;
     memset(&g, 0, sizeof g);
     g.axis = ADASLICE_AXIS_Z;
-    g.pitch = 0.5;
+    g.pitch[0] = g.pitch[1] = 0.5;
     g.origin[0] = g.origin[1] = -10.25; /* centres at multiples of 0.5 */
     g.width = g.height = 41;
     CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
@@ -148,7 +159,7 @@ static void rays_through_edges_light_exactly_once(void)
 static void antialiased_masks_cover_the_area(void)
 {
     adaslice_mesh m = gen_cylinder(5, 4, 256, 0);
-    adaslice_grid g = plate_around(&m, 0.1, 140, 130);
+    adaslice_grid g = plate_around(&m, 0.1, 0.1, 140, 130);
     adaslice_masker mk;
     size_t p, sum = 0;
     double poly = 256 / 2.0 * 25 * sin(2 * M_PI / 256);
@@ -170,7 +181,7 @@ static void antialiased_masks_cover_the_area(void)
 static void open_meshes_never_light_a_column(void)
 {
     adaslice_mesh box = gen_box(-4, -3, 0, 4, 3, 2);
-    adaslice_grid g = plate_around(&box, 0.1, 120, 100);
+    adaslice_grid g = plate_around(&box, 0.1, 0.1, 120, 100);
     adaslice_masker mk;
     size_t t, kept = 0;
     CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
@@ -193,6 +204,7 @@ static void open_meshes_never_light_a_column(void)
 void test_masks(void)
 {
     RUN(sphere_masks_match_contours);
+    RUN(sphere_masks_match_contours_on_oblong_pixels);
     RUN(box_with_cylinder_masks_match_contours);
     RUN(overlapping_boxes_stay_lit);
     RUN(bundled_hand_masks_match_contours);

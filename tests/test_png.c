@@ -152,18 +152,19 @@ static int run_oiiotool(char **args)
     return -1;
 }
 
-/* The P5 PGM at path as w x h bytes of maxval 255, or NULL. */
-static unsigned char *read_pgm(const char *path, int w, int h)
+/* The P5 PGM (channels 1) or P6 PPM (3) at path as w x h pixels of
+   maxval 255, or NULL. */
+static unsigned char *read_pnm(const char *path, int w, int h, int channels)
 {
-    size_t n;
+    size_t n, size = (size_t)w * (size_t)h * (size_t)channels;
     unsigned char *s = read_file(path, &n), *pixels = NULL;
     int width, height, maxval, used = 0;
     if (s) {
         s[n] = 0;
-        if (sscanf((char *)s, "P5 %d %d %d%n", &width, &height, &maxval, &used) == 3 && width == w &&
-            height == h && maxval == 255 && n - (size_t)used - 1 == (size_t)w * (size_t)h &&
-            (pixels = (unsigned char *)malloc((size_t)w * (size_t)h)) != NULL)
-            memcpy(pixels, s + used + 1, (size_t)w * (size_t)h);
+        if (sscanf((char *)s, channels == 3 ? "P6 %d %d %d%n" : "P5 %d %d %d%n", &width, &height, &maxval,
+                   &used) == 3 && width == w && height == h && maxval == 255 && n - (size_t)used - 1 == size &&
+            (pixels = (unsigned char *)malloc(size)) != NULL)
+            memcpy(pixels, s + used + 1, size);
     }
     free(s);
     return pixels;
@@ -195,7 +196,7 @@ static void round_trip(batch *b)
     if (encoded && run_oiiotool(args) == 0) {
         for (int i = 0; i < b->count; i++) {
             image *im = &b->im[i];
-            unsigned char *got = read_pgm(im->pgm, im->width, im->height);
+            unsigned char *got = read_pnm(im->pgm, im->width, im->height, 1);
             long wrong = 0, first_x = -1, first_y = -1;
             CHECKF(got, "%s: oiiotool wrote no %dx%d 8-bit PGM", im->pgm, im->width, im->height);
             for (int y = 0; got && y < im->height; y++)
@@ -461,6 +462,108 @@ static void noise_decodes_in_oiiotool(void)
     round_trip(&b);
 }
 
+/* ---- RGB, for previews ---------------------------------------------------- */
+
+/* A picture like a preview: a dark background and a shaded ball. */
+static int shaded(int x, int y, int c, int w, int h)
+{
+    double dx = (x - w / 2.0) / (w / 3.0), dy = (y - h / 2.0) / (h / 3.0), r2 = dx * dx + dy * dy;
+    if (r2 >= 1) return 30 + 8 * c;
+    return (int)((0.3 + 0.7 * sqrt(1 - r2) * (0.6 - 0.4 * dx - 0.3 * dy)) * (200 + 25 * c)) & 255;
+}
+static int bands(int x, int y, int c, int w, int h) { (void)y; (void)w; (void)h; return (x / 7 * (c + 1) * 40) & 255; }
+static int rgb_noise(int x, int y, int c, int w, int h)
+{
+    (void)x; (void)y; (void)c; (void)w; (void)h;
+    return rng() & 255;
+}
+
+static unsigned char *rgb_image(int w, int h, int (*f)(int x, int y, int c, int w, int h))
+{
+    unsigned char *rgb = (unsigned char *)malloc((size_t)w * (size_t)h * 3);
+    for (int y = 0; rgb && y < h; y++)
+        for (int x = 0; x < w; x++)
+            for (int c = 0; c < 3; c++)
+                rgb[((size_t)y * (size_t)w + (size_t)x) * 3 + (size_t)c] = (unsigned char)f(x, y, c, w, h);
+    return rgb;
+}
+
+/* IHDR says 8-bit truecolour, every chunk's CRC holds; bad sizes are refused. */
+static void rgb_header_says_truecolour(void)
+{
+    unsigned char *rgb = rgb_image(5, 3, bands), *png = NULL, *out = rgb;
+    size_t size = 0, pos = 8, one = 1;
+    int chunks = 0;
+    CHECK(rgb && png_encode_rgb(rgb, 5, 3, &png, &size) == 0);
+    while (png && pos + 12 <= size) {
+        uint32_t len = be32(png + pos);
+        const unsigned char *type = png + pos + 4, *body = type + 4;
+        if (pos + 12 + len > size) break;
+        CHECKF(adaslice_crc32(0, type, len + 4) == be32(body + len), "chunk %d: bad CRC", chunks);
+        if (chunks == 0)
+            CHECK(!memcmp(type, "IHDR", 4) && len == 13 && be32(body) == 5 && be32(body + 4) == 3 && body[8] == 8 &&
+                  body[9] == 2 && body[10] == 0 && body[11] == 0 && body[12] == 0);
+        pos += 12 + len;
+        chunks++;
+    }
+    CHECK(chunks == 3 && pos == size);
+    CHECK(png_encode_rgb(rgb, 0, 3, &out, &one) == -1 && !out && one == 0);
+    CHECK(png_encode_rgb(rgb, 5, 0, &out, &size) == -1);
+    CHECK(png_encode_rgb(NULL, 5, 3, &out, &size) == -1);
+    CHECK(png_encode_rgb(rgb, 40000, 40000, &out, &size) == -1 && !out); /* 4.8 GB of rows */
+    free(rgb);
+    free(png);
+}
+
+/* Previews at the formats' sizes and odd small ones, read back through
+   OpenImageIO (as P6 PPM) pixel for pixel. */
+static void rgb_images_decode_in_oiiotool(void)
+{
+    static const struct { int w, h; int (*f)(int, int, int, int, int); } cases[] = {
+        {1, 1, bands}, {2, 3, rgb_noise}, {7, 5, shaded}, {33, 17, rgb_noise}, {954, 850, shaded},
+        {168, 150, shaded}, {400, 400, bands}, {800, 480, rgb_noise}, {3000, 2, shaded},
+    };
+    enum { N = sizeof cases / sizeof cases[0] };
+    char png_path[N][128], ppm_path[N][128], *args[2 + 5 * N] = {(char *)"oiiotool"};
+    unsigned char *rgb[N];
+    int n = 1, encoded = 1;
+    for (int i = 0; i < N; i++) {
+        unsigned char *png = NULL;
+        size_t size = 0;
+        snprintf(png_path[i], sizeof png_path[i], "%s/rgb%d.png", dir, i);
+        snprintf(ppm_path[i], sizeof ppm_path[i], "%s/rgb%d.ppm", dir, i);
+        rgb[i] = rgb_image(cases[i].w, cases[i].h, cases[i].f);
+        if (!rgb[i] || png_encode_rgb(rgb[i], cases[i].w, cases[i].h, &png, &size) ||
+            !write_file(png_path[i], png, size)) {
+            CHECKF(0, "cannot encode or write %s", png_path[i]);
+            encoded = 0;
+        }
+        free(png);
+        args[n++] = png_path[i];
+        args[n++] = (char *)"-d";
+        args[n++] = (char *)"uint8";
+        args[n++] = (char *)"-o";
+        args[n++] = ppm_path[i];
+    }
+    args[n] = NULL;
+    if (encoded && run_oiiotool(args) == 0)
+        for (int i = 0; i < N; i++) {
+            size_t count = (size_t)cases[i].w * (size_t)cases[i].h, wrong = 0, first = 0;
+            unsigned char *got = read_pnm(ppm_path[i], cases[i].w, cases[i].h, 3);
+            CHECKF(got, "%s: oiiotool wrote no %dx%d 8-bit PPM", ppm_path[i], cases[i].w, cases[i].h);
+            for (size_t k = 0; got && k < count; k++)
+                if (memcmp(got + 3 * k, rgb[i] + 3 * k, 3) && wrong++ == 0) first = k;
+            CHECKF(wrong == 0, "%s (%dx%d RGB): %zu pixels differ, the first at (%zu, %zu)", png_path[i], cases[i].w,
+                   cases[i].h, wrong, first % (size_t)cases[i].w, first / (size_t)cases[i].w);
+            free(got);
+        }
+    for (int i = 0; i < N; i++) {
+        remove(png_path[i]);
+        remove(ppm_path[i]);
+        free(rgb[i]);
+    }
+}
+
 /* A 2560x1440 layer is 460 KB of 1-bit rows or 3.7 MB of 8-bit ones; masks
    must come out at a few KB. The limits are about 1.3-1.5 times the sizes
    measured when they were set (a disc over 25 %: 4.4 KB 1-bit, 13.2 KB 8-bit;
@@ -541,7 +644,7 @@ static void the_maskers_images_decode_in_oiiotool(void)
         adaslice_masker mk;
         adaslice_grid g;
         batch bt;
-        g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, NULL);
+        g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
         bt.count = 0;
         CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){s, NULL}, &e) == ADASLICE_OK);
         for (k = 0; k < 4; k++) {
@@ -575,6 +678,8 @@ void test_png(void)
     RUN_NEEDING("oiiotool", masks_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", patterns_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", noise_decodes_in_oiiotool);
+    RUN(rgb_header_says_truecolour);
+    RUN_NEEDING("oiiotool", rgb_images_decode_in_oiiotool);
     RUN(compression_stays_within_its_bounds);
     RUN_NEEDING("oiiotool", the_maskers_images_decode_in_oiiotool);
     remove_dir();

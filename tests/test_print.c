@@ -147,7 +147,7 @@ static int read_sim_log(const char *path, sim_log *l)
 }
 
 /* The host's --report: each layer's top (bins) and mask CRC. */
-typedef struct report { uint32_t layers, first, bin_nm, *tops, *crcs; unsigned long retransmits, mask_bytes; int by_printer; } report;
+typedef struct report { uint32_t layers, first, bin_nm, *tops, *crcs, *exposures; unsigned long retransmits, mask_bytes; int by_printer; } report;
 
 static int read_report(const char *path, report *r)
 {
@@ -164,17 +164,38 @@ static int read_report(const char *path, report *r)
     r->by_printer = strstr(text, "\"planned_by_printer\": true") != NULL;
     r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
     r->crcs = (uint32_t *)calloc(r->layers + 1, sizeof *r->crcs);
+    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
     for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
         r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
         at = strstr(at, "\"crc32\": \"");
         if (!at) break;
         r->crcs[k] = (uint32_t)strtoul(at + 10, &at, 16);
+        at = strstr(at, "\"exposure_ms\": ");
+        if (!at) break;
+        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
     }
     free(text);
     return r->layers && k == r->layers;
 }
 
-static void report_free(report *r) { free(r->tops); free(r->crcs); }
+static void report_free(report *r) { free(r->tops); free(r->crcs); free(r->exposures); }
+
+/* Every print here runs with CURE: 0.1 s cure a layer of tmin on a resin of
+   Dp 0.1 mm, two bottom layers of 0.5 s. */
+#define CURE "--exposure", "0.1", "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", "0.5"
+
+/* The exposures the host sent are Jacobs' working curve, E(t) = 0.1 s x
+   exp((t - tmin) / 0.1 mm), to the millisecond the protocol carries. */
+static void check_exposures(const report *r)
+{
+    uint32_t k, bad = 0;
+    for (k = r->first ? r->first - 1 : 0; k < r->layers; k++) {
+        double t = (r->tops[k] - (k ? r->tops[k - 1] : 0)) * (double)r->bin_nm / 1e6;
+        double want = k < 2 ? 500 : 100 * exp((t - ADASLICE_DEFAULT_TMIN) / 0.1);
+        if (fabs(r->exposures[k] - want) > 0.5 + 1e-9 && bad++ < 3)
+            CHECKF(0, "layer %u (%.4f mm): %u ms of exposure, the working curve gives %.2f", k + 1, t, r->exposures[k], want);
+    }
+}
 
 /* The record against the report: every layer shown once with the host's
    mask, at its exact height, the motion within limits. */
@@ -198,9 +219,8 @@ static void check_print(const char *log_path, const char *report_path, int expec
     e.top_bins = r.tops;
     e.bin_nm = r.bin_nm;
     e.crcs = r.crcs;
-    e.exposure_ticks = l.tick_hz / 10;   /* --exposure 0.1 */
-    e.bottom_ticks = l.tick_hz / 2;      /* --bottom-exposure 0.5 */
-    e.bottom_layers = 2;
+    e.exposure_ms = r.exposures;
+    check_exposures(&r);
     s = zcheck_record(l.ev, l.count, &e);
     CHECKF(s.shows == r.layers, "%zu masks shown for %u layers", s.shows, r.layers);
     if (expect_link_pause) {
@@ -247,8 +267,7 @@ static int start_relayed(child *sim, child *relay, const char *log, const char *
 
 static cli_result run_print(const char *port, const char *report)
 {
-    return cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--bottom-layers", "2",
-                   "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
+    return cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
                    "0.05", "--report", report, NULL);
 }
 
@@ -351,8 +370,8 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     child sim;
     char port[256], *out, *at;
     char *args[] = {(char *)"print", (char *)MODEL, (char *)"--scale", (char *)"15", (char *)"--port", port,
-                    (char *)"--exposure", (char *)"0.1", (char *)"--bottom-layers", (char *)"2", (char *)"--bottom-exposure",
-                    (char *)"0.5", (char *)"--peel", (char *)"2", (char *)"--peel-speed", (char *)"10", (char *)"--return-speed",
+                    (char *)"--exposure", (char *)"0.1", (char *)"--penetration", (char *)"0.1", (char *)"--bottom-layers",
+                    (char *)"2", (char *)"--bottom-exposure", (char *)"0.5", (char *)"--peel", (char *)"2", (char *)"--peel-speed", (char *)"10", (char *)"--return-speed",
                     (char *)"10", (char *)"--settle", (char *)"0.05", NULL};
     pid_t pid;
     int st, status = -1, i;
@@ -383,8 +402,7 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     {
         char k[16];
         snprintf(k, sizeof k, "%u", layer);
-        r = cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--bottom-layers", "2",
-                    "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
+        r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
                     "0.05", "--resume-from", k, "--report", cli_path("report5.json"), NULL);
     }
     CHECKF(r.status == 0, "resume: exit %d: %s", r.status, r.err);
@@ -409,9 +427,8 @@ static void ctrl_c_pauses_and_resume_finishes(void)
         e.top_bins = rep.tops;
         e.bin_nm = rep.bin_nm;
         e.crcs = rep.crcs;
-        e.exposure_ticks = l.tick_hz / 10;
-        e.bottom_ticks = l.tick_hz / 2;
-        e.bottom_layers = 2;
+        e.exposure_ms = rep.exposures;
+        check_exposures(&rep);
         CHECK(rep.first == layer);
         (void)zcheck_record(l.ev + from, l.count - from, &e);
         /* between the Ctrl-C and the resume: the light off, Z still */
@@ -428,29 +445,47 @@ static void print_a_sliced_job(void)
 {
     child sim;
     cli_result r;
-    char *text;
     if (!start_sim(&sim, cli_path("sim6.log"), SIM_SPEED)) return;
-    r = cli_run("slice", MODEL, "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "-o", cli_path("job"), NULL);
+    r = cli_run("slice", MODEL, "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "-o", cli_path("job"), CURE,
+                "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05", NULL);
     CHECKF(r.status == 0, "slice: %s", r.err);
     cli_free(&r);
-    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--exposure", "0.1", "--bottom-layers", "2",
-                "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05",
-                "--report", cli_path("report6.json"), NULL);
+    /* the job holds its exposures and motion */
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--exposure", "3", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "slice it again"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--report", cli_path("report6.json"), NULL);
     CHECKF(r.status == 0, "print JOBDIR: exit %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "the host's plan") != NULL);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0);
-    /* a damaged job: the message names the file and the byte */
-    text = cli_read(cli_path("job/masks.rle"));
-    if (text) {
-        FILE *f = fopen(cli_path("job/masks.rle"), "r+b");
-        if (f) { fseek(f, 36, SEEK_SET); fputc(0xff, f); fputc(0xff, f); fputc(0xff, f); fputc(0x7f, f); fclose(f); }
-        free(text);
+    /* a damaged job: the message names the file and the byte. masks.rle:
+       44 bytes of header, then layer 1: bins at 44, exposure at 48, CRC at
+       52, code bytes at 56 */
+    {
+        static const struct { long at; unsigned char v[4]; const char *says; } damage[] = {
+            {48, {0, 0, 0, 0}, "masks.rle: byte 48: layer 1's exposure of 0 ms"},
+            {56, {0xff, 0xff, 0xff, 0x7f}, "masks.rle: byte 44: layer 1 runs past the end"},
+        };
+        int d;
+        for (d = 0; d < 2; d++) {
+            FILE *f = fopen(cli_path("job/masks.rle"), "r+b");
+            CHECK(f != NULL);
+            if (!f) break;
+            fseek(f, damage[d].at, SEEK_SET);
+            fwrite(damage[d].v, 1, 4, f);
+            fclose(f);
+            r = cli_run("print", cli_path("job"), "--port", "/dev/null", NULL);
+            CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, damage[d].says), "damaged job: %d %s", r.status,
+                   r.err);
+            cli_free(&r);
+            if (d == 0) { /* put the exposure back for the next damage */
+                f = fopen(cli_path("job/masks.rle"), "r+b");
+                if (f) { fseek(f, 48, SEEK_SET); fwrite("\xf4\x01\0\0", 1, 4, f); fclose(f); }
+            }
+        }
     }
-    r = cli_run("print", cli_path("job"), "--port", "/dev/null", NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "masks.rle: byte 28"), "damaged job: %d %s", r.status, r.err);
-    cli_free(&r);
 }
 
 /* Bad ports and arguments: one clear message, a non-zero exit. */
@@ -495,21 +530,12 @@ static void silent_port_is_named(void)
 static void thousand_layers_on_the_simulator(void)
 {
     adaslice_mesh m = gen_cylinder(3, 100, 24, 0);
-    FILE *f = fopen(cli_path("column.obj"), "w");
     child sim;
     cli_result r;
-    size_t i;
-    CHECK(f != NULL);
-    if (!f) { gen_free(&m); return; }
-    for (i = 0; i < m.vertex_count; i++)
-        fprintf(f, "v %.9g %.9g %.9g\n", m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2]);
-    for (i = 0; i < m.triangle_count; i++)
-        fprintf(f, "f %u %u %u\n", m.triangles[3 * i] + 1, m.triangles[3 * i + 1] + 1, m.triangles[3 * i + 2] + 1);
-    fclose(f);
+    cli_write_obj(cli_path("column.obj"), &m);
     gen_free(&m);
     if (!start_sim(&sim, cli_path("sim7.log"), "1000")) return;
-    r = cli_run("print", cli_path("column.obj"), "--tmax", "0.1", "--port", sim.line + 4, "--exposure", "0.1",
-                "--bottom-layers", "2", "--bottom-exposure", "0.5", "--peel", "0.5", "--peel-speed", "10",
+    r = cli_run("print", cli_path("column.obj"), "--tmax", "0.1", "--port", sim.line + 4, CURE, "--peel", "0.5", "--peel-speed", "10",
                 "--return-speed", "10", "--settle", "0.02", "--report", cli_path("report7.json"), NULL);
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "1000 layers, the host's plan") != NULL);
@@ -539,7 +565,7 @@ static void short_print_under_qemu(void)
     at = strstr(qemu.line, "/dev/");
     for (i = 0; at && at[i] && at[i] != ' ' && i < 63; i++) port[i] = at[i];
     port[i] = 0;
-    r = cli_run("print", MODEL, "--scale", "5", "--port", port, "--exposure", "0.05", "--bottom-layers", "1",
+    r = cli_run("print", MODEL, "--scale", "5", "--port", port, "--exposure", "0.05", "--penetration", "0.1", "--bottom-layers", "1",
                 "--bottom-exposure", "0.1", "--peel", "0.5", "--peel-speed", "10", "--return-speed", "10", "--settle",
                 "0.02", "--then-exit", NULL);
     CHECKF(r.status == 0, "print on QEMU exited %d: %s", r.status, r.err);

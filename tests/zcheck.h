@@ -28,8 +28,7 @@ typedef struct zexpect {
     const uint32_t *top_bins;     /* [layers]: top plane of each layer, bins */
     uint32_t bin_nm;
     const uint32_t *crcs;         /* [layers] or NULL */
-    uint64_t exposure_ticks, bottom_ticks;
-    uint32_t bottom_layers;
+    const uint32_t *exposure_ms;  /* [layers]: the light each layer must get */
 } zexpect;
 
 typedef struct zsummary { size_t steps, exposures, shows; double worst_accel_ratio, worst_speed_ratio; } zsummary;
@@ -43,7 +42,7 @@ static inline int64_t zcheck_steps_of(const zexpect *e, uint32_t bins)
 /* The light a layer got, all its pieces together. */
 static inline void zcheck_exposure(const zexpect *e, uint32_t layer, uint64_t lit, size_t *bad, zsummary *s)
 {
-    uint64_t want = layer <= e->bottom_layers ? e->bottom_ticks : e->exposure_ticks;
+    uint64_t want = (uint64_t)e->exposure_ms[layer - 1] * e->tick_hz / 1000u;
     if (lit != want && (*bad)++ < 3)
         CHECKF(0, "layer %u got %llu ticks of light, not %llu", layer, (unsigned long long)lit, (unsigned long long)want);
     s->exposures++;

@@ -1,0 +1,509 @@
+/* ChiTuBox .ctb job files, versions 3 and 4, unencrypted (EncryptionKey 0),
+   little-endian: the header, both previews (400 x 300 and 200 x 125, RGB15
+   run-length), PrintParameters, SlicerInfo with the machine's name, for v4 the
+   disclaimer and PrintParametersV4, the 36-byte layer table, and per layer an
+   84-byte LayerDefEx followed by the image in CTB's 7-bit run-length code.
+
+   Byte layouts: UVtools, UVtools.Core/FileFormats/ChituboxFile.cs (classes
+   Header, Preview, PrintParameters, SlicerInfo, PrintParametersV4, LayerDef,
+   LayerDefEx; EncodeInternally for the order of the blocks), checked against
+   mslicer's format/ctb_format; the facts, and where the sources disagree, are
+   collected in the project's notes on resin formats (resin_formats.md). The
+   file is laid out as UVtools writes it; readers follow the offsets.
+
+   Each layer is encoded as it arrives and streamed through one fixed buffer;
+   its LayerDefEx (which holds the data's size) is written after the data, by
+   seeking back, and the table and the header blocks (the volume is known
+   only then) at close. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
+#endif
+#include "jobfile.h"
+#include "report.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <time.h>
+
+#define CTB_MAGIC_V3 0x12FD0086u
+#define CTB_MAGIC_V4 0x12FD0106u
+#define CTB_HEADER 112
+#define CTB_PREVIEW_HEADER 32
+#define CTB_PRINT_PARAMS 60
+#define CTB_SLICER_INFO 76
+#define CTB_PARAMS_V4 464
+#define CTB_LAYER_DEF 36
+#define CTB_LAYER_DEF_EX 84
+#define CTB_RUN_MAX 0x0FFFFFFFu     /* the longest run one code can hold (28 bits) */
+#define CTB_PREVIEW_RUN_MAX 0xFFF   /* pixels per preview run word pair (UVtools RLE16EncodingLimit) */
+#define CTB_OUT_BUF 65536
+#define CTB_CODE_MAX 5              /* bytes of the longest run code */
+
+/* The v4 header text, exactly as ChiTuBox writes it (320 bytes, no NUL; the
+   double full stop is in the original). */
+static const char ctb_disclaimer[] =
+    "Layout and record format for the ctb and cbddlp file types are the copyrighted programs or codes of "
+    "CBD Technology (China) Inc..The Customer or User shall not in any manner reproduce, distribute, modify, "
+    "decompile, disassemble, decrypt, extract, reverse engineer, lease, assign, or sublicense the said "
+    "programs or codes.";
+#define CTB_DISCLAIMER_LEN 320
+
+typedef struct ctb_writer {
+    job_file file;
+    const job_desc *d;          /* read again at close: the volume is known only then */
+    unsigned version;
+    const char *machine;
+    uint32_t small_preview_at, print_params_at, slicer_at, disclaimer_at, params_v4_at, table_at;
+    unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
+    size_t layers_done;
+    off_t end;                  /* where the next layer's LayerDefEx goes */
+    /* The layer being encoded: the pending run, and the bytes not yet written. */
+    unsigned run_grey7;
+    uint64_t run_length, data_size;
+    size_t fill;
+    int write_errno;
+    unsigned char out[CTB_OUT_BUF];
+} ctb_writer;
+
+static void put_u16(unsigned char *p, unsigned v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+    p[2] = (unsigned char)(v >> 16);
+    p[3] = (unsigned char)(v >> 24);
+}
+
+static void put_f32(unsigned char *p, double v)
+{
+    float f = (float)v;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    put_u32(p, u);
+}
+
+static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
+
+static void write_at(ctb_writer *w, off_t at, const void *bytes, size_t n)
+{
+    if (w->write_errno) return;
+    errno = 0;
+    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
+        w->write_errno = errno ? errno : EIO;
+}
+
+static void write_zeros(ctb_writer *w, off_t at, size_t n)
+{
+    static const unsigned char zero[4096];
+    if (!w->write_errno && fseeko(w->file.f, at, SEEK_SET) != 0) w->write_errno = errno ? errno : EIO;
+    while (n && !w->write_errno) {
+        size_t part = n < sizeof zero ? n : sizeof zero;
+        if (fwrite(zero, 1, part, w->file.f) != part) w->write_errno = errno ? errno : EIO;
+        n -= part;
+    }
+}
+
+static int write_failed(ctb_writer *w)
+{
+    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
+}
+
+static int is_bottom(const ctb_writer *w, size_t k) { return k < w->d->bottom_layers; }
+
+/* The bottom lift falls back to the normal one when the desc leaves it 0: a
+   printer that does not peel tears the first layers off the plate. */
+static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
+static double bottom_lift_speed(const job_motion *m)
+{
+    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
+}
+static double lift_mm(const ctb_writer *w, size_t k)
+{
+    return is_bottom(w, k) ? bottom_lift_mm(&w->d->motion) : w->d->motion.lift_mm;
+}
+static double lift_speed(const ctb_writer *w, size_t k)
+{
+    return is_bottom(w, k) ? bottom_lift_speed(&w->d->motion) : mm_per_min(w->d->motion.lift_speed);
+}
+
+/* v4 has rest times; like UVtools, a file with a rest before cure keeps its
+   light-off delays 0 so that the printer does not wait twice. v3 has only the
+   light-off delay. */
+static double light_off_s(const ctb_writer *w) { return w->version >= 4 ? 0 : w->d->motion.wait_before_cure_s; }
+static double rest_before_cure_s(const ctb_writer *w) { return w->version >= 4 ? w->d->motion.wait_before_cure_s : 0; }
+
+/* ---- previews --------------------------------------------------------- */
+
+/* RGB15 with bit 5 as the run flag: a flagged word is followed by a count
+   word (n - 1) | 0x3000; runs of one or two are plain words. */
+static size_t preview_encode(const unsigned char *rgb, size_t pixels, unsigned char *out)
+{
+    size_t i = 0, n = 0;
+    while (i < pixels) {
+        const unsigned char *p = rgb + i * 3;
+        unsigned word = (unsigned)(p[0] >> 3) << 11 | (unsigned)(p[1] >> 3) << 6 | (unsigned)(p[2] >> 3);
+        size_t run = 1;
+        while (i + run < pixels && run < CTB_PREVIEW_RUN_MAX && !memcmp(p, p + run * 3, 3)) run++;
+        if (run >= 3) {
+            put_u16(out + n, word | 0x20);
+            put_u16(out + n + 2, (unsigned)(run - 1) | 0x3000);
+            n += 4;
+        } else {
+            put_u16(out + n, word);
+            n += 2;
+            if (run == 2) { put_u16(out + n, word); n += 2; }
+        }
+        i += run;
+    }
+    return n;
+}
+
+/* The preview header and its data at `at`; *next: where the next block goes. */
+static int write_preview(ctb_writer *w, uint32_t at, int width, int height, uint32_t *next)
+{
+    size_t pixels = (size_t)width * (size_t)height;
+    unsigned char *rgb = (unsigned char *)calloc(pixels, 3);
+    unsigned char *code = (unsigned char *)malloc(pixels * 2);
+    unsigned char head[CTB_PREVIEW_HEADER] = {0};
+    size_t len;
+    if (!rgb || !code || (w->d->preview && w->d->preview(w->d->preview_ctx, width, height, rgb) != 0)) {
+        free(rgb);
+        free(code);
+        return complain(RC_FAIL, "cannot write %s: out of memory for the %dx%d preview", w->file.path, width, height);
+    }
+    len = preview_encode(rgb, pixels, code);
+    put_u32(head, (uint32_t)width);
+    put_u32(head + 4, (uint32_t)height);
+    put_u32(head + 8, at + CTB_PREVIEW_HEADER);
+    put_u32(head + 12, (uint32_t)len);
+    write_at(w, at, head, sizeof head);
+    write_at(w, at + CTB_PREVIEW_HEADER, code, len);
+    free(rgb);
+    free(code);
+    *next = at + CTB_PREVIEW_HEADER + (uint32_t)len;
+    return w->write_errno ? write_failed(w) : RC_OK;
+}
+
+/* ---- the header blocks: placeholders at open, final at close ----------- */
+
+static void write_header(ctb_writer *w)
+{
+    const job_desc *d = w->d;
+    unsigned char h[CTB_HEADER] = {0};
+    double total_mm = d->layers[d->layer_count - 1].z_top;
+    put_u32(h, w->version >= 4 ? CTB_MAGIC_V4 : CTB_MAGIC_V3);
+    put_u32(h + 4, w->version);
+    put_f32(h + 8, d->display_mm[0]);
+    put_f32(h + 12, d->display_mm[1]);
+    /* An unknown build height: the job's own is the least the printer has. */
+    put_f32(h + 16, d->z_max_mm > 0 ? d->z_max_mm : total_mm);
+    put_f32(h + 28, total_mm);
+    put_f32(h + 32, d->layer_height_mm);
+    put_f32(h + 36, d->exposure_s);
+    put_f32(h + 40, d->bottom_exposure_s);
+    put_f32(h + 44, light_off_s(w));
+    put_u32(h + 48, d->bottom_layers);
+    put_u32(h + 52, (uint32_t)d->width);
+    put_u32(h + 56, (uint32_t)d->height);
+    put_u32(h + 60, CTB_HEADER); /* the large preview comes first */
+    put_u32(h + 64, w->table_at);
+    put_u32(h + 68, (uint32_t)d->layer_count);
+    put_u32(h + 72, w->small_preview_at);
+    put_u32(h + 76, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
+    /* ProjectorType says only "mirrored" (UVtools reads any non-zero as
+       flipped across); the images themselves are already flipped. */
+    put_u32(h + 80, d->mirror_x || d->mirror_y);
+    put_u32(h + 84, w->print_params_at);
+    put_u32(h + 88, CTB_PRINT_PARAMS);
+    put_u32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
+    put_u16(h + 96, 255);
+    put_u16(h + 98, 255);
+    put_u32(h + 100, 0); /* EncryptionKey: layer data in clear */
+    put_u32(h + 104, w->slicer_at);
+    put_u32(h + 108, CTB_SLICER_INFO);
+    write_at(w, 0, h, sizeof h);
+}
+
+static void write_print_params(ctb_writer *w)
+{
+    const job_desc *d = w->d;
+    unsigned char p[CTB_PRINT_PARAMS] = {0};
+    put_f32(p, bottom_lift_mm(&d->motion));
+    put_f32(p + 4, bottom_lift_speed(&d->motion));
+    put_f32(p + 8, d->motion.lift_mm);
+    put_f32(p + 12, mm_per_min(d->motion.lift_speed));
+    put_f32(p + 16, mm_per_min(d->motion.retract_speed));
+    put_f32(p + 20, d->volume_mm3 / 1000.0);
+    put_f32(p + 32, light_off_s(w));
+    put_f32(p + 36, light_off_s(w));
+    put_u32(p + 40, d->bottom_layers);
+    write_at(w, w->print_params_at, p, sizeof p);
+}
+
+static void write_slicer_info(ctb_writer *w)
+{
+    const job_desc *d = w->d;
+    unsigned char s[CTB_SLICER_INFO] = {0};
+    size_t name_len = strlen(w->machine);
+    if (w->version >= 4) {
+        /* One-stage moves: the second stage is 0 mm, at the first stage's speed. */
+        put_f32(s + 4, bottom_lift_speed(&d->motion));
+        put_f32(s + 12, mm_per_min(d->motion.lift_speed));
+        put_f32(s + 20, mm_per_min(d->motion.retract_speed));
+        put_u32(s + 64, w->params_v4_at);
+    }
+    put_u32(s + 28, w->slicer_at + CTB_SLICER_INFO);
+    put_u32(s + 32, (uint32_t)name_len);
+    /* AntiAliasFlag: UVtools' comment says 7 without AA and 0x0F with, but it
+       always writes 0x0F; so do we. */
+    s[36] = 0x0F;
+    /* PerLayerSettings: the layers differ in Z step and exposure, so the
+       printer must take the table's values: Version x 0x10 (current UVtools;
+       older UVtools wrote 0x20 for v3). */
+    s[39] = (unsigned char)(w->version * 0x10);
+    put_u32(s + 40, (uint32_t)(time(NULL) / 60));
+    put_u32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
+    put_u32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
+    put_f32(s + 52, rest_before_cure_s(w));
+    write_at(w, w->slicer_at, s, sizeof s);
+    write_at(w, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
+}
+
+static void write_params_v4(ctb_writer *w)
+{
+    const job_desc *d = w->d;
+    unsigned char p[CTB_PARAMS_V4] = {0};
+    put_f32(p, mm_per_min(d->motion.retract_speed));
+    put_f32(p + 4, mm_per_min(d->motion.retract_speed));
+    /* 4.0, 4.0 and 5: constants both UVtools and mslicer write; what they
+       mean is not known. */
+    put_f32(p + 12, 4.0);
+    put_f32(p + 20, 4.0);
+    put_f32(p + 24, rest_before_cure_s(w));
+    put_u32(p + 48, 5);
+    put_u32(p + 52, (uint32_t)(d->layer_count - 1));
+    put_u32(p + 72, w->disclaimer_at);
+    put_u32(p + 76, CTB_DISCLAIMER_LEN);
+    write_at(w, w->params_v4_at, p, sizeof p);
+}
+
+static void write_blocks(ctb_writer *w)
+{
+    write_header(w);
+    write_print_params(w);
+    write_slicer_info(w);
+    if (w->version >= 4) write_params_v4(w);
+}
+
+/* ---- layer images: 7-bit run-length ------------------------------------ */
+
+static void flush_out(ctb_writer *w)
+{
+    if (w->fill && !w->write_errno && fwrite(w->out, 1, w->fill, w->file.f) != w->fill)
+        w->write_errno = errno ? errno : EIO;
+    w->data_size += w->fill;
+    w->fill = 0;
+}
+
+/* The pending run as codes: a byte with bit 7 clear is one pixel; bit 7 set
+   is a run, its length after it in 1 to 4 big-endian bytes, prefix-coded
+   (0xxxxxxx, 10xxxxxx, 110xxxxx, 1110xxxx); longer runs are cut. */
+static void emit_run(ctb_writer *w)
+{
+    uint64_t left = w->run_length;
+    unsigned v = w->run_grey7;
+    while (left) {
+        uint32_t n = left > CTB_RUN_MAX ? CTB_RUN_MAX : (uint32_t)left;
+        unsigned char *p;
+        if (w->fill + CTB_CODE_MAX > sizeof w->out) flush_out(w);
+        p = w->out + w->fill;
+        if (n == 1) {
+            *p++ = (unsigned char)v;
+        } else {
+            *p++ = (unsigned char)(0x80 | v);
+            if (n <= 0x7F) {
+                *p++ = (unsigned char)n;
+            } else if (n <= 0x3FFF) {
+                *p++ = (unsigned char)(0x80 | n >> 8);
+                *p++ = (unsigned char)n;
+            } else if (n <= 0x1FFFFF) {
+                *p++ = (unsigned char)(0xC0 | n >> 16);
+                *p++ = (unsigned char)(n >> 8);
+                *p++ = (unsigned char)n;
+            } else {
+                *p++ = (unsigned char)(0xE0 | n >> 24);
+                *p++ = (unsigned char)(n >> 16);
+                *p++ = (unsigned char)(n >> 8);
+                *p++ = (unsigned char)n;
+            }
+        }
+        w->fill = (size_t)(p - w->out);
+        left -= n;
+    }
+    w->run_length = 0;
+}
+
+/* Runs cross rows: the image is one row-major stream. 8-bit grey keeps its
+   top 7 bits (the printer shows v ? v << 1 | 1 : 0), so greys that differ
+   only in the lowest bit make one run. */
+static void add_run(ctb_writer *w, unsigned grey, uint64_t n)
+{
+    unsigned grey7 = grey >> 1;
+    if (grey7 != w->run_grey7) {
+        emit_run(w);
+        w->run_grey7 = grey7;
+    }
+    w->run_length += n;
+}
+
+/* job_row_runs hands each run here. */
+static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((ctb_writer *)writer, grey, n); }
+
+static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+{
+    ctb_writer *w = (ctb_writer *)writer;
+    const job_desc *d = w->d;
+    const job_layer *L = &d->layers[k];
+    unsigned char *entry, ex[CTB_LAYER_DEF_EX] = {0};
+    off_t data_at = w->end + CTB_LAYER_DEF_EX;
+    int y;
+    if (k != w->layers_done || k >= d->layer_count)
+        return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layers", w->file.path, k,
+                        w->layers_done, d->layer_count);
+    if (!w->write_errno && fseeko(w->file.f, data_at, SEEK_SET) != 0) w->write_errno = errno ? errno : EIO;
+    w->run_length = w->data_size = 0;
+    w->fill = 0;
+    for (y = 0; y < d->height; y++) {
+        const unsigned char *row = image + (size_t)y * stride;
+        job_row_runs(row, d->bits, d->width, take_run, w);
+    }
+    emit_run(w);
+    flush_out(w);
+    if (w->write_errno) return write_failed(w);
+    if (w->data_size > 0xFFFFFFFFu)
+        return complain(RC_FAIL, "%s: layer %zu encodes to %llu bytes, more than a ctb layer can hold", w->file.path, k,
+                        (unsigned long long)w->data_size);
+
+    entry = w->table + k * CTB_LAYER_DEF;
+    put_f32(entry, L->z_top);
+    put_f32(entry + 4, L->exposure_s);
+    put_f32(entry + 8, light_off_s(w));
+    put_u32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
+    put_u32(entry + 16, (uint32_t)w->data_size);
+    put_u32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
+    put_u32(entry + 24, CTB_LAYER_DEF_EX);
+    /* LayerDefEx repeats the entry byte for byte, then the layer's moves. */
+    memcpy(ex, entry, CTB_LAYER_DEF);
+    put_u32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + w->data_size));
+    put_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
+    put_f32(ex + 44, lift_speed(w, k));
+    put_f32(ex + 56, mm_per_min(d->motion.retract_speed));
+    if (w->version >= 4) {
+        memcpy(ex + 52, ex + 44, 4); /* the second stage: 0 mm at the same speeds */
+        memcpy(ex + 64, ex + 56, 4);
+        put_f32(ex + 76, rest_before_cure_s(w));
+    }
+    put_f32(ex + 80, 255.0);
+    write_at(w, w->end, ex, sizeof ex);
+    if (w->write_errno) return write_failed(w);
+    w->end = data_at + (off_t)w->data_size;
+    w->layers_done++;
+    return RC_OK;
+}
+
+/* ---- open and close ------------------------------------------------------ */
+
+static void free_writer(ctb_writer *w)
+{
+    job_file_discard(&w->file);
+    free(w->table);
+    free(w);
+}
+
+static int open_job(void **writer, const char *path, const job_desc *d)
+{
+    unsigned version = d->preset && d->preset->version ? d->preset->version : 4;
+    ctb_writer *w;
+    uint64_t table_end;
+    uint32_t at;
+    int rc;
+    *writer = NULL;
+    if (version != 3 && version != 4)
+        return complain(RC_FAIL, "%s: ctb version %u is not one this writer makes (3 or 4)", path, version);
+    if (d->width <= 0 || d->height <= 0 || !d->layer_count || !d->layers || (d->bits != 1 && d->bits != 8))
+        return complain(RC_FAIL, "%s: a ctb job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layers, %d bits)",
+                        path, d->width, d->height, d->layer_count, d->bits);
+    w = (ctb_writer *)calloc(1, sizeof *w);
+    if (w) w->table = (unsigned char *)calloc(d->layer_count, CTB_LAYER_DEF);
+    if (!w || !w->table) {
+        if (w) free(w->table);
+        free(w);
+        return complain(RC_FAIL, "cannot write %s: out of memory for %zu layers", path, d->layer_count);
+    }
+    if ((rc = job_file_open(&w->file, path)) != RC_OK) {
+        free(w->table);
+        free(w);
+        return rc;
+    }
+    w->d = d;
+    w->version = version;
+    w->machine = d->preset && d->preset->machine ? d->preset->machine : "adaslice";
+
+    write_zeros(w, 0, CTB_HEADER);
+    if ((rc = write_preview(w, CTB_HEADER, 400, 300, &w->small_preview_at)) != RC_OK ||
+        (rc = write_preview(w, w->small_preview_at, 200, 125, &w->print_params_at)) != RC_OK) {
+        free_writer(w);
+        return rc;
+    }
+    w->slicer_at = w->print_params_at + CTB_PRINT_PARAMS;
+    at = w->slicer_at + CTB_SLICER_INFO + (uint32_t)strlen(w->machine);
+    if (version >= 4) {
+        w->disclaimer_at = at;
+        w->params_v4_at = at + CTB_DISCLAIMER_LEN;
+        at = w->params_v4_at + CTB_PARAMS_V4;
+        write_at(w, w->disclaimer_at, ctb_disclaimer, CTB_DISCLAIMER_LEN);
+    }
+    w->table_at = at;
+    table_end = (uint64_t)at + (uint64_t)d->layer_count * CTB_LAYER_DEF;
+    if (table_end > 0xFFFFFFFFu) {
+        rc = complain(RC_FAIL, "%s: %zu layers make a ctb layer table past 4 GiB", path, d->layer_count);
+        free_writer(w);
+        return rc;
+    }
+    write_blocks(w);
+    write_zeros(w, at, d->layer_count * CTB_LAYER_DEF);
+    w->end = (off_t)table_end;
+    if (w->write_errno) {
+        rc = write_failed(w);
+        free_writer(w);
+        return rc;
+    }
+    *writer = w;
+    return RC_OK;
+}
+
+static int close_job(void *writer, int ok)
+{
+    ctb_writer *w = (ctb_writer *)writer;
+    int rc = RC_OK;
+    if (!w) return ok ? RC_FAIL : RC_OK;
+    if (ok && w->layers_done != w->d->layer_count) {
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layers were written; no file made", w->file.path, w->layers_done,
+                      w->d->layer_count);
+    } else if (ok) {
+        write_at(w, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
+        write_blocks(w);
+        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+    }
+    free_writer(w); /* after a commit there is nothing left to discard */
+    return rc;
+}
+
+const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, open_job, layer, close_job};

@@ -1,0 +1,412 @@
+/* Elegoo .goo job files, "V3.0", big-endian: the 195477-byte header (with
+   the 116 x 116 and 290 x 290 RGB565 previews), per layer a 70-byte
+   definition and the image (0x55, run-length chunks, a checksum), each
+   followed by 0D 0A, and the 11-byte ending.
+
+   Byte layouts: UVtools, UVtools.Core/FileFormats/GooFile.cs (FileHeader,
+   LayerDef, EncodeImage/DecodeImage, whose comments quote Elegoo's
+   specification, FileFooter), checked against mslicer's format/goo_format;
+   the facts, and where the sources disagree, are in the project's notes on
+   resin formats (resin_formats.md).
+
+   Each layer is encoded as it arrives and streamed through one fixed buffer,
+   the checksum summed on the way; its DataLength, which precedes the data, is
+   written after it by seeking back, and the header's fields (the volume is
+   known only at close) again at close. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* fseeko, localtime_r */
+#endif
+#include "jobfile.h"
+#include "report.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <time.h>
+
+#define GOO_HEADER 195477u          /* also the LayerDefAddress */
+#define GOO_SMALL_PREVIEW 194u      /* 116 x 116, then 0D 0A */
+#define GOO_BIG_PREVIEW 27108u      /* 290 x 290, then 0D 0A */
+#define GOO_FIELDS 195310u          /* the fields after the previews */
+#define GOO_LAYER_DEF 70u
+#define GOO_RUN_MAX 0x0FFFFFFFu     /* the longest run one chunk can hold (28 bits) */
+#define GOO_DIFF_RUN_MAX 255u       /* a diff chunk's run is one byte */
+#define GOO_OUT_BUF 65536
+#define GOO_CHUNK_MAX 5             /* bytes of the longest chunk */
+
+static const unsigned char goo_magic[8] = {0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0x50, 0x00};
+
+typedef struct goo_writer {
+    job_file file;
+    const job_desc *d;          /* read again at close: the volume is known only then */
+    size_t layers_done;
+    off_t end;                  /* where the next layer's definition goes */
+    /* The layer being encoded: the pending run, the value of the pixel
+       before it (diff chunks are relative to it), the bytes not yet written. */
+    unsigned run_grey, previous_grey;
+    uint64_t run_length, data_size;
+    unsigned checksum_sum;
+    size_t fill;
+    int write_errno;
+    unsigned char out[GOO_OUT_BUF];
+} goo_writer;
+
+static void put_u16(unsigned char *p, unsigned v)
+{
+    p[0] = (unsigned char)(v >> 8);
+    p[1] = (unsigned char)v;
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)(v >> 24);
+    p[1] = (unsigned char)(v >> 16);
+    p[2] = (unsigned char)(v >> 8);
+    p[3] = (unsigned char)v;
+}
+
+static void put_f32(unsigned char *p, double v)
+{
+    float f = (float)v;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    put_u32(p, u);
+}
+
+/* A fixed-width text field: cut to leave room for the NUL, NUL-padded. */
+static void put_text(unsigned char *p, size_t width, const char *s)
+{
+    size_t n = strlen(s);
+    if (n > width - 1) n = width - 1;
+    memcpy(p, s, n);
+}
+
+static void write_at(goo_writer *w, off_t at, const void *bytes, size_t n)
+{
+    if (w->write_errno) return;
+    errno = 0;
+    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
+        w->write_errno = errno ? errno : EIO;
+}
+
+static int write_failed(goo_writer *w)
+{
+    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
+}
+
+static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
+
+/* The bottom lift falls back to the normal one when the desc leaves it 0: a
+   printer that does not peel tears the first layers off the plate. */
+static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
+static double bottom_lift_speed(const job_motion *m)
+{
+    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
+}
+
+static double build_height_mm(const job_desc *d)
+{
+    /* An unknown build height: the job's own is the least the printer has. */
+    return d->z_max_mm > 0 ? d->z_max_mm : d->layers[d->layer_count - 1].z_top;
+}
+
+/* ---- the header -------------------------------------------------------- */
+
+/* RGB565, big-endian words, rows top first; no size is stored. */
+static int put_preview(goo_writer *w, unsigned char *to, int side)
+{
+    size_t pixels = (size_t)side * (size_t)side, i;
+    unsigned char *rgb = (unsigned char *)calloc(pixels, 3);
+    if (!rgb || (w->d->preview && w->d->preview(w->d->preview_ctx, side, side, rgb) != 0)) {
+        free(rgb);
+        return complain(RC_FAIL, "cannot write %s: out of memory for the %dx%d preview", w->file.path, side, side);
+    }
+    for (i = 0; i < pixels; i++) {
+        const unsigned char *p = rgb + i * 3;
+        put_u16(to + i * 2, (unsigned)(p[0] >> 3) << 11 | (unsigned)(p[1] >> 2) << 5 | (unsigned)(p[2] >> 3));
+    }
+    to[pixels * 2] = 0x0D;
+    to[pixels * 2 + 1] = 0x0A;
+    free(rgb);
+    return RC_OK;
+}
+
+/* The header's first 194 bytes: names and levels. */
+static void put_names(const goo_writer *w, unsigned char *h)
+{
+    const job_desc *d = w->d;
+    char created[24];
+    time_t now = time(NULL);
+    struct tm t;
+    if (!localtime_r(&now, &t) || !strftime(created, sizeof created, "%Y-%m-%d %H:%M:%S", &t)) created[0] = 0;
+    memcpy(h, "V3.0", 4);
+    memcpy(h + 4, goo_magic, sizeof goo_magic);
+    put_text(h + 12, 32, "adaslice");
+    put_text(h + 44, 24, ADASLICE_VERSION);
+    put_text(h + 68, 24, created);
+    put_text(h + 92, 32, d->preset && d->preset->machine ? d->preset->machine : "adaslice");
+    put_text(h + 124, 32, "DLP"); /* MachineType as UVtools writes it (mslicer: "Default") */
+    put_text(h + 156, 32, "adaslice");
+    put_u16(h + 188, (unsigned)(d->supersample > 1 ? d->supersample : 1));
+    put_u16(h + 190, 1); /* GreyLevel, as UVtools */
+}
+
+/* The fields from 195310 to the end of the header. */
+static void put_fields(const goo_writer *w, unsigned char *f)
+{
+    const job_desc *d = w->d;
+    const job_motion *m = &d->motion;
+    double wait_s = m->wait_before_cure_s;
+    put_u32(f, (uint32_t)d->layer_count);
+    put_u16(f + 4, (unsigned)d->width);
+    put_u16(f + 6, (unsigned)d->height);
+    f[8] = d->mirror_x != 0;
+    f[9] = d->mirror_y != 0;
+    put_f32(f + 10, d->display_mm[0]);
+    put_f32(f + 14, d->display_mm[1]);
+    put_f32(f + 18, build_height_mm(d));
+    put_f32(f + 22, d->layer_height_mm);
+    put_f32(f + 26, d->exposure_s);
+    /* Wait-time mode: the rest before each exposure is a WaitTimeBeforeCure
+       and the light-off delay stays 0 (UVtools sets the two so). */
+    f[30] = 1;
+    put_f32(f + 43, wait_s); /* BottomWaitTimeBeforeCure */
+    put_f32(f + 55, wait_s); /* WaitTimeBeforeCure */
+    put_f32(f + 59, d->bottom_exposure_s);
+    put_u32(f + 63, d->bottom_layers);
+    put_f32(f + 67, bottom_lift_mm(m));
+    put_f32(f + 71, bottom_lift_speed(m));
+    put_f32(f + 75, m->lift_mm);
+    put_f32(f + 79, mm_per_min(m->lift_speed));
+    /* One-stage moves: retract all the way the lift went; the second stages
+       are 0 mm at the first stages' speeds. */
+    put_f32(f + 83, bottom_lift_mm(m));
+    put_f32(f + 87, mm_per_min(m->retract_speed));
+    put_f32(f + 91, m->lift_mm);
+    put_f32(f + 95, mm_per_min(m->retract_speed));
+    put_f32(f + 103, bottom_lift_speed(m));
+    put_f32(f + 111, mm_per_min(m->lift_speed));
+    put_f32(f + 119, mm_per_min(m->retract_speed));
+    put_f32(f + 127, mm_per_min(m->retract_speed));
+    put_u16(f + 131, 255);
+    put_u16(f + 133, 255);
+    /* Advance mode: the printer takes every layer's own Z, exposure and moves. */
+    f[135] = 1;
+    put_u32(f + 136, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
+    put_f32(f + 140, d->volume_mm3);
+    /* MaterialGrams: UVtools writes the millilitres there; we know no density. */
+    put_f32(f + 144, d->volume_mm3 / 1000.0);
+    put_text(f + 152, 8, "$");
+    put_u32(f + 160, GOO_HEADER);
+    f[164] = 1; /* GrayScaleLevel: grey 0x00-0xFF */
+}
+
+static void write_header_fields(goo_writer *w)
+{
+    unsigned char names[GOO_SMALL_PREVIEW] = {0}, fields[GOO_HEADER - GOO_FIELDS] = {0};
+    put_names(w, names);
+    put_fields(w, fields);
+    write_at(w, 0, names, sizeof names);
+    write_at(w, GOO_FIELDS, fields, sizeof fields);
+}
+
+/* ---- layer images: 0x55, chunks, checksum -------------------------------- */
+
+static void flush_out(goo_writer *w)
+{
+    size_t i;
+    for (i = 0; i < w->fill; i++) w->checksum_sum += w->out[i];
+    if (w->fill && !w->write_errno && fwrite(w->out, 1, w->fill, w->file.f) != w->fill)
+        w->write_errno = errno ? errno : EIO;
+    w->data_size += w->fill;
+    w->fill = 0;
+}
+
+/* The pending run as chunks. byte0[7:6]: 00 black, 11 white, 01 the grey in
+   the next byte, each with byte0[5:4] extra length bytes (run =
+   b1.. << 4 | byte0[3:0]); 10 a diff of up to 15 from the previous pixel,
+   byte0[5] its sign, byte0[4] a run byte following (else a run of 1). Diff
+   chunks as UVtools uses them: for greys between 0 and 255 and runs up to
+   255. Longer runs are cut. */
+static void emit_run(goo_writer *w)
+{
+    uint64_t left = w->run_length;
+    unsigned v = w->run_grey;
+    while (left) {
+        uint32_t n = left > GOO_RUN_MAX ? GOO_RUN_MAX : (uint32_t)left;
+        unsigned prev = w->previous_grey, diff = v > prev ? v - prev : prev - v;
+        unsigned char *p;
+        if (w->fill + GOO_CHUNK_MAX > sizeof w->out) flush_out(w);
+        p = w->out + w->fill;
+        if (v > 0 && v < 255 && diff <= 15 && n <= GOO_DIFF_RUN_MAX) {
+            *p++ = (unsigned char)(0x80 | (v < prev ? 0x20 : 0) | (n > 1 ? 0x10 : 0) | diff);
+            if (n > 1) *p++ = (unsigned char)n;
+        } else {
+            unsigned char *b0 = p++;
+            *b0 = (unsigned char)((v == 0 ? 0x00 : v == 255 ? 0xC0 : 0x40) | (n & 0x0F));
+            if (v != 0 && v != 255) *p++ = (unsigned char)v;
+            if (n > 0xFFFFF) {
+                *b0 |= 0x30;
+                *p++ = (unsigned char)(n >> 20);
+                *p++ = (unsigned char)(n >> 12);
+                *p++ = (unsigned char)(n >> 4);
+            } else if (n > 0xFFF) {
+                *b0 |= 0x20;
+                *p++ = (unsigned char)(n >> 12);
+                *p++ = (unsigned char)(n >> 4);
+            } else if (n > 0xF) {
+                *b0 |= 0x10;
+                *p++ = (unsigned char)(n >> 4);
+            }
+        }
+        w->fill = (size_t)(p - w->out);
+        w->previous_grey = v;
+        left -= n;
+    }
+    w->run_length = 0;
+}
+
+/* Runs cross rows: the image is one row-major stream. */
+static void add_run(goo_writer *w, unsigned grey, uint64_t n)
+{
+    if (grey != w->run_grey) {
+        emit_run(w);
+        w->run_grey = grey;
+    }
+    w->run_length += n;
+}
+
+
+/* job_row_runs hands each run here. */
+static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((goo_writer *)writer, grey, n); }
+
+static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
+{
+    const job_desc *d = w->d;
+    const job_motion *m = &d->motion;
+    int bottom = k < d->bottom_layers;
+    double lift = bottom ? bottom_lift_mm(m) : m->lift_mm;
+    double speed = bottom ? bottom_lift_speed(m) : mm_per_min(m->lift_speed);
+    put_f32(e + 2, build_height_mm(d)); /* PausePositionZ, as UVtools and mslicer */
+    put_f32(e + 6, d->layers[k].z_top);
+    put_f32(e + 10, d->layers[k].exposure_s);
+    put_f32(e + 26, m->wait_before_cure_s);
+    put_f32(e + 30, lift);
+    put_f32(e + 34, speed);
+    put_f32(e + 42, speed);
+    put_f32(e + 46, lift);
+    put_f32(e + 50, mm_per_min(m->retract_speed));
+    put_f32(e + 58, mm_per_min(m->retract_speed));
+    put_u16(e + 62, 255);
+    e[64] = 0x0D;
+    e[65] = 0x0A;
+}
+
+static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+{
+    goo_writer *w = (goo_writer *)writer;
+    const job_desc *d = w->d;
+    unsigned char def[GOO_LAYER_DEF] = {0}, tail[3];
+    off_t data_at = w->end + GOO_LAYER_DEF;
+    uint64_t data_length;
+    int y;
+    if (k != w->layers_done || k >= d->layer_count)
+        return complain(RC_FAIL, "%s: layer %zu handed to the goo writer after %zu of %zu layers", w->file.path, k,
+                        w->layers_done, d->layer_count);
+    /* The magic is not part of the checksum: written before the sum starts. */
+    write_at(w, data_at, "\x55", 1);
+    w->run_length = w->data_size = 0;
+    w->checksum_sum = 0;
+    w->previous_grey = w->run_grey = 0;
+    w->fill = 0;
+    for (y = 0; y < d->height; y++) {
+        const unsigned char *row = image + (size_t)y * stride;
+        job_row_runs(row, d->bits, d->width, take_run, w);
+    }
+    emit_run(w);
+    flush_out(w);
+    tail[0] = (unsigned char)~w->checksum_sum;
+    tail[1] = 0x0D;
+    tail[2] = 0x0A;
+    if (!w->write_errno && fwrite(tail, 1, sizeof tail, w->file.f) != sizeof tail) w->write_errno = errno ? errno : EIO;
+    if (w->write_errno) return write_failed(w);
+    data_length = w->data_size + 2; /* with the 0x55 and the checksum */
+    if (data_length > 0xFFFFFFFFu)
+        return complain(RC_FAIL, "%s: layer %zu encodes to %llu bytes, more than a goo layer can hold", w->file.path,
+                        k, (unsigned long long)data_length);
+    put_layer_def(w, k, def);
+    put_u32(def + 66, (uint32_t)data_length);
+    write_at(w, w->end, def, sizeof def);
+    if (w->write_errno) return write_failed(w);
+    w->end = data_at + (off_t)data_length + 2;
+    w->layers_done++;
+    return RC_OK;
+}
+
+/* ---- open and close ------------------------------------------------------ */
+
+static int open_job(void **writer, const char *path, const job_desc *d)
+{
+    goo_writer *w;
+    unsigned char *header;
+    int rc;
+    *writer = NULL;
+    if (d->width <= 0 || d->height <= 0 || d->width > 0xFFFF || d->height > 0xFFFF || !d->layer_count ||
+        !d->layers || (d->bits != 1 && d->bits != 8))
+        return complain(RC_FAIL,
+                        "%s: a goo job needs 1 to 65535 pixels across and down, layers and 1- or 8-bit images "
+                        "(%dx%d, %zu layers, %d bits)",
+                        path, d->width, d->height, d->layer_count, d->bits);
+    if ((uint64_t)d->layer_count > 0xFFFFFFFFu)
+        return complain(RC_FAIL, "%s: %zu layers are more than a goo file can count", path, d->layer_count);
+    w = (goo_writer *)calloc(1, sizeof *w);
+    header = (unsigned char *)calloc(1, GOO_HEADER);
+    if (!w || !header) {
+        free(w);
+        free(header);
+        return complain(RC_FAIL, "cannot write %s: out of memory", path);
+    }
+    if ((rc = job_file_open(&w->file, path)) != RC_OK) {
+        free(w);
+        free(header);
+        return rc;
+    }
+    w->d = d;
+    if ((rc = put_preview(w, header + GOO_SMALL_PREVIEW, 116)) == RC_OK &&
+        (rc = put_preview(w, header + GOO_BIG_PREVIEW, 290)) == RC_OK) {
+        write_at(w, 0, header, GOO_HEADER);
+        write_header_fields(w);
+        if (w->write_errno) rc = write_failed(w);
+    }
+    free(header);
+    if (rc != RC_OK) {
+        job_file_discard(&w->file);
+        free(w);
+        return rc;
+    }
+    w->end = GOO_HEADER;
+    *writer = w;
+    return RC_OK;
+}
+
+static int close_job(void *writer, int ok)
+{
+    static const unsigned char ending[11] = {0x00, 0x00, 0x00, 0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0x50, 0x00};
+    goo_writer *w = (goo_writer *)writer;
+    int rc = RC_OK;
+    if (!w) return ok ? RC_FAIL : RC_OK;
+    if (ok && w->layers_done != w->d->layer_count) {
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layers were written; no file made", w->file.path, w->layers_done,
+                      w->d->layer_count);
+    } else if (ok) {
+        write_at(w, w->end, ending, sizeof ending);
+        write_header_fields(w);
+        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+    }
+    job_file_discard(&w->file); /* after a commit there is nothing left to discard */
+    free(w);
+    return rc;
+}
+
+const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, open_job, layer, close_job};

@@ -1,0 +1,131 @@
+/* The job formats and what they share: see jobfile.h. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "jobfile.h"
+#include "report.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+const job_format *const JOB_FORMATS[] = {&JOB_FORMAT_DIR, &JOB_FORMAT_CTB, &JOB_FORMAT_GOO, &JOB_FORMAT_CHITU_ZIP,
+                                         &JOB_FORMAT_SL1, NULL};
+
+const job_format *job_format_named(const char *name)
+{
+    int i;
+    for (i = 0; JOB_FORMATS[i]; i++)
+        if (!strcmp(JOB_FORMATS[i]->name, name)) return JOB_FORMATS[i];
+    return NULL;
+}
+
+const job_format *job_format_for_path(const char *path)
+{
+    const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
+    int i;
+    if (!dot || (slash && dot < slash) || dot == path || (slash && dot == slash + 1)) return &JOB_FORMAT_DIR;
+    for (i = 0; JOB_FORMATS[i]; i++) {
+        const char *e = JOB_FORMATS[i]->extension, *d = dot;
+        if (!e) continue;
+        while (*e && *d && tolower((unsigned char)*d) == *e) { e++; d++; }
+        if (!*e && !*d) return JOB_FORMATS[i];
+    }
+    return NULL;
+}
+
+void job_row_grey(const unsigned char *image, size_t stride, int bits, int width, int y, unsigned char *out)
+{
+    const unsigned char *row = image + (size_t)y * stride;
+    int x;
+    if (bits == 8) { memcpy(out, row, (size_t)width); return; }
+    for (x = 0; x < width; x++) out[x] = (unsigned char)((row[x >> 3] >> (7 - (x & 7)) & 1) ? 255 : 0);
+}
+
+/* Where the run of bytes equal to row[x] ends, at most at `end`: eight
+   bytes at a time, as most of a mask is long runs of black. */
+static int same_bytes_end(const unsigned char *row, int x, int end)
+{
+    const uint64_t all = 0x0101010101010101u * row[x];
+    uint64_t word;
+    for (x++; end - x >= 8; x += 8) {
+        memcpy(&word, row + x, sizeof word);
+        if (word != all) break;
+    }
+    while (x < end && row[x] == row[x - 1]) x++;
+    return x;
+}
+
+void job_row_runs(const unsigned char *row, int bits, int width, job_run_fn run, void *ctx)
+{
+    int x = 0;
+    if (bits == 8) {
+        while (x < width) {
+            int from = x;
+            x = same_bytes_end(row, x, width);
+            run(ctx, row[from], (uint64_t)(x - from));
+        }
+        return;
+    }
+    while (x < width) { /* whole 0x00 or 0xFF bytes go as runs of eight pixels a byte */
+        const int whole_bytes = width >> 3;
+        unsigned char b = row[x >> 3];
+        if ((x & 7) == 0 && (x >> 3) < whole_bytes && (b == 0 || b == 0xFF)) {
+            int from = x;
+            x = same_bytes_end(row, x >> 3, whole_bytes) << 3;
+            run(ctx, b, (uint64_t)(x - from));
+        } else {
+            run(ctx, (b >> (7 - (x & 7)) & 1) ? 255 : 0, 1);
+            x++;
+        }
+    }
+}
+
+int job_file_open(job_file *jf, const char *path)
+{
+    size_t n = strlen(path) + 32;
+    memset(jf, 0, sizeof *jf);
+    jf->path = (char *)malloc(strlen(path) + 1);
+    jf->tmp = (char *)malloc(n);
+    if (!jf->path || !jf->tmp) {
+        job_file_discard(jf);
+        return complain(RC_FAIL, "cannot write %s: out of memory", path);
+    }
+    strcpy(jf->path, path);
+    snprintf(jf->tmp, n, "%s.tmp.%ld", path, (long)getpid());
+    if (!(jf->f = fopen(jf->tmp, "wb"))) {
+        int e = errno;
+        job_file_discard(jf);
+        return complain(RC_FAIL, "cannot write %s: %s", path, strerror(e));
+    }
+    return RC_OK;
+}
+
+int job_file_commit(job_file *jf)
+{
+    int err = ferror(jf->f) ? (errno ? errno : EIO) : 0;
+    if (fflush(jf->f) != 0 && !err) err = errno;
+    if (fclose(jf->f) != 0 && !err) err = errno;
+    jf->f = NULL;
+    if (!err && rename(jf->tmp, jf->path) != 0) err = errno;
+    if (err) {
+        int rc = complain(RC_FAIL, "cannot write %s: %s", jf->path, strerror(err));
+        job_file_discard(jf);
+        return rc;
+    }
+    free(jf->path);
+    free(jf->tmp);
+    memset(jf, 0, sizeof *jf);
+    return RC_OK;
+}
+
+void job_file_discard(job_file *jf)
+{
+    if (jf->f) fclose(jf->f);
+    if (jf->tmp) remove(jf->tmp);
+    free(jf->path);
+    free(jf->tmp);
+    memset(jf, 0, sizeof *jf);
+}

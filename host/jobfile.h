@@ -1,0 +1,118 @@
+/* Job files: what adaslice slice writes for the printers and slicers people
+   own (a ChiTuBox .ctb, an Elegoo .goo, a ChiTu G-code .zip, a Prusa .sl1, or
+   the job directory of jobdir.h). Every format is written through one layer
+   loop (cmd_slice.c): the masker renders each layer once, bottom-up, and
+   hands the image to the format's `layer`; what the format needs besides the
+   images (every layer's Z and exposure, the printer, the motion, previews) is
+   in a job_desc known before the first layer. A format writes its file under a
+   temporary name and renames it into place on a good close, so a failed or
+   interrupted run leaves nothing that looks complete. */
+#ifndef ADASLICE_HOST_JOBFILE_H
+#define ADASLICE_HOST_JOBFILE_H
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include "printer.h"
+
+/* One layer as the printer moves and exposes it. */
+typedef struct job_layer {
+    double z_bottom, z_top;      /* mm above the plate: the part's bottom is at 0 */
+    double thickness;            /* mm */
+    double exposure_s;           /* UV time, s: the working curve's for its thickness,
+                                    or the bottom exposure for the first bottom_layers */
+    double lit_mm2;              /* lit area of its mask: set before layer k goes to `layer` */
+} job_layer;
+
+/* How the printer moves between layers (the formats' lift/retract and waits). */
+typedef struct job_motion {
+    double lift_mm;              /* peel: lift after each layer */
+    double lift_speed;           /* mm/s */
+    double retract_speed;        /* mm/s, back down */
+    double wait_before_cure_s;   /* settle: resin at rest before the light goes on */
+    double bottom_lift_mm, bottom_lift_speed;   /* the same for the bottom layers */
+} job_motion;
+
+/* Everything a format needs besides the images. The writer keeps the pointer:
+   it lives until close, and lit_mm2 and volume_mm3 are filled in meanwhile. */
+typedef struct job_desc {
+    const printer *preset;       /* NULL for a display given by --pixels/--pitch */
+    const char *model;           /* the model's file name, for headers */
+    int width, height;           /* pixels of each image as stored (after any turn) */
+    double pitch[2];             /* mm per stored pixel, across (x) and down (y) */
+    double display_mm[2];        /* width * pitch[0], height * pitch[1] */
+    double z_max_mm;             /* the printer's build height (0: unknown) */
+    int bits;                    /* of the images handed to `layer`: 1 or 8 */
+    int supersample;             /* 1: 1-bit masks; s: 8-bit from s x s rays */
+    int mirror_x, mirror_y;      /* the images are flipped so for this display */
+    size_t layer_count;
+    const job_layer *layers;     /* all layer_count, bottom first */
+    double exposure_s;           /* the normal layers' exposure for headers that hold
+                                    one (the thinnest layer's, by the working curve) */
+    double bottom_exposure_s;
+    unsigned bottom_layers;
+    double layer_height_mm;      /* for headers that hold one: the thinnest layer */
+    job_motion motion;
+    double volume_mm3;           /* of the part (sum of lit area x thickness): known
+                                    at close, as are the layers' lit_mm2 */
+    double print_time_s;         /* estimated: exposures, waits and moves */
+    /* What the plan was, for the formats that record it (the directory's manifest) */
+    const char *metric, *method, *slice_at;
+    double eps, bin_mm;          /* the plan's error bound; its bin (every thickness is
+                                    a whole number of bins) */
+    double cure[3];              /* the working curve: S seconds cure T mm, Dp mm (0: every
+                                    layer gets S) */
+    double part_mm[3], place_mm[2];
+    int rotate;                  /* quarter turns, as --rotate */
+    /* A shaded picture of the part, w x h pixels, 3 bytes (R, G, B) a pixel,
+       rows top first, for the formats' previews; 0 or -1 (out of memory). */
+    int (*preview)(void *ctx, int w, int h, unsigned char *rgb);
+    void *preview_ctx;
+} job_desc;
+
+typedef struct job_format {
+    const char *name;            /* --format NAME */
+    const char *extension;       /* of -o that picks it (".ctb"); NULL: the directory */
+    const char *what;            /* for --help */
+    double min_layer_mm;         /* a thinner layer cannot be stored or will not print */
+    int adaptive;                /* 0: every layer the same thickness (the file holds one) */
+    /* Begins the file (or directory) at path; RC_OK, or a complaint made and
+       *writer NULL with nothing left behind. */
+    int (*open)(void **writer, const char *path, const job_desc *d);
+    /* Layer k's image: rows top first, `stride` bytes apart, d->bits per pixel
+       (1-bit rows packed MSB first, 1 = lit). Layers come in order. */
+    int (*layer)(void *writer, size_t k, const unsigned char *image, size_t stride);
+    /* ok: finish and put the file in place; !ok: remove what was written.
+       Frees the writer either way. */
+    int (*close)(void *writer, int ok);
+} job_format;
+
+/* The formats: jobdir.c, fmt_ctb.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
+extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP, JOB_FORMAT_SL1;
+extern const job_format *const JOB_FORMATS[];  /* NULL-terminated */
+/* The format called `name`, or NULL. */
+const job_format *job_format_named(const char *name);
+/* The format -o path's extension picks (case-insensitive); NULL for an
+   extension no format has, the directory format for a path without one. */
+const job_format *job_format_for_path(const char *path);
+
+/* ---- helpers the formats share --------------------------------------- */
+
+/* Row y of an image handed to `layer` as 8-bit grey (1-bit: 0 or 255). */
+void job_row_grey(const unsigned char *image, size_t stride, int bits, int width, int y, unsigned char *out);
+
+/* The runs of equal pixels along row (as `layer` gets it), left to right:
+   run(ctx, grey, n), 1-bit pixels as 0 or 255. Neighbouring runs may share
+   a grey (a byte-long run beside a pixel run). */
+typedef void (*job_run_fn)(void *ctx, unsigned grey, uint64_t n);
+void job_row_runs(const unsigned char *row, int bits, int width, job_run_fn run, void *ctx);
+
+/* A file written under "PATH.tmp.PID" and renamed into place by
+   job_file_commit; job_file_discard removes it. */
+typedef struct job_file {
+    FILE *f;
+    char *path, *tmp;
+} job_file;
+int job_file_open(job_file *jf, const char *path);
+int job_file_commit(job_file *jf);
+void job_file_discard(job_file *jf);
+#endif

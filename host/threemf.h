@@ -1,0 +1,40 @@
+/* A 3MF project for FDM slicers: the model (the core 3MF schema) with the
+   plan as a variable-layer-height profile that PrusaSlicer
+   (Metadata/Slic3r_PE_layer_heights_profile.txt) and OrcaSlicer / Bambu
+   Studio (Metadata/layer_heights_profile.txt) slice layer for layer.
+
+   The profile is one step per layer, "object_id=1|0;h1;z1;h1;z1;h2;...;H;hK":
+   the slicers look a layer's height up just above its bottom and add it to
+   the layers below, so a flat step per layer reproduces every top exactly.
+   The last top is the object's height (both slicers drop a profile that ends
+   more than 1e-3 mm off it), each h comes from the tops as written (the
+   slicers sum h, so no rounding adds up), and the first layer is the
+   printer's first-layer height, which must equal h1 (OrcaSlicer compares
+   them exactly). Metadata/Slic3r_PE.config carries first, minimum and
+   maximum layer heights for PrusaSlicer. */
+#ifndef ADASLICE_HOST_THREEMF_H
+#define ADASLICE_HOST_THREEMF_H
+#include "plan_job.h"
+
+/* The thickest layer a nozzle lays in PrusaSlicer unless told otherwise
+   (max_layer_height 0: 75 % of the nozzle), and its floor for any layer. */
+#define THREEMF_MAX_OF_NOZZLE 0.75
+#define THREEMF_MIN_LAYER 0.01
+
+typedef struct threemf_args {
+    const char *path;            /* --3mf FILE, or NULL */
+    double nozzle;               /* --nozzle MM */
+} threemf_args;
+
+/* Takes --3mf FILE and --nozzle MM out of argv (argv[0] kept); RC_OK or
+   RC_USAGE after a complaint. */
+int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest);
+void threemf_usage(FILE *f);
+/* The layer bounds against the nozzle, before planning; RC_OK or RC_USAGE
+   after a complaint. */
+int threemf_check_bounds(const threemf_args *t, const plan_args *a);
+/* Writes t->path from the job's mesh (welded here) and plan; says on `note`
+   which first-layer height and layer limits the printer profile needs.
+   RC_OK or a complaint made, and no file. */
+int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *note);
+#endif

@@ -1,0 +1,260 @@
+/* ZIP writer, see zip.h. The layouts are the PKWARE APPNOTE 6.3.x's: 4.3.7
+   the local file header, 4.3.12 the central directory header, 4.3.16 the end
+   of central directory record; numbers little-endian. Sizes and the CRC are
+   known before a member's header goes out (its bytes are in memory), so no
+   member needs a data descriptor. */
+#include "zip.h"
+#include "deflate.h"
+#include "png.h"
+#include "report.h"
+#include "../adaslice_mcu.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum {
+    LOCAL_HEADER = 30, CENTRAL_HEADER = 46, END_RECORD = 22,
+    MAX_MEMBERS = 65535,   /* the end record counts members in 16 bits */
+    DOS_DATE = 1 << 5 | 1, /* 1980-01-01, the first day a DOS date can hold; time 00:00:00 is 0 */
+    UTF8_NAME = 1 << 11    /* general purpose flag bit 11 (APPNOTE appendix D) */
+};
+/* 32-bit sizes and offsets stay below this: 0xFFFFFFFF tells a reader to
+   look for ZIP64 fields, which this writer has none of. */
+#define ZIP_LIMIT 0xFFFFFFFFu
+
+struct zip_writer {
+    job_file file;
+    uint64_t offset;           /* bytes written so far: the next local header's offset */
+    unsigned char *central;    /* the central directory, one header per member so far */
+    size_t central_size, central_cap;
+    unsigned members;
+    int failed;                /* a zip_add failed: the archive is not to be kept */
+};
+
+static void put16(unsigned char *p, unsigned v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static void put32(unsigned char *p, uint32_t v)
+{
+    put16(p, v & 0xFFFF);
+    put16(p + 2, v >> 16);
+}
+
+/* The 26 bytes a local header (from its offset 4) and a central header (from
+   its offset 6) share: version needed, flags, method, time, date, CRC-32,
+   both sizes, name and extra field lengths. */
+static void put_common(unsigned char *p, const char *name, size_t len, int method, uint32_t crc, size_t csize,
+                       size_t size)
+{
+    unsigned flags = 0;
+    for (size_t i = 0; i < len; i++)
+        if ((unsigned char)name[i] >= 0x80) flags = UTF8_NAME; /* names come from the command line */
+    put16(p, method ? 20 : 10); /* 2.0 for deflate, 1.0 for stored */
+    put16(p + 2, flags);
+    put16(p + 4, (unsigned)method);
+    put16(p + 6, 0);
+    put16(p + 8, DOS_DATE);
+    put32(p + 10, crc);
+    put32(p + 14, (uint32_t)csize);
+    put32(p + 18, (uint32_t)size);
+    put16(p + 22, (unsigned)len);
+    put16(p + 24, 0);
+}
+
+static int write_bytes(zip_writer *z, const void *data, size_t size)
+{
+    errno = 0;
+    if (size && fwrite(data, 1, size, z->file.f) != size)
+        return complain(RC_FAIL, "cannot write %s: %s", z->file.path, strerror(errno ? errno : EIO));
+    z->offset += size;
+    return RC_OK;
+}
+
+int zip_open(zip_writer **z, const char *path)
+{
+    zip_writer *w = (zip_writer *)calloc(1, sizeof *w);
+    *z = NULL;
+    if (!w) return complain(RC_FAIL, "cannot write %s: out of memory", path);
+    if (job_file_open(&w->file, path) != RC_OK) {
+        free(w);
+        return RC_FAIL;
+    }
+    *z = w;
+    return RC_OK;
+}
+
+/* Checks name and size, then writes the member; any complaint leaves
+   z->failed set. */
+static int add(zip_writer *z, const char *name, const void *data, size_t size, int deflate,
+               unsigned char **packed)
+{
+    const char *path = z->file.path;
+    size_t len = strlen(name), csize = size; /* csize: the bytes in the archive */
+    const void *body = data;
+    unsigned char local[LOCAL_HEADER], *c;
+    uint32_t crc;
+    int method = 0;
+
+    if (!len || len > 65535 || strchr(name, '\\') || name[0] == '/')
+        return complain(RC_FAIL, "cannot write %s: bad member name \"%.80s\": 1 to 65535 bytes, '/' between "
+                        "folders, no '\\' and no leading '/'", path, name);
+    if (z->members == MAX_MEMBERS)
+        return complain(RC_FAIL, "cannot write %s: a ZIP holds at most %d members (ZIP64 is not written)", path,
+                        MAX_MEMBERS);
+    if ((uint64_t)size >= ZIP_LIMIT)
+        return complain(RC_FAIL, "cannot write %s: member %s has %zu bytes; a ZIP without ZIP64 holds less than "
+                        "4 GiB", path, name, size);
+    crc = adaslice_crc32(0, data, size);
+    if (deflate && size) {
+        size_t n;
+        if (deflate_bytes((const unsigned char *)data, size, 0, packed, &n))
+            return complain(RC_FAIL, "cannot write %s: out of memory deflating %s", path, name);
+        if (n < size) {
+            body = *packed;
+            csize = n;
+            method = 8;
+        }
+    }
+    /* the whole archive under 4 GiB keeps every offset and size in 32 bits */
+    if (z->offset + LOCAL_HEADER + len + csize + z->central_size + CENTRAL_HEADER + len + END_RECORD >= ZIP_LIMIT)
+        return complain(RC_FAIL, "cannot write %s: with %s the archive reaches 4 GiB (ZIP64 is not written)", path,
+                        name);
+    if (z->central_size + CENTRAL_HEADER + len > z->central_cap) {
+        size_t cap = (z->central_size + CENTRAL_HEADER + len) * 2;
+        if (!(c = (unsigned char *)realloc(z->central, cap)))
+            return complain(RC_FAIL, "cannot write %s: out of memory", path);
+        z->central = c;
+        z->central_cap = cap;
+    }
+    c = z->central + z->central_size;
+    put32(c, 0x02014b50);
+    put16(c + 4, 3 << 8 | 20);  /* made by: UNIX (the attributes below), APPNOTE 2.0 */
+    put_common(c + 6, name, len, method, crc, csize, size);
+    put16(c + 32, 0);           /* comment length */
+    put16(c + 34, 0);           /* disk number */
+    put16(c + 36, 0);           /* internal attributes */
+    put32(c + 38, (uint32_t)0100644 << 16); /* a regular file, rw-r--r-- */
+    put32(c + 42, (uint32_t)z->offset);
+    memcpy(c + CENTRAL_HEADER, name, len);
+    put32(local, 0x04034b50);
+    put_common(local + 4, name, len, method, crc, csize, size);
+    if (write_bytes(z, local, LOCAL_HEADER) || write_bytes(z, name, len) || write_bytes(z, body, csize))
+        return RC_FAIL;
+    z->central_size += CENTRAL_HEADER + len;
+    z->members++;
+    z->failed = 0;
+    return RC_OK;
+}
+
+int zip_add(zip_writer *z, const char *name, const void *data, size_t size, int deflate)
+{
+    unsigned char *packed = NULL;
+    int rc;
+    if (z->failed) return RC_FAIL;
+    z->failed = 1;
+    rc = add(z, name, data, size, deflate, &packed);
+    free(packed);
+    return rc;
+}
+
+int zip_close(zip_writer *z, int ok)
+{
+    int rc = RC_FAIL;
+    if (ok && !z->failed) {
+        unsigned char end[END_RECORD];
+        uint64_t start = z->offset;
+        put32(end, 0x06054b50);
+        put16(end + 4, 0);                 /* this disk */
+        put16(end + 6, 0);                 /* the disk the central directory starts on */
+        put16(end + 8, z->members);        /* members on this disk */
+        put16(end + 10, z->members);       /* and in all */
+        put32(end + 12, (uint32_t)z->central_size);
+        put32(end + 16, (uint32_t)start);
+        put16(end + 20, 0);                /* comment length */
+        if (write_bytes(z, z->central, z->central_size) == RC_OK && write_bytes(z, end, END_RECORD) == RC_OK)
+            rc = job_file_commit(&z->file);
+        else
+            job_file_discard(&z->file);
+    } else {
+        job_file_discard(&z->file);
+    }
+    free(z->central);
+    free(z);
+    return rc;
+}
+
+/* ---- members the zip job formats share ------------------------------- */
+
+void zip_number(FILE *f, double v, int decimals)
+{
+    char text[DBL_MAX_10_EXP + 32]; /* the longest %.*f there is, decimals <= 16 */
+    for (int k = 0; k <= decimals; k++) {
+        snprintf(text, sizeof text, "%.*f", k, v);
+        if (fabs(strtod(text, NULL) - v) <= 1e-9 * (fabs(v) > 1 ? fabs(v) : 1)) break;
+    }
+    fputs(text, f);
+}
+
+int zip_add_text(zip_writer *z, const char *name, write_fn fill, const void *ctx)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    int bad, rc;
+    if (!f) return complain(RC_FAIL, "cannot write %s: out of memory for %s", z->file.path, name);
+    fill(f, ctx);
+    bad = ferror(f);
+    if (fclose(f) != 0 || bad) rc = complain(RC_FAIL, "cannot write %s: out of memory for %s", z->file.path, name);
+    else rc = zip_add(z, name, text, size, 1);
+    free(text);
+    return rc;
+}
+
+/* An encoded PNG as a member, or the encoder's failure, which (with the
+   sizes a job_desc has) can only be memory. */
+static int add_png(zip_writer *z, const char *name, int failed, unsigned char *png, size_t size)
+{
+    int rc = failed ? complain(RC_FAIL, "cannot write %s: out of memory for %s", z->file.path, name)
+                     : zip_add(z, name, png, size, 0);
+    free(png);
+    return rc;
+}
+
+int zip_add_layer_png(zip_writer *z, const char *name, const job_desc *d, const unsigned char *image, size_t stride)
+{
+    unsigned char *grey = NULL, *png = NULL;
+    size_t size = 0;
+    int rc;
+    if (d->bits == 8) {
+        rc = png_encode_gray(image, d->width, d->height, stride, 8, &png, &size);
+    } else if (!(grey = (unsigned char *)malloc((size_t)d->width * (size_t)d->height))) {
+        rc = -1;
+    } else {
+        for (int y = 0; y < d->height; y++)
+            job_row_grey(image, stride, d->bits, d->width, y, grey + (size_t)y * (size_t)d->width);
+        rc = png_encode_gray(grey, d->width, d->height, (size_t)d->width, 8, &png, &size);
+    }
+    free(grey);
+    return add_png(z, name, rc, png, size);
+}
+
+int zip_add_preview_png(zip_writer *z, const char *name, const job_desc *d, int w, int h)
+{
+    unsigned char *rgb, *png = NULL;
+    size_t size = 0;
+    int rc = -1;
+    if (!d->preview) return RC_OK;
+    rgb = (unsigned char *)malloc((size_t)w * (size_t)h * 3);
+    if (rgb && d->preview(d->preview_ctx, w, h, rgb) == 0)
+        rc = png_encode_rgb(rgb, w, h, &png, &size);
+    free(rgb);
+    return add_png(z, name, rc, png, size);
+}

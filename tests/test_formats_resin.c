@@ -1,0 +1,750 @@
+/* Tests of the resin job writers (host/fmt_ctb.c, host/fmt_goo.c): every file
+   is read back by the independent readers of tests/job_readers.c (written
+   from the byte layouts, not from the writers), header, layer table and
+   every pixel of every layer compared with what was handed in. */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
+#endif
+#include "check.h"
+#include "job_readers.h"
+#include "../host/jobfile.h"
+#include "../host/report.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char dir[64];
+
+static const char *in_dir(const char *name)
+{
+    static char path[160];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    return path;
+}
+
+static unsigned char *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    struct stat st;
+    unsigned char *data = NULL;
+    *size = 0;
+    if (!f) return NULL;
+    if (fstat(fileno(f), &st) == 0 && (data = (unsigned char *)malloc((size_t)st.st_size + 1)) != NULL)
+        *size = fread(data, 1, (size_t)st.st_size, f);
+    fclose(f);
+    return data;
+}
+
+static int exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* Entries of the test directory besides . and .. */
+static int entries_in_dir(void)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int n = 0;
+    if (!d) return -1;
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) n++;
+    closedir(d);
+    return n;
+}
+
+static double le_f32(const unsigned char *p)
+{
+    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static double be_f32(const unsigned char *p)
+{
+    uint32_t u = (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | (uint32_t)p[3];
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static uint32_t le_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* While a complaint is expected: stderr into a file beside the test
+   directory; complaint_ends gives it back and checks the complaint is one
+   line naming `path`. */
+static int saved_stderr = -1;
+
+static const char *complaint_file(void)
+{
+    static char path[80];
+    snprintf(path, sizeof path, "%s.stderr", dir);
+    return path;
+}
+
+static void complaint_begins(void)
+{
+    int fd;
+    fflush(stderr);
+    saved_stderr = dup(2);
+    fd = open(complaint_file(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+        dup2(fd, 2);
+        close(fd);
+    }
+}
+
+static void complaint_ends(const char *path, const char *about)
+{
+    unsigned char *text;
+    size_t n;
+    fflush(stderr);
+    if (saved_stderr >= 0) {
+        dup2(saved_stderr, 2);
+        close(saved_stderr);
+        saved_stderr = -1;
+    }
+    text = slurp(complaint_file(), &n);
+    if (text) text[n] = 0;
+    CHECKF(text && strstr((char *)text, path) && strstr((char *)text, about) && strchr((char *)text, '\n') == (char *)text + n - 1,
+           "wanted one line naming %s and \"%s\", got \"%s\"", path, about, text ? (char *)text : "");
+    free(text);
+    remove(complaint_file());
+}
+
+/* ---- a job: the desc, its layers and every image as handed in ---------- */
+
+typedef struct test_job {
+    printer preset;
+    job_desc d;
+    job_layer *layers;
+    unsigned char **images;     /* as handed to `layer` (d.bits per pixel) */
+    size_t stride;
+    int preview_calls, preview_sizes[4][2];
+    int preview_fails;
+} test_job;
+
+/* A picture no format could mistake for black: a colour ramp. */
+static int test_preview(void *ctx, int w, int h, unsigned char *rgb)
+{
+    test_job *j = (test_job *)ctx;
+    int x, y;
+    if (j->preview_calls < 4) {
+        j->preview_sizes[j->preview_calls][0] = w;
+        j->preview_sizes[j->preview_calls][1] = h;
+    }
+    j->preview_calls++;
+    if (j->preview_fails) return -1;
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            unsigned char *p = rgb + ((size_t)y * (size_t)w + (size_t)x) * 3;
+            p[0] = (unsigned char)(255 * x / w);
+            p[1] = (unsigned char)(255 * y / h);
+            p[2] = 200;
+        }
+    return 0;
+}
+
+/* The 8-bit value the format must hold for pixel (x, y) of layer k. */
+static unsigned char source_grey(const test_job *j, size_t k, int x, int y)
+{
+    const unsigned char *row = j->images[k] + (size_t)y * j->stride;
+    if (j->d.bits == 8) return row[x];
+    return (row[x >> 3] >> (7 - (x & 7)) & 1) ? 255 : 0;
+}
+
+static void set_pixel(test_job *j, size_t k, int x, int y, unsigned v)
+{
+    unsigned char *row = j->images[k] + (size_t)y * j->stride;
+    if (j->d.bits == 8) row[x] = (unsigned char)v;
+    else if (v >= 128) row[x >> 3] |= (unsigned char)(0x80 >> (x & 7));
+    else row[x >> 3] &= (unsigned char)~(0x80 >> (x & 7));
+}
+
+/* Layers of the given thicknesses, exposures by a working curve
+   (E = 1.2 s * exp(t / 0.08 mm)), the first two bottom layers at 25 s;
+   images zeroed; padding bits of 1-bit rows set, which the writers must
+   ignore. */
+static test_job *job_new(int width, int height, int bits, size_t count, const double *thickness)
+{
+    test_job *j = (test_job *)calloc(1, sizeof *j);
+    double z = 0, thinnest = 1e9;
+    size_t k;
+    j->layers = (job_layer *)calloc(count, sizeof *j->layers);
+    j->images = (unsigned char **)calloc(count, sizeof *j->images);
+    j->stride = bits == 8 ? (size_t)width + 3 : ((size_t)width + 7) / 8 + 1;
+    for (k = 0; k < count; k++) {
+        double t = thickness[k];
+        j->layers[k].z_bottom = z;
+        z += t;
+        j->layers[k].z_top = z;
+        j->layers[k].thickness = t;
+        j->layers[k].exposure_s = k < 2 ? 25.0 : 1.2 * exp(t / 0.08);
+        if (t < thinnest) thinnest = t;
+        j->images[k] = (unsigned char *)calloc(j->stride, (size_t)height);
+        if (bits == 1 && (width & 7)) {
+            int y;
+            for (y = 0; y < height; y++) j->images[k][(size_t)y * j->stride + (size_t)width / 8] = (unsigned char)(0xFF >> (width & 7));
+        }
+    }
+    j->preset.name = "test-printer";
+    j->preset.machine = "Test Printer 12K";
+    j->preset.width = width;
+    j->preset.height = height;
+    j->d.preset = &j->preset;
+    j->d.model = "sphere.stl";
+    j->d.width = width;
+    j->d.height = height;
+    j->d.pitch[0] = j->d.pitch[1] = 0.05;
+    j->d.display_mm[0] = width * 0.05;
+    j->d.display_mm[1] = height * 0.05;
+    j->d.z_max_mm = 150;
+    j->d.bits = bits;
+    j->d.supersample = bits == 8 ? 4 : 1;
+    j->d.layer_count = count;
+    j->d.layers = j->layers;
+    j->d.exposure_s = 1.2 * exp(thinnest / 0.08);
+    j->d.bottom_exposure_s = 25;
+    j->d.bottom_layers = 2;
+    j->d.layer_height_mm = thinnest;
+    j->d.motion.lift_mm = 6;
+    j->d.motion.lift_speed = 1.5;
+    j->d.motion.retract_speed = 3;
+    j->d.motion.wait_before_cure_s = 1.25;
+    j->d.motion.bottom_lift_mm = 8;
+    j->d.motion.bottom_lift_speed = 1;
+    j->d.print_time_s = 3600.4;
+    j->d.preview = test_preview;
+    j->d.preview_ctx = j;
+    return j;
+}
+
+static void job_free(test_job *j)
+{
+    size_t k;
+    if (!j) return;
+    for (k = 0; k < j->d.layer_count; k++) free(j->images[k]);
+    free(j->images);
+    free(j->layers);
+    free(j);
+}
+
+static void set_pitch(test_job *j, double across, double down)
+{
+    j->d.pitch[0] = across;
+    j->d.pitch[1] = down;
+    j->d.display_mm[0] = j->d.width * across;
+    j->d.display_mm[1] = j->d.height * down;
+}
+
+/* Writes every layer; the volume is set only after the last, as the slicer
+   knows it only then. */
+static int job_write(test_job *j, const job_format *f, const char *path)
+{
+    void *w = NULL;
+    size_t k;
+    int rc = f->open(&w, path, &j->d);
+    if (rc != RC_OK) return rc;
+    for (k = 0; k < j->d.layer_count; k++)
+        if ((rc = f->layer(w, k, j->images[k], j->stride)) != RC_OK) {
+            f->close(w, 0);
+            return rc;
+        }
+    j->d.volume_mm3 = 1234.5;
+    return f->close(w, 1);
+}
+
+enum { AS_CTB3, AS_CTB4, AS_GOO };
+
+static const job_format *format_of(int as) { return as == AS_GOO ? &JOB_FORMAT_GOO : &JOB_FORMAT_CTB; }
+
+/* Writes the job as `as` to `name` and reads it back; 0 if either failed. */
+static int write_and_read(test_job *j, int as, const char *name, jr_job *out, unsigned char **file, size_t *size)
+{
+    const char *path = in_dir(name);
+    int rc, read_rc;
+    j->preset.version = as == AS_CTB3 ? 3 : as == AS_CTB4 ? 4 : 0;
+    j->preset.format = as == AS_GOO ? "goo" : "ctb";
+    rc = job_write(j, format_of(as), path);
+    CHECKF(rc == RC_OK, "%s: writer returned %d", name, rc);
+    if (rc != RC_OK) return 0;
+    *file = slurp(path, size);
+    CHECKF(*file != NULL, "%s: not there after a good close", name);
+    if (!*file) return 0;
+    read_rc = as == AS_GOO ? jr_read_goo(*file, *size, out) : jr_read_ctb(*file, *size, out);
+    CHECKF(read_rc == 0, "%s: the reader refuses it: %s", name, out->error);
+    if (read_rc != 0) {
+        free(*file);
+        *file = NULL;
+        return 0;
+    }
+    return 1;
+}
+
+/* Pixels of layer k that differ from what was handed in; the first is told. */
+static long image_differences(const test_job *j, int as, const jr_job *r, size_t k, const char *name)
+{
+    long bad = 0;
+    int x, y;
+    if (!r->layers[k].image) return -1;
+    for (y = 0; y < j->d.height; y++)
+        for (x = 0; x < j->d.width; x++) {
+            unsigned char src = source_grey(j, k, x, y);
+            unsigned char want = as == AS_GOO ? src : jr_ctb_grey(src);
+            unsigned char got = r->layers[k].image[(size_t)y * (size_t)j->d.width + (size_t)x];
+            if (got != want && bad++ == 0)
+                CHECKF(0, "%s: layer %zu pixel (%d, %d) is %u, handed in %u (want %u)", name, k, x, y, got, src, want);
+        }
+    return bad;
+}
+
+static int all_black(const unsigned char *rgb, int w, int h)
+{
+    size_t i, n = (size_t)w * (size_t)h * 3;
+    for (i = 0; i < n; i++)
+        if (rgb[i]) return 0;
+    return 1;
+}
+
+static int same_f32(double got, double want) { return got == (double)(float)want; }
+
+/* ---- 1. a sphere job, every header field and pixel --------------------- */
+
+/* A sphere of radius 0.55 mm standing on the plate (its bottom at z = 0):
+   layer k's cross-section at its middle, an ellipse in pixels where the pitch
+   is not square; 8-bit from 4 x 4 samples a pixel (17 levels), 1-bit from the
+   centre; the 8-bit images also get a ramp 0-255 along the bottom rows. */
+static void draw_sphere(test_job *j)
+{
+    const double radius = 0.55, cx = j->d.display_mm[0] / 2, cy = j->d.display_mm[1] / 2;
+    size_t k;
+    int x, y, sx, sy;
+    for (k = 0; k < j->d.layer_count; k++) {
+        double zm = (j->layers[k].z_bottom + j->layers[k].z_top) / 2 - radius;
+        double r2 = radius * radius - zm * zm;
+        for (y = 0; y < j->d.height; y++)
+            for (x = 0; x < j->d.width; x++) {
+                int hits = 0, n = j->d.bits == 8 ? 4 : 1;
+                for (sy = 0; sy < n; sy++)
+                    for (sx = 0; sx < n; sx++) {
+                        double px = (x + (sx + 0.5) / n) * j->d.pitch[0] - cx;
+                        double py = (y + (sy + 0.5) / n) * j->d.pitch[1] - cy;
+                        hits += px * px + py * py <= r2;
+                    }
+                set_pixel(j, k, x, y, (unsigned)(255 * hits / (n * n)));
+            }
+        if (j->d.bits == 8)
+            for (y = j->d.height - 3; y < j->d.height; y++)
+                for (x = 0; x < j->d.width; x++) set_pixel(j, k, x, y, (unsigned)(255 * x / (j->d.width - 1)));
+    }
+}
+
+static void check_sphere(int as, int bits, const char *name)
+{
+    /* Adaptive: thin layers where the sphere's wall is steep or flat. */
+    static const double t[20] = {0.05, 0.05, 0.05, 0.04, 0.03, 0.02, 0.02, 0.03, 0.05, 0.08,
+                                 0.1,  0.08, 0.05, 0.03, 0.02, 0.02, 0.03, 0.04, 0.05, 0.05};
+    test_job *j = job_new(bits == 8 ? 90 : 96, bits == 8 ? 64 : 70, bits, 20, t);
+    jr_job r;
+    unsigned char *file = NULL;
+    size_t size = 0, k;
+    int ctb = as != AS_GOO;
+    if (as == AS_CTB4) set_pitch(j, 0.05, 0.035); /* a non-square panel */
+    if (bits == 8) j->d.mirror_x = 1;
+    draw_sphere(j);
+    if (!write_and_read(j, as, name, &r, &file, &size)) {
+        remove(in_dir(name));
+        job_free(j);
+        return;
+    }
+    CHECKF(r.width == j->d.width && r.height == j->d.height, "%s: %dx%d pixels", name, r.width, r.height);
+    CHECK(same_f32(r.bed_mm[0], j->d.display_mm[0]) && same_f32(r.bed_mm[1], j->d.display_mm[1]));
+    CHECK(same_f32(r.bed_mm[2], 150));
+    CHECK(r.layer_count == 20 && r.bottom_layers == 2);
+    CHECK(same_f32(r.exposure_s, j->d.exposure_s) && same_f32(r.bottom_exposure_s, 25));
+    CHECK(same_f32(r.layer_height_mm, 0.02));
+    CHECKF(!strcmp(r.machine_name, "Test Printer 12K"), "%s: machine \"%s\"", name, r.machine_name);
+    CHECK(r.print_time == 3600);
+    CHECKF(r.per_layer_settings, "%s: per-layer settings off", name);
+    if (ctb) {
+        unsigned v = as == AS_CTB3 ? 3 : 4;
+        CHECKF(r.version == v && r.magic == (v == 3 ? 0x12FD0086u : 0x12FD0106u), "%s: version %u magic 0x%08X", name,
+               r.version, r.magic);
+        CHECKF(r.per_layer_raw == v * 0x10, "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
+        CHECKF(r.anti_alias == (bits == 8 ? 4 : 1), "%s: AntiAliasLevel %d", name, r.anti_alias);
+        CHECK(r.ctb_aa_flag == 0x0F && r.ctb_encryption_key == 0);
+        CHECK(same_f32(r.total_height_mm, j->layers[19].z_top));
+        CHECK(r.mirror == (bits == 8));
+        /* Light-off (v3) or a rest before cure (v4), never both. */
+        CHECK(same_f32(r.light_off_s, v == 3 ? 1.25 : 0));
+        if (v == 4) CHECK(r.ctb_v4_last_layer_index == 19 && r.ctb_v4_disclaimer_length == 320);
+        /* The volume is written at close: PrintParameters+20, in ml. */
+        CHECK(same_f32(le_f32(file + le_u32(file + 84) + 20), 1.2345));
+        CHECKF(r.preview_w[1] == 400 && r.preview_h[1] == 300 && r.preview_w[0] == 200 && r.preview_h[0] == 125,
+               "%s: previews %dx%d and %dx%d", name, r.preview_w[1], r.preview_h[1], r.preview_w[0], r.preview_h[0]);
+    } else {
+        CHECK(r.version == 3 && r.per_layer_raw == 1);
+        CHECKF(r.anti_alias == (bits == 8 ? 4 : 1), "%s: AntiAliasingLevel %d", name, r.anti_alias);
+        CHECK(r.goo_delay_mode == 1 && r.goo_grey_scale_level == 1 && same_f32(r.light_off_s, 0));
+        CHECK(r.mirror == (bits == 8 ? 1 : 0));
+        CHECK(same_f32(be_f32(file + 195450), 1234.5));
+        CHECKF(r.preview_w[0] == 116 && r.preview_w[1] == 290, "%s: previews %d and %d", name, r.preview_w[0],
+               r.preview_w[1]);
+    }
+    CHECKF(j->preview_calls == 2, "%s: %d preview calls", name, j->preview_calls);
+    CHECK(j->preview_sizes[0][0] == (ctb ? 400 : 116) && j->preview_sizes[1][0] == (ctb ? 200 : 290));
+    CHECK(r.preview_rgb[0] && !all_black(r.preview_rgb[0], r.preview_w[0], r.preview_h[0]));
+    CHECK(r.preview_rgb[1] && !all_black(r.preview_rgb[1], r.preview_w[1], r.preview_h[1]));
+
+    for (k = 0; k < 20; k++) {
+        const jr_layer *L = &r.layers[k];
+        int bottom = k < 2;
+        double lift = bottom ? 8 : 6, speed = bottom ? 60 : 90;
+        CHECKF(same_f32(L->z_mm, j->layers[k].z_top), "%s: layer %zu at %g mm, not %g", name, k, L->z_mm,
+               j->layers[k].z_top);
+        CHECKF(same_f32(L->exposure_s, j->layers[k].exposure_s), "%s: layer %zu exposed %g s, not %g", name, k,
+               L->exposure_s, j->layers[k].exposure_s);
+        CHECKF(same_f32(L->lift_mm, lift) && same_f32(L->lift_speed, speed) && same_f32(L->retract_speed, 180),
+               "%s: layer %zu lifts %g mm at %g mm/min, retracts at %g", name, k, L->lift_mm, L->lift_speed,
+               L->retract_speed);
+        CHECK(same_f32(L->lift2_mm, 0) && same_f32(L->retract2_mm, 0));
+        CHECK(same_f32(L->pwm, 255));
+        if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, 1.25) && same_f32(L->wait_before_cure_s, 0));
+        else CHECK(same_f32(L->light_off_s, 0) && same_f32(L->wait_before_cure_s, 1.25));
+        if (as == AS_CTB4) CHECK(same_f32(L->lift2_speed, speed) && same_f32(L->retract2_speed, 180));
+        if (as == AS_GOO) CHECK(same_f32(L->retract_mm, lift) && L->pause == 0);
+        CHECK(image_differences(j, as, &r, k, name) == 0);
+    }
+    jr_free(&r);
+    free(file);
+    remove(in_dir(name));
+    job_free(j);
+}
+
+static void sphere_as_ctb_v3(void)
+{
+    check_sphere(AS_CTB3, 1, "sphere1.v3.ctb");
+    check_sphere(AS_CTB3, 8, "sphere8.v3.ctb");
+}
+
+static void sphere_as_ctb_v4_on_a_non_square_panel(void)
+{
+    check_sphere(AS_CTB4, 1, "sphere1.v4.ctb");
+    check_sphere(AS_CTB4, 8, "sphere8.v4.ctb");
+}
+
+static void sphere_as_goo(void)
+{
+    check_sphere(AS_GOO, 1, "sphere1.goo");
+    check_sphere(AS_GOO, 8, "sphere8.goo");
+}
+
+/* A preset without a version writes CTB v4; none at all names the machine
+   "adaslice". */
+static void ctb_defaults_to_v4_and_adaslice(void)
+{
+    static const double t[3] = {0.05, 0.05, 0.05};
+    test_job *j = job_new(40, 30, 1, 3, t);
+    jr_job r;
+    unsigned char *file = NULL;
+    size_t size;
+    set_pixel(j, 2, 5, 5, 255);
+    j->d.preset = NULL;
+    if (write_and_read(j, AS_CTB4, "plain.ctb", &r, &file, &size)) {
+        CHECK(r.version == 4 && r.magic == 0x12FD0106u);
+        CHECKF(!strcmp(r.machine_name, "adaslice"), "machine \"%s\"", r.machine_name);
+        jr_free(&r);
+    }
+    free(file);
+    remove(in_dir("plain.ctb"));
+    job_free(j);
+}
+
+/* ---- 2. corruption is caught ------------------------------------------- */
+
+static int corruption_seen(test_job *j, int as, unsigned char *file, size_t size, size_t at)
+{
+    jr_job r;
+    int seen;
+    size_t k;
+    file[at] ^= 0x01;
+    if ((as == AS_GOO ? jr_read_goo(file, size, &r) : jr_read_ctb(file, size, &r)) != 0) return 1;
+    seen = 0;
+    for (k = 0; k < r.layer_count; k++) {
+        long bad = 0;
+        int x, y;
+        for (y = 0; y < j->d.height; y++)
+            for (x = 0; x < j->d.width; x++) {
+                unsigned char src = source_grey(j, k, x, y);
+                bad += r.layers[k].image[(size_t)y * (size_t)j->d.width + (size_t)x] != (as == AS_GOO ? src : jr_ctb_grey(src));
+            }
+        if (bad) seen = 1;
+    }
+    jr_free(&r);
+    return seen;
+}
+
+static void flipped_layer_bytes_are_detected(void)
+{
+    static const double t[6] = {0.05, 0.05, 0.03, 0.03, 0.02, 0.02};
+    int as;
+    for (as = AS_CTB3; as <= AS_GOO; as++) {
+        test_job *j = job_new(64, 48, 8, 6, t);
+        jr_job r;
+        unsigned char *file = NULL;
+        size_t size, k;
+        int x, y;
+        for (k = 0; k < 6; k++)
+            for (y = 0; y < 48; y++)
+                for (x = 0; x < 64; x++) set_pixel(j, k, x, y, (unsigned)((x * 7 + y * 3 + (int)k * 11) % 256));
+        if (write_and_read(j, as, "corrupt.job", &r, &file, &size)) {
+            const jr_layer *L = &r.layers[3];
+            /* Inside the data: past GOO's 0x55, before its checksum. */
+            size_t at = (size_t)L->data_offset + (size_t)L->data_size / 2;
+            jr_free(&r);
+            CHECKF(corruption_seen(j, as, file, size, at), "%s: a flipped bit at offset %zu goes unnoticed",
+                   as == AS_GOO ? "goo" : "ctb", at);
+        }
+        free(file);
+        remove(in_dir("corrupt.job"));
+        job_free(j);
+    }
+}
+
+/* ---- 3. a failure leaves nothing ---------------------------------------- */
+
+static void failures_leave_no_file(void)
+{
+    static const double t[4] = {0.05, 0.05, 0.05, 0.05};
+    int as;
+    for (as = AS_CTB4; as <= AS_GOO; as++) {
+        const job_format *f = format_of(as);
+        test_job *j = job_new(37, 23, 1, 4, t);
+        char missing[200];
+        void *w = (void *)&w;
+        size_t k;
+        int rc;
+        j->preset.version = as == AS_CTB4 ? 4 : 0;
+
+        snprintf(missing, sizeof missing, "%s/no-such-dir/job%s", dir, f->extension);
+        complaint_begins();
+        rc = f->open(&w, missing, &j->d);
+        complaint_ends(missing, "No such file");
+        CHECKF(rc == RC_FAIL && w == NULL, "%s: open in a missing directory gave %d", f->name, rc);
+        CHECK(!exists(missing) && entries_in_dir() == 0);
+
+        /* Layers written, then a close that gives up. */
+        rc = f->open(&w, in_dir("given_up.job"), &j->d);
+        CHECK(rc == RC_OK);
+        if (rc == RC_OK) {
+            for (k = 0; k < 3; k++) CHECK(f->layer(w, k, j->images[k], j->stride) == RC_OK);
+            CHECK(entries_in_dir() == 1); /* the temporary file, while writing */
+            CHECK(f->close(w, 0) == RC_OK);
+        }
+        CHECKF(entries_in_dir() == 0, "%s: %d files left after close(ok=0)", f->name, entries_in_dir());
+
+        /* A good close after too few layers is refused, and leaves nothing. */
+        rc = f->open(&w, in_dir("short.job"), &j->d);
+        CHECK(rc == RC_OK);
+        if (rc == RC_OK) {
+            CHECK(f->layer(w, 0, j->images[0], j->stride) == RC_OK);
+            complaint_begins();
+            CHECK(f->close(w, 1) == RC_FAIL);
+            complaint_ends(in_dir("short.job"), "1 of 4 layers");
+        }
+        CHECK(entries_in_dir() == 0);
+
+        /* Layers out of order are refused. */
+        rc = f->open(&w, in_dir("order.job"), &j->d);
+        CHECK(rc == RC_OK);
+        if (rc == RC_OK) {
+            complaint_begins();
+            CHECK(f->layer(w, 1, j->images[1], j->stride) == RC_FAIL);
+            complaint_ends(in_dir("order.job"), "layer 1");
+            f->close(w, 0);
+        }
+        CHECK(entries_in_dir() == 0);
+
+        /* A preview that cannot be drawn fails the open. */
+        j->preview_fails = 1;
+        complaint_begins();
+        rc = f->open(&w, in_dir("no_preview.job"), &j->d);
+        complaint_ends(in_dir("no_preview.job"), "preview");
+        CHECK(rc == RC_FAIL && w == NULL);
+        CHECK(entries_in_dir() == 0);
+        job_free(j);
+    }
+}
+
+/* ---- 4. edges: odd widths, blank and full layers, runs past the limits --- */
+
+static uint32_t rng_state = 2463534242u;
+
+static uint32_t rng(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 17;
+    rng_state ^= rng_state << 5;
+    return rng_state;
+}
+
+static void round_trip(test_job *j, const char *what)
+{
+    int as;
+    for (as = AS_CTB3; as <= AS_GOO; as++) {
+        char name[64];
+        jr_job r;
+        unsigned char *file = NULL;
+        size_t size, k;
+        snprintf(name, sizeof name, "%s.%s", what, as == AS_CTB3 ? "v3.ctb" : as == AS_CTB4 ? "v4.ctb" : "goo");
+        if (write_and_read(j, as, name, &r, &file, &size)) {
+            for (k = 0; k < j->d.layer_count; k++) CHECK(image_differences(j, as, &r, k, name) == 0);
+            jr_free(&r);
+        }
+        free(file);
+        remove(in_dir(name));
+    }
+}
+
+/* 37 x 23: rows end inside a byte (and the padding bits are set). */
+static void odd_width_blank_full_and_noisy_layers(void)
+{
+    static const double t[5] = {0.05, 0.05, 0.05, 0.05, 0.05};
+    int bits;
+    for (bits = 1; bits <= 8; bits += 7) {
+        test_job *j = job_new(37, 23, bits, 5, t);
+        int x, y;
+        for (y = 0; y < 23; y++)
+            for (x = 0; x < 37; x++) {
+                set_pixel(j, 1, x, y, 255);                          /* all lit */
+                set_pixel(j, 2, x, y, rng() & 0xFF);                 /* no runs at all */
+                set_pixel(j, 3, x, y, (x + y) & 1 ? 255 : 0);        /* a checkerboard */
+                set_pixel(j, 4, x, y, x == 36 || y == 22 ? 255 : 1); /* the last column and row */
+            }
+        /* layer 0 stays dark */
+        round_trip(j, bits == 1 ? "odd1" : "odd8");
+        job_free(j);
+    }
+}
+
+/* Runs of every length at which a length form ends (CTB 127/128, 16383/16384,
+   2097151/2097152; GOO 15/16, 4095/4096, 1048575/1048576, diff 255/256):
+   each short length once with every grey in turn, so that each meets every
+   change of grey (a small diff up or down, to and from black and white); the
+   long ones once. */
+static void run_lengths_at_every_form_boundary(void)
+{
+    static const double t[1] = {0.05};
+    static const uint32_t lengths[] = {1,     2,     3,       15,      16,      127,     128,    255, 256, 4095,
+                                       4096, 16383, 16384, 1048575, 1048576, 2097151, 2097152};
+    /* Neighbours differ in their top 7 bits too, so CTB does not merge them. */
+    static const unsigned greys[] = {100, 107, 0, 255, 93, 130, 129, 255, 1, 254};
+    const size_t side = 2600, n = side * side, n_greys = sizeof greys / sizeof greys[0];
+    test_job *j = job_new((int)side, (int)side, 8, 1, t);
+    size_t at = 0, i, g = 0;
+    for (i = 0; at < n; i++) {
+        uint32_t len = lengths[i / n_greys % (sizeof lengths / sizeof lengths[0])];
+        unsigned v = greys[g++ % n_greys];
+        if (len > 4096) { /* the long ones once, each with its own grey */
+            if (i % n_greys) continue;
+            v = greys[i / n_greys % n_greys];
+        }
+        for (; len && at < n; len--, at++) j->images[0][at / side * j->stride + at % side] = (unsigned char)v;
+    }
+    round_trip(j, "runs8");
+    job_free(j);
+}
+
+/* 16384 x 16384 (2^28 pixels, the readers' limit) all lit, then all dark:
+   one run longer than either format's longest run code (2^28 - 1), cut
+   into two; the bytes are checked, not just the decode. */
+static void runs_longer_than_a_code_are_cut(void)
+{
+    static const double t[2] = {0.05, 0.05};
+    static const unsigned char ctb_lit[] = {0xFF, 0xEF, 0xFF, 0xFF, 0xFF, 0x7F};
+    static const unsigned char ctb_dark[] = {0x80, 0xEF, 0xFF, 0xFF, 0xFF, 0x00};
+    static const unsigned char goo_lit[] = {0x55, 0xFF, 0xFF, 0xFF, 0xFF, 0xC1};
+    static const unsigned char goo_dark[] = {0x55, 0x3F, 0xFF, 0xFF, 0xFF, 0x01};
+    const int side = 16384;
+    test_job *j = job_new(8, 8, 1, 2, t);
+    int as;
+    /* Only two images of 32 MiB: built here rather than by job_new. */
+    free(j->images[0]);
+    free(j->images[1]);
+    j->stride = side / 8;
+    j->d.width = j->d.height = j->preset.width = j->preset.height = side;
+    j->d.display_mm[0] = j->d.display_mm[1] = side * 0.05;
+    j->images[0] = (unsigned char *)malloc(j->stride * side);
+    j->images[1] = (unsigned char *)calloc(j->stride, side);
+    if (!j->images[0] || !j->images[1]) {
+        CHECK(!"out of memory for two 16384 x 16384 masks");
+        job_free(j);
+        return;
+    }
+    memset(j->images[0], 0xFF, j->stride * side);
+    for (as = AS_CTB3; as <= AS_GOO; as++) {
+        const char *name = as == AS_GOO ? "long.goo" : "long.ctb";
+        unsigned char *file;
+        size_t size;
+        jr_job r;
+        int rc;
+        j->preset.version = as == AS_CTB3 ? 3 : as == AS_CTB4 ? 4 : 0;
+        CHECK(job_write(j, format_of(as), in_dir(name)) == RC_OK);
+        file = slurp(in_dir(name), &size);
+        CHECK(file != NULL);
+        if (!file) continue;
+        rc = as == AS_GOO ? jr_read_goo_ex(file, size, &r, JR_SKIP_IMAGES) : jr_read_ctb_ex(file, size, &r, JR_SKIP_IMAGES);
+        CHECKF(rc == 0, "%s: %s", name, r.error);
+        if (rc == 0) {
+            const jr_layer *lit = &r.layers[0], *dark = &r.layers[1];
+            if (as == AS_GOO) {
+                unsigned char want_lit[7], want_dark[7];
+                memcpy(want_lit, goo_lit, 6);
+                memcpy(want_dark, goo_dark, 6);
+                want_lit[6] = (unsigned char)~(0xFF * 4 + 0xC1);
+                want_dark[6] = (unsigned char)~(0x3F + 0xFF * 3 + 0x01);
+                CHECK(lit->data_size == 7 && !memcmp(file + lit->data_offset, want_lit, 7));
+                CHECK(dark->data_size == 7 && !memcmp(file + dark->data_offset, want_dark, 7));
+            } else {
+                CHECK(lit->data_size == 6 && !memcmp(file + lit->data_offset, ctb_lit, 6));
+                CHECK(dark->data_size == 6 && !memcmp(file + dark->data_offset, ctb_dark, 6));
+            }
+            jr_free(&r);
+        }
+        free(file);
+        remove(in_dir(name));
+    }
+    job_free(j);
+}
+
+void test_formats_resin(void)
+{
+    const char *tmp = getenv("TMPDIR");
+    snprintf(dir, sizeof dir, "%s/adaslice-resin-XXXXXX", tmp && strlen(tmp) < 40 ? tmp : "/tmp");
+    if (!mkdtemp(dir)) {
+        perror("test_formats_resin: mkdtemp");
+        return;
+    }
+    RUN(sphere_as_ctb_v3);
+    RUN(sphere_as_ctb_v4_on_a_non_square_panel);
+    RUN(sphere_as_goo);
+    RUN(ctb_defaults_to_v4_and_adaslice);
+    RUN(flipped_layer_bytes_are_detected);
+    RUN(failures_leave_no_file);
+    RUN(odd_width_blank_full_and_noisy_layers);
+    RUN(run_lengths_at_every_form_boundary);
+    RUN(runs_longer_than_a_code_are_cut);
+    rmdir(dir);
+}

@@ -1,0 +1,368 @@
+/* adaslice slice end to end: every layer's exposure from the working curve
+   (checked against the closed form, not the tool's code), the two-point fit,
+   the one-exposure warning, and the refusals a printer owner meets (an
+   unknown extension, the wrong format for a printer, a part too big or too
+   tall, layers a format cannot hold, an adaptive plan for .sl1, bad exposure
+   values): a one-line message, a non-zero exit and nothing written. */
+#include "cli_run.h"
+#include "job_readers.h"
+#include "meshgen.h"
+#include "../adaslice_mcu.h"
+
+/* A sphere 10 mm across: its layers are of every thickness from tmin to tmax. */
+static const char *sphere_obj(void)
+{
+    const char *path = cli_path("sphere.obj");
+    if (!cli_exists(path)) {
+        adaslice_mesh m = gen_sphere(5, 64, 32, 0);
+        cli_write_obj(path, &m);
+        gen_free(&m);
+    }
+    return path;
+}
+
+typedef struct manifest_layer { double thickness, exposure; } manifest_layer;
+
+/* The layers of DIR/manifest.json, in order; their count in *n (0: none). */
+static manifest_layer *read_manifest(const char *dir, size_t *n, char **text_out)
+{
+    char path[600], *text, *at;
+    manifest_layer *l;
+    size_t k = 0, count;
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    *n = 0;
+    *text_out = text = cli_read(path);
+    if (!text) return NULL;
+    count = (size_t)cli_json_number(text, "layer_count");
+    l = (manifest_layer *)calloc(count + 1, sizeof *l);
+    for (at = strstr(text, "\"layers\": ["); at && k < count; k++) {
+        if (!(at = strstr(at, "\"thickness\": "))) break;
+        l[k].thickness = strtod(at + 13, &at);
+        if (!(at = strstr(at, "\"exposure_s\": "))) break;
+        l[k].exposure = strtod(at + 14, &at);
+    }
+    *n = k == count ? count : 0;
+    return l;
+}
+
+/* No file or directory at path, and none beside it named like a temporary. */
+static int nothing_written(const char *path)
+{
+    DIR *d = opendir(cli_dir);
+    struct dirent *e;
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    int clean = !cli_exists(path);
+    while (d && (e = readdir(d)) != NULL)
+        if (!strncmp(e->d_name, base, strlen(base))) clean = 0;
+    if (d) closedir(d);
+    return clean;
+}
+
+/* --exposure S@T --penetration DP: layer k of thickness t gets
+   S exp((t - T) / Dp), the bottom layers their own. */
+static void exposure_follows_the_working_curve(void)
+{
+    const char *job = cli_path("curve");
+    cli_result r = cli_run("slice", sphere_obj(), "--pixels", "240x240", "--pitch", "0.05", "-o", job, "--exposure",
+                           "2@0.08", "--penetration", "0.07", "--bottom-layers", "4", "--bottom-exposure", "30", NULL);
+    manifest_layer *l;
+    char *text;
+    size_t n, k, bad = 0;
+    double lo = 1, hi = 0;
+    CHECKF(r.status == 0 && !*r.err, "exit %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "exposure ") && strstr(r.out, "(4 bottom layers of 30 s)"));
+    cli_free(&r);
+    l = read_manifest(job, &n, &text);
+    CHECKF(n > 60, "%zu layers in the manifest", n);
+    for (k = 0; k < n; k++) {
+        double want = k < 4 ? 30 : 2 * exp((l[k].thickness - 0.08) / 0.07);
+        if (fabs(l[k].exposure - want) > 1e-9 * want && bad++ < 3)
+            CHECKF(0, "layer %zu, %g mm: %.9g s, the curve gives %.9g", k + 1, l[k].thickness, l[k].exposure, want);
+        if (k >= 4 && l[k].thickness < lo) lo = l[k].thickness;
+        if (k >= 4 && l[k].thickness > hi) hi = l[k].thickness;
+    }
+    /* the curve is exercised over most of [tmin, tmax] */
+    CHECKF(hi - lo > 0.06, "layers of %g to %g mm only", lo, hi);
+    CHECK(text && cli_json_number(text, "penetration_mm") == 0.07 && cli_json_number(text, "thickness_mm") == 0.08);
+    free(l);
+    free(text);
+}
+
+/* Two calibrated points: Dp = (t2 - t1) / ln(s2 / s1), and the curve passes
+   through both. */
+static void two_points_fit_the_penetration(void)
+{
+    const char *job = cli_path("fit");
+    cli_result r = cli_run("slice", sphere_obj(), "--pixels", "240x240", "--pitch", "0.05", "-o", job, "--exposure",
+                           "1.8@0.05,3@0.1", NULL);
+    manifest_layer *l;
+    char *text;
+    size_t n, k, bad = 0;
+    double dp = 0.05 / log(3 / 1.8);
+    CHECKF(r.status == 0 && !*r.err, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    l = read_manifest(job, &n, &text);
+    CHECK(n > 0 && text);
+    if (text) CHECKF(fabs(cli_json_number(text, "penetration_mm") - dp) < 1e-12, "Dp %.12g, want %.12g",
+                     cli_json_number(text, "penetration_mm"), dp);
+    for (k = 3; k < n; k++) {
+        double want = 1.8 * exp((l[k].thickness - 0.05) / dp);
+        if (fabs(l[k].exposure - want) > 1e-9 * want && bad++ < 3) CHECKF(0, "layer %zu: %.9g s, want %.9g", k + 1, l[k].exposure, want);
+    }
+    CHECK(fabs(1.8 * exp(0.05 / dp) - 3) < 1e-12);
+    free(l);
+    free(text);
+}
+
+/* One exposure for layers of many thicknesses: the job is written, with a
+   warning naming the thickest layer and its dose. */
+static void one_exposure_for_adaptive_layers_warns(void)
+{
+    const char *job = cli_path("plain");
+    cli_result r = cli_run("slice", sphere_obj(), "--pixels", "240x240", "--pitch", "0.05", "-o", job, "--exposure", "2.5",
+                           NULL);
+    manifest_layer *l;
+    char *text;
+    size_t n, k, same = 1;
+    CHECKF(r.status == 0 && cli_one_message(r.err) && strstr(r.err, "warning") && strstr(r.err, "layer ") &&
+               strstr(r.err, "x the dose"),
+           "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    l = read_manifest(job, &n, &text);
+    for (k = 3; k < n; k++) same &= l[k].exposure == 2.5;
+    CHECK(n > 0 && same);
+    free(l);
+    free(text);
+}
+
+/* Bad exposure and motion values: exit 2, one line naming the option, and
+   no job. */
+static void bad_exposure_values_exit_2(void)
+{
+    static const char *const cases[][3] = {
+        {"--penetration", "0", "--penetration"},
+        {"--penetration", "-0.1", "--penetration"},
+        {"--exposure", "0", "not a positive exposure"},
+        {"--exposure", "-2", "--exposure"},
+        {"--exposure", "2@0.5", "outside tmin"},
+        {"--exposure", "2@0.01", "outside tmin"},
+        {"--exposure", "3@0.05,2@0.1", "thicker layer must need the longer"},
+        {"--exposure", "2@0.06,3@0.06", "thicker layer must need the longer"},
+        {"--exposure", "2@0.06,", "expected S"},
+        {"--exposure", "two", "expected S"},
+        {"--bottom-exposure", "0", "--bottom-exposure"},
+        {"--peel-speed", "0", "--peel-speed"},
+        {"--exposure", "4000", "limited to 3600 s"},
+    };
+    char job[256], model[256];
+    size_t c;
+    snprintf(job, sizeof job, "%s", cli_path("bad"));
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        cli_result r = cli_run("slice", model, "--pixels", "240x240", "--pitch", "0.05", "-o", job, cases[c][0],
+                               cases[c][1], NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, cases[c][2]), "%s %s: exit %d: %s", cases[c][0],
+               cases[c][1], r.status, r.err);
+        CHECKF(nothing_written(job), "%s %s left %s behind", cases[c][0], cases[c][1], job);
+        cli_free(&r);
+    }
+    {   /* --penetration beside two points is one Dp too many */
+        cli_result r = cli_run("slice", model, "-o", job, "--exposure", "1.8@0.05,3@0.1", "--penetration", "0.1", NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "one or the other"), "%d %s", r.status, r.err);
+        CHECK(nothing_written(job));
+        cli_free(&r);
+    }
+}
+
+/* What a format or a printer cannot take is refused before a byte is
+   written: the message names the file and what is wrong. */
+static void refusals_leave_nothing_behind(void)
+{
+    char model[256];
+    struct { const char *out, *args[10], *says; int status; } cases[] = {
+        {"job.pwmx", {NULL}, "no job format has the extension .pwmx", 2},
+        {"job.goo", {"--printer", "elegoo-saturn", NULL}, "reads ctb jobs, not goo", 2},
+        {"job.sl1", {"--printer", "prusa-sl1s", NULL}, "--uniform T", 2},
+        {"job.sl1", {"--pixels", "240x240", "--pitch", "0.05", NULL}, "holds one layer height", 2},
+        {"job.zip", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
+         "is 0.0005 mm thick", 2},
+        {"job.ctb", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
+         "is 0.0005 mm thick", 2},
+        {"job.ctb", {"--printer", "elegoo-saturn", "--scale", "25", NULL}, "mm tall: the elegoo-saturn builds 200 mm", 1},
+        {"job.ctb", {"--printer", "elegoo-saturn", "--scale", "15", NULL}, "does not fit", 1},
+        {"job", {"--format", "pwmx", NULL}, "--format pwmx: unknown", 2},
+        {"job.goo", {"--pixels", "240x240", "--pitch", "0.05", "--svg", NULL}, "--svg writes into a job directory", 2},
+        {"job.goo", {NULL}, "which printer?", 2},
+    };
+    size_t c;
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const char *out = cli_path(cases[c].out), **a = cases[c].args;
+        cli_result r = cli_run("slice", model, "-o", out, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], NULL);
+        CHECKF(r.status == cases[c].status && cli_one_message(r.err) && strstr(r.err, cases[c].says), "%s %s: exit %d: %s", cases[c].out,
+               a[0] ? a[0] : "", r.status, r.err);
+        if (!strstr(cases[c].says, "does not fit") && !strstr(cases[c].says, "tall"))
+            CHECKF(strstr(r.err, out) || strstr(r.err, "--format") || strstr(r.err, "--svg"), "the message does not name %s: %s",
+                   out, r.err);
+        CHECKF(nothing_written(out), "%s: something was left behind", cases[c].out);
+        cli_free(&r);
+    }
+}
+
+/* ------------------------------------------- the formats against the masks */
+
+typedef struct dir_masks {
+    uint32_t width, height, bits, layers;
+    unsigned char **grey;        /* per layer, width x height, 0..255 */
+} dir_masks;
+
+static void grey_row(void *ctx, uint32_t y, const unsigned char *row)
+{
+    dir_masks *m = (dir_masks *)((void **)ctx)[0];
+    unsigned char *out = (unsigned char *)((void **)ctx)[1] + (size_t)y * m->width;
+    uint32_t x;
+    for (x = 0; x < m->width; x++) out[x] = m->bits == 8 ? row[x] : (row[x >> 3] >> (7 - (x & 7)) & 1) ? 255 : 0;
+}
+
+static uint32_t le32(const unsigned char *p) { return p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
+
+/* DIR/masks.rle as jobdir.h lays it out, every layer decoded (its CRC held
+   against the masker's, which the file carries). */
+static int read_dir_masks(const char *dir, dir_masks *m)
+{
+    char path[600];
+    size_t size = 0, at = 44;
+    unsigned char *f, row[8192];
+    uint32_t k;
+    FILE *in;
+    long n;
+    memset(m, 0, sizeof *m);
+    snprintf(path, sizeof path, "%s/masks.rle", dir);
+    if (!(in = fopen(path, "rb"))) return 0;
+    fseek(in, 0, SEEK_END);
+    n = ftell(in);
+    fseek(in, 0, SEEK_SET);
+    f = (unsigned char *)malloc((size_t)n);
+    if (f) size = fread(f, 1, (size_t)n, in);
+    fclose(in);
+    if (!f || size < 44 || memcmp(f, "ADASMSK2", 8)) { free(f); return 0; }
+    m->width = le32(f + 8);
+    m->height = le32(f + 12);
+    m->bits = le32(f + 16);
+    m->layers = le32(f + 20);
+    m->grey = (unsigned char **)calloc(m->layers, sizeof *m->grey);
+    for (k = 0; k < m->layers && at + 16 <= size; k++) {
+        adaslice_rle_decoder dec;
+        uint32_t crc = le32(f + at + 8), code = le32(f + at + 12);
+        void *ctx[2];
+        m->grey[k] = (unsigned char *)malloc((size_t)m->width * m->height);
+        ctx[0] = m;
+        ctx[1] = m->grey[k];
+        CHECK(adaslice_rle_decoder_init(&dec, m->width, m->height, (int)m->bits, row, sizeof row) == ADASLICE_OK);
+        CHECKF(at + 16 + code <= size && adaslice_rle_decode(&dec, f + at + 16, code, grey_row, ctx) == ADASLICE_OK &&
+                   adaslice_rle_finished(&dec) && ADASLICE_RLE_CRC(&dec) == crc,
+               "masks.rle: layer %u does not decode to its CRC", k + 1);
+        at += 16 + code;
+    }
+    free(f);
+    return k == m->layers && !check_case_failed();
+}
+
+static void dir_masks_free(dir_masks *m)
+{
+    uint32_t k;
+    for (k = 0; m->grey && k < m->layers; k++) free(m->grey[k]);
+    free(m->grey);
+}
+
+static unsigned char *read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *d = NULL;
+    long n;
+    *size = 0;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 && (d = (unsigned char *)malloc((size_t)n)))
+        *size = fread(d, 1, (size_t)n, f);
+    fclose(f);
+    return d;
+}
+
+/* One model, one display, sliced as a directory and as each resin file: the
+   file's reader (tests/job_readers.c, from the formats' documentation) finds
+   every layer's Z and exposure as the manifest has them and every pixel of
+   the masker's mask; 1-bit and anti-aliased, on oblong pixels. */
+static void resin_files_hold_the_directory_jobs_masks(void)
+{
+    static const char *const formats[] = {"ctb", "goo"};
+    const char *aa[2] = {"1", "4"};
+    int pass, f;
+    char model[256];
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    for (pass = 0; pass < 2; pass++) {
+        char dir[256], *text;
+        dir_masks m;
+        manifest_layer *l;
+        size_t n, k;
+        cli_result r;
+        snprintf(dir, sizeof dir, "%s", cli_path(pass ? "aa_dir" : "bw_dir"));
+#define SAME_JOB "--pixels", "300x250", "--pitch", "0.05,0.06", "--aa", aa[pass], "--exposure", "2@0.08", "--penetration", "0.07"
+        r = cli_run("slice", model, "-o", dir, SAME_JOB, NULL);
+        CHECKF(r.status == 0, "directory: %s", r.err);
+        cli_free(&r);
+        l = read_manifest(dir, &n, &text);
+        free(text);
+        if (!read_dir_masks(dir, &m) || m.layers != n || n < 50) { CHECKF(0, "%s: %u masks, %zu layers", dir, m.layers, n); free(l); dir_masks_free(&m); return; }
+        CHECK(m.width == 300 && m.height == 250 && m.bits == (pass ? 8u : 1u));
+        for (f = 0; f < 2; f++) {
+            char out[300];
+            unsigned char *data;
+            size_t size, bad_z = 0, bad_px = 0;
+            jr_job job;
+            snprintf(out, sizeof out, "%s/job.%s", cli_dir, formats[f]);
+            r = cli_run("slice", model, "-o", out, SAME_JOB, NULL);
+            CHECKF(r.status == 0, "%s: %s", out, r.err);
+            cli_free(&r);
+            data = read_file(out, &size);
+            if (!data || (f == 0 ? jr_read_ctb(data, size, &job) : jr_read_goo(data, size, &job)) != 0) {
+                CHECKF(0, "%.200s: the reader refuses it: %.200s", out, data ? job.error : "no file");
+                free(data);
+                continue;
+            }
+            CHECKF(job.width == 300 && job.height == 250 && job.layer_count == n, "%s: %d x %d, %u layers", out, job.width,
+                   job.height, job.layer_count);
+            CHECKF(fabs(job.bed_mm[0] - 15) < 1e-4 && fabs(job.bed_mm[1] - 15) < 1e-4, "%s: display %g x %g mm", out,
+                   job.bed_mm[0], job.bed_mm[1]);
+            for (k = 0; k < n && k < job.layer_count; k++) {
+                const jr_layer *L = &job.layers[k];
+                double top = 0;
+                size_t i, q, px = (size_t)m.width * m.height;
+                for (q = 0; q <= k; q++) top += l[q].thickness;
+                if ((fabs(L->z_mm - top) > 2e-5 || fabs(L->exposure_s - l[k].exposure) > 1e-5 * l[k].exposure) && bad_z++ < 3)
+                    CHECKF(0, "%s layer %zu: z %.6f, exposure %.6f; the manifest: %.6f, %.6f", out, k + 1, L->z_mm, L->exposure_s,
+                           top, l[k].exposure);
+                for (i = 0; i < px; i++) {
+                    unsigned char want = f == 0 ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
+                    if (L->image[i] != want) { if (bad_px++ < 3) CHECKF(0, "%s layer %zu pixel %zu: %u, the mask %u", out, k + 1, i, L->image[i], want); break; }
+                }
+            }
+            jr_free(&job);
+            free(data);
+        }
+#undef SAME_JOB
+        dir_masks_free(&m);
+        free(l);
+    }
+}
+
+void test_slice_jobs(void)
+{
+    if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
+    RUN(exposure_follows_the_working_curve);
+    RUN(two_points_fit_the_penetration);
+    RUN(one_exposure_for_adaptive_layers_warns);
+    RUN(bad_exposure_values_exit_2);
+    RUN(refusals_leave_nothing_behind);
+    RUN(resin_files_hold_the_directory_jobs_masks);
+    cli_end();
+}
