@@ -162,22 +162,25 @@ check-models: $(B)/check_models $(B)/adaslice
 
 # ---- make bench -----------------------------------------------------------
 BENCH_LIB = $(call objs,bench,$(LIB_SRC))
-$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c host/deflate.c) $(BENCH_LIB)
+$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c host/deflate.c host/maskrows.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c host/deflate.c) $(BENCH_LIB)
+$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c host/deflate.c host/maskrows.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_wire: $(call objs,bench,bench/bench_wire.c $(LINK_SRC)) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
+$(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c host/report.c) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 
-bench: $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan \
+bench: $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs \
        $(B)/bench-plan-mps2.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
+	$(B)/bench_jobs $(B)/adaslice $(MODELS)
 	$(B)/bench_wire $(MODELS)
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
 

@@ -34,7 +34,7 @@ typedef struct huffman {
     uint16_t code[288];     /* bit-reversed, ready for the LSB-first stream */
 } huffman;
 
-typedef struct deflater {
+struct deflater {
     unsigned char *out;
     size_t size, cap;
     uint64_t acc;       /* bits not yet in out, the oldest lowest */
@@ -47,7 +47,8 @@ typedef struct deflater {
     uint32_t *hash;     /* position + 1 of the last probe per 4-byte hash, 0 if none */
     unsigned char lcode[256]; /* length - 3 -> length code - 257 */
     unsigned char dcode[512]; /* see dist_code */
-} deflater;
+    int failed;         /* token mode: out of memory */
+};
 
 static int reserve(deflater *d, size_t more)
 {
@@ -237,7 +238,8 @@ static int flush_block(deflater *d, size_t start, size_t end, int final)
     for (int i = 0; i < 288; i++) fixed_lit.len[i] = i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8;
     for (int i = 0; i < 30; i++) fixed_dist.len[i] = 5;
     fixed_bits = 3 + data_bits(d, &fixed_lit, &fixed_dist);
-    stored_bits = 8 * (uint64_t)(end - start) + 40 * chunks; /* header, padding, LEN, NLEN */
+    /* stored blocks copy the data, which the token mode never has */
+    stored_bits = d->data ? 8 * (uint64_t)(end - start) + 40 * chunks : UINT64_MAX; /* header, padding, LEN, NLEN */
 
     if (stored_bits <= dynamic_bits && stored_bits <= fixed_bits) {
         if (reserve(d, end - start + 5 * chunks + 16)) return -1;
@@ -363,6 +365,16 @@ static int deflate_data(deflater *d)
     return d->nsyms || !n ? flush_block(d, block_start, n, 1) : 0;
 }
 
+static void code_tables(deflater *d)
+{
+    for (int c = 0; c < 29; c++)
+        for (int v = len_base[c] - 3; v < len_base[c] - 3 + (1 << len_extra[c]) && v < 256; v++)
+            d->lcode[v] = (unsigned char)c;
+    for (int c = 0; c < 30; c++)
+        for (unsigned v = dist_base[c] - 1u; v < dist_base[c] - 1u + (1u << dist_extra[c]); v += v < 256 ? 1 : 128)
+            d->dcode[v < 256 ? v : 256 + (v >> 7)] = (unsigned char)c;
+}
+
 int deflate_bytes(const unsigned char *data, size_t n, size_t row, unsigned char **out, size_t *out_size)
 {
     deflater d;
@@ -378,12 +390,7 @@ int deflate_bytes(const unsigned char *data, size_t n, size_t row, unsigned char
     d.syms = (uint32_t *)malloc((n < BLOCK_SYMBOLS ? n + 1 : BLOCK_SYMBOLS) * sizeof *d.syms);
     d.hash = (uint32_t *)calloc((size_t)1 << HASH_BITS, sizeof *d.hash);
     if (!d.syms || !d.hash || reserve(&d, n / 64 + 1024)) goto done;
-    for (int c = 0; c < 29; c++)
-        for (int v = len_base[c] - 3; v < len_base[c] - 3 + (1 << len_extra[c]) && v < 256; v++)
-            d.lcode[v] = (unsigned char)c;
-    for (int c = 0; c < 30; c++)
-        for (unsigned v = dist_base[c] - 1u; v < dist_base[c] - 1u + (1u << dist_extra[c]); v += v < 256 ? 1 : 128)
-            d.dcode[v < 256 ? v : 256 + (v >> 7)] = (unsigned char)c;
+    code_tables(&d);
     if (deflate_data(&d) || reserve(&d, 8)) goto done;
     align_byte(&d);
     *out = (unsigned char *)realloc(d.out, d.size); /* give back the spare room */
@@ -395,5 +402,71 @@ done:
     free(d.out);
     free(d.syms);
     free(d.hash);
+    return rc;
+}
+
+/* ---- symbols from the caller --------------------------------------------- */
+
+deflater *deflate_begin(void)
+{
+    deflater *d = (deflater *)calloc(1, sizeof *d);
+    if (!d) return NULL;
+    d->syms = (uint32_t *)malloc(BLOCK_SYMBOLS * sizeof *d->syms);
+    if (!d->syms || reserve(d, 4096)) {
+        free(d->syms);
+        free(d->out);
+        free(d);
+        return NULL;
+    }
+    code_tables(d);
+    return d;
+}
+
+/* A full block goes out, not final: deflate_end writes the final one. */
+static int flush_full(deflater *d)
+{
+    if (d->nsyms < BLOCK_SYMBOLS) return 0;
+    if (flush_block(d, 0, 0, 0)) d->failed = 1;
+    return d->failed ? -1 : 0;
+}
+
+int deflate_literal(deflater *d, unsigned char byte)
+{
+    if (d->failed) return -1;
+    d->syms[d->nsyms++] = byte;
+    d->lfreq[byte]++;
+    return flush_full(d);
+}
+
+int deflate_copy(deflater *d, size_t length, size_t distance)
+{
+    if (d->failed || length < 3 || distance < 1 || distance > WINDOW) return -1;
+    while (length) {
+        /* pieces of at most 258, the last never shorter than 3 */
+        size_t piece = length <= MAX_MATCH ? length : length - 3 < MAX_MATCH ? length - 3 : MAX_MATCH;
+        d->syms[d->nsyms++] = (uint32_t)distance << 9 | (uint32_t)piece;
+        d->lfreq[257 + d->lcode[piece - 3]]++;
+        d->dfreq[dist_code(d, (uint32_t)distance)]++;
+        length -= piece;
+        if (flush_full(d)) return -1;
+    }
+    return 0;
+}
+
+int deflate_end(deflater *d, int ok, unsigned char **out, size_t *out_size)
+{
+    int rc = -1;
+    *out = NULL;
+    *out_size = 0;
+    if (ok && !d->failed && !flush_block(d, 0, 0, 1) && !reserve(d, 8)) {
+        align_byte(d);
+        *out = d->out;
+        *out_size = d->size;
+        d->out = NULL;
+        rc = 0;
+    }
+    free(d->out);
+    free(d->syms);
+    free(d);
     return rc;
 }

@@ -13,4 +13,18 @@
    32 bits), with *out = NULL and *out_size = 0. */
 int deflate_bytes(const unsigned char *data, size_t n, size_t row, unsigned char **out, size_t *out_size);
 
+/* The same stream from symbols the caller finds, for data it knows as runs
+   and repeated rows and never holds expanded (png_encode_mask): literals,
+   and copies of `length` bytes (3 or more; longer ones are split) from
+   `distance` bytes back (1 to 32768). The blocks are dynamic or fixed
+   Huffman. deflate_begin: NULL when out of memory. deflate_literal and
+   deflate_copy: 0, or -1 when out of memory, after which only deflate_end
+   is called. deflate_end finishes into *out (malloc'd) as deflate_bytes
+   does, or frees everything when ok is 0; it frees d either way. */
+typedef struct deflater deflater;
+deflater *deflate_begin(void);
+int deflate_literal(deflater *d, unsigned char byte);
+int deflate_copy(deflater *d, size_t length, size_t distance);
+int deflate_end(deflater *d, int ok, unsigned char **out, size_t *out_size);
+
 #endif

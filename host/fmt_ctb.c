@@ -363,7 +363,7 @@ static void add_run(ctb_writer *w, unsigned grey, uint64_t n)
     w->run_length += n;
 }
 
-/* job_row_runs hands each run here. */
+/* mask_row_runs hands each run here. */
 static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((ctb_writer *)writer, grey, n); }
 
 static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
@@ -382,7 +382,7 @@ static int layer(void *writer, size_t k, const unsigned char *image, size_t stri
     w->fill = 0;
     for (y = 0; y < d->height; y++) {
         const unsigned char *row = image + (size_t)y * stride;
-        job_row_runs(row, d->bits, d->width, take_run, w);
+        mask_row_runs(row, d->bits, d->width, take_run, w);
     }
     emit_run(w);
     flush_out(w);

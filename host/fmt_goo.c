@@ -278,7 +278,7 @@ static void add_run(goo_writer *w, unsigned grey, uint64_t n)
 }
 
 
-/* job_row_runs hands each run here. */
+/* mask_row_runs hands each run here. */
 static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((goo_writer *)writer, grey, n); }
 
 static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
@@ -322,7 +322,7 @@ static int layer(void *writer, size_t k, const unsigned char *image, size_t stri
     w->fill = 0;
     for (y = 0; y < d->height; y++) {
         const unsigned char *row = image + (size_t)y * stride;
-        job_row_runs(row, d->bits, d->width, take_run, w);
+        mask_row_runs(row, d->bits, d->width, take_run, w);
     }
     emit_run(w);
     flush_out(w);

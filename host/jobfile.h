@@ -12,6 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include "maskrows.h"
 #include "printer.h"
 
 /* One layer as the printer moves and exposes it. */
@@ -95,16 +96,7 @@ const job_format *job_format_named(const char *name);
    extension no format has, the directory format for a path without one. */
 const job_format *job_format_for_path(const char *path);
 
-/* ---- helpers the formats share --------------------------------------- */
-
-/* Row y of an image handed to `layer` as 8-bit grey (1-bit: 0 or 255). */
-void job_row_grey(const unsigned char *image, size_t stride, int bits, int width, int y, unsigned char *out);
-
-/* The runs of equal pixels along row (as `layer` gets it), left to right:
-   run(ctx, grey, n), 1-bit pixels as 0 or 255. Neighbouring runs may share
-   a grey (a byte-long run beside a pixel run). */
-typedef void (*job_run_fn)(void *ctx, unsigned grey, uint64_t n);
-void job_row_runs(const unsigned char *row, int bits, int width, job_run_fn run, void *ctx);
+/* ---- helpers the formats share (and maskrows.h) ---------------------- */
 
 /* A file written under "PATH.tmp.PID" and renamed into place by
    job_file_commit; job_file_discard removes it. */

@@ -31,12 +31,12 @@ void slice_options_usage(FILE *f)
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n", f);
-    fputs("printer presets (each writes the job its printer reads)\n", f);
+    fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
         fprintf(f, "  %-24s %s, %d x %d px of %g", p->name, p->format, p->width, p->height, p->pitch[0] * 1000);
         if (p->pitch[1] != p->pitch[0]) fprintf(f, " x %g", p->pitch[1] * 1000);
-        fprintf(f, " um: %s\n", p->about);
+        fprintf(f, " um: %s\n", p->machine);
     }
 }
 

@@ -3,6 +3,7 @@
    that the same byte one row up is a row length + 1 back. */
 #include "png.h"
 #include "deflate.h"
+#include "maskrows.h"
 #include "../adaslice.h"
 #include <stdlib.h>
 #include <string.h>
@@ -86,30 +87,15 @@ static void filter_rows(const unsigned char *pixels, int height, size_t stride, 
     }
 }
 
-/* One IDAT holding the filtered rows of rowbytes each; colour is the IHDR
-   colour type, last_mask the bits of a row's last byte that are pixels. */
-static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int bits,
-                  int colour, unsigned char last_mask, unsigned char **out, size_t *out_size)
+/* The PNG file around one IDAT of zlib data: deflate stream z and the
+   Adler-32 of the filtered rows it holds. */
+static int wrap(int width, int height, int bits, int colour, const unsigned char *z, size_t zsize, uint32_t adler,
+                unsigned char **out, size_t *out_size)
 {
-    /* Up to 2 GB of row data keeps the one IDAT chunk under its 2^31 limit. */
-    const size_t max_data = 0x7F000000u, head = 8 + 25 + 8;
     static const unsigned char signature[8] = {137, 80, 78, 71, 13, 10, 26, 10};
-    unsigned char *filtered, *z = NULL, *o;
-    size_t n, zsize = 0, size;
-
-    *out = NULL;
-    *out_size = 0;
-    if (width < 1 || height < 1 || !pixels || stride < rowbytes || rowbytes + 1 > max_data / (size_t)height)
-        return -1;
-    n = (rowbytes + 1) * (size_t)height;
-    if (!(filtered = (unsigned char *)malloc(n))) return -1;
-    filter_rows(pixels, height, stride, rowbytes, last_mask, filtered);
-    if (deflate_bytes(filtered, n, rowbytes + 1, &z, &zsize) ||
-        !(o = (unsigned char *)malloc(size = head + 2 + zsize + 4 + 4 + 12))) {
-        free(filtered);
-        free(z);
-        return -1;
-    }
+    const size_t head = 8 + 25 + 8, size = head + 2 + zsize + 4 + 4 + 12;
+    unsigned char *o;
+    if (zsize > 0x7F000000u || !(o = (unsigned char *)malloc(size))) return -1;
     memcpy(o, signature, 8);
     put_be32(o + 8, 13);
     memcpy(o + 12, "IHDR", 4);
@@ -124,16 +110,39 @@ static int encode(const unsigned char *pixels, int width, int height, size_t str
     o[41] = 0x78; /* deflate, 32K window; 0x7801 is a multiple of 31 */
     o[42] = 0x01;
     memcpy(o + head + 2, z, zsize);
-    put_be32(o + head + 2 + zsize, png_adler32(1, filtered, n));
+    put_be32(o + head + 2 + zsize, adler);
     put_be32(o + head + 2 + zsize + 4, adaslice_crc32(0, o + 37, 4 + 2 + zsize + 4));
     put_be32(o + size - 12, 0);
     memcpy(o + size - 8, "IEND", 4);
     put_be32(o + size - 4, adaslice_crc32(0, "IEND", 4));
-    free(filtered);
-    free(z);
     *out = o;
     *out_size = size;
     return 0;
+}
+
+/* One IDAT holding the filtered rows of rowbytes each; colour is the IHDR
+   colour type, last_mask the bits of a row's last byte that are pixels. */
+static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int bits,
+                  int colour, unsigned char last_mask, unsigned char **out, size_t *out_size)
+{
+    /* Up to 2 GB of row data keeps the one IDAT chunk under its 2^31 limit. */
+    const size_t max_data = 0x7F000000u;
+    unsigned char *filtered, *z = NULL;
+    size_t n, zsize = 0;
+    int rc;
+
+    *out = NULL;
+    *out_size = 0;
+    if (width < 1 || height < 1 || !pixels || stride < rowbytes || rowbytes + 1 > max_data / (size_t)height)
+        return -1;
+    n = (rowbytes + 1) * (size_t)height;
+    if (!(filtered = (unsigned char *)malloc(n))) return -1;
+    filter_rows(pixels, height, stride, rowbytes, last_mask, filtered);
+    rc = deflate_bytes(filtered, n, rowbytes + 1, &z, &zsize) ? -1
+         : wrap(width, height, bits, colour, z, zsize, png_adler32(1, filtered, n), out, out_size);
+    free(filtered);
+    free(z);
+    return rc;
 }
 
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
@@ -151,4 +160,116 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
 int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size)
 {
     return encode(rgb, width, height, 3 * (size_t)width, 3 * (size_t)width, 8, 2, 0xFF, out, out_size);
+}
+
+/* ---- 8-bit masks from their runs ------------------------------------------ */
+
+/* The filtered stream (a 0 filter byte, then the row's bytes) goes to the
+   deflater as runs of one byte: a literal, then copies from one byte back;
+   a row of many runs that repeats the row above goes as one copy from a row
+   back. The Adler-32 follows the runs in closed form, so the cost is in the
+   runs, not the pixels. */
+typedef struct mask_encoder {
+    deflater *d;
+    int failed, have_last;
+    unsigned last;               /* the byte before the pending run */
+    unsigned run_v;              /* the pending run: run_n bytes of run_v */
+    uint64_t run_n;
+    uint32_t *runs;              /* the row's runs, grey << 24 | length */
+    size_t run_count, run_cap;
+} mask_encoder;
+
+static void emit_run(mask_encoder *e)
+{
+    uint64_t n = e->run_n;
+    if (!n) return;
+    if (!e->have_last || e->last != e->run_v) {
+        e->failed |= deflate_literal(e->d, (unsigned char)e->run_v) != 0;
+        n--;
+    }
+    if (n >= 3) e->failed |= deflate_copy(e->d, (size_t)n, 1) != 0;
+    else while (n--) e->failed |= deflate_literal(e->d, (unsigned char)e->run_v) != 0;
+    e->last = e->run_v;
+    e->have_last = 1;
+    e->run_n = 0;
+}
+
+static void push_run(mask_encoder *e, unsigned v, uint64_t n)
+{
+    if (e->run_n && e->run_v != v) emit_run(e);
+    e->run_v = v;
+    e->run_n += n;
+}
+
+static void keep_run(void *ctx, unsigned grey, uint64_t n)
+{
+    mask_encoder *e = (mask_encoder *)ctx;
+    if (e->run_count && e->runs[e->run_count - 1] >> 24 == grey) { /* n and a row are under 2^24 */
+        e->runs[e->run_count - 1] += (uint32_t)n;
+        return;
+    }
+    if (e->run_count == e->run_cap) {
+        size_t cap = e->run_cap ? 2 * e->run_cap : 256;
+        uint32_t *r = (uint32_t *)realloc(e->runs, cap * sizeof *r);
+        if (!r) { e->failed = 1; return; }
+        e->runs = r;
+        e->run_cap = cap;
+    }
+    e->runs[e->run_count++] = grey << 24 | (uint32_t)n;
+}
+
+static int same_row(const unsigned char *a, const unsigned char *b, int width, int bits)
+{
+    size_t whole = bits == 8 ? (size_t)width : (size_t)width / 8;
+    unsigned char pixels = (unsigned char)(0xFF << (8 - width % 8));
+    return !memcmp(a, b, whole) && (bits == 8 || width % 8 == 0 || !((a[whole] ^ b[whole]) & pixels));
+}
+
+int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
+                    size_t *out_size)
+{
+    const uint64_t M = 65521;
+    const size_t line = (size_t)width + 1;
+    /* a copied row costs a copy per 258 bytes: less than its runs when it has more */
+    const size_t runs_worth_a_row = line / 258 + 1;
+    uint64_t s1 = 1, s2 = 0;
+    mask_encoder e;
+    unsigned char *z = NULL;
+    size_t zsize = 0;
+    int y, rc = -1;
+    *out = NULL;
+    *out_size = 0;
+    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || width >= 1 << 24 || line > 32768 || !image ||
+        stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || line > 0x7F000000u / (size_t)height)
+        return -1;
+    memset(&e, 0, sizeof e);
+    if (!(e.d = deflate_begin())) return -1;
+    for (y = 0; y < height && !e.failed; y++) {
+        const unsigned char *row = image + (size_t)y * stride;
+        uint64_t r1 = 0, r2 = 0; /* the row's own sums, from zero: the 0 filter byte before it changes neither */
+        size_t r;
+        e.run_count = 0;
+        mask_row_runs(row, bits, width, keep_run, &e);
+        for (r = 0; r < e.run_count; r++) {
+            uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
+            r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
+            r1 = (r1 + n * v) % M;
+        }
+        s2 = (s2 + line % M * s1 + r2) % M;
+        s1 = (s1 + r1) % M;
+        if (y > 0 && e.run_count > runs_worth_a_row && same_row(row, row - stride, width, bits)) {
+            emit_run(&e);
+            e.failed |= deflate_copy(e.d, line, line) != 0;
+            e.last = e.runs[e.run_count - 1] >> 24;
+        } else {
+            push_run(&e, 0, 1); /* filter None */
+            for (r = 0; r < e.run_count; r++) push_run(&e, e.runs[r] >> 24, e.runs[r] & 0xFFFFFF);
+        }
+    }
+    emit_run(&e);
+    free(e.runs);
+    if (!deflate_end(e.d, !e.failed, &z, &zsize))
+        rc = wrap(width, height, 8, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
+    free(z);
+    return rc;
 }

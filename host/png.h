@@ -22,6 +22,13 @@ int png_encode_gray(const unsigned char *pixels, int width, int height, size_t s
    memory. */
 int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size);
 
+/* An 8-bit grey PNG of a 1- or 8-bit mask (1-bit pixels as 0 or 255), as the
+   ChiTu and Prusa jobs want their layers, in time proportional to the mask's
+   runs rather than its pixels. Arguments as png_encode_gray; -1 as there
+   too, and for widths over 32767 pixels (a row must fit deflate's window). */
+int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
+                    size_t *out_size);
+
 /* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
    result back in continues it over more data. (CRC-32 is adaslice_crc32.) */
 uint32_t png_adler32(uint32_t adler, const void *data, size_t size);

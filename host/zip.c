@@ -230,19 +230,9 @@ static int add_png(zip_writer *z, const char *name, int failed, unsigned char *p
 
 int zip_add_layer_png(zip_writer *z, const char *name, const job_desc *d, const unsigned char *image, size_t stride)
 {
-    unsigned char *grey = NULL, *png = NULL;
+    unsigned char *png = NULL;
     size_t size = 0;
-    int rc;
-    if (d->bits == 8) {
-        rc = png_encode_gray(image, d->width, d->height, stride, 8, &png, &size);
-    } else if (!(grey = (unsigned char *)malloc((size_t)d->width * (size_t)d->height))) {
-        rc = -1;
-    } else {
-        for (int y = 0; y < d->height; y++)
-            job_row_grey(image, stride, d->bits, d->width, y, grey + (size_t)y * (size_t)d->width);
-        rc = png_encode_gray(grey, d->width, d->height, (size_t)d->width, 8, &png, &size);
-    }
-    free(grey);
+    int rc = png_encode_mask(image, d->width, d->height, stride, d->bits, &png, &size);
     return add_png(z, name, rc, png, size);
 }
 

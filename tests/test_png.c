@@ -170,9 +170,10 @@ static unsigned char *read_pnm(const char *path, int w, int h, int channels)
     return pixels;
 }
 
-/* Encodes every image, has oiiotool decode them all in one run and compares
-   every pixel; frees the images. */
-static void round_trip(batch *b)
+/* Encodes every image (as_mask: with png_encode_mask, 8-bit whatever came
+   in), has oiiotool decode them all in one run and compares every pixel;
+   frees the images. */
+static void round_trip_as(batch *b, int as_mask)
 {
     char *args[2 + 5 * MAX_IMAGES] = {(char *)"oiiotool"};
     int n = 1, encoded = 1;
@@ -180,7 +181,8 @@ static void round_trip(batch *b)
         image *im = &b->im[i];
         unsigned char *png = NULL;
         size_t size = 0;
-        if (!im->pixels || png_encode_gray(im->pixels, im->width, im->height, im->stride, im->bits, &png, &size) ||
+        if (!im->pixels ||
+            (as_mask ? png_encode_mask : png_encode_gray)(im->pixels, im->width, im->height, im->stride, im->bits, &png, &size) ||
             !write_file(im->png, png, size)) {
             CHECKF(0, "cannot encode or write %s", im->png);
             encoded = 0;
@@ -217,6 +219,8 @@ static void round_trip(batch *b)
     }
     b->count = 0;
 }
+
+static void round_trip(batch *b) { round_trip_as(b, 0); }
 
 /* A disc of the given share of a w x h image, centred, anti-aliased. */
 static unsigned char *disc_coverage(int w, int h, double share)
@@ -302,6 +306,14 @@ static void bad_arguments_are_refused(void)
     CHECK(png_encode_gray(px, 17, 2, 2, 1, &out, &size) == -1);
     CHECK(png_encode_gray(NULL, 4, 4, 4, 8, &out, &size) == -1);
     CHECK(png_encode_gray(px, 65536, 65536, 65536, 8, &out, &size) == -1 && !out); /* 4 GB of rows */
+    out = px;
+    size = 1;
+    CHECK(png_encode_mask(px, 4, 4, 4, 4, &out, &size) == -1 && !out && size == 0);
+    CHECK(png_encode_mask(px, 0, 4, 4, 8, &out, &size) == -1);
+    CHECK(png_encode_mask(px, 4, 4, 3, 8, &out, &size) == -1);
+    CHECK(png_encode_mask(px, 17, 2, 2, 1, &out, &size) == -1);
+    CHECK(png_encode_mask(NULL, 4, 4, 4, 8, &out, &size) == -1);
+    CHECK(png_encode_mask(px, 32768, 1, 32768, 8, &out, &size) == -1 && !out); /* a row past deflate's window */
 }
 
 static uint32_t be32(const unsigned char *p)
@@ -443,6 +455,39 @@ static void patterns_decode_in_oiiotool(void)
     fill(add(&b, "wide8", 40000, 4, 8, 0), hstripes);
     fill(add(&b, "wide1", 300000, 3, 1, 0), vstripes);
     round_trip(&b);
+}
+
+/* The run-driven 8-bit encoder of the ChiTu and Prusa jobs on masks, their
+   worst cases (a pixel checkerboard: a run per pixel; noise; rows that
+   repeat and rows that do not; a width at deflate's window) and padded
+   strides, 1-bit and 8-bit in. */
+static void masks_from_runs_decode_in_oiiotool(void)
+{
+    const int w = 2560, h = 1440;
+    unsigned char *disc = disc_coverage(w, h, 0.25), *scene = (unsigned char *)malloc(2561 * 1440);
+    batch b = {0};
+    CHECK(disc && scene);
+    if (!disc || !scene) { free(disc); free(scene); return; }
+    from_coverage(add(&b, "run_disc_aa8", w, h, 8, 0), disc);
+    from_coverage(add(&b, "run_disc1", w, h, 1, 3), disc);
+    mask_scene(scene, 2561, 1440, 30);
+    from_coverage(add(&b, "run_scene1_w2561", 2561, 1440, 1, 1), scene);
+    from_coverage(add(&b, "run_scene8_w2561", 2561, 1440, 8, 5), scene);
+    fill(add(&b, "run_black1", w, h, 1, 0), black);
+    fill(add(&b, "run_white1", w, h, 1, 0), white);
+    fill(add(&b, "run_white8", w, h, 8, 0), white);
+    fill(add(&b, "run_checker1", w, 64, 1, 0), checker1);
+    fill(add(&b, "run_checker8", w, 64, 8, 0), checker8);
+    fill(add(&b, "run_hstripes1", w, h, 1, 0), hstripes);
+    fill(add(&b, "run_vstripes8", w, 200, 8, 0), vstripes);
+    fill(add(&b, "run_gradient8", 700, 300, 8, 0), gradient);
+    add(&b, "run_noise1", 999, 77, 1, 2);
+    add(&b, "run_noise8", 333, 55, 8, 0);
+    fill(add(&b, "run_column1", 1, h, 1, 0), hstripes);
+    fill(add(&b, "run_window8", 32767, 3, 8, 0), vstripes);
+    round_trip_as(&b, 1);
+    free(disc);
+    free(scene);
 }
 
 /* Noise does not compress: stored blocks, a little larger than the data. */
@@ -677,6 +722,7 @@ void test_png(void)
     RUN_NEEDING("oiiotool", small_and_odd_images_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", masks_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", patterns_decode_in_oiiotool);
+    RUN_NEEDING("oiiotool", masks_from_runs_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", noise_decodes_in_oiiotool);
     RUN(rgb_header_says_truecolour);
     RUN_NEEDING("oiiotool", rgb_images_decode_in_oiiotool);

@@ -1,0 +1,204 @@
+/* What printing a job costs, as users feel it.
+   1. Writing each job format: the whole `adaslice slice` command on the
+      turbine blade x4.3 on a 3840 x 2400 display of 50 um, in layers per
+      second against the same command writing the PNG directory, each the
+      median of RUNS runs taken in turn. SL1 holds one layer height, so it is
+      timed, with the directory beside it, on a uniform plan.
+   2. Print time saved: every shared model's estimated print time (each
+      layer's exposure by the working curve, settle, peel and return at the
+      tool's defaults) with the optimal plan against the uniform plan with the
+      thickest layers whose worst cusp error is no larger than the optimal
+      plan's.
+   usage: bench_jobs TOOL MODELS_DIR */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "../adaslice.h"
+#include "../host/cure.h"
+#include "models.h"
+#include "timing.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+#define RUNS 3
+
+static char work[64];
+
+/* Runs argv with stdout into work/out; its wall time, or -1. */
+static double run(char **argv, size_t *layers)
+{
+    posix_spawn_file_actions_t fa;
+    char out[128], line[512];
+    double t0 = now(), t;
+    pid_t pid;
+    int st = 0;
+    FILE *f;
+    snprintf(out, sizeof out, "%s/out", work);
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (posix_spawn(&pid, argv[0], &fa, NULL, argv, environ) != 0 || waitpid(pid, &st, 0) != pid || !WIFEXITED(st) ||
+        WEXITSTATUS(st) != 0) {
+        posix_spawn_file_actions_destroy(&fa);
+        return -1;
+    }
+    t = now() - t0;
+    posix_spawn_file_actions_destroy(&fa);
+    *layers = 0;
+    if ((f = fopen(out, "r"))) {
+        if (fgets(line, sizeof line, f) && strstr(line, " layers of ")) *layers = strtoul(strstr(line, ": ") + 2, NULL, 10);
+        fclose(f);
+    }
+    return t;
+}
+
+typedef struct job { const char *name, *out; int uniform; } job;
+
+static int time_formats(const char *tool, const char *dir)
+{
+    static const job jobs[] = {
+        {"directory (PNG)", "job", 0}, {"ctb", "job.ctb", 0}, {"goo", "job.goo", 0}, {"chitu-zip", "job.zip", 0},
+        {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
+    enum { JOBS = sizeof jobs / sizeof jobs[0] };
+    char model[4096], out[JOBS][128];
+    double t[JOBS][RUNS], rate[JOBS];
+    size_t layers[JOBS] = {0};
+    int r, k;
+    snprintf(model, sizeof model, "%s/turbineblade.ply", dir);
+    for (k = 0; k < JOBS; k++) snprintf(out[k], sizeof out[k], "%s/%s", work, jobs[k].out);
+    for (r = 0; r < RUNS; r++)
+        for (k = 0; k < JOBS; k++) {
+            char *argv[16];
+            int a = 0;
+            argv[a++] = (char *)tool;
+            argv[a++] = (char *)"slice";
+            argv[a++] = model;
+            argv[a++] = (char *)"--scale";
+            argv[a++] = (char *)"4.3";
+            argv[a++] = (char *)"--pixels";
+            argv[a++] = (char *)"3840x2400";
+            argv[a++] = (char *)"--pitch";
+            argv[a++] = (char *)"0.05";
+            if (jobs[k].uniform) { argv[a++] = (char *)"--uniform"; argv[a++] = (char *)"0.1"; }
+            argv[a++] = (char *)"-o";
+            argv[a++] = out[k];
+            argv[a] = NULL;
+            if ((t[k][r] = run(argv, &layers[k])) < 0 || !layers[k]) {
+                printf("bench_jobs: %s slice %s -o %s failed\n", tool, model, out[k]);
+                return 1;
+            }
+        }
+    printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", RUNS);
+    printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
+    for (k = 0; k < JOBS; k++) {
+        double s = median(t[k], RUNS);
+        int base = jobs[k].uniform ? 4 : 0;
+        rate[k] = layers[k] / s;
+        printf("  %-30s %7zu %9.2f %10.1f", jobs[k].name, layers[k], s, rate[k]);
+        if (k != base) printf(" %.2fx", rate[k] / rate[base]);
+        printf("\n");
+    }
+    return 0;
+}
+
+/* The largest layer of k bins whose uniform plan's worst error is within
+   `worst`; 0 if even the thinnest layer's is not. */
+static int uniform_within(const adaslice_profile *p, double worst, double tmin, double tmax, adaslice_plan *out)
+{
+    uint32_t k, lo = (uint32_t)(tmin / p->bin + 0.5), hi = (uint32_t)(tmax / p->bin + 0.5);
+    for (k = hi; k >= lo && k > 0; k--) {
+        adaslice_plan_options o;
+        adaslice_plan plan;
+        memset(&o, 0, sizeof o);
+        o.method = ADASLICE_METHOD_FINEST;
+        o.tmin = o.tmax = k * p->bin;
+        o.eps = 1e9;
+        if (adaslice_plan_profile(p, &o, &plan, NULL) != ADASLICE_OK) continue;
+        if (plan.worst_error <= worst) { *out = plan; return 1; }
+        adaslice_plan_free(&plan);
+    }
+    return 0;
+}
+
+static double print_seconds(const cure_args *c, const adaslice_plan *p)
+{
+    job_layer *l = (job_layer *)malloc(p->layer_count * sizeof *l);
+    double s;
+    cure_layers(c, p, l);
+    s = cure_print_time(&c->motion, l, p->layer_count);
+    free(l);
+    return s;
+}
+
+static int print_time_saved(const char *dir)
+{
+    double saved[BENCH_MODEL_COUNT];
+    int n = 0;
+    size_t i;
+    cure_args c;
+    cure_defaults(&c);
+    if (cure_finish(&c, ADASLICE_DEFAULT_TMIN, ADASLICE_DEFAULT_TMAX)) return 1;
+    printf("\nprint time, optimal plan against uniform layers of no larger worst cusp error (default eps, tmin, tmax;\n"
+           "exposure %.3g s at %g mm, Dp %g mm; %g mm peel at %g mm/s, back at %g mm/s, %g s settle; %zu bottom layers of %g s)\n",
+           c.cure.seconds, c.cure.thickness, c.cure.penetration, c.motion.lift_mm, c.motion.lift_speed,
+           c.motion.retract_speed, c.motion.wait_before_cure_s, c.bottom_layers, c.bottom_exposure_s);
+    printf("  %-28s %8s %9s %8s %9s %9s %7s\n", "model", "optimal", "time", "uniform", "at mm", "time", "saved");
+    for (i = 0; i < BENCH_MODEL_COUNT; i++) {
+        char path[4096];
+        adaslice_load_options lo;
+        adaslice_profile_options po;
+        adaslice_plan_options o;
+        adaslice_mesh m;
+        adaslice_profile p;
+        adaslice_plan best, uni;
+        adaslice_error e;
+        double t_best, t_uni;
+        snprintf(path, sizeof path, "%s/%s", dir, BENCH_MODELS[i].name);
+        memset(&lo, 0, sizeof lo);
+        lo.scale = BENCH_MODELS[i].scale;
+        memset(&po, 0, sizeof po);
+        memset(&o, 0, sizeof o);
+        if (adaslice_mesh_load_file(path, &lo, &m, &e) != ADASLICE_OK) { printf("  %s: %s\n", path, e.message); return 1; }
+        if (adaslice_profile_exact(&m, &po, &p, &e) != ADASLICE_OK || adaslice_plan_profile(&p, &o, &best, &e) != ADASLICE_OK) {
+            printf("  %-28.28s no plan: %s\n", BENCH_MODELS[i].name, e.message);
+            adaslice_mesh_free(&m);
+            continue;
+        }
+        if (!uniform_within(&p, best.worst_error, ADASLICE_DEFAULT_TMIN, ADASLICE_DEFAULT_TMAX, &uni)) {
+            printf("  %-28.28s no uniform plan within %g\n", BENCH_MODELS[i].name, best.worst_error);
+        } else {
+            t_best = print_seconds(&c, &best);
+            t_uni = print_seconds(&c, &uni);
+            saved[n++] = 1 - t_best / t_uni;
+            printf("  %-28.28s %8zu %8.0fs %8zu %9.3f %8.0fs %6.1f%%\n", BENCH_MODELS[i].name, best.layer_count, t_best,
+                   uni.layer_count, uni.layers[0].thickness, t_uni, 100 * (1 - t_best / t_uni));
+            adaslice_plan_free(&uni);
+        }
+        adaslice_plan_free(&best);
+        adaslice_profile_free(&p);
+        adaslice_mesh_free(&m);
+    }
+    if (n) printf("  median saving over %d models: %.1f%%\n", n, 100 * median(saved, n));
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int rc;
+    char cmd[128];
+    if (argc != 3) { fprintf(stderr, "usage: bench_jobs TOOL MODELS_DIR\n"); return 2; }
+    snprintf(work, sizeof work, "/tmp/bench-jobs-XXXXXX");
+    if (!mkdtemp(work)) { perror("mkdtemp"); return 1; }
+    rc = time_formats(argv[1], argv[2]);
+    if (!rc) rc = print_time_saved(argv[2]);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", work);
+    if (system(cmd) != 0) fprintf(stderr, "bench_jobs: could not remove %s\n", work);
+    return rc;
+}
