@@ -62,6 +62,8 @@
      ADASLICE_DEF                 the linkage of public functions
      ADASLICE_ASSERT(x)           internal invariant checks (off by default here;
                                   adaslice.h turns them on with assert)
+     ADASLICE_CRC32_SMALL         CRC-32 a nibble at a time: 64 bytes of table and
+                                  no 8 KiB of stack (microcontrollers)
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; masks below 2^24
    pixels a side.
 */
@@ -159,7 +161,9 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t pl
 /* ------------------------------------------------------------- job output */
 
 /* CRC-32 (IEEE 802.3, as zlib's crc32 and PNG): crc = adaslice_crc32(0, data, n),
-   and running: adaslice_crc32(crc, more, m). */
+   and running: adaslice_crc32(crc, more, m). From 4 KiB on it slices by eight
+   bytes with 8 KiB of tables on the stack; define ADASLICE_CRC32_SMALL for a
+   microcontroller, which then goes a nibble at a time (64 bytes of table). */
 ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
 
 /* A LEB128 varint: 7 bits a byte, low bits first, at most 5 bytes. */
@@ -482,20 +486,48 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t pl
 }
 /* ------------------------------------------------------------- job output */
 
-ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size)
+/* A nibble at a time: 64 bytes of table, which is what a microcontroller
+   keeps. */
+static uint32_t adaslice__crc32_nibbles(uint32_t crc, const unsigned char *p, size_t size)
 {
-    /* a nibble table: 64 bytes of flash instead of 1 KiB, at half the speed */
     static const uint32_t nibble[16] = {
         0x00000000u, 0x1db71064u, 0x3b6e20c8u, 0x26d930acu, 0x76dc4190u, 0x6b6b51f4u, 0x4db26158u, 0x5005713cu,
         0xedb88320u, 0xf00f9344u, 0xd6d6a3e8u, 0xcb61b38cu, 0x9b64c2b0u, 0x86d3d2d4u, 0xa00ae278u, 0xbdbdf21cu};
-    const unsigned char *p = ADASLICE__CAST(const unsigned char *, data);
-    crc = ~crc;
     while (size--) {
         crc ^= *p++;
         crc = (crc >> 4) ^ nibble[crc & 15u];
         crc = (crc >> 4) ^ nibble[crc & 15u];
     }
-    return ~crc;
+    return crc;
+}
+
+ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size)
+{
+    const unsigned char *p = ADASLICE__CAST(const unsigned char *, data);
+    crc = ~crc;
+#ifndef ADASLICE_CRC32_SMALL
+    /* Slicing by eight: eight tables of 256 built on the stack for this call
+       (about 4,000 operations, so nothing is global and nothing is written
+       out by hand), then eight bytes a step, read byte by byte so that the
+       order of bytes in a word does not matter. */
+    if (size >= 4096) {
+        uint32_t t[8][256], i, k;
+        for (i = 0; i < 256; i++) {
+            uint32_t c = i;
+            for (k = 0; k < 8; k++) c = c & 1u ? (c >> 1) ^ 0xedb88320u : c >> 1;
+            t[0][i] = c;
+        }
+        for (i = 0; i < 256; i++)
+            for (k = 1; k < 8; k++) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xffu];
+        for (; size >= 8; p += 8, size -= 8) {
+            uint32_t lo = crc ^ ((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
+            uint32_t hi = (uint32_t)p[4] | (uint32_t)p[5] << 8 | (uint32_t)p[6] << 16 | (uint32_t)p[7] << 24;
+            crc = t[7][lo & 0xffu] ^ t[6][(lo >> 8) & 0xffu] ^ t[5][(lo >> 16) & 0xffu] ^ t[4][lo >> 24] ^
+                  t[3][hi & 0xffu] ^ t[2][(hi >> 8) & 0xffu] ^ t[1][(hi >> 16) & 0xffu] ^ t[0][hi >> 24];
+        }
+    }
+#endif
+    return ~adaslice__crc32_nibbles(crc, p, size);
 }
 
 ADASLICE_DEF size_t adaslice_varint_put(unsigned char *out, uint32_t v)
@@ -529,10 +561,6 @@ static uint32_t adaslice__rle_stride(uint32_t width, int bits)
     return bits == 1 ? (width + 7u) / 8u : width;
 }
 
-static int adaslice__rle_pixel(const unsigned char *row, uint32_t x, int bits)
-{
-    return bits == 1 ? (row[x >> 3] >> (7u - (x & 7u))) & 1 : row[x];
-}
 
 ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits)
 {
@@ -542,21 +570,70 @@ ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits
     return per_row * height;
 }
 
+/* The encoder works a word at a time: a mask is mostly whole bytes of one
+   colour and rows that repeat the row above. */
+static uint64_t adaslice__load64(const unsigned char *p)
+{
+    uint64_t w;
+    memcpy(&w, p, 8);
+    return w;
+}
+
+/* Where bytes equal to `fill` stop, from byte b, at most at `end`. */
+static uint32_t adaslice__fill_end(const unsigned char *row, uint32_t b, uint32_t end, unsigned char fill)
+{
+    const uint64_t all = 0x0101010101010101u * fill;
+    while (end - b >= 8 && adaslice__load64(row + b) == all) b += 8;
+    while (b < end && row[b] == fill) b++;
+    return b;
+}
+
+/* 1-bit: the first pixel from x on that is not `lit`, or width. */
+static uint32_t adaslice__run_end_1(const unsigned char *row, uint32_t x, uint32_t width, unsigned lit)
+{
+    while ((x & 7u) && x < width && ((row[x >> 3] >> (7u - (x & 7u))) & 1u) == lit) x++;
+    if (x & 7u || x >= width) return x < width ? x : width;
+    x = adaslice__fill_end(row, x >> 3, width >> 3, lit ? 0xffu : 0x00u) << 3;
+    while (x < width && ((row[x >> 3] >> (7u - (x & 7u))) & 1u) == lit) x++;
+    return x;
+}
+
+/* Pixels, not bytes: a 1-bit row's padding bits may hold anything. NULL
+   for b is a dark row. */
+static int adaslice__rows_equal(const unsigned char *a, const unsigned char *b, uint32_t width, int bits)
+{
+    uint32_t whole = bits == 1 ? width >> 3 : width, tail = bits == 1 ? width & 7u : 0;
+    unsigned char pixels = (unsigned char)(0xffu << (8u - tail));
+    if (b) {
+        if (memcmp(a, b, whole)) return 0;
+        return !tail || !((a[whole] ^ b[whole]) & pixels);
+    }
+    return adaslice__fill_end(a, 0, whole, 0) == whole && (!tail || !(a[whole] & pixels));
+}
+
 /* The runs of one row into out (NULL: only counted); returns the runs. */
 static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int bits, unsigned char *out, size_t *size)
 {
     uint32_t x = 0, runs = 0;
-    int current = 0;
     size_t n = 0;
-    while (x < width) {
-        uint32_t start = x;
-        if (bits == 8) current = row[x];
-        while (x < width && adaslice__rle_pixel(row, x, bits) == current) x++;
-        if (bits == 8 && out) out[n] = (unsigned char)current;
-        if (bits == 8) n++;
-        n += adaslice_varint_put(out ? out + n : NULL, x - start);
-        runs++;
-        if (bits == 1) current ^= 1;
+    if (bits == 8) {
+        while (x < width) {
+            uint32_t start = x;
+            x = adaslice__fill_end(row, x, width, row[x]);
+            if (out) out[n] = row[start];
+            n++;
+            n += adaslice_varint_put(out ? out + n : NULL, x - start);
+            runs++;
+        }
+    } else {
+        unsigned lit = 0;
+        while (x < width) {
+            uint32_t start = x;
+            x = adaslice__run_end_1(row, x, width, lit);
+            n += adaslice_varint_put(out ? out + n : NULL, x - start);
+            runs++;
+            lit ^= 1u;
+        }
     }
     *size = n;
     return runs;
@@ -566,45 +643,44 @@ ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, siz
                                                  uint32_t height, int bits, unsigned char *out, size_t capacity,
                                                  size_t *size)
 {
-    size_t n = 0, row_bytes;
-    uint32_t y = 0, repeat = 0, rs = adaslice__rle_stride(width, bits);
+    /* a row's runs go 5 bytes in, after the room for its header, and move
+       up to it once the header's size is known; a row takes at most this */
+    const size_t worst_row = adaslice_rle_bound(width, 1, bits) + 5u;
+    unsigned char spill[5];
+    size_t n = 0;
+    uint32_t y, repeat = 0, rs = adaslice__rle_stride(width, bits);
     const unsigned char *prev = NULL;
-    unsigned char header[5];
     if (size) *size = 0;
     if (!image || !out || !size || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) ||
         height >= (1u << 24) || stride < rs)
         return ADASLICE_ERR_ARGUMENT;
     for (y = 0; y <= height; y++) {
         const unsigned char *row = y < height ? image + (size_t)y * stride : NULL;
-        int same;
-        if (row && prev) {
-            uint32_t x;
-            same = 1;
-            /* compare pixels, not bytes: 1-bit padding bits may hold anything */
-            for (x = 0; x < width && same; x++)
-                same = adaslice__rle_pixel(row, x, bits) == adaslice__rle_pixel(prev, x, bits);
-        } else if (row) {
-            uint32_t x;
-            same = 1; /* before the first row, the previous row is dark */
-            for (x = 0; x < width && same; x++) same = adaslice__rle_pixel(row, x, bits) == 0;
-        } else {
-            same = 0;
-        }
-        if (same) { repeat++; if (row) prev = row; continue; }
+        if (row && adaslice__rows_equal(row, prev, width, bits)) { repeat++; prev = row; continue; }
         if (repeat) {
-            size_t h = adaslice_varint_put(header, ((repeat - 1u) << 1) | 1u);
+            size_t h = adaslice_varint_put(spill, ((repeat - 1u) << 1) | 1u);
             if (capacity - n < h) return ADASLICE_ERR_OVERFLOW;
-            memcpy(out + n, header, h); n += h;
+            memcpy(out + n, spill, h);
+            n += h;
             repeat = 0;
         }
         if (!row) break;
         {
-            uint32_t runs = adaslice__rle_runs(row, width, bits, NULL, &row_bytes);
-            size_t h = adaslice_varint_put(header, runs << 1);
-            if (capacity - n < h + row_bytes) return ADASLICE_ERR_OVERFLOW;
-            memcpy(out + n, header, h); n += h;
-            (void)adaslice__rle_runs(row, width, bits, out + n, &row_bytes);
-            n += row_bytes;
+            size_t row_bytes, h;
+            uint32_t runs;
+            if (capacity - n >= worst_row) {
+                runs = adaslice__rle_runs(row, width, bits, out + n + 5, &row_bytes);
+                h = adaslice_varint_put(spill, runs << 1);
+                memmove(out + n + h, out + n + 5, row_bytes);
+                memcpy(out + n, spill, h);
+            } else { /* near the end of a small buffer: counted first */
+                runs = adaslice__rle_runs(row, width, bits, NULL, &row_bytes);
+                h = adaslice_varint_put(spill, runs << 1);
+                if (capacity - n < h + row_bytes) return ADASLICE_ERR_OVERFLOW;
+                memcpy(out + n, spill, h);
+                (void)adaslice__rle_runs(row, width, bits, out + n + h, &row_bytes);
+            }
+            n += h + row_bytes;
         }
         prev = row;
     }

@@ -51,6 +51,7 @@ typedef struct dir_writer {
     size_t path_size;
     int digits;
     job_masks masks;
+    unsigned char *scratch;      /* a layer's code at its worst, before it is kept at its size */
 } dir_writer;
 
 static void write_manifest(FILE *f, const void *ctx)
@@ -266,8 +267,11 @@ static int dir_layer(void *writer, size_t k, const unsigned char *image, size_t 
         return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
     layer_path(w->path, w->path_size, w->dir, k, w->digits, "png");
     if ((rc = write_png(w->path, png, size))) return rc;
-    if (!(m->codes[k] = (unsigned char *)malloc(bound))) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
-    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, m->codes[k], bound, &m->sizes[k]);
+    if (!w->scratch && !(w->scratch = (unsigned char *)malloc(bound)))
+        return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
+    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, w->scratch, bound, &m->sizes[k]);
+    if (!(m->codes[k] = (unsigned char *)malloc(m->sizes[k]))) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
+    memcpy(m->codes[k], w->scratch, m->sizes[k]);
     m->crcs[k] = adaslice_crc32(0, image, stride * m->height);
     m->lengths[k] = (uint32_t)(l->thickness / w->d->bin_mm + 0.5);
     m->exposure_ms[k] = milli(l->exposure_s);
@@ -305,6 +309,7 @@ static int dir_close(void *writer, int ok)
     dir_writer *w = (dir_writer *)writer;
     int rc = ok ? dir_finish(w) : RC_FAIL;
     job_masks_free(&w->masks);
+    free(w->scratch);
     free(w->dir);
     free(w->path);
     free(w);

@@ -2,6 +2,7 @@
    mask run-length code, and the integers a printer plans on. */
 #include "../adaslice.h"
 #include "check.h"
+#include "codec_reference.h"
 #include "maskgen.h"
 #include <stdlib.h>
 #include <string.h>
@@ -112,6 +113,15 @@ static void masks_round_trip(void)
         }
         CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, cap, &n) == ADASLICE_OK);
         CHECKF(n > 0 && n <= cap, "trial %d: encoded %zu of bound %zu", trial, n, cap);
+        {   /* the fast encoder writes the reference's bytes, and so it does in a buffer just big enough */
+            unsigned char *want = (unsigned char *)malloc(cap);
+            size_t wn = 0, tight = 0;
+            CHECK(want && ref_rle_encode(image, in_stride, w, h, bits, want, cap, &wn) == ADASLICE_OK);
+            if (want && (wn != n || memcmp(want, code, n))) failures++;
+            CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, want, n, &tight) == ADASLICE_OK && tight == n &&
+                  !memcmp(want, code, n));
+            free(want);
+        }
         CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, n - 1, &got) == ADASLICE_ERR_OVERFLOW || n == 0);
         CHECK(adaslice_rle_encode(image, in_stride, w, h, bits, code, cap, &n) == ADASLICE_OK);
         CHECK(adaslice_rle_decoder_init(&dec, w, h, bits, row, sizeof row) == ADASLICE_OK);
@@ -129,6 +139,67 @@ static void masks_round_trip(void)
         free(grey); free(image); free(clean); free(code); free(back); free(ref);
     }
     CHECKF(failures == 0, "%d masks did not survive the round trip", failures);
+}
+
+/* Slicing by eight (from 4 KiB) and nibbles agree with the reference on
+   every length to 4096 and on long buffers, at every alignment, in pieces. */
+static void crc32_agrees_with_the_reference(void)
+{
+    enum { BIG = 70000 };
+    unsigned char *buf = (unsigned char *)malloc(BIG + 16);
+    size_t n, bad = 0, i;
+    if (!buf) { CHECK(!"out of memory"); return; }
+    for (i = 0; i < BIG + 16; i++) buf[i] = (unsigned char)codec_rng();
+    for (n = 0; n <= 4096; n++) {
+        size_t off = codec_rng() % 16;
+        if (adaslice_crc32(0, buf + off, n) != ref_crc32(0, buf + off, n)) bad++;
+    }
+    for (i = 0; i < 200; i++) {
+        size_t off = codec_rng() % 16, len = 4096 + codec_rng() % (BIG - 4096), cut = codec_rng() % len;
+        uint32_t whole = adaslice_crc32(0, buf + off, len);
+        if (whole != ref_crc32(0, buf + off, len) || adaslice_crc32(adaslice_crc32(0, buf + off, cut), buf + off + cut, len - cut) != whole)
+            bad++;
+    }
+    memset(buf, 0, BIG);
+    CHECK(adaslice_crc32(0, buf, BIG) == ref_crc32(0, buf, BIG));
+    CHECKF(bad == 0, "%zu buffers disagree", bad);
+    free(buf);
+}
+
+/* Wide masks, long runs across words, rows that repeat and rows that do not,
+   in every tight buffer near the end: the reference's bytes or its overflow. */
+static void fast_encoder_writes_the_reference_bytes(void)
+{
+    int trial, failures = 0;
+    for (trial = 0; trial < 40; trial++) {
+        int bits = trial % 2 ? 8 : 1;
+        uint32_t w = 1 + codec_rng() % 3000, h = 1 + codec_rng() % 40, x, y;
+        size_t stride = (bits == 1 ? (w + 7) / 8 : w) + trial % 3, cap = adaslice_rle_bound(w, h, bits), n = 0, wn = 0, k;
+        unsigned char *image = (unsigned char *)malloc(stride * h), *code = (unsigned char *)malloc(cap),
+                      *want = (unsigned char *)malloc(cap);
+        if (!image || !code || !want) { CHECK(!"out of memory"); free(image); free(code); free(want); return; }
+        for (y = 0; y < h; y++) {
+            unsigned char *row = image + (size_t)y * stride;
+            if (y && codec_rng() % 3 == 0) { memcpy(row, row - stride, stride); continue; }
+            for (x = 0; x < stride;) {
+                uint32_t len = 1 + codec_rng() % (codec_rng() % 4 ? 200 : 5);
+                unsigned char v = (unsigned char)(codec_rng() % 3 == 0 ? codec_rng() : codec_rng() % 2 ? 0xff : 0);
+                while (len-- && x < stride) row[x++] = v;
+            }
+        }
+        CHECK(adaslice_rle_encode(image, stride, w, h, bits, code, cap, &n) == ADASLICE_OK);
+        CHECK(ref_rle_encode(image, stride, w, h, bits, want, cap, &wn) == ADASLICE_OK);
+        if (n != wn || memcmp(code, want, n)) failures++;
+        for (k = n > 40 ? n - 40 : 0; k <= n; k++) {
+            size_t got = 0;
+            adaslice_result r = adaslice_rle_encode(image, stride, w, h, bits, code, k, &got);
+            if (k < n ? r != ADASLICE_ERR_OVERFLOW : r != ADASLICE_OK || got != n || memcmp(code, want, n)) failures++;
+        }
+        free(image);
+        free(code);
+        free(want);
+    }
+    CHECKF(failures == 0, "%d encodings differ from the reference", failures);
 }
 
 static void empty_and_full_masks_are_tiny(void)
@@ -262,7 +333,9 @@ static void printer_units_refuse_what_a_printer_cannot_plan(void)
 void test_codec(void)
 {
     RUN(crc32_known_values);
+    RUN(crc32_agrees_with_the_reference);
     RUN(masks_round_trip);
+    RUN(fast_encoder_writes_the_reference_bytes);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);
