@@ -268,7 +268,10 @@ static void write_slicer_info(ctb_writer *w)
        printer must take the table's values: Version x 0x10 (current UVtools;
        older UVtools wrote 0x20 for v3). */
     s[39] = (unsigned char)(w->version * 0x10);
-    put_u32(s + 40, (uint32_t)(time(NULL) / 60));
+    {
+        int fixed;
+        put_u32(s + 40, (uint32_t)(job_time(&fixed) / 60));
+    }
     put_u32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
     put_u32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
     put_f32(s + 52, rest_before_cure_s(w));

@@ -137,9 +137,11 @@ static void put_names(const goo_writer *w, unsigned char *h)
 {
     const job_desc *d = w->d;
     char created[24];
-    time_t now = time(NULL);
+    int fixed;
+    time_t now = job_time(&fixed);
     struct tm t;
-    if (!localtime_r(&now, &t) || !strftime(created, sizeof created, "%Y-%m-%d %H:%M:%S", &t)) created[0] = 0;
+    if (!(fixed ? gmtime_r(&now, &t) : localtime_r(&now, &t)) || !strftime(created, sizeof created, "%Y-%m-%d %H:%M:%S", &t))
+        created[0] = 0;
     memcpy(h, "V3.0", 4);
     memcpy(h + 4, goo_magic, sizeof goo_magic);
     put_text(h + 12, 32, "adaslice");

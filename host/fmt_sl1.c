@@ -84,7 +84,8 @@ static void write_config(FILE *f, const void *ctx)
     const job_desc *d = w->d;
     double slow_mm2 = AREA_FILL * d->display_mm[0] * d->display_mm[1];
     size_t k, slow = 0;
-    time_t now = time(NULL);
+    int fixed;
+    time_t now = job_time(&fixed);
     struct tm utc;
     char when[64] = "";
     for (k = 0; k < d->layer_count; k++) slow += d->layers[k].lit_mm2 > slow_mm2;

@@ -37,6 +37,15 @@ const job_format *job_format_for_path(const char *path)
 }
 
 
+time_t job_time(int *fixed)
+{
+    const char *epoch = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long v = epoch && *epoch ? strtoll(epoch, &end, 10) : -1;
+    *fixed = epoch && *epoch && !*end && v >= 0;
+    return *fixed ? (time_t)v : time(NULL);
+}
+
 int job_file_open(job_file *jf, const char *path)
 {
     size_t n = strlen(path) + 32;

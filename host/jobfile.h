@@ -12,6 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <time.h>
 #include "maskrows.h"
 #include "printer.h"
 
@@ -97,6 +98,11 @@ const job_format *job_format_named(const char *name);
 const job_format *job_format_for_path(const char *path);
 
 /* ---- helpers the formats share (and maskrows.h) ---------------------- */
+
+/* When the job was made, for the headers that carry it: SOURCE_DATE_EPOCH
+   when set (the reproducible-builds convention: the same job, the same
+   bytes), else now. *fixed says which; a fixed time is shown in UTC. */
+time_t job_time(int *fixed);
 
 /* A file written under "PATH.tmp.PID" and renamed into place by
    job_file_commit; job_file_discard removes it. */

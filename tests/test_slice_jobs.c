@@ -355,6 +355,39 @@ static void resin_files_hold_the_directory_jobs_masks(void)
     }
 }
 
+/* The same job twice is the same bytes, given SOURCE_DATE_EPOCH for the
+   headers' dates. */
+static void jobs_are_reproducible(void)
+{
+    static const char *const ext[] = {"ctb", "goo", "zip", "sl1"};
+    char model[256];
+    int f;
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
+    for (f = 0; f < 4; f++) {
+        char a[300], b[400], dir_b[200];
+        unsigned char *x, *y;
+        size_t nx, ny;
+        cli_result r;
+        snprintf(a, sizeof a, "%s/same.%s", cli_dir, ext[f]);
+        snprintf(dir_b, sizeof dir_b, "%s/again", cli_dir);
+        mkdir(dir_b, 0755);
+        snprintf(b, sizeof b, "%s/same.%s", dir_b, ext[f]);
+        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "-o", a, NULL);
+        CHECKF(r.status == 0, "%s: %s", a, r.err);
+        cli_free(&r);
+        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "-o", b, NULL);
+        CHECKF(r.status == 0, "%s: %s", b, r.err);
+        cli_free(&r);
+        x = read_file(a, &nx);
+        y = read_file(b, &ny);
+        CHECKF(x && y && nx == ny && !memcmp(x, y, nx), "%s: two runs differ", ext[f]);
+        free(x);
+        free(y);
+    }
+    unsetenv("SOURCE_DATE_EPOCH");
+}
+
 void test_slice_jobs(void)
 {
     if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
@@ -364,5 +397,6 @@ void test_slice_jobs(void)
     RUN(bad_exposure_values_exit_2);
     RUN(refusals_leave_nothing_behind);
     RUN(resin_files_hold_the_directory_jobs_masks);
+    RUN(jobs_are_reproducible);
     cli_end();
 }
