@@ -68,6 +68,7 @@
        adaslice_masker_init             layer masks, made bottom-up in one sweep
        adaslice_masker_slice            the mask at the next height
        adaslice_masker_free
+       adaslice_masker_bytes            what a masker will allocate, before it does
        adaslice_contours_slice          cross-section polygons at sorted heights
        adaslice_contours_winding        winding number of a point at one height
        adaslice_contours_distance       distance to the nearest edge at one height
@@ -720,6 +721,10 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *masker, const
    decrease from call to call. */
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
+/* The bytes adaslice_masker_init asks for on a width x height grid at
+   `supersample` for a mesh of `triangles`: a caller's limit checked before
+   the work (saturates at SIZE_MAX). */
+ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles);
 
 #ifndef ADASLICE_NO_CONTOURS
 typedef struct adaslice_contour_options {
@@ -4591,6 +4596,16 @@ static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
     if (highest) { if (b > r) r = b; if (c > r) r = c; }
     else { if (b < r) r = b; if (c < r) r = c; }
     return r;
+}
+
+ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles)
+{
+    /* as adaslice_masker_init allocates: the image, a winding per ray, a
+       coverage per pixel when anti-aliased, and three words per triangle */
+    double s = supersample > 1 ? supersample : 1, pixels = (double)width * height;
+    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * sizeof(int16_t) +
+                   (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + sizeof(adaslice__zkey));
+    return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
 
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)

@@ -345,6 +345,7 @@ static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *
     s->pitch[0] = s->pitch[1] = l->id.pitch_nm / 1e6;
     if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
     if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
+    if ((rc = layer_masks_check(s, 1))) return rc;
     a->method = ADASLICE_METHOD_OPTIMAL;
     a->compare = 0;
     /* printer units wherever the printer can plan, so both plans are one */

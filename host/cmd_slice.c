@@ -295,6 +295,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
+    if (!rc) rc = layer_masks_check(&s, 1);
     if (rc) { free(extended); return rc; }
     path = extended ? extended : (char *)s.dir;
     if (f == &JOB_FORMAT_DIR) {

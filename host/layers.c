@@ -1,9 +1,13 @@
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
 /* The display and mask options and the layer masks: see layers.h. */
 #include "layers.h"
 #include "options.h"
 #include "report.h"
 
 #include <math.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,7 +34,8 @@ void slice_options_usage(FILE *f)
           "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
-          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n", f);
+          "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
+          "  --memory MB         the most the masks may take       [half the machine's memory]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
@@ -40,6 +45,16 @@ void slice_options_usage(FILE *f)
     }
 }
 
+
+/* Physical memory, MB (10^6 bytes); 4096 where the system does not say. */
+static double machine_memory_mb(void)
+{
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && size > 0) return (double)pages * size / 1e6;
+#endif
+    return 4096;
+}
 
 int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir)
 {
@@ -91,6 +106,8 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
             s->placed = 1;
         } else if (!strcmp(o, "--svg")) {
             s->svg = 1;
+        } else if (!strcmp(o, "--memory")) {
+            rc = number_option(argc, argv, &i, 0, &s->memory_mb);
         } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
             return -1;
         } else if (cure_option(argc, argv, &i, &s->cure, &rc)) {
@@ -98,6 +115,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
         } else rest[(*rest_argc)++] = argv[i];
     }
     if (rc) return rc;
+    if (!s->memory_mb) s->memory_mb = machine_memory_mb() / 2;
     s->geometry_given = s->preset || s->width || s->pitch[0] || s->display[0];
     if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR or -o FILE (.ctb, .goo, .zip, .sl1)");
     if (s->preset && (s->width || s->pitch[0] || s->display[0]))
@@ -184,6 +202,36 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
                         over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
     *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch[0], s->pitch[1], s->place);
     return RC_OK;
+}
+
+double layer_masks_bytes(const slice_args *s, int buffers)
+{
+    double w = s->width, h = s->height, bits = s->supersample > 1 ? 8 : 1;
+    double image = bits == 8 ? w * h : (w + 7) / 8 * h;
+    /* the directory's coding at worst: the mask code's bound and the PNG's filtered rows and output */
+    double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h);
+    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0) +
+           buffers * (image + coding);
+}
+
+/* "14.3 GB", "512 MB" */
+static const char *size_text(double bytes, char out[32])
+{
+    if (bytes >= 1e9) snprintf(out, 32, "%.3g GB", bytes / 1e9);
+    else snprintf(out, 32, "%.0f MB", bytes / 1e6);
+    return out;
+}
+
+int layer_masks_check(const slice_args *s, int buffers)
+{
+    double need = layer_masks_bytes(s, buffers), limit = s->memory_mb * 1e6;
+    char a[32], b[32], c[32];
+    if (need <= limit) return RC_OK;
+    return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s, %d layer%s in flight), "
+                              "more than --memory %s",
+                    s->width, s->height, s->supersample, size_text(need, a),
+                    size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0), b),
+                    buffers, buffers == 1 ? "" : "s", size_text(limit, c));
 }
 
 /* Where layer k is sliced, mm above the part's bottom. */

@@ -30,6 +30,7 @@ typedef struct slice_args {
     int svg;                     /* also the contours of each layer as SVG */
     int geometry_given;          /* --printer, --pixels, --pitch or --display */
     cure_args cure;              /* exposure and motion (cure.h) */
+    double memory_mb;            /* --memory: what the masks may take [half the memory] */
 } slice_args;
 
 /* Takes the slice options (with cure.h's) out of argv; what is left (argv[0]
@@ -48,6 +49,12 @@ typedef struct layer_masks {
     int width, height, bits;
     double part[3];                /* the part's size, mm */
 } layer_masks;
+/* The bytes the masks of s's grid take with `buffers` layers in flight: the
+   masker and, per layer, its image and what coding it needs at worst. */
+double layer_masks_bytes(const slice_args *s, int buffers);
+/* RC_OK, or RC_USAGE after a complaint naming the grid and the bytes when
+   they pass --memory: said before any work. */
+int layer_masks_check(const slice_args *s, int buffers);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
    the masker. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
