@@ -71,7 +71,7 @@ static int job_mask(print_job *pj, uint32_t k)
         pj->code_cap = bound;
     }
     /* the masker sweeps upwards; layers below k were passed on the way */
-    if ((rc = layer_masks_render(&pj->masks, k - 1))) return rc;
+    if ((rc = layer_masks_render(&pj->masks, k - 1, pj->masks.image))) return rc;
     pj->rendered = k;
     (void)adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits, pj->code,
                               pj->code_cap, &pj->code_size);

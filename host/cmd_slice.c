@@ -12,6 +12,7 @@
 #include "jobfile.h"
 #include "layers.h"
 #include "output.h"
+#include "pipeline.h"
 #include "plan_job.h"
 #include "report.h"
 
@@ -166,6 +167,34 @@ static void on_sigint(int sig) { (void)sig; interrupted = 1; }
 
 typedef struct job_summary { double lo, hi, e_lo, e_hi; } job_summary;
 
+/* What the pipeline's calls need (pipeline.h). */
+typedef struct slice_run {
+    layer_masks *masks;
+    job_desc *d;
+    job_layer *layers;
+    const char *path;
+    progress *bar;
+} slice_run;
+
+/* The masker's next layer, its lit area and its resin. */
+static int render_layer(void *ctx, size_t k, unsigned char *image)
+{
+    slice_run *r = (slice_run *)ctx;
+    layer_masks *m = r->masks;
+    int rc;
+    if (interrupted) return complain(RC_FAIL, "interrupted at layer %zu of %zu: %s not written", k + 1, r->d->layer_count, r->path);
+    if ((rc = layer_masks_render(m, k, image))) return rc;
+    r->layers[k].lit_mm2 = m->masker.lit * m->grid.pitch[0] * m->grid.pitch[1];
+    r->d->volume_mm3 += r->layers[k].lit_mm2 * r->layers[k].thickness;
+    return RC_OK;
+}
+
+static void layer_done(void *ctx, size_t k)
+{
+    slice_run *r = (slice_run *)ctx;
+    progress_show(r->bar, k + 1, r->d->layer_count, "layers", NULL);
+}
+
 /* The job's description; every layer rendered once, in order, into the format. */
 static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const job_format *f, const char *path,
                      job_desc *d, job_summary *sum)
@@ -176,6 +205,8 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     job_layer *layers;
     void *writer = NULL;
     progress bar;
+    slice_run run;
+    pipeline_job pipe;
     int rc, odd = s->rotate & 1;
     void (*was)(int);
 
@@ -241,14 +272,23 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
         if ((rc = write_outputs(a, j))) goto done;
         if (s->svg && (rc = write_contours(s, a, j))) goto done;
     }
-    for (k = 0; k < count && !rc; k++) {
-        if (interrupted) { rc = complain(RC_FAIL, "interrupted at layer %zu of %zu: %s not written", k + 1, count, path); break; }
-        if ((rc = layer_masks_render(&m, k))) break;
-        layers[k].lit_mm2 = m.masker.lit * m.grid.pitch[0] * m.grid.pitch[1];
-        d->volume_mm3 += layers[k].lit_mm2 * layers[k].thickness;
-        rc = f->layer(writer, k, m.image, m.stride);
-        progress_show(&bar, k + 1, count, "layers", NULL);
-    }
+    memset(&run, 0, sizeof run);
+    run.masks = &m;
+    run.d = d;
+    run.layers = layers;
+    run.path = path;
+    run.bar = &bar;
+    memset(&pipe, 0, sizeof pipe);
+    pipe.format = f;
+    pipe.writer = writer;
+    pipe.layers = count;
+    pipe.image_bytes = m.stride * (size_t)m.height;
+    pipe.stride = m.stride;
+    pipe.threads = s->threads;
+    pipe.render = render_layer;
+    pipe.done = layer_done;
+    pipe.ctx = &run;
+    rc = pipeline_run(&pipe);
 done:
     if (writer) {
         int closed = f->close(writer, rc == RC_OK);
@@ -295,7 +335,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
-    if (!rc) rc = layer_masks_check(&s, 1);
+    if (!rc) rc = layer_masks_check(&s, pipeline_images(s.threads));
     if (rc) { free(extended); return rc; }
     path = extended ? extended : (char *)s.dir;
     if (f == &JOB_FORMAT_DIR) {

@@ -124,12 +124,18 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     return RC_OK;
 }
 
-static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    (void)k;
+    return zip_layer_png(((const chitu_zip *)writer)->d, image, stride, blob);
+}
+
+static int put(void *writer, size_t k, job_blob *blob)
 {
     chitu_zip *w = (chitu_zip *)writer;
     char name[32];
     snprintf(name, sizeof name, "%zu.png", k + 1);
-    return zip_add_layer_png(w->zip, name, w->d, image, stride);
+    return zip_add_blob(w->zip, name, blob);
 }
 
 /* run.gcode goes last: its header holds the volume, known once every layer is in. */
@@ -142,4 +148,4 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1, open_job, layer, close_job};
+const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1, open_job, encode, put, close_job};

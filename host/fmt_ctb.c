@@ -38,7 +38,6 @@
 #define CTB_LAYER_DEF_EX 84
 #define CTB_RUN_MAX 0x0FFFFFFFu     /* the longest run one code can hold (28 bits) */
 #define CTB_PREVIEW_RUN_MAX 0xFFF   /* pixels per preview run word pair (UVtools RLE16EncodingLimit) */
-#define CTB_OUT_BUF 65536
 #define CTB_CODE_MAX 5              /* bytes of the longest run code */
 
 /* The v4 header text, exactly as ChiTuBox writes it (320 bytes, no NUL; the
@@ -59,12 +58,7 @@ typedef struct ctb_writer {
     unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
     size_t layers_done;
     off_t end;                  /* where the next layer's LayerDefEx goes */
-    /* The layer being encoded: the pending run, and the bytes not yet written. */
-    unsigned run_grey7;
-    uint64_t run_length, data_size;
-    size_t fill;
     int write_errno;
-    unsigned char out[CTB_OUT_BUF];
 } ctb_writer;
 
 static void put_u16(unsigned char *p, unsigned v)
@@ -307,26 +301,26 @@ static void write_blocks(ctb_writer *w)
 
 /* ---- layer images: 7-bit run-length ------------------------------------ */
 
-static void flush_out(ctb_writer *w)
-{
-    if (w->fill && !w->write_errno && fwrite(w->out, 1, w->fill, w->file.f) != w->fill)
-        w->write_errno = errno ? errno : EIO;
-    w->data_size += w->fill;
-    w->fill = 0;
-}
+/* A layer being coded: its runs, into a blob. */
+typedef struct ctb_coder {
+    job_blob *out;
+    unsigned run_grey7;          /* the pending run */
+    uint64_t run_length;
+    int failed;                  /* out of memory */
+} ctb_coder;
 
 /* The pending run as codes: a byte with bit 7 clear is one pixel; bit 7 set
    is a run, its length after it in 1 to 4 big-endian bytes, prefix-coded
    (0xxxxxxx, 10xxxxxx, 110xxxxx, 1110xxxx); longer runs are cut. */
-static void emit_run(ctb_writer *w)
+static void emit_run(ctb_coder *c)
 {
-    uint64_t left = w->run_length;
-    unsigned v = w->run_grey7;
-    while (left) {
+    uint64_t left = c->run_length;
+    unsigned v = c->run_grey7;
+    while (left && !c->failed) {
         uint32_t n = left > CTB_RUN_MAX ? CTB_RUN_MAX : (uint32_t)left;
         unsigned char *p;
-        if (w->fill + CTB_CODE_MAX > sizeof w->out) flush_out(w);
-        p = w->out + w->fill;
+        if (job_blob_reserve(c->out, CTB_CODE_MAX)) { c->failed = 1; break; }
+        p = c->out->data + c->out->size;
         if (n == 1) {
             *p++ = (unsigned char)v;
         } else {
@@ -347,64 +341,69 @@ static void emit_run(ctb_writer *w)
                 *p++ = (unsigned char)n;
             }
         }
-        w->fill = (size_t)(p - w->out);
+        c->out->size = (size_t)(p - c->out->data);
         left -= n;
     }
-    w->run_length = 0;
+    c->run_length = 0;
 }
 
 /* Runs cross rows: the image is one row-major stream. 8-bit grey keeps its
    top 7 bits (the printer shows v ? v << 1 | 1 : 0), so greys that differ
-   only in the lowest bit make one run. */
-static void add_run(ctb_writer *w, unsigned grey, uint64_t n)
+   only in the lowest bit make one run. mask_row_runs hands each run here. */
+static void take_run(void *coder, unsigned grey, uint64_t n)
 {
+    ctb_coder *c = (ctb_coder *)coder;
     unsigned grey7 = grey >> 1;
-    if (grey7 != w->run_grey7) {
-        emit_run(w);
-        w->run_grey7 = grey7;
+    if (grey7 != c->run_grey7) {
+        emit_run(c);
+        c->run_grey7 = grey7;
     }
-    w->run_length += n;
+    c->run_length += n;
 }
 
-/* mask_row_runs hands each run here. */
-static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((ctb_writer *)writer, grey, n); }
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    const ctb_writer *w = (const ctb_writer *)writer;
+    const job_desc *d = w->d;
+    ctb_coder c;
+    int y;
+    memset(&c, 0, sizeof c);
+    c.out = blob;
+    for (y = 0; y < d->height; y++) mask_row_runs(image + (size_t)y * stride, d->bits, d->width, take_run, &c);
+    emit_run(&c);
+    if (c.failed) return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    if (blob->size > 0xFFFFFFFFu)
+        return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a ctb layer can hold", w->file.path,
+                        k + 1, blob->size);
+    return RC_OK;
+}
 
-static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+/* The layer's LayerDefEx, then its code; its table entry waits for close. */
+static int put(void *writer, size_t k, job_blob *blob)
 {
     ctb_writer *w = (ctb_writer *)writer;
     const job_desc *d = w->d;
     const job_layer *L = &d->layers[k];
     unsigned char *entry, ex[CTB_LAYER_DEF_EX] = {0};
     off_t data_at = w->end + CTB_LAYER_DEF_EX;
-    int y;
-    if (k != w->layers_done || k >= d->layer_count)
+    uint64_t size = blob->size;
+    if (k != w->layers_done || k >= d->layer_count) {
+        free(blob->data);
+        blob->data = NULL;
         return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layers", w->file.path, k,
                         w->layers_done, d->layer_count);
-    if (!w->write_errno && fseeko(w->file.f, data_at, SEEK_SET) != 0) w->write_errno = errno ? errno : EIO;
-    w->run_length = w->data_size = 0;
-    w->fill = 0;
-    for (y = 0; y < d->height; y++) {
-        const unsigned char *row = image + (size_t)y * stride;
-        mask_row_runs(row, d->bits, d->width, take_run, w);
     }
-    emit_run(w);
-    flush_out(w);
-    if (w->write_errno) return write_failed(w);
-    if (w->data_size > 0xFFFFFFFFu)
-        return complain(RC_FAIL, "%s: layer %zu encodes to %llu bytes, more than a ctb layer can hold", w->file.path, k,
-                        (unsigned long long)w->data_size);
-
     entry = w->table + k * CTB_LAYER_DEF;
     put_f32(entry, L->z_top);
     put_f32(entry + 4, L->exposure_s);
     put_f32(entry + 8, light_off_s(w));
     put_u32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
-    put_u32(entry + 16, (uint32_t)w->data_size);
+    put_u32(entry + 16, (uint32_t)size);
     put_u32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
     put_u32(entry + 24, CTB_LAYER_DEF_EX);
     /* LayerDefEx repeats the entry byte for byte, then the layer's moves. */
     memcpy(ex, entry, CTB_LAYER_DEF);
-    put_u32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + w->data_size));
+    put_u32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
     put_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
     put_f32(ex + 44, lift_speed(w, k));
     put_f32(ex + 56, mm_per_min(d->motion.retract_speed));
@@ -414,9 +413,13 @@ static int layer(void *writer, size_t k, const unsigned char *image, size_t stri
         put_f32(ex + 76, rest_before_cure_s(w));
     }
     put_f32(ex + 80, 255.0);
+    /* the code's size is known, so both go out in order, with no seek back */
     write_at(w, w->end, ex, sizeof ex);
+    if (!w->write_errno && fwrite(blob->data, 1, blob->size, w->file.f) != blob->size) w->write_errno = errno ? errno : EIO;
+    free(blob->data);
+    blob->data = NULL;
     if (w->write_errno) return write_failed(w);
-    w->end = data_at + (off_t)w->data_size;
+    w->end = data_at + (off_t)size;
     w->layers_done++;
     return RC_OK;
 }
@@ -509,4 +512,4 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, open_job, layer, close_job};
+const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, open_job, encode, put, close_job};

@@ -32,7 +32,6 @@
 #define GOO_LAYER_DEF 70u
 #define GOO_RUN_MAX 0x0FFFFFFFu     /* the longest run one chunk can hold (28 bits) */
 #define GOO_DIFF_RUN_MAX 255u       /* a diff chunk's run is one byte */
-#define GOO_OUT_BUF 65536
 #define GOO_CHUNK_MAX 5             /* bytes of the longest chunk */
 
 static const unsigned char goo_magic[8] = {0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0x50, 0x00};
@@ -42,14 +41,7 @@ typedef struct goo_writer {
     const job_desc *d;          /* read again at close: the volume is known only then */
     size_t layers_done;
     off_t end;                  /* where the next layer's definition goes */
-    /* The layer being encoded: the pending run, the value of the pixel
-       before it (diff chunks are relative to it), the bytes not yet written. */
-    unsigned run_grey, previous_grey;
-    uint64_t run_length, data_size;
-    unsigned checksum_sum;
-    size_t fill;
     int write_errno;
-    unsigned char out[GOO_OUT_BUF];
 } goo_writer;
 
 static void put_u16(unsigned char *p, unsigned v)
@@ -215,15 +207,14 @@ static void write_header_fields(goo_writer *w)
 
 /* ---- layer images: 0x55, chunks, checksum -------------------------------- */
 
-static void flush_out(goo_writer *w)
-{
-    size_t i;
-    for (i = 0; i < w->fill; i++) w->checksum_sum += w->out[i];
-    if (w->fill && !w->write_errno && fwrite(w->out, 1, w->fill, w->file.f) != w->fill)
-        w->write_errno = errno ? errno : EIO;
-    w->data_size += w->fill;
-    w->fill = 0;
-}
+/* A layer being coded: its runs, into a blob. */
+typedef struct goo_coder {
+    job_blob *out;
+    unsigned run_grey;           /* the pending run */
+    uint64_t run_length;
+    unsigned previous_grey;      /* the pixel before it: diff chunks are relative to it */
+    int failed;                  /* out of memory */
+} goo_coder;
 
 /* The pending run as chunks. byte0[7:6]: 00 black, 11 white, 01 the grey in
    the next byte, each with byte0[5:4] extra length bytes (run =
@@ -231,16 +222,16 @@ static void flush_out(goo_writer *w)
    byte0[5] its sign, byte0[4] a run byte following (else a run of 1). Diff
    chunks as UVtools uses them: for greys between 0 and 255 and runs up to
    255. Longer runs are cut. */
-static void emit_run(goo_writer *w)
+static void emit_run(goo_coder *c)
 {
-    uint64_t left = w->run_length;
-    unsigned v = w->run_grey;
-    while (left) {
+    uint64_t left = c->run_length;
+    unsigned v = c->run_grey;
+    while (left && !c->failed) {
         uint32_t n = left > GOO_RUN_MAX ? GOO_RUN_MAX : (uint32_t)left;
-        unsigned prev = w->previous_grey, diff = v > prev ? v - prev : prev - v;
+        unsigned prev = c->previous_grey, diff = v > prev ? v - prev : prev - v;
         unsigned char *p;
-        if (w->fill + GOO_CHUNK_MAX > sizeof w->out) flush_out(w);
-        p = w->out + w->fill;
+        if (job_blob_reserve(c->out, GOO_CHUNK_MAX)) { c->failed = 1; break; }
+        p = c->out->data + c->out->size;
         if (v > 0 && v < 255 && diff <= 15 && n <= GOO_DIFF_RUN_MAX) {
             *p++ = (unsigned char)(0x80 | (v < prev ? 0x20 : 0) | (n > 1 ? 0x10 : 0) | diff);
             if (n > 1) *p++ = (unsigned char)n;
@@ -262,26 +253,24 @@ static void emit_run(goo_writer *w)
                 *p++ = (unsigned char)(n >> 4);
             }
         }
-        w->fill = (size_t)(p - w->out);
-        w->previous_grey = v;
+        c->out->size = (size_t)(p - c->out->data);
+        c->previous_grey = v;
         left -= n;
     }
-    w->run_length = 0;
+    c->run_length = 0;
 }
 
-/* Runs cross rows: the image is one row-major stream. */
-static void add_run(goo_writer *w, unsigned grey, uint64_t n)
+/* Runs cross rows: the image is one row-major stream. mask_row_runs hands
+   each run here. */
+static void take_run(void *coder, unsigned grey, uint64_t n)
 {
-    if (grey != w->run_grey) {
-        emit_run(w);
-        w->run_grey = grey;
+    goo_coder *c = (goo_coder *)coder;
+    if (grey != c->run_grey) {
+        emit_run(c);
+        c->run_grey = grey;
     }
-    w->run_length += n;
+    c->run_length += n;
 }
-
-
-/* mask_row_runs hands each run here. */
-static void take_run(void *writer, unsigned grey, uint64_t n) { add_run((goo_writer *)writer, grey, n); }
 
 static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
 {
@@ -305,43 +294,54 @@ static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
     e[65] = 0x0A;
 }
 
-static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+/* The layer's data as DataLength counts it: the 0x55, the chunks and the
+   checksum (the NOT of the chunks' sum, the magic left out). */
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    const goo_writer *w = (const goo_writer *)writer;
+    const job_desc *d = w->d;
+    goo_coder c;
+    unsigned sum = 0;
+    size_t i;
+    int y;
+    memset(&c, 0, sizeof c);
+    c.out = blob;
+    if (job_blob_reserve(blob, 1)) return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    blob->data[blob->size++] = 0x55;
+    for (y = 0; y < d->height; y++) mask_row_runs(image + (size_t)y * stride, d->bits, d->width, take_run, &c);
+    emit_run(&c);
+    if (c.failed || job_blob_reserve(blob, 1))
+        return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    for (i = 1; i < blob->size; i++) sum += blob->data[i];
+    blob->data[blob->size++] = (unsigned char)~sum;
+    if (blob->size > 0xFFFFFFFFu)
+        return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a goo layer can hold", w->file.path,
+                        k + 1, blob->size);
+    return RC_OK;
+}
+
+/* The layer's definition, its data and the 0D 0A after each, in order. */
+static int put(void *writer, size_t k, job_blob *blob)
 {
     goo_writer *w = (goo_writer *)writer;
     const job_desc *d = w->d;
-    unsigned char def[GOO_LAYER_DEF] = {0}, tail[3];
-    off_t data_at = w->end + GOO_LAYER_DEF;
-    uint64_t data_length;
-    int y;
-    if (k != w->layers_done || k >= d->layer_count)
+    unsigned char def[GOO_LAYER_DEF] = {0};
+    size_t size = blob->size;
+    if (k != w->layers_done || k >= d->layer_count) {
+        free(blob->data);
+        blob->data = NULL;
         return complain(RC_FAIL, "%s: layer %zu handed to the goo writer after %zu of %zu layers", w->file.path, k,
                         w->layers_done, d->layer_count);
-    /* The magic is not part of the checksum: written before the sum starts. */
-    write_at(w, data_at, "\x55", 1);
-    w->run_length = w->data_size = 0;
-    w->checksum_sum = 0;
-    w->previous_grey = w->run_grey = 0;
-    w->fill = 0;
-    for (y = 0; y < d->height; y++) {
-        const unsigned char *row = image + (size_t)y * stride;
-        mask_row_runs(row, d->bits, d->width, take_run, w);
     }
-    emit_run(w);
-    flush_out(w);
-    tail[0] = (unsigned char)~w->checksum_sum;
-    tail[1] = 0x0D;
-    tail[2] = 0x0A;
-    if (!w->write_errno && fwrite(tail, 1, sizeof tail, w->file.f) != sizeof tail) w->write_errno = errno ? errno : EIO;
-    if (w->write_errno) return write_failed(w);
-    data_length = w->data_size + 2; /* with the 0x55 and the checksum */
-    if (data_length > 0xFFFFFFFFu)
-        return complain(RC_FAIL, "%s: layer %zu encodes to %llu bytes, more than a goo layer can hold", w->file.path,
-                        k, (unsigned long long)data_length);
     put_layer_def(w, k, def);
-    put_u32(def + 66, (uint32_t)data_length);
+    put_u32(def + 66, (uint32_t)size);
     write_at(w, w->end, def, sizeof def);
+    if (!w->write_errno && (fwrite(blob->data, 1, size, w->file.f) != size || fwrite("\r\n", 1, 2, w->file.f) != 2))
+        w->write_errno = errno ? errno : EIO;
+    free(blob->data);
+    blob->data = NULL;
     if (w->write_errno) return write_failed(w);
-    w->end = data_at + (off_t)data_length + 2;
+    w->end += (off_t)(GOO_LAYER_DEF + size + 2);
     w->layers_done++;
     return RC_OK;
 }
@@ -411,4 +411,4 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, open_job, layer, close_job};
+const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, open_job, encode, put, close_job};

@@ -199,11 +199,17 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     return RC_OK;
 }
 
-static int layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    (void)k;
+    return zip_layer_png(((const sl1 *)writer)->d, image, stride, blob);
+}
+
+static int put(void *writer, size_t k, job_blob *blob)
 {
     sl1 *w = (sl1 *)writer;
     snprintf(w->name, w->name_size, "%s%05zu.png", w->job_dir, k);
-    return zip_add_layer_png(w->zip, w->name, w->d, image, stride);
+    return zip_add_blob(w->zip, w->name, blob);
 }
 
 /* The two ini files go last: config.ini holds the volume and the slow
@@ -218,4 +224,4 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0, open_job, layer, close_job};
+const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0, open_job, encode, put, close_job};

@@ -51,7 +51,6 @@ typedef struct dir_writer {
     size_t path_size;
     int digits;
     job_masks masks;
-    unsigned char *scratch;      /* a layer's code at its worst, before it is kept at its size */
 } dir_writer;
 
 static void write_manifest(FILE *f, const void *ctx)
@@ -255,24 +254,45 @@ static int write_png(const char *path, unsigned char *png, size_t size)
     return rc;
 }
 
-static int dir_layer(void *writer, size_t k, const unsigned char *image, size_t stride)
+/* The layer's PNG goes straight to its own file; the blob is its mask code
+   and CRC for masks.rle. */
+static int dir_encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    const dir_writer *w = (const dir_writer *)writer;
+    const job_masks *m = &w->masks;
+    size_t bound = adaslice_rle_bound(m->width, m->height, (int)m->bits), size;
+    unsigned char *png = NULL;
+    char *path = (char *)malloc(w->path_size);
+    int rc;
+    if (!path || png_encode_gray(image, (int)m->width, (int)m->height, stride, (int)m->bits, &png, &size)) {
+        free(path);
+        return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
+    }
+    layer_path(path, w->path_size, w->dir, k, w->digits, "png");
+    rc = write_png(path, png, size);
+    free(path);
+    if (rc) return rc;
+    if (job_blob_reserve(blob, bound)) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
+    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, blob->data, bound, &blob->size);
+    blob->crc = adaslice_crc32(0, image, stride * m->height);
+    return RC_OK;
+}
+
+static int dir_put(void *writer, size_t k, job_blob *blob)
 {
     dir_writer *w = (dir_writer *)writer;
     job_masks *m = &w->masks;
     const job_layer *l = &w->d->layers[k];
-    size_t bound = adaslice_rle_bound(m->width, m->height, (int)m->bits), size;
-    unsigned char *png = NULL;
-    int rc;
-    if (png_encode_gray(image, (int)m->width, (int)m->height, stride, (int)m->bits, &png, &size))
-        return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
-    layer_path(w->path, w->path_size, w->dir, k, w->digits, "png");
-    if ((rc = write_png(w->path, png, size))) return rc;
-    if (!w->scratch && !(w->scratch = (unsigned char *)malloc(bound)))
-        return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
-    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, w->scratch, bound, &m->sizes[k]);
-    if (!(m->codes[k] = (unsigned char *)malloc(m->sizes[k]))) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
-    memcpy(m->codes[k], w->scratch, m->sizes[k]);
-    m->crcs[k] = adaslice_crc32(0, image, stride * m->height);
+    unsigned char *code = (unsigned char *)realloc(blob->data, blob->size ? blob->size : 1); /* kept at its size */
+    if (!code) {
+        free(blob->data);
+        blob->data = NULL;
+        return complain(RC_FAIL, "out of memory keeping layer %zu", k + 1);
+    }
+    blob->data = NULL;
+    m->codes[k] = code;
+    m->sizes[k] = blob->size;
+    m->crcs[k] = blob->crc;
     m->lengths[k] = (uint32_t)(l->thickness / w->d->bin_mm + 0.5);
     m->exposure_ms[k] = milli(l->exposure_s);
     return RC_OK;
@@ -309,7 +329,6 @@ static int dir_close(void *writer, int ok)
     dir_writer *w = (dir_writer *)writer;
     int rc = ok ? dir_finish(w) : RC_FAIL;
     job_masks_free(&w->masks);
-    free(w->scratch);
     free(w->dir);
     free(w->path);
     free(w);
@@ -317,7 +336,7 @@ static int dir_close(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
-                                   0, 1, dir_open, dir_layer, dir_close};
+                                   0, 1, dir_open, dir_encode, dir_put, dir_close};
 
 /* ------------------------------------------------------------ reading */
 

@@ -37,6 +37,31 @@ const job_format *job_format_for_path(const char *path)
 }
 
 
+int job_blob_reserve(job_blob *b, size_t more)
+{
+    size_t cap = b->cap ? b->cap : 4096;
+    unsigned char *p;
+    if (b->size + more <= b->cap) return 0;
+    while (cap < b->size + more) cap = cap / 2 * 3 + more;
+    if (!(p = (unsigned char *)realloc(b->data, cap))) return -1;
+    b->data = p;
+    b->cap = cap;
+    return 0;
+}
+
+int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride)
+{
+    job_blob blob;
+    int rc;
+    memset(&blob, 0, sizeof blob);
+    rc = f->encode(writer, k, image, stride, &blob);
+    if (rc) {
+        free(blob.data);
+        return rc;
+    }
+    return f->put(writer, k, &blob);
+}
+
 time_t job_time(int *fixed)
 {
     const char *epoch = getenv("SOURCE_DATE_EPOCH");

@@ -71,6 +71,17 @@ typedef struct job_desc {
     void *preview_ctx;
 } job_desc;
 
+/* A layer coded as its file holds it (its code, the PNG, ...), in a
+   malloc'd buffer: data[0, size) of cap bytes, and a CRC-32 where the format
+   keeps one. */
+typedef struct job_blob {
+    unsigned char *data;
+    size_t size, cap;
+    uint32_t crc;
+} job_blob;
+/* Room for `more` bytes after data + size: 0, or -1 when out of memory. */
+int job_blob_reserve(job_blob *b, size_t more);
+
 typedef struct job_format {
     const char *name;            /* --format NAME */
     const char *extension;       /* of -o that picks it (".ctb"); NULL: the directory */
@@ -80,13 +91,22 @@ typedef struct job_format {
     /* Begins the file (or directory) at path; RC_OK, or a complaint made and
        *writer NULL with nothing left behind. */
     int (*open)(void **writer, const char *path, const job_desc *d);
-    /* Layer k's image: rows top first, `stride` bytes apart, d->bits per pixel
-       (1-bit rows packed MSB first, 1 = lit). Layers come in order. */
-    int (*layer)(void *writer, size_t k, const unsigned char *image, size_t stride);
+    /* Layer k's image coded into *blob (zeroed by the caller): rows top
+       first, `stride` bytes apart, d->bits per pixel (1-bit rows packed MSB
+       first, 1 = lit). Called for several layers at once from worker
+       threads (cmd_slice.c), so it reads the writer and the desc and changes
+       nothing shared. RC_OK or a complaint made. */
+    int (*encode)(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob);
+    /* The coded layers into the file, in order of k, on one thread; takes
+       the blob's data (and frees it) either way. */
+    int (*put)(void *writer, size_t k, job_blob *blob);
     /* ok: finish and put the file in place; !ok: remove what was written.
        Frees the writer either way. */
     int (*close)(void *writer, int ok);
 } job_format;
+
+/* encode and put one after the other: a layer on one thread. */
+int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride);
 
 /* The formats: jobdir.c, fmt_ctb.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
 extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP, JOB_FORMAT_SL1;

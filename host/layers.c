@@ -4,6 +4,7 @@
 /* The display and mask options and the layer masks: see layers.h. */
 #include "layers.h"
 #include "options.h"
+#include "pipeline.h"
 #include "report.h"
 
 #include <math.h>
@@ -35,7 +36,8 @@ void slice_options_usage(FILE *f)
           "                      first, middle or last bin)                  [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
-          "  --memory MB         the most the masks may take       [half the machine's memory]\n", f);
+          "  --memory MB         the most the masks may take       [half the machine's memory]\n"
+          "  --threads N         layers coded at once (the job is the same bytes) [the cores]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
@@ -108,6 +110,10 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
             s->svg = 1;
         } else if (!strcmp(o, "--memory")) {
             rc = number_option(argc, argv, &i, 0, &s->memory_mb);
+        } else if (!strcmp(o, "--threads")) {
+            size_t n = 1;
+            rc = count_option(argc, argv, &i, 64, &n);
+            s->threads = (int)n;
         } else if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
             return -1;
         } else if (cure_option(argc, argv, &i, &s->cure, &rc)) {
@@ -116,6 +122,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
     }
     if (rc) return rc;
     if (!s->memory_mb) s->memory_mb = machine_memory_mb() / 2;
+    if (!s->threads) s->threads = pipeline_cores();
     s->geometry_given = s->preset || s->width || s->pitch[0] || s->display[0];
     if (need_dir && !s->dir) return complain(RC_USAGE, "slice needs -o JOBDIR or -o FILE (.ctb, .goo, .zip, .sl1)");
     if (s->preset && (s->width || s->pitch[0] || s->display[0]))
@@ -267,12 +274,12 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
     return RC_OK;
 }
 
-int layer_masks_render(layer_masks *m, size_t k)
+int layer_masks_render(layer_masks *m, size_t k, unsigned char *out)
 {
     adaslice_error err;
     if (adaslice_masker_slice(&m->masker, m->j->profile.z0 + layer_slice_height(m->s, m->j, k), &err) != ADASLICE_OK)
         return library_error(&err);
-    orient_image(&m->masker, m->s, m->image, m->stride);
+    orient_image(&m->masker, m->s, out, m->stride);
     return RC_OK;
 }
 

@@ -31,6 +31,7 @@ typedef struct slice_args {
     int geometry_given;          /* --printer, --pixels, --pitch or --display */
     cure_args cure;              /* exposure and motion (cure.h) */
     double memory_mb;            /* --memory: what the masks may take [half the memory] */
+    int threads;                 /* --threads: layers coded at once [the cores] */
 } slice_args;
 
 /* Takes the slice options (with cure.h's) out of argv; what is left (argv[0]
@@ -58,8 +59,9 @@ int layer_masks_check(const slice_args *s, int buffers);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
    the masker. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
-/* Layer k's (0-based; k never decreasing) mask into m->image. */
-int layer_masks_render(layer_masks *m, size_t k);
+/* Layer k's (0-based; k never decreasing) mask into out (m->image or
+   another buffer of m->stride * m->height bytes). */
+int layer_masks_render(layer_masks *m, size_t k, unsigned char *out);
 /* Where layer k is sliced, mm above the part's bottom. */
 double layer_slice_height(const slice_args *s, const plan_job *j, size_t k);
 void layer_masks_close(layer_masks *m);

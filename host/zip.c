@@ -228,12 +228,23 @@ static int add_png(zip_writer *z, const char *name, int failed, unsigned char *p
     return rc;
 }
 
-int zip_add_layer_png(zip_writer *z, const char *name, const job_desc *d, const unsigned char *image, size_t stride)
+int zip_layer_png(const job_desc *d, const unsigned char *image, size_t stride, job_blob *blob)
 {
     unsigned char *png = NULL;
     size_t size = 0;
-    int rc = png_encode_mask(image, d->width, d->height, stride, d->bits, &png, &size);
-    return add_png(z, name, rc, png, size);
+    if (png_encode_mask(image, d->width, d->height, stride, d->bits, &png, &size))
+        return complain(RC_FAIL, "out of memory for a %d x %d layer PNG", d->width, d->height);
+    blob->data = png;
+    blob->size = blob->cap = size;
+    return RC_OK;
+}
+
+int zip_add_blob(zip_writer *z, const char *name, job_blob *blob)
+{
+    int rc = zip_add(z, name, blob->data, blob->size, 0);
+    free(blob->data);
+    blob->data = NULL;
+    return rc;
 }
 
 int zip_add_preview_png(zip_writer *z, const char *name, const job_desc *d, int w, int h)

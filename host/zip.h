@@ -34,9 +34,11 @@ int zip_close(zip_writer *z, int ok);
 void zip_number(FILE *f, double v, int decimals);
 /* A text member, deflated, that fill writes through a FILE. */
 int zip_add_text(zip_writer *z, const char *name, write_fn fill, const void *ctx);
-/* A layer image as `layer` gets it (jobfile.h: d->width x d->height, d->bits,
-   rows `stride` apart) as an 8-bit grey PNG, stored: the PNG is deflated. */
-int zip_add_layer_png(zip_writer *z, const char *name, const job_desc *d, const unsigned char *image, size_t stride);
+/* A layer image as `encode` gets it (jobfile.h: d->width x d->height,
+   d->bits, rows `stride` apart) as an 8-bit grey PNG in blob; and a blob
+   added as a member, stored (a PNG is deflated already), its data freed. */
+int zip_layer_png(const job_desc *d, const unsigned char *image, size_t stride, job_blob *blob);
+int zip_add_blob(zip_writer *z, const char *name, job_blob *blob);
 /* d->preview drawn at w x h as an RGB PNG, stored; nothing without a
    d->preview. */
 int zip_add_preview_png(zip_writer *z, const char *name, const job_desc *d, int w, int h);

@@ -258,7 +258,7 @@ static int job_write(test_job *j, const job_format *f, const char *path)
     int rc = f->open(&w, path, &j->d);
     if (rc != RC_OK) return rc;
     for (k = 0; k < j->d.layer_count; k++)
-        if ((rc = f->layer(w, k, j->images[k], j->stride)) != RC_OK) {
+        if ((rc = job_write_layer(f, w, k, j->images[k], j->stride)) != RC_OK) {
             f->close(w, 0);
             return rc;
         }
@@ -549,7 +549,7 @@ static void failures_leave_no_file(void)
         rc = f->open(&w, in_dir("given_up.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            for (k = 0; k < 3; k++) CHECK(f->layer(w, k, j->images[k], j->stride) == RC_OK);
+            for (k = 0; k < 3; k++) CHECK(job_write_layer(f, w, k, j->images[k], j->stride) == RC_OK);
             CHECK(entries_in_dir() == 1); /* the temporary file, while writing */
             CHECK(f->close(w, 0) == RC_OK);
         }
@@ -559,7 +559,7 @@ static void failures_leave_no_file(void)
         rc = f->open(&w, in_dir("short.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            CHECK(f->layer(w, 0, j->images[0], j->stride) == RC_OK);
+            CHECK(job_write_layer(f, w, 0, j->images[0], j->stride) == RC_OK);
             complaint_begins();
             CHECK(f->close(w, 1) == RC_FAIL);
             complaint_ends(in_dir("short.job"), "1 of 4 layers");
@@ -571,7 +571,7 @@ static void failures_leave_no_file(void)
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
             complaint_begins();
-            CHECK(f->layer(w, 1, j->images[1], j->stride) == RC_FAIL);
+            CHECK(job_write_layer(f, w, 1, j->images[1], j->stride) == RC_FAIL);
             complaint_ends(in_dir("order.job"), "layer 1");
             f->close(w, 0);
         }

@@ -418,7 +418,7 @@ static int write_job(const job_format *f, const char *path, made_job *j)
 {
     void *w = NULL;
     int rc = f->open(&w, path, &j->d);
-    for (size_t k = 0; rc == 0 && k < j->d.layer_count; k++) rc = f->layer(w, k, j->image[k], j->stride);
+    for (size_t k = 0; rc == 0 && k < j->d.layer_count; k++) rc = job_write_layer(f, w, k, j->image[k], j->stride);
     if (w) {
         int closed = f->close(w, rc == 0);
         if (!rc) rc = closed;
@@ -660,7 +660,7 @@ static int try_job(void *ctx)
     int rc;
     if (!a->layers_then_fail) return write_job(a->f, a->path, a->j);
     rc = a->f->open(&w, a->path, &a->j->d);
-    for (size_t k = 0; rc == 0 && k < 3; k++) rc = a->f->layer(w, k, a->j->image[k], a->j->stride);
+    for (size_t k = 0; rc == 0 && k < 3; k++) rc = job_write_layer(a->f, w, k, a->j->image[k], a->j->stride);
     if (w) a->f->close(w, 0); /* as after a failed render */
     return rc;
 }
