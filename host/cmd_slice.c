@@ -147,6 +147,12 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
                             "(the top %g mm higher)\n",
                     path, p->layers[n - 1].thickness, f->what, t, t - p->layers[n - 1].thickness);
     }
+    if (f == &JOB_FORMAT_SL1 && s->cure.bottom_layers > 1)
+        fprintf(stderr, "adaslice: warning: %s: the SL1 fades its exposure from the bottom exposure to the normal one over "
+                        "the %zu bottom layers, so only the first gets the full %g s\n",
+                path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
+    if (f->max_layers && n > f->max_layers)
+        return complain(RC_USAGE, "%s: %zu layers; %s holds %zu at most", path, n, f->what, f->max_layers);
     if (s->preset && n && p->layers[n - 1].z_top > s->preset->z_max)
         return complain(RC_FAIL, "the part is %g mm tall: the %s builds %g mm", p->layers[n - 1].z_top, s->preset->name,
                         s->preset->z_max);
@@ -244,7 +250,10 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
         if (t < sum->lo) sum->lo = t;
         if (t > sum->hi) sum->hi = t;
         if (k < d->bottom_layers) continue;
-        if (t < d->layer_height_mm) { d->layer_height_mm = t; d->exposure_s = e; }
+        /* the headers' one height and exposure: the thinnest layer's, but not
+           the top one, which is what is left of the part (a uniform plan's is
+           thinner than the rest) */
+        if (t < d->layer_height_mm && (k + 1 < count || k == d->bottom_layers)) { d->layer_height_mm = t; d->exposure_s = e; }
         if (e < sum->e_lo) sum->e_lo = e;
         if (e > sum->e_hi) sum->e_hi = e;
     }

@@ -94,7 +94,9 @@ static int take(int argc, char **argv, int *i, cure_args *c, int *rc)
     return 0;
 }
 
-/* The firmware counts milliseconds and nanometres in 32 bits. */
+/* The firmware counts milliseconds (a mask takes 1 ms to an hour) and
+   nanometres in 32 bits. */
+#define MIN_SECONDS 0.001
 #define MAX_SECONDS 3600.0
 #define MAX_PEEL_MM 1000.0
 
@@ -124,16 +126,21 @@ int cure_finish(cure_args *c, double tmin, double tmax)
         if (adaslice_cure_fit(c->seconds[0], c->thickness[0], c->seconds[1], c->thickness[1], &c->cure, &e) != ADASLICE_OK)
             return complain(RC_USAGE, "--exposure %g@%g,%g@%g: the thicker layer must need the longer exposure",
                             c->seconds[0], c->thickness[0], c->seconds[1], c->thickness[1]);
-        return RC_OK;
+    } else {
+        c->cure.seconds = c->seconds[0];
+        c->cure.thickness = c->thickness[0];
+        c->cure.penetration = c->penetration;
     }
-    c->cure.seconds = c->seconds[0];
-    c->cure.thickness = c->thickness[0];
-    c->cure.penetration = c->penetration;
-    if (c->cure.penetration > 0 && adaslice_cure_seconds(&c->cure, tmax) > MAX_SECONDS)
-        return complain(RC_USAGE, "--exposure %g@%g --penetration %g: a layer of tmax %g mm would need %.3g s, over %g s",
-                        c->seconds[0], c->thickness[0], c->penetration, tmax, adaslice_cure_seconds(&c->cure, tmax),
-                        MAX_SECONDS);
-    if (c->seconds[0] > MAX_SECONDS) return complain(RC_USAGE, "--exposure %g: exposures are limited to %g s", c->seconds[0], MAX_SECONDS);
+    /* E(t) grows with t: its ends are the thinnest and thickest exposures */
+    for (k = 0; k < 2; k++) {
+        double t = k ? tmax : tmin, e_t = adaslice_cure_seconds(&c->cure, t);
+        if (!(e_t >= MIN_SECONDS && e_t <= MAX_SECONDS))
+            return complain(RC_USAGE, "the working curve (%g s at %g mm, Dp %g mm) gives a %g mm layer %.3g s: exposures "
+                                      "are %g to %g s", c->cure.seconds, c->cure.thickness, c->cure.penetration, t, e_t,
+                            MIN_SECONDS, MAX_SECONDS);
+    }
+    if (c->bottom_layers && c->bottom_exposure_s < MIN_SECONDS)
+        return complain(RC_USAGE, "--bottom-exposure %g: exposures are %g to %g s", c->bottom_exposure_s, MIN_SECONDS, MAX_SECONDS);
     return RC_OK;
 }
 

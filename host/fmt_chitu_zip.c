@@ -148,4 +148,5 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1, open_job, encode, put, close_job};
+const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1,
+                                          ZIP_MEMBERS_MAX - 3 /* two previews, run.gcode */, open_job, encode, put, close_job};

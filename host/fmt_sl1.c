@@ -157,17 +157,6 @@ static int one_height(const char *path, const job_desc *d, double *t)
     return RC_OK;
 }
 
-/* The exposure of the layers past the bottom ones, all layer_height thick
-   as printed: that of one planned so. d->exposure_s is the thinnest layer's,
-   which may be the thinner top layer's. */
-static double regular_exposure(const job_desc *d, double layer_height)
-{
-    size_t k;
-    for (k = d->bottom_layers; k < d->layer_count; k++)
-        if (fabs(d->layers[k].thickness - layer_height) <= 1e-6) return d->layers[k].exposure_s;
-    return d->exposure_s;
-}
-
 static void free_writer(sl1 *w)
 {
     if (!w) return;
@@ -194,7 +183,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         return rc;
     }
     w->d = d;
-    w->exposure = regular_exposure(d, w->layer_height);
+    w->exposure = d->exposure_s;
     *writer = w;
     return RC_OK;
 }
@@ -224,4 +213,5 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0, open_job, encode, put, close_job};
+const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0,
+                                    ZIP_MEMBERS_MAX - 4 /* two thumbnails, two inis */, open_job, encode, put, close_job};

@@ -273,7 +273,8 @@ static int dir_encode(const void *writer, size_t k, const unsigned char *image, 
     free(path);
     if (rc) return rc;
     if (job_blob_reserve(blob, bound)) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
-    (void)adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, blob->data, bound, &blob->size);
+    if (adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, blob->data, bound, &blob->size) != ADASLICE_OK)
+        return complain(RC_FAIL, "layer %zu: its mask does not code", k + 1);
     blob->crc = adaslice_crc32(0, image, stride * m->height);
     return RC_OK;
 }
@@ -298,6 +299,12 @@ static int dir_put(void *writer, size_t k, job_blob *blob)
     return RC_OK;
 }
 
+static int write_manifest_file(dir_writer *w)
+{
+    snprintf(w->path, w->path_size, "%s/manifest.json", w->dir);
+    return write_atomic(w->path, write_manifest, w);
+}
+
 /* masks.rle (unless the bin is not a whole number of nanometres, which a
    printer cannot count), preview.png, then the manifest. */
 static int dir_finish(dir_writer *w)
@@ -311,7 +318,11 @@ static int dir_finish(dir_writer *w)
     if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
         snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
         if ((rc = write_atomic(w->path, write_mask_file, &w->masks))) return rc;
+    } else {
+        fprintf(stderr, "adaslice: warning: %s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
+                        "is not a whole number of nanometres\n", w->dir, d->bin_mm);
     }
+    if (!d->preview) return write_manifest_file(w);
     if (!(rgb = (unsigned char *)malloc((size_t)pw * ph * 3)) || d->preview(d->preview_ctx, pw, ph, rgb) ||
         png_encode_rgb(rgb, pw, ph, &png, &size)) {
         free(rgb);
@@ -320,8 +331,7 @@ static int dir_finish(dir_writer *w)
     free(rgb);
     snprintf(w->path, w->path_size, "%s/preview.png", w->dir);
     if ((rc = write_png(w->path, png, size))) return rc;
-    snprintf(w->path, w->path_size, "%s/manifest.json", w->dir);
-    return write_atomic(w->path, write_manifest, w);
+    return write_manifest_file(w);
 }
 
 static int dir_close(void *writer, int ok)
@@ -336,7 +346,7 @@ static int dir_close(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
-                                   0, 1, dir_open, dir_encode, dir_put, dir_close};
+                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close};
 
 /* ------------------------------------------------------------ reading */
 

@@ -71,6 +71,14 @@ time_t job_time(int *fixed)
     return *fixed ? (time_t)v : time(NULL);
 }
 
+/* Frees the names; the file, if any, is the caller's. */
+static void forget(job_file *jf)
+{
+    free(jf->path);
+    free(jf->tmp);
+    memset(jf, 0, sizeof *jf);
+}
+
 int job_file_open(job_file *jf, const char *path)
 {
     size_t n = strlen(path) + 32;
@@ -78,14 +86,14 @@ int job_file_open(job_file *jf, const char *path)
     jf->path = (char *)malloc(strlen(path) + 1);
     jf->tmp = (char *)malloc(n);
     if (!jf->path || !jf->tmp) {
-        job_file_discard(jf);
+        forget(jf);
         return complain(RC_FAIL, "cannot write %s: out of memory", path);
     }
     strcpy(jf->path, path);
     snprintf(jf->tmp, n, "%s.tmp.%ld", path, (long)getpid());
     if (!(jf->f = fopen(jf->tmp, "wb"))) {
         int e = errno;
-        job_file_discard(jf);
+        forget(jf); /* nothing was made to remove */
         return complain(RC_FAIL, "cannot write %s: %s", path, strerror(e));
     }
     return RC_OK;
@@ -93,7 +101,8 @@ int job_file_open(job_file *jf, const char *path)
 
 int job_file_commit(job_file *jf)
 {
-    int err = ferror(jf->f) ? (errno ? errno : EIO) : 0;
+    /* errno after an earlier failed write may be anyone's: say EIO */
+    int err = ferror(jf->f) ? EIO : 0;
     if (fflush(jf->f) != 0 && !err) err = errno;
     if (fclose(jf->f) != 0 && !err) err = errno;
     jf->f = NULL;
@@ -103,9 +112,7 @@ int job_file_commit(job_file *jf)
         job_file_discard(jf);
         return rc;
     }
-    free(jf->path);
-    free(jf->tmp);
-    memset(jf, 0, sizeof *jf);
+    forget(jf);
     return RC_OK;
 }
 
@@ -113,7 +120,5 @@ void job_file_discard(job_file *jf)
 {
     if (jf->f) fclose(jf->f);
     if (jf->tmp) remove(jf->tmp);
-    free(jf->path);
-    free(jf->tmp);
-    memset(jf, 0, sizeof *jf);
+    forget(jf);
 }

@@ -1,12 +1,14 @@
 /* Job files: what adaslice slice writes for the printers and slicers people
    own (a ChiTuBox .ctb, an Elegoo .goo, a ChiTu G-code .zip, a Prusa .sl1, or
    the job directory of jobdir.h). Every format is written through one layer
-   loop (cmd_slice.c): the masker renders each layer once, bottom-up, and
-   hands the image to the format's `layer`; what the format needs besides the
+   loop (pipeline.h): the masker renders each layer once, bottom-up, the
+   format's `encode` codes it (on any thread) and its `put` puts it into the
+   job (in order); what the format needs besides the
    images (every layer's Z and exposure, the printer, the motion, previews) is
-   in a job_desc known before the first layer. A format writes its file under a
-   temporary name and renames it into place on a good close, so a failed or
-   interrupted run leaves nothing that looks complete. */
+   in a job_desc known before the first layer. A file format writes under a
+   temporary name and renames it into place on a good close, and the directory
+   writes its manifest last, so a failed or interrupted run leaves nothing
+   that looks complete. */
 #ifndef ADASLICE_HOST_JOBFILE_H
 #define ADASLICE_HOST_JOBFILE_H
 #include <stddef.h>
@@ -49,10 +51,10 @@ typedef struct job_desc {
     size_t layer_count;
     const job_layer *layers;     /* all layer_count, bottom first */
     double exposure_s;           /* the normal layers' exposure for headers that hold
-                                    one (the thinnest layer's, by the working curve) */
+                                    one: the thinnest layer's, the top one aside */
     double bottom_exposure_s;
     unsigned bottom_layers;
-    double layer_height_mm;      /* for headers that hold one: the thinnest layer */
+    double layer_height_mm;      /* for headers that hold one: the thinnest layer, the top one aside */
     job_motion motion;
     double volume_mm3;           /* of the part (sum of lit area x thickness): known
                                     at close, as are the layers' lit_mm2 */
@@ -88,6 +90,7 @@ typedef struct job_format {
     const char *what;            /* for --help */
     double min_layer_mm;         /* a thinner layer cannot be stored or will not print */
     int adaptive;                /* 0: every layer the same thickness (the file holds one) */
+    size_t max_layers;           /* the most layers the file holds (0: no limit) */
     /* Begins the file (or directory) at path; RC_OK, or a complaint made and
        *writer NULL with nothing left behind. */
     int (*open)(void **writer, const char *path, const job_desc *d);

@@ -239,7 +239,7 @@ int png_encode_mask(const unsigned char *image, int width, int height, size_t st
     int y, rc = -1;
     *out = NULL;
     *out_size = 0;
-    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || width >= 1 << 24 || line > 32768 || !image ||
+    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || width >= 1 << 24 || !image ||
         stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || line > 0x7F000000u / (size_t)height)
         return -1;
     memset(&e, 0, sizeof e);
@@ -257,7 +257,8 @@ int png_encode_mask(const unsigned char *image, int width, int height, size_t st
         }
         s2 = (s2 + line % M * s1 + r2) % M;
         s1 = (s1 + r1) % M;
-        if (y > 0 && e.run_count > runs_worth_a_row && same_row(row, row - stride, width, bits)) {
+        /* a row copy reaches one row back: within deflate's 32 KB window only */
+        if (y > 0 && line <= 32768 && e.run_count > runs_worth_a_row && same_row(row, row - stride, width, bits)) {
             emit_run(&e);
             e.failed |= deflate_copy(e.d, line, line) != 0;
             e.last = e.runs[e.run_count - 1] >> 24;

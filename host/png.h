@@ -25,7 +25,7 @@ int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned cha
 /* An 8-bit grey PNG of a 1- or 8-bit mask (1-bit pixels as 0 or 255), as the
    ChiTu and Prusa jobs want their layers, in time proportional to the mask's
    runs rather than its pixels. Arguments as png_encode_gray; -1 as there
-   too, and for widths over 32767 pixels (a row must fit deflate's window). */
+   too, and for widths of 2^24 or more. */
 int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
                     size_t *out_size);
 

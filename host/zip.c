@@ -19,7 +19,6 @@
 
 enum {
     LOCAL_HEADER = 30, CENTRAL_HEADER = 46, END_RECORD = 22,
-    MAX_MEMBERS = 65535,   /* the end record counts members in 16 bits */
     DOS_DATE = 1 << 5 | 1, /* 1980-01-01, the first day a DOS date can hold; time 00:00:00 is 0 */
     UTF8_NAME = 1 << 11    /* general purpose flag bit 11 (APPNOTE appendix D) */
 };
@@ -106,9 +105,9 @@ static int add(zip_writer *z, const char *name, const void *data, size_t size, i
     if (!len || len > 65535 || strchr(name, '\\') || name[0] == '/')
         return complain(RC_FAIL, "cannot write %s: bad member name \"%.80s\": 1 to 65535 bytes, '/' between "
                         "folders, no '\\' and no leading '/'", path, name);
-    if (z->members == MAX_MEMBERS)
-        return complain(RC_FAIL, "cannot write %s: a ZIP holds at most %d members (ZIP64 is not written)", path,
-                        MAX_MEMBERS);
+    if (z->members == ZIP_MEMBERS_MAX)
+        return complain(RC_FAIL, "cannot write %s: a ZIP holds at most %u members (ZIP64 is not written)", path,
+                        ZIP_MEMBERS_MAX);
     if ((uint64_t)size >= ZIP_LIMIT)
         return complain(RC_FAIL, "cannot write %s: member %s has %zu bytes; a ZIP without ZIP64 holds less than "
                         "4 GiB", path, name, size);

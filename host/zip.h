@@ -12,6 +12,9 @@
 
 typedef struct zip_writer zip_writer;
 
+/* Members an archive without ZIP64 holds: the end record counts them in 16 bits. */
+#define ZIP_MEMBERS_MAX 65535u
+
 /* Begins an archive at path (written as "PATH.tmp.PID"); RC_OK, or a
    complaint made and *z = NULL. */
 int zip_open(zip_writer **z, const char *path);

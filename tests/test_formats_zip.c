@@ -607,6 +607,8 @@ static void sl1_holds_every_layer_as_given(void)
     snprintf(path, sizeof path, "%s", in_dir("my part.sl1"));
     for (int bits = 1; bits <= 8; bits += 7) {
         make_job(&j, t, n, bits, printer_find("prusa-sl1s"));
+        /* the desc's one exposure, as slice makes it: the regular layers' (layer 3's), not the thin top's */
+        j.d.exposure_s = j.layers[2].exposure_s;
         CHECK(write_job(&JOB_FORMAT_SL1, path, &j) == 0);
         names = member_names(path);
         CHECKF(names && line_count(names) == n + 4 && has_line(names, "config.ini") &&

@@ -313,7 +313,7 @@ static void bad_arguments_are_refused(void)
     CHECK(png_encode_mask(px, 4, 4, 3, 8, &out, &size) == -1);
     CHECK(png_encode_mask(px, 17, 2, 2, 1, &out, &size) == -1);
     CHECK(png_encode_mask(NULL, 4, 4, 4, 8, &out, &size) == -1);
-    CHECK(png_encode_mask(px, 32768, 1, 32768, 8, &out, &size) == -1 && !out); /* a row past deflate's window */
+    CHECK(png_encode_mask(px, 1 << 24, 1, 1 << 24, 8, &out, &size) == -1 && !out);
 }
 
 static uint32_t be32(const unsigned char *p)
@@ -485,6 +485,8 @@ static void masks_from_runs_decode_in_oiiotool(void)
     add(&b, "run_noise8", 333, 55, 8, 0);
     fill(add(&b, "run_column1", 1, h, 1, 0), hstripes);
     fill(add(&b, "run_window8", 32767, 3, 8, 0), vstripes);
+    fill(add(&b, "run_wide1", 40000, 4, 1, 0), hstripes); /* rows past deflate's window: no row copies */
+    fill(add(&b, "run_wide8", 33000, 3, 8, 0), vstripes);
     round_trip_as(&b, 1);
     free(disc);
     free(scene);

@@ -152,7 +152,10 @@ static void bad_exposure_values_exit_2(void)
         {"--exposure", "two", "expected S"},
         {"--bottom-exposure", "0", "--bottom-exposure"},
         {"--peel-speed", "0", "--peel-speed"},
-        {"--exposure", "4000", "limited to 3600 s"},
+        {"--exposure", "4000", "exposures are 0.001 to 3600 s"},
+        {"--exposure", "1@0.05,60@0.06", "exposures are 0.001 to 3600 s"},
+        {"--exposure", "0.0001", "exposures are 0.001 to 3600 s"},
+        {"--penetration", "0.001", "exposures are 0.001 to 3600 s"},
     };
     char job[256], model[256];
     size_t c;
@@ -392,6 +395,40 @@ static void jobs_are_reproducible(void)
     unsetenv("SOURCE_DATE_EPOCH");
 }
 
+/* A uniform job's top layer is what is left of the part: the headers' one
+   layer height and exposure are the regular layers', not the top's. */
+static void headers_hold_the_regular_layers(void)
+{
+    static const char *const ext[] = {"ctb", "goo"};
+    char model[256];
+    int f;
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    for (f = 0; f < 2; f++) {
+        char out[300];
+        unsigned char *data;
+        size_t size;
+        jr_job job;
+        cli_result r;
+        snprintf(out, sizeof out, "%s/uniform.%s", cli_dir, ext[f]);
+        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.06", "--exposure", "2@0.06",
+                    "--penetration", "0.1", "-o", out, NULL);
+        CHECKF(r.status == 0, "%s: %s", out, r.err);
+        cli_free(&r);
+        data = read_file(out, &size);
+        if (!data || (f == 0 ? jr_read_ctb(data, size, &job) : jr_read_goo(data, size, &job)) != 0) {
+            CHECKF(0, "%.200s: the reader refuses it", out);
+            free(data);
+            continue;
+        }
+        CHECKF(fabs(job.layer_height_mm - 0.06) < 1e-6 && fabs(job.exposure_s - 2) < 1e-5, "%s: header %g mm, %g s", ext[f],
+               job.layer_height_mm, job.exposure_s);
+        /* while the top layer itself is thinner and exposed for its thickness */
+        CHECK(job.layer_count > 2 && job.layers[job.layer_count - 1].exposure_s < 2);
+        jr_free(&job);
+        free(data);
+    }
+}
+
 void test_slice_jobs(void)
 {
     if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
@@ -402,5 +439,6 @@ void test_slice_jobs(void)
     RUN(refusals_leave_nothing_behind);
     RUN(resin_files_hold_the_directory_jobs_masks);
     RUN(jobs_are_reproducible);
+    RUN(headers_hold_the_regular_layers);
     cli_end();
 }
