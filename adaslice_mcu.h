@@ -63,7 +63,7 @@
      ADASLICE_ASSERT(x)           internal invariant checks (off by default here;
                                   adaslice.h turns them on with assert)
      ADASLICE_CRC32_SMALL         CRC-32 a nibble at a time: 64 bytes of table and
-                                  no 8 KiB of stack (microcontrollers)
+                                  no 16 KiB of stack (microcontrollers)
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; masks below 2^24
    pixels a side.
 */
@@ -161,9 +161,9 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t pl
 /* ------------------------------------------------------------- job output */
 
 /* CRC-32 (IEEE 802.3, as zlib's crc32 and PNG): crc = adaslice_crc32(0, data, n),
-   and running: adaslice_crc32(crc, more, m). From 4 KiB on it slices by eight
-   bytes with 8 KiB of tables on the stack; define ADASLICE_CRC32_SMALL for a
-   microcontroller, which then goes a nibble at a time (64 bytes of table). */
+   and running: adaslice_crc32(crc, more, m). From 4 KiB on it slices by
+   sixteen bytes with 16 KiB of tables on the stack; define ADASLICE_CRC32_SMALL
+   for a microcontroller, which then goes a nibble at a time (64 bytes of table). */
 ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
 
 /* A LEB128 varint: 7 bits a byte, low bits first, at most 5 bytes. */
@@ -506,24 +506,24 @@ ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size
     const unsigned char *p = ADASLICE__CAST(const unsigned char *, data);
     crc = ~crc;
 #ifndef ADASLICE_CRC32_SMALL
-    /* Slicing by eight: eight tables of 256 built on the stack for this call
-       (about 4,000 operations, so nothing is global and nothing is written
-       out by hand), then eight bytes a step, read byte by byte so that the
-       order of bytes in a word does not matter. */
+    /* Slicing by sixteen: sixteen tables of 256 built on the stack for this
+       call (about 8,000 operations, so nothing is global and nothing is
+       written out by hand), then sixteen bytes a step, read byte by byte so
+       that the order of bytes in a word does not matter. */
     if (size >= 4096) {
-        uint32_t t[8][256], i, k;
+        uint32_t t[16][256], i, k;
         for (i = 0; i < 256; i++) {
             uint32_t c = i;
             for (k = 0; k < 8; k++) c = c & 1u ? (c >> 1) ^ 0xedb88320u : c >> 1;
             t[0][i] = c;
         }
         for (i = 0; i < 256; i++)
-            for (k = 1; k < 8; k++) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xffu];
-        for (; size >= 8; p += 8, size -= 8) {
-            uint32_t lo = crc ^ ((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
-            uint32_t hi = (uint32_t)p[4] | (uint32_t)p[5] << 8 | (uint32_t)p[6] << 16 | (uint32_t)p[7] << 24;
-            crc = t[7][lo & 0xffu] ^ t[6][(lo >> 8) & 0xffu] ^ t[5][(lo >> 16) & 0xffu] ^ t[4][lo >> 24] ^
-                  t[3][hi & 0xffu] ^ t[2][(hi >> 8) & 0xffu] ^ t[1][(hi >> 16) & 0xffu] ^ t[0][hi >> 24];
+            for (k = 1; k < 16; k++) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xffu];
+        for (; size >= 16; p += 16, size -= 16) {
+            uint32_t a = crc ^ ((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
+            crc = t[15][a & 0xffu] ^ t[14][(a >> 8) & 0xffu] ^ t[13][(a >> 16) & 0xffu] ^ t[12][a >> 24] ^
+                  t[11][p[4]] ^ t[10][p[5]] ^ t[9][p[6]] ^ t[8][p[7]] ^ t[7][p[8]] ^ t[6][p[9]] ^ t[5][p[10]] ^
+                  t[4][p[11]] ^ t[3][p[12]] ^ t[2][p[13]] ^ t[1][p[14]] ^ t[0][p[15]];
         }
     }
 #endif

@@ -2,8 +2,9 @@
    1. Writing each job format: the whole `adaslice slice` command on the
       turbine blade x4.3 on a 3840 x 2400 display of 50 um, in layers per
       second against the same command writing the PNG directory, each the
-      median of RUNS runs taken in turn. SL1 holds one layer height, so it is
-      timed, with the directory beside it, on a uniform plan.
+      median of RUNS runs taken in turn, and the directory on one thread
+      against all the cores. SL1 holds one layer height, so it is timed,
+      with the directory beside it, on a uniform plan.
    2. Print time saved: every shared model's estimated print time (each
       layer's exposure by the working curve, settle, peel and return at the
       tool's defaults) with the optimal plan against the uniform plan with the
@@ -66,12 +67,14 @@ static double run(char **argv, size_t *layers)
     return t;
 }
 
+/* uniform: 1 on --uniform 0.1 (against the uniform directory), 2 on one thread */
 typedef struct job { const char *name, *out; int uniform; } job;
 
 static int time_formats(const char *tool, const char *dir)
 {
     static const job jobs[] = {
         {"directory (PNG)", "job", 0}, {"ctb", "job.ctb", 0}, {"goo", "job.goo", 0}, {"chitu-zip", "job.zip", 0},
+        {"directory, --threads 1", "one", 2},
         {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
     enum { JOBS = sizeof jobs / sizeof jobs[0] };
     char model[4096], out[JOBS][128];
@@ -93,7 +96,8 @@ static int time_formats(const char *tool, const char *dir)
             argv[a++] = (char *)"3840x2400";
             argv[a++] = (char *)"--pitch";
             argv[a++] = (char *)"0.05";
-            if (jobs[k].uniform) { argv[a++] = (char *)"--uniform"; argv[a++] = (char *)"0.1"; }
+            if (jobs[k].uniform == 1) { argv[a++] = (char *)"--uniform"; argv[a++] = (char *)"0.1"; }
+            if (jobs[k].uniform == 2) { argv[a++] = (char *)"--threads"; argv[a++] = (char *)"1"; }
             argv[a++] = (char *)"-o";
             argv[a++] = out[k];
             argv[a] = NULL;
@@ -106,7 +110,7 @@ static int time_formats(const char *tool, const char *dir)
     printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
     for (k = 0; k < JOBS; k++) {
         double s = median(t[k], RUNS);
-        int base = jobs[k].uniform ? 4 : 0;
+        int base = jobs[k].uniform == 1 ? 5 : 0;
         rate[k] = layers[k] / s;
         printf("  %-30s %7zu %9.2f %10.1f", jobs[k].name, layers[k], s, rate[k]);
         if (k != base) printf(" %.2fx", rate[k] / rate[base]);

@@ -264,7 +264,9 @@ static int dir_encode(const void *writer, size_t k, const unsigned char *image, 
     unsigned char *png = NULL;
     char *path = (char *)malloc(w->path_size);
     int rc;
-    if (!path || png_encode_gray(image, (int)m->width, (int)m->height, stride, (int)m->bits, &png, &size)) {
+    /* 8-bit masks code fastest from their runs; 1-bit ones stay 1-bit PNGs */
+    if (!path || (m->bits == 8 ? png_encode_mask : png_encode_gray)(image, (int)m->width, (int)m->height, stride,
+                                                                   (int)m->bits, &png, &size)) {
         free(path);
         return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
     }

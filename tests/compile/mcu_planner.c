@@ -3,7 +3,7 @@
    workspace. make check fails if that workspace passes 16 KiB. */
 #define ADASLICE_STATIC
 #define ADASLICE_MCU_IMPLEMENTATION
-#define ADASLICE_CRC32_SMALL /* no 8 KiB of tables on a small stack */
+#define ADASLICE_CRC32_SMALL /* no 16 KiB of tables on a small stack */
 #include "../../adaslice_mcu.h"
 
 #define BINS 12000u
