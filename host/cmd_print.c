@@ -9,6 +9,7 @@
 #include "cure.h"
 #include "jobdir.h"
 #include "layers.h"
+#include "maskrows.h"
 #include "options.h"
 #include "output.h"
 #include "plan_job.h"
@@ -75,7 +76,7 @@ static int job_mask(print_job *pj, uint32_t k)
     pj->rendered = k;
     (void)adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits, pj->code,
                               pj->code_cap, &pj->code_size);
-    pj->crc = adaslice_crc32(0, pj->masks.image, pj->masks.stride * pj->height);
+    pj->crc = mask_crc32(pj->masks.image, pj->masks.stride, pj->masks.stride, (int)pj->height);
     return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
 }
 

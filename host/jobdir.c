@@ -4,6 +4,7 @@
 #endif
 #include "jobdir.h"
 #include "jobfile.h"
+#include "maskrows.h"
 #include "layers.h"
 #include "output.h"
 #include "png.h"
@@ -277,7 +278,7 @@ static int dir_encode(const void *writer, size_t k, const unsigned char *image, 
     if (job_blob_reserve(blob, bound)) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
     if (adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, blob->data, bound, &blob->size) != ADASLICE_OK)
         return complain(RC_FAIL, "layer %zu: its mask does not code", k + 1);
-    blob->crc = adaslice_crc32(0, image, stride * m->height);
+    blob->crc = mask_crc32(image, stride, stride, (int)m->height);
     return RC_OK;
 }
 

@@ -1,5 +1,6 @@
 /* Rows of layer masks: see maskrows.h. */
 #include "maskrows.h"
+#include "../adaslice_mcu.h"
 #include <string.h>
 
 void mask_row_grey(const unsigned char *image, size_t stride, int bits, int width, int y, unsigned char *out)
@@ -55,3 +56,57 @@ void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn ru
     }
 }
 
+
+/* a * b modulo the CRC's polynomial, both as reflected polynomials (bit 31
+   is x^0): what combining two CRCs needs (zlib's crc32_combine does the same). */
+static uint32_t mult_mod_p(uint32_t a, uint32_t b)
+{
+    uint32_t m = (uint32_t)1 << 31, p = 0;
+    while (m) {
+        if (a & m) p ^= b;
+        m >>= 1;
+        b = b & 1u ? (b >> 1) ^ 0xedb88320u : b >> 1;
+    }
+    return p;
+}
+
+/* x^(8 n) modulo the polynomial: appending n bytes shifts a CRC by that. */
+static uint32_t x_to_8n(size_t n)
+{
+    uint32_t result = (uint32_t)1 << 31, power = (uint32_t)1 << 30; /* x^0, x^1 */
+    unsigned long long e = 8ull * n;
+    while (e) {
+        if (e & 1u) result = mult_mod_p(power, result);
+        power = mult_mod_p(power, power);
+        e >>= 1;
+    }
+    return result;
+}
+
+/* crc(A || B) from crc(A), crc(B) and B's length */
+static uint32_t crc_append(uint32_t a, uint32_t b, size_t b_bytes) { return mult_mod_p(x_to_8n(b_bytes), a) ^ b; }
+
+uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height)
+{
+    uint32_t crc = 0, shift = x_to_8n(row_bytes);
+    int y = 0;
+    while (y < height) {
+        /* rows unlike the row above, in one pass when they lie back to back */
+        int y0 = y++;
+        while (y < height && memcmp(image + (size_t)y * stride, image + (size_t)(y - 1) * stride, row_bytes)) y++;
+        if (stride == row_bytes) {
+            crc = crc_append(crc, adaslice_crc32(0, image + (size_t)y0 * stride, (size_t)(y - y0) * row_bytes),
+                             (size_t)(y - y0) * row_bytes);
+        } else {
+            int r;
+            for (r = y0; r < y; r++) crc = mult_mod_p(shift, crc) ^ adaslice_crc32(0, image + (size_t)r * stride, row_bytes);
+        }
+        /* then the rows that repeat it: one multiplication each */
+        if (y < height) {
+            uint32_t repeated = adaslice_crc32(0, image + (size_t)(y - 1) * stride, row_bytes);
+            for (; y < height && !memcmp(image + (size_t)y * stride, image + (size_t)(y - 1) * stride, row_bytes); y++)
+                crc = mult_mod_p(shift, crc) ^ repeated;
+        }
+    }
+    return crc;
+}

@@ -3,6 +3,7 @@
 #include "../adaslice.h"
 #include "check.h"
 #include "codec_reference.h"
+#include "../host/maskrows.h"
 #include "maskgen.h"
 #include <stdlib.h>
 #include <string.h>
@@ -202,6 +203,35 @@ static void fast_encoder_writes_the_reference_bytes(void)
     CHECKF(failures == 0, "%d encodings differ from the reference", failures);
 }
 
+/* The host's CRC of a mask by rows (repeated rows combined in GF(2)) is the
+   CRC of its bytes, on masks with every kind of repetition and width. */
+static void mask_crc_by_rows_is_the_crc_of_the_bytes(void)
+{
+    int trial, bad = 0;
+    for (trial = 0; trial < 200; trial++) {
+        size_t w = 1 + codec_rng() % 700, h = 1 + codec_rng() % 60, y, x;
+        unsigned char *img = (unsigned char *)malloc(w * h);
+        if (!img) { CHECK(!"out of memory"); return; }
+        for (y = 0; y < h; y++) {
+            unsigned char *row = img + y * w;
+            if (y && codec_rng() % 2) { memcpy(row, row - w, w); continue; }
+            for (x = 0; x < w; x++) row[x] = (unsigned char)(codec_rng() % 5 ? 0 : codec_rng());
+        }
+        if (mask_crc32(img, w, w, (int)h) != ref_crc32(0, img, w * h)) bad++;
+        if (h > 1 && w > 1) { /* rows with a byte of padding after them: the same rows as w - 1 bytes each */
+            size_t r;
+            uint32_t want = 0;
+            unsigned char *packed = (unsigned char *)malloc((w - 1) * h);
+            for (r = 0; packed && r < h; r++) memcpy(packed + r * (w - 1), img + r * w, w - 1);
+            if (packed) want = ref_crc32(0, packed, (w - 1) * h);
+            if (!packed || mask_crc32(img, w, w - 1, (int)h) != want) bad++;
+            free(packed);
+        }
+        free(img);
+    }
+    CHECKF(bad == 0, "%d masks' row CRCs differ from their bytes'", bad);
+}
+
 static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
@@ -336,6 +366,7 @@ void test_codec(void)
     RUN(crc32_agrees_with_the_reference);
     RUN(masks_round_trip);
     RUN(fast_encoder_writes_the_reference_bytes);
+    RUN(mask_crc_by_rows_is_the_crc_of_the_bytes);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);
