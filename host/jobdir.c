@@ -255,6 +255,24 @@ static int write_png(const char *path, unsigned char *png, size_t size)
     return rc;
 }
 
+/* A layer's PNG straight under its name: the manifest, removed before the
+   first layer and written after the last, is what says the job is whole, so
+   the layers need no temporary name (which would double the directory's
+   work); a failed write removes its file. */
+static int write_layer_png(const char *path, unsigned char *png, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    int err = 0;
+    if (!f) err = errno;
+    else {
+        if (fwrite(png, 1, size, f) != size) err = errno ? errno : EIO;
+        if (fclose(f) != 0 && !err) err = errno;
+        if (err) remove(path);
+    }
+    free(png);
+    return err ? complain(RC_FAIL, "cannot write %s: %s", path, strerror(err)) : RC_OK;
+}
+
 /* The layer's PNG goes straight to its own file; the blob is its mask code
    and CRC for masks.rle. */
 static int dir_encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
@@ -272,7 +290,7 @@ static int dir_encode(const void *writer, size_t k, const unsigned char *image, 
         return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
     }
     layer_path(path, w->path_size, w->dir, k, w->digits, "png");
-    rc = write_png(path, png, size);
+    rc = write_layer_png(path, png, size);
     free(path);
     if (rc) return rc;
     if (job_blob_reserve(blob, bound)) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
