@@ -711,6 +711,7 @@ typedef struct adaslice_masker {
     int16_t *winding;            /* per ray */
     uint16_t *coverage;          /* per pixel, s > 1 */
     unsigned char grey[257];     /* coverage -> grey level */
+    long long lit_rays;          /* rays inside: lit * s * s */
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -4732,14 +4733,13 @@ static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
         w[i] = (int16_t)(w[i] + step);
         after = w[i] > 0;
         if (before == after) continue;
+        mk->lit_rays += after ? 1 : -1;
         if (s == 1) {
             mk->image[row * mk->stride + (size_t)(i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
-            mk->lit += after ? 1 : -1;
         } else {
             size_t px = row * mk->stride + (size_t)(i / s);
             mk->coverage[px] = (uint16_t)(mk->coverage[px] + (after ? 1 : -1));
             mk->image[px] = mk->grey[mk->coverage[px]];
-            mk->lit += (after ? 1.0 : -1.0) / (s * s);
         }
     }
 }
@@ -4773,6 +4773,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double h
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "masks: triangle %u lies more than 2^21 pixels from the printer's grid", (unsigned)mk->active[k]);
     mk->done = h;
+    mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
