@@ -11,6 +11,7 @@
 #include "report.h"
 
 #include <errno.h>
+#include <dirent.h>
 #include <sys/stat.h>
 #include <math.h>
 #include <stdlib.h>
@@ -52,6 +53,8 @@ typedef struct dir_writer {
     size_t path_size;
     int digits;
     job_masks masks;
+    int has_masks;               /* masks.rle written, its CRC-32 below (the manifest names it) */
+    uint32_t masks_crc;
 } dir_writer;
 
 static void write_manifest(FILE *f, const void *ctx)
@@ -100,6 +103,9 @@ static void write_manifest(FILE *f, const void *ctx)
     json_number(f, d->print_time_s);
     fputs(",\n  \"volume_mm3\": ", f);
     json_number(f, d->volume_mm3);
+    fputs(",\n  \"masks_rle_crc32\": ", f);
+    if (((const dir_writer *)ctx)->has_masks) fprintf(f, "\"%08x\"", (unsigned)((const dir_writer *)ctx)->masks_crc);
+    else fputs("null", f);
     fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", d->layer_count);
     for (k = 0; k < d->layer_count; k++) {
         const job_layer *l = &d->layers[k];
@@ -158,11 +164,17 @@ void job_masks_free(job_masks *m)
     memset(m, 0, sizeof *m);
 }
 
-static void put_u32(FILE *f, uint32_t v)
+/* masks.rle's bytes go to a sink: the file, or the CRC the manifest keeps of it */
+typedef void (*byte_sink)(void *ctx, const void *bytes, size_t n);
+
+static void sink_u32(byte_sink out, void *ctx, uint32_t v)
 {
     unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
-    fwrite(b, 1, 4, f);
+    out(ctx, b, 4);
 }
+
+static void to_file(void *ctx, const void *bytes, size_t n) { fwrite(bytes, 1, n, (FILE *)ctx); }
+static void to_crc(void *ctx, const void *bytes, size_t n) { *(uint32_t *)ctx = adaslice_crc32(*(uint32_t *)ctx, bytes, n); }
 
 static uint32_t get_u32(const unsigned char *p)
 {
@@ -172,39 +184,72 @@ static uint32_t get_u32(const unsigned char *p)
 #define MASKS_HEADER 44   /* magic and nine u32 */
 #define MASKS_LAYER 16    /* bins, exposure, CRC, code bytes */
 
-static void write_mask_file(FILE *f, const void *ctx)
+static void emit_masks(const job_masks *m, byte_sink out, void *ctx)
 {
-    const job_masks *m = (const job_masks *)ctx;
     uint32_t k;
-    fwrite("ADASMSK2", 1, 8, f);
-    put_u32(f, m->width);
-    put_u32(f, m->height);
-    put_u32(f, m->bits);
-    put_u32(f, m->layers);
-    put_u32(f, m->bin_nm);
-    put_u32(f, m->peel_nm);
-    put_u32(f, m->peel_speed_um_s);
-    put_u32(f, m->return_speed_um_s);
-    put_u32(f, m->settle_ms);
+    out(ctx, "ADASMSK2", 8);
+    sink_u32(out, ctx, m->width);
+    sink_u32(out, ctx, m->height);
+    sink_u32(out, ctx, m->bits);
+    sink_u32(out, ctx, m->layers);
+    sink_u32(out, ctx, m->bin_nm);
+    sink_u32(out, ctx, m->peel_nm);
+    sink_u32(out, ctx, m->peel_speed_um_s);
+    sink_u32(out, ctx, m->return_speed_um_s);
+    sink_u32(out, ctx, m->settle_ms);
     for (k = 0; k < m->layers; k++) {
-        put_u32(f, m->lengths[k]);
-        put_u32(f, m->exposure_ms[k]);
-        put_u32(f, m->crcs[k]);
-        put_u32(f, (uint32_t)m->sizes[k]);
-        fwrite(m->codes[k], 1, m->sizes[k], f);
+        sink_u32(out, ctx, m->lengths[k]);
+        sink_u32(out, ctx, m->exposure_ms[k]);
+        sink_u32(out, ctx, m->crcs[k]);
+        sink_u32(out, ctx, (uint32_t)m->sizes[k]);
+        out(ctx, m->codes[k], m->sizes[k]);
     }
 }
+
+static void write_mask_file(FILE *f, const void *ctx) { emit_masks((const job_masks *)ctx, to_file, f); }
 
 static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
 
 static int dir_close(void *writer, int ok);
 
+/* "layer_" digits ".png" or ".svg": a layer file of a job */
+static int is_layer_file(const char *name)
+{
+    const char *p = name + 6, *dot;
+    if (strncmp(name, "layer_", 6)) return 0;
+    for (dot = p; *dot >= '0' && *dot <= '9'; dot++) {}
+    return dot - p >= 5 && (!strcmp(dot, ".png") || !strcmp(dot, ".svg"));
+}
+
+/* What an earlier job left in dir: its manifest first (so that an interrupted
+   clean leaves no job that looks whole), then its masks, previews, plan and
+   layer files; nothing else. path is room for a file's path. */
+static int remove_old_job(const char *dir, char *path, size_t size)
+{
+    static const char *const files[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
+    DIR *d;
+    struct dirent *e;
+    size_t i;
+    int rc = RC_OK;
+    for (i = 0; i < sizeof files / sizeof files[0]; i++) {
+        snprintf(path, size, "%s/%s", dir, files[i]);
+        if (remove(path) != 0 && errno != ENOENT) return complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
+    }
+    if (!(d = opendir(dir))) return complain(RC_FAIL, "cannot read %s: %s", dir, strerror(errno));
+    while (!rc && (e = readdir(d)) != NULL) {
+        if (!is_layer_file(e->d_name) || strlen(dir) + strlen(e->d_name) + 2 > size) continue;
+        snprintf(path, size, "%s/%s", dir, e->d_name);
+        if (remove(path) != 0 && errno != ENOENT) rc = complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
+    }
+    closedir(d);
+    return rc;
+}
+
 static int dir_open(void **writer, const char *dir, const job_desc *d)
 {
     dir_writer *w = (dir_writer *)calloc(1, sizeof *w);
-    const char *stale[] = {"manifest.json", "masks.rle"};
     struct stat st;
-    int i, rc = RC_OK;
+    int rc = RC_OK;
     *writer = NULL;
     if (!w || !(w->dir = (char *)malloc(strlen(dir) + 1)) || !(w->path = (char *)malloc(strlen(dir) + 64))) {
         rc = complain(RC_FAIL, "out of memory");
@@ -216,11 +261,7 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     w->path_size = strlen(dir) + 64;
     if (mkdir(dir, 0777) != 0 && errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) { rc = complain(RC_FAIL, "%s is not a directory", dir); goto fail; }
-    /* an earlier job's manifest and masks must not vouch for layers about to change */
-    for (i = 0; i < 2; i++) {
-        snprintf(w->path, w->path_size, "%s/%s", dir, stale[i]);
-        if (remove(w->path) != 0 && errno != ENOENT) { rc = complain(RC_FAIL, "cannot remove %s: %s", w->path, strerror(errno)); goto fail; }
-    }
+    if ((rc = remove_old_job(dir, w->path, w->path_size))) goto fail;
     if ((rc = job_masks_alloc(&w->masks, (uint32_t)d->layer_count))) goto fail;
     w->masks.width = (uint32_t)d->width;
     w->masks.height = (uint32_t)d->height;
@@ -339,6 +380,9 @@ static int dir_finish(dir_writer *w)
     if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
         snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
         if ((rc = write_atomic(w->path, write_mask_file, &w->masks))) return rc;
+        w->masks_crc = 0;
+        emit_masks(&w->masks, to_crc, &w->masks_crc);
+        w->has_masks = 1;
     } else {
         fprintf(stderr, "adaslice: warning: %s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
                         "is not a whole number of nanometres\n", w->dir, d->bin_mm);
@@ -370,6 +414,49 @@ const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per laye
                                    0, 1, 0, dir_open, dir_encode, dir_put, dir_close};
 
 /* ------------------------------------------------------------ reading */
+
+/* masks.rle is the job's when the manifest, written after it, names its
+   CRC-32: a job without a manifest is not whole, and masks left from
+   another job do not match. */
+static int matches_manifest(const char *dir, const char *masks_path, const job_masks *m)
+{
+    char *path = dir_file(dir, "manifest.json"), *text = NULL;
+    const char *at;
+    unsigned long named = 0;
+    uint32_t crc = adaslice_crc32(0, m->file, m->file_size);
+    FILE *f;
+    long size = -1;
+    int rc = RC_FAIL;
+    if (!path) return RC_FAIL;
+    if (!(f = fopen(path, "rb"))) {
+        complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", path);
+        goto done;
+    }
+    if (fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (text = (char *)malloc((size_t)size + 1)) != NULL && fread(text, 1, (size_t)size, f) == (size_t)size)
+        text[size] = 0;
+    else {
+        free(text);
+        text = NULL;
+    }
+    fclose(f);
+    if (!text) { complain(RC_FAIL, "cannot read %s", path); goto done; }
+    at = strstr(text, "\"masks_rle_crc32\": \"");
+    if (!at || sscanf(at + 20, "%8lx", &named) != 1) {
+        complain(RC_FAIL, "%s names no masks.rle (masks_rle_crc32): it is not the manifest of this %s", path, masks_path);
+        goto done;
+    }
+    if (named != crc) {
+        complain(RC_FAIL, "%s belongs to another job than %s (CRC-32 %08x, the manifest names %08lx): slice it again",
+                 masks_path, path, (unsigned)crc, named);
+        goto done;
+    }
+    rc = RC_OK;
+done:
+    free(text);
+    free(path);
+    return rc;
+}
 
 int jobdir_read_masks(const char *dir, job_masks *m)
 {
@@ -437,7 +524,7 @@ int jobdir_read_masks(const char *dir, job_masks *m)
         complain(RC_FAIL, "%s: byte %zu: %zu bytes after the last layer", path, at, m->file_size - at);
         goto done;
     }
-    rc = RC_OK;
+    rc = matches_manifest(dir, path, m);
 done:
     if (rc) job_masks_free(m);
     free(path);

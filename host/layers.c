@@ -203,10 +203,14 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
     plate[1] = s->height * s->pitch[1];
     for (k = 0; k < 3; k++) size[k] = hi[k] - lo[k];
     for (k = 0; k < 2; k++) over[k] = fabs(s->place[k]) + size[k] / 2 - plate[k] / 2;
-    if (over[0] > 0 || over[1] > 0)
-        return complain(RC_FAIL, "the part (%g x %g mm%s) does not fit the %g x %g mm plate: %g mm too wide along %s",
-                        size[0], size[1], s->placed ? ", placed off centre" : "", plate[0], plate[1],
-                        over[0] > over[1] ? over[0] : over[1], over[0] > over[1] ? "x" : "y");
+    if (over[0] > 0 || over[1] > 0) {
+        int axis = over[1] > over[0];
+        if (!s->placed || size[axis] > plate[axis]) /* centred, it is this much wider than the plate */
+            return complain(RC_FAIL, "the part (%g x %g mm) does not fit the %g x %g mm plate: %g mm too wide along %s",
+                            size[0], size[1], plate[0], plate[1], size[axis] - plate[axis], axis ? "y" : "x");
+        return complain(RC_FAIL, "the part (%g x %g mm), placed at %g, %g mm, overhangs the %g x %g mm plate by %g mm along %s",
+                        size[0], size[1], s->place[0], s->place[1], plate[0], plate[1], over[axis], axis ? "y" : "x");
+    }
     *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch[0], s->pitch[1], s->place);
     return RC_OK;
 }

@@ -69,7 +69,7 @@ static inline void cli_write(const char *path, const char *text)
 {
     FILE *f = fopen(path, "wb");
     size_t n = strlen(text);
-    CHECKF(f && fwrite(text, 1, n, f) == n && fclose(f) == 0, "cannot write %s", path);
+    CHECKF(f && fwrite(text, 1, n, f) == n && fclose(f) == 0, "cannot write %.400s", path);
 }
 
 /* cli_run(arg, ..., NULL) */

@@ -377,16 +377,23 @@ static void slice_writes_a_job(void)
     CHECK(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "-o JOBDIR"));
     cli_free(&r);
 
-    /* a complete job, then a run that cannot write its third layer */
+    /* a complete job, then a run that cannot clear its third layer away (a
+       directory with a file in it took the name) */
     r = cli_run("slice", sphere_stl(), "-o", job, NULL);
     CHECK(r.status == 0 && cli_exists(path));
     cli_free(&r);
     snprintf(path, sizeof path, "%s/layer_00003.png", job);
     remove(path);
     mkdir(path, 0755);
-    r = cli_run("slice", sphere_stl(), "-o", job, NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "layer_00003.png"), "exit %d: %s", r.status, r.err);
-    cli_free(&r);
+    {
+        char inside[1100];
+        snprintf(inside, sizeof inside, "%s/x", path);
+        cli_write(inside, "x");
+        r = cli_run("slice", sphere_stl(), "-o", job, NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "layer_00003.png"), "exit %d: %s", r.status, r.err);
+        cli_free(&r);
+        remove(inside);
+    }
     rmdir(path);
     snprintf(path, sizeof path, "%s/manifest.json", job);
     CHECKF(!cli_exists(path), "an interrupted job still has a manifest");

@@ -192,7 +192,8 @@ static void refusals_leave_nothing_behind(void)
         {"job.ctb", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
          "is 0.0005 mm thick", 2},
         {"job.ctb", {"--printer", "elegoo-saturn", "--scale", "25", NULL}, "mm tall: the elegoo-saturn builds 200 mm", 1},
-        {"job.ctb", {"--printer", "elegoo-saturn", "--scale", "15", NULL}, "does not fit", 1},
+        {"job.ctb", {"--printer", "elegoo-saturn", "--scale", "15", NULL}, "does not fit the 192 x 120 mm plate: 30 mm too wide along y", 1},
+        {"job.ctb", {"--printer", "elegoo-saturn", "--place", "0,60", NULL}, "overhangs the 192 x 120 mm plate by 5 mm along y", 1},
         {"job", {"--format", "pwmx", NULL}, "--format pwmx: unknown", 2},
         {"job.goo", {"--pixels", "240x240", "--pitch", "0.05", "--svg", NULL}, "--svg writes into a job directory", 2},
         {"job.goo", {NULL}, "which printer?", 2},
@@ -207,7 +208,8 @@ static void refusals_leave_nothing_behind(void)
         cli_result r = cli_run("slice", model, "-o", out, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], NULL);
         CHECKF(r.status == cases[c].status && cli_one_message(r.err) && strstr(r.err, cases[c].says), "%s %s: exit %d: %s", cases[c].out,
                a[0] ? a[0] : "", r.status, r.err);
-        if (!strstr(cases[c].says, "does not fit") && !strstr(cases[c].says, "tall") && !strstr(cases[c].says, "grid") &&
+        if (!strstr(cases[c].says, "does not fit") && !strstr(cases[c].says, "overhangs") && !strstr(cases[c].says, "tall") &&
+            !strstr(cases[c].says, "grid") &&
             !strstr(cases[c].says, "--memory"))
             CHECKF(strstr(r.err, out) || strstr(r.err, "--format") || strstr(r.err, "--svg"), "the message does not name %s: %s",
                    out, r.err);
@@ -429,6 +431,62 @@ static void headers_hold_the_regular_layers(void)
     }
 }
 
+/* A job directory cannot go stale: a shorter job after a longer one leaves
+   none of the old layers, and print takes masks.rle only with the manifest
+   that names it. */
+static void job_directories_cannot_go_stale(void)
+{
+    char model[256], job[300], other[300], path[400], *text;
+    size_t layers = 0, pngs = 0;
+    cli_result r;
+    DIR *d;
+    struct dirent *e;
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    snprintf(job, sizeof job, "%s/stale", cli_dir);
+    snprintf(other, sizeof other, "%s/other", cli_dir);
+    r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "-o", job, NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.15", "-o", job, NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    text = cli_read(path);
+    if (text) layers = (size_t)cli_json_number(text, "layer_count");
+    free(text);
+    for (d = opendir(job); d && (e = readdir(d)) != NULL;) pngs += !strncmp(e->d_name, "layer_", 6);
+    if (d) closedir(d);
+    CHECKF(layers > 50 && pngs == layers, "%zu layer files for %zu layers", pngs, layers);
+
+    /* masks.rle from another job, then no manifest at all */
+    r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.1", "-o", other, NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    {
+        char from[400], to[400];
+        size_t n;
+        unsigned char *bytes;
+        FILE *f;
+        snprintf(from, sizeof from, "%s/masks.rle", other);
+        snprintf(to, sizeof to, "%s/masks.rle", job);
+        bytes = read_file(from, &n);
+        f = fopen(to, "wb");
+        CHECK(bytes && f && fwrite(bytes, 1, n, f) == n);
+        if (f) fclose(f);
+        free(bytes);
+    }
+    r = cli_run("print", job, "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "belongs to another job"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    remove(path);
+    r = cli_run("print", other, "--port", "/dev/null", NULL); /* whole: gets past the job to the port */
+    CHECKF(r.status == 1 && !strstr(r.err, "manifest"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", job, "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "manifest.json: missing"), "%d %s", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_slice_jobs(void)
 {
     if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
@@ -440,5 +498,6 @@ void test_slice_jobs(void)
     RUN(resin_files_hold_the_directory_jobs_masks);
     RUN(jobs_are_reproducible);
     RUN(headers_hold_the_regular_layers);
+    RUN(job_directories_cannot_go_stale);
     cli_end();
 }
