@@ -153,11 +153,11 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
                 path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
     if (f->max_layers && n > f->max_layers)
         return complain(RC_USAGE, "%s: %zu layers; %s holds %zu at most", path, n, f->what, f->max_layers);
-    if (s->preset && n && p->layers[n - 1].z_top > s->preset->z_max)
-        return complain(RC_FAIL, "the part is %g mm tall: the %s builds %g mm", p->layers[n - 1].z_top, s->preset->name,
-                        s->preset->z_max);
     return RC_OK;
 }
+
+/* The plate's fit, checked before the part is profiled and planned. */
+static int fits_the_plate(void *ctx, const adaslice_mesh *mesh) { return layer_masks_fit((const slice_args *)ctx, mesh); }
 
 static int draw_preview(void *ctx, int w, int h, unsigned char *rgb)
 {
@@ -359,6 +359,8 @@ int cmd_slice(int argc, char **argv)
     }
     j.args = &a;
     j.keep_mesh = 1;
+    j.loaded = fits_the_plate;
+    j.loaded_ctx = &s;
     rc = run_plan(&a, &j);
     if (!rc) rc = check_plan(f, path, &j.plan[a.method], &s);
     /* chaining contours needs shared vertices (STL has none); welded before

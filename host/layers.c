@@ -245,6 +245,17 @@ int layer_masks_check(const slice_args *s, int buffers)
                     buffers, buffers == 1 ? "" : "s", size_text(limit, c));
 }
 
+int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
+{
+    adaslice_grid g;
+    double size[3], lo[3], hi[3];
+    adaslice_mesh_bounds(mesh, lo, hi);
+    if (s->geometry_given && s->preset && hi[2] - lo[2] > s->preset->z_max)
+        return complain(RC_FAIL, "the part is %g mm tall: the %s builds %g mm", hi[2] - lo[2], s->preset->name,
+                        s->preset->z_max);
+    return place_part(s, mesh, &g, size);
+}
+
 /* Where layer k is sliced, mm above the part's bottom. */
 double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
 {

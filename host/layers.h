@@ -56,6 +56,9 @@ double layer_masks_bytes(const slice_args *s, int buffers);
 /* RC_OK, or RC_USAGE after a complaint naming the grid and the bytes when
    they pass --memory: said before any work. */
 int layer_masks_check(const slice_args *s, int buffers);
+/* RC_OK when the part fits s's plate where it is placed, else a complaint
+   saying by how much it does not. */
+int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
    the masker. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);

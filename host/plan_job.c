@@ -214,6 +214,11 @@ static int profile_model(const plan_args *a, plan_job *j)
     j->triangles = mesh.triangle_count;
     j->degenerate = mesh.degenerate_dropped;
     j->format = mesh.format;
+    if (j->loaded && (rc = j->loaded(j->loaded_ctx, &mesh)) != RC_OK) {
+        free(weights);
+        adaslice_mesh_free(&mesh);
+        return rc;
+    }
 
     memset(&po, 0, sizeof po);
     po.metric = a->metric;

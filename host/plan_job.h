@@ -51,6 +51,10 @@ typedef struct plan_job {
     int planned[METHOD_COUNT];
     double *kappa;                 /* curvature per bin, for the curvature method (model only) */
     double ms_load, ms_profile, ms_plan;
+    /* Called with the mesh loaded and turned, before it is profiled: a
+       check (the plate's fit) that should stop the job before the work. */
+    int (*loaded)(void *ctx, const adaslice_mesh *mesh);
+    void *loaded_ctx;
 } plan_job;
 
 /* The plan options of `plan` (argv[0] is the command's name); RC_OK or a
