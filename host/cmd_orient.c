@@ -127,7 +127,8 @@ static void orient_usage(FILE *f)
 {
     fputs("usage: adaslice orient MODEL [--dirs N] [--alpha A] [plan options] [--map map.svg] [--json]\n"
           "\n"
-          "Plans MODEL along N build directions of a spherical Fibonacci lattice and scores each\n"
+          "Plans MODEL along N build directions of a spherical Fibonacci lattice and the six axis\n"
+          "directions (the part as loaded among them) and scores each\n"
           "by F = A K/max K + (1 - A) eps/max eps (eq. 25), eps being the plan's worst layer\n"
           "error; prints the best direction and the best other local minima, each with the\n"
           "rotation that brings it up (apply it with adaslice plan|slice --orient X,Y,Z).\n"
@@ -183,6 +184,9 @@ int cmd_orient(int argc, char **argv)
     if (a.help) { orient_usage(stdout); return RC_OK; }
     if (!a.model) return complain(RC_USAGE, "orient needs a MODEL");
     if (a.orient) return complain(RC_USAGE, "orient searches the directions itself: drop --orient");
+    if (a.out || a.plot || a.profile_out || a.compare)
+        return complain(RC_USAGE, "orient prints directions: --out, --plot, --profile-out and --compare belong to adaslice "
+                                  "plan MODEL --orient X,Y,Z with the direction orient found");
     if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
     memset(&lo, 0, sizeof lo);
@@ -193,7 +197,7 @@ int cmd_orient(int argc, char **argv)
     if (!rc && o.map) {
         map_ctx m;
         m.scores = scores;
-        m.count = o.dirs;
+        m.count = o.dirs + SEARCH_AXES;
         m.minima = minima;
         m.minima_count = count;
         m.model = base_name(a.model);
@@ -223,11 +227,17 @@ int cmd_orient(int argc, char **argv)
             for (k = 0; k < 9; k++) printf("%s%.9g", k ? ", " : "", r[k]);
             printf("], \"axis\": [%.9g, %.9g, %.9g], \"angle_deg\": %.9g}", axis[0], axis[1], axis[2], deg);
         }
-        printf("\n  ]\n}\n");
+        printf("\n  ],\n  \"as_loaded\": {\"feasible\": %s, \"layers\": %zu, \"worst_error\": ",
+               scores[o.dirs].feasible ? "true" : "false", scores[o.dirs].layers);
+        json_number(stdout, scores[o.dirs].worst_error);
+        printf(", \"F\": ");
+        json_number(stdout, scores[o.dirs].score);
+        printf("}\n}\n");
     } else if (!rc) {
         size_t feasible = 0;
-        for (i = 0; i < o.dirs; i++) feasible += scores[i].feasible;
-        printf("%s: %zu directions (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst layer error)\n",
+        for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;
+        printf("%s: %zu directions and the 6 axes (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst "
+               "layer error)\n",
                base_name(a.model), o.dirs, feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
         printf("rank  direction (x, y, z)           rotate about (x, y, z)   by deg   layers  mean err   worst err        F\n");
         for (i = 0; i < count && i <= SEARCH_MINIMA; i++) {
@@ -237,6 +247,14 @@ int cmd_orient(int argc, char **argv)
             printf("%-5s (%7.4f, %7.4f, %7.4f)   (%6.3f, %6.3f, %6.3f)  %7.2f  %7zu  %9.5f  %9.5f  %7.4f\n",
                    i == 0 ? "best" : i == 1 ? "2" : i == 2 ? "3" : "4", s->direction[0], s->direction[1], s->direction[2],
                    axis[0], axis[1], axis[2], deg, s->layers, s->mean_error, s->worst_error, s->score);
+        }
+        {
+            const adaslice_direction_score *s = &scores[o.dirs]; /* +z: the part as loaded */
+            if (s->feasible)
+                printf("as loaded (%7.4f, %7.4f, %7.4f)   %-31s %7zu  %9.5f  %9.5f  %7.4f\n", 0.0, 0.0, 1.0, "", s->layers,
+                       s->mean_error, s->worst_error, s->score);
+            else
+                printf("as loaded: no plan meets eps\n");
         }
     }
     free(scores);

@@ -206,6 +206,10 @@ static int profile_model(const plan_args *a, plan_job *j)
         } else {
             memcpy(j->up, a->orient_up, sizeof j->up);
         }
+        /* by the largest component first, so that 1e308,1e308,1e308 does not overflow */
+        len = fabs(j->up[0]) > fabs(j->up[1]) ? fabs(j->up[0]) : fabs(j->up[1]);
+        if (fabs(j->up[2]) > len) len = fabs(j->up[2]);
+        j->up[0] /= len; j->up[1] /= len; j->up[2] /= len;
         len = sqrt(j->up[0] * j->up[0] + j->up[1] * j->up[1] + j->up[2] * j->up[2]);
         j->up[0] /= len; j->up[1] /= len; j->up[2] /= len;
         adaslice_rotation_to_z(j->up, r);

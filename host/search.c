@@ -131,8 +131,8 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
 
     if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error(&e);
     memset(&s, 0, sizeof s);
-    dirs = (double *)malloc(3 * count * sizeof *dirs);
-    *scores = (adaslice_direction_score *)calloc(count, sizeof **scores);
+    dirs = (double *)malloc(3 * (count + SEARCH_AXES) * sizeof *dirs);
+    *scores = (adaslice_direction_score *)calloc(count + SEARCH_AXES, sizeof **scores);
     if (!dirs || !*scores) {
         free(dirs);
         free(*scores);
@@ -140,6 +140,11 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
         return complain(RC_FAIL, "out of memory for %zu directions", count);
     }
     adaslice_fibonacci_directions(count, dirs);
+    {
+        static const double axes[SEARCH_AXES][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+        memcpy(dirs + 3 * count, axes, sizeof axes);
+    }
+    count += SEARCH_AXES;
     s.o = &o;
     s.scores = *scores;
     s.dirs = dirs;
@@ -159,7 +164,8 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
     }
     adaslice_orient_scores(*scores, count, alpha);
     /* neighbours: within 2.5 lattice spacings (the lattice's cells cover 4 pi / n) */
-    *minima_count = adaslice_orient_minima(*scores, count, 2.5 * sqrt(4 * 3.14159265358979 / (double)count), minima,
+    *minima_count = adaslice_orient_minima(*scores, count,
+                                           2.5 * sqrt(4 * 3.14159265358979 / (double)(count - SEARCH_AXES)), minima,
                                            SEARCH_MINIMA + 1);
     return RC_OK;
 }

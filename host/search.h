@@ -8,10 +8,17 @@
 /* the local minima reported besides the best direction */
 #define SEARCH_MINIMA 3
 
-/* Scores `count` Fibonacci-lattice directions with these options into
-   *scores (malloc'd), F(O) with `alpha`; minima[0 .. *minima_count) are the
-   best local minima, best first (at most SEARCH_MINIMA + 1). RC_OK or a
-   complaint made. */
+/* The axis directions scored besides the lattice, after it: the part as
+   loaded (+z) first, then -z, +x, -x, +y, -y. A lattice never holds them, and
+   flat-faced parts often plan best along one. */
+#define SEARCH_AXES 6
+
+/* Scores `count` Fibonacci-lattice directions and the SEARCH_AXES axis
+   directions with these options into *scores (malloc'd, count + SEARCH_AXES
+   of them, the axes last), F(O) with `alpha` over all of them;
+   minima[0 .. *minima_count) are the best local minima, best first (at most
+   SEARCH_MINIMA + 1), so the best never scores worse than the part as
+   loaded. RC_OK or a complaint made. */
 int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
                   size_t count, double alpha, adaslice_direction_score **scores, size_t *minima, size_t *minima_count);
 #endif

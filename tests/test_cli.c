@@ -446,6 +446,46 @@ static void orient_finds_directions(void)
     r = cli_run("plan", box, "--orient", "0,0,0", NULL);
     CHECK(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--orient"));
     cli_free(&r);
+    /* a direction whose length overflows a double is still a direction (the box turned on its side) */
+    r = cli_run("plan", box, "--orient", "1e308,0,1e-300", "--json", NULL);
+    CHECKF(r.status == 0 && fabs(cli_json_number(r.out, "height_mm") - 10) < 0.01, "exit %d: %s%s", r.status, r.out, r.err);
+    cli_free(&r);
+    r = cli_run("plan", box, "--orient", "1e308,1e308,1e308", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    /* orient prints directions: the plan's outputs are refused, not ignored */
+    r = cli_run("orient", box, "--out", cli_path("o.csv"), NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--out") && !cli_exists(cli_path("o.csv")), "%d %s",
+           r.status, r.err);
+    cli_free(&r);
+}
+
+/* The part as loaded and the six axes are always scored, so a flat-faced
+   part is never turned to something worse: a cube plans as many layers
+   after --orient best as it does as loaded, and orient shows the as-loaded
+   score, which the best never exceeds. */
+static void orient_never_does_worse_than_as_loaded(void)
+{
+    const char *cube = cli_path("cube.stl");
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 10, 10);
+    cli_result r;
+    double as_loaded, best, f_loaded, f_best;
+    const char *p;
+    write_stl(cube, &m, m.triangle_count);
+    gen_free(&m);
+    r = cli_run("plan", cube, "--json", NULL);
+    as_loaded = cli_json_number(r.out, "layers");
+    cli_free(&r);
+    r = cli_run("plan", cube, "--orient", "best", "--json", NULL);
+    best = cli_json_number(r.out, "layers");
+    cli_free(&r);
+    CHECKF(as_loaded > 0 && best <= as_loaded, "as loaded %g layers, --orient best %g", as_loaded, best);
+    r = cli_run("orient", cube, "--json", NULL);
+    p = strstr(r.out, "\"as_loaded\"");
+    f_best = cli_json_number(r.out, "F");
+    f_loaded = p ? cli_json_number(p, "F") : NAN;
+    CHECKF(r.status == 0 && p && cli_json_number(p, "layers") == as_loaded && f_best <= f_loaded, "%s", r.out);
+    cli_free(&r);
 }
 
 static void unwritable_output_fails_cleanly(void)
@@ -503,6 +543,7 @@ void test_cli(void)
     RUN(compare_prints_table_3);
     RUN(slice_writes_a_job);
     RUN(orient_finds_directions);
+    RUN(orient_never_does_worse_than_as_loaded);
     RUN(unwritable_output_fails_cleanly);
     RUN(bad_model_is_named);
     cli_end();
