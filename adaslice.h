@@ -36,6 +36,7 @@
        adaslice_mesh_free
        adaslice_mesh_bounds             the box around the vertices triangles use
        adaslice_mesh_weld               merge equal (or nearby) vertices in place
+       adaslice_mesh_repair             weld, drop, wind and turn shells as a slicer does on load
        adaslice_rotation_to_z           the rotation turning a direction up
        adaslice_mesh_rotate             turn every vertex
      sampling
@@ -106,7 +107,11 @@
    `scale` converts units (scans are often in metres). adaslice_mesh_weld
    merges vertices with equal coordinates, or within a tolerance, in place
    (STL gives every triangle its own corners; contours and curvature need
-   them shared).
+   them shared). adaslice_mesh_repair does what a slicer does on load (weld,
+   stitch cracks, drop degenerate facets, wind each shell one way and turn it
+   to face out, or in for a cavity) and reports what it found
+   (adaslice_mesh_report: shells, open and non-manifold edges, facets turned,
+   volume).
 
    SAMPLING  adaslice_ldi_build rasterises every triangle scan line by scan
    line at the pixel centres of a grid of rays along x, y or z. Vertices snap
@@ -366,6 +371,45 @@ typedef struct adaslice_weld_options {
    which every stage skips. */
 ADASLICE_DEF adaslice_result adaslice_mesh_weld(adaslice_mesh *mesh, const adaslice_weld_options *options,
                                                 adaslice_error *error);
+
+typedef struct adaslice_repair_options {
+    double tolerance;                    /* mm: vertices on open edges this close are one;
+                                            0: 1e-4 of the box's diagonal */
+    const adaslice_allocator *allocator; /* NULL: default (temporary tables) */
+} adaslice_repair_options;
+
+/* What adaslice_mesh_repair found and did. A shell is a set of facets
+   connected through edges that exactly two facets share. */
+typedef struct adaslice_mesh_report {
+    size_t shells;
+    size_t closed_shells;        /* shells with no open edge */
+    size_t open_edges;           /* edges of one facet (holes, cracks), after repair */
+    size_t nonmanifold_edges;    /* edges of three or more facets */
+    size_t inconsistent_edges;   /* edges whose two facets still run the same way
+                                    (a one-sided surface cannot be wound) */
+    size_t welded_nearby;        /* open-edge vertices merged within the tolerance */
+    size_t degenerate_dropped;   /* facets of zero area after welding, dropped */
+    size_t flipped_facets;       /* facets turned, to agree with their shell or to face out */
+    size_t flipped_shells;       /* shells turned whole to face the way their nesting says */
+    double volume;               /* mm^3 enclosed, after repair (open shells: about
+                                    their centroid) */
+} adaslice_mesh_report;
+
+/* Repairs a mesh in place as a slicer does on load: welds equal vertices,
+   then vertices on open edges within `tolerance` (cracks between patches);
+   drops facets left with zero area; winds every shell consistently by flood
+   fill (keeping the winding of most of its facets); then turns each shell
+   whole so that it faces the way its nesting says: a shell inside an even
+   number of closed shells (none: the outside of a part) encloses positive
+   volume, one inside an odd number (a cavity) negative, so a hollow part
+   stays hollow. Nesting comes from z rays from a few points of the shell
+   against the other closed shells; a shell whose points disagree about
+   another (they intersect) does not count that one. Vertices no facet uses
+   are dropped; the order of the rest and of the facets is kept. Nothing is
+   reallocated. report (may be NULL) says what was found. A mesh that was
+   closed and wound one way keeps its facets, their corners and their order. */
+ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *mesh, const adaslice_repair_options *options,
+                                                  adaslice_mesh_report *report, adaslice_error *error);
 /* The rotation (row-major 3x3) turning unit direction d onto +z by the
    smallest angle; its last row is d. */
 ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9]);
@@ -2141,6 +2185,567 @@ ADASLICE_DEF adaslice_result adaslice_mesh_weld(adaslice_mesh *mesh, const adasl
     return r;
 }
 
+/* ---- repair */
+/* Half-edge h = 3t + k runs from corner k of triangle t to corner k + 1. An
+   edge is every half-edge joining the same two vertices, either way; a closed
+   surface wound one way uses each of its edges once each way. */
+static uint32_t adaslice__he_to(const uint32_t *tri, size_t h) { return tri[h % 3 == 2 ? h - 2 : h + 1]; }
+
+/* Half-edges grouped by edge: slot[] of a hash table names one half-edge of
+   each edge, next[] links the rest. Zero-area facets, which every stage skips,
+   are left out. */
+typedef struct adaslice__edges {
+    uint32_t *slot, *next;
+    size_t cap;
+} adaslice__edges;
+
+static void adaslice__edges_free(const adaslice_allocator *al, adaslice__edges *e)
+{
+    adaslice__free(al, e->slot);
+    adaslice__free(al, e->next);
+    memset(e, 0, sizeof *e);
+}
+
+static adaslice_result adaslice__edges_build(const adaslice_mesh *m, const adaslice_allocator *al, adaslice__edges *e,
+                                             adaslice_error *err)
+{
+    const uint32_t *tri = m->triangles;
+    size_t n = 3 * m->triangle_count, h, k;
+    memset(e, 0, sizeof *e);
+    if (m->triangle_count >= ADASLICE__NONE / 3)
+        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "edges: %zu triangles is too many", m->triangle_count);
+    e->cap = adaslice__table_size(n);
+    e->slot = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, e->cap, sizeof(uint32_t)));
+    e->next = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
+    if (!e->slot || !e->next) {
+        adaslice__edges_free(al, e);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "edges: out of memory for %zu triangles", m->triangle_count);
+    }
+    memset(e->slot, 0xff, e->cap * sizeof(uint32_t));
+    memset(e->next, 0xff, n * sizeof(uint32_t));
+    for (h = 0; h < n; h++) {
+        uint32_t a = tri[h], b = adaslice__he_to(tri, h), lo = a < b ? a : b, hi = a < b ? b : a;
+        if (h % 3 == 0 && adaslice__zero_area(m->vertices, tri + h)) { h += 2; continue; }
+        k = (size_t)adaslice__mix((uint64_t)lo << 32 | hi) & (e->cap - 1);
+        for (; e->slot[k] != ADASLICE__NONE; k = (k + 1) & (e->cap - 1)) {
+            uint32_t g = e->slot[k], c = tri[g], d = adaslice__he_to(tri, g);
+            if ((c == lo && d == hi) || (c == hi && d == lo)) break;
+        }
+        if (e->slot[k] == ADASLICE__NONE) e->slot[k] = (uint32_t)h;
+        else { e->next[h] = e->next[e->slot[k]]; e->next[e->slot[k]] = (uint32_t)h; }
+    }
+    return ADASLICE_OK;
+}
+
+/* The facets using an edge, and how many more run from its lower-numbered
+   vertex to its higher than back: 0 on a closed surface wound one way. */
+static void adaslice__edge_uses(const uint32_t *tri, const adaslice__edges *e, uint32_t first, size_t *uses, long *net)
+{
+    uint32_t h;
+    *uses = 0;
+    *net = 0;
+    for (h = first; h != ADASLICE__NONE; h = e->next[h]) {
+        ++*uses;
+        *net += tri[h] < adaslice__he_to(tri, h) ? 1 : -1;
+    }
+}
+
+/* Drops zero-area facets in place, keeping the order of the rest. */
+static size_t adaslice__drop_degenerate(adaslice_mesh *m)
+{
+    size_t t, kept = 0;
+    for (t = 0; t < m->triangle_count; t++) {
+        if (adaslice__zero_area(m->vertices, m->triangles + 3 * t)) continue;
+        memmove(m->triangles + 3 * kept++, m->triangles + 3 * t, 3 * sizeof(uint32_t));
+    }
+    t = m->triangle_count - kept;
+    m->triangle_count = kept;
+    return t;
+}
+
+/* Welds the vertices of open edges within `tolerance` of each other (the
+   lowest index stays, as adaslice_mesh_weld does); *merged counts the moved. */
+static adaslice_result adaslice__weld_open(adaslice_mesh *m, double tolerance, const adaslice_allocator *al,
+                                           size_t *merged, adaslice_error *err)
+{
+    adaslice__edges e;
+    adaslice_result r;
+    uint32_t *index = NULL, *remap = NULL, *first = NULL;
+    float *pos = NULL, *kept_pos = NULL;
+    size_t i, n = 0, kept = 0;
+    *merged = 0;
+    if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
+    /* index[v]: v's place among the open-edge vertices, or NONE */
+    index = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof(uint32_t)));
+    if (!index) goto nomem;
+    memset(index, 0xff, m->vertex_count * sizeof(uint32_t));
+    for (i = 0; i < e.cap; i++) {
+        uint32_t h = e.slot[i];
+        if (h == ADASLICE__NONE || e.next[h] != ADASLICE__NONE) continue;
+        index[m->triangles[h]] = index[adaslice__he_to(m->triangles, h)] = 0;
+    }
+    for (i = 0; i < m->vertex_count; i++) if (index[i] == 0) index[i] = (uint32_t)n++;
+    if (n > 1) {
+        pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
+        kept_pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
+        remap = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
+        first = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
+        if (!pos || !kept_pos || !remap || !first) goto nomem;
+        for (i = 0; i < m->vertex_count; i++)
+            if (index[i] != ADASLICE__NONE) memcpy(pos + 3 * (size_t)index[i], m->vertices + 3 * i, 3 * sizeof(float));
+        if ((r = adaslice__weld_map(pos, n, tolerance, al, kept_pos, remap, &kept, err)) != ADASLICE_OK) goto done;
+        /* first[k]: the vertex that kept place k (the first to reach it) */
+        memset(first, 0xff, n * sizeof(uint32_t));
+        for (i = 0; i < m->vertex_count; i++)
+            if (index[i] != ADASLICE__NONE && first[remap[index[i]]] == ADASLICE__NONE) first[remap[index[i]]] = (uint32_t)i;
+        for (i = 0; i < 3 * m->triangle_count; i++) {
+            uint32_t v = m->triangles[i];
+            if (index[v] != ADASLICE__NONE) m->triangles[i] = first[remap[index[v]]];
+        }
+        *merged = n - kept;
+    }
+    r = ADASLICE_OK;
+    goto done;
+nomem:
+    r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu vertices", m->vertex_count);
+done:
+    adaslice__free(al, index);
+    adaslice__free(al, pos);
+    adaslice__free(al, kept_pos);
+    adaslice__free(al, remap);
+    adaslice__free(al, first);
+    adaslice__edges_free(al, &e);
+    return r;
+}
+
+/* Drops the vertices no facet uses, keeping the order of the rest. */
+static adaslice_result adaslice__drop_unused(adaslice_mesh *m, const adaslice_allocator *al, adaslice_error *err)
+{
+    uint32_t *to = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof(uint32_t)));
+    size_t i, kept = 0;
+    if (!to) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu vertices", m->vertex_count);
+    memset(to, 0xff, m->vertex_count * sizeof(uint32_t));
+    for (i = 0; i < 3 * m->triangle_count; i++) to[m->triangles[i]] = 0;
+    for (i = 0; i < m->vertex_count; i++) {
+        if (to[i] == ADASLICE__NONE) continue;
+        memmove(m->vertices + 3 * kept, m->vertices + 3 * i, 3 * sizeof(float));
+        to[i] = (uint32_t)kept++;
+    }
+    for (i = 0; i < 3 * m->triangle_count; i++) m->triangles[i] = to[m->triangles[i]];
+    m->vertex_count = kept;
+    adaslice__free(al, to);
+    return ADASLICE_OK;
+}
+
+/* Corner k of facet t as doubles. */
+static void adaslice__corner(const adaslice_mesh *m, size_t t, int k, double p[3])
+{
+    const float *v = m->vertices + 3 * (size_t)m->triangles[3 * t + k];
+    p[0] = v[0]; p[1] = v[1]; p[2] = v[2];
+}
+
+static void adaslice__normal(const double a[3], const double b[3], const double c[3], double n[3])
+{
+    double u[3], w[3];
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = b[k] - a[k]; w[k] = c[k] - a[k]; }
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* Which side of the directed xy line a -> b (vertex indices) the point p
+   lies on, positive on the left. The line is evaluated from its lower
+   numbered end whichever way it is asked, and a point on it goes to the side
+   the point moved by (e, e^2) would be on, so the facets on either side of an
+   edge never both claim a point. */
+static int adaslice__side(const adaslice_mesh *m, uint32_t a, uint32_t b, const double p[2])
+{
+    int flip = a > b;
+    const float *u = m->vertices + 3 * (size_t)(flip ? b : a), *w = m->vertices + 3 * (size_t)(flip ? a : b);
+    double dx = (double)w[0] - u[0], dy = (double)w[1] - u[1];
+    double s = dx * (p[1] - u[1]) - dy * (p[0] - u[0]);
+    if (s == 0) s = dy != 0 ? -dy : dx;
+    return (s > 0) != flip ? 1 : -1;
+}
+
+/* Whether the z ray up from p crosses facet t. */
+static int adaslice__ray_crosses(const adaslice_mesh *m, size_t t, const double p[3])
+{
+    const uint32_t *c = m->triangles + 3 * t;
+    double a[3], b[3], d[3], area, la, lb, lc, z;
+    int s0, s1, s2;
+    adaslice__corner(m, t, 0, a);
+    adaslice__corner(m, t, 1, b);
+    adaslice__corner(m, t, 2, d);
+    area = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
+    if (area == 0) return 0; /* seen edge-on */
+    s0 = adaslice__side(m, c[0], c[1], p);
+    s1 = adaslice__side(m, c[1], c[2], p);
+    s2 = adaslice__side(m, c[2], c[0], p);
+    if (s0 != s1 || s1 != s2 || (s0 > 0) != (area > 0)) return 0;
+    la = ((b[0] - p[0]) * (d[1] - p[1]) - (b[1] - p[1]) * (d[0] - p[0])) / area;
+    lb = ((d[0] - p[0]) * (a[1] - p[1]) - (d[1] - p[1]) * (a[0] - p[0])) / area;
+    lc = 1 - la - lb;
+    z = la * a[2] + lb * b[2] + lc * d[2];
+    return z > p[2];
+}
+
+#define ADASLICE__PROBES 7 /* points per shell that test its nesting */
+
+typedef struct adaslice__shells {
+    size_t count;
+    uint32_t *of;          /* per facet: its shell */
+    uint32_t *facets;      /* facets shell by shell */
+    size_t *start;         /* count + 1: shell s owns facets[start[s] .. start[s+1]) */
+    unsigned char *turn;   /* per facet: 1 to reverse it */
+    unsigned char *closed; /* per shell */
+    double *probe;         /* ADASLICE__PROBES points per shell, x y z */
+    unsigned char *probes; /* per shell: how many */
+} adaslice__shells;
+
+#define ADASLICE__OPEN (ADASLICE__NONE - 1) /* a half-edge's mate when it is alone on its edge */
+
+/* Winds each shell one way by flood fill through its two-facet edges; the
+   winding of the larger part stays. Counts what remains inconsistent. */
+static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adaslice__edges *e, adaslice__shells *s,
+                                             const adaslice_allocator *al, adaslice_mesh_report *rep, adaslice_error *err)
+{
+    const uint32_t *tri = m->triangles;
+    size_t nt = m->triangle_count, t, head = 0, tail = 0, i;
+    uint32_t *mate = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 3 * nt, sizeof(uint32_t)));
+    if (!mate) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+    memset(mate, 0xff, 3 * nt * sizeof(uint32_t));
+    for (i = 0; i < e->cap; i++) {
+        uint32_t h = e->slot[i];
+        size_t uses;
+        long net;
+        if (h == ADASLICE__NONE) continue;
+        adaslice__edge_uses(tri, e, h, &uses, &net);
+        if (uses == 1) mate[h] = ADASLICE__OPEN;
+        if (uses == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
+    }
+    memset(s->of, 0xff, nt * sizeof(uint32_t));
+    s->count = 0;
+    for (t = 0; t < nt; t++) {
+        size_t begin = tail, turned = 0;
+        if (s->of[t] != ADASLICE__NONE) continue;
+        s->start[s->count] = begin;
+        s->of[t] = (uint32_t)s->count;
+        s->turn[t] = 0;
+        s->facets[tail++] = (uint32_t)t;
+        for (head = begin; head < tail; head++) {
+            uint32_t f = s->facets[head];
+            int k;
+            for (k = 0; k < 3; k++) {
+                uint32_t h = 3 * f + (uint32_t)k, g = mate[h], u;
+                unsigned char want;
+                if (g >= ADASLICE__OPEN) continue;
+                u = g / 3;
+                /* the same direction along the edge: one of the two must turn */
+                want = (unsigned char)(s->turn[f] ^ (tri[h] == tri[g]));
+                if (s->of[u] == ADASLICE__NONE) {
+                    s->of[u] = (uint32_t)s->count;
+                    s->turn[u] = want;
+                    s->facets[tail++] = u;
+                } else if (s->turn[u] != want && u > f) {
+                    rep->inconsistent_edges++; /* counted once, from the lower facet */
+                }
+            }
+        }
+        for (i = begin; i < tail; i++) turned += s->turn[s->facets[i]];
+        if (2 * turned > tail - begin)
+            for (i = begin; i < tail; i++) s->turn[s->facets[i]] ^= 1;
+        s->count++;
+    }
+    s->start[s->count] = tail;
+    /* a shell is closed when it has an even number of facets on each of its
+       edges: two on most, more where shells meet (two cubes sharing an
+       edge); a piece cut off by edges of three facets has one there */
+    for (i = 0; i < s->count; i++) s->closed[i] = 1;
+    for (i = 0; i < e->cap; i++) {
+        uint32_t h = e->slot[i], g, k;
+        if (h == ADASLICE__NONE) continue;
+        if (mate[h] == ADASLICE__OPEN) { s->closed[s->of[h / 3]] = 0; continue; }
+        if (mate[h] != ADASLICE__NONE) continue;
+        for (g = h; g != ADASLICE__NONE; g = e->next[g]) {
+            size_t same = 0;
+            for (k = h; k != ADASLICE__NONE; k = e->next[k]) same += s->of[k / 3] == s->of[g / 3];
+            if (same % 2) s->closed[s->of[g / 3]] = 0;
+        }
+    }
+    adaslice__free(al, mate);
+    return ADASLICE_OK;
+}
+
+/* Six times the volume facet t (turned as s says) spans with centre c. */
+static double adaslice__cone(const adaslice_mesh *m, size_t t, int turned, const double c[3])
+{
+    double a[3], b[3], d[3], v;
+    int k;
+    adaslice__corner(m, t, 0, a);
+    adaslice__corner(m, t, turned ? 2 : 1, b);
+    adaslice__corner(m, t, turned ? 1 : 2, d);
+    for (k = 0; k < 3; k++) { a[k] -= c[k]; b[k] -= c[k]; d[k] -= c[k]; }
+    v = a[0] * (b[1] * d[2] - b[2] * d[1]) + a[1] * (b[2] * d[0] - b[0] * d[2]) + a[2] * (b[0] * d[1] - b[1] * d[0]);
+    return v;
+}
+
+static void adaslice__centroid(const adaslice_mesh *m, size_t t, double c[3])
+{
+    double a[3], b[3], d[3];
+    int k;
+    adaslice__corner(m, t, 0, a);
+    adaslice__corner(m, t, 1, b);
+    adaslice__corner(m, t, 2, d);
+    for (k = 0; k < 3; k++) c[k] = (a[k] + b[k] + d[k]) / 3;
+}
+
+/* A shell's probes: the centroids of its largest facet and of its facets
+   lowest and highest along x, y and z (repeats dropped). */
+static void adaslice__shell_probes(const adaslice_mesh *m, adaslice__shells *s, size_t shell)
+{
+    size_t i, pick[ADASLICE__PROBES], n = 0, j;
+    double best = -1, lo[3], hi[3];
+    int k;
+    for (k = 0; k < ADASLICE__PROBES; k++) pick[k] = s->facets[s->start[shell]];
+    for (k = 0; k < 3; k++) { lo[k] = DBL_MAX; hi[k] = -DBL_MAX; }
+    for (i = s->start[shell]; i < s->start[shell + 1]; i++) {
+        size_t t = s->facets[i];
+        double c[3], a[3], b[3], d[3], nv[3], n2;
+        adaslice__centroid(m, t, c);
+        adaslice__corner(m, t, 0, a);
+        adaslice__corner(m, t, 1, b);
+        adaslice__corner(m, t, 2, d);
+        adaslice__normal(a, b, d, nv);
+        n2 = nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2];
+        if (n2 > best) { best = n2; pick[0] = t; }
+        for (k = 0; k < 3; k++) {
+            if (c[k] < lo[k]) { lo[k] = c[k]; pick[1 + 2 * k] = t; }
+            if (c[k] > hi[k]) { hi[k] = c[k]; pick[2 + 2 * k] = t; }
+        }
+    }
+    for (i = 0; i < ADASLICE__PROBES; i++) {
+        for (j = 0; j < i && pick[j] != pick[i]; j++) {}
+        if (j < i) continue;
+        adaslice__centroid(m, pick[i], s->probe + 3 * (ADASLICE__PROBES * shell + n));
+        n++;
+    }
+    s->probes[shell] = (unsigned char)n;
+}
+
+static int adaslice__u64_cmp(const void *a, const void *b)
+{
+    uint64_t x = *ADASLICE__CAST(const uint64_t *, a), y = *ADASLICE__CAST(const uint64_t *, b);
+    return x < y ? -1 : x > y;
+}
+
+static double adaslice__min3(double a, double b, double c) { return a < b ? (a < c ? a : c) : (b < c ? b : c); }
+static double adaslice__max3(double a, double b, double c) { return a > b ? (a > c ? a : c) : (b > c ? b : c); }
+
+/* The cell of coordinate v in a row of g cells of `size` from lo. */
+static size_t adaslice__cell(double v, double lo, double size, size_t g)
+{
+    double c = (v - lo) / size;
+    return c <= 0 ? 0 : c >= (double)(g - 1) ? g - 1 : (size_t)c;
+}
+
+/* depth[s]: how many closed shells hold every probe of shell s. Probes sit in
+   a grid of xy cells; each facet of a closed shell tests the probes of the
+   cells under it, so the work is about the facets plus the crossings. */
+static adaslice_result adaslice__nesting(const adaslice_mesh *m, const adaslice__shells *s, const adaslice_allocator *al,
+                                         size_t *depth, adaslice_error *err)
+{
+    size_t np = s->count * ADASLICE__PROBES, g, i, t, pairs = 0, cap = 0, kept = 0, run, *cell_first = NULL, *fill = NULL;
+    uint32_t *cell_probe = NULL;
+    uint64_t *pair = NULL;
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, size[2];
+    adaslice_result r = ADASLICE_OK;
+    int a;
+    memset(depth, 0, s->count * sizeof *depth);
+    for (g = 1; g * g < np; g++) {}
+    for (i = 0; i < np; i++) {
+        const double *p = s->probe + 3 * i;
+        if (i % ADASLICE__PROBES >= s->probes[i / ADASLICE__PROBES]) continue;
+        for (a = 0; a < 2; a++) { if (p[a] < lo[a]) lo[a] = p[a]; if (p[a] > hi[a]) hi[a] = p[a]; }
+    }
+    for (a = 0; a < 2; a++) size[a] = hi[a] > lo[a] ? (hi[a] - lo[a]) / (double)g : 1;
+    cell_first = ADASLICE__CAST(size_t *, adaslice__alloc(al, g * g + 1, sizeof(size_t)));
+    fill = ADASLICE__CAST(size_t *, adaslice__alloc(al, g * g, sizeof(size_t)));
+    cell_probe = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, np, sizeof(uint32_t)));
+    if (!cell_first || !fill || !cell_probe) goto nomem;
+    memset(cell_first, 0, (g * g + 1) * sizeof(size_t));
+    for (i = 0; i < np; i++) {
+        const double *p = s->probe + 3 * i;
+        if (i % ADASLICE__PROBES >= s->probes[i / ADASLICE__PROBES]) continue;
+        cell_first[adaslice__cell(p[1], lo[1], size[1], g) * g + adaslice__cell(p[0], lo[0], size[0], g) + 1]++;
+    }
+    for (i = 0; i < g * g; i++) cell_first[i + 1] += cell_first[i];
+    memcpy(fill, cell_first, g * g * sizeof(size_t));
+    for (i = 0; i < np; i++) {
+        const double *p = s->probe + 3 * i;
+        if (i % ADASLICE__PROBES >= s->probes[i / ADASLICE__PROBES]) continue;
+        cell_probe[fill[adaslice__cell(p[1], lo[1], size[1], g) * g + adaslice__cell(p[0], lo[0], size[0], g)]++] = (uint32_t)i;
+    }
+    for (t = 0; t < m->triangle_count; t++) {
+        uint32_t q = s->of[t];
+        double c[3][3], xlo, xhi, ylo, yhi;
+        size_t x, y, j;
+        if (!s->closed[q]) continue;
+        for (a = 0; a < 3; a++) adaslice__corner(m, t, a, c[a]);
+        xlo = adaslice__min3(c[0][0], c[1][0], c[2][0]); xhi = adaslice__max3(c[0][0], c[1][0], c[2][0]);
+        ylo = adaslice__min3(c[0][1], c[1][1], c[2][1]); yhi = adaslice__max3(c[0][1], c[1][1], c[2][1]);
+        if (xhi < lo[0] || xlo > hi[0] || yhi < lo[1] || ylo > hi[1]) continue;
+        for (y = adaslice__cell(ylo, lo[1], size[1], g); y <= adaslice__cell(yhi, lo[1], size[1], g); y++)
+            for (x = adaslice__cell(xlo, lo[0], size[0], g); x <= adaslice__cell(xhi, lo[0], size[0], g); x++)
+                for (j = cell_first[y * g + x]; j < cell_first[y * g + x + 1]; j++) {
+                    uint32_t p = cell_probe[j];
+                    if (p / ADASLICE__PROBES == q || !adaslice__ray_crosses(m, t, s->probe + 3 * (size_t)p)) continue;
+                    if (pairs == cap) {
+                        uint64_t *more = ADASLICE__CAST(uint64_t *, adaslice__grow(al, pair, pairs, &cap, pairs + 1, sizeof *pair));
+                        if (!more) goto nomem;
+                        pair = more;
+                    }
+                    pair[pairs++] = (uint64_t)p << 32 | q;
+                }
+    }
+    /* a probe is inside q when its ray crosses q an odd number of times;
+       q holds shell s when it holds every probe of s */
+    if (pairs) qsort(pair, pairs, sizeof *pair, adaslice__u64_cmp);
+    for (i = 0; i < pairs; i += run) {
+        for (run = 1; i + run < pairs && pair[i + run] == pair[i]; run++) {}
+        if (run % 2) pair[kept++] = (uint64_t)((uint32_t)(pair[i] >> 32) / ADASLICE__PROBES) << 32 | (uint32_t)pair[i];
+    }
+    if (kept) qsort(pair, kept, sizeof *pair, adaslice__u64_cmp);
+    for (i = 0; i < kept; i += run) {
+        for (run = 1; i + run < kept && pair[i + run] == pair[i]; run++) {}
+        if (run == s->probes[pair[i] >> 32]) depth[pair[i] >> 32]++;
+    }
+    goto done;
+nomem:
+    r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for the nesting of %zu shells", s->count);
+done:
+    adaslice__free(al, cell_first);
+    adaslice__free(al, fill);
+    adaslice__free(al, cell_probe);
+    adaslice__free(al, pair);
+    return r;
+}
+
+ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adaslice_repair_options *o,
+                                                  adaslice_mesh_report *report, adaslice_error *err)
+{
+    adaslice_allocator al;
+    adaslice_mesh_report rep;
+    adaslice_weld_options wo;
+    adaslice__edges e;
+    adaslice__shells s;
+    adaslice_result r;
+    size_t *depth = NULL, i, t, nt;
+    double tolerance = o ? o->tolerance : 0, lo[3], hi[3];
+    memset(&rep, 0, sizeof rep);
+    memset(&e, 0, sizeof e);
+    memset(&s, 0, sizeof s);
+    if (report) memset(report, 0, sizeof *report);
+    if ((r = adaslice__mesh_check(m, "repair", err)) != ADASLICE_OK ||
+        (r = adaslice__tolerance_check(tolerance, "repair", err)) != ADASLICE_OK)
+        return r;
+    al = adaslice__allocator(o ? o->allocator : NULL);
+    memset(&wo, 0, sizeof wo);
+    wo.allocator = &al;
+    if ((r = adaslice_mesh_weld(m, &wo, err)) != ADASLICE_OK) return r;
+    rep.degenerate_dropped = adaslice__drop_degenerate(m);
+    if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
+    adaslice_mesh_bounds(m, lo, hi);
+    if (tolerance == 0)
+        tolerance = 1e-4 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (tolerance > 0 && (r = adaslice__weld_open(m, tolerance, &al, &rep.welded_nearby, err)) != ADASLICE_OK) return r;
+    if (rep.welded_nearby) rep.degenerate_dropped += adaslice__drop_degenerate(m);
+    if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
+    if ((r = adaslice__drop_unused(m, &al, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__edges_build(m, &al, &e, err)) != ADASLICE_OK) return r;
+    nt = m->triangle_count;
+    s.of = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, nt, sizeof(uint32_t)));
+    s.facets = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, nt, sizeof(uint32_t)));
+    s.start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, nt + 1, sizeof(size_t)));
+    s.turn = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, nt, 1));
+    s.closed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, nt, 1));
+    if (!s.of || !s.facets || !s.start || !s.turn || !s.closed) goto nomem;
+    if ((r = adaslice__wind_shells(m, &e, &s, &al, &rep, err)) != ADASLICE_OK) goto done;
+    for (i = 0; i < s.count; i++) rep.closed_shells += s.closed[i];
+    depth = ADASLICE__CAST(size_t *, adaslice__alloc(&al, s.count, sizeof(size_t)));
+    if (!depth) goto nomem;
+    memset(depth, 0, s.count * sizeof *depth);
+    if (s.count > 1 && rep.closed_shells) {
+        s.probes = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, s.count, 1));
+        s.probe = ADASLICE__CAST(double *, adaslice__alloc(&al, s.count, 3 * ADASLICE__PROBES * sizeof(double)));
+        if (!s.probes || !s.probe) goto nomem;
+        for (i = 0; i < s.count; i++) adaslice__shell_probes(m, &s, i);
+        if ((r = adaslice__nesting(m, &s, &al, depth, err)) != ADASLICE_OK) goto done;
+    }
+    /* each shell faces the way its nesting says: out at even depth, in at odd */
+    for (i = 0; i < s.count; i++) {
+        double c[3] = {0, 0, 0}, v = 0, area = 0;
+        size_t n = s.start[i + 1] - s.start[i], j;
+        int k;
+        for (j = s.start[i]; j < s.start[i + 1]; j++) {
+            double f[3];
+            adaslice__centroid(m, s.facets[j], f);
+            for (k = 0; k < 3; k++) c[k] += f[k] / (double)n;
+        }
+        for (j = s.start[i]; j < s.start[i + 1]; j++) {
+            double a[3], b[3], d[3], nv[3];
+            v += adaslice__cone(m, s.facets[j], s.turn[s.facets[j]], c);
+            adaslice__corner(m, s.facets[j], 0, a);
+            adaslice__corner(m, s.facets[j], 1, b);
+            adaslice__corner(m, s.facets[j], 2, d);
+            adaslice__normal(a, b, d, nv);
+            area += 0.5 * sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+        }
+        /* an open shell only when it clearly holds one side: six times its
+           volume about its centroid at least 5% of a sphere's of its area
+           (A^1.5 / sqrt(pi)); a patch is left as it is wound */
+        if (!s.closed[i] && fabs(v) < 0.05 * area * sqrt(area / 3.14159265358979323846)) v = 0;
+        if (v != 0 && (v < 0) != (depth[i] % 2 == 1)) {
+            for (j = s.start[i]; j < s.start[i + 1]; j++) s.turn[s.facets[j]] ^= 1;
+            rep.flipped_shells++;
+            v = -v;
+        }
+        rep.volume += v / 6;
+    }
+    for (t = 0; t < nt; t++) {
+        uint32_t *c = m->triangles + 3 * t, x;
+        if (!s.turn[t]) continue;
+        x = c[1]; c[1] = c[2]; c[2] = x;
+        rep.flipped_facets++;
+    }
+    rep.shells = s.count;
+    for (i = 0; i < e.cap; i++) {
+        size_t uses;
+        long net;
+        if (e.slot[i] == ADASLICE__NONE) continue;
+        adaslice__edge_uses(m->triangles, &e, e.slot[i], &uses, &net);
+        rep.open_edges += uses == 1;
+        rep.nonmanifold_edges += uses > 2;
+    }
+    if (report) *report = rep;
+    adaslice__ok(err);
+    goto done;
+nomem:
+    r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+done:
+    adaslice__edges_free(&al, &e);
+    adaslice__free(&al, s.of);
+    adaslice__free(&al, s.facets);
+    adaslice__free(&al, s.start);
+    adaslice__free(&al, s.turn);
+    adaslice__free(&al, s.closed);
+    adaslice__free(&al, s.probes);
+    adaslice__free(&al, s.probe);
+    adaslice__free(&al, depth);
+    return r;
+}
+
 /* ---- turning */
 ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9])
 {
@@ -2564,22 +3169,6 @@ static double *adaslice__rmax_finish(adaslice__rmax *r)
         }
     }
     return r->t;
-}
-
-static void adaslice__corner(const adaslice_mesh *m, size_t t, int k, double p[3])
-{
-    const float *v = m->vertices + 3 * (size_t)m->triangles[3 * t + k];
-    p[0] = v[0]; p[1] = v[1]; p[2] = v[2];
-}
-
-static void adaslice__normal(const double a[3], const double b[3], const double c[3], double n[3])
-{
-    double u[3], w[3];
-    int k;
-    for (k = 0; k < 3; k++) { u[k] = b[k] - a[k]; w[k] = c[k] - a[k]; }
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
 }
 
 /* Per-triangle value that the max-type profiles take: |n_z| (eq. 4) or

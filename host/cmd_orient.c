@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "commands.h"
+#include "model.h"
 #include "options.h"
 #include "output.h"
 #include "plan_job.h"
@@ -167,8 +168,7 @@ int cmd_orient(int argc, char **argv)
     orient_args o;
     plan_args a;
     adaslice_mesh mesh;
-    adaslice_load_options lo;
-    adaslice_error e;
+    adaslice_mesh_report repair;
     adaslice_direction_score *scores = NULL;
     size_t minima[SEARCH_MINIMA + 1], count = 0, i;
     char **rest = (char **)malloc(((size_t)argc + 1) * sizeof *rest);
@@ -189,9 +189,7 @@ int cmd_orient(int argc, char **argv)
                                   "plan MODEL --orient X,Y,Z with the direction orient found");
     if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
-    memset(&lo, 0, sizeof lo);
-    lo.scale = a.scale;
-    if (adaslice_mesh_load_file(a.model, &lo, &mesh, &e) != ADASLICE_OK) return library_error(&e);
+    if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();
     rc = plan_orient_search(&a, &mesh, o.dirs, o.alpha, &scores, minima, &count);
     if (!rc && o.map) {
@@ -207,6 +205,8 @@ int cmd_orient(int argc, char **argv)
     if (!rc && a.json) {
         printf("{\n  \"model\": ");
         json_string(stdout, a.model);
+        printf(",\n  \"repair\": ");
+        model_report_json(stdout, &repair);
         printf(",\n  \"directions\": %zu,\n  \"alpha\": ", o.dirs);
         json_number(stdout, o.alpha);
         printf(",\n  \"metric\": \"%s\",\n  \"seconds\": %.3f,\n  \"best\": [", METRIC_NAMES[a.metric], (now_ms() - t0) / 1000);

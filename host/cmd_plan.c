@@ -1,6 +1,7 @@
 /* adaslice plan: the fewest layers within eps for a mesh or a metric profile,
    printed as a summary (with the paper's Table 3 on request) or as JSON. */
 #include "commands.h"
+#include "model.h"
 #include "output.h"
 #include "plan_job.h"
 #include "report.h"
@@ -127,8 +128,12 @@ static void print_json(const plan_args *a, const plan_job *j)
     printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
     if (a->model) json_string(stdout, format_name(j->format));
     else printf("null");
-    if (a->model) printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu", j->triangles, j->degenerate);
-    else printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null");
+    if (a->model) {
+        printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu,\n  \"repair\": ", j->triangles, j->degenerate);
+        model_report_json(stdout, &j->repair);
+    } else {
+        printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null,\n  \"repair\": null");
+    }
     printf(",\n  \"metric\": \"%s\",\n  \"sampler\": \"%s\",\n  \"unsampled_bins\": %zu,\n  \"method\": \"%s\",\n  \"eps\": ",
            METRIC_NAMES[a->metric], SAMPLER_NAMES[a->sampler], j->profile.unsampled_bins, METHOD_NAMES[a->method]);
     json_number(stdout, p->eps);

@@ -3,6 +3,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "model.h"
 #include "options.h"
 #include "output.h"
 #include "report.h"
@@ -121,9 +122,7 @@ static void write_ply(FILE *f, const void *ctx)
 int cmd_saliency(int argc, char **argv)
 {
     saliency_args s;
-    adaslice_load_options lo;
     adaslice_mesh mesh;
-    adaslice_error err;
     weighted_mesh wm;
     float *weight = NULL;
     double t0, t1, sum = 0, top = 0;
@@ -134,10 +133,8 @@ int cmd_saliency(int argc, char **argv)
         saliency_usage(stdout);
         return RC_OK;
     }
-    memset(&lo, 0, sizeof lo);
-    lo.scale = s.scale;
     t0 = now_ms();
-    if (adaslice_mesh_load_file(s.model, &lo, &mesh, &err) != ADASLICE_OK) return library_error(&err);
+    if ((rc = model_load(s.model, s.scale, &mesh, NULL)) != RC_OK) return rc;
     t1 = now_ms();
     rc = weights_for_plan(&s.weights, &mesh, &weight);
     if (!rc && !weight) { /* nothing asked for: every face weighs 1 */

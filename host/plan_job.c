@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L /* getline */
 #endif
 #include "plan_job.h"
+#include "model.h"
 #include "options.h"
 #include "output.h"
 #include "report.h"
@@ -170,7 +171,6 @@ static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profi
 
 static int profile_model(const plan_args *a, plan_job *j)
 {
-    adaslice_load_options lo;
     adaslice_profile_options po;
     adaslice_mesh mesh;
     adaslice_error err;
@@ -179,9 +179,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     float *weights = NULL;
     int rc;
 
-    memset(&lo, 0, sizeof lo);
-    lo.scale = a->scale;
-    if (adaslice_mesh_load_file(a->model, &lo, &mesh, &err) != ADASLICE_OK) return library_error(&err);
+    if ((rc = model_load(a->model, a->scale, &mesh, &j->repair)) != RC_OK) return rc;
     j->ms_load = now_ms() - t0;
     /* before any turn, so that regions are in the model's own coordinates */
     t0 = now_ms();

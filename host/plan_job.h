@@ -40,6 +40,7 @@ typedef struct plan_args {
 typedef struct plan_job {
     const plan_args *args;
     size_t triangles, degenerate;  /* model only */
+    adaslice_mesh_report repair;   /* model only: what loading repaired */
     adaslice_format format;
     adaslice_profile profile;
     int profiled;                  /* profile came from the library and needs freeing */

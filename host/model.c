@@ -1,0 +1,61 @@
+/* Loading and repairing a model file: what plan, slice, print, orient and
+   saliency share. */
+#include "model.h"
+#include "output.h"
+#include "report.h"
+#include <string.h>
+
+/* "3 facets" or "1 facet" into a list, comma-separated. */
+static void item(char *buf, size_t size, size_t count, const char *one, const char *many)
+{
+    size_t used = strlen(buf);
+    if (!count || used >= size) return;
+    snprintf(buf + used, size - used, "%s%zu %s", used ? ", " : "", count, count == 1 ? one : many);
+}
+
+static void warn_repairs(const char *path, const adaslice_mesh *mesh, const adaslice_mesh_report *r)
+{
+    char fixed[512] = "", left[512] = "";
+    item(fixed, sizeof fixed, r->flipped_facets, "facet turned", "facets turned");
+    item(fixed, sizeof fixed, r->flipped_shells, "shell turned whole to face the way its nesting says",
+         "shells turned whole to face the way their nesting says");
+    item(fixed, sizeof fixed, r->welded_nearby, "vertex of a crack welded", "vertices of cracks welded");
+    item(fixed, sizeof fixed, r->degenerate_dropped + mesh->degenerate_dropped, "facet of zero area dropped",
+         "facets of zero area dropped");
+    item(left, sizeof left, r->open_edges, "open edge (masks and areas close each layer's gaps)",
+         "open edges (masks and areas close each layer's gaps)");
+    item(left, sizeof left, r->nonmanifold_edges, "edge of three or more facets", "edges of three or more facets");
+    item(left, sizeof left, r->inconsistent_edges, "edge whose facets cannot be wound alike",
+         "edges whose facets cannot be wound alike");
+    if (!fixed[0] && !left[0]) return;
+    fprintf(stderr, "adaslice: warning: %s:%s%s%s%s%s\n", path, fixed[0] ? " repaired " : "", fixed,
+            fixed[0] && left[0] ? ";" : "", left[0] ? " left " : "", left);
+}
+
+int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report)
+{
+    adaslice_load_options lo;
+    adaslice_mesh_report r;
+    adaslice_error err;
+    memset(&lo, 0, sizeof lo);
+    lo.scale = scale;
+    if (adaslice_mesh_load_file(path, &lo, mesh, &err) != ADASLICE_OK) return library_error(&err);
+    if (adaslice_mesh_repair(mesh, NULL, &r, &err) != ADASLICE_OK) {
+        adaslice_mesh_free(mesh);
+        return complain(RC_FAIL, "%s: %s", path, err.message);
+    }
+    warn_repairs(path, mesh, &r);
+    if (report) *report = r;
+    return RC_OK;
+}
+
+void model_report_json(FILE *f, const adaslice_mesh_report *r)
+{
+    fprintf(f, "{\"shells\": %zu, \"closed_shells\": %zu, \"open_edges\": %zu, \"nonmanifold_edges\": %zu, "
+               "\"inconsistent_edges\": %zu, \"welded_nearby\": %zu, \"degenerate_dropped\": %zu, \"flipped_facets\": %zu, "
+               "\"flipped_shells\": %zu, \"volume_mm3\": ",
+            r->shells, r->closed_shells, r->open_edges, r->nonmanifold_edges, r->inconsistent_edges, r->welded_nearby,
+            r->degenerate_dropped, r->flipped_facets, r->flipped_shells);
+    json_number(f, r->volume);
+    fputc('}', f);
+}
