@@ -731,9 +731,16 @@ typedef struct adaslice_mask_options {
    each call applies the z-ray samples between the previous height and this
    one, so every sample is rasterised once over the whole print. A pixel is
    lit when the winding number of its z ray below the height is positive
-   (overlapping shells stay lit). On a ray whose surfaces do not balance (an
-   open or inconsistently wound mesh) it must also be positive counted from
-   above, so such a mesh never leaves a column lit to the top.
+   (overlapping shells stay lit). A mesh whose edges do not all balance (a
+   hole, a crack, facets wound against their neighbours) cannot be read along
+   rays, which may cross its surface once: its masks are its sections made
+   whole, each gap closed by a chord from where a cut stops to the nearest
+   place one starts, filled where the winding is positive (as PrusaSlicer
+   closes gaps in 2D; for one gap this is where the generalized winding
+   number of the section is >= 1/2). Pixels then differ from the closed
+   part's only between each chord and the missing surface. The areas of the
+   profiles follow the same rule. Such a mesh costs a sort of its section's
+   row crossings per layer instead of the incremental sweep.
    With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
    grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
    per pixel when s > 1, plus the image. */
@@ -756,6 +763,12 @@ typedef struct adaslice_masker {
     uint16_t *coverage;          /* per pixel, s > 1 */
     unsigned char grey[257];     /* coverage -> grey level */
     long long lit_rays;          /* rays inside: lit * s * s */
+    struct adaslice__gaps *gaps; /* a mesh whose edges do not balance: its unbalanced
+                                    edges, and masks come from its sections */
+    double *seg;                 /* a section's directed segments, 4 per segment */
+    size_t seg_cap;
+    uint64_t *cross;             /* where they cross the ray rows */
+    size_t cross_cap;
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -1068,7 +1081,6 @@ static void adaslice__free(const adaslice_allocator *a, void *p)
     if (p && a->free) a->free(a->user, p);
 }
 
-#if !defined(ADASLICE_NO_LOADERS) || !defined(ADASLICE_NO_CONTOURS)
 /* Room for `need` items, at least twice the old capacity so that appending stays
    linear; NULL when out of memory (then `old` is still valid). */
 static void *adaslice__grow(const adaslice_allocator *a, void *old, size_t used, size_t *cap,
@@ -1085,7 +1097,6 @@ static void *adaslice__grow(const adaslice_allocator *a, void *old, size_t used,
     *cap = n;
     return p;
 }
-#endif
 
 /* ================================================================== mesh */
 #ifndef ADASLICE_NO_LOADERS
@@ -2746,6 +2757,192 @@ done:
     return r;
 }
 
+/* ---- sections of open meshes */
+/* Where edges do not balance (a hole, a crack, facets wound against their
+   neighbours) a ray cannot tell inside from outside: it may cross the surface
+   once. There each section is made whole in the plane instead: the facets'
+   cuts, run as the contours run (counter-clockwise round material), stop at
+   loose ends on the unbalanced edges; each end where a cut stops is joined by
+   a straight chord to the nearest loose start, and the closed result is
+   filled where its winding number is positive. A section with one gap is
+   thereby closed by its chord, which is exactly where the generalized winding
+   number (Jacobson, Kavan and Sorkine-Hornung 2013) of the open section is
+   >= 1/2; several gaps are joined end to nearest start. Masks and areas use
+   the same rule. */
+typedef struct adaslice__loose_edge {
+    uint32_t u, v;  /* u < v */
+    int32_t net;    /* facets running u -> v minus those running v -> u */
+    float lo, hi;   /* z of its ends */
+} adaslice__loose_edge;
+
+typedef struct adaslice__gaps adaslice__gaps;
+struct adaslice__gaps {
+    adaslice__loose_edge *edge; /* by lowest z */
+    size_t count, next;
+    uint32_t *active;
+    size_t active_count;
+    double *tail, *head;        /* x, y of the loose ends at the last height */
+    size_t tails, heads, tail_cap, head_cap;
+    uint32_t *taker;            /* per head: the tail whose chord goes to it */
+    size_t taker_cap;
+    adaslice_allocator allocator;
+};
+
+static int adaslice__loose_cmp(const void *a, const void *b)
+{
+    const adaslice__loose_edge *x = ADASLICE__CAST(const adaslice__loose_edge *, a), *y = ADASLICE__CAST(const adaslice__loose_edge *, b);
+    if (x->lo != y->lo) return x->lo < y->lo ? -1 : 1;
+    return x->u != y->u ? (x->u < y->u ? -1 : 1) : (x->v < y->v ? -1 : x->v > y->v);
+}
+
+static void adaslice__gaps_free(adaslice__gaps *g)
+{
+    adaslice_allocator al;
+    if (!g) return;
+    al = g->allocator;
+    adaslice__free(&al, g->edge);
+    adaslice__free(&al, g->active);
+    adaslice__free(&al, g->tail);
+    adaslice__free(&al, g->head);
+    adaslice__free(&al, g->taker);
+    adaslice__free(&al, g);
+}
+
+/* The unbalanced edges of m, or *gaps = NULL when every edge balances (a
+   closed mesh wound one way: rays are exact). */
+static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice_mesh *m, const adaslice_allocator *al,
+                                           adaslice_error *err)
+{
+    adaslice__edges e;
+    adaslice__gaps *g;
+    adaslice_result r;
+    size_t i, n = 0;
+    *gaps = NULL;
+    if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
+    for (i = 0; i < e.cap; i++) {
+        size_t uses;
+        long net;
+        if (e.slot[i] == ADASLICE__NONE) continue;
+        adaslice__edge_uses(m->triangles, &e, e.slot[i], &uses, &net);
+        n += net != 0;
+    }
+    if (!n) { adaslice__edges_free(al, &e); return ADASLICE_OK; }
+    g = ADASLICE__CAST(adaslice__gaps *, adaslice__alloc(al, 1, sizeof *g));
+    if (g) {
+        memset(g, 0, sizeof *g);
+        g->allocator = *al;
+        g->edge = ADASLICE__CAST(adaslice__loose_edge *, adaslice__alloc(al, n, sizeof *g->edge));
+        g->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
+    }
+    if (!g || !g->edge || !g->active) {
+        adaslice__gaps_free(g);
+        adaslice__edges_free(al, &e);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "sections: out of memory for %zu open edges", n);
+    }
+    for (i = 0; i < e.cap; i++) {
+        uint32_t h = e.slot[i], a, b;
+        size_t uses;
+        long net;
+        adaslice__loose_edge *x;
+        float za, zb;
+        if (h == ADASLICE__NONE) continue;
+        adaslice__edge_uses(m->triangles, &e, h, &uses, &net);
+        if (!net) continue;
+        a = m->triangles[h];
+        b = adaslice__he_to(m->triangles, h);
+        x = g->edge + g->count++;
+        x->u = a < b ? a : b;
+        x->v = a < b ? b : a;
+        x->net = (int32_t)net;
+        za = m->vertices[3 * (size_t)x->u + 2];
+        zb = m->vertices[3 * (size_t)x->v + 2];
+        x->lo = za < zb ? za : zb;
+        x->hi = za < zb ? zb : za;
+    }
+    adaslice__edges_free(al, &e);
+    qsort(g->edge, g->count, sizeof *g->edge, adaslice__loose_cmp);
+    *gaps = g;
+    return ADASLICE_OK;
+}
+
+/* Where the edge from `below` (z <= height) to `above` (z > height) meets
+   the plane: computed the same way by every facet and every chord. */
+static void adaslice__cut_point(const adaslice_mesh *m, uint32_t below, uint32_t above, double height, double xy[2])
+{
+    const float *a = m->vertices + 3 * (size_t)below, *b = m->vertices + 3 * (size_t)above;
+    double t = (height - a[2]) / ((double)b[2] - a[2]);
+    xy[0] = a[0] + t * ((double)b[0] - a[0]);
+    xy[1] = a[1] + t * ((double)b[1] - a[1]);
+}
+
+/* Room for `more` points after `used` in *points (x, y pairs). */
+static int adaslice__room(const adaslice_allocator *al, double **points, size_t used, size_t *cap, size_t more)
+{
+    double *p;
+    if (2 * (used + more) <= *cap) return 1;
+    p = ADASLICE__CAST(double *, adaslice__grow(al, *points, 2 * used, cap, 2 * (used + more), sizeof(double)));
+    if (!p) return 0;
+    *points = p;
+    return 1;
+}
+
+/* The loose ends at `height` (not below the last height asked): tails, where
+   a cut stops, and heads, where one starts; taker[j] is the tail whose chord
+   goes to head j. */
+static adaslice_result adaslice__gaps_at(adaslice__gaps *g, const adaslice_mesh *m, double height, adaslice_error *err)
+{
+    size_t k, kept = 0, i, j;
+    while (g->next < g->count && (double)g->edge[g->next].lo <= height) g->active[g->active_count++] = (uint32_t)g->next++;
+    g->tails = g->heads = 0;
+    for (k = 0; k < g->active_count; k++) {
+        const adaslice__loose_edge *x = g->edge + g->active[k];
+        double xy[2];
+        int32_t n = x->net, c;
+        int u_below = (double)m->vertices[3 * (size_t)x->u + 2] <= height, tail;
+        if (!((double)x->hi > height)) continue; /* ended below: gone for good */
+        g->active[kept++] = g->active[k];
+        /* a facet running upwards across the plane ends its cut there:
+           u -> v runs upwards when u is below */
+        tail = (n > 0) == u_below;
+        if (n < 0) n = -n;
+        if (tail ? !adaslice__room(&g->allocator, &g->tail, g->tails, &g->tail_cap, (size_t)n)
+                 : !adaslice__room(&g->allocator, &g->head, g->heads, &g->head_cap, (size_t)n))
+            goto nomem;
+        adaslice__cut_point(m, u_below ? x->u : x->v, u_below ? x->v : x->u, height, xy);
+        for (c = 0; c < n; c++) {
+            double *p = tail ? g->tail + 2 * g->tails++ : g->head + 2 * g->heads++;
+            p[0] = xy[0];
+            p[1] = xy[1];
+        }
+    }
+    g->active_count = kept;
+    /* every cut starts once and ends once, so the loose ends pair up */
+    if (g->tails != g->heads)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "sections: %zu loose ends against %zu at %g mm", g->tails,
+                              g->heads, height);
+    if (g->heads > g->taker_cap) {
+        adaslice__free(&g->allocator, g->taker);
+        g->taker_cap = 0;
+        g->taker = ADASLICE__CAST(uint32_t *, adaslice__alloc(&g->allocator, 2 * g->heads, sizeof(uint32_t)));
+        if (!g->taker) goto nomem;
+        g->taker_cap = 2 * g->heads;
+    }
+    for (j = 0; j < g->heads; j++) g->taker[j] = ADASLICE__NONE;
+    /* each tail in turn takes the nearest head still free */
+    for (i = 0; i < g->tails; i++) {
+        double best = DBL_MAX;
+        size_t pick = 0;
+        for (j = 0; j < g->heads; j++) {
+            double dx = g->head[2 * j] - g->tail[2 * i], dy = g->head[2 * j + 1] - g->tail[2 * i + 1];
+            if (g->taker[j] == ADASLICE__NONE && dx * dx + dy * dy < best) { best = dx * dx + dy * dy; pick = j; }
+        }
+        g->taker[pick] = (uint32_t)i;
+    }
+    return ADASLICE_OK;
+nomem:
+    return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "sections: out of memory for the loose ends at %g mm", height);
+}
+
 /* ---- turning */
 ADASLICE_DEF void adaslice_rotation_to_z(const double d[3], double r[9])
 {
@@ -3267,12 +3464,12 @@ static void adaslice__area_finish(const adaslice__area_acc *acc, double *area)
 /* Cross-section area at every bin centre. x and y are taken about the box
    centre, so terms stay small; the sign is fixed by the mesh's signed volume,
    so an inside-out mesh still gives positive areas. */
-static void adaslice__areas(const adaslice_mesh *m, const double lo[3], const double hi[3],
-                            adaslice__area_acc *acc, double *area)
+static double adaslice__green_areas(const adaslice_mesh *m, const double lo[3], const double hi[3],
+                                    adaslice__area_acc *acc, double *area)
 {
     double cx = 0.5 * (lo[0] + hi[0]), cy = 0.5 * (lo[1] + hi[1]), cz = 0.5 * (lo[2] + hi[2]);
     double volume = 0;
-    size_t t, i;
+    size_t t;
     for (t = 0; t < m->triangle_count; t++) {
         double v[3][3], n[3], d[2], s, *p0, *p1, *p2, *tmp;
         adaslice__piece pc;
@@ -3318,10 +3515,54 @@ static void adaslice__areas(const adaslice_mesh *m, const double lo[3], const do
         }
     }
     adaslice__area_finish(acc, area);
-    for (i = 0; i < acc->n; i++) {
-        if (volume < 0) area[i] = -area[i];
-        if (area[i] < 0) area[i] = 0; /* open or badly wound meshes: see the manual */
+    return volume;
+}
+
+/* A(z) at the centres of n bins from z0: Green's theorem over the facets'
+   cuts, plus the chords of a mesh with unbalanced edges (see "sections of
+   open meshes"), so areas and masks follow one rule. */
+static adaslice_result adaslice__section_areas(const adaslice_mesh *m, double z0, double bin, size_t n, double *area,
+                                               const adaslice_allocator *al, adaslice_error *err)
+{
+    adaslice__area_acc acc;
+    adaslice__gaps *gaps = NULL;
+    adaslice_result r;
+    double lo[3], hi[3], cx, cy, volume;
+    size_t i, j;
+    memset(&acc, 0, sizeof acc);
+    acc.n = n; acc.z0 = z0; acc.bin = bin;
+    acc.direct = ADASLICE__CAST(double *, adaslice__alloc(al, n, sizeof(double)));
+    acc.coef = ADASLICE__CAST(double *, adaslice__alloc(al, 3 * (n + 1), sizeof(double)));
+    if (!acc.direct || !acc.coef) {
+        r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+        goto done;
     }
+    memset(acc.direct, 0, n * sizeof(double));
+    memset(acc.coef, 0, 3 * (n + 1) * sizeof(double));
+    adaslice_mesh_bounds(m, lo, hi);
+    volume = adaslice__green_areas(m, lo, hi, &acc, area);
+    if ((r = adaslice__gaps_init(&gaps, m, al, err)) != ADASLICE_OK) goto done;
+    cx = 0.5 * (lo[0] + hi[0]);
+    cy = 0.5 * (lo[1] + hi[1]);
+    for (i = 0; gaps && i < n; i++) {
+        double sum = 0;
+        if ((r = adaslice__gaps_at(gaps, m, adaslice__centre(&acc, i), err)) != ADASLICE_OK) goto done;
+        for (j = 0; j < gaps->heads; j++) {
+            const double *t = gaps->tail + 2 * (size_t)gaps->taker[j], *h = gaps->head + 2 * j;
+            sum += (t[0] - cx) * (h[1] - cy) - (h[0] - cx) * (t[1] - cy);
+        }
+        area[i] += 0.5 * sum;
+    }
+    for (i = 0; i < n; i++) {
+        if (volume < 0) area[i] = -area[i];
+        if (area[i] < 0) area[i] = 0; /* badly wound meshes: see the manual */
+    }
+    r = ADASLICE_OK;
+done:
+    adaslice__gaps_free(gaps);
+    adaslice__free(al, acc.direct);
+    adaslice__free(al, acc.coef);
+    return r;
 }
 
 /* eq. 14 with one-sided differences at the top bin; where A(i) is zero the
@@ -3486,44 +3727,34 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
                                                const double *zrange, adaslice_profile *profile, adaslice_error *err)
 {
     adaslice_profile_options opt;
-    adaslice__area_acc acc;
     adaslice__rmax rmax;
     adaslice_result r;
-    double lo[3], hi[3], *tree = NULL;
+    double *tree = NULL;
     size_t n;
     int max_type;
 
     if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, err)) != ADASLICE_OK) return r;
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
-    memset(&acc, 0, sizeof acc);
-    if (!max_type) {
-        acc.n = n; acc.z0 = profile->z0; acc.bin = opt.bin;
-        acc.direct = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, n, sizeof(double)));
-        acc.coef = ADASLICE__CAST(double *, adaslice__alloc(&profile->allocator, 3 * (n + 1), sizeof(double)));
-    }
     if (max_type || opt.weights) {
         tree = adaslice__max_over_bins(mesh, &opt, profile, &rmax);
-    }
-    if (((max_type || opt.weights) && !tree) || (!max_type && (!acc.direct || !acc.coef))) {
-        adaslice__free(&profile->allocator, tree);
-        adaslice__free(&profile->allocator, acc.direct);
-        adaslice__free(&profile->allocator, acc.coef);
-        adaslice_profile_free(profile);
-        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+        if (!tree) {
+            adaslice_profile_free(profile);
+            return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
+        }
     }
     if (max_type) {
         memcpy(profile->phi, tree, n * sizeof(double));
     } else {
-        adaslice_mesh_bounds(mesh, lo, hi);
-        memset(acc.direct, 0, n * sizeof(double));
-        memset(acc.coef, 0, 3 * (n + 1) * sizeof(double));
-        adaslice__areas(mesh, lo, hi, &acc, profile->area);
+        r = adaslice__section_areas(mesh, profile->z0, opt.bin, n, profile->area, &profile->allocator, err);
+        if (r != ADASLICE_OK) {
+            adaslice__free(&profile->allocator, tree);
+            adaslice_profile_free(profile);
+            return r;
+        }
         adaslice__phi_from_area(profile, tree);
     }
     adaslice__free(&profile->allocator, tree);
-    adaslice__free(&profile->allocator, acc.direct);
-    adaslice__free(&profile->allocator, acc.coef);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
@@ -3783,10 +4014,20 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         double pixel = 0;
         adaslice_grid gz = adaslice_grid_fit(mesh, ADASLICE_AXIS_Z, opt.resolution);
         pixel = gz.pitch[0] * gz.pitch[1];
+        adaslice__gaps *gaps;
+        int open;
         for (i = 0; i < n; i++) {
             count += s.inside[i];
             profile->area[i] = (double)count * pixel;
         }
+        /* rays cannot read a mesh whose edges do not balance: its areas
+           come from its sections, as its masks do */
+        if ((r = adaslice__gaps_init(&gaps, mesh, &profile->allocator, err)) != ADASLICE_OK) goto done;
+        open = gaps != NULL;
+        adaslice__gaps_free(gaps);
+        if (open && (r = adaslice__section_areas(mesh, profile->z0, profile->bin, n, profile->area, &profile->allocator,
+                                                 err)) != ADASLICE_OK)
+            goto done;
         adaslice__phi_from_area(profile, s.wmax);
     }
     r = ADASLICE_OK;
@@ -5208,6 +5449,9 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->active);
     adaslice__free(&al, mk->winding);
     adaslice__free(&al, mk->coverage);
+    adaslice__free(&al, mk->seg);
+    adaslice__free(&al, mk->cross);
+    adaslice__gaps_free(mk->gaps);
     memset(mk, 0, sizeof *mk);
 }
 
@@ -5226,16 +5470,6 @@ ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int wi
     g.origin[0] = 0.5 * (lo[0] + hi[0]) - (offset ? offset[0] : 0) - 0.5 * width * pitch_x;
     g.origin[1] = 0.5 * (lo[1] + hi[1]) - (offset ? offset[1] : 0) - 0.5 * height * pitch_y;
     return g;
-}
-
-/* Each ray's net winding number over the whole mesh. */
-static void adaslice__total_visit(void *ctx, const adaslice__span *span)
-{
-    adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
-    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
-    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
-    int i;
-    for (i = span->first; i < span->end; i++) w[i] = (int16_t)(w[i] + step);
 }
 
 ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const adaslice_mesh *mesh,
@@ -5268,42 +5502,27 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     rays = (size_t)mk->rays.width * (size_t)mk->rays.height;
     pixels = (size_t)grid->width * (size_t)grid->height;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
+    if ((res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK) return res;
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
-    mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
+    /* sections need no winding per ray */
+    if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
     if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(adaslice__zkey)));
-    if (!mk->image || !mk->winding || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
+    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
         adaslice__free(&mk->allocator, keys);
         adaslice_masker_free(mk);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
     }
     memset(mk->image, 0, mk->stride * (size_t)grid->height);
-    memset(mk->winding, 0, rays * sizeof(int16_t));
+    if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
     if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
     for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__tri_z(mesh, t, 0); keys[t].t = (uint32_t)t; }
     qsort(keys, mesh->triangle_count, sizeof *keys, adaslice__zkey_cmp);
     for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = keys[t].t;
     adaslice__free(&mk->allocator, keys);
     for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
-    /* A ray of an open or badly wound mesh may end with a net winding T != 0;
-       counting from above then disagrees with counting from below. A ray is
-       inside only where both are positive: w > 0 and w - T > 0, that is
-       w > max(0, T), so each ray starts at -max(0, T) and the test stays
-       "> 0". Closed meshes have T = 0 everywhere and nothing changes; no mesh
-       leaves a pixel lit above its top. */
-    {
-        adaslice__raster r;
-        memset(&r, 0, sizeof r);
-        r.grid = &mk->rays;
-        r.depth_origin = mk->depth_origin;
-        r.row_end = mk->rays.height;
-        r.fn = adaslice__total_visit;
-        r.ctx = mk;
-        if ((res = adaslice__raster_mesh(&r, mesh, err)) != ADASLICE_OK) { adaslice_masker_free(mk); return res; }
-        for (t = 0; t < rays; t++) mk->winding[t] = (int16_t)(mk->winding[t] > 0 ? -mk->winding[t] : 0);
-    }
     adaslice__ok(err);
     return ADASLICE_OK;
 }
@@ -5333,6 +5552,138 @@ static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
     }
 }
 
+/* ---- masks of open meshes: each layer's section filled in the plane */
+static void adaslice__set_bits(unsigned char *row, size_t a, size_t b)
+{
+    for (; a < b && (a & 7); a++) row[a >> 3] |= (unsigned char)(0x80u >> (a & 7));
+    for (; a + 8 <= b; a += 8) row[a >> 3] = 0xff;
+    for (; a < b; a++) row[a >> 3] |= (unsigned char)(0x80u >> (a & 7));
+}
+
+static int adaslice__push_segment(adaslice_masker *mk, size_t *count, const double from[2], const double to[2])
+{
+    double *s;
+    if (4 * (*count + 1) > mk->seg_cap) {
+        s = ADASLICE__CAST(double *, adaslice__grow(&mk->allocator, mk->seg, 4 * *count, &mk->seg_cap, 4 * (*count + 1), sizeof(double)));
+        if (!s) return 0;
+        mk->seg = s;
+    }
+    s = mk->seg + 4 * (*count)++;
+    s[0] = from[0]; s[1] = from[1]; s[2] = to[0]; s[3] = to[1];
+    return 1;
+}
+
+/* The centre of ray row j: one expression, so cuts that share an end agree. */
+static double adaslice__row_centre(const adaslice_grid *g, long j) { return g->origin[1] + ((double)j + 0.5) * g->pitch[1]; }
+
+/* The first ray row whose centre is at or above y, within [0, rows]. */
+static long adaslice__first_row(const adaslice_grid *g, double y)
+{
+    double c = ceil((y - g->origin[1]) / g->pitch[1] - 0.5);
+    long j = c < 0 ? 0 : c > g->height ? g->height : (long)c;
+    while (j > 0 && adaslice__row_centre(g, j - 1) >= y) j--;
+    while (j < g->height && adaslice__row_centre(g, j) < y) j++;
+    return j;
+}
+
+/* Fills the mask from the directed segments: each crosses the ray rows whose
+   centres lie in [its lower y, its upper y), one going down (in y) raising
+   the winding to its right by one; a ray is lit where the winding is positive. */
+static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segments, double height, adaslice_error *err)
+{
+    const adaslice_grid *g = &mk->rays;
+    size_t k, n = 0, c, lo_row = SIZE_MAX, hi_row = 0;
+    int s = mk->supersample;
+    for (k = 0; k < segments; k++) {
+        const double *p = mk->seg + 4 * k;
+        double ylo = p[1] < p[3] ? p[1] : p[3], yhi = p[1] < p[3] ? p[3] : p[1];
+        long j, j0, j1;
+        if (!(yhi > ylo)) continue; /* along a row: crosses none */
+        j0 = adaslice__first_row(g, ylo);
+        j1 = adaslice__first_row(g, yhi);
+        if (j1 > j0 && n + (size_t)(j1 - j0) > mk->cross_cap) {
+            uint64_t *more = ADASLICE__CAST(uint64_t *, adaslice__grow(&mk->allocator, mk->cross, n, &mk->cross_cap, n + (size_t)(j1 - j0), sizeof(uint64_t)));
+            if (!more) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
+            mk->cross = more;
+        }
+        for (j = j0; j < j1; j++) {
+            double v = adaslice__row_centre(g, j), x = p[0] + (v - p[1]) * (p[2] - p[0]) / (p[3] - p[1]);
+            double t = (x - g->origin[0]) / g->pitch[0] - 0.5;
+            uint64_t i = t < 0 ? 0 : t >= g->width ? (uint64_t)g->width : (uint64_t)floor(t) + 1;
+            if (i > (uint64_t)g->width) i = (uint64_t)g->width;
+            mk->cross[n++] = (uint64_t)j << 32 | i << 1 | (p[3] < p[1]);
+        }
+    }
+    if (n) qsort(mk->cross, n, sizeof *mk->cross, adaslice__u64_cmp);
+    memset(mk->image, 0, mk->stride * (size_t)mk->grid.height);
+    mk->lit_rays = 0;
+    for (c = 0; c < n;) {
+        size_t row = (size_t)(mk->cross[c] >> 32);
+        int w = 0;
+        for (; c < n && (size_t)(mk->cross[c] >> 32) == row; c++) {
+            size_t a = (size_t)((mk->cross[c] >> 1) & 0x7fffffffu), b;
+            w += (mk->cross[c] & 1) ? 1 : -1;
+            b = c + 1 < n && (size_t)(mk->cross[c + 1] >> 32) == row ? (size_t)((mk->cross[c + 1] >> 1) & 0x7fffffffu) : (size_t)g->width;
+            if (w <= 0 || b <= a) continue;
+            mk->lit_rays += (long long)(b - a);
+            if (s == 1) {
+                adaslice__set_bits(mk->image + row * mk->stride, a, b);
+            } else {
+                size_t px, base = row / (size_t)s * (size_t)mk->grid.width;
+                for (px = a / (size_t)s; px * (size_t)s < b; px++) {
+                    size_t from = px * (size_t)s > a ? px * (size_t)s : a, to = (px + 1) * (size_t)s < b ? (px + 1) * (size_t)s : b;
+                    mk->coverage[base + px] = (uint16_t)(mk->coverage[base + px] + (to - from));
+                }
+                if (row / (size_t)s < lo_row) lo_row = row / (size_t)s;
+                if (row / (size_t)s > hi_row) hi_row = row / (size_t)s;
+            }
+        }
+    }
+    if (s > 1 && lo_row <= hi_row) {
+        size_t px, first = lo_row * (size_t)mk->grid.width, end = (hi_row + 1) * (size_t)mk->grid.width;
+        for (px = first; px < end; px++) { mk->image[px] = mk->grey[mk->coverage[px]]; mk->coverage[px] = 0; }
+    }
+    return ADASLICE_OK;
+}
+
+/* The mask at `height` of a mesh with unbalanced edges: the facets' cuts and
+   the chords of the gaps (see "sections of open meshes"), filled. */
+static adaslice_result adaslice__masker_section(adaslice_masker *mk, double height, adaslice_error *err)
+{
+    const adaslice_mesh *m = mk->mesh;
+    size_t k, kept = 0, segments = 0, j;
+    adaslice_result r;
+    /* facets whose lowest corner is at or below the plane join; those whose
+       highest is at or below it are done */
+    while (mk->next < m->triangle_count && (double)adaslice__tri_z(m, mk->order[mk->next], 0) <= height)
+        mk->active[mk->active_count++] = mk->order[mk->next++];
+    for (k = 0; k < mk->active_count; k++) {
+        uint32_t t = mk->active[k];
+        const uint32_t *c = m->triangles + 3 * (size_t)t;
+        double from[2] = {0, 0}, to[2] = {0, 0};
+        int e;
+        if (!((double)adaslice__tri_z(m, t, 1) > height)) continue;
+        mk->active[kept++] = t;
+        if (adaslice__zero_area(m->vertices, c)) continue;
+        for (e = 0; e < 3; e++) {
+            uint32_t p = c[e], q = c[(e + 1) % 3];
+            int p_below = (double)m->vertices[3 * (size_t)p + 2] <= height, q_below = (double)m->vertices[3 * (size_t)q + 2] <= height;
+            if (p_below == q_below) continue;
+            /* the facet's boundary going up ends its cut, coming down starts it */
+            if (p_below) adaslice__cut_point(m, p, q, height, to);
+            else adaslice__cut_point(m, q, p, height, from);
+        }
+        if (!adaslice__push_segment(mk, &segments, from, to)) goto nomem;
+    }
+    mk->active_count = kept;
+    if ((r = adaslice__gaps_at(mk->gaps, m, height, err)) != ADASLICE_OK) return r;
+    for (j = 0; j < mk->gaps->heads; j++)
+        if (!adaslice__push_segment(mk, &segments, mk->gaps->tail + 2 * (size_t)mk->gaps->taker[j], mk->gaps->head + 2 * j)) goto nomem;
+    return adaslice__fill_section(mk, segments, height, err);
+nomem:
+    return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
+}
+
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
 {
     adaslice__raster r;
@@ -5341,6 +5692,14 @@ ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double h
     size_t k, kept = 0;
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
+    if (mk->gaps) {
+        adaslice_result res = adaslice__masker_section(mk, height, err);
+        if (res != ADASLICE_OK) return res;
+        mk->done = h;
+        mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
+        adaslice__ok(err);
+        return ADASLICE_OK;
+    }
     /* triangles starting below the new height join; those ending below the
        previous height (whose samples are all applied) leave */
     while (mk->next < m->triangle_count && adaslice__tri_z(m, mk->order[mk->next], 0) - mk->depth_origin < h)
@@ -5397,14 +5756,6 @@ static adaslice__slot *adaslice__slot_of(adaslice__slot *table, size_t cap, uint
     return table + i;
 }
 
-static void adaslice__cut_point(const adaslice_mesh *m, adaslice__cut c, double h, double xy[2])
-{
-    const float *a = m->vertices + 3 * (size_t)c.below, *b = m->vertices + 3 * (size_t)c.above;
-    double t = (h - a[2]) / ((double)b[2] - a[2]);
-    xy[0] = a[0] + t * ((double)b[0] - a[0]);
-    xy[1] = a[1] + t * ((double)b[1] - a[1]);
-}
-
 static void adaslice__zrange(const adaslice_mesh *m, size_t t, double *lo, double *hi)
 {
     const uint32_t *v = m->triangles + 3 * t;
@@ -5459,14 +5810,14 @@ static void adaslice__emit(adaslice_contours *c, const adaslice_mesh *m, double 
     p->count = 0;
     do {
         seg[i].state |= ADASLICE__USED;
-        adaslice__cut_point(m, seg[i].from, h, xy);
+        adaslice__cut_point(m, seg[i].from.below, seg[i].from.above, h, xy);
         adaslice__put_point(c, p, xy);
         last = i;
         i = seg[i].next;
     } while (i != ADASLICE__NONE && !(seg[i].state & ADASLICE__USED));
     p->closed = i == start;
     if (!p->closed) {
-        adaslice__cut_point(m, seg[last].to, h, xy);
+        adaslice__cut_point(m, seg[last].to.below, seg[last].to.above, h, xy);
         adaslice__put_point(c, p, xy);
     }
     q = c->points + 2 * p->first;

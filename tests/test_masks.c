@@ -178,29 +178,6 @@ static void antialiased_masks_cover_the_area(void)
    and never leaves. Counted from above it is outside, so nothing is lit, and
    above the top nothing is lit either; the closed box lights its whole
    footprint. */
-static void open_meshes_never_light_a_column(void)
-{
-    adaslice_mesh box = gen_box(-4, -3, 0, 4, 3, 2);
-    adaslice_grid g = plate_around(&box, 0.1, 0.1, 120, 100);
-    adaslice_masker mk;
-    size_t t, kept = 0;
-    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
-    CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK && fabs(mk.lit * 0.01 - 48) < 1.5);
-    adaslice_masker_free(&mk);
-    for (t = 0; t < box.triangle_count; t++) { /* drop the two triangles at z = 2 */
-        const uint32_t *tri = box.triangles + 3 * t;
-        if (box.vertices[3 * tri[0] + 2] == 2 && box.vertices[3 * tri[1] + 2] == 2 && box.vertices[3 * tri[2] + 2] == 2) continue;
-        memmove(box.triangles + 3 * kept++, tri, 3 * sizeof(uint32_t));
-    }
-    CHECK(kept == 10);
-    box.triangle_count = kept;
-    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
-    CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK && mk.lit == 0);
-    CHECK(adaslice_masker_slice(&mk, 3, NULL) == ADASLICE_OK && mk.lit == 0);
-    adaslice_masker_free(&mk);
-    gen_free(&box);
-}
-
 void test_masks(void)
 {
     RUN(sphere_masks_match_contours);
@@ -210,5 +187,4 @@ void test_masks(void)
     RUN(bundled_hand_masks_match_contours);
     RUN(rays_through_edges_light_exactly_once);
     RUN(antialiased_masks_cover_the_area);
-    RUN(open_meshes_never_light_a_column);
 }
