@@ -2785,6 +2785,9 @@ struct adaslice__gaps {
     size_t tails, heads, tail_cap, head_cap;
     uint32_t *taker;            /* per head: the tail whose chord goes to it */
     size_t taker_cap;
+    size_t *cell_first;         /* the heads by grid cell, for joining */
+    uint32_t *cell_head;
+    size_t cell_cap, slot_cap;
     adaslice_allocator allocator;
 };
 
@@ -2805,6 +2808,8 @@ static void adaslice__gaps_free(adaslice__gaps *g)
     adaslice__free(&al, g->tail);
     adaslice__free(&al, g->head);
     adaslice__free(&al, g->taker);
+    adaslice__free(&al, g->cell_first);
+    adaslice__free(&al, g->cell_head);
     adaslice__free(&al, g);
 }
 
@@ -2875,6 +2880,74 @@ static void adaslice__cut_point(const adaslice_mesh *m, uint32_t below, uint32_t
     xy[1] = a[1] + t * ((double)b[1] - a[1]);
 }
 
+/* Each tail in turn takes the nearest head still free. Heads sit in a grid
+   of about one per cell, searched ring by ring outwards from the tail's cell
+   until no nearer head can remain, so a section with thousands of loose ends
+   (a mesh with many facets wound backwards) is not quadratic. 0 when out of
+   memory. */
+static int adaslice__join_ends(adaslice__gaps *g)
+{
+    size_t n = g->heads, side, cells, i, j;
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, size;
+    long r;
+    for (side = 1; side * side < n; side++) {}
+    cells = side * side;
+    if (cells + 1 > g->cell_cap || n > g->slot_cap) {
+        adaslice__free(&g->allocator, g->cell_first);
+        adaslice__free(&g->allocator, g->cell_head);
+        g->cell_cap = g->slot_cap = 0;
+        g->cell_first = ADASLICE__CAST(size_t *, adaslice__alloc(&g->allocator, 2 * (cells + 1), sizeof(size_t)));
+        g->cell_head = ADASLICE__CAST(uint32_t *, adaslice__alloc(&g->allocator, 2 * n, sizeof(uint32_t)));
+        if (!g->cell_first || !g->cell_head) return 0;
+        g->cell_cap = 2 * (cells + 1);
+        g->slot_cap = 2 * n;
+    }
+    for (j = 0; j < n; j++) {
+        int a;
+        for (a = 0; a < 2; a++) {
+            if (g->head[2 * j + a] < lo[a]) lo[a] = g->head[2 * j + a];
+            if (g->head[2 * j + a] > hi[a]) hi[a] = g->head[2 * j + a];
+        }
+    }
+    size = (hi[0] - lo[0] > hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1]) / (double)side;
+    if (!(size > 0)) size = 1;
+    memset(g->cell_first, 0, (cells + 1) * sizeof(size_t));
+    for (j = 0; j < n; j++) g->cell_first[adaslice__cell(g->head[2 * j + 1], lo[1], size, side) * side +
+                                           adaslice__cell(g->head[2 * j], lo[0], size, side) + 1]++;
+    for (i = 0; i < cells; i++) g->cell_first[i + 1] += g->cell_first[i];
+    for (j = 0; j < n; j++) {
+        size_t c = adaslice__cell(g->head[2 * j + 1], lo[1], size, side) * side + adaslice__cell(g->head[2 * j], lo[0], size, side);
+        g->cell_head[g->cell_first[c]++] = (uint32_t)j;
+    }
+    for (i = cells; i > 0; i--) g->cell_first[i] = g->cell_first[i - 1];
+    g->cell_first[0] = 0;
+    for (j = 0; j < n; j++) g->taker[j] = ADASLICE__NONE;
+    for (i = 0; i < g->tails; i++) {
+        const double *t = g->tail + 2 * i;
+        long cx = (long)adaslice__cell(t[0], lo[0], size, side), cy = (long)adaslice__cell(t[1], lo[1], size, side);
+        double best = DBL_MAX;
+        size_t pick = ADASLICE__NONE;
+        /* every head in ring r lies at least (r - 1) cells away */
+        for (r = 0; r <= (long)side && !(r > 1 && (double)(r - 1) * size * (double)(r - 1) * size > best); r++) {
+            long dx, dy;
+            for (dy = -r; dy <= r; dy++)
+                for (dx = -r; dx <= r; dx += (dy == -r || dy == r) ? 1 : 2 * r) {
+                    long x = cx + dx, y = cy + dy;
+                    size_t k;
+                    if (x < 0 || y < 0 || x >= (long)side || y >= (long)side) { if (!r) break; continue; }
+                    for (k = g->cell_first[(size_t)y * side + (size_t)x]; k < g->cell_first[(size_t)y * side + (size_t)x + 1]; k++) {
+                        size_t h = g->cell_head[k];
+                        double ex = g->head[2 * h] - t[0], ey = g->head[2 * h + 1] - t[1];
+                        if (g->taker[h] == ADASLICE__NONE && ex * ex + ey * ey < best) { best = ex * ex + ey * ey; pick = h; }
+                    }
+                    if (!r) break;
+                }
+        }
+        g->taker[pick] = (uint32_t)i;
+    }
+    return 1;
+}
+
 /* Room for `more` points after `used` in *points (x, y pairs). */
 static int adaslice__room(const adaslice_allocator *al, double **points, size_t used, size_t *cap, size_t more)
 {
@@ -2891,7 +2964,7 @@ static int adaslice__room(const adaslice_allocator *al, double **points, size_t 
    goes to head j. */
 static adaslice_result adaslice__gaps_at(adaslice__gaps *g, const adaslice_mesh *m, double height, adaslice_error *err)
 {
-    size_t k, kept = 0, i, j;
+    size_t k, kept = 0;
     while (g->next < g->count && (double)g->edge[g->next].lo <= height) g->active[g->active_count++] = (uint32_t)g->next++;
     g->tails = g->heads = 0;
     for (k = 0; k < g->active_count; k++) {
@@ -2927,17 +3000,7 @@ static adaslice_result adaslice__gaps_at(adaslice__gaps *g, const adaslice_mesh 
         if (!g->taker) goto nomem;
         g->taker_cap = 2 * g->heads;
     }
-    for (j = 0; j < g->heads; j++) g->taker[j] = ADASLICE__NONE;
-    /* each tail in turn takes the nearest head still free */
-    for (i = 0; i < g->tails; i++) {
-        double best = DBL_MAX;
-        size_t pick = 0;
-        for (j = 0; j < g->heads; j++) {
-            double dx = g->head[2 * j] - g->tail[2 * i], dy = g->head[2 * j + 1] - g->tail[2 * i + 1];
-            if (g->taker[j] == ADASLICE__NONE && dx * dx + dy * dy < best) { best = dx * dx + dy * dy; pick = j; }
-        }
-        g->taker[pick] = (uint32_t)i;
-    }
+    if (g->heads && !adaslice__join_ends(g)) goto nomem;
     return ADASLICE_OK;
 nomem:
     return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "sections: out of memory for the loose ends at %g mm", height);
