@@ -1,0 +1,150 @@
+/* Input defects users found, each with the cases that show it fixed: a huge binary
+   STL read whole before its count was checked. Library cases load files; the tool
+   runs as a child process (cli_run.h). */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
+#endif
+#include "cli_run.h"
+#include "../adaslice.h"
+#include "meshgen.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* ------------------------------------------------------------ helpers */
+
+#define HUGE_SIZE 2147483648.0 /* 2 GiB */
+
+/* `head` and then zeros to `size` bytes, which take no disk: a sparse file. */
+static int write_sparse(const char *path, const void *head, size_t n, double size)
+{
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644), ok;
+    ok = fd >= 0 && write(fd, head, n) == (ssize_t)n && ftruncate(fd, (off_t)size) == 0;
+    if (fd >= 0) close(fd);
+    CHECKF(ok, "cannot make the sparse file %s: %s", path, strerror(errno));
+    return ok;
+}
+
+/* An 84-byte binary STL header: `text` padded with NULs, then the count. */
+static void stl_header(unsigned char h[84], const char *text, uint32_t count)
+{
+    int i;
+    memset(h, 0, 84);
+    memcpy(h, text, strlen(text));
+    for (i = 0; i < 4; i++) h[80 + i] = (unsigned char)(count >> (8 * i));
+}
+
+/* An allocator that refuses any block over 1 MiB: a loader that would read a
+   huge file into memory fails with ERR_NOMEM instead of taking seconds. */
+static void *small_alloc(void *user, size_t size) { (void)user; return size > (1u << 20) ? NULL : malloc(size); }
+static void small_free(void *user, void *p) { (void)user; free(p); }
+static const adaslice_allocator small_blocks = {small_alloc, small_free, NULL};
+
+static adaslice_result load_small(const char *path, adaslice_mesh *m, adaslice_error *e)
+{
+    adaslice_load_options o;
+    memset(&o, 0, sizeof o);
+    o.allocator = &small_blocks;
+    return adaslice_mesh_load_file(path, &o, m, e);
+}
+
+/* ------------------------------------------------------------ 1: a huge binary STL */
+
+/* A 2 GiB binary STL whose header counts 1000 triangles is refused from its
+   first bytes and its size: never read, so the 1 MiB allocator is no
+   obstacle. The header may be text, start with "solid" or be all zeros. */
+static void huge_binary_stl_is_refused_before_it_is_read(void)
+{
+    static const char *const headers[] = {"adaslice sparse test", "solid part", ""};
+    const char *path = cli_path("huge.stl");
+    unsigned char h[84];
+    adaslice_mesh m;
+    adaslice_error e;
+    char want[400];
+    size_t i;
+    snprintf(want, sizeof want, "%s: binary STL: header says 1000 triangles (50084 bytes) but the data is 2147483648 bytes",
+             path);
+    for (i = 0; i < sizeof headers / sizeof *headers; i++) {
+        stl_header(h, headers[i], 1000);
+        if (!write_sparse(path, h, sizeof h, HUGE_SIZE)) return;
+        CHECKF(load_small(path, &m, &e) == ADASLICE_ERR_COUNT && e.offset == 80 && !strcmp(e.message, want),
+               "header '%s': %s (%s)", headers[i], adaslice_result_name(e.result), e.message);
+    }
+    remove(path);
+}
+
+/* A PLY header that promises more vertices than 2 GiB can hold is refused the
+   same way; and files whose first 4 KiB cannot tell their format (a long
+   comment) or hold only part of the PLY header still load. */
+static void huge_ply_is_refused_and_long_headers_still_load(void)
+{
+    static const char ply_head[] = "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                                   "property float x\nproperty float y\nproperty float z\nend_header\n";
+    const char *path = cli_path("huge.ply"), *obj = cli_path("commented.obj"), *ply = cli_path("commented.ply");
+    adaslice_mesh m;
+    adaslice_error e;
+    char want[300], comment[6000];
+    FILE *f;
+    int k;
+    if (!write_sparse(path, ply_head, strlen(ply_head), HUGE_SIZE)) return;
+    snprintf(want, sizeof want, "%s: PLY byte %zu: element 'vertex' has 1000000000 records of at least 12 bytes, but only "
+             "%.0f bytes remain", path, strlen(ply_head), HUGE_SIZE - (double)strlen(ply_head));
+    CHECKF(load_small(path, &m, &e) == ADASLICE_ERR_TRUNCATED && !strcmp(e.message, want), "%s", e.message);
+    remove(path);
+
+    memset(comment, 'c', sizeof comment - 1);
+    comment[sizeof comment - 1] = 0;
+    f = fopen(obj, "w");
+    if (f) fprintf(f, "# %s\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", comment), fclose(f);
+    CHECKF(load_small(obj, &m, &e) == ADASLICE_OK && m.triangle_count == 1, "%s", e.message);
+    if (e.result == ADASLICE_OK) adaslice_mesh_free(&m);
+    f = fopen(ply, "w");
+    if (f) {
+        fputs("ply\nformat ascii 1.0\n", f);
+        for (k = 0; k < 100; k++) fprintf(f, "comment %.60s\n", comment);
+        fputs("element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+              "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", f);
+        fclose(f);
+    }
+    CHECKF(load_small(ply, &m, &e) == ADASLICE_OK && m.triangle_count == 1, "%s", e.message);
+    if (e.result == ADASLICE_OK) adaslice_mesh_free(&m);
+}
+
+/* The tool refuses it too, in one line naming the file, the count and the
+   size. Under AddressSanitizer the child may not allocate more than 256 MiB, so
+   a tool that read the file first would say "out of memory" instead. */
+static void huge_binary_stl_is_refused_by_the_tool(void)
+{
+    const char *path = cli_path("huge.stl"), *was = getenv("ASAN_OPTIONS");
+    char options[512], *saved = was ? strdup(was) : NULL;
+    unsigned char h[84];
+    cli_result r;
+    stl_header(h, "solid part", 1000);
+    if (!write_sparse(path, h, sizeof h, HUGE_SIZE)) return;
+    snprintf(options, sizeof options, "%s%smax_allocation_size_mb=256:allocator_may_return_null=1", was ? was : "",
+             was && *was ? ":" : "");
+    setenv("ASAN_OPTIONS", options, 1);
+    r = cli_run("plan", path, NULL);
+    if (saved) setenv("ASAN_OPTIONS", saved, 1);
+    else unsetenv("ASAN_OPTIONS");
+    free(saved);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, path) && strstr(r.err, "1000 triangles") &&
+           strstr(r.err, "2147483648 bytes") && !*r.out, "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    remove(path);
+}
+
+void test_input_defects(void)
+{
+    if (!cli_begin("adaslice-input")) return;
+    RUN(huge_binary_stl_is_refused_before_it_is_read);
+    RUN(huge_ply_is_refused_and_long_headers_still_load);
+    RUN(huge_binary_stl_is_refused_by_the_tool);
+    cli_end();
+}
