@@ -1420,14 +1420,20 @@ static adaslice_result adaslice__stl_ascii(adaslice__build *b)
 /* ---- OBJ */
 
 /* "7", "7/1", "7/1/3", "7//3" or relative "-1": the vertex part, as a 0-based index
-   into the vertices read so far. */
+   into the vertices read so far. The texture and normal indices are not used, but
+   each must be an integer or left out ("7//"), so that "7/a/" is not taken for 7. */
 static adaslice_result adaslice__obj_index(adaslice__build *b, const char *w, size_t n, size_t line, uint32_t *out)
 {
-    long long i, k;
-    size_t used = adaslice__integer(w, n, &i);
+    long long i, k, unused;
+    size_t used = adaslice__integer(w, n, &i), at, slashes = 0;
     char q[48];
-    if (!used || (used < n && w[used] != '/'))
-        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line, "'%s' is not a vertex index",
+    for (at = used; used && at < n && w[at] == '/' && slashes < 2; slashes++) {
+        at++;
+        at += adaslice__integer(w + at, n - at, &unused);
+    }
+    if (!used || at < n)
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line,
+                             "'%s' is not a vertex reference (v, v/vt, v/vt/vn or v//vn, each an integer)",
                              adaslice__quote(q, w, n));
     if (i == 0)
         return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,

@@ -1,6 +1,6 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
-   STL read whole before its count was checked. Library cases load files; the tool
-   runs as a child process (cli_run.h). */
+   STL read whole before its count was checked and malformed OBJ vertex references
+   taken. Library cases load files; the tool runs as a child process (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -52,6 +52,11 @@ static adaslice_result load_small(const char *path, adaslice_mesh *m, adaslice_e
     memset(&o, 0, sizeof o);
     o.allocator = &small_blocks;
     return adaslice_mesh_load_file(path, &o, m, e);
+}
+
+static adaslice_result load_text(const char *text, adaslice_mesh *m, adaslice_error *e)
+{
+    return adaslice_mesh_load(text, strlen(text), NULL, m, e);
 }
 
 /* ------------------------------------------------------------ 1: a huge binary STL */
@@ -140,11 +145,46 @@ static void huge_binary_stl_is_refused_by_the_tool(void)
     remove(path);
 }
 
+/* ------------------------------------------------------------ 3 and 4: OBJ references, PLY counts */
+
+/* A texture or normal index that is not an integer, or a fourth part, is an
+   error at the token, naming the line and the token; left-out indices are not. */
+static void malformed_obj_references_are_refused(void)
+{
+    static const char *const bad[] = {"1/a/", "1/2/3/4", "1/2x", "1//x", "1/2/3x", "1/+/3"};
+    static const char *const good[] = {"1//", "1/2/", "1//3", "1/2/3", "1/2", "-3/-1/-2"};
+    const char *path = cli_path("bad_ref.obj");
+    char text[200], want[200];
+    adaslice_mesh m;
+    adaslice_error e;
+    cli_result r;
+    size_t i;
+    for (i = 0; i < sizeof bad / sizeof *bad; i++) {
+        snprintf(text, sizeof text, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf %s 2 3\n", bad[i]);
+        snprintf(want, sizeof want, "OBJ line 4: '%s' is not a vertex reference", bad[i]);
+        CHECKF(load_text(text, &m, &e) == ADASLICE_ERR_NUMBER && e.line == 4 && e.offset == 26 &&
+               !strncmp(e.message, want, strlen(want)), "%s: %s at %zu: %s", bad[i], adaslice_result_name(e.result),
+               e.offset, e.message);
+        if (e.result == ADASLICE_OK) adaslice_mesh_free(&m);
+    }
+    for (i = 0; i < sizeof good / sizeof *good; i++) {
+        snprintf(text, sizeof text, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf %s 2 3\n", good[i]);
+        CHECKF(load_text(text, &m, &e) == ADASLICE_OK && m.triangles[0] == 0, "%s: %s", good[i], e.message);
+        if (e.result == ADASLICE_OK) adaslice_mesh_free(&m);
+    }
+    cli_write(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a/ 2 3\n");
+    r = cli_run("plan", path, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, path) && strstr(r.err, "line 4") &&
+           strstr(r.err, "'1/a/'"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
     RUN(huge_binary_stl_is_refused_before_it_is_read);
     RUN(huge_ply_is_refused_and_long_headers_still_load);
     RUN(huge_binary_stl_is_refused_by_the_tool);
+    RUN(malformed_obj_references_are_refused);
     cli_end();
 }
