@@ -1559,9 +1559,12 @@ static adaslice_result adaslice__ply_element_line(adaslice__ply_reader *r)
     if (e->kind == ADASLICE__PLY_VERTEX && r->has_vertex)
         return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "a second 'vertex' element");
     n = adaslice__word(&r->t, 0, &w);
-    if (!n || adaslice__integer(w, n, &count) != n || count < 0)
+    if (!n || adaslice__integer(w, n, &count) != n)
         return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), r->t.line,
-                             "element count '%s' is not a number", adaslice__quote(q, w, n));
+                             "element '%s' count '%s' is not a number", e->name, adaslice__quote(q, w, n));
+    if (count < 0)
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), r->t.line,
+                             "element '%s' count %s is negative", e->name, adaslice__quote(q, w, n));
     if (count > UINT32_MAX) /* indices are 32-bit, and no other element gets this big */
         return adaslice__bad(b, ADASLICE_ERR_OVERFLOW, adaslice__at(b, w), r->t.line,
                              "element '%s' count %s exceeds 4294967295", e->name, adaslice__quote(q, w, n));

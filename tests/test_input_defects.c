@@ -1,6 +1,7 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
-   STL read whole before its count was checked and malformed OBJ vertex references
-   taken. Library cases load files; the tool runs as a child process (cli_run.h). */
+   STL read whole before its count was checked; malformed OBJ vertex references
+   taken and a negative PLY count called not a number. Library cases load files;
+   the tool runs as a child process (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -179,6 +180,16 @@ static void malformed_obj_references_are_refused(void)
     cli_free(&r);
 }
 
+static void negative_ply_count_says_negative(void)
+{
+    adaslice_mesh m;
+    adaslice_error e;
+    CHECK(load_text("ply\nformat ascii 1.0\nelement vertex -3\nend_header\n", &m, &e) == ADASLICE_ERR_NUMBER);
+    CHECKF(!strcmp(e.message, "PLY line 3: element 'vertex' count -3 is negative"), "%s", e.message);
+    CHECK(load_text("ply\nformat ascii 1.0\nelement face x3\nend_header\n", &m, &e) == ADASLICE_ERR_NUMBER);
+    CHECKF(!strcmp(e.message, "PLY line 3: element 'face' count 'x3' is not a number"), "%s", e.message);
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -186,5 +197,6 @@ void test_input_defects(void)
     RUN(huge_ply_is_refused_and_long_headers_still_load);
     RUN(huge_binary_stl_is_refused_by_the_tool);
     RUN(malformed_obj_references_are_refused);
+    RUN(negative_ply_count_says_negative);
     cli_end();
 }
