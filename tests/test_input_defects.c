@@ -1,7 +1,8 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
    STL read whole before its count was checked; malformed OBJ vertex references
-   taken and a negative PLY count called not a number. Library cases load files;
-   the tool runs as a child process (cli_run.h). */
+   taken; a negative PLY count called not a number and too-large numbers called not
+   whole numbers. Library cases load files; the tool runs as a child process
+   (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -190,6 +191,35 @@ static void negative_ply_count_says_negative(void)
     CHECKF(!strcmp(e.message, "PLY line 3: element 'face' count 'x3' is not a number"), "%s", e.message);
 }
 
+/* ------------------------------------------------------------ 5: too-large numbers */
+
+/* Every whole-number option: a number over its maximum says it is too large
+   and gives the maximum; 0 says the least is 1; text is not a number. */
+static void too_large_counts_say_the_most(void)
+{
+    static const struct { const char *command, *option, *most; } cases[] = {
+        {"plan", "--budget", "4294967295"}, {"plan", "--res", "65536"},     {"slice", "--aa", "16"},
+        {"slice", "--threads", "64"},       {"slice", "--bottom-layers", "4294967295"},
+        {"orient", "--dirs", "1000000"},    {"print", "--baud", "4000000"}, {"print", "--resume-from", "4294967295"},
+    };
+    static const struct { const char *value, *says; } values[] = {
+        {"99999999999", "too large, the most is"}, {"99999999999999999999999", "too large, the most is"},
+        {"0", "too small, the least is 1"},        {"12a", "not a whole number"},
+    };
+    size_t i, k;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++)
+        for (k = 0; k < sizeof values / sizeof *values; k++) {
+            cli_result r;
+            if (!strcmp(values[k].value, "0") && !strcmp(cases[i].option, "--bottom-layers")) continue; /* 0 is none */
+            r = cli_run(cases[i].command, "m.stl", cases[i].option, values[k].value, NULL);
+            CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, cases[i].option) &&
+                   strstr(r.err, values[k].value) && strstr(r.err, values[k].says) &&
+                   (k > 1 || strstr(r.err, cases[i].most)),
+                   "%s %s %s: exit %d, '%s'", cases[i].command, cases[i].option, values[k].value, r.status, r.err);
+            cli_free(&r);
+        }
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -198,5 +228,6 @@ void test_input_defects(void)
     RUN(huge_binary_stl_is_refused_by_the_tool);
     RUN(malformed_obj_references_are_refused);
     RUN(negative_ply_count_says_negative);
+    RUN(too_large_counts_say_the_most);
     cli_end();
 }
