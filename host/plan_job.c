@@ -271,7 +271,7 @@ static int read_profile(const plan_args *a, plan_job *j)
 {
     const char *path = a->profile;
     FILE *f = fopen(path, "r");
-    char *line = NULL;
+    char *line = NULL, q[QUOTE_SIZE];
     size_t line_cap = 0, lineno = 0, n = 0, cap = 0;
     double *phi = NULL, t0 = now_ms();
     int rc = RC_OK, first = 1;
@@ -285,9 +285,10 @@ static int read_profile(const plan_args *a, plan_job *j)
         field = field ? trim(field + 1) : s;
         v = strtod(field, &end);
         if (end == field || *end) {
-            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: %.80s", path, lineno, s);
+            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
         } else if (!isfinite(v) || v < 0) {
-            rc = complain(RC_FAIL, "%s:%zu: %.80s: profile values must be finite and >= 0", path, lineno, s);
+            rc = complain(RC_FAIL, "%s:%zu: '%s': profile values must be finite and >= 0", path, lineno,
+                          quote_text(q, s, strlen(s)));
         } else if (!push(&phi, &n, &cap, v)) {
             rc = complain(RC_FAIL, "%s: out of memory after %zu values", path, n);
         }

@@ -106,7 +106,7 @@ static char *trim(char *s)
 static int read_weights(const char *path, size_t count, float *w)
 {
     FILE *f = fopen(path, "r");
-    char *line = NULL;
+    char *line = NULL, q[QUOTE_SIZE];
     size_t cap = 0, lineno = 0, n = 0;
     int rc = RC_OK;
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
@@ -117,9 +117,9 @@ static int read_weights(const char *path, size_t count, float *w)
         if (!*s || *s == '#') continue;
         v = strtod(s, &end);
         if (end == s || *end)
-            rc = complain(RC_USAGE, "%s:%zu: '%.40s' is not a number", path, lineno, s);
+            rc = complain(RC_USAGE, "%s:%zu: '%s' is not a number", path, lineno, quote_text(q, s, strlen(s)));
         else if (!(v >= 0 && v <= 1))
-            rc = complain(RC_USAGE, "%s:%zu: %.40s is not a weight in [0, 1]", path, lineno, s);
+            rc = complain(RC_USAGE, "%s:%zu: %s is not a weight in [0, 1]", path, lineno, quote_text(q, s, strlen(s)));
         else if (n == count)
             rc = complain(RC_USAGE, "%s:%zu: more weights than the model's %zu triangles", path, lineno, count);
         else

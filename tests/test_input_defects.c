@@ -1,8 +1,8 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
    STL read whole before its count was checked; malformed OBJ vertex references
-   taken; a negative PLY count called not a number and too-large numbers called not
-   whole numbers. Library cases load files; the tool runs as a child process
-   (cli_run.h). */
+   taken; a negative PLY count called not a number; too-large numbers called not
+   whole numbers and a binary file's raw bytes in a message. Library cases load
+   files; the tool runs as a child process (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -22,6 +22,12 @@
 /* ------------------------------------------------------------ helpers */
 
 #define HUGE_SIZE 2147483648.0 /* 2 GiB */
+
+static void write_bytes(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    CHECKF(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "cannot write %s", path);
+}
 
 /* `head` and then zeros to `size` bytes, which take no disk: a sparse file. */
 static int write_sparse(const char *path, const void *head, size_t n, double size)
@@ -59,6 +65,14 @@ static adaslice_result load_small(const char *path, adaslice_mesh *m, adaslice_e
 static adaslice_result load_text(const char *text, adaslice_mesh *m, adaslice_error *e)
 {
     return adaslice_mesh_load(text, strlen(text), NULL, m, e);
+}
+
+/* A tetrahedron 1 mm tall, as OBJ: no direction sees it flat. */
+static const char *tetra_obj(void)
+{
+    const char *path = cli_path("tetra.obj");
+    cli_write(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0.3 0.3 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    return path;
 }
 
 /* ------------------------------------------------------------ 1: a huge binary STL */
@@ -220,6 +234,39 @@ static void too_large_counts_say_the_most(void)
         }
 }
 
+/* ------------------------------------------------------------ 7: binary file content in messages */
+
+/* A message quotes a binary file's line escaped (\xNN) and cut short: one
+   printable line, whatever the file holds. */
+static int printable_line(const char *s)
+{
+    size_t n = strlen(s), i;
+    for (i = 0; i + 1 < n; i++)
+        if ((unsigned char)s[i] < 32 || (unsigned char)s[i] > 126) return 0;
+    return n && n < 400 && s[n - 1] == '\n';
+}
+
+static void binary_file_content_is_escaped(void)
+{
+    const char *profile = cli_path("binary_profile.csv"), *weights = cli_path("binary_weights.txt");
+    unsigned char junk[300];
+    cli_result r;
+    size_t i;
+    junk[0] = '0'; junk[1] = '.'; junk[2] = '1'; junk[3] = '\n'; /* one good value, then bytes */
+    for (i = 4; i < sizeof junk - 1; i++) junk[i] = (unsigned char)(i == 4 ? 0x89 : i == 5 ? 0x01 : 'A' + i % 50);
+    junk[sizeof junk - 1] = '\n';
+    write_bytes(profile, junk, sizeof junk);
+    write_bytes(weights, junk, sizeof junk);
+    r = cli_run("plan", "--profile", profile, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && printable_line(r.err) && strstr(r.err, "binary_profile.csv:2:") &&
+           strstr(r.err, "'\\x89\\x01") && strstr(r.err, "...'"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", tetra_obj(), "--weights", weights, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && printable_line(r.err) && strstr(r.err, "binary_weights.txt:2:") &&
+           strstr(r.err, "\\x89\\x01"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -229,5 +276,6 @@ void test_input_defects(void)
     RUN(malformed_obj_references_are_refused);
     RUN(negative_ply_count_says_negative);
     RUN(too_large_counts_say_the_most);
+    RUN(binary_file_content_is_escaped);
     cli_end();
 }
