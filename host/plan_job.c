@@ -32,8 +32,10 @@ void plan_options_usage(FILE *f)
 {
     fprintf(f,
         "input\n"
-        "  --profile FILE      plan this profile instead of a MODEL: one value per line,\n"
-        "                      or CSV whose last column is the value; bins of --bin mm\n"
+        "  --profile FILE      plan this profile instead of a MODEL: one value per line\n"
+        "                      (bins of --bin mm), or CSV z,phi as --profile-out\n"
+        "                      writes it: the value last, z first, the bin centres in\n"
+        "                      mm, evenly spaced, which give the bin\n"
         "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
         "profile\n"
         "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"
@@ -86,7 +88,6 @@ int parse_plan(int argc, char **argv, plan_args *a)
     int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0;
     double uniform = 0;
     memset(a, 0, sizeof *a);
-    a->bin = ADASLICE_DEFAULT_BIN;
     a->eps = ADASLICE_DEFAULT_EPS;
     a->tmin = ADASLICE_DEFAULT_TMIN;
     a->tmax = ADASLICE_DEFAULT_TMAX;
@@ -265,37 +266,101 @@ static int push(double **phi, size_t *n, size_t *cap, double v)
     return 1;
 }
 
-/* One value per line, or CSV with the value last; blank lines and # comments
-   are skipped, and so is a first line that is not a number (a header). */
+/* The z column of a profile so far: the first, second and latest z, and the
+   lines of the first two. */
+typedef struct z_column { double first, second, last; size_t first_line, second_line; } z_column;
+
+/* The z of value `index`: the first two set the step, which every later one
+   keeps to 1 % (a column printed with %.9g is exact to far less). */
+static int z_column_add(z_column *c, const char *path, size_t line, size_t index, double z)
+{
+    double step = c->second - c->first;
+    if (index == 0) {
+        c->first = c->last = z;
+        c->first_line = line;
+        return RC_OK;
+    }
+    if (!(z > c->last)) return complain(RC_FAIL, "%s:%zu: z %g is not above the line before's, %g", path, line, z, c->last);
+    if (index == 1) {
+        c->second = z;
+        c->second_line = line;
+    } else if (fabs(z - c->last - step) > 0.01 * step) {
+        return complain(RC_FAIL, "%s:%zu: z %g is %g mm above the line before, not %g as from line %zu to %zu: "
+                                 "the z column must be evenly spaced", path, line, z, z - c->last, step,
+                        c->first_line, c->second_line);
+    }
+    c->last = z;
+    return RC_OK;
+}
+
+/* The bin of an evenly spaced z column of n values, to six digits: the %.9g
+   centres --profile-out writes give it to about nine, and 0.0099999999 for
+   0.01 would change the bins a layer may take (ceil(tmin/b)). */
+static double z_column_bin(const z_column *c, size_t n)
+{
+    char six[32];
+    snprintf(six, sizeof six, "%.6g", (c->last - c->first) / (double)(n - 1));
+    return strtod(six, NULL);
+}
+
+/* A z in the first column, before the first comma: 1 if there is one. */
+static int z_field(const char *s, const char *comma, double *z)
+{
+    char *end;
+    *z = strtod(s, &end);
+    while (end < comma && (*end == ' ' || *end == '\t')) end++;
+    return end != s && end == comma && isfinite(*z);
+}
+
+/* One value per line, or CSV with the value last and, in two or more columns, z
+   first: the bin centres as --profile-out writes them, which give the bin and
+   z0. Blank lines and # comments are skipped, and so is a first line that is
+   not a number (a header). */
 static int read_profile(const plan_args *a, plan_job *j)
 {
     const char *path = a->profile;
     FILE *f = fopen(path, "r");
     char *line = NULL, q[QUOTE_SIZE];
-    size_t line_cap = 0, lineno = 0, n = 0, cap = 0;
-    double *phi = NULL, t0 = now_ms();
-    int rc = RC_OK, first = 1;
+    size_t line_cap = 0, lineno = 0, n = 0, cap = 0, first_line = 0;
+    double *phi = NULL, t0 = now_ms(), bin = a->bin ? a->bin : ADASLICE_DEFAULT_BIN;
+    z_column zc = {0, 0, 0, 0, 0};
+    int rc = RC_OK, first = 1, has_z = 0;
 
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     while (!rc && getline(&line, &line_cap, f) != -1) {
-        char *s = trim(line), *field = strrchr(s, ','), *end;
-        double v;
+        char *s = trim(line), *comma = strchr(s, ','), *field, *end;
+        double v, z = 0;
         lineno++;
         if (!*s || *s == '#') continue;
-        field = field ? trim(field + 1) : s;
+        field = comma ? trim(strrchr(s, ',') + 1) : s;
         v = strtod(field, &end);
-        if (end == field || *end) {
+        if (end == field || *end || (comma && !z_field(s, comma, &z))) {
             if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
         } else if (!isfinite(v) || v < 0) {
             rc = complain(RC_FAIL, "%s:%zu: '%s': profile values must be finite and >= 0", path, lineno,
                           quote_text(q, s, strlen(s)));
+        } else if (n && has_z != (comma != NULL)) {
+            rc = complain(RC_FAIL, "%s:%zu: '%s' has %s z column, unlike line %zu", path, lineno,
+                          quote_text(q, s, strlen(s)), comma ? "a" : "no", first_line);
+        } else if (comma && (rc = z_column_add(&zc, path, lineno, n, z))) {
+            /* z_column_add said why */
         } else if (!push(&phi, &n, &cap, v)) {
             rc = complain(RC_FAIL, "%s: out of memory after %zu values", path, n);
+        } else if (n == 1) {
+            first_line = lineno;
+            has_z = comma != NULL;
         }
         first = 0;
     }
     if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && !n) rc = complain(RC_FAIL, "%s: no profile values", path);
+    if (!rc && has_z && n > 1) {
+        double column = z_column_bin(&zc, n);
+        if (!a->bin) bin = column;
+        else if (fabs(column - a->bin) > 1e-6 * a->bin)
+            rc = complain(RC_USAGE, "%s:%zu: the z column has bins of %g mm, but --bin is %g mm", path, zc.second_line,
+                          column, a->bin);
+    }
     fclose(f);
     free(line);
     j->ms_load = now_ms() - t0;
@@ -305,8 +370,9 @@ static int read_profile(const plan_args *a, plan_job *j)
     }
     j->profile.metric = a->metric;
     j->profile.bin_count = n;
-    j->profile.bin = a->bin;
-    j->profile.height = n * a->bin;
+    j->profile.bin = bin;
+    j->profile.z0 = has_z ? zc.first - bin / 2 : 0;
+    j->profile.height = n * bin;
     j->profile.phi = phi;
     return RC_OK;
 }

@@ -22,7 +22,8 @@ typedef struct plan_args {
     const char *model, *profile;   /* exactly one is set */
     adaslice_metric metric;
     adaslice_method method;
-    double bin, eps, tmin, tmax;
+    double bin;                    /* 0: not given (the library's, or a --profile's z column) */
+    double eps, tmin, tmax;
     double scale;                  /* 0: not given */
     double sharp;                  /* 0: pre-pass off */
     size_t budget;                 /* 0: none */

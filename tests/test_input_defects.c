@@ -1,8 +1,8 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
-   STL read whole before its count was checked; malformed OBJ vertex references
-   taken; a negative PLY count called not a number; too-large numbers called not
-   whole numbers and a binary file's raw bytes in a message. Library cases load
-   files; the tool runs as a child process (cli_run.h). */
+   STL read whole before its count was checked; a profile's z column ignored;
+   malformed OBJ vertex references taken; a negative PLY count called not a number;
+   too-large numbers called not whole numbers and a binary file's raw bytes in a
+   message. Library cases load files; the tool runs as a child process (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -161,6 +161,60 @@ static void huge_binary_stl_is_refused_by_the_tool(void)
     remove(path);
 }
 
+/* ------------------------------------------------------------ 2: a profile's z column */
+
+/* A profile written with --bin 0.01 and read back without --bin plans the
+   part at its height: the z column gives the bin (and z0); --bin that agrees is
+   taken, one that does not is refused naming the file, the line and both; a
+   column that is not evenly spaced is refused naming its line. */
+static void profile_z_column_gives_the_bin(void)
+{
+    const char *model = tetra_obj(), *csv = cli_path("tetra_profile.csv"), *bad = cli_path("uneven.csv");
+    cli_result r = cli_run("plan", model, "--bin", "0.01", "--tmin", "0.02", "--tmax", "0.05", "--profile-out", csv,
+                           "--json", NULL);
+    double layers = cli_json_number(r.out, "layers"), height = cli_json_number(r.out, "height_mm");
+    char *text;
+    CHECKF(r.status == 0 && cli_json_number(r.out, "bins") == 100, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+
+    r = cli_run("plan", "--profile", csv, "--tmin", "0.02", "--tmax", "0.05", "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "bin") == 0.01 && cli_json_number(r.out, "layers") == layers &&
+           fabs(cli_json_number(r.out, "height_mm") - height) < 0.01 + 1e-9,
+           "exit %d: bin %g, %g layers (the model's %g), height %g (%g): %s", r.status, cli_json_number(r.out, "bin"),
+           cli_json_number(r.out, "layers"), layers, cli_json_number(r.out, "height_mm"), height, r.err);
+    cli_free(&r);
+    r = cli_run("plan", "--profile", csv, "--bin", "0.01", "--tmin", "0.02", "--tmax", "0.05", "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "layers") == layers, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", "--profile", csv, "--bin", "0.002", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "tetra_profile.csv:3:") && strstr(r.err, "0.01") &&
+           strstr(r.err, "0.002") && !*r.out, "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+
+    /* line 7 is missing: line 8 (now 7) is two bins above the one before */
+    text = cli_read(csv);
+    if (text) {
+        char *line = text;
+        int k;
+        for (k = 1; k < 7 && line; k++) line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL;
+        if (line && strchr(line, '\n')) memmove(line, strchr(line, '\n') + 1, strlen(strchr(line, '\n') + 1) + 1);
+        cli_write(bad, text);
+        free(text);
+    }
+    r = cli_run("plan", "--profile", bad, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "uneven.csv:7:") && strstr(r.err, "evenly"),
+           "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    cli_write(bad, "z,phi\n0.001,1\n0.003,1\n0.002,1\n");
+    r = cli_run("plan", "--profile", bad, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "uneven.csv:4:"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    cli_write(bad, "z,phi\n0.001,1\n0.003,1\n0.5\n");
+    r = cli_run("plan", "--profile", bad, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "uneven.csv:4:"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+}
+
 /* ------------------------------------------------------------ 3 and 4: OBJ references, PLY counts */
 
 /* A texture or normal index that is not an integer, or a fourth part, is an
@@ -273,6 +327,7 @@ void test_input_defects(void)
     RUN(huge_binary_stl_is_refused_before_it_is_read);
     RUN(huge_ply_is_refused_and_long_headers_still_load);
     RUN(huge_binary_stl_is_refused_by_the_tool);
+    RUN(profile_z_column_gives_the_bin);
     RUN(malformed_obj_references_are_refused);
     RUN(negative_ply_count_says_negative);
     RUN(too_large_counts_say_the_most);
