@@ -1088,6 +1088,9 @@ static const char *adaslice__quote(char q[48], const char *w, size_t n)
     return q;
 }
 
+/* A count's noun in a message: "1 triangle", "2 triangles". */
+static const char *adaslice__noun(size_t n, const char *one, const char *many) { return n == 1 ? one : many; }
+
 /* An integral double as exact text: %g keeps only six digits, too few for an index. */
 static const char *adaslice__int_text(char buf[24], double v)
 {
@@ -1171,6 +1174,8 @@ static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
         to[0] = t[0]; to[1] = t[1]; to[2] = t[2];
         kept++;
     }
+    if (!kept && b->nt == 1)
+        return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: its one triangle has zero area", b->name);
     if (!kept && b->nt)
         return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: all %zu triangles have zero area",
                               b->name, b->nt);
@@ -1344,8 +1349,8 @@ static adaslice_result adaslice__stl_count(adaslice__build *b, size_t total, siz
     *count = (size_t)adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0);
     if ((total - 84) % 50 || (total - 84) / 50 != *count)
         return adaslice__fail(b->err, ADASLICE_ERR_COUNT, 80, 0,
-                              "binary STL: header says %zu triangles (%zu bytes) but the data is %zu bytes", *count,
-                              84 + 50 * *count, total);
+                              "binary STL: header says %zu %s (%zu bytes) but the data is %zu bytes", *count,
+                              adaslice__noun(*count, "triangle", "triangles"), 84 + 50 * *count, total);
     return ADASLICE_OK;
 }
 
@@ -1441,8 +1446,8 @@ static adaslice_result adaslice__obj_index(adaslice__build *b, const char *w, si
     k = i < 0 ? (long long)b->nv + i : i - 1;
     if (k < 0 || k >= (long long)b->nv)
         return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,
-                             "vertex index %s is out of range (%zu vertices so far)",
-                             adaslice__quote(q, w, used), b->nv);
+                             "vertex index %s is out of range (%zu %s so far)", adaslice__quote(q, w, used),
+                             b->nv, adaslice__noun(b->nv, "vertex", "vertices"));
     *out = (uint32_t)k;
     return ADASLICE_OK;
 }
@@ -1732,9 +1737,9 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
     if (v < 0) return adaslice__bad(b, ADASLICE_ERR_FORMAT, at, line, "list length %g is negative", v);
     left = r->encoding ? b->size - r->pos : (size_t)(r->t.end - r->t.p);
     if (v > (double)(left / item))
-        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, at, line,
-                             "a list of %s entries cannot fit in the %zu bytes left",
-                             adaslice__int_text(num, v), left);
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, at, line, "a list of %s %s cannot fit in the %zu %s left",
+                             adaslice__int_text(num, v), adaslice__noun((size_t)v, "entry", "entries"), left,
+                             adaslice__noun(left, "byte", "bytes"));
     n = (size_t)v;
     for (j = 0; j < n; j++) {
         if ((res = adaslice__ply_value(r, e, record, p->type, p->role ? &v : NULL))) return res;
@@ -1742,8 +1747,8 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
         if (e->kind == ADASLICE__PLY_STRIPS && v == -1) { run = 0; continue; }
         if (!(v >= 0 && v < (double)r->vertices))
             return adaslice__bad(b, ADASLICE_ERR_INDEX, r->at, adaslice__ply_line(r),
-                                 "vertex index %s is out of range (%zu vertices)", adaslice__int_text(num, v),
-                                 r->vertices);
+                                 "vertex index %s is out of range (%zu %s)", adaslice__int_text(num, v),
+                                 r->vertices, adaslice__noun(r->vertices, "vertex", "vertices"));
         cur = (uint32_t)v;
         if (e->kind == ADASLICE__PLY_FACE) {
             if (j == 0) first = cur;
@@ -1775,8 +1780,9 @@ static adaslice_result adaslice__ply_fits(adaslice__ply_reader *r, const adaslic
     }
     if (e->count > (left + !r->encoding) / *least)
         return adaslice__bad(r->b, ADASLICE_ERR_TRUNCATED, at, adaslice__ply_line(r),
-                             "element '%s' has %zu records of at least %zu bytes, but only %zu bytes remain", e->name,
-                             e->count, *least, left);
+                             "element '%s' has %zu %s of at least %zu bytes, but only %zu %s", e->name, e->count,
+                             adaslice__noun(e->count, "record", "records"), *least, left,
+                             adaslice__noun(left, "byte remains", "bytes remain"));
     return ADASLICE_OK;
 }
 
@@ -1937,7 +1943,8 @@ static adaslice_result adaslice__begin(adaslice__build *b, const void *data, siz
         if (*format == ADASLICE_FORMAT_AUTO)
             return adaslice__fail(error, ADASLICE_ERR_FORMAT, 0, 0,
                                   "not a mesh: no 'ply' magic, STL 'solid ... facet' or OBJ statement, "
-                                  "and %zu bytes is too short for binary STL", total);
+                                  "and %zu %s too short for binary STL", total,
+                                  adaslice__noun(total, "byte is", "bytes is"));
     }
     if (*format == ADASLICE__UNDECIDED) return ADASLICE_OK;
     if (*format < ADASLICE_FORMAT_STL_BINARY || *format > ADASLICE_FORMAT_PLY)

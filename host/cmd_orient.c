@@ -236,9 +236,9 @@ int cmd_orient(int argc, char **argv)
     } else if (!rc) {
         size_t feasible = 0;
         for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;
-        printf("%s: %zu directions and the 6 axes (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst "
+        printf("%s: %zu direction%s and the 6 axes (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst "
                "layer error)\n",
-               base_name(a.model), o.dirs, feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
+               base_name(a.model), o.dirs, plural(o.dirs), feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
         printf("rank  direction (x, y, z)           rotate about (x, y, z)   by deg   layers  mean err   worst err        F\n");
         for (i = 0; i < count && i <= SEARCH_MINIMA; i++) {
             const adaslice_direction_score *s = &scores[minima[i]];

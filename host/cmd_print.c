@@ -118,7 +118,8 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     if ((rc = serial_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
     if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
     if (l->st.layers != pj->layers) {
-        rc = complain(RC_FAIL, "the printer planned %u layers, the host %u: the planners disagree", l->st.layers, pj->layers);
+        rc = complain(RC_FAIL, "the printer planned %u layer%s, the host %u: the planners disagree", l->st.layers,
+                      plural(l->st.layers), pj->layers);
         goto done;
     }
     /* read the plan back, page by page, and compare it layer by layer */
@@ -127,7 +128,8 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
         if (!serial_plan_page(l, k, &rc)) { if (rc) goto done; continue; }
         for (m = LINK_SIZE_PLAN; m < l->plan_size && k <= pj->layers; m++, k++)
             if (l->plan[m] != pj->lengths[k - 1]) {
-                rc = complain(RC_FAIL, "layer %u: the printer planned %u bins, the host %u", k, l->plan[m], pj->lengths[k - 1]);
+                rc = complain(RC_FAIL, "layer %u: the printer planned %u bin%s, the host %u", k, l->plan[m],
+                              plural(l->plan[m]), pj->lengths[k - 1]);
                 goto done;
             }
     }
@@ -420,7 +422,8 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
     rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
     if (rc) return rc;
-    printf("%s: %u layers, %s\n", name, pj->layers, planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
+    printf("%s: %u layer%s, %s\n", name, pj->layers, plural(pj->layers),
+           planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
     fflush(stdout);
     if ((rc = serial_status(l))) return rc;
     if (!(l->st.flags & LINK_FLAG_HOMED)) {
@@ -504,7 +507,10 @@ int cmd_print(int argc, char **argv)
                       pj.bits, l.id.width, l.id.height, l.id.bits);
         goto done;
     }
-    if (pa.resume_from > pj.layers) { rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layers", pa.resume_from, pj.layers); goto done; }
+    if (pa.resume_from > pj.layers) {
+        rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layer%s", pa.resume_from, pj.layers, plural(pj.layers));
+        goto done;
+    }
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
@@ -514,9 +520,12 @@ int cmd_print(int argc, char **argv)
     if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model)))) goto done;
     rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
     if (!rc && pa.then_exit) rc = end_emulator(&l);
-    if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
-                    pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
-                    mask_bytes, l.retransmits);
+    if (!rc) {
+        uint32_t printed = pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0);
+        printf("printed %u layer%s in %.1f s; %lu byte%s of mask code, %lu retransmitted frame%s\n", printed,
+               plural(printed), (now_ms() - started) / 1000, mask_bytes, plural(mask_bytes), l.retransmits,
+               plural(l.retransmits));
+    }
     if (pa.report && (rc == RC_OK || rc == RC_PAUSED)) {
         report r;
         int wrc;

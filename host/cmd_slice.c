@@ -152,7 +152,7 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
                         "the %zu bottom layers, so only the first gets the full %g s\n",
                 path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
     if (f->max_layers && n > f->max_layers)
-        return complain(RC_USAGE, "%s: %zu layers; %s holds %zu at most", path, n, f->what, f->max_layers);
+        return complain(RC_USAGE, "%s: %zu layer%s; %s holds %zu at most", path, n, plural(n), f->what, f->max_layers);
     return RC_OK;
 }
 
@@ -220,7 +220,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     if ((rc = layer_masks_open(&m, s, j))) return rc;
     if (!(layers = (job_layer *)calloc(count ? count : 1, sizeof *layers))) {
         layer_masks_close(&m);
-        return complain(RC_FAIL, "out of memory for %zu layers", count);
+        return complain(RC_FAIL, "out of memory for %zu layer%s", count, plural(count));
     }
     cure_layers(&s->cure, p, layers);
     memset(d, 0, sizeof *d);
@@ -373,12 +373,13 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
     if (!rc) {
         duration(when, sizeof when, d.print_time_s);
-        printf("%s: %zu layers of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
-               sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display", d.width, d.height,
-               d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
+        printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
+               plural(d.layer_count), sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display",
+               d.width, d.height, d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
         printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
                sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
-        if (d.bottom_layers) printf(" (%u bottom layers of %g s)", d.bottom_layers, d.bottom_exposure_s);
+        if (d.bottom_layers)
+            printf(" (%u bottom layer%s of %g s)", d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
         printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
         if (s.cure.typical)
             printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "

@@ -160,7 +160,8 @@ static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profi
 {
     adaslice_error e;
     *kappa = (double *)malloc(profile->bin_count * sizeof **kappa);
-    if (!*kappa) return complain(RC_FAIL, "out of memory for the curvature of %zu bins", profile->bin_count);
+    if (!*kappa) return complain(RC_FAIL, "out of memory for the curvature of %zu bin%s", profile->bin_count,
+                                 plural(profile->bin_count));
     if (adaslice_curvature_profile(mesh, profile, NULL, *kappa, &e) != ADASLICE_OK) {
         free(*kappa);
         *kappa = NULL;
@@ -345,7 +346,7 @@ static int read_profile(const plan_args *a, plan_job *j)
         } else if (comma && (rc = z_column_add(&zc, path, lineno, n, z))) {
             /* z_column_add said why */
         } else if (!push(&phi, &n, &cap, v)) {
-            rc = complain(RC_FAIL, "%s: out of memory after %zu values", path, n);
+            rc = complain(RC_FAIL, "%s: out of memory after %zu value%s", path, n, plural(n));
         } else if (n == 1) {
             first_line = lineno;
             has_z = comma != NULL;

@@ -121,14 +121,15 @@ static int read_weights(const char *path, size_t count, float *w)
         else if (!(v >= 0 && v <= 1))
             rc = complain(RC_USAGE, "%s:%zu: %s is not a weight in [0, 1]", path, lineno, quote_text(q, s, strlen(s)));
         else if (n == count)
-            rc = complain(RC_USAGE, "%s:%zu: more weights than the model's %zu triangles", path, lineno, count);
+            rc = complain(RC_USAGE, "%s:%zu: more weights than the model's %zu triangle%s", path, lineno, count,
+                          plural(count));
         else
             w[n++] *= (float)v;
     }
     if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && n != count)
-        rc = complain(RC_USAGE, "%s: %zu weights for the model's %zu triangles (one per line, in the order they load)",
-                      path, n, count);
+        rc = complain(RC_USAGE, "%s: %zu weight%s for the model's %zu triangle%s (one per line, in the order they load)",
+                      path, n, plural(n), count, plural(count));
     fclose(f);
     free(line);
     return rc;
@@ -172,7 +173,7 @@ int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **ou
     if (!weights_given(w)) return RC_OK;
     f = (float *)malloc((n ? n : 1) * sizeof *f);
     if (w->saliency) s = (float *)malloc((n ? n : 1) * sizeof *s);
-    if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weights", n);
+    if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
     for (t = 0; !rc && t < n; t++) f[t] = 1;
     /* the file first: a mistake there shows before the saliency's second */
     if (!rc && w->file) rc = read_weights(w->file, n, f);

@@ -1,8 +1,9 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
    STL read whole before its count was checked; a profile's z column ignored;
    malformed OBJ vertex references taken; a negative PLY count called not a number;
-   too-large numbers called not whole numbers and a binary file's raw bytes in a
-   message. Library cases load files; the tool runs as a child process (cli_run.h). */
+   too-large numbers called not whole numbers; "1 layers" and a binary file's raw
+   bytes in a message. Library cases load files; the tool runs as a child process
+   (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -288,6 +289,69 @@ static void too_large_counts_say_the_most(void)
         }
 }
 
+/* ------------------------------------------------------------ 6: one of a thing */
+
+/* "1 " followed by a plural noun ("1 layers"), not a unit (ms), anywhere in s;
+   NULL if there is none. */
+static const char *one_plural(const char *s)
+{
+    const char *p;
+    for (p = s; (p = strstr(p, "1 ")) != NULL; p++) {
+        const char *w = p + 2, *e = w;
+        if (p > s && (isdigit((unsigned char)p[-1]) || p[-1] == '.' || p[-1] == '-')) continue;
+        while (isalpha((unsigned char)*e)) e++;
+        if (e - w >= 3 && e[-1] == 's' && strncmp(w, "ms", 2)) return p;
+    }
+    return NULL;
+}
+
+static void expect_singular(const char *what, const cli_result *r)
+{
+    const char *at = one_plural(r->out), *err = one_plural(r->err);
+    CHECKF(!at && !err, "%s: '%.40s'", what, at ? at : err);
+}
+
+/* Runs where the tool counts one of something: a one-triangle model, a
+   one-value profile, one direction, one layer, one bottom layer. */
+static void counts_of_one_are_singular(void)
+{
+    const char *tri = cli_path("tri.obj"), *one = cli_path("one.txt"), *stl = cli_path("one.stl");
+    unsigned char h[84];
+    cli_result r;
+    cli_write(tri, "v 0 0 0\nv 1 0 0\nv 0 0 0.1\nf 1 2 3\n");
+    cli_write(one, "0.5\n");
+    r = cli_run("plan", tri, "--budget", "1", "--compare", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "1 triangle\n") && strstr(r.out, "fits 1 layer)") &&
+           strstr(r.out, "budget of 1 layer:"), "exit %d: %s%s", r.status, r.out, r.err);
+    expect_singular("plan a triangle", &r);
+    cli_free(&r);
+    r = cli_run("plan", "--profile", one, "--tmin", "0.002", "--tmax", "0.002", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "1 value\n") && strstr(r.out, "1 bin of") && strstr(r.out, "1 .. 1 bin per"),
+           "exit %d: %s%s", r.status, r.out, r.err);
+    expect_singular("plan a value", &r);
+    cli_free(&r);
+    r = cli_run("orient", tetra_obj(), "--dirs", "1", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "1 direction and"), "exit %d: %s%s", r.status, r.out, r.err);
+    expect_singular("orient 1 direction", &r);
+    cli_free(&r);
+    r = cli_run("saliency", tri, "-o", cli_path("tri_w.txt"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "1 triangle\n") && strstr(r.out, "1 face above"), "exit %d: %s%s", r.status,
+           r.out, r.err);
+    expect_singular("saliency of a triangle", &r);
+    cli_free(&r);
+    r = cli_run("slice", tri, "-o", cli_path("tri_job"), "--pixels", "64x64", "--pitch", "0.05", "--bottom-layers", "1",
+                "--uniform", "0.102", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "1 layer of") && strstr(r.out, "1 bottom layer of"), "exit %d: %s%s", r.status,
+           r.out, r.err);
+    expect_singular("slice one layer", &r);
+    cli_free(&r);
+    stl_header(h, "", 1);
+    write_bytes(stl, h, sizeof h);
+    r = cli_run("plan", stl, NULL);
+    CHECKF(r.status == 1 && strstr(r.err, "header says 1 triangle (134 bytes)"), "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+}
+
 /* ------------------------------------------------------------ 7: binary file content in messages */
 
 /* A message quotes a binary file's line escaped (\xNN) and cut short: one
@@ -331,6 +395,7 @@ void test_input_defects(void)
     RUN(malformed_obj_references_are_refused);
     RUN(negative_ply_count_says_negative);
     RUN(too_large_counts_say_the_most);
+    RUN(counts_of_one_are_singular);
     RUN(binary_file_content_is_escaped);
     cli_end();
 }
