@@ -137,7 +137,7 @@ static void orient_usage(FILE *f)
           "  --alpha A           weight of the layer count against the error, 0..1  [0.5]\n"
           "  --map FILE          SVG map of F over the sphere (longitude, latitude)\n"
           "\n", f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_ORIENT);
 }
 
 /* Takes the orient options out of argv; the rest goes to parse_plan. */
@@ -187,8 +187,10 @@ int cmd_orient(int argc, char **argv)
     if (a.out || a.plot || a.profile_out || a.compare)
         return complain(RC_USAGE, "orient prints directions: --out, --plot, --profile-out and --compare belong to adaslice "
                                   "plan MODEL --orient X,Y,Z with the direction orient found");
-    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
-        return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
+    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights) || a.sampler)
+        return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
+                                  "exact profiles: drop --method curvature, --saliency, --weights, --weight and "
+                                  "--sampler");
     memset(&lo, 0, sizeof lo);
     lo.scale = a.scale;
     if (adaslice_mesh_load_file(a.model, &lo, &mesh, &e) != ADASLICE_OK) return library_error(&e);

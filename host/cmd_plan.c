@@ -33,7 +33,7 @@ static void plan_usage(FILE *f)
           "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
           "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
           "\n", f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_PLAN);
     threemf_usage(f);
 }
 

@@ -303,7 +303,7 @@ static void print_usage(FILE *f)
           "\n", f);
     cure_usage(f);
     fputc('\n', f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_PRINT);
 }
 
 static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, char **rest)
@@ -349,8 +349,6 @@ static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *
     if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
     if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
     if ((rc = layer_masks_check(s, 1))) return rc;
-    a->method = ADASLICE_METHOD_OPTIMAL;
-    a->compare = 0;
     /* printer units wherever the printer can plan, so both plans are one */
     a->eps_units = a->metric != ADASLICE_METRIC_VOLUME && !a->budget ? ADASLICE_PRINTER_EPS_UNITS : 0;
     j->args = a;
@@ -469,6 +467,9 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     } else if (!rc) {
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
         if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
+        if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
+            rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
+                                    "--method, --uniform, --out, --plot, --profile-out, --json and --compare");
     }
     free(rest);
     free(rest2);

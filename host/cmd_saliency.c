@@ -32,7 +32,7 @@ static void saliency_usage(FILE *f)
           "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
           "  --no-saliency       weights from --weights and --weight alone\n"
           "\n", f);
-    weights_usage(f);
+    weights_usage(f, 0);
 }
 
 static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)

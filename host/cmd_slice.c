@@ -42,7 +42,7 @@ static void slice_usage(FILE *f)
     slice_options_usage(f);
     cure_usage(f);
     fputc('\n', f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_SLICE);
 }
 
 
@@ -340,6 +340,8 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc && a.profile) rc = complain(RC_USAGE, "slice needs a MODEL, not --profile");
+    if (!rc && (a.json || a.compare))
+        rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");
     free(rest);
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);

@@ -28,46 +28,63 @@ const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
 };
 const char *const MAPPING_NAMES[] = {"linear", "exp", "step"};
 
-void plan_options_usage(FILE *f)
+/* "[0.002]" from ADASLICE_DEFAULT_BIN: the help shows the library's defaults */
+#define DEFAULT_OF(x) DEFAULT_TEXT(x)
+#define DEFAULT_TEXT(x) "[" #x "]"
+enum { FOR_ANY = FOR_PLAN | FOR_SLICE | FOR_ORIENT | FOR_PRINT };
+
+/* The plan options' help, each entry with the commands that take it and use it:
+   orient writes no plan files, profiles exactly and unweighted; print plans
+   the optimal way, as the printer does, and writes no plan files. */
+static const struct plan_help { unsigned commands; const char *text; } PLAN_HELP[] = {
+    {FOR_ANY, "input\n"},
+    {FOR_PLAN, "  --profile FILE      plan this profile instead of a MODEL: one value per line\n"
+               "                      (bins of --bin mm), or CSV z,phi as --profile-out\n"
+               "                      writes it: the value last, z first, the bin centres in\n"
+               "                      mm, evenly spaced, which give the bin\n"},
+    {FOR_ANY, "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"},
+    {FOR_ANY, "profile\n"},
+    {FOR_ANY, "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"},
+    {FOR_ANY, "  --bin MM            bin size                                    " DEFAULT_OF(ADASLICE_DEFAULT_BIN) "\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_PRINT,
+              "  --sampler NAME      exact (from the triangles) or ldi (the\n"
+              "                      paper's sampling by rays along x, y, z)     [exact]\n"
+              "  --res R             ldi: pixels across the largest extent       "
+              DEFAULT_OF(ADASLICE_DEFAULT_RESOLUTION) "\n"
+              "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
+              "                      (the best of 1000, as adaslice orient finds it)\n"},
+    {FOR_ANY, "plan\n"},
+    {FOR_PLAN | FOR_SLICE,
+              "  --method NAME       optimal, greedy, finest, coarsest or\n"
+              "                      curvature (thickness from mean curvature)   [optimal]\n"
+              "  --mapping NAME      curvature: linear, exp or step              [linear]\n"},
+    {FOR_ORIENT, "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"},
+    {FOR_ANY, "  --eps E             allowed error per layer (mm; area: none;\n"
+              "                      volume: mm^3)                               " DEFAULT_OF(ADASLICE_DEFAULT_EPS) "\n"
+              "  --tmin MM           thinnest layer                              " DEFAULT_OF(ADASLICE_DEFAULT_TMIN) "\n"
+              "  --tmax MM           thickest layer                              " DEFAULT_OF(ADASLICE_DEFAULT_TMAX) "\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_ORIENT,
+              "  --uniform T         every layer T mm (--method finest --tmin T --tmax T)\n"},
+    {FOR_ANY, "  --sharp T           a plane at each phi jump above T; 0: off    " DEFAULT_OF(ADASLICE_DEFAULT_SHARP) "\n"
+              "  --budget K          at most K layers, with the smallest eps that allows it\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_ORIENT, "output\n"},
+    {FOR_PLAN | FOR_SLICE,
+              "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
+              "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
+              "  --plot FILE         SVG figure of the profile and the layer thickness\n"},
+    {FOR_PLAN | FOR_ORIENT, "  --json              print a JSON object instead of the summary\n"},
+    {FOR_PLAN, "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
+               "                      curvature on the same profile and print them as in\n"
+               "                      the paper's Table 3\n"},
+    {FOR_ANY, "Heights are in mm from the part's bottom.\n"},
+};
+
+void plan_options_usage(FILE *f, unsigned command)
 {
-    fprintf(f,
-        "input\n"
-        "  --profile FILE      plan this profile instead of a MODEL: one value per line\n"
-        "                      (bins of --bin mm), or CSV z,phi as --profile-out\n"
-        "                      writes it: the value last, z first, the bin centres in\n"
-        "                      mm, evenly spaced, which give the bin\n"
-        "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
-        "profile\n"
-        "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"
-        "  --bin MM            bin size                                    [%g]\n"
-        "  --sampler NAME      exact (from the triangles) or ldi (the\n"
-        "                      paper's sampling by rays along x, y, z)     [exact]\n"
-        "  --res R             ldi: pixels across the largest extent       [%d]\n"
-        "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
-        "                      (the best of 1000, as adaslice orient finds it)\n"
-        "plan\n"
-        "  --method NAME       optimal, greedy, finest, coarsest or\n"
-        "                      curvature (thickness from mean curvature)   [optimal]\n"
-        "  --mapping NAME      curvature: linear, exp or step              [linear]\n"
-        "  --eps E             allowed error per layer (mm; area: none;\n"
-        "                      volume: mm^3)                               [%g]\n"
-        "  --tmin MM           thinnest layer                              [%g]\n"
-        "  --tmax MM           thickest layer                              [%g]\n"
-        "  --uniform T         every layer T mm (--method finest --tmin T --tmax T)\n"
-        "  --sharp T           a plane at each phi jump above T; 0: off    [%g]\n"
-        "  --budget K          at most K layers, with the smallest eps that allows it\n"
-        "output\n"
-        "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
-        "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
-        "  --plot FILE         SVG figure of the profile and the layer thickness\n"
-        "  --json              print a JSON object instead of the summary\n"
-        "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
-        "                      curvature on the same profile and print them as in\n"
-        "                      the paper's Table 3\n"
-        "Heights are in mm from the part's bottom.\n",
-        ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_RESOLUTION, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN,
-        ADASLICE_DEFAULT_TMAX, ADASLICE_DEFAULT_SHARP);
-    weights_usage(f);
+    size_t i;
+    for (i = 0; i < sizeof PLAN_HELP / sizeof *PLAN_HELP; i++)
+        if (PLAN_HELP[i].commands & command) fputs(PLAN_HELP[i].text, f);
+    if (command != FOR_ORIENT) weights_usage(f, 1);
 }
 
 /* --orient best, or a direction X,Y,Z that is not zero */

@@ -12,12 +12,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-void weights_usage(FILE *f)
+void weights_usage(FILE *f, int saliency_option)
 {
-    fputs("weights (paper section 4.2), multiplied face by face into the profile\n"
-          "  --saliency          weight faces by their mesh saliency (Lee et al. 2005);\n"
-          "                      adaslice saliency shows it\n"
-          "  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
+    fputs("weights (paper section 4.2), multiplied face by face into the profile\n", f);
+    if (saliency_option)
+        fputs("  --saliency          weight faces by their mesh saliency (Lee et al. 2005);\n"
+              "                      adaslice saliency shows it\n", f);
+    fputs("  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
           "                      order the model loads (adaslice saliency -o writes one)\n"
           "  --weight REGION=W   weight W in [0,1] for the faces whose centroid lies in\n"
           "                      REGION: box:X0,Y0,Z0,X1,Y1,Z1 or sphere:X,Y,Z,R (mm, after\n"

@@ -1,9 +1,9 @@
 /* Input defects users found, each with the cases that show it fixed: a huge binary
    STL read whole before its count was checked; a profile's z column ignored;
    malformed OBJ vertex references taken; a negative PLY count called not a number;
-   too-large numbers called not whole numbers; "1 layers" and a binary file's raw
-   bytes in a message. Library cases load files; the tool runs as a child process
-   (cli_run.h). */
+   too-large numbers called not whole numbers; "1 layers"; a binary file's raw
+   bytes in a message and help listing options a command does not take. Library
+   cases load files; the tool runs as a child process (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -23,6 +23,16 @@
 /* ------------------------------------------------------------ helpers */
 
 #define HUGE_SIZE 2147483648.0 /* 2 GiB */
+
+/* cli_run with an argument list: up to 15 arguments, NULL-terminated */
+static cli_result run_list(const char *const *a)
+{
+    const char *v[16] = {NULL};
+    int n;
+    for (n = 0; n < 15 && a[n]; n++) v[n] = a[n];
+    return cli_run(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11], v[12], v[13], v[14],
+                   (const char *)NULL);
+}
 
 static void write_bytes(const char *path, const void *data, size_t size)
 {
@@ -385,6 +395,112 @@ static void binary_file_content_is_escaped(void)
     cli_free(&r);
 }
 
+/* ------------------------------------------------------------ 8 and 9: help */
+
+/* A value each option takes in the tests below (and what it needs besides),
+   by "--option PLACEHOLDER" as help writes it, else by the option alone. */
+static const struct { const char *option, *value; } OPTION_VALUES[] = {
+    {"-o", "@out"}, {"--3mf", "@x.3mf"}, {"--aa", "2"}, {"--alpha", "0.5"}, {"--baud", "115200"}, {"--bin", "0.002"},
+    {"--bottom-exposure", "25"}, {"--bottom-layers", "3"}, {"--budget", "100"}, {"--dirs", "10"},
+    {"--display", "68x120 --pixels 1440x2560"}, {"--eps", "0.065"}, {"--exposure S@T", "2.5@0.05"},
+    {"--exposure S1@T1,S2@T2", "2@0.05,6@0.15"}, {"--format", "dir"}, {"--give-up", "30"}, {"--map", "@map.svg"},
+    {"--mapping", "exp"}, {"--memory", "4000"}, {"--method", "greedy"}, {"--metric", "area"}, {"--mirror", "x"},
+    {"--nozzle", "0.4"}, {"--orient", "0,0,1"}, {"--out", "@plan.csv"}, {"--peel", "5"}, {"--peel-speed", "2"},
+    {"--penetration", "0.098"}, {"--pitch", "0.05 --pixels 1440x2560"}, {"--pixels", "1440x2560 --pitch 0.05"},
+    {"--place", "0,0"}, {"--plot", "@plot.svg"}, {"--ply", "@c.ply"}, {"--port", "/nonexistent/port"},
+    {"--printer", "elegoo-saturn"}, {"--profile", "@no-such-profile.csv"}, {"--profile-out", "@profile.csv"},
+    {"--report", "@report.json"}, {"--res", "1024 --sampler ldi"}, {"--resume-from", "2"}, {"--return-speed", "4"},
+    {"--rotate", "90"}, {"--sampler", "ldi"}, {"--scale", "2"}, {"--settle", "0.5"}, {"--sharp", "0.5"},
+    {"--slice-at", "top"}, {"--threads", "2"}, {"--tmax", "0.15"}, {"--tmin", "0.05"}, {"--uniform", "0.05"},
+    {"--weight", "box:0,0,0,1,1,1=0.5"}, {"--weights", "@w.txt"},
+};
+
+static const char *option_value(const char *option, const char *placeholder)
+{
+    char key[80];
+    size_t i;
+    snprintf(key, sizeof key, "%s %s", option, placeholder);
+    for (i = 0; i < sizeof OPTION_VALUES / sizeof *OPTION_VALUES; i++)
+        if (!strcmp(OPTION_VALUES[i].option, key)) return OPTION_VALUES[i].value;
+    for (i = 0; i < sizeof OPTION_VALUES / sizeof *OPTION_VALUES; i++)
+        if (!strcmp(OPTION_VALUES[i].option, option)) return OPTION_VALUES[i].value;
+    return NULL;
+}
+
+/* `command` on a model that does not exist, with the arguments it needs, and
+   `option` with `value` ("@name": a file in the test directory; words after a
+   space: what the option needs besides): every argument is accepted, so the
+   run gets as far as the missing model (or port) and fails with exit 1. */
+static void expect_accepted(const char *command, const char *option, const char *value)
+{
+    static char words[4][200];
+    const char *args[16];
+    char spec[200], *save = NULL, *w;
+    int n = 0, k = 0;
+    cli_result r;
+    args[n++] = command;
+    if (strcmp(option, "--profile")) args[n++] = cli_path("no-such-model.stl"); /* --profile replaces it */
+    if (!strcmp(command, "slice")) { args[n++] = "-o"; args[n++] = cli_path("job"); }
+    if (!strcmp(command, "saliency")) { args[n++] = "-o"; args[n++] = cli_path("w.txt"); }
+    if (!strcmp(command, "print")) { args[n++] = "--port"; args[n++] = "/nonexistent/port"; }
+    args[n++] = option;
+    snprintf(spec, sizeof spec, "%s", value ? value : "");
+    for (w = strtok_r(spec, " ", &save); w && k < 4; w = strtok_r(NULL, " ", &save), k++) {
+        snprintf(words[k], sizeof words[k], "%s", w[0] == '@' ? cli_path(w + 1) : w);
+        args[n++] = words[k];
+    }
+    args[n] = NULL;
+    r = run_list(args);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && (strstr(r.err, "no-such") || strstr(r.err, "/nonexistent/port")),
+           "%s %s %s: exit %d, '%s'", command, option, value ? value : "", r.status, r.err);
+    cli_free(&r);
+}
+
+/* One option of a help line: by name and placeholder, or (in a list) by name. */
+static int check_listed(const char *command, const char *option, const char *placeholder, int takes_value)
+{
+    const char *v = takes_value ? option_value(option, placeholder) : NULL;
+    CHECKF(!takes_value || v, "%s --help lists %s %s: give it a value in OPTION_VALUES", command, option, placeholder);
+    CHECKF(strcmp(command, "saliency") || strcmp(option, "--saliency"), "saliency --help lists --saliency");
+    if (!takes_value || v) expect_accepted(command, option, v);
+    return 1;
+}
+
+/* Each option a command's help lists (a line's first column: "--bin MM",
+   "--json", "--mirror, --rotate, ...") is accepted by that command, and
+   adaslice saliency does not offer --saliency, which it always does. */
+static void every_option_in_help_is_accepted(void)
+{
+    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print"};
+    size_t c;
+    for (c = 0; c < sizeof commands / sizeof *commands; c++) {
+        cli_result h = cli_run(commands[c], "--help", NULL);
+        char *line, *save = NULL;
+        int listed = 0;
+        CHECKF(h.status == 0 && !*h.err, "%s --help: exit %d", commands[c], h.status);
+        for (line = strtok_r(h.out, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+            char column[200], option[64], placeholder[64] = "", *item, *next;
+            const char *gap;
+            if (strncmp(line, "  -", 3)) continue;
+            gap = strstr(line + 2, "  ");
+            snprintf(column, sizeof column, "%.*s", gap ? (int)(gap - line - 2) : (int)strlen(line + 2), line + 2);
+            if (strstr(column, ", -")) { /* several options, each as another command has it */
+                for (item = column; item; item = next) {
+                    next = strstr(item, ", ");
+                    if (next) *next = 0, next += 2;
+                    listed += check_listed(commands[c], item, "", 1);
+                }
+                continue;
+            }
+            /* "--option PLACEHOLDER description" or "--option description" */
+            sscanf(column, "%63s %63s", option, placeholder);
+            listed += check_listed(commands[c], option, placeholder, isupper((unsigned char)placeholder[0]) != 0);
+        }
+        CHECKF(listed >= 5, "%s --help lists %d options", commands[c], listed);
+        cli_free(&h);
+    }
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -397,5 +513,6 @@ void test_input_defects(void)
     RUN(too_large_counts_say_the_most);
     RUN(counts_of_one_are_singular);
     RUN(binary_file_content_is_escaped);
+    RUN(every_option_in_help_is_accepted);
     cli_end();
 }
