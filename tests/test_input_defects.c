@@ -2,8 +2,9 @@
    STL read whole before its count was checked; a profile's z column ignored;
    malformed OBJ vertex references taken; a negative PLY count called not a number;
    too-large numbers called not whole numbers; "1 layers"; a binary file's raw
-   bytes in a message and help listing options a command does not take. Library
-   cases load files; the tool runs as a child process (cli_run.h). */
+   bytes in a message; help listing options a command does not take and no adaslice
+   help COMMAND. Library cases load files; the tool runs as a child process
+   (cli_run.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* ftruncate, setenv */
 #endif
@@ -501,6 +502,32 @@ static void every_option_in_help_is_accepted(void)
     }
 }
 
+/* adaslice help is adaslice --help, and adaslice help COMMAND is adaslice
+   COMMAND --help; an unknown COMMAND or a second one is a usage error. */
+static void help_command_shows_help(void)
+{
+    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print"};
+    cli_result a = cli_run("help", NULL), b = cli_run("--help", NULL);
+    size_t i;
+    CHECKF(a.status == 0 && !*a.err && !strcmp(a.out, b.out) && strstr(a.out, "help"), "exit %d: %s", a.status, a.err);
+    cli_free(&a);
+    cli_free(&b);
+    for (i = 0; i < sizeof commands / sizeof *commands; i++) {
+        a = cli_run("help", commands[i], NULL);
+        b = cli_run(commands[i], "--help", NULL);
+        CHECKF(a.status == 0 && !*a.err && !strcmp(a.out, b.out) && strstr(a.out, commands[i]), "help %s: exit %d: %s",
+               commands[i], a.status, a.err);
+        cli_free(&a);
+        cli_free(&b);
+    }
+    a = cli_run("help", "frobnicate", NULL);
+    CHECKF(a.status == 2 && cli_one_message(a.err) && strstr(a.err, "frobnicate") && !*a.out, "exit %d: %s", a.status, a.err);
+    cli_free(&a);
+    a = cli_run("help", "plan", "slice", NULL);
+    CHECKF(a.status == 2 && cli_one_message(a.err) && strstr(a.err, "slice") && !*a.out, "exit %d: %s", a.status, a.err);
+    cli_free(&a);
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -514,5 +541,6 @@ void test_input_defects(void)
     RUN(counts_of_one_are_singular);
     RUN(binary_file_content_is_escaped);
     RUN(every_option_in_help_is_accepted);
+    RUN(help_command_shows_help);
     cli_end();
 }
