@@ -1143,6 +1143,9 @@ static const char *adaslice__quote(char q[48], const char *w, size_t n)
     return q;
 }
 
+/* A count's noun in a message: "1 triangle", "2 triangles". */
+static const char *adaslice__noun(size_t n, const char *one, const char *many) { return n == 1 ? one : many; }
+
 /* An integral double as exact text: %g keeps only six digits, too few for an index. */
 static const char *adaslice__int_text(char buf[24], double v)
 {
@@ -1226,6 +1229,8 @@ static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
         to[0] = t[0]; to[1] = t[1]; to[2] = t[2];
         kept++;
     }
+    if (!kept && b->nt == 1)
+        return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: its one triangle has zero area", b->name);
     if (!kept && b->nt)
         return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: all %zu triangles have zero area",
                               b->name, b->nt);
@@ -1387,22 +1392,30 @@ static double adaslice__scalar(const unsigned char *p, int type, int big_endian)
 
 /* ---- STL */
 
+/* 84 bytes of header and count, then 50 per triangle, in data `total` bytes
+   long of which b may hold only the first 84 or more (the file loader checks
+   the count before it reads the rest). A wrong count and a cut-off file look
+   alike, so both are a count mismatch. */
+static adaslice_result adaslice__stl_count(adaslice__build *b, size_t total, size_t *count)
+{
+    if (total < 84)
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, total, 0,
+                             "the data ends inside the 84-byte header and triangle count");
+    *count = (size_t)adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0);
+    if ((total - 84) % 50 || (total - 84) / 50 != *count)
+        return adaslice__fail(b->err, ADASLICE_ERR_COUNT, 80, 0,
+                              "binary STL: header says %zu %s (%zu bytes) but the data is %zu bytes", *count,
+                              adaslice__noun(*count, "triangle", "triangles"), 84 + 50 * *count, total);
+    return ADASLICE_OK;
+}
+
 static adaslice_result adaslice__stl_binary(adaslice__build *b)
 {
     size_t count, i, at;
     float xyz[3];
     int corner, k;
     adaslice_result r;
-    if (b->size < 84)
-        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, b->size, 0,
-                             "the data ends inside the 84-byte header and triangle count");
-    count = (size_t)adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0);
-    /* a wrong count and a cut-off file look alike, so both are a count mismatch */
-    if ((b->size - 84) % 50 || (b->size - 84) / 50 != count)
-        return adaslice__fail(b->err, ADASLICE_ERR_COUNT, 80, 0,
-                              "binary STL: header says %zu triangles (%zu bytes) but the data is %zu bytes",
-                              count, 84 + 50 * count, b->size);
-    if ((r = adaslice__reserve(b, 3 * count, count))) return r;
+    if ((r = adaslice__stl_count(b, b->size, &count)) || (r = adaslice__reserve(b, 3 * count, count))) return r;
     for (i = 0; i < count; i++) {
         for (corner = 0; corner < 3; corner++) { /* the 12-byte normal is ignored: often wrong */
             for (k = 0; k < 3; k++) {
@@ -1467,14 +1480,20 @@ static adaslice_result adaslice__stl_ascii(adaslice__build *b)
 /* ---- OBJ */
 
 /* "7", "7/1", "7/1/3", "7//3" or relative "-1": the vertex part, as a 0-based index
-   into the vertices read so far. */
+   into the vertices read so far. The texture and normal indices are not used, but
+   each must be an integer or left out ("7//"), so that "7/a/" is not taken for 7. */
 static adaslice_result adaslice__obj_index(adaslice__build *b, const char *w, size_t n, size_t line, uint32_t *out)
 {
-    long long i, k;
-    size_t used = adaslice__integer(w, n, &i);
+    long long i, k, unused;
+    size_t used = adaslice__integer(w, n, &i), at, slashes = 0;
     char q[48];
-    if (!used || (used < n && w[used] != '/'))
-        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line, "'%s' is not a vertex index",
+    for (at = used; used && at < n && w[at] == '/' && slashes < 2; slashes++) {
+        at++;
+        at += adaslice__integer(w + at, n - at, &unused);
+    }
+    if (!used || at < n)
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), line,
+                             "'%s' is not a vertex reference (v, v/vt, v/vt/vn or v//vn, each an integer)",
                              adaslice__quote(q, w, n));
     if (i == 0)
         return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,
@@ -1482,8 +1501,8 @@ static adaslice_result adaslice__obj_index(adaslice__build *b, const char *w, si
     k = i < 0 ? (long long)b->nv + i : i - 1;
     if (k < 0 || k >= (long long)b->nv)
         return adaslice__bad(b, ADASLICE_ERR_INDEX, adaslice__at(b, w), line,
-                             "vertex index %s is out of range (%zu vertices so far)",
-                             adaslice__quote(q, w, used), b->nv);
+                             "vertex index %s is out of range (%zu %s so far)", adaslice__quote(q, w, used),
+                             b->nv, adaslice__noun(b->nv, "vertex", "vertices"));
     *out = (uint32_t)k;
     return ADASLICE_OK;
 }
@@ -1600,9 +1619,12 @@ static adaslice_result adaslice__ply_element_line(adaslice__ply_reader *r)
     if (e->kind == ADASLICE__PLY_VERTEX && r->has_vertex)
         return adaslice__bad(b, ADASLICE_ERR_FORMAT, adaslice__at(b, w), r->t.line, "a second 'vertex' element");
     n = adaslice__word(&r->t, 0, &w);
-    if (!n || adaslice__integer(w, n, &count) != n || count < 0)
+    if (!n || adaslice__integer(w, n, &count) != n)
         return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), r->t.line,
-                             "element count '%s' is not a number", adaslice__quote(q, w, n));
+                             "element '%s' count '%s' is not a number", e->name, adaslice__quote(q, w, n));
+    if (count < 0)
+        return adaslice__bad(b, ADASLICE_ERR_NUMBER, adaslice__at(b, w), r->t.line,
+                             "element '%s' count %s is negative", e->name, adaslice__quote(q, w, n));
     if (count > UINT32_MAX) /* indices are 32-bit, and no other element gets this big */
         return adaslice__bad(b, ADASLICE_ERR_OVERFLOW, adaslice__at(b, w), r->t.line,
                              "element '%s' count %s exceeds 4294967295", e->name, adaslice__quote(q, w, n));
@@ -1770,9 +1792,9 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
     if (v < 0) return adaslice__bad(b, ADASLICE_ERR_FORMAT, at, line, "list length %g is negative", v);
     left = r->encoding ? b->size - r->pos : (size_t)(r->t.end - r->t.p);
     if (v > (double)(left / item))
-        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, at, line,
-                             "a list of %s entries cannot fit in the %zu bytes left",
-                             adaslice__int_text(num, v), left);
+        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, at, line, "a list of %s %s cannot fit in the %zu %s left",
+                             adaslice__int_text(num, v), adaslice__noun((size_t)v, "entry", "entries"), left,
+                             adaslice__noun(left, "byte", "bytes"));
     n = (size_t)v;
     for (j = 0; j < n; j++) {
         if ((res = adaslice__ply_value(r, e, record, p->type, p->role ? &v : NULL))) return res;
@@ -1780,8 +1802,8 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
         if (e->kind == ADASLICE__PLY_STRIPS && v == -1) { run = 0; continue; }
         if (!(v >= 0 && v < (double)r->vertices))
             return adaslice__bad(b, ADASLICE_ERR_INDEX, r->at, adaslice__ply_line(r),
-                                 "vertex index %s is out of range (%zu vertices)", adaslice__int_text(num, v),
-                                 r->vertices);
+                                 "vertex index %s is out of range (%zu %s)", adaslice__int_text(num, v),
+                                 r->vertices, adaslice__noun(r->vertices, "vertex", "vertices"));
         cur = (uint32_t)v;
         if (e->kind == ADASLICE__PLY_FACE) {
             if (j == 0) first = cur;
@@ -1799,25 +1821,36 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
     return ADASLICE_OK;
 }
 
+/* Every record of e takes some bytes (in ASCII a character and a separator per
+   value), so a count that the `left` bytes from `at` on cannot hold is refused
+   before anything is allocated; *least is the bytes a record takes at least. */
+static adaslice_result adaslice__ply_fits(adaslice__ply_reader *r, const adaslice__ply_elem *e, size_t at, size_t left,
+                                          size_t *least)
+{
+    unsigned k;
+    *least = 0;
+    for (k = 0; k < e->props; k++) {
+        const adaslice__ply_prop *p = &r->props[e->first + k];
+        *least += r->encoding ? adaslice__type_size[p->count_type ? p->count_type : p->type] : 2;
+    }
+    if (e->count > (left + !r->encoding) / *least)
+        return adaslice__bad(r->b, ADASLICE_ERR_TRUNCATED, at, adaslice__ply_line(r),
+                             "element '%s' has %zu %s of at least %zu bytes, but only %zu %s", e->name, e->count,
+                             adaslice__noun(e->count, "record", "records"), *least, left,
+                             adaslice__noun(left, "byte remains", "bytes remain"));
+    return ADASLICE_OK;
+}
+
 static adaslice_result adaslice__ply_element(adaslice__ply_reader *r, const adaslice__ply_elem *e)
 {
     adaslice__build *b = r->b;
-    size_t i, least = 0, left;
+    size_t i, least;
     unsigned k;
-    adaslice_result res = ADASLICE_OK;
+    adaslice_result res;
     if (!e->props) return ADASLICE_OK; /* no data, however many records it claims */
-    /* Every record takes some bytes (in ASCII a character and a separator per value),
-       so a count the data cannot hold is refused before anything is allocated. */
-    for (k = 0; k < e->props; k++) {
-        const adaslice__ply_prop *p = &r->props[e->first + k];
-        least += r->encoding ? adaslice__type_size[p->count_type ? p->count_type : p->type] : 2;
-    }
-    left = r->encoding ? b->size - r->pos : (size_t)(r->t.end - r->t.p);
-    if (e->count > (left + !r->encoding) / least)
-        return adaslice__bad(b, ADASLICE_ERR_TRUNCATED, r->encoding ? r->pos : adaslice__at(b, r->t.p),
-                             adaslice__ply_line(r),
-                             "element '%s' has %zu records of at least %zu bytes, but only %zu bytes remain",
-                             e->name, e->count, least, left);
+    res = r->encoding ? adaslice__ply_fits(r, e, r->pos, b->size - r->pos, &least)
+                      : adaslice__ply_fits(r, e, adaslice__at(b, r->t.p), (size_t)(r->t.end - r->t.p), &least);
+    if (res) return res;
     if (e->kind == ADASLICE__PLY_VERTEX) res = adaslice__reserve(b, e->count, 0);
     else if (e->kind) res = adaslice__reserve(b, 0, b->nt + e->count);
     if (res) return res;
@@ -1856,6 +1889,39 @@ static adaslice_result adaslice__ply(adaslice__build *b)
     return ADASLICE_OK;
 }
 
+#ifndef ADASLICE_NO_STDIO
+/* The counts of data `total` bytes long against its size, from b, its first
+   bytes (the file loader's first look), when they hold the whole header: each
+   element that starts at a known place, which is every one up to the first with
+   records of varying size (a list, or any ASCII record). A header that the
+   first bytes cut off is left for the whole read to judge. */
+static adaslice_result adaslice__ply_check_start(adaslice__build *b, size_t total)
+{
+    adaslice__ply_reader r;
+    adaslice_error *error = b->err, cut;
+    size_t least;
+    unsigned i, k;
+    adaslice_result res;
+    memset(&r, 0, sizeof r);
+    r.b = b;
+    r.t = adaslice__text_at(b);
+    b->err = &cut;
+    res = adaslice__ply_header(&r);
+    b->err = error;
+    if (res || r.t.p == r.t.end) return ADASLICE_OK; /* cut off, or where the data starts is unsure */
+    r.pos = adaslice__at(b, r.t.p);
+    for (i = 0; i < r.elem_count; i++) {
+        const adaslice__ply_elem *e = &r.elems[i];
+        if (!e->props) continue;
+        if ((res = adaslice__ply_fits(&r, e, r.pos, total - r.pos, &least))) return res;
+        for (k = 0; k < e->props && !r.props[e->first + k].count_type; k++) {}
+        if (!r.encoding || k < e->props) break;
+        r.pos += e->count * least; /* fixed-size binary records: least is their size */
+    }
+    return ADASLICE_OK;
+}
+#endif
+
 /* ---- the loaders */
 
 static int adaslice__obj_keyword(const char *w, size_t n)
@@ -1867,67 +1933,96 @@ static int adaslice__obj_keyword(const char *w, size_t n)
     return 0;
 }
 
-/* AUTO: the first rule that matches wins; ADASLICE_FORMAT_AUTO when none does. A
-   binary STL header may start with "solid", so the exact size is tested first. */
-static adaslice_format adaslice__detect(const adaslice__build *b)
+/* adaslice__detect: the first bytes end before the rules can tell */
+#define ADASLICE__UNDECIDED (-1)
+
+/* AUTO, for data `total` bytes long of which b holds all or only the first bytes:
+   the first rule that matches wins; ADASLICE_FORMAT_AUTO when none does. A
+   binary STL header may start with "solid", so the exact size is tested first;
+   text holds no NUL, so the text rules read up to the first one (a binary
+   header's count is seldom without one). */
+static int adaslice__detect(const adaslice__build *b, size_t total)
 {
-    adaslice__text t = adaslice__text_at(b);
-    const char *w;
+    adaslice__text text = adaslice__text_at(b), t;
+    const char *w, *nul = ADASLICE__CAST(const char *, memchr(b->text, 0, b->size));
     size_t n;
+    int open = !nul && b->size < total; /* text rules that read to the end of b need more */
     if (b->size >= 4 && memcmp(b->text, "ply", 3) == 0 && (b->text[3] == '\n' || adaslice__blank(b->text[3])))
         return ADASLICE_FORMAT_PLY;
-    if (b->size >= 84 && (b->size - 84) % 50 == 0 &&
-        (double)((b->size - 84) / 50) == adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0))
+    if (total >= 84 && (total - 84) % 50 == 0 &&
+        (double)((total - 84) / 50) == adaslice__scalar(b->bytes + 80, ADASLICE__U32, 0))
         return ADASLICE_FORMAT_STL_BINARY;
+    if (nul) text.end = nul;
+    t = text;
     n = adaslice__word(&t, 1, &w);
+    if (open && t.p == t.end) return ADASLICE__UNDECIDED;
     if (adaslice__is(w, n, "solid")) {
         adaslice__skip_line(&t);
         n = adaslice__word(&t, 1, &w);
+        if (open && t.p == t.end) return ADASLICE__UNDECIDED;
         if (adaslice__is(w, n, "facet") || adaslice__is(w, n, "endsolid")) return ADASLICE_FORMAT_STL_ASCII;
     }
-    t = adaslice__text_at(b);
+    t = text;
     while ((n = adaslice__word(&t, 1, &w)) && w[0] == '#') adaslice__skip_line(&t);
+    if (open && t.p == t.end) return ADASLICE__UNDECIDED;
     if (adaslice__obj_keyword(w, n)) return ADASLICE_FORMAT_OBJ;
-    return b->size >= 84 ? ADASLICE_FORMAT_STL_BINARY : ADASLICE_FORMAT_AUTO;
+    return total >= 84 ? ADASLICE_FORMAT_STL_BINARY : ADASLICE_FORMAT_AUTO;
+}
+
+/* What a load and the file loader's first look share: b over `data`, all of the
+   data or its first `size` of `total` bytes, and *format, detected when the
+   options say AUTO (ADASLICE__UNDECIDED when the first bytes cannot tell). */
+static adaslice_result adaslice__begin(adaslice__build *b, const void *data, size_t size, size_t total,
+                                       const adaslice_load_options *options, adaslice_error *error, int *format)
+{
+    static const char *const names[] = {"", "binary STL", "ASCII STL", "OBJ", "PLY"};
+    adaslice__text t;
+    const char *w;
+    memset(b, 0, sizeof *b);
+    if (!data && size) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "data is NULL, size %zu", size);
+    if (!data) data = ""; /* so that no pointer arithmetic touches NULL */
+    b->text = ADASLICE__CAST(const char *, data);
+    b->bytes = ADASLICE__CAST(const unsigned char *, data);
+    b->size = size;
+    b->err = error;
+    b->scale = options && options->scale != 0 ? options->scale : 1;
+    b->a = adaslice__allocator(options ? options->allocator : NULL);
+    if (!(b->scale > 0 && b->scale <= DBL_MAX))
+        return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "scale %g is not positive and finite", b->scale);
+    *format = options ? (int)options->format : (int)ADASLICE_FORMAT_AUTO;
+    if (*format == ADASLICE_FORMAT_AUTO) {
+        t = adaslice__text_at(b);
+        if (adaslice__word(&t, 1, &w)) *format = adaslice__detect(b, total);
+        else if (size < total) *format = ADASLICE__UNDECIDED; /* blank so far */
+        else return adaslice__fail(error, ADASLICE_ERR_EMPTY, 0, 0, "the data is empty");
+        if (*format == ADASLICE_FORMAT_AUTO)
+            return adaslice__fail(error, ADASLICE_ERR_FORMAT, 0, 0,
+                                  "not a mesh: no 'ply' magic, STL 'solid ... facet' or OBJ statement, "
+                                  "and %zu %s too short for binary STL", total,
+                                  adaslice__noun(total, "byte is", "bytes is"));
+    }
+    if (*format == ADASLICE__UNDECIDED) return ADASLICE_OK;
+    if (*format < ADASLICE_FORMAT_STL_BINARY || *format > ADASLICE_FORMAT_PLY)
+        return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "unknown format %d", *format);
+    b->name = names[*format];
+    return ADASLICE_OK;
 }
 
 ADASLICE_DEF adaslice_result adaslice_mesh_load(const void *data, size_t size, const adaslice_load_options *options,
                                                 adaslice_mesh *mesh, adaslice_error *error)
 {
     adaslice__build b;
-    adaslice__text t;
-    const char *w;
-    adaslice_format format = options ? options->format : ADASLICE_FORMAT_AUTO;
+    int format;
     adaslice_result r;
     adaslice__ok(error);
     if (!mesh) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "mesh is NULL");
     memset(mesh, 0, sizeof *mesh);
-    if (!data && size) return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "data is NULL, size %zu", size);
-    memset(&b, 0, sizeof b);
-    if (!data) data = ""; /* so that no pointer arithmetic touches NULL */
-    b.text = ADASLICE__CAST(const char *, data);
-    b.bytes = ADASLICE__CAST(const unsigned char *, data);
-    b.size = size;
-    b.err = error;
-    b.scale = options && options->scale != 0 ? options->scale : 1;
-    b.a = adaslice__allocator(options ? options->allocator : NULL);
-    if (!(b.scale > 0 && b.scale <= DBL_MAX))
-        return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "scale %g is not positive and finite", b.scale);
-    if (format == ADASLICE_FORMAT_AUTO) {
-        t = adaslice__text_at(&b);
-        if (!adaslice__word(&t, 1, &w)) return adaslice__fail(error, ADASLICE_ERR_EMPTY, 0, 0, "the data is empty");
-        format = adaslice__detect(&b);
-        if (format == ADASLICE_FORMAT_AUTO)
-            return adaslice__fail(error, ADASLICE_ERR_FORMAT, 0, 0,
-                                  "not a mesh: no 'ply' magic, STL 'solid ... facet' or OBJ statement, "
-                                  "and %zu bytes is too short for binary STL", size);
-    }
+    if ((r = adaslice__begin(&b, data, size, size, options, error, &format))) return r;
     switch (format) {
-    case ADASLICE_FORMAT_STL_BINARY: b.name = "binary STL"; r = adaslice__stl_binary(&b); break;
-    case ADASLICE_FORMAT_STL_ASCII: b.name = "ASCII STL"; r = adaslice__stl_ascii(&b); break;
-    case ADASLICE_FORMAT_OBJ: b.name = "OBJ"; r = adaslice__obj(&b); break;
-    case ADASLICE_FORMAT_PLY: b.name = "PLY"; r = adaslice__ply(&b); break;
-    default: return adaslice__fail(error, ADASLICE_ERR_ARGUMENT, 0, 0, "unknown format %d", (int)format);
+    case ADASLICE_FORMAT_STL_BINARY: r = adaslice__stl_binary(&b); break;
+    case ADASLICE_FORMAT_STL_ASCII: r = adaslice__stl_ascii(&b); break;
+    case ADASLICE_FORMAT_OBJ: r = adaslice__obj(&b); break;
+    default: r = adaslice__ply(&b); break;
     }
     if (!r) r = adaslice__finish(&b, mesh);
     if (r) {
@@ -1935,20 +2030,42 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load(const void *data, size_t size, c
         adaslice__free(&b.a, b.t);
         return r;
     }
-    mesh->format = format;
+    mesh->format = (adaslice_format)format;
     return ADASLICE_OK;
 }
 
 #ifndef ADASLICE_NO_STDIO
 #include <errno.h>
 
+/* The file loader's first look: a binary STL's count and a PLY header are
+   checked against the file's size before the rest is read. */
+#define ADASLICE__FILE_START 4096
+
+/* What the first `size` bytes of a file `total` bytes long show to be wrong. */
+static adaslice_result adaslice__check_start(const unsigned char *start, size_t size, size_t total,
+                                             const adaslice_load_options *options, adaslice_error *error)
+{
+    adaslice__build b;
+    size_t count;
+    int format;
+    adaslice_result r = adaslice__begin(&b, start, size, total, options, error, &format);
+    if (r) return r;
+    if (format == ADASLICE_FORMAT_STL_BINARY) return adaslice__stl_count(&b, total, &count);
+    if (format == ADASLICE_FORMAT_PLY) return adaslice__ply_check_start(&b, total);
+    return ADASLICE_OK;
+}
+
+/* The first bytes are checked against the size before the rest is read, so that
+   a wrong count in a huge file fails at once, not after reading it all. */
 ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path, const adaslice_load_options *options,
                                                      adaslice_mesh *mesh, adaslice_error *error)
 {
     adaslice_allocator a = adaslice__allocator(options ? options->allocator : NULL);
     adaslice_result r;
-    void *data = NULL;
+    unsigned char start[ADASLICE__FILE_START], *data = NULL;
+    size_t first = 0;
     long size = -1;
+    int judged = 0; /* r is the loader's, whose message lacks the path */
     FILE *f;
     char why[320];
     if (mesh) memset(mesh, 0, sizeof *mesh);
@@ -1962,13 +2079,22 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path, const ada
         return r;
     }
     if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
+    if (size >= 0) first = (size_t)size < sizeof start ? (size_t)size : sizeof start;
     if (size < 0 || size == LONG_MAX || fseek(f, 0, SEEK_SET) != 0) {
         r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot find the size: %s", path, strerror(errno));
-    } else if (!(data = adaslice__alloc(&a, (size_t)size, 1))) {
-        r = adaslice__fail(error, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory for %zu bytes", path, (size_t)size);
-    } else if (fread(data, 1, (size_t)size, f) != (size_t)size) {
+    } else if (fread(start, 1, first, f) != first) {
         r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot read", path);
-    } else if ((r = adaslice_mesh_load(data, (size_t)size, options, mesh, error)) && error) {
+    } else if ((r = adaslice__check_start(start, first, (size_t)size, options, error)) != ADASLICE_OK) {
+        judged = 1;
+    } else if (!(data = ADASLICE__CAST(unsigned char *, adaslice__alloc(&a, (size_t)size, 1)))) {
+        r = adaslice__fail(error, ADASLICE_ERR_NOMEM, 0, 0, "%s: out of memory for %zu bytes", path, (size_t)size);
+    } else if (memcpy(data, start, first), fread(data + first, 1, (size_t)size - first, f) != (size_t)size - first) {
+        r = adaslice__fail(error, ADASLICE_ERR_IO, 0, 0, "%s: cannot read", path);
+    } else {
+        r = adaslice_mesh_load(data, (size_t)size, options, mesh, error);
+        judged = 1;
+    }
+    if (r && judged && error) {
         memcpy(why, error->message, sizeof why);
         adaslice__fail(error, r, error->offset, error->line, "%s: %s", path, why);
     }

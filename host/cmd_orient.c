@@ -138,7 +138,7 @@ static void orient_usage(FILE *f)
           "  --alpha A           weight of the layer count against the error, 0..1  [0.5]\n"
           "  --map FILE          SVG map of F over the sphere (longitude, latitude)\n"
           "\n", f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_ORIENT);
 }
 
 /* Takes the orient options out of argv; the rest goes to parse_plan. */
@@ -187,8 +187,10 @@ int cmd_orient(int argc, char **argv)
     if (a.out || a.plot || a.profile_out || a.compare)
         return complain(RC_USAGE, "orient prints directions: --out, --plot, --profile-out and --compare belong to adaslice "
                                   "plan MODEL --orient X,Y,Z with the direction orient found");
-    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights))
-        return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans");
+    if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights) || a.sampler)
+        return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
+                                  "exact profiles: drop --method curvature, --saliency, --weights, --weight and "
+                                  "--sampler");
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();
     rc = plan_orient_search(&a, &mesh, o.dirs, o.alpha, &scores, minima, &count);
@@ -236,9 +238,9 @@ int cmd_orient(int argc, char **argv)
     } else if (!rc) {
         size_t feasible = 0;
         for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;
-        printf("%s: %zu directions and the 6 axes (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst "
+        printf("%s: %zu direction%s and the 6 axes (%zu feasible) in %.2f s, F = %g K/max K + %g eps/max eps (eps: worst "
                "layer error)\n",
-               base_name(a.model), o.dirs, feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
+               base_name(a.model), o.dirs, plural(o.dirs), feasible, (now_ms() - t0) / 1000, o.alpha, 1 - o.alpha);
         printf("rank  direction (x, y, z)           rotate about (x, y, z)   by deg   layers  mean err   worst err        F\n");
         for (i = 0; i < count && i <= SEARCH_MINIMA; i++) {
             const adaslice_direction_score *s = &scores[minima[i]];

@@ -34,7 +34,7 @@ static void plan_usage(FILE *f)
           "within eps (Mao et al., Adaptive Slicing Based on Efficient Profile Analysis,\n"
           "section 3.3). MODEL is a binary or ASCII STL, OBJ or PLY file in mm; +z is up.\n"
           "\n", f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_PLAN);
     threemf_usage(f);
 }
 
@@ -67,7 +67,8 @@ static void print_compare(const plan_args *a, const plan_job *j)
             printf("%-10s %8s   (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
     }
     if (a->budget)
-        printf("(Optimal with a budget of %zu layers: eps %g%s)\n", a->budget, j->plan[ADASLICE_METHOD_OPTIMAL].eps, u);
+        printf("(Optimal with a budget of %zu layer%s: eps %g%s)\n", a->budget, plural(a->budget),
+               j->plan[ADASLICE_METHOD_OPTIMAL].eps, u);
 }
 
 static void print_summary(const plan_args *a, const plan_job *j)
@@ -77,31 +78,32 @@ static void print_summary(const plan_args *a, const plan_job *j)
     char u[16];
     const char *eu = unit_suffix(METRICS[a->metric].eps_unit, u);
     if (a->model) {
-        printf("model      %s: %s, %zu triangles", a->model, format_name(j->format), j->triangles);
+        printf("model      %s: %s, %zu triangle%s", a->model, format_name(j->format), j->triangles, plural(j->triangles));
         if (j->degenerate) printf(" (%zu degenerate dropped)", j->degenerate);
         printf("\n");
     } else {
-        printf("profile    %s: %zu values\n", a->profile, pr->bin_count);
+        printf("profile    %s: %zu value%s\n", a->profile, pr->bin_count, plural(pr->bin_count));
     }
-    printf("height     %g mm, %zu bins of %g mm\n", pr->height, pr->bin_count, pr->bin);
+    printf("height     %g mm, %zu bin%s of %g mm\n", pr->height, pr->bin_count, plural(pr->bin_count), pr->bin);
     printf("metric     %s", METRICS[a->metric].label);
     if (a->model && a->sampler)
-        printf(", sampled by LDIs of %d pixels across (%zu bins no ray reached take their neighbours' value)",
-               a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION, j->profile.unsampled_bins);
+        printf(", sampled by LDIs of %d pixel%s across (bins no ray reached, which take their neighbours' value: %zu)",
+               a->resolution ? (int)a->resolution : ADASLICE_DEFAULT_RESOLUTION,
+               plural(a->resolution ? a->resolution : ADASLICE_DEFAULT_RESOLUTION), j->profile.unsampled_bins);
     printf("\n");
     printf("method     %s, eps %g%s", METHOD_NAMES[a->method], p->eps, eu);
     if (a->method == ADASLICE_METHOD_CURVATURE)
         printf(" (%s mapping; eps only counts the layers over it)", MAPPING_NAMES[a->mapping]);
-    if (a->budget) printf(" (the smallest that fits %zu layers)", a->budget);
-    printf("\nthickness  %g .. %g mm, %u .. %u bins per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max);
+    if (a->budget) printf(" (the smallest that fits %zu layer%s)", a->budget, plural(a->budget));
+    printf("\nthickness  %g .. %g mm, %u .. %u bin%s per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max,
+           plural(p->bins_max));
     printf("layers     %zu\n", p->layer_count);
     printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
-    if (p->over_eps) printf(", %zu layers over eps", p->over_eps);
+    if (p->over_eps) printf(", %zu layer%s over eps", p->over_eps, plural(p->over_eps));
     printf("\n");
     /* the section 3.3 pre-pass belongs to the optimal method only */
     if (a->method == ADASLICE_METHOD_OPTIMAL && a->sharp > 0)
-        printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes,
-               p->forced_planes == 1 ? "" : "s", a->sharp);
+        printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes, plural(p->forced_planes), a->sharp);
     else if (a->method == ADASLICE_METHOD_OPTIMAL)
         printf("forced     none (sharp-change pre-pass off)\n");
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);

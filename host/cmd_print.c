@@ -118,7 +118,8 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     if ((rc = serial_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
     if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
     if (l->st.layers != pj->layers) {
-        rc = complain(RC_FAIL, "the printer planned %u layers, the host %u: the planners disagree", l->st.layers, pj->layers);
+        rc = complain(RC_FAIL, "the printer planned %u layer%s, the host %u: the planners disagree", l->st.layers,
+                      plural(l->st.layers), pj->layers);
         goto done;
     }
     /* read the plan back, page by page, and compare it layer by layer */
@@ -127,7 +128,8 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
         if (!serial_plan_page(l, k, &rc)) { if (rc) goto done; continue; }
         for (m = LINK_SIZE_PLAN; m < l->plan_size && k <= pj->layers; m++, k++)
             if (l->plan[m] != pj->lengths[k - 1]) {
-                rc = complain(RC_FAIL, "layer %u: the printer planned %u bins, the host %u", k, l->plan[m], pj->lengths[k - 1]);
+                rc = complain(RC_FAIL, "layer %u: the printer planned %u bin%s, the host %u", k, l->plan[m],
+                              plural(l->plan[m]), pj->lengths[k - 1]);
                 goto done;
             }
     }
@@ -301,7 +303,7 @@ static void print_usage(FILE *f)
           "\n", f);
     cure_usage(f);
     fputc('\n', f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_PRINT);
 }
 
 static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, char **rest)
@@ -347,8 +349,6 @@ static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *
     if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
     if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
     if ((rc = layer_masks_check(s, 1))) return rc;
-    a->method = ADASLICE_METHOD_OPTIMAL;
-    a->compare = 0;
     /* printer units wherever the printer can plan, so both plans are one */
     a->eps_units = a->metric != ADASLICE_METRIC_VOLUME && !a->budget ? ADASLICE_PRINTER_EPS_UNITS : 0;
     j->args = a;
@@ -420,7 +420,8 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
     rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
     if (rc) return rc;
-    printf("%s: %u layers, %s\n", name, pj->layers, planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
+    printf("%s: %u layer%s, %s\n", name, pj->layers, plural(pj->layers),
+           planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
     fflush(stdout);
     if ((rc = serial_status(l))) return rc;
     if (!(l->st.flags & LINK_FLAG_HOMED)) {
@@ -466,6 +467,9 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     } else if (!rc) {
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
         if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
+        if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
+            rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
+                                    "--method, --uniform, --out, --plot, --profile-out, --json and --compare");
     }
     free(rest);
     free(rest2);
@@ -504,7 +508,10 @@ int cmd_print(int argc, char **argv)
                       pj.bits, l.id.width, l.id.height, l.id.bits);
         goto done;
     }
-    if (pa.resume_from > pj.layers) { rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layers", pa.resume_from, pj.layers); goto done; }
+    if (pa.resume_from > pj.layers) {
+        rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layer%s", pa.resume_from, pj.layers, plural(pj.layers));
+        goto done;
+    }
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
@@ -514,9 +521,12 @@ int cmd_print(int argc, char **argv)
     if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model)))) goto done;
     rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
     if (!rc && pa.then_exit) rc = end_emulator(&l);
-    if (!rc) printf("printed %u layers in %.1f s; %lu bytes of mask code, %lu retransmitted frames\n",
-                    pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0), (now_ms() - started) / 1000,
-                    mask_bytes, l.retransmits);
+    if (!rc) {
+        uint32_t printed = pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0);
+        printf("printed %u layer%s in %.1f s; %lu byte%s of mask code, %lu retransmitted frame%s\n", printed,
+               plural(printed), (now_ms() - started) / 1000, mask_bytes, plural(mask_bytes), l.retransmits,
+               plural(l.retransmits));
+    }
     if (pa.report && (rc == RC_OK || rc == RC_PAUSED)) {
         report r;
         int wrc;

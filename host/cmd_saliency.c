@@ -33,7 +33,7 @@ static void saliency_usage(FILE *f)
           "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
           "  --no-saliency       weights from --weights and --weight alone\n"
           "\n", f);
-    weights_usage(f);
+    weights_usage(f, 0);
 }
 
 static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)
@@ -139,7 +139,8 @@ int cmd_saliency(int argc, char **argv)
     rc = weights_for_plan(&s.weights, &mesh, &weight);
     if (!rc && !weight) { /* nothing asked for: every face weighs 1 */
         weight = (float *)malloc(mesh.triangle_count * sizeof *weight);
-        if (!weight) rc = complain(RC_FAIL, "out of memory for %zu weights", mesh.triangle_count);
+        if (!weight)
+            rc = complain(RC_FAIL, "out of memory for %zu weight%s", mesh.triangle_count, plural(mesh.triangle_count));
         for (t = 0; !rc && t < mesh.triangle_count; t++) weight[t] = 1;
     }
     if (!rc) {
@@ -154,8 +155,9 @@ int cmd_saliency(int argc, char **argv)
         if (s.out) rc = write_atomic(s.out, write_weights, &wm);
         if (!rc && s.ply) rc = write_atomic(s.ply, write_ply, &wm);
         if (!rc) {
-            printf("model      %s: %zu triangles\n", s.model, mesh.triangle_count);
-            printf("weights    mean %.3g, largest %.3g, %zu faces above 0.5\n", sum / (double)mesh.triangle_count, top, above);
+            printf("model      %s: %zu triangle%s\n", s.model, mesh.triangle_count, plural(mesh.triangle_count));
+            printf("weights    mean %.3g, largest %.3g, %zu face%s above 0.5\n", sum / (double)mesh.triangle_count, top,
+                   above, plural(above));
             printf("time       load %.1f ms, weights %.1f ms\n", t1 - t0, done - t1);
         }
     }

@@ -42,7 +42,7 @@ static void slice_usage(FILE *f)
     slice_options_usage(f);
     cure_usage(f);
     fputc('\n', f);
-    plan_options_usage(f);
+    plan_options_usage(f, FOR_SLICE);
 }
 
 
@@ -152,7 +152,7 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
                         "the %zu bottom layers, so only the first gets the full %g s\n",
                 path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
     if (f->max_layers && n > f->max_layers)
-        return complain(RC_USAGE, "%s: %zu layers; %s holds %zu at most", path, n, f->what, f->max_layers);
+        return complain(RC_USAGE, "%s: %zu layer%s; %s holds %zu at most", path, n, plural(n), f->what, f->max_layers);
     return RC_OK;
 }
 
@@ -220,7 +220,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     if ((rc = layer_masks_open(&m, s, j))) return rc;
     if (!(layers = (job_layer *)calloc(count ? count : 1, sizeof *layers))) {
         layer_masks_close(&m);
-        return complain(RC_FAIL, "out of memory for %zu layers", count);
+        return complain(RC_FAIL, "out of memory for %zu layer%s", count, plural(count));
     }
     cure_layers(&s->cure, p, layers);
     memset(d, 0, sizeof *d);
@@ -340,6 +340,8 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc && a.profile) rc = complain(RC_USAGE, "slice needs a MODEL, not --profile");
+    if (!rc && (a.json || a.compare))
+        rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");
     free(rest);
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
@@ -373,12 +375,13 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
     if (!rc) {
         duration(when, sizeof when, d.print_time_s);
-        printf("%s: %zu layers of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
-               sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display", d.width, d.height,
-               d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
+        printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
+               plural(d.layer_count), sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display",
+               d.width, d.height, d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
         printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
                sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
-        if (d.bottom_layers) printf(" (%u bottom layers of %g s)", d.bottom_layers, d.bottom_exposure_s);
+        if (d.bottom_layers)
+            printf(" (%u bottom layer%s of %g s)", d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
         printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
         if (s.cure.typical)
             printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "

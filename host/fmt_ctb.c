@@ -390,8 +390,8 @@ static int put(void *writer, size_t k, job_blob *blob)
     if (k != w->layers_done || k >= d->layer_count) {
         free(blob->data);
         blob->data = NULL;
-        return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layers", w->file.path, k,
-                        w->layers_done, d->layer_count);
+        return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layer%s", w->file.path, k,
+                        w->layers_done, d->layer_count, plural(d->layer_count));
     }
     entry = w->table + k * CTB_LAYER_DEF;
     put_f32(entry, L->z_top);
@@ -444,14 +444,15 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     if (version != 3 && version != 4)
         return complain(RC_FAIL, "%s: ctb version %u is not one this writer makes (3 or 4)", path, version);
     if (d->width <= 0 || d->height <= 0 || !d->layer_count || !d->layers || (d->bits != 1 && d->bits != 8))
-        return complain(RC_FAIL, "%s: a ctb job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layers, %d bits)",
-                        path, d->width, d->height, d->layer_count, d->bits);
+        return complain(RC_FAIL, "%s: a ctb job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layer%s, %d-bit)",
+                        path, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
     w = (ctb_writer *)calloc(1, sizeof *w);
     if (w) w->table = (unsigned char *)calloc(d->layer_count, CTB_LAYER_DEF);
     if (!w || !w->table) {
         if (w) free(w->table);
         free(w);
-        return complain(RC_FAIL, "cannot write %s: out of memory for %zu layers", path, d->layer_count);
+        return complain(RC_FAIL, "cannot write %s: out of memory for %zu layer%s", path, d->layer_count,
+                        plural(d->layer_count));
     }
     if ((rc = job_file_open(&w->file, path)) != RC_OK) {
         free(w->table);
@@ -501,8 +502,8 @@ static int close_job(void *writer, int ok)
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
     if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layers were written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count);
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
+                      w->d->layer_count, plural(w->d->layer_count));
     } else if (ok) {
         write_at(w, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
         write_blocks(w);

@@ -330,8 +330,8 @@ static int put(void *writer, size_t k, job_blob *blob)
     if (k != w->layers_done || k >= d->layer_count) {
         free(blob->data);
         blob->data = NULL;
-        return complain(RC_FAIL, "%s: layer %zu handed to the goo writer after %zu of %zu layers", w->file.path, k,
-                        w->layers_done, d->layer_count);
+        return complain(RC_FAIL, "%s: layer %zu handed to the goo writer after %zu of %zu layer%s", w->file.path, k,
+                        w->layers_done, d->layer_count, plural(d->layer_count));
     }
     put_layer_def(w, k, def);
     put_u32(def + 66, (uint32_t)size);
@@ -358,8 +358,8 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         !d->layers || (d->bits != 1 && d->bits != 8))
         return complain(RC_FAIL,
                         "%s: a goo job needs 1 to 65535 pixels across and down, layers and 1- or 8-bit images "
-                        "(%dx%d, %zu layers, %d bits)",
-                        path, d->width, d->height, d->layer_count, d->bits);
+                        "(%dx%d, %zu layer%s, %d-bit)",
+                        path, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
     if ((uint64_t)d->layer_count > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: %zu layers are more than a goo file can count", path, d->layer_count);
     w = (goo_writer *)calloc(1, sizeof *w);
@@ -399,8 +399,8 @@ static int close_job(void *writer, int ok)
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
     if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layers were written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count);
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
+                      w->d->layer_count, plural(w->d->layer_count));
     } else if (ok) {
         write_at(w, w->end, ending, sizeof ending);
         write_header_fields(w);

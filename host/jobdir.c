@@ -148,7 +148,7 @@ int job_masks_alloc(job_masks *m, uint32_t layers)
     m->crcs = (uint32_t *)calloc(n, sizeof *m->crcs);
     return m->lengths && m->exposure_ms && m->codes && m->sizes && m->crcs
                ? RC_OK
-               : complain(RC_FAIL, "out of memory for %u layers", layers);
+               : complain(RC_FAIL, "out of memory for %u layer%s", layers, plural(layers));
 }
 
 void job_masks_free(job_masks *m)
@@ -498,7 +498,7 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     m->return_speed_um_s = get_u32(m->file + 36);
     m->settle_ms = get_u32(m->file + 40);
     if (!k || k > m->file_size / MASKS_LAYER || !m->bin_nm) {
-        complain(RC_FAIL, "%s: byte 20: %u layers of %u nm do not fit the file", path, k, m->bin_nm);
+        complain(RC_FAIL, "%s: byte 20: the file does not hold %u layer%s of %u nm", path, k, plural(k), m->bin_nm);
         goto done;
     }
     if (job_masks_alloc(m, k)) goto done;
@@ -521,7 +521,8 @@ int jobdir_read_masks(const char *dir, job_masks *m)
         at += MASKS_LAYER + code;
     }
     if (at != m->file_size) {
-        complain(RC_FAIL, "%s: byte %zu: %zu bytes after the last layer", path, at, m->file_size - at);
+        complain(RC_FAIL, "%s: byte %zu: %zu byte%s after the last layer", path, at, m->file_size - at,
+                 plural(m->file_size - at));
         goto done;
     }
     rc = matches_manifest(dir, path, m);

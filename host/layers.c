@@ -242,7 +242,7 @@ int layer_masks_check(const slice_args *s, int buffers)
                               "more than --memory %s",
                     s->width, s->height, s->supersample, size_text(need, a),
                     size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0), b),
-                    buffers, buffers == 1 ? "" : "s", size_text(limit, c));
+                    buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)

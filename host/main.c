@@ -1,6 +1,7 @@
 /* adaslice - the command-line tool over adaslice.h: the command table.
 
-   adaslice COMMAND [options]; adaslice COMMAND --help lists a command's options.
+   adaslice COMMAND [options]; adaslice COMMAND --help (or adaslice help COMMAND)
+   lists a command's options.
 
    Exit status: 0 done; 1 the work failed (a file that cannot be read or written,
    a malformed mesh, constraints that no plan meets); 2 the command line is wrong;
@@ -32,32 +33,48 @@ static void usage(FILE *f)
 {
     int i;
     fputs("usage: adaslice COMMAND [options]\n"
-          "       adaslice help | --help | --version\n"
+          "       adaslice help [COMMAND] | --help | --version\n"
           "\n"
           "commands:\n", f);
     for (i = 0; i < COMMAND_COUNT; i++) fprintf(f, "  %-10s %s\n", COMMANDS[i].name, COMMANDS[i].summary);
-    fputs("\n'adaslice COMMAND --help' lists the command's options.\n", f);
+    fputs("\n'adaslice help COMMAND' or 'adaslice COMMAND --help' lists the command's options.\n", f);
+}
+
+/* The command called `name`, or NULL after saying it is unknown. */
+static const command *find_command(const char *name)
+{
+    int i;
+    for (i = 0; i < COMMAND_COUNT; i++)
+        if (!strcmp(name, COMMANDS[i].name)) return &COMMANDS[i];
+    complain(RC_USAGE, "unknown %s %s (see adaslice --help)", name[0] == '-' ? "option" : "command", name);
+    return NULL;
 }
 
 int main(int argc, char **argv)
 {
-    int i, rc;
+    const command *c;
+    int rc;
     if (argc < 2) {
         usage(stderr);
         return RC_USAGE;
     }
-    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || (!strcmp(argv[1], "help") && argc == 2)) {
         usage(stdout);
         rc = RC_OK;
+    } else if (!strcmp(argv[1], "help")) { /* help COMMAND: what COMMAND --help says */
+        char *help[3];
+        if (argc > 3) return complain(RC_USAGE, "help %s %s: help takes one COMMAND", argv[2], argv[3]);
+        if (!(c = find_command(argv[2]))) return RC_USAGE;
+        help[0] = argv[2];
+        help[1] = (char *)"--help";
+        help[2] = NULL;
+        rc = c->run(2, help);
     } else if (!strcmp(argv[1], "--version")) {
         printf("adaslice %s\n", ADASLICE_VERSION);
         rc = RC_OK;
     } else {
-        for (i = 0; i < COMMAND_COUNT && strcmp(argv[1], COMMANDS[i].name); i++) {}
-        if (i == COMMAND_COUNT)
-            return complain(RC_USAGE, "unknown %s %s (see adaslice --help)",
-                            argv[1][0] == '-' ? "option" : "command", argv[1]);
-        rc = COMMANDS[i].run(argc - 1, argv + 1);
+        if (!(c = find_command(argv[1]))) return RC_USAGE;
+        rc = c->run(argc - 1, argv + 1);
     }
     /* a full disk or closed pipe on stdout is a failure, not a silent success */
     if (fflush(stdout) != 0 || ferror(stdout)) return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));

@@ -45,8 +45,9 @@ int count_option(int argc, char **argv, int *i, size_t max, size_t *out)
     if (!v) return RC_USAGE;
     errno = 0;
     n = strtoull(v, &end, 10);
-    if (*v < '0' || *v > '9' || *end || errno == ERANGE || n == 0 || n > max)
-        return complain(RC_USAGE, "%s %s: not a whole number from 1 to %zu", opt, v, max);
+    if (*v < '0' || *v > '9' || *end) return complain(RC_USAGE, "%s %s: not a whole number from 1 to %zu", opt, v, max);
+    if (errno == ERANGE || n > max) return complain(RC_USAGE, "%s %s: too large, the most is %zu", opt, v, max);
+    if (n == 0) return complain(RC_USAGE, "%s %s: too small, the least is 1", opt, v);
     *out = (size_t)n;
     return RC_OK;
 }

@@ -29,44 +29,63 @@ const metric_info METRICS[METRIC_COUNT] = { /* by adaslice_metric */
 };
 const char *const MAPPING_NAMES[] = {"linear", "exp", "step"};
 
-void plan_options_usage(FILE *f)
+/* "[0.002]" from ADASLICE_DEFAULT_BIN: the help shows the library's defaults */
+#define DEFAULT_OF(x) DEFAULT_TEXT(x)
+#define DEFAULT_TEXT(x) "[" #x "]"
+enum { FOR_ANY = FOR_PLAN | FOR_SLICE | FOR_ORIENT | FOR_PRINT };
+
+/* The plan options' help, each entry with the commands that take it and use it:
+   orient writes no plan files, profiles exactly and unweighted; print plans
+   the optimal way, as the printer does, and writes no plan files. */
+static const struct plan_help { unsigned commands; const char *text; } PLAN_HELP[] = {
+    {FOR_ANY, "input\n"},
+    {FOR_PLAN, "  --profile FILE      plan this profile instead of a MODEL: one value per line\n"
+               "                      (bins of --bin mm), or CSV z,phi as --profile-out\n"
+               "                      writes it: the value last, z first, the bin centres in\n"
+               "                      mm, evenly spaced, which give the bin\n"},
+    {FOR_ANY, "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"},
+    {FOR_ANY, "profile\n"},
+    {FOR_ANY, "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"},
+    {FOR_ANY, "  --bin MM            bin size                                    " DEFAULT_OF(ADASLICE_DEFAULT_BIN) "\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_PRINT,
+              "  --sampler NAME      exact (from the triangles) or ldi (the\n"
+              "                      paper's sampling by rays along x, y, z)     [exact]\n"
+              "  --res R             ldi: pixels across the largest extent       "
+              DEFAULT_OF(ADASLICE_DEFAULT_RESOLUTION) "\n"
+              "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
+              "                      (the best of 1000, as adaslice orient finds it)\n"},
+    {FOR_ANY, "plan\n"},
+    {FOR_PLAN | FOR_SLICE,
+              "  --method NAME       optimal, greedy, finest, coarsest or\n"
+              "                      curvature (thickness from mean curvature)   [optimal]\n"
+              "  --mapping NAME      curvature: linear, exp or step              [linear]\n"},
+    {FOR_ORIENT, "  --method NAME       optimal, greedy, finest or coarsest         [optimal]\n"},
+    {FOR_ANY, "  --eps E             allowed error per layer (mm; area: none;\n"
+              "                      volume: mm^3)                               " DEFAULT_OF(ADASLICE_DEFAULT_EPS) "\n"
+              "  --tmin MM           thinnest layer                              " DEFAULT_OF(ADASLICE_DEFAULT_TMIN) "\n"
+              "  --tmax MM           thickest layer                              " DEFAULT_OF(ADASLICE_DEFAULT_TMAX) "\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_ORIENT,
+              "  --uniform T         every layer T mm (--method finest --tmin T --tmax T)\n"},
+    {FOR_ANY, "  --sharp T           a plane at each phi jump above T; 0: off    " DEFAULT_OF(ADASLICE_DEFAULT_SHARP) "\n"
+              "  --budget K          at most K layers, with the smallest eps that allows it\n"},
+    {FOR_PLAN | FOR_SLICE | FOR_ORIENT, "output\n"},
+    {FOR_PLAN | FOR_SLICE,
+              "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
+              "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
+              "  --plot FILE         SVG figure of the profile and the layer thickness\n"},
+    {FOR_PLAN | FOR_ORIENT, "  --json              print a JSON object instead of the summary\n"},
+    {FOR_PLAN, "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
+               "                      curvature on the same profile and print them as in\n"
+               "                      the paper's Table 3\n"},
+    {FOR_ANY, "Heights are in mm from the part's bottom.\n"},
+};
+
+void plan_options_usage(FILE *f, unsigned command)
 {
-    fprintf(f,
-        "input\n"
-        "  --profile FILE      plan this profile instead of a MODEL: one value per line,\n"
-        "                      or CSV whose last column is the value; bins of --bin mm\n"
-        "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
-        "profile\n"
-        "  --metric NAME       cusp, roughness, area or volume             [cusp]\n"
-        "  --bin MM            bin size                                    [%g]\n"
-        "  --sampler NAME      exact (from the triangles) or ldi (the\n"
-        "                      paper's sampling by rays along x, y, z)     [exact]\n"
-        "  --res R             ldi: pixels across the largest extent       [%d]\n"
-        "  --orient D          turn the part so direction D points up: X,Y,Z, or best\n"
-        "                      (the best of 1000, as adaslice orient finds it)\n"
-        "plan\n"
-        "  --method NAME       optimal, greedy, finest, coarsest or\n"
-        "                      curvature (thickness from mean curvature)   [optimal]\n"
-        "  --mapping NAME      curvature: linear, exp or step              [linear]\n"
-        "  --eps E             allowed error per layer (mm; area: none;\n"
-        "                      volume: mm^3)                               [%g]\n"
-        "  --tmin MM           thinnest layer                              [%g]\n"
-        "  --tmax MM           thickest layer                              [%g]\n"
-        "  --uniform T         every layer T mm (--method finest --tmin T --tmax T)\n"
-        "  --sharp T           a plane at each phi jump above T; 0: off    [%g]\n"
-        "  --budget K          at most K layers, with the smallest eps that allows it\n"
-        "output\n"
-        "  --out FILE          the plan as CSV: layer,z_bottom,z_top,thickness,error\n"
-        "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
-        "  --plot FILE         SVG figure of the profile and the layer thickness\n"
-        "  --json              print a JSON object instead of the summary\n"
-        "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
-        "                      curvature on the same profile and print them as in\n"
-        "                      the paper's Table 3\n"
-        "Heights are in mm from the part's bottom.\n",
-        ADASLICE_DEFAULT_BIN, ADASLICE_DEFAULT_RESOLUTION, ADASLICE_DEFAULT_EPS, ADASLICE_DEFAULT_TMIN,
-        ADASLICE_DEFAULT_TMAX, ADASLICE_DEFAULT_SHARP);
-    weights_usage(f);
+    size_t i;
+    for (i = 0; i < sizeof PLAN_HELP / sizeof *PLAN_HELP; i++)
+        if (PLAN_HELP[i].commands & command) fputs(PLAN_HELP[i].text, f);
+    if (command != FOR_ORIENT) weights_usage(f, 1);
 }
 
 /* --orient best, or a direction X,Y,Z that is not zero */
@@ -87,7 +106,6 @@ int parse_plan(int argc, char **argv, plan_args *a)
     int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0;
     double uniform = 0;
     memset(a, 0, sizeof *a);
-    a->bin = ADASLICE_DEFAULT_BIN;
     a->eps = ADASLICE_DEFAULT_EPS;
     a->tmin = ADASLICE_DEFAULT_TMIN;
     a->tmax = ADASLICE_DEFAULT_TMAX;
@@ -160,7 +178,8 @@ static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profi
 {
     adaslice_error e;
     *kappa = (double *)malloc(profile->bin_count * sizeof **kappa);
-    if (!*kappa) return complain(RC_FAIL, "out of memory for the curvature of %zu bins", profile->bin_count);
+    if (!*kappa) return complain(RC_FAIL, "out of memory for the curvature of %zu bin%s", profile->bin_count,
+                                 plural(profile->bin_count));
     if (adaslice_curvature_profile(mesh, profile, NULL, *kappa, &e) != ADASLICE_OK) {
         free(*kappa);
         *kappa = NULL;
@@ -263,36 +282,101 @@ static int push(double **phi, size_t *n, size_t *cap, double v)
     return 1;
 }
 
-/* One value per line, or CSV with the value last; blank lines and # comments
-   are skipped, and so is a first line that is not a number (a header). */
+/* The z column of a profile so far: the first, second and latest z, and the
+   lines of the first two. */
+typedef struct z_column { double first, second, last; size_t first_line, second_line; } z_column;
+
+/* The z of value `index`: the first two set the step, which every later one
+   keeps to 1 % (a column printed with %.9g is exact to far less). */
+static int z_column_add(z_column *c, const char *path, size_t line, size_t index, double z)
+{
+    double step = c->second - c->first;
+    if (index == 0) {
+        c->first = c->last = z;
+        c->first_line = line;
+        return RC_OK;
+    }
+    if (!(z > c->last)) return complain(RC_FAIL, "%s:%zu: z %g is not above the line before's, %g", path, line, z, c->last);
+    if (index == 1) {
+        c->second = z;
+        c->second_line = line;
+    } else if (fabs(z - c->last - step) > 0.01 * step) {
+        return complain(RC_FAIL, "%s:%zu: z %g is %g mm above the line before, not %g as from line %zu to %zu: "
+                                 "the z column must be evenly spaced", path, line, z, z - c->last, step,
+                        c->first_line, c->second_line);
+    }
+    c->last = z;
+    return RC_OK;
+}
+
+/* The bin of an evenly spaced z column of n values, to six digits: the %.9g
+   centres --profile-out writes give it to about nine, and 0.0099999999 for
+   0.01 would change the bins a layer may take (ceil(tmin/b)). */
+static double z_column_bin(const z_column *c, size_t n)
+{
+    char six[32];
+    snprintf(six, sizeof six, "%.6g", (c->last - c->first) / (double)(n - 1));
+    return strtod(six, NULL);
+}
+
+/* A z in the first column, before the first comma: 1 if there is one. */
+static int z_field(const char *s, const char *comma, double *z)
+{
+    char *end;
+    *z = strtod(s, &end);
+    while (end < comma && (*end == ' ' || *end == '\t')) end++;
+    return end != s && end == comma && isfinite(*z);
+}
+
+/* One value per line, or CSV with the value last and, in two or more columns, z
+   first: the bin centres as --profile-out writes them, which give the bin and
+   z0. Blank lines and # comments are skipped, and so is a first line that is
+   not a number (a header). */
 static int read_profile(const plan_args *a, plan_job *j)
 {
     const char *path = a->profile;
     FILE *f = fopen(path, "r");
-    char *line = NULL;
-    size_t line_cap = 0, lineno = 0, n = 0, cap = 0;
-    double *phi = NULL, t0 = now_ms();
-    int rc = RC_OK, first = 1;
+    char *line = NULL, q[QUOTE_SIZE];
+    size_t line_cap = 0, lineno = 0, n = 0, cap = 0, first_line = 0;
+    double *phi = NULL, t0 = now_ms(), bin = a->bin ? a->bin : ADASLICE_DEFAULT_BIN;
+    z_column zc = {0, 0, 0, 0, 0};
+    int rc = RC_OK, first = 1, has_z = 0;
 
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     while (!rc && getline(&line, &line_cap, f) != -1) {
-        char *s = trim(line), *field = strrchr(s, ','), *end;
-        double v;
+        char *s = trim(line), *comma = strchr(s, ','), *field, *end;
+        double v, z = 0;
         lineno++;
         if (!*s || *s == '#') continue;
-        field = field ? trim(field + 1) : s;
+        field = comma ? trim(strrchr(s, ',') + 1) : s;
         v = strtod(field, &end);
-        if (end == field || *end) {
-            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: %.80s", path, lineno, s);
+        if (end == field || *end || (comma && !z_field(s, comma, &z))) {
+            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
         } else if (!isfinite(v) || v < 0) {
-            rc = complain(RC_FAIL, "%s:%zu: %.80s: profile values must be finite and >= 0", path, lineno, s);
+            rc = complain(RC_FAIL, "%s:%zu: '%s': profile values must be finite and >= 0", path, lineno,
+                          quote_text(q, s, strlen(s)));
+        } else if (n && has_z != (comma != NULL)) {
+            rc = complain(RC_FAIL, "%s:%zu: '%s' has %s z column, unlike line %zu", path, lineno,
+                          quote_text(q, s, strlen(s)), comma ? "a" : "no", first_line);
+        } else if (comma && (rc = z_column_add(&zc, path, lineno, n, z))) {
+            /* z_column_add said why */
         } else if (!push(&phi, &n, &cap, v)) {
-            rc = complain(RC_FAIL, "%s: out of memory after %zu values", path, n);
+            rc = complain(RC_FAIL, "%s: out of memory after %zu value%s", path, n, plural(n));
+        } else if (n == 1) {
+            first_line = lineno;
+            has_z = comma != NULL;
         }
         first = 0;
     }
     if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && !n) rc = complain(RC_FAIL, "%s: no profile values", path);
+    if (!rc && has_z && n > 1) {
+        double column = z_column_bin(&zc, n);
+        if (!a->bin) bin = column;
+        else if (fabs(column - a->bin) > 1e-6 * a->bin)
+            rc = complain(RC_USAGE, "%s:%zu: the z column has bins of %g mm, but --bin is %g mm", path, zc.second_line,
+                          column, a->bin);
+    }
     fclose(f);
     free(line);
     j->ms_load = now_ms() - t0;
@@ -302,8 +386,9 @@ static int read_profile(const plan_args *a, plan_job *j)
     }
     j->profile.metric = a->metric;
     j->profile.bin_count = n;
-    j->profile.bin = a->bin;
-    j->profile.height = n * a->bin;
+    j->profile.bin = bin;
+    j->profile.z0 = has_z ? zc.first - bin / 2 : 0;
+    j->profile.height = n * bin;
     j->profile.phi = phi;
     return RC_OK;
 }

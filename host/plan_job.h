@@ -22,7 +22,8 @@ typedef struct plan_args {
     const char *model, *profile;   /* exactly one is set */
     adaslice_metric metric;
     adaslice_method method;
-    double bin, eps, tmin, tmax;
+    double bin;                    /* 0: not given (the library's, or a --profile's z column) */
+    double eps, tmin, tmax;
     double scale;                  /* 0: not given */
     double sharp;                  /* 0: pre-pass off */
     size_t budget;                 /* 0: none */
@@ -61,7 +62,9 @@ typedef struct plan_job {
 /* The plan options of `plan` (argv[0] is the command's name); RC_OK or a
    complaint made. */
 int parse_plan(int argc, char **argv, plan_args *a);
-void plan_options_usage(FILE *f);
+/* The command whose help lists the plan options: each lists those it takes. */
+enum { FOR_PLAN = 1, FOR_SLICE = 2, FOR_ORIENT = 4, FOR_PRINT = 8 };
+void plan_options_usage(FILE *f, unsigned command);
 /* The library's plan options for method m from the command line's. */
 void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_options *o);
 /* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */

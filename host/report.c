@@ -26,6 +26,28 @@ int library_error(const adaslice_error *e)
     return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s", e->message);
 }
 
+const char *plural(size_t n) { return n == 1 ? "" : "s"; }
+
+const char *quote_text(char out[QUOTE_SIZE], const char *text, size_t n)
+{
+    static const char hex[] = "0123456789abcdef";
+    size_t i, k = 0;
+    for (i = 0; i < n && i < QUOTE_BYTES; i++) {
+        unsigned char c = (unsigned char)text[i];
+        if (c >= 32 && c < 127 && c != '\\') {
+            out[k++] = (char)c;
+        } else {
+            out[k++] = '\\';
+            out[k++] = 'x';
+            out[k++] = hex[c >> 4];
+            out[k++] = hex[c & 15];
+        }
+    }
+    if (n > QUOTE_BYTES) for (i = 0; i < 3; i++) out[k++] = '.';
+    out[k] = 0;
+    return out;
+}
+
 double now_ms(void)
 {
     struct timespec ts;

@@ -12,6 +12,13 @@ enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3 };
 int complain(int rc, const char *fmt, ...);
 /* The library's message; exit 2 for an argument it rejects, else 1. */
 int library_error(const adaslice_error *e);
+/* "" or "s" after a count's noun: "%zu layer%s", n, plural(n). */
+const char *plural(size_t n);
+/* Text from an input file as a message quotes it: the first QUOTE_BYTES bytes
+   of text[0..n), "..." when there are more, each byte outside printable ASCII
+   as \xNN, so that a binary file shows neither raw bytes nor a page of them. */
+enum { QUOTE_BYTES = 40, QUOTE_SIZE = 4 * QUOTE_BYTES + 4 };
+const char *quote_text(char out[QUOTE_SIZE], const char *text, size_t n);
 /* A monotonic clock, ms. */
 double now_ms(void);
 

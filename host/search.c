@@ -137,7 +137,7 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
         free(dirs);
         free(*scores);
         *scores = NULL;
-        return complain(RC_FAIL, "out of memory for %zu directions", count);
+        return complain(RC_FAIL, "out of memory for %zu direction%s", count, plural(count));
     }
     adaslice_fibonacci_directions(count, dirs);
     {

@@ -4,6 +4,7 @@
    Both panels are reduced to at most one step per pixel row, so the file stays
    small for any number of bins or layers. */
 #include "svg.h"
+#include "report.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -263,7 +264,7 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
     xml_text(f, fig->model);
     fputs(" &#8212; ", f);
     xml_text(f, fig->method);
-    fprintf(f, " plan, K = %zu layer%s, &#949; = %g", p->layer_count, p->layer_count == 1 ? "" : "s", p->eps);
+    fprintf(f, " plan, K = %zu layer%s, &#949; = %g", p->layer_count, plural(p->layer_count), p->eps);
     if (*fig->eps_unit) fprintf(f, " %s", fig->eps_unit);
     fputs("</text>\n", f);
     fprintf(f, "<text x=\"%d\" y=\"46\" fill=\"%s\">", PROFILE_X0 - 52, MUTED);

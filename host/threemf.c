@@ -166,10 +166,10 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
     }
     if (!(rc = zip_close(z, 1)))
         fprintf(note,
-                "%s: %zu layers of %.9g to %.9g mm for PrusaSlicer, OrcaSlicer and Bambu Studio; the printer profile "
+                "%s: %zu layer%s of %.9g to %.9g mm for PrusaSlicer, OrcaSlicer and Bambu Studio; the printer profile "
                 "needs first layer height %.9g mm, minimum layer height %.9g mm or less and maximum %.9g mm or more "
                 "(prusa-slicer --first-layer-height %.9g --min-layer-height %.9g --max-layer-height %.9g)\n",
-                t->path, n, thinnest, thickest, tops[0], p.tmin, p.tmax, tops[0], p.tmin, p.tmax);
+                t->path, n, plural(n), thinnest, thickest, tops[0], p.tmin, p.tmax, tops[0], p.tmin, p.tmax);
     free(tops);
     return rc;
 }

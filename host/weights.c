@@ -12,12 +12,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-void weights_usage(FILE *f)
+void weights_usage(FILE *f, int saliency_option)
 {
-    fputs("weights (paper section 4.2), multiplied face by face into the profile\n"
-          "  --saliency          weight faces by their mesh saliency (Lee et al. 2005);\n"
-          "                      adaslice saliency shows it\n"
-          "  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
+    fputs("weights (paper section 4.2), multiplied face by face into the profile\n", f);
+    if (saliency_option)
+        fputs("  --saliency          weight faces by their mesh saliency (Lee et al. 2005);\n"
+              "                      adaslice saliency shows it\n", f);
+    fputs("  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
           "                      order the model loads (adaslice saliency -o writes one)\n"
           "  --weight REGION=W   weight W in [0,1] for the faces whose centroid lies in\n"
           "                      REGION: box:X0,Y0,Z0,X1,Y1,Z1 or sphere:X,Y,Z,R (mm, after\n"
@@ -106,7 +107,7 @@ static char *trim(char *s)
 static int read_weights(const char *path, size_t count, float *w)
 {
     FILE *f = fopen(path, "r");
-    char *line = NULL;
+    char *line = NULL, q[QUOTE_SIZE];
     size_t cap = 0, lineno = 0, n = 0;
     int rc = RC_OK;
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
@@ -117,18 +118,19 @@ static int read_weights(const char *path, size_t count, float *w)
         if (!*s || *s == '#') continue;
         v = strtod(s, &end);
         if (end == s || *end)
-            rc = complain(RC_USAGE, "%s:%zu: '%.40s' is not a number", path, lineno, s);
+            rc = complain(RC_USAGE, "%s:%zu: '%s' is not a number", path, lineno, quote_text(q, s, strlen(s)));
         else if (!(v >= 0 && v <= 1))
-            rc = complain(RC_USAGE, "%s:%zu: %.40s is not a weight in [0, 1]", path, lineno, s);
+            rc = complain(RC_USAGE, "%s:%zu: %s is not a weight in [0, 1]", path, lineno, quote_text(q, s, strlen(s)));
         else if (n == count)
-            rc = complain(RC_USAGE, "%s:%zu: more weights than the model's %zu triangles", path, lineno, count);
+            rc = complain(RC_USAGE, "%s:%zu: more weights than the model's %zu triangle%s", path, lineno, count,
+                          plural(count));
         else
             w[n++] *= (float)v;
     }
     if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && n != count)
-        rc = complain(RC_USAGE, "%s: %zu weights for the model's %zu triangles (one per line, in the order they load)",
-                      path, n, count);
+        rc = complain(RC_USAGE, "%s: %zu weight%s for the model's %zu triangle%s (one per line, in the order they load)",
+                      path, n, plural(n), count, plural(count));
     fclose(f);
     free(line);
     return rc;
@@ -172,7 +174,7 @@ int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **ou
     if (!weights_given(w)) return RC_OK;
     f = (float *)malloc((n ? n : 1) * sizeof *f);
     if (w->saliency) s = (float *)malloc((n ? n : 1) * sizeof *s);
-    if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weights", n);
+    if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
     for (t = 0; !rc && t < n; t++) f[t] = 1;
     /* the file first: a mistake there shows before the saliency's second */
     if (!rc && w->file) rc = read_weights(w->file, n, f);

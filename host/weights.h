@@ -30,5 +30,7 @@ int weights_given(const weight_args *w);
    none are asked for. A bad weight file is RC_USAGE, an unreadable one RC_FAIL;
    the complaint is made. */
 int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **out);
-void weights_usage(FILE *f);
+/* The weight options' help; `saliency_option`: with --saliency (adaslice
+   saliency weighs by saliency unless told not to). */
+void weights_usage(FILE *f, int saliency_option);
 #endif
