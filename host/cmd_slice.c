@@ -46,12 +46,12 @@ static void slice_usage(FILE *f)
 }
 
 
-typedef struct contour_file { const adaslice_contours *c; size_t layer; } contour_file;
+typedef struct contour_file { const adaslice_contours *c; size_t k; contour_layer layer; } contour_file;
 
 static void write_contour_svg(FILE *f, const void *ctx)
 {
     const contour_file *cf = (const contour_file *)ctx;
-    svg_write_contours(f, cf->c, cf->layer, 1);
+    svg_write_contours(f, cf->c, cf->k, &cf->layer);
 }
 
 /* The slice polygons at the masks' heights, one SVG per layer, from the
@@ -74,9 +74,17 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
         return library_error(&err);
     }
     cf.c = &c;
+    cf.layer.model = base_name(a->model);
+    cf.layer.count = p->layer_count;
     for (k = 0; k < p->layer_count && !rc; k++) {
+        const adaslice_layer *l = &p->layers[k];
         layer_path(path, n, s->dir, k, digits, "svg");
-        cf.layer = k;
+        cf.k = k;
+        cf.layer.number = k + 1;
+        cf.layer.z_bottom = l->z_bottom; /* the plan's, as the manifest takes them (cure_layers) */
+        cf.layer.z_top = l->z_top;
+        cf.layer.thickness = l->thickness;
+        cf.layer.cut = layer_slice_height(s, j, k);
         rc = write_atomic(path, write_contour_svg, &cf);
     }
     adaslice_contours_free(&c);
