@@ -92,9 +92,108 @@ static void layer_svgs_agree_with_the_manifest(void)
     cli_remove_all(job);
 }
 
+/* The rectangles of the group that starts at g (up to its first "</g>"):
+   x, y, width, height each; returns how many, at most max. */
+static size_t group_rects(const char *g, double (*rect)[4], size_t max)
+{
+    const char *end = g ? strstr(g, "</g>") : NULL, *p = g;
+    size_t n = 0;
+    while (end && n < max && (p = strstr(p, "<rect ")) != NULL && p < end) {
+        rect[n][0] = attribute(p, "x");
+        rect[n][1] = attribute(p, "y");
+        rect[n][2] = attribute(p, "width");
+        rect[n][3] = attribute(p, "height");
+        n++;
+        p++;
+    }
+    return n;
+}
+
+static int by_row_then_column(const void *a, const void *b)
+{
+    const double *r = (const double *)a, *s = (const double *)b;
+    return r[1] != s[1] ? (r[1] > s[1]) - (r[1] < s[1]) : (r[0] > s[0]) - (r[0] < s[0]);
+}
+
+/* The orient map's cells tile its rectangle exactly, row after row (each
+   cell starts where its left neighbour ends, each row where the one above
+   ends), with crispEdges so that no renderer anti-aliases the shared edges
+   into white seams; a colour bar gives the lowest F (the best direction's)
+   and the highest, as data and as text. */
+static void orient_map_tiles_and_has_a_colour_bar(void)
+{
+    enum { MAX_RECTS = 20000 };
+    const char *box = cli_path("map_box.obj"), *map = cli_path("map.svg");
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 20, 40);
+    double (*rect)[4] = (double (*)[4])malloc(MAX_RECTS * sizeof *rect), left, right, row_top, row_bottom, best, lo, hi;
+    char *svg = NULL, label[32];
+    const char *cells, *crisp, *bar;
+    cli_result r;
+    size_t n, k, rows = 0;
+    cli_write_obj(box, &m);
+    gen_free(&m);
+    r = cli_run("orient", box, "--dirs", "300", "--json", "--map", map, NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    best = cli_json_number(r.out, "F");
+    svg = cli_read(map);
+    cli_free(&r);
+    CHECK(rect && svg);
+    if (!rect || !svg) goto done;
+    CHECK(strstr(svg, "viewBox=\"") != NULL);
+
+    cells = strstr(svg, "<g id=\"cells\"");
+    crisp = cells ? strstr(cells, "shape-rendering=\"crispEdges\"") : NULL;
+    CHECKF(crisp && crisp < strchr(cells, '>'), "the cells' group is not crispEdges");
+    n = group_rects(cells, rect, MAX_RECTS);
+    CHECKF(n > 0 && n < MAX_RECTS, "%zu cells", n);
+    if (!n || n == MAX_RECTS) goto done;
+    qsort(rect, n, sizeof *rect, by_row_then_column);
+    left = rect[0][0];
+    row_top = row_bottom = rect[0][1];
+    for (k = 0; k + 1 < n && rect[k + 1][1] == rect[0][1]; k++) {}
+    right = rect[k][0] + rect[k][2]; /* where the first row ends, every row must */
+    for (k = 0; k < n; k++) {
+        const double *c = rect[k], *before = k ? rect[k - 1] : NULL;
+        CHECKF(c[2] > 0 && c[3] > 0, "a cell of %g x %g", c[2], c[3]);
+        if (!before || c[1] != before[1]) {
+            /* a row begins at the left edge, right below the row above, which
+               ended at the right edge */
+            CHECKF(!before || before[0] + before[2] == right, "the row at y %g ends at %g, not %g", before[1],
+                   before[0] + before[2], right);
+            CHECKF(c[0] == left && c[1] == row_bottom, "a row starts at (%g, %g), not (%g, %g)", c[0], c[1], left, row_bottom);
+            row_top = c[1];
+            row_bottom = c[1] + c[3];
+            rows++;
+        } else {
+            CHECKF(c[0] == before[0] + before[2], "row at y %g: a cell at x %g, its neighbour ends at %g", c[1], c[0],
+                   before[0] + before[2]);
+            CHECKF(c[1] + c[3] == row_bottom, "row at y %g: a cell ends at %g, the row at %g", row_top, c[1] + c[3],
+                   row_bottom);
+        }
+    }
+    CHECKF(rect[n - 1][0] + rect[n - 1][2] == right, "the last row ends at %g, not %g", rect[n - 1][0] + rect[n - 1][2], right);
+    CHECKF(rows > 10 && right > left, "%zu rows from x %g to %g", rows, left, right);
+
+    bar = strstr(svg, "<g id=\"colour-bar\"");
+    lo = attribute(bar, "data-min");
+    hi = attribute(bar, "data-max");
+    CHECKF(bar && fabs(lo - best) < 1e-8 && hi > lo && hi <= 1 + 1e-12, "colour bar from %g to %g; the best F is %g", lo, hi,
+           best);
+    if (!bar) goto done;
+    snprintf(label, sizeof label, ">%.4g</text>", lo);
+    CHECKF(strstr(bar, label) != NULL, "the colour bar has no label %s", label);
+    snprintf(label, sizeof label, ">%.4g</text>", hi);
+    CHECKF(strstr(bar, label) != NULL, "the colour bar has no label %s", label);
+    CHECKF(group_rects(strstr(bar + 1, "<g"), rect, MAX_RECTS) >= 10, "the colour bar has no steps");
+done:
+    free(rect);
+    free(svg);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(layer_svgs_agree_with_the_manifest);
+    RUN(orient_map_tiles_and_has_a_colour_bar);
     cli_end();
 }
