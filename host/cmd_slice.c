@@ -318,15 +318,6 @@ done:
     return rc;
 }
 
-/* "1 h 23 min", "12 min", "40 s" */
-static void duration(char *out, size_t size, double s)
-{
-    long m = (long)(s / 60 + 0.5);
-    if (s < 60) snprintf(out, size, "%.0f s", s);
-    else if (m < 60) snprintf(out, size, "%ld min", m);
-    else snprintf(out, size, "%ld h %02ld min", m / 60, m % 60);
-}
-
 int cmd_slice(int argc, char **argv)
 {
     slice_args s;
@@ -380,7 +371,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc && f != &JOB_FORMAT_DIR) rc = write_outputs(&a, &j);
     if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
     if (!rc) {
-        duration(when, sizeof when, d.print_time_s);
+        format_duration(when, sizeof when, d.print_time_s);
         printf("%s: %zu layers of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
                sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display", d.width, d.height,
                d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);

@@ -12,6 +12,8 @@ enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3 };
 int complain(int rc, const char *fmt, ...);
 /* The library's message; exit 2 for an argument it rejects, else 1. */
 int library_error(const adaslice_error *e);
+/* A print's duration as people say it: "1 h 23 min", "12 min", "40 s". */
+void format_duration(char *out, size_t size, double seconds);
 /* A monotonic clock, ms. */
 double now_ms(void);
 

@@ -1,13 +1,14 @@
 /* What the tool's figures and reports tell a reader, end to end (the tool
    runs as a child process, as in test_cli.c): the layer SVGs agree with the
    manifest, the orient map tiles and has its colour bar, plan --compare
-   gives the saving against uniform layers. */
+   gives the saving against uniform layers. format_duration is the tool's. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "meshgen.h"
+#include "../host/report.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -190,10 +191,85 @@ done:
     free(svg);
 }
 
+/* plan --compare gives the thickest uniform layers no worse than the optimal
+   plan, both layer counts and print times and the saving, and the numbers
+   hold: --uniform plans the same layers; their worst error is within the
+   optimal plan's (so within eps) and a bin thicker it would not be; they are
+   no fewer; the saving is 1 - the ratio of the times; the text says what the
+   JSON does; and the optimal plan's time is the one slice gives its job. */
+static void compare_gives_the_saving_against_uniform_layers(void)
+{
+    char arg[64], line[160], when[32], instead[32], job[600], path[700], *manifest;
+    const char *u, *o;
+    double eps, bin, tmax, worst, t, wu, tu, to, pct, nu, no;
+    cli_result r = cli_run("plan", raised_sphere(), "--compare", "--json", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    eps = cli_json_number(r.out, "eps");
+    bin = cli_json_number(r.out, "bin");
+    tmax = cli_json_number(r.out, "tmax");
+    o = strstr(r.out, "{\"method\": \"optimal\"");
+    u = strstr(r.out, "\"uniform_no_worse\": {");
+    CHECKF(o && u, "no optimal row or uniform plan: %.400s", r.out);
+    if (!o || !u) { cli_free(&r); return; }
+    worst = cli_json_number(o, "worst_error");
+    t = cli_json_number(u, "thickness");
+    nu = cli_json_number(u, "uniform_layers");
+    wu = cli_json_number(u, "uniform_worst_error");
+    tu = cli_json_number(u, "uniform_print_time_s");
+    no = cli_json_number(u, "optimal_layers");
+    to = cli_json_number(u, "optimal_print_time_s");
+    pct = cli_json_number(u, "print_time_saved_percent");
+    CHECKF(no == cli_json_number(r.out, "layers") && no == cli_json_number(o, "layers") &&
+               to == cli_json_number(o, "print_time_s"), "the optimal plan: %g layers, %g s", no, to);
+    CHECKF(wu <= worst && worst <= eps, "uniform worst error %g, optimal %g, eps %g", wu, worst, eps);
+    CHECKF(nu >= no && nu > 0, "uniform %g layers, optimal %g", nu, no);
+    CHECKF(to > 0 && tu >= to && fabs(pct - 100 * (1 - to / tu)) < 1e-9, "%g s against %g s: %g %% saved", to, tu, pct);
+    CHECKF(nu > no && pct > 0, "a sphere gains nothing: %g layers against %g", no, nu);
+    cli_free(&r);
+
+    /* the same layers from --uniform, and one bin thicker is worse than optimal */
+    snprintf(arg, sizeof arg, "%.9g", t);
+    r = cli_run("plan", raised_sphere(), "--uniform", arg, "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "layers") == nu && fabs(cli_json_number(r.out, "worst_error") - wu) < 1e-12,
+           "--uniform %s: %g layers, worst %g; --compare said %g, %g", arg, cli_json_number(r.out, "layers"),
+           cli_json_number(r.out, "worst_error"), nu, wu);
+    cli_free(&r);
+    if (t + bin <= tmax + 1e-9) {
+        snprintf(arg, sizeof arg, "%.9g", t + bin);
+        r = cli_run("plan", raised_sphere(), "--uniform", arg, "--json", NULL);
+        CHECKF(r.status == 0 && cli_json_number(r.out, "worst_error") > worst, "--uniform %s: worst %g, optimal %g: not the thickest",
+               arg, cli_json_number(r.out, "worst_error"), worst);
+        cli_free(&r);
+    }
+
+    /* the summary's table and its saving line */
+    r = cli_run("plan", raised_sphere(), "--compare", NULL);
+    format_duration(when, sizeof when, to);
+    format_duration(instead, sizeof instead, tu);
+    snprintf(line, sizeof line, "%.0f layers instead of %.0f", no, nu);
+    CHECKF(strstr(r.out, "\nUniform ") && strstr(r.out, line), "no Uniform row or no '%s' in\n%s", line, r.out);
+    snprintf(line, sizeof line, "%s instead of %s to print: %.1f %% saved", when, instead, pct);
+    CHECKF(strstr(r.out, line), "no '%s' in\n%s", line, r.out);
+    cli_free(&r);
+
+    /* slice estimates the optimal plan's job as --compare does */
+    snprintf(job, sizeof job, "%s/timejob", cli_dir);
+    r = cli_run("slice", raised_sphere(), "-o", job, "--pixels", "400x400", "--pitch", "0.05", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", job);
+    manifest = cli_read(path);
+    CHECKF(manifest && fabs(cli_json_number(manifest, "print_time_s") - to) < 1e-6 * to, "slice: %g s, --compare: %g s",
+           manifest ? cli_json_number(manifest, "print_time_s") : NAN, to);
+    free(manifest);
+    cli_remove_all(job);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(orient_map_tiles_and_has_a_colour_bar);
+    RUN(compare_gives_the_saving_against_uniform_layers);
     cli_end();
 }
