@@ -144,8 +144,8 @@ static void write_map(FILE *f, const void *ctx)
             MAP_X(MAP_W) - MAP_X(0), MAP_Y(MAP_H) - MAP_Y(0));
     colour_bar(f, lo <= hi ? lo : 0, lo <= hi ? hi : 0, infeasible);
     for (x = -180; x <= 180; x += 60)
-        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%d&#176;</text>\n", MAP_LEFT + (x + 180) * CELL * MAP_W / 360,
-                MAP_Y(MAP_H) + 16, x);
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%d&#176;</text>\n",
+                MAP_LEFT + (x + 180) * CELL * MAP_W / 360, MAP_Y(MAP_H) + 16, x);
     for (y = -90; y <= 90; y += 45)
         fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%d&#176;</text>\n", MAP_LEFT - 6,
                 MAP_TOP + (90 - y) * CELL * MAP_H / 180 + 4, y);

@@ -86,12 +86,12 @@ static void print_compare(const plan_args *a, const plan_job *j)
         format_duration(when, sizeof when, t_best);
         format_duration(instead, sizeof instead, t_uni);
         printf("\nOptimal against Uniform, no worse: %zu layers instead of %zu (%.0f %% fewer), %s instead of %s to print: "
-               "%.1f %% saved\n", best->layer_count, uni->layer_count, 100 * (1 - (double)best->layer_count / uni->layer_count),
-               when, instead, 100 * (1 - t_best / t_uni));
+               "%.1f %% saved\n", best->layer_count, uni->layer_count,
+               100 * (1 - (double)best->layer_count / uni->layer_count), when, instead, 100 * (1 - t_best / t_uni));
         printf("(print times as slice estimates them by default: %g s at %g mm on a typical resin's working curve of Dp "
-               "%g mm, %zu bottom layers of %g s, a %g mm peel at %g mm/s back at %g mm/s, %g s settle)\n", c.cure.seconds, c.cure.thickness,
-               c.cure.penetration, c.bottom_layers, c.bottom_exposure_s, c.motion.lift_mm, c.motion.lift_speed,
-               c.motion.retract_speed, c.motion.wait_before_cure_s);
+               "%g mm, %zu bottom layers of %g s, a %g mm peel at %g mm/s back at %g mm/s, %g s settle)\n",
+               c.cure.seconds, c.cure.thickness, c.cure.penetration, c.bottom_layers, c.bottom_exposure_s,
+               c.motion.lift_mm, c.motion.lift_speed, c.motion.retract_speed, c.motion.wait_before_cure_s);
     } else if (j->planned[ADASLICE_METHOD_OPTIMAL] && j->why[ADASLICE_METHOD_OPTIMAL].result == ADASLICE_OK) {
         printf("\nNo uniform layers from %g to %g mm are as good as Optimal (worst error %g%s)\n", a->tmin, a->tmax,
                best->worst_error, u);

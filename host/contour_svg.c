@@ -34,9 +34,9 @@ static void caption_line(FILE *f, double x, double y, double em, const char *wei
 
 void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const contour_layer *layer)
 {
-    double lo[2] = {0, 0}, hi[2] = {0, 0}, em, band, width, top, x, bar, line[4];
+    double lo[2] = {0, 0}, hi[2] = {0, 0}, em, band, width, top, x, bar, line[4], scale_row;
     size_t p, k, seen = 0, open = 0;
-    char text[4][160];
+    char text[3][160];
     int n;
     for (p = c->first_polygon[i]; p < c->first_polygon[i + 1]; p++) {
         open += !c->polygons[p].closed;
@@ -64,7 +64,8 @@ void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const con
     if (width < 24 * em) width = 24 * em;
     if (width < hi[0] - lo[0]) width = hi[0] - lo[0];
     for (n = 0; n < 4; n++) line[n] = (1.2 + 1.3 * n) * em; /* baselines below the band's top */
-    band = line[3] + (open ? 2.6 : 1.3) * em + 0.6 * em;
+    scale_row = line[3] + (open ? 2 : 1) * 1.3 * em;          /* the legend's last row */
+    band = scale_row + 0.6 * em;
     top = -hi[1] - band;
 
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
@@ -82,8 +83,8 @@ void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const con
     caption_line(f, x, top + line[1], em, "", text[1]);
     caption_line(f, x, top + line[2], em, "", text[2]);
     /* the legend: the fill, the open polylines (only when there are any), the scale */
-    fprintf(f, "<rect x=\"%.4f\" y=\"%.4f\" width=\"%.4f\" height=\"%.4f\" fill=\"%s\" stroke=\"%s\" stroke-width=\"%.4f\"/>\n",
-            x, top + line[3] - 0.75 * em, 1.6 * em, 0.8 * em, FILL, STROKE, em / 20);
+    fprintf(f, "<rect x=\"%.4f\" y=\"%.4f\" width=\"%.4f\" height=\"%.4f\" fill=\"%s\" stroke=\"%s\" "
+               "stroke-width=\"%.4f\"/>\n", x, top + line[3] - 0.75 * em, 1.6 * em, 0.8 * em, FILL, STROKE, em / 20);
     caption_line(f, x + 2.1 * em, top + line[3], em, "", "inside the part (nonzero winding)");
     if (open) {
         double y = top + line[3] + 1.3 * em;
@@ -92,7 +93,7 @@ void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const con
         caption_line(f, x + 2.1 * em, y, em, "", "open contour: the mesh has a hole here");
     }
     {
-        double y = top + line[3] + (open ? 2.6 : 1.3) * em - 0.35 * em;
+        double y = top + scale_row - 0.35 * em;
         char label[32];
         bar = svg_nice_step(hi[0] - lo[0], 4);
         fprintf(f, "<path d=\"M%.4f %.4fv%.4fH%.4fv%.4f\" fill=\"none\" stroke=\"%s\" stroke-width=\"%.4f\"/>\n", x,
