@@ -22,6 +22,7 @@
 #endif
 #include "../adaslice.h"
 #include "../host/cure.h"
+#include "../host/plan_job.h"
 #include "models.h"
 #include "timing.h"
 
@@ -119,35 +120,6 @@ static int time_formats(const char *tool, const char *dir)
     return 0;
 }
 
-/* The largest layer of k bins whose uniform plan's worst error is within
-   `worst`; 0 if even the thinnest layer's is not. */
-static int uniform_within(const adaslice_profile *p, double worst, double tmin, double tmax, adaslice_plan *out)
-{
-    uint32_t k, lo = (uint32_t)(tmin / p->bin + 0.5), hi = (uint32_t)(tmax / p->bin + 0.5);
-    for (k = hi; k >= lo && k > 0; k--) {
-        adaslice_plan_options o;
-        adaslice_plan plan;
-        memset(&o, 0, sizeof o);
-        o.method = ADASLICE_METHOD_FINEST;
-        o.tmin = o.tmax = k * p->bin;
-        o.eps = 1e9;
-        if (adaslice_plan_profile(p, &o, &plan, NULL) != ADASLICE_OK) continue;
-        if (plan.worst_error <= worst) { *out = plan; return 1; }
-        adaslice_plan_free(&plan);
-    }
-    return 0;
-}
-
-static double print_seconds(const cure_args *c, const adaslice_plan *p)
-{
-    job_layer *l = (job_layer *)malloc(p->layer_count * sizeof *l);
-    double s;
-    cure_layers(c, p, l);
-    s = cure_print_time(&c->motion, l, p->layer_count);
-    free(l);
-    return s;
-}
-
 static int print_time_saved(const char *dir)
 {
     double saved[BENCH_MODEL_COUNT];
@@ -182,11 +154,11 @@ static int print_time_saved(const char *dir)
             adaslice_mesh_free(&m);
             continue;
         }
-        if (!uniform_within(&p, best.worst_error, ADASLICE_DEFAULT_TMIN, ADASLICE_DEFAULT_TMAX, &uni)) {
+        if (!plan_uniform_no_worse(&p, &best, &uni)) {
             printf("  %-28.28s no uniform plan within %g\n", BENCH_MODELS[i].name, best.worst_error);
         } else {
-            t_best = print_seconds(&c, &best);
-            t_uni = print_seconds(&c, &uni);
+            t_best = cure_plan_seconds(&c, &best);
+            t_uni = cure_plan_seconds(&c, &uni);
             saved[n++] = 1 - t_best / t_uni;
             printf("  %-28.28s %8zu %8.0fs %8zu %9.3f %8.0fs %6.1f%%\n", BENCH_MODELS[i].name, best.layer_count, t_best,
                    uni.layer_count, uni.layers[0].thickness, t_uni, 100 * (1 - t_best / t_uni));

@@ -45,15 +45,54 @@ typedef struct map_ctx {
     double alpha;
 } map_ctx;
 
-/* Blue (low F, good) through white to red (high F); grey: infeasible. */
+/* Blue (low F, good) through white (halfway) to red (high F); grey: infeasible. */
 static void score_colour(double f, double lo, double hi, char out[8])
 {
     double t = hi > lo ? (f - lo) / (hi - lo) : 0;
     int r, g, b;
     if (f > 1.5) { strcpy(out, "#b0b0b0"); return; }
-    if (t < 0.5) { r = (int)(40 + 430 * t); g = (int)(90 + 330 * t); b = 220; }
+    if (t < 0.5) { r = (int)(40 + 430 * t); g = (int)(90 + 330 * t); b = (int)(220 + 70 * t); }
     else { r = 255; g = (int)(255 - 360 * (t - 0.5)); b = (int)(255 - 420 * (t - 0.5)); }
     snprintf(out, 8, "#%02x%02x%02x", r > 255 ? 255 : r, g > 255 ? 255 : g < 0 ? 0 : g, b > 255 ? 255 : b < 0 ? 0 : b);
+}
+
+/* The map's grid in pixels: cell i's edges are MAP_X(i) and MAP_X(i + 1), so
+   neighbours share their edge exactly, and crispEdges keeps renderers from
+   anti-aliasing those edges into seams of the background. */
+enum { MAP_W = 180, MAP_H = 90, CELL = 4, MAP_LEFT = 60, MAP_TOP = 50, BAR_LEFT = MAP_LEFT + MAP_W * CELL + 28, BAR_W = 16 };
+#define MAP_X(i) (MAP_LEFT + (i) * CELL)
+#define MAP_Y(j) (MAP_TOP + (j) * CELL)
+
+static void cell_run(FILE *f, int x0, int x1, int row, const char *colour)
+{
+    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"%s\"/>\n", x0, MAP_Y(row), x1 - x0,
+            MAP_Y(row + 1) - MAP_Y(row), colour);
+}
+
+/* The colour of every F from lo (bottom) to hi (top), one step per map row,
+   in the map's own colours; grey below it if some directions have no plan. */
+static void colour_bar(FILE *f, double lo, double hi, int infeasible)
+{
+    char c[8];
+    int j;
+    fprintf(f, "<g id=\"colour-bar\" data-min=\"%.9g\" data-max=\"%.9g\">\n<g shape-rendering=\"crispEdges\">\n", lo, hi);
+    for (j = 0; j < MAP_H; j++) {
+        score_colour(lo + (hi - lo) * (MAP_H - j - 0.5) / MAP_H, lo, hi, c);
+        cell_run(f, BAR_LEFT, BAR_LEFT + BAR_W, j, c);
+    }
+    fputs("</g>\n", f);
+    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"none\" stroke=\"black\"/>\n", BAR_LEFT, MAP_Y(0),
+            BAR_W, MAP_Y(MAP_H) - MAP_Y(0));
+    fprintf(f, "<text x=\"%d\" y=\"%d\" font-weight=\"bold\">F</text>\n", BAR_LEFT, MAP_Y(0) - 8);
+    fprintf(f, "<text x=\"%d\" y=\"%d\">%.4g</text><text x=\"%d\" y=\"%d\" fill=\"#555\">max</text>\n",
+            BAR_LEFT + BAR_W + 5, MAP_Y(0) + 10, hi, BAR_LEFT + BAR_W + 5, MAP_Y(0) + 24);
+    fprintf(f, "<text x=\"%d\" y=\"%d\">%.4g</text><text x=\"%d\" y=\"%d\" fill=\"#555\">min</text>\n",
+            BAR_LEFT + BAR_W + 5, MAP_Y(MAP_H), lo, BAR_LEFT + BAR_W + 5, MAP_Y(MAP_H) - 14);
+    if (infeasible)
+        fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"10\" fill=\"#b0b0b0\" stroke=\"black\"/>"
+                   "<text x=\"%d\" y=\"%d\">no plan</text>\n",
+                BAR_LEFT, MAP_Y(MAP_H) + 12, BAR_W, BAR_LEFT + BAR_W + 5, MAP_Y(MAP_H) + 21);
+    fputs("</g>\n", f);
 }
 
 /* The paper's Fig. 8 flattened: F of the nearest lattice direction over an
@@ -61,30 +100,30 @@ static void score_colour(double f, double lo, double hi, char out[8])
 static void write_map(FILE *f, const void *ctx)
 {
     const map_ctx *m = (const map_ctx *)ctx;
-    enum { W = 180, H = 90, CELL = 4, LEFT = 60, TOP = 50 };
+    int width = BAR_LEFT + BAR_W + 60, height = MAP_Y(MAP_H) + 60, x, y, infeasible = 0;
     double lo = 2, hi = 0;
     size_t i;
-    int x, y;
     for (i = 0; i < m->count; i++)
         if (m->scores[i].score <= 1.5) {
             if (m->scores[i].score < lo) lo = m->scores[i].score;
             if (m->scores[i].score > hi) hi = m->scores[i].score;
-        }
-    fprintf(f, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-family=\"sans-serif\" font-size=\"12\">\n",
-            LEFT + W * CELL + 30, TOP + H * CELL + 60);
+        } else infeasible = 1;
+    fprintf(f, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\" "
+               "font-family=\"sans-serif\" font-size=\"12\">\n", width, height, width, height);
     fputs("<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n", f);
-    fprintf(f, "<text x=\"%d\" y=\"22\" font-size=\"15\" font-weight=\"bold\">", LEFT);
+    fprintf(f, "<text x=\"%d\" y=\"22\" font-size=\"15\" font-weight=\"bold\">", MAP_LEFT);
     xml_text(f, m->model);
     fprintf(f, ": F over build directions (alpha %g, %zu directions)</text>\n", m->alpha, m->count);
-    fprintf(f, "<text x=\"%d\" y=\"40\" fill=\"#555\">blue: low F (good), red: high F; F from %.4g to %.4g; "
-               "circles: the best direction and local minima</text>\n", LEFT, lo, hi);
-    for (y = 0; y < H; y++) {
-        double lat = (90 - (y + 0.5) * 180.0 / H) * 3.14159265358979 / 180;
+    fprintf(f, "<text x=\"%d\" y=\"40\" fill=\"#555\">blue: low F (good), red: high F; "
+               "circles: the best direction and local minima</text>\n", MAP_LEFT);
+    fputs("<g id=\"cells\" shape-rendering=\"crispEdges\">\n", f);
+    for (y = 0; y < MAP_H; y++) {
+        double lat = (90 - (y + 0.5) * 180.0 / MAP_H) * 3.14159265358979 / 180;
         char run[8] = "", c[8];
         int start = 0;
-        for (x = 0; x <= W; x++) {
-            if (x < W) {
-                double lon = (-180 + (x + 0.5) * 360.0 / W) * 3.14159265358979 / 180, best = -2;
+        for (x = 0; x <= MAP_W; x++) {
+            if (x < MAP_W) {
+                double lon = (-180 + (x + 0.5) * 360.0 / MAP_W) * 3.14159265358979 / 180, best = -2;
                 double p[3];
                 size_t k, near = 0;
                 p[0] = cos(lat) * cos(lon); p[1] = cos(lat) * sin(lon); p[2] = sin(lat);
@@ -95,28 +134,30 @@ static void write_map(FILE *f, const void *ctx)
                 }
                 score_colour(m->scores[near].score, lo, hi, c);
             }
-            if (x == W || strcmp(c, run)) {
-                if (x > 0)
-                    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"%s\"/>\n", LEFT + start * CELL,
-                            TOP + y * CELL, (x - start) * CELL, CELL, run);
-                if (x < W) { strcpy(run, c); start = x; }
+            if (x == MAP_W || strcmp(c, run)) {
+                if (x > 0) cell_run(f, MAP_X(start), MAP_X(x), y, run);
+                if (x < MAP_W) { strcpy(run, c); start = x; }
             }
         }
     }
-    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"none\" stroke=\"black\"/>\n", LEFT, TOP, W * CELL, H * CELL);
+    fputs("</g>\n", f);
+    fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"none\" stroke=\"black\"/>\n", MAP_X(0), MAP_Y(0),
+            MAP_X(MAP_W) - MAP_X(0), MAP_Y(MAP_H) - MAP_Y(0));
+    colour_bar(f, lo <= hi ? lo : 0, lo <= hi ? hi : 0, infeasible);
     for (x = -180; x <= 180; x += 60)
-        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%d&#176;</text>\n", LEFT + (x + 180) * CELL * W / 360,
-                TOP + H * CELL + 16, x);
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%d&#176;</text>\n",
+                MAP_LEFT + (x + 180) * CELL * MAP_W / 360, MAP_Y(MAP_H) + 16, x);
     for (y = -90; y <= 90; y += 45)
-        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%d&#176;</text>\n", LEFT - 6, TOP + (90 - y) * CELL * H / 180 + 4, y);
+        fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%d&#176;</text>\n", MAP_LEFT - 6,
+                MAP_TOP + (90 - y) * CELL * MAP_H / 180 + 4, y);
     fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">longitude of the build direction (atan2(y, x))</text>\n",
-            LEFT + W * CELL / 2, TOP + H * CELL + 36);
+            MAP_LEFT + MAP_W * CELL / 2, MAP_Y(MAP_H) + 36);
     fprintf(f, "<text transform=\"translate(16 %d) rotate(-90)\" text-anchor=\"middle\">latitude (asin z)</text>\n",
-            TOP + H * CELL / 2);
+            MAP_TOP + MAP_H * CELL / 2);
     for (i = 0; i < m->minima_count; i++) {
         const double *d = m->scores[m->minima[i]].direction;
         double lon = atan2(d[1], d[0]) * 180 / 3.14159265358979, lat = asin(d[2]) * 180 / 3.14159265358979;
-        double cx = LEFT + (lon + 180) * CELL * W / 360, cy = TOP + (90 - lat) * CELL * H / 180;
+        double cx = MAP_LEFT + (lon + 180) * CELL * MAP_W / 360, cy = MAP_TOP + (90 - lat) * CELL * MAP_H / 180;
         fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"7\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/>"
                    "<text x=\"%.1f\" y=\"%.1f\" font-weight=\"bold\">%s</text>\n",
                 cx, cy, cx + 9, cy - 8, i == 0 ? "best" : i == 1 ? "2" : i == 2 ? "3" : "4");

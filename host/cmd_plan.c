@@ -1,6 +1,7 @@
 /* adaslice plan: the fewest layers within eps for a mesh or a metric profile,
    printed as a summary (with the paper's Table 3 on request) or as JSON. */
 #include "commands.h"
+#include "cure.h"
 #include "model.h"
 #include "output.h"
 #include "plan_job.h"
@@ -46,29 +47,56 @@ static const adaslice_method TABLE3[] = {
 static const char *const TABLE3_NAMES[] = {"Coarsest", "Optimal", "Greedy", "Finest", "Curvature"};
 enum { TABLE3_ROWS = sizeof TABLE3 / sizeof *TABLE3 };
 
+/* --compare's print times: slice's default exposures and motion, so that the
+   Optimal row says what slice would. */
+static void compare_cure(const plan_args *a, cure_args *c) { cure_typical(c, a->tmin); }
+
 static void print_compare(const plan_args *a, const plan_job *j)
 {
     const char *unit = METRICS[a->metric].eps_unit;
-    char u[16], head[40];
+    const adaslice_plan *best = &j->plan[ADASLICE_METHOD_OPTIMAL], *uni = &j->uniform;
+    char u[16], head[40], when[32], instead[32];
+    cure_args c;
     int r;
+    compare_cure(a, &c);
     snprintf(head, sizeof head, "worst error%s%s%s", *unit ? " (" : "", unit, *unit ? ")" : "");
     printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
            METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
-    printf("%-10s %8s %18s %10s\n", "method", "layers", head, "over eps");
+    printf("%-10s %8s %18s %10s %12s\n", "method", "layers", head, "over eps", "print time");
     for (r = 0; r < TABLE3_ROWS; r++) {
         const adaslice_plan *p = &j->plan[TABLE3[r]];
         const adaslice_error *e = &j->why[TABLE3[r]];
         if (!j->planned[TABLE3[r]]) continue; /* curvature, from a --profile */
-        if (e->result == ADASLICE_OK)
-            printf("%-10s %8zu %18.6g %10zu\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps);
-        else if (e->min_eps > 0)
+        if (e->result == ADASLICE_OK) {
+            format_duration(when, sizeof when, cure_plan_seconds(&c, p));
+            printf("%-10s %8zu %18.6g %10zu %12s\n", TABLE3_NAMES[r], p->layer_count, p->worst_error, p->over_eps, when);
+        } else if (e->min_eps > 0)
             printf("%-10s %8s   (feasible from eps %g)\n", TABLE3_NAMES[r], "none", e->min_eps);
         else
             printf("%-10s %8s   (tmin..tmax cannot tile the height)\n", TABLE3_NAMES[r], "none");
     }
+    if (j->uniform_found) {
+        format_duration(when, sizeof when, cure_plan_seconds(&c, uni));
+        printf("%-10s %8zu %18.6g %10zu %12s   (%g mm layers: the thickest no worse than Optimal)\n", "Uniform",
+               uni->layer_count, uni->worst_error, uni->over_eps, when, uni->layers[0].thickness);
+    }
     if (a->budget)
-        printf("(Optimal with a budget of %zu layer%s: eps %g%s)\n", a->budget, plural(a->budget),
-               j->plan[ADASLICE_METHOD_OPTIMAL].eps, u);
+        printf("(Optimal with a budget of %zu layer%s: eps %g%s)\n", a->budget, plural(a->budget), best->eps, u);
+    if (j->uniform_found) {
+        double t_best = cure_plan_seconds(&c, best), t_uni = cure_plan_seconds(&c, uni);
+        format_duration(when, sizeof when, t_best);
+        format_duration(instead, sizeof instead, t_uni);
+        printf("\nOptimal against Uniform, no worse: %zu layer%s instead of %zu (%.0f %% fewer), %s instead of %s to print: "
+               "%.1f %% saved\n", best->layer_count, plural(best->layer_count), uni->layer_count,
+               100 * (1 - (double)best->layer_count / uni->layer_count), when, instead, 100 * (1 - t_best / t_uni));
+        printf("(print times as slice estimates them by default: %g s at %g mm on a typical resin's working curve of Dp "
+               "%g mm, %zu bottom layers of %g s, a %g mm peel at %g mm/s back at %g mm/s, %g s settle)\n",
+               c.cure.seconds, c.cure.thickness, c.cure.penetration, c.bottom_layers, c.bottom_exposure_s,
+               c.motion.lift_mm, c.motion.lift_speed, c.motion.retract_speed, c.motion.wait_before_cure_s);
+    } else if (j->planned[ADASLICE_METHOD_OPTIMAL] && j->why[ADASLICE_METHOD_OPTIMAL].result == ADASLICE_OK) {
+        printf("\nNo uniform layers from %g to %g mm are as good as Optimal (worst error %g%s)\n", a->tmin, a->tmax,
+               best->worst_error, u);
+    }
 }
 
 static void print_summary(const plan_args *a, const plan_job *j)
@@ -125,6 +153,8 @@ static void print_json(const plan_args *a, const plan_job *j)
     const adaslice_profile *pr = &j->profile;
     size_t k;
     int r;
+    cure_args c;
+    compare_cure(a, &c);
     printf("{\n  \"model\": ");
     json_string(stdout, a->model ? a->model : a->profile);
     printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
@@ -178,13 +208,32 @@ static void print_json(const plan_args *a, const plan_job *j)
             printf("%s\n    {\"method\": \"%s\", ", r ? "," : "", METHOD_NAMES[TABLE3[r]]);
             if (e->result == ADASLICE_OK) {
                 print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
+                printf(", \"print_time_s\": ");
+                json_number(stdout, cure_plan_seconds(&c, &j->plan[TABLE3[r]]));
             } else {
                 printf("\"layers\": null, \"min_eps\": ");
                 json_number(stdout, e->min_eps);
             }
             printf("}");
         }
-        printf("\n  ]");
+        printf("\n  ],\n  \"uniform_no_worse\": ");
+        if (j->uniform_found) {
+            const adaslice_plan *best = &j->plan[ADASLICE_METHOD_OPTIMAL];
+            double t_best = cure_plan_seconds(&c, best), t_uni = cure_plan_seconds(&c, &j->uniform);
+            printf("{\"thickness\": ");
+            json_number(stdout, j->uniform.layers[0].thickness);
+            printf(", \"uniform_layers\": %zu, \"uniform_worst_error\": ", j->uniform.layer_count);
+            json_number(stdout, j->uniform.worst_error);
+            printf(", \"uniform_print_time_s\": ");
+            json_number(stdout, t_uni);
+            printf(", \"optimal_layers\": %zu, \"optimal_print_time_s\": ", best->layer_count);
+            json_number(stdout, t_best);
+            printf(", \"print_time_saved_percent\": ");
+            json_number(stdout, 100 * (1 - t_best / t_uni));
+            printf("}");
+        } else {
+            printf("null");
+        }
     }
     printf("\n}\n");
 }

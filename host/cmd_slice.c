@@ -46,12 +46,12 @@ static void slice_usage(FILE *f)
 }
 
 
-typedef struct contour_file { const adaslice_contours *c; size_t layer; } contour_file;
+typedef struct contour_file { const adaslice_contours *c; size_t k; contour_layer layer; } contour_file;
 
 static void write_contour_svg(FILE *f, const void *ctx)
 {
     const contour_file *cf = (const contour_file *)ctx;
-    svg_write_contours(f, cf->c, cf->layer, 1);
+    svg_write_contours(f, cf->c, cf->k, &cf->layer);
 }
 
 /* The slice polygons at the masks' heights, one SVG per layer, from the
@@ -74,9 +74,17 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
         return library_error(&err);
     }
     cf.c = &c;
+    cf.layer.model = base_name(a->model);
+    cf.layer.count = p->layer_count;
     for (k = 0; k < p->layer_count && !rc; k++) {
+        const adaslice_layer *l = &p->layers[k];
         layer_path(path, n, s->dir, k, digits, "svg");
-        cf.layer = k;
+        cf.k = k;
+        cf.layer.number = k + 1;
+        cf.layer.z_bottom = l->z_bottom; /* the plan's, as the manifest takes them (cure_layers) */
+        cf.layer.z_top = l->z_top;
+        cf.layer.thickness = l->thickness;
+        cf.layer.cut = layer_slice_height(s, j, k);
         rc = write_atomic(path, write_contour_svg, &cf);
     }
     adaslice_contours_free(&c);
@@ -310,15 +318,6 @@ done:
     return rc;
 }
 
-/* "1 h 23 min", "12 min", "40 s" */
-static void duration(char *out, size_t size, double s)
-{
-    long m = (long)(s / 60 + 0.5);
-    if (s < 60) snprintf(out, size, "%.0f s", s);
-    else if (m < 60) snprintf(out, size, "%ld min", m);
-    else snprintf(out, size, "%ld h %02ld min", m / 60, m % 60);
-}
-
 int cmd_slice(int argc, char **argv)
 {
     slice_args s;
@@ -374,7 +373,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc && f != &JOB_FORMAT_DIR) rc = write_outputs(&a, &j);
     if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
     if (!rc) {
-        duration(when, sizeof when, d.print_time_s);
+        format_duration(when, sizeof when, d.print_time_s);
         printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
                plural(d.layer_count), sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display",
                d.width, d.height, d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);

@@ -4,14 +4,25 @@
 #include <stdio.h>
 #include "../adaslice.h"
 
-/* Writes heights [first, first + count) of `c` as one standalone SVG document
-   (count is clipped to the heights there are). Units are millimetres: the
-   viewBox is the polygons' bounding box plus a 1 mm margin, width and height
-   carry "mm", and y is flipped so that +y points up the page. One <g> per
-   height (id "z<index>", data-z the height in mm) holds one path of every loop,
-   filled with the nonzero rule so holes and overlaps read as the winding number
-   says, and a second, unfilled path for open polylines, if any. Layers are
-   translucent so a stack of them shows through. Errors show in ferror(f). */
-void svg_write_contours(FILE *f, const adaslice_contours *c, size_t first, size_t count);
+/* The layer a cross-section belongs to, in the job's terms. */
+typedef struct contour_layer {
+    const char *model;          /* named in the title */
+    size_t number, count;       /* layer `number` (from 1) of `count` */
+    double z_bottom, z_top;     /* mm above the part's bottom, as manifest.json gives them */
+    double thickness;           /* mm, as manifest.json gives it */
+    double cut;                 /* the contours' height, mm above the part's bottom */
+} contour_layer;
+
+/* Writes the contours of height i of `c` as one standalone SVG document of
+   the layer. Units are millimetres: width and height carry "mm" (1:1 at 100 %),
+   the viewBox is the polygons' bounding box plus a 1 mm margin and a caption
+   band above them, and y is flipped so that +y points up the page. The caption
+   (and <title>) name the layer, its heights and thickness; a legend says what
+   the fill and the red strokes mean, with a scale bar. The layer's <g>
+   (id "layer-N") carries data-layer, data-z-bottom, data-z-top, data-thickness
+   and data-cut; it holds one path of every loop, filled with the nonzero rule
+   so holes and overlaps read as the winding number says, and a second,
+   unfilled path for open polylines, if any. Errors show in ferror(f). */
+void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const contour_layer *layer);
 
 #endif

@@ -20,6 +20,26 @@ void cure_defaults(cure_args *c)
     c->motion.wait_before_cure_s = 0.5;
 }
 
+/* T defaults to tmin, and Dp to a typical resin's unless a second point or
+   --penetration gives it; one point makes the curve (two are fitted later). */
+static void default_curve(cure_args *c, double tmin)
+{
+    if (!c->at_given) c->thickness[0] = tmin;
+    if (!c->points && !c->penetration) {
+        c->penetration = CURE_TYPICAL_DP;
+        c->typical = 1;
+    }
+    c->cure.seconds = c->seconds[0];
+    c->cure.thickness = c->thickness[0];
+    c->cure.penetration = c->penetration;
+}
+
+void cure_typical(cure_args *c, double tmin)
+{
+    cure_defaults(c);
+    default_curve(c, tmin);
+}
+
 void cure_usage(FILE *f)
 {
     fputs("exposure (Jacobs' working curve: a layer t mm thick gets E(t) = S exp((t - T) / Dp))\n"
@@ -108,11 +128,7 @@ int cure_finish(cure_args *c, double tmin, double tmax)
         return complain(RC_USAGE, "--bottom-exposure and --settle are limited to %g s", MAX_SECONDS);
     if (c->motion.lift_mm > MAX_PEEL_MM || c->motion.lift_speed > MAX_PEEL_MM || c->motion.retract_speed > MAX_PEEL_MM)
         return complain(RC_USAGE, "--peel is limited to %g mm and speeds to %g mm/s", MAX_PEEL_MM, MAX_PEEL_MM);
-    if (!c->at_given) c->thickness[0] = tmin;
-    if (!c->points && !c->penetration) {
-        c->penetration = CURE_TYPICAL_DP;
-        c->typical = 1;
-    }
+    default_curve(c, tmin);
     for (k = 0; k < (c->points ? c->points : 1); k++) {
         if (!(c->seconds[k] > 0))
             return complain(RC_USAGE, "--exposure: %g s is not a positive exposure", c->seconds[k]);
@@ -126,10 +142,6 @@ int cure_finish(cure_args *c, double tmin, double tmax)
         if (adaslice_cure_fit(c->seconds[0], c->thickness[0], c->seconds[1], c->thickness[1], &c->cure, &e) != ADASLICE_OK)
             return complain(RC_USAGE, "--exposure %g@%g,%g@%g: the thicker layer must need the longer exposure",
                             c->seconds[0], c->thickness[0], c->seconds[1], c->thickness[1]);
-    } else {
-        c->cure.seconds = c->seconds[0];
-        c->cure.thickness = c->thickness[0];
-        c->cure.penetration = c->penetration;
     }
     /* E(t) grows with t: its ends are the thinnest and thickest exposures */
     for (k = 0; k < 2; k++) {
@@ -150,6 +162,17 @@ double cure_print_time(const job_motion *m, const job_layer *layers, size_t coun
     size_t k;
     for (k = 0; k < count; k++) t += layers[k].exposure_s + per_layer;
     return t;
+}
+
+double cure_plan_seconds(const cure_args *c, const adaslice_plan *plan)
+{
+    job_layer *layers = (job_layer *)malloc((plan->layer_count ? plan->layer_count : 1) * sizeof *layers);
+    double s;
+    if (!layers) return NAN;
+    cure_layers(c, plan, layers);
+    s = cure_print_time(&c->motion, layers, plan->layer_count);
+    free(layers);
+    return s;
 }
 
 void cure_layers(const cure_args *c, const adaslice_plan *p, job_layer *out)

@@ -27,6 +27,10 @@ typedef struct cure_args {
    standard resin (UVtools #280): Dp = 0.05 / ln(3 / 1.8). */
 #define CURE_TYPICAL_DP 0.098
 void cure_defaults(cure_args *c);
+/* The defaults with their working curve (T = tmin), for an estimate where no
+   printer is involved (plan --compare): slice's exposures without the limits
+   a printer counts in. */
+void cure_typical(cure_args *c, double tmin);
 /* If argv[*i] is one of the options above, takes it (and its value), sets
    *rc (RC_OK or RC_USAGE after a complaint) and returns 1; else 0. */
 int cure_option(int argc, char **argv, int *i, cure_args *c, int *rc);
@@ -41,4 +45,6 @@ void cure_usage(FILE *f);
 void cure_layers(const cure_args *c, const adaslice_plan *plan, job_layer *out);
 /* Seconds to print the layers: every exposure, settle, peel and return. */
 double cure_print_time(const job_motion *m, const job_layer *layers, size_t count);
+/* The same for a plan's layers with c's exposures; NAN without memory. */
+double cure_plan_seconds(const cure_args *c, const adaslice_plan *plan);
 #endif

@@ -51,6 +51,8 @@ typedef struct plan_job {
     adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all of them with --compare */
     adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
     int planned[METHOD_COUNT];
+    adaslice_plan uniform;         /* --compare: plan_uniform_no_worse than the optimal plan */
+    int uniform_found;
     double *kappa;                 /* curvature per bin, for the curvature method (model only) */
     double ms_load, ms_profile, ms_plan;
     /* Called with the mesh loaded and turned, before it is profiled: a
@@ -70,6 +72,10 @@ void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_option
 /* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */
 int run_plan(const plan_args *a, plan_job *j);
 int write_outputs(const plan_args *a, const plan_job *j);
+/* The thickest uniform layers within the bounds of `than` whose worst error is
+   no larger than its worst: what the same quality costs without adaptive
+   layers. 1 with *out made (free it), 0 if even the thinnest are worse. */
+int plan_uniform_no_worse(const adaslice_profile *profile, const adaslice_plan *than, adaslice_plan *out);
 /* The build-direction search (search.h) with these plan options: orient and
    --orient best. */
 int plan_orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t count, double alpha,

@@ -48,6 +48,14 @@ const char *quote_text(char out[QUOTE_SIZE], const char *text, size_t n)
     return out;
 }
 
+void format_duration(char *out, size_t size, double s)
+{
+    long m = (long)(s / 60 + 0.5);
+    if (s < 60) snprintf(out, size, "%.0f s", s);
+    else if (m < 60) snprintf(out, size, "%ld min", m);
+    else snprintf(out, size, "%ld h %02ld min", m / 60, m % 60);
+}
+
 double now_ms(void)
 {
     struct timespec ts;

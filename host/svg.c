@@ -25,8 +25,7 @@ static double px(const axis *a, double v)
     return a->p0 + (v - a->lo) / (a->hi - a->lo) * (a->p1 - a->p0);
 }
 
-/* 1, 2 or 5 times a power of ten, giving about `count` steps over `range`. */
-static double nice_step(double range, int count)
+double svg_nice_step(double range, int count)
 {
     double raw = range / count, mag = pow(10, floor(log10(raw))), f = raw / mag;
     return (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * mag;
@@ -94,7 +93,7 @@ static void frame(FILE *f, const axis *x)
 /* z grid across both panels, ticks and labels on the left one. */
 static void z_axis(FILE *f, const axis *z)
 {
-    double step = nice_step(z->hi, 8);
+    double step = svg_nice_step(z->hi, 8);
     int i;
     for (i = 0; i * step <= z->hi * (1 + 1e-9); i++) {
         double v = i * step, p = px(z, v);
@@ -250,7 +249,7 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
     axis z, xphi, xt;
 
     z.lo = 0; z.hi = pr->bin_count * b; z.p0 = BOTTOM; z.p1 = TOP;
-    step = nice_step(phi_max, 4);
+    step = svg_nice_step(phi_max, 4);
     xphi.lo = 0; xphi.hi = ceil(phi_max / step * (1 - 1e-9)) * step; xphi.p0 = PROFILE_X0; xphi.p1 = PROFILE_X1;
     xt.lo = 0; xt.hi = p->bins_max * b * 1.15; xt.p0 = PLAN_X0; xt.p1 = PLAN_X1;
 
@@ -278,7 +277,7 @@ void svg_write_plan(FILE *f, const svg_plan_figure *fig)
     caption(f, PLAN_X0, "slicing plan");
     z_axis(f, &z);
     panel(f, &xphi, step, fig->phi_axis);
-    panel(f, &xt, nice_step(xt.hi, 4), "layer thickness (mm)");
+    panel(f, &xt, svg_nice_step(xt.hi, 4), "layer thickness (mm)");
     profile_curve(f, pr, top, rows, &xphi, &z);
     if (cut)
         fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\" font-size=\"10\" fill=\"%s\">"

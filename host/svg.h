@@ -15,6 +15,10 @@ typedef struct svg_plan_figure {
     const adaslice_plan *plan;  /* at least one layer */
 } svg_plan_figure;
 
+/* 1, 2 or 5 times a power of ten, giving about `count` steps over `range`
+   (axis ticks, scale bars). */
+double svg_nice_step(double range, int count);
+
 /* s as XML character data (escaped). */
 void xml_text(FILE *f, const char *s);
 
