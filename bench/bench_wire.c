@@ -116,7 +116,8 @@ static int load_scaled(const char *path, double scale, adaslice_mesh *m, adaslic
     adaslice_load_options lo;
     memset(&lo, 0, sizeof lo);
     lo.scale = scale;
-    return adaslice_mesh_load_file(path, &lo, m, e) == ADASLICE_OK;
+    /* repaired as the tool repairs what it loads */
+    return adaslice_mesh_load_file(path, &lo, m, e) == ADASLICE_OK && adaslice_mesh_repair(m, NULL, NULL, e) == ADASLICE_OK;
 }
 
 static void bench_model(const char *dir, const char *name, row *r)

@@ -460,31 +460,110 @@ static void orient_finds_directions(void)
     cli_free(&r);
 }
 
+/* A quad a b c d facing along n (wound to match). */
+static void quad_facing(adaslice_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d, const double n[3])
+{
+    const float *p = m->vertices + 3 * a, *q = m->vertices + 3 * b, *r = m->vertices + 3 * c;
+    double u[3], w[3], x[3];
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = q[k] - p[k]; w[k] = r[k] - p[k]; }
+    x[0] = u[1] * w[2] - u[2] * w[1]; x[1] = u[2] * w[0] - u[0] * w[2]; x[2] = u[0] * w[1] - u[1] * w[0];
+    if (x[0] * n[0] + x[1] * n[1] + x[2] * n[2] >= 0) { gen_triangle(m, a, b, c); gen_triangle(m, a, c, d); }
+    else { gen_triangle(m, a, c, b); gen_triangle(m, a, d, c); }
+}
+
+/* A 30 x 30 x 3 mm plate with a 10 x 10 mm square hole through its middle. */
+static adaslice_mesh plate_with_a_hole(void)
+{
+    static const double up[3] = {0, 0, 1}, down[3] = {0, 0, -1};
+    adaslice_mesh m = gen_alloc(16, 32);
+    double ring[2][4][2] = {{{0, 0}, {30, 0}, {30, 30}, {0, 30}}, {{10, 10}, {20, 10}, {20, 20}, {10, 20}}};
+    uint32_t v[2][2][4]; /* [outer/inner][bottom/top][corner] */
+    int r, z, k;
+    for (r = 0; r < 2; r++)
+        for (z = 0; z < 2; z++)
+            for (k = 0; k < 4; k++) v[r][z][k] = gen_vertex(&m, ring[r][k][0], ring[r][k][1], 3.0 * z);
+    for (k = 0; k < 4; k++) {
+        int l = (k + 1) % 4;
+        double mid[2] = {(ring[0][k][0] + ring[0][l][0]) / 2 - 15, (ring[0][k][1] + ring[0][l][1]) / 2 - 15};
+        double out[3] = {mid[0], mid[1], 0}, in[3] = {-mid[0], -mid[1], 0};
+        quad_facing(&m, v[0][1][k], v[0][1][l], v[1][1][l], v[1][1][k], up);   /* top ring */
+        quad_facing(&m, v[0][0][k], v[0][0][l], v[1][0][l], v[1][0][k], down); /* bottom ring */
+        quad_facing(&m, v[0][0][k], v[0][0][l], v[0][1][l], v[0][1][k], out);  /* outer wall */
+        quad_facing(&m, v[1][0][k], v[1][0][l], v[1][1][l], v[1][1][k], in);   /* the hole's wall */
+    }
+    return m;
+}
+
 /* The part as loaded and the six axes are always scored, so a flat-faced
-   part is never turned to something worse: a cube plans as many layers
-   after --orient best as it does as loaded, and orient shows the as-loaded
-   score, which the best never exceeds. */
+   part is never turned to something worse: a cube, a 10 x 20 x 30 box and a
+   plate with a hole plan no more layers after --orient best than as loaded,
+   and orient shows the as-loaded score, which the best never exceeds. */
 static void orient_never_does_worse_than_as_loaded(void)
 {
-    const char *cube = cli_path("cube.stl");
-    adaslice_mesh m = gen_box(0, 0, 0, 10, 10, 10);
-    cli_result r;
-    double as_loaded, best, f_loaded, f_best;
-    const char *p;
-    write_stl(cube, &m, m.triangle_count);
+    adaslice_mesh parts[3];
+    const char *names[3] = {"cube.stl", "box.stl", "plate.stl"};
+    int i;
+    parts[0] = gen_box(0, 0, 0, 10, 10, 10);
+    parts[1] = gen_box(0, 0, 0, 10, 20, 30);
+    parts[2] = plate_with_a_hole();
+    for (i = 0; i < 3; i++) {
+        const char *path = cli_path(names[i]);
+        cli_result r;
+        double as_loaded, best, f_loaded, f_best;
+        const char *p;
+        write_stl(path, &parts[i], parts[i].triangle_count);
+        gen_free(&parts[i]);
+        r = cli_run("plan", path, "--json", NULL);
+        as_loaded = cli_json_number(r.out, "layers");
+        CHECKF(r.status == 0 && !strstr(r.err, "repaired"), "%s: %s", names[i], r.err);
+        cli_free(&r);
+        r = cli_run("plan", path, "--orient", "best", "--json", NULL);
+        best = cli_json_number(r.out, "layers");
+        cli_free(&r);
+        CHECKF(as_loaded > 0 && best <= as_loaded, "%s: as loaded %g layers, --orient best %g", names[i], as_loaded, best);
+        r = cli_run("orient", path, "--json", NULL);
+        p = strstr(r.out, "\"as_loaded\"");
+        f_best = cli_json_number(r.out, "F");
+        f_loaded = p ? cli_json_number(p, "F") : NAN;
+        CHECKF(r.status == 0 && p && cli_json_number(p, "layers") == as_loaded && f_best <= f_loaded, "%s: %s", names[i], r.out);
+        cli_free(&r);
+    }
+}
+
+/* Every command repairs what it loads and says so in one line: a box with
+   facets wound backwards and one inside out, each warned about with what was
+   done, the report in --json, the plan as the clean box's. */
+static void repairs_are_warned_about_and_reported(void)
+{
+    const char *bad = cli_path("bad_box.stl"), *good = cli_path("good_box.stl");
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 8, 6), far = gen_box(20, 0, 0, 30, 8, 6);
+    size_t t;
+    cli_result r, clean;
+    gen_append(&m, &far);
+    gen_free(&far);
+    write_stl(good, &m, m.triangle_count);
+    for (t = 0; t < 12; t += 4) { uint32_t x = m.triangles[3 * t + 1]; m.triangles[3 * t + 1] = m.triangles[3 * t + 2]; m.triangles[3 * t + 2] = x; }
+    for (t = 12; t < 24; t++) { uint32_t x = m.triangles[3 * t + 1]; m.triangles[3 * t + 1] = m.triangles[3 * t + 2]; m.triangles[3 * t + 2] = x; }
+    write_stl(bad, &m, m.triangle_count);
     gen_free(&m);
-    r = cli_run("plan", cube, "--json", NULL);
-    as_loaded = cli_json_number(r.out, "layers");
+    r = cli_run("plan", bad, "--metric", "area", "--eps", "0.1", "--json", NULL);
+    clean = cli_run("plan", good, "--metric", "area", "--eps", "0.1", "--json", NULL);
+    CHECKF(r.status == 0 && cli_one_message(r.err) && strstr(r.err, "warning") && strstr(r.err, "bad_box.stl") &&
+               strstr(r.err, "15 facets turned") && strstr(r.err, "1 shell turned"),
+           "'%s'", r.err);
+    CHECKF(!clean.err[0], "a clean part is warned about: '%s'", clean.err);
+    CHECKF(cli_json_number(r.out, "flipped_facets") == 15 && cli_json_number(r.out, "flipped_shells") == 1 &&
+               cli_json_number(r.out, "open_edges") == 0 && fabs(cli_json_number(r.out, "volume_mm3") - 960) < 1e-6,
+           "%s", r.out);
+    CHECK(cli_json_number(r.out, "layers") == cli_json_number(clean.out, "layers"));
     cli_free(&r);
-    r = cli_run("plan", cube, "--orient", "best", "--json", NULL);
-    best = cli_json_number(r.out, "layers");
+    cli_free(&clean);
+    r = cli_run("slice", bad, "--pixels", "200x100", "--pitch", "0.2", "-o", cli_path("bad_job"), NULL);
+    CHECKF(r.status == 0 && strstr(r.err, "15 facets turned"), "slice: '%s'", r.err);
     cli_free(&r);
-    CHECKF(as_loaded > 0 && best <= as_loaded, "as loaded %g layers, --orient best %g", as_loaded, best);
-    r = cli_run("orient", cube, "--json", NULL);
-    p = strstr(r.out, "\"as_loaded\"");
-    f_best = cli_json_number(r.out, "F");
-    f_loaded = p ? cli_json_number(p, "F") : NAN;
-    CHECKF(r.status == 0 && p && cli_json_number(p, "layers") == as_loaded && f_best <= f_loaded, "%s", r.out);
+    r = cli_run("orient", bad, "--dirs", "20", "--json", NULL);
+    CHECKF(r.status == 0 && strstr(r.err, "15 facets turned") && cli_json_number(r.out, "flipped_facets") == 15, "orient: '%s'", r.err);
     cli_free(&r);
 }
 
@@ -544,6 +623,7 @@ void test_cli(void)
     RUN(slice_writes_a_job);
     RUN(orient_finds_directions);
     RUN(orient_never_does_worse_than_as_loaded);
+    RUN(repairs_are_warned_about_and_reported);
     RUN(unwritable_output_fails_cleanly);
     RUN(bad_model_is_named);
     cli_end();
