@@ -5,6 +5,8 @@
    tall, layers a format cannot hold, an adaptive plan for .sl1, bad exposure
    values): a one-line message, a non-zero exit and nothing written. */
 #include "cli_run.h"
+#include <signal.h>
+#include <time.h>
 #include "job_readers.h"
 #include "meshgen.h"
 #include "../adaslice_mcu.h"
@@ -487,6 +489,52 @@ static void job_directories_cannot_go_stale(void)
     cli_free(&r);
 }
 
+/* A re-slice killed mid-job (a crash, a power cut, ^C) leaves no manifest,
+   since slice removes it first and writes it last, so print refuses the
+   directory instead of printing the old job's masks.rle. */
+static void pause_ms(long ms)
+{
+    struct timespec t;
+    t.tv_sec = ms / 1000;
+    t.tv_nsec = ms % 1000 * 1000000L;
+    nanosleep(&t, NULL);
+}
+
+static void an_interrupted_reslice_cannot_be_printed(void)
+{
+    char job[300], manifest[400];
+    const char *argv[] = {cli_tool, "slice", NULL, "--pixels", "3000x3000", "--pitch", "0.004", "--uniform", "0.01",
+                          "--threads", "1", "-o", job, NULL};
+    cli_result r;
+    pid_t pid;
+    int st = 0, waited;
+    snprintf(job, sizeof job, "%s/killed", cli_dir);
+    snprintf(manifest, sizeof manifest, "%s/manifest.json", job);
+    argv[2] = sphere_obj();
+    r = cli_run("slice", sphere_obj(), "--pixels", "300x250", "--pitch", "0.05", "-o", job, NULL);
+    CHECKF(r.status == 0 && cli_exists(manifest), "%s", r.err);
+    cli_free(&r);
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        int devnull = open("/dev/null", O_WRONLY);
+        if (devnull >= 0) { dup2(devnull, 1); dup2(devnull, 2); }
+        execv(cli_tool, (char *const *)argv);
+        _exit(127);
+    }
+    CHECK(pid > 0);
+    /* the old manifest goes before any layer is written; then a moment of work */
+    for (waited = 0; waited < 2000 && cli_exists(manifest); waited++) pause_ms(10);
+    pause_ms(300);
+    kill(pid, SIGKILL);
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECKF(WIFSIGNALED(st), "the re-slice finished before it could be killed (status %d)", st);
+    CHECKF(!cli_exists(manifest), "a killed re-slice left a manifest");
+    r = cli_run("print", job, "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "manifest.json: missing"), "%d %s", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_slice_jobs(void)
 {
     if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
@@ -499,5 +547,6 @@ void test_slice_jobs(void)
     RUN(jobs_are_reproducible);
     RUN(headers_hold_the_regular_layers);
     RUN(job_directories_cannot_go_stale);
+    RUN(an_interrupted_reslice_cannot_be_printed);
     cli_end();
 }
