@@ -1099,6 +1099,15 @@ static void *adaslice__grow(const adaslice_allocator *a, void *old, size_t used,
 }
 
 /* ================================================================== mesh */
+/* Exactly zero area, in double from the stored floats: repeated corners included. */
+static int adaslice__zero_area(const float *v, const uint32_t *t)
+{
+    const float *a = v + 3 * (size_t)t[0], *p = v + 3 * (size_t)t[1], *q = v + 3 * (size_t)t[2];
+    double ux = (double)p[0] - a[0], uy = (double)p[1] - a[1], uz = (double)p[2] - a[2];
+    double wx = (double)q[0] - a[0], wy = (double)q[1] - a[1], wz = (double)q[2] - a[2];
+    return uy * wz - uz * wy == 0 && uz * wx - ux * wz == 0 && ux * wy - uy * wx == 0;
+}
+
 #ifndef ADASLICE_NO_LOADERS
 /* ---- reading: what every loader shares */
 
@@ -1206,15 +1215,6 @@ static adaslice_result adaslice__triangle(adaslice__build *b, uint32_t i, uint32
     t = b->t + 3 * b->nt++;
     t[0] = i; t[1] = j; t[2] = k;
     return ADASLICE_OK;
-}
-
-/* Exactly zero area, in double from the stored floats: repeated corners included. */
-static int adaslice__zero_area(const float *v, const uint32_t *t)
-{
-    const float *a = v + 3 * (size_t)t[0], *p = v + 3 * (size_t)t[1], *q = v + 3 * (size_t)t[2];
-    double ux = (double)p[0] - a[0], uy = (double)p[1] - a[1], uz = (double)p[2] - a[2];
-    double wx = (double)q[0] - a[0], wy = (double)q[1] - a[1], wz = (double)q[2] - a[2];
-    return uy * wz - uz * wy == 0 && uz * wx - ux * wz == 0 && ux * wy - uy * wx == 0;
 }
 
 /* Drops zero-area triangles, since no later stage can give them a normal, and hands
