@@ -469,6 +469,10 @@ ADASLICE_DEF adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const
                                                 const adaslice_ldi_options *options, adaslice_ldi *ldi,
                                                 adaslice_error *error);
 ADASLICE_DEF void adaslice_ldi_free(adaslice_ldi *ldi);
+/* n directions of a spherical Fibonacci lattice, x y z each, near-uniform on
+   the sphere, from near +z down to near -z: the first n/2 are the upper
+   hemisphere's. */
+ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz);
 
 /* =============================================================== profiles */
 
@@ -567,6 +571,32 @@ ADASLICE_DEF adaslice_result adaslice_mean_curvature(const adaslice_mesh *mesh, 
    memory: about a second and 27 MiB for 200K triangles on one core. */
 ADASLICE_DEF adaslice_result adaslice_saliency(const adaslice_mesh *mesh, float *face_weight,
                                                const adaslice_surface_options *options, adaslice_error *error);
+
+#define ADASLICE_DEFAULT_VIEWS 32
+#define ADASLICE_DEFAULT_VIEW_RESOLUTION 512
+
+typedef struct adaslice_view_options {
+    const double *directions;            /* count directions towards the viewer, x y z each
+                                            (any length); NULL: the upper hemisphere, the
+                                            first `count` of 2 count Fibonacci directions */
+    size_t count;                        /* 0: ADASLICE_DEFAULT_VIEWS */
+    int resolution;                      /* LDI pixels across the part per view (1 to 8192);
+                                            0: ADASLICE_DEFAULT_VIEW_RESOLUTION */
+    const adaslice_allocator *allocator; /* NULL: default */
+} adaslice_view_options;
+
+/* Viewpoint importance (the "viewpoint" term of saliency-preserving slicing,
+   after Wang et al. 2015) as one value in [0,1] per triangle: the fraction of
+   the view directions from which it is seen. Along each direction the mesh is
+   turned to look down +z and rasterised by the LDI's rasteriser into a
+   z-buffer (each pixel keeps its ray's sample nearest the viewer, the last of
+   its LDI ray): the face it names counts as seen if it is turned towards the
+   viewer, so a face behind another, inside a cavity or facing away is unseen.
+   A face that covers no pixel centre of a view (small, or seen very
+   obliquely) is missed in that view. Time: one raster of the part per view;
+   memory: 8 bytes a pixel of a view. */
+ADASLICE_DEF adaslice_result adaslice_view_importance(const adaslice_mesh *mesh, float *importance,
+                                                      const adaslice_view_options *options, adaslice_error *error);
 
 /* k per bin of `profile` (its z0, bin and bin_count; the mesh it was made
    from), for ADASLICE_METHOD_CURVATURE: the area-weighted mean |H| of the
@@ -687,8 +717,6 @@ typedef struct adaslice_direction_score {
     double score;          /* F(O), filled by adaslice_orient_scores */
 } adaslice_direction_score;
 
-/* n directions of a spherical Fibonacci lattice, x y z each, near-uniform on the sphere. */
-ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz);
 /* The allocator is the profile options'. */
 ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *orienter, const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *profile,
@@ -851,6 +879,8 @@ ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *cure, double thic
 typedef struct adaslice_preview_options {
     double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 35 and 45 */
     unsigned char colour[3];             /* the part's; 0, 0, 0: a resin grey-blue */
+    const unsigned char *face_colours;   /* NULL, or R G B per triangle: each face its own
+                                            colour (a weight map), shaded the same way */
     unsigned char background[3];         /* 0, 0, 0: black */
     const adaslice_allocator *allocator; /* NULL: default */
 } adaslice_preview_options;
@@ -858,9 +888,9 @@ typedef struct adaslice_preview_options {
 /* A shaded picture of the part for a job's preview: width x height pixels,
    3 bytes (R, G, B) each, rows top first. The mesh is turned so the viewer
    looks down at it (elevation above the plate, azimuth from +x towards +y),
-   rasterised into an LDI along the view at the picture's pixels (the part
-   fitted with a margin, pixels square), and each pixel takes the nearest
-   surface's normal, lit from the viewer's upper left. */
+   rasterised by the LDI's rasteriser into a z-buffer at the picture's pixels
+   (the part fitted with a margin, pixels square), and each pixel takes the
+   nearest surface's normal, lit from the viewer's upper left. */
 ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
                                               const adaslice_preview_options *options, unsigned char *rgb,
                                               adaslice_error *error);
@@ -3164,6 +3194,19 @@ static void adaslice__turn_vertex(const double r[9], const float *p, float *q)
     memcpy(q, t, sizeof t);
 }
 
+/* mesh's vertices turned by r into a copy (triangles shared); 0 when out of memory */
+static int adaslice__turned_copy(const adaslice_mesh *mesh, const double r[9], const adaslice_allocator *al,
+                                 adaslice_mesh *turned)
+{
+    size_t v;
+    *turned = *mesh;
+    memset(&turned->allocator, 0, sizeof turned->allocator);
+    turned->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, mesh->vertex_count ? mesh->vertex_count : 1, 3 * sizeof(float)));
+    if (!turned->vertices) return 0;
+    for (v = 0; v < mesh->vertex_count; v++) adaslice__turn_vertex(r, mesh->vertices + 3 * v, turned->vertices + 3 * v);
+    return 1;
+}
+
 ADASLICE_DEF void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9])
 {
     size_t v;
@@ -3443,6 +3486,50 @@ static double adaslice__depth_origin(const adaslice_mesh *m, adaslice_axis axis)
     double lo[3], hi[3];
     adaslice_mesh_bounds(m, lo, hi);
     return lo[axis];
+}
+
+/* ---- the face nearest a viewer at +z, per pixel (a z-buffer) */
+typedef struct adaslice__nearest {
+    const adaslice_grid *grid;
+    float *depth;
+    uint32_t *face;        /* triangle | ADASLICE_SAMPLE_LEAVES, or ADASLICE__NONE: no surface */
+} adaslice__nearest;
+
+static void adaslice__nearest_visit(void *ctx, const adaslice__span *s)
+{
+    adaslice__nearest *z = ADASLICE__CAST(adaslice__nearest *, ctx);
+    size_t row = (size_t)s->row * (size_t)z->grid->width;
+    int i;
+    for (i = s->first; i < s->end; i++) {
+        float d = (float)adaslice__span_depth(s, i);
+        size_t p = row + (size_t)i;
+        /* on a tie (a silhouette) the face turned towards the viewer wins */
+        if (z->face[p] == ADASLICE__NONE || d > z->depth[p] || (d == z->depth[p] && (s->face & ADASLICE_SAMPLE_LEAVES))) {
+            z->depth[p] = d;
+            z->face[p] = s->face;
+        }
+    }
+}
+
+/* face[p]: the nearest surface of mesh seen from +z at pixel p of grid (axis
+   z), with ADASLICE_SAMPLE_LEAVES when it is turned towards the viewer;
+   ADASLICE__NONE where no surface is. depth: scratch of a float a pixel. */
+static adaslice_result adaslice__nearest_faces(const adaslice_mesh *m, const adaslice_grid *grid, float *depth,
+                                               uint32_t *face, adaslice_error *err)
+{
+    adaslice__nearest z;
+    adaslice__raster r;
+    z.grid = grid;
+    z.depth = depth;
+    z.face = face;
+    memset(face, 0xff, (size_t)grid->width * (size_t)grid->height * sizeof(uint32_t));
+    memset(&r, 0, sizeof r);
+    r.grid = grid;
+    r.depth_origin = adaslice__depth_origin(m, ADASLICE_AXIS_Z);
+    r.row_end = grid->height;
+    r.fn = adaslice__nearest_visit;
+    r.ctx = &z;
+    return adaslice__raster_mesh(&r, m, err);
 }
 
 ADASLICE_DEF adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const adaslice_grid *grid,
@@ -3953,6 +4040,18 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     adaslice_profile *profile, adaslice_error *err)
 {
     return adaslice__profile_exact(mesh, options, NULL, profile, err);
+}
+
+ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)
+{
+    const double golden = 3.14159265358979323846 * (3 - sqrt(5.0));
+    size_t i;
+    for (i = 0; i < n; i++) {
+        double z = 1 - (2.0 * (double)i + 1) / (double)n, r = sqrt(1 - z * z), phi = golden * (double)i;
+        xyz[3 * i] = r * cos(phi);
+        xyz[3 * i + 1] = r * sin(phi);
+        xyz[3 * i + 2] = z;
+    }
 }
 
 #ifndef ADASLICE_NO_SAMPLED
@@ -4824,6 +4923,98 @@ done:
     return r;
 }
 
+/* ---- weights: viewpoint importance */
+ADASLICE_DEF adaslice_result adaslice_view_importance(const adaslice_mesh *mesh, float *importance,
+                                                      const adaslice_view_options *options, adaslice_error *err)
+{
+    adaslice_allocator al;
+    adaslice_result r;
+    adaslice_mesh turned;
+    size_t n = options && options->count ? options->count : ADASLICE_DEFAULT_VIEWS, k, t, p, pixels = 0;
+    float *depth = NULL;
+    uint32_t *face = NULL;
+    int res = options && options->resolution ? options->resolution : ADASLICE_DEFAULT_VIEW_RESOLUTION;
+    const double *given = options ? options->directions : NULL;
+    double *dirs = NULL;
+    uint32_t *stamp = NULL, *seen = NULL;
+    if ((r = adaslice__mesh_check(mesh, "view importance", err)) != ADASLICE_OK) return r;
+    if (!importance) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: no output given");
+    if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "view importance: the mesh has no triangles");
+    if (res < 1 || res > 8192)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: resolution %d is outside 1..8192", res);
+    if (n > 1000000 || (given && !options->count))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: %zu directions (1 to 1000000, and a count "
+                              "for the ones given)", given ? options->count : n);
+    for (k = 0; given && k < n; k++) {
+        const double *d = given + 3 * k;
+        int finite = fabs(d[0]) <= DBL_MAX && fabs(d[1]) <= DBL_MAX && fabs(d[2]) <= DBL_MAX;
+        if (!finite || (d[0] == 0 && d[1] == 0 && d[2] == 0))
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: direction %zu (%g, %g, %g) is not a "
+                                  "direction", k + 1, d[0], d[1], d[2]);
+    }
+    al = adaslice__allocator(options ? options->allocator : NULL);
+    dirs = ADASLICE__CAST(double *, adaslice__alloc(&al, 2 * n, 3 * sizeof(double)));
+    stamp = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, mesh->triangle_count, sizeof(uint32_t)));
+    seen = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, mesh->triangle_count, sizeof(uint32_t)));
+    turned.vertices = NULL;
+    if (!dirs || !stamp || !seen) goto nomem;
+    if (given) {
+        for (k = 0; k < n; k++) {
+            /* by the largest component first, so that huge ones do not overflow */
+            const double *d = given + 3 * k;
+            double big = fabs(d[0]) > fabs(d[1]) ? fabs(d[0]) : fabs(d[1]), len;
+            int c;
+            if (fabs(d[2]) > big) big = fabs(d[2]);
+            for (c = 0; c < 3; c++) dirs[3 * k + c] = d[c] / big;
+            len = sqrt(dirs[3 * k] * dirs[3 * k] + dirs[3 * k + 1] * dirs[3 * k + 1] + dirs[3 * k + 2] * dirs[3 * k + 2]);
+            for (c = 0; c < 3; c++) dirs[3 * k + c] /= len;
+        }
+    } else {
+        adaslice_fibonacci_directions(2 * n, dirs); /* the first half: z > 0 */
+    }
+    memset(stamp, 0, mesh->triangle_count * sizeof(uint32_t));
+    memset(seen, 0, mesh->triangle_count * sizeof(uint32_t));
+    for (k = 0; k < n; k++) {
+        double rot[9];
+        adaslice_grid g;
+        adaslice_rotation_to_z(dirs + 3 * k, rot);
+        if (!turned.vertices && !adaslice__turned_copy(mesh, rot, &al, &turned)) goto nomem;
+        for (p = 0; p < mesh->vertex_count; p++) adaslice__turn_vertex(rot, mesh->vertices + 3 * p, turned.vertices + 3 * p);
+        g = adaslice_grid_fit(&turned, ADASLICE_AXIS_Z, res);
+        if ((size_t)g.width * (size_t)g.height > pixels) {
+            adaslice__free(&al, depth);
+            adaslice__free(&al, face);
+            pixels = (size_t)g.width * (size_t)g.height;
+            depth = ADASLICE__CAST(float *, adaslice__alloc(&al, pixels, sizeof(float)));
+            face = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, pixels, sizeof(uint32_t)));
+            if (!depth || !face) goto nomem;
+        }
+        if ((r = adaslice__nearest_faces(&turned, &g, depth, face, err)) != ADASLICE_OK) goto done;
+        /* the face a pixel sees counts when it is turned towards the viewer;
+           one turned away is nearest only through the hole of an open mesh,
+           or by rounding on a silhouette */
+        for (p = 0; p < (size_t)g.width * (size_t)g.height; p++) {
+            if (face[p] == ADASLICE__NONE || !(face[p] & ADASLICE_SAMPLE_LEAVES)) continue;
+            t = face[p] & ~ADASLICE_SAMPLE_LEAVES;
+            if (stamp[t] != (uint32_t)(k + 1)) { stamp[t] = (uint32_t)(k + 1); seen[t]++; }
+        }
+    }
+    for (t = 0; t < mesh->triangle_count; t++) importance[t] = (float)((double)seen[t] / (double)n);
+    r = ADASLICE_OK;
+    adaslice__ok(err);
+    goto done;
+nomem:
+    r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "view importance: out of memory for %zu triangles", mesh->triangle_count);
+done:
+    adaslice__free(&al, dirs);
+    adaslice__free(&al, stamp);
+    adaslice__free(&al, seen);
+    adaslice__free(&al, depth);
+    adaslice__free(&al, face);
+    adaslice__free(&al, turned.vertices);
+    return r;
+}
+
 /* ---- weights: the curvature profile */
 /* The bin of height z, the top one included. */
 static size_t adaslice__kappa_bin(const adaslice_profile *p, double z)
@@ -5455,18 +5646,6 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
 
 /* =========================================================== orientation */
 #ifndef ADASLICE_NO_ORIENT
-ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)
-{
-    const double golden = 3.14159265358979323846 * (3 - sqrt(5.0));
-    size_t i;
-    for (i = 0; i < n; i++) {
-        double z = 1 - (2.0 * (double)i + 1) / (double)n, r = sqrt(1 - z * z), phi = golden * (double)i;
-        xyz[3 * i] = r * cos(phi);
-        xyz[3 * i + 1] = r * sin(phi);
-        xyz[3 * i + 2] = z;
-    }
-}
-
 ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *profile,
                                                     const adaslice_plan_options *plan, adaslice_error *err)
@@ -6318,14 +6497,14 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     static const unsigned char resin[3] = {96, 132, 168};
     adaslice_preview_options opt;
     adaslice_mesh turned;
-    adaslice_ldi ldi;
-    adaslice_ldi_options lo;
     adaslice_grid g;
     adaslice_allocator al;
     adaslice_result r;
+    float *depth;
+    uint32_t *face;
     double el, az, d[3], rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
     const unsigned char *part, *back;
-    size_t v, p;
+    size_t p;
     int k;
     if (!rgb || width < 1 || height < 1 || width > 16384 || height > 16384)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "preview: %d x %d pixels is not a picture (1 to 16384 a side)",
@@ -6341,11 +6520,7 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     /* the viewer's direction, turned onto +z: the LDI's last sample is the nearest */
     d[0] = cos(el) * cos(az); d[1] = cos(el) * sin(az); d[2] = sin(el);
     adaslice_rotation_to_z(d, rot);
-    turned = *mesh;
-    memset(&turned.allocator, 0, sizeof turned.allocator);
-    turned.vertices = ADASLICE__CAST(float *, adaslice__alloc(&al, mesh->vertex_count ? mesh->vertex_count : 1, 3 * sizeof(float)));
-    if (!turned.vertices) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "preview: out of memory");
-    for (v = 0; v < mesh->vertex_count; v++) adaslice__turn_vertex(rot, mesh->vertices + 3 * v, turned.vertices + 3 * v);
+    if (!adaslice__turned_copy(mesh, rot, &al, &turned)) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "preview: out of memory");
     adaslice_mesh_bounds(&turned, lo3, hi3);
     /* the part fills 90% of the picture's tighter side */
     pitch = (hi3[0] - lo3[0]) / (0.9 * width);
@@ -6358,30 +6533,34 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     g.height = height;
     g.origin[0] = 0.5 * (lo3[0] + hi3[0]) - 0.5 * width * pitch;
     g.origin[1] = 0.5 * (lo3[1] + hi3[1]) - 0.5 * height * pitch;
-    memset(&lo, 0, sizeof lo);
-    lo.allocator = &al;
-    r = adaslice_ldi_build(&turned, &g, &lo, &ldi, err);
-    if (r != ADASLICE_OK) { adaslice__free(&al, turned.vertices); return r; }
+    depth = ADASLICE__CAST(float *, adaslice__alloc(&al, (size_t)width * (size_t)height, sizeof(float)));
+    face = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, (size_t)width * (size_t)height, sizeof(uint32_t)));
+    r = depth && face ? adaslice__nearest_faces(&turned, &g, depth, face, err)
+                      : adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "preview: out of memory");
+    adaslice__free(&al, depth);
+    if (r != ADASLICE_OK) { adaslice__free(&al, face); adaslice__free(&al, turned.vertices); return r; }
     for (p = 0; p < (size_t)width * (size_t)height; p++) {
         /* LDI row 0 is the lowest y: the picture's bottom row */
         size_t px = (size_t)(height - 1 - (int)(p / (size_t)width)) * (size_t)width + p % (size_t)width;
         unsigned char *out = rgb + 3 * p;
         double a[3], b[3], c[3], n[3], len, shade;
-        if (ldi.first[px] == ldi.first[px + 1]) { memcpy(out, back, 3); continue; }
+        const unsigned char *colour = part;
+        if (face[px] == ADASLICE__NONE) { memcpy(out, back, 3); continue; }
         {
-            size_t t = ADASLICE_SAMPLE_FACE(ldi.samples[ldi.first[px + 1] - 1]);
+            size_t t = face[px] & ~ADASLICE_SAMPLE_LEAVES;
             adaslice__corner(&turned, t, 0, a);
             adaslice__corner(&turned, t, 1, b);
             adaslice__corner(&turned, t, 2, c);
+            if (opt.face_colours) colour = opt.face_colours + 3 * t;
         }
         adaslice__normal(a, b, c, n);
         len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         /* either side of a face may face the viewer (open or inside-out meshes) */
         shade = len > 0 ? fabs(n[0] * light[0] + n[1] * light[1] + n[2] * light[2]) / len : 0;
         shade = 0.35 + 0.65 * shade;
-        for (k = 0; k < 3; k++) out[k] = (unsigned char)(part[k] * shade + 0.5);
+        for (k = 0; k < 3; k++) out[k] = (unsigned char)(colour[k] * shade + 0.5);
     }
-    adaslice_ldi_free(&ldi);
+    adaslice__free(&al, face);
     adaslice__free(&al, turned.vertices);
     adaslice__ok(err);
     return ADASLICE_OK;

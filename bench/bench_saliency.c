@@ -1,6 +1,7 @@
-/* make bench: mesh saliency on the two 200K-triangle shared models, one core,
-   median of 3 runs; memory as the library's peak of live allocations (a
-   counting allocator) and the process's peak resident size.
+/* make bench: mesh saliency and view importance (default views and
+   resolution) on the two 200K-triangle shared models, one core, median of 3
+   runs; memory as the library's peak of live allocations (a counting
+   allocator) and the process's peak resident size.
    usage: bench_saliency [MODELS_DIR]   (default ../shared/models) */
 #include "../adaslice.h"
 #include <limits.h>
@@ -82,6 +83,31 @@ int main(int argc, char **argv)
                    models[i], mesh.triangle_count, mesh.vertex_count, mid, t[0], t[2], c.peak / 1048576.0,
                    ru.ru_maxrss / 1024.0, 100.0 * above / (double)mesh.triangle_count);
             if (c.live) { printf("leak: %zu bytes still allocated\n", c.live); failed = 1; }
+        }
+        {
+            adaslice_view_options vo;
+            size_t seen = 0;
+            memset(&vo, 0, sizeof vo);
+            vo.allocator = &al;
+            c.peak = c.live = 0;
+            for (r = 0; r < 3; r++) {
+                double t0 = now();
+                if (!w || adaslice_view_importance(&mesh, w, &vo, &e) != ADASLICE_OK) {
+                    printf("view importance %s failed: %s\n", models[i], w ? e.message : "out of memory");
+                    failed = 1;
+                    break;
+                }
+                t[r] = now() - t0;
+            }
+            if (r == 3) {
+                for (k = 0; k < mesh.triangle_count; k++) seen += w[k] > 0;
+                mid = median(t, 3);
+                printf("view     %-22s %7zu triangles  %d views of %d px  median %6.3f s (%.3f .. %.3f)  library peak %5.1f MiB  "
+                       "%.1f%% of faces seen from some view\n", models[i], mesh.triangle_count, ADASLICE_DEFAULT_VIEWS,
+                       ADASLICE_DEFAULT_VIEW_RESOLUTION, mid, t[0], t[2], c.peak / 1048576.0,
+                       100.0 * (double)seen / (double)mesh.triangle_count);
+                if (c.live) { printf("leak: %zu bytes still allocated\n", c.live); failed = 1; }
+            }
         }
         free(w);
         adaslice_mesh_free(&mesh);

@@ -6,6 +6,7 @@
 #include "model.h"
 #include "options.h"
 #include "output.h"
+#include "png.h"
 #include "report.h"
 #include "weights.h"
 
@@ -13,7 +14,7 @@
 #include <string.h>
 
 typedef struct saliency_args {
-    const char *model, *out, *ply;
+    const char *model, *out, *ply, *png;
     double scale;
     int no_saliency;
     weight_args weights;
@@ -21,7 +22,7 @@ typedef struct saliency_args {
 
 static void saliency_usage(FILE *f)
 {
-    fputs("usage: adaslice saliency MODEL -o WEIGHTS [--ply COLOURED.ply] [options]\n"
+    fputs("usage: adaslice saliency MODEL -o WEIGHTS [--ply COLOURED.ply] [--png PICTURE.png] [options]\n"
           "\n"
           "Writes the per-face weights that adaslice plan MODEL --saliency uses (mesh\n"
           "saliency after Lee, Varshney and Jacobs 2005, in [0,1], 1 the most salient):\n"
@@ -30,6 +31,8 @@ static void saliency_usage(FILE *f)
           "  -o FILE             the weights\n"
           "  --ply FILE          the mesh coloured by weight, blue 0 .. red 1 (binary PLY;\n"
           "                      each triangle has its own three vertices, all its colour)\n"
+          "  --png FILE          a 960 x 720 picture of the part coloured the same way, seen\n"
+          "                      from 35 degrees above the plate\n"
           "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
           "  --no-saliency       weights from --weights and --weight alone\n"
           "\n", f);
@@ -49,6 +52,7 @@ static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { *help = 1; return RC_OK; }
         else if (!strcmp(o, "-o") || !strcmp(o, "--out")) rc = file_option(argc, argv, &i, &s->out);
         else if (!strcmp(o, "--ply")) rc = file_option(argc, argv, &i, &s->ply);
+        else if (!strcmp(o, "--png")) rc = file_option(argc, argv, &i, &s->png);
         else if (!strcmp(o, "--scale")) rc = number_option(argc, argv, &i, 0, &s->scale);
         else if (!strcmp(o, "--no-saliency")) s->no_saliency = 1;
         else if (!weights_option(argc, argv, &i, &s->weights, &rc))
@@ -56,7 +60,8 @@ static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)
     }
     if (rc) return rc;
     if (!s->model) return complain(RC_USAGE, "saliency needs a MODEL");
-    if (!s->out && !s->ply) return complain(RC_USAGE, "saliency writes -o WEIGHTS, --ply FILE or both; neither is given");
+    if (!s->out && !s->ply && !s->png)
+        return complain(RC_USAGE, "saliency writes -o WEIGHTS, --ply FILE or --png FILE; none is given");
     s->weights.saliency = !s->no_saliency;
     return RC_OK;
 }
@@ -119,6 +124,40 @@ static void write_ply(FILE *f, const void *ctx)
     }
 }
 
+typedef struct picture { const unsigned char *png; size_t size; } picture;
+
+static void write_png(FILE *f, const void *ctx)
+{
+    const picture *p = (const picture *)ctx;
+    fwrite(p->png, 1, p->size, f);
+}
+
+/* The part as adaslice_preview shows it, each face in its weight's colour. */
+static int write_picture(const char *path, const weighted_mesh *w)
+{
+    enum { WIDTH = 960, HEIGHT = 720 };
+    adaslice_preview_options o;
+    adaslice_error e;
+    unsigned char *colours = (unsigned char *)malloc(3 * (w->mesh->triangle_count ? w->mesh->triangle_count : 1));
+    unsigned char *rgb = (unsigned char *)malloc((size_t)WIDTH * HEIGHT * 3), *png = NULL;
+    picture p;
+    size_t t;
+    int rc = RC_OK;
+    if (!colours || !rgb) rc = complain(RC_FAIL, "out of memory for the picture");
+    for (t = 0; !rc && t < w->mesh->triangle_count; t++) ramp(w->weight[t], colours + 3 * t);
+    memset(&o, 0, sizeof o);
+    o.face_colours = colours;
+    o.background[0] = o.background[1] = o.background[2] = 255;
+    if (!rc && adaslice_preview(w->mesh, WIDTH, HEIGHT, &o, rgb, &e) != ADASLICE_OK) rc = library_error(&e);
+    if (!rc && png_encode_rgb(rgb, WIDTH, HEIGHT, &png, &p.size)) rc = complain(RC_FAIL, "out of memory for %s", path);
+    p.png = png;
+    if (!rc) rc = write_atomic(path, write_png, &p);
+    free(png);
+    free(rgb);
+    free(colours);
+    return rc;
+}
+
 int cmd_saliency(int argc, char **argv)
 {
     saliency_args s;
@@ -154,6 +193,7 @@ int cmd_saliency(int argc, char **argv)
         }
         if (s.out) rc = write_atomic(s.out, write_weights, &wm);
         if (!rc && s.ply) rc = write_atomic(s.ply, write_ply, &wm);
+        if (!rc && s.png) rc = write_picture(s.png, &wm);
         if (!rc) {
             printf("model      %s: %zu triangle%s\n", s.model, mesh.triangle_count, plural(mesh.triangle_count));
             printf("weights    mean %.3g, largest %.3g, %zu face%s above 0.5\n", sum / (double)mesh.triangle_count, top,

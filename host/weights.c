@@ -1,4 +1,5 @@
-/* Per-face weights: saliency, a weight file and regions, multiplied face by face. */
+/* Per-face weights: saliency, a weight file and regions, multiplied face by
+   face, or blended with the view importance. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* getline */
 #endif
@@ -23,12 +24,58 @@ void weights_usage(FILE *f, int saliency_option)
           "  --weight REGION=W   weight W in [0,1] for the faces whose centroid lies in\n"
           "                      REGION: box:X0,Y0,Z0,X1,Y1,Z1 or sphere:X,Y,Z,R (mm, after\n"
           "                      --scale). Repeatable; where regions overlap the last one\n"
-          "                      given wins; faces in none keep 1\n", f);
+          "                      given wins; faces in none keep 1\n"
+          "  --importance A,B,C  blend instead of multiplying, as saliency-preserving\n"
+          "                      slicing does: A saliency + B view importance + C the\n"
+          "                      weights above, each in [0,1]; the blend is divided by its\n"
+          "                      largest value                         [0.5,0.3,0.2]\n"
+          "  --view V            the views of the view importance (implies the blend):\n"
+          "                      hemisphere (the upper one, looked at from above the\n"
+          "                      plate), all, top, bottom, front (-y), back (+y), left\n"
+          "                      (-x), right (+x): that half of the sphere; or\n"
+          "                      X,Y,Z[,X,Y,Z...] towards the viewer    [hemisphere]\n", f);
+}
+
+static const struct { const char *name; double axis[3]; } VIEW_NAMES[] = {
+    {"hemisphere", {0, 0, 1}}, {"top", {0, 0, 1}}, {"all", {0, 0, 0}}, {"bottom", {0, 0, -1}},
+    {"front", {0, -1, 0}}, {"back", {0, 1, 0}}, {"left", {-1, 0, 0}}, {"right", {1, 0, 0}}};
+
+/* --view: a name (the lattice's directions in that half of the sphere; the
+   upper hemisphere is the library's default) or a list of directions */
+static int parse_view(const char *v, weight_args *w)
+{
+    size_t i, n = 0;
+    const char *p = v;
+    for (i = 0; i < sizeof VIEW_NAMES / sizeof *VIEW_NAMES; i++) {
+        const double *a = VIEW_NAMES[i].axis;
+        double lattice[3 * WEIGHT_VIEWS_MAX];
+        size_t k;
+        if (strcmp(v, VIEW_NAMES[i].name)) continue;
+        w->view_count = 0;
+        if (a[2] == 1) return RC_OK;
+        adaslice_fibonacci_directions(WEIGHT_VIEWS_MAX, lattice);
+        for (k = 0; k < WEIGHT_VIEWS_MAX; k++)
+            if (a[0] * lattice[3 * k] + a[1] * lattice[3 * k + 1] + a[2] * lattice[3 * k + 2] >= 0) {
+                memcpy(w->views + 3 * w->view_count, lattice + 3 * k, 3 * sizeof(double));
+                w->view_count++;
+            }
+        return RC_OK;
+    }
+    for (n = 1; *p; p++) n += *p == ',';
+    if (n % 3 == 0 && n <= 3 * WEIGHT_VIEWS_MAX && parse_numbers(v, ',', (int)n, w->views)) {
+        for (i = 0; i < n / 3; i++)
+            if (w->views[3 * i] == 0 && w->views[3 * i + 1] == 0 && w->views[3 * i + 2] == 0)
+                return complain(RC_USAGE, "--view %s: direction %zu is 0,0,0", v, i + 1);
+        w->view_count = n / 3;
+        return RC_OK;
+    }
+    return complain(RC_USAGE, "--view %s: expected hemisphere, all, top, bottom, front, back, left, right or up to %d "
+                              "directions X,Y,Z[,X,Y,Z...]", v, WEIGHT_VIEWS_MAX);
 }
 
 int weights_given(const weight_args *w)
 {
-    return w->saliency || w->file || w->region_count;
+    return w->saliency || w->file || w->region_count || w->blend;
 }
 
 static const struct { const char *name, *numbers; int count; } REGION_KINDS[] = { /* by WEIGHT_BOX, WEIGHT_SPHERE */
@@ -83,6 +130,15 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
         *rc = RC_OK;
     } else if (!strcmp(o, "--weights")) {
         *rc = w->file ? complain(RC_USAGE, "--weights given twice; give one file") : file_option(argc, argv, i, &w->file);
+    } else if (!strcmp(o, "--importance")) {
+        double *c = w->importance;
+        if ((*rc = numbers_option(argc, argv, i, ',', 3, "three weights A,B,C", c)) != RC_OK) return 1;
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] + c[1] + c[2] <= 0)
+            *rc = complain(RC_USAGE, "--importance %g,%g,%g: each weight must be >= 0 and one above 0", c[0], c[1], c[2]);
+        w->blend = 2; /* the weights given */
+    } else if (!strcmp(o, "--view")) {
+        if ((*rc = file_option(argc, argv, i, &v)) != RC_OK) return 1;
+        if ((*rc = parse_view(v, w)) == RC_OK && !w->blend) w->blend = 1;
     } else if (!strcmp(o, "--weight")) {
         if ((*rc = file_option(argc, argv, i, &v)) != RC_OK) return 1;
         if (w->region_count == WEIGHT_REGIONS_MAX)
@@ -165,6 +221,52 @@ static void apply_regions(const weight_args *w, const adaslice_mesh *mesh, float
     }
 }
 
+/* Divides by the largest value, so the term lies in [0, 1] (all 0 stays 0). */
+static void normalise(float *v, size_t n)
+{
+    float top = 0;
+    size_t t;
+    for (t = 0; t < n; t++) if (v[t] > top) top = v[t];
+    for (t = 0; top > 0 && t < n; t++) v[t] /= top;
+}
+
+/* a S + b V + c U, divided by its largest value: the user term U is the
+   weight file and the regions (0 where none are given: nothing is marked). */
+static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
+{
+    size_t t, n = mesh->triangle_count;
+    const double *c = w->blend == 2 ? w->importance : (const double[3]){0.5, 0.3, 0.2};
+    float *term = (float *)malloc((n ? n : 1) * sizeof *term);
+    int rc = RC_OK, user = w->file || w->region_count;
+    adaslice_error e;
+    if (!term) return complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
+    for (t = 0; t < n; t++) out[t] = 0;
+    if (c[0] > 0) {
+        if (adaslice_saliency(mesh, term, NULL, &e) != ADASLICE_OK) rc = library_error(&e);
+        for (t = 0; !rc && t < n; t++) out[t] += (float)c[0] * term[t];
+    }
+    if (!rc && c[1] > 0) {
+        adaslice_view_options vo;
+        memset(&vo, 0, sizeof vo);
+        vo.directions = w->view_count ? w->views : NULL;
+        vo.count = w->view_count;
+        if (adaslice_view_importance(mesh, term, &vo, &e) != ADASLICE_OK) rc = library_error(&e);
+        normalise(term, n);
+        for (t = 0; !rc && t < n; t++) out[t] += (float)c[1] * term[t];
+    }
+    if (!rc && c[2] > 0 && user) {
+        for (t = 0; t < n; t++) term[t] = 1;
+        if (w->file) rc = read_weights(w->file, n, term);
+        if (!rc) apply_regions(w, mesh, term);
+        normalise(term, n);
+        for (t = 0; !rc && t < n; t++) out[t] += (float)c[2] * term[t];
+    }
+    free(term);
+    if (rc) return rc;
+    normalise(out, n);
+    return RC_OK;
+}
+
 int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **out)
 {
     size_t t, n = mesh->triangle_count;
@@ -175,6 +277,13 @@ int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **ou
     f = (float *)malloc((n ? n : 1) * sizeof *f);
     if (w->saliency) s = (float *)malloc((n ? n : 1) * sizeof *s);
     if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
+    if (!rc && w->blend) {
+        rc = blend(w, mesh, f);
+        free(s);
+        if (rc) { free(f); return rc; }
+        *out = f;
+        return RC_OK;
+    }
     for (t = 0; !rc && t < n; t++) f[t] = 1;
     /* the file first: a mistake there shows before the saliency's second */
     if (!rc && w->file) rc = read_weights(w->file, n, f);

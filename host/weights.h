@@ -1,11 +1,13 @@
 /* Per-face weights for the profiles (paper §4.2): the mesh's saliency, a
-   weight file and regions given on the command line, multiplied face by face. */
+   weight file and regions given on the command line, multiplied face by face;
+   or, with --importance or --view, the blend of saliency-preserving slicing:
+   a saliency + b view importance + c user weight, each term in [0, 1]. */
 #ifndef ADASLICE_HOST_WEIGHTS_H
 #define ADASLICE_HOST_WEIGHTS_H
 #include <stdio.h>
 #include "../adaslice.h"
 
-enum { WEIGHT_BOX = 0, WEIGHT_SPHERE = 1, WEIGHT_REGIONS_MAX = 32 };
+enum { WEIGHT_BOX = 0, WEIGHT_SPHERE = 1, WEIGHT_REGIONS_MAX = 32, WEIGHT_VIEWS_MAX = 2 * ADASLICE_DEFAULT_VIEWS };
 
 /* A face is in a region when its centroid is: inside the box or on its faces,
    or within the sphere's radius of its centre. */
@@ -20,9 +22,13 @@ typedef struct weight_args {
     const char *file;                          /* --weights FILE, or NULL */
     size_t region_count;
     weight_region regions[WEIGHT_REGIONS_MAX]; /* --weight REGION=W, in the order given */
+    int blend;                                 /* --importance or --view given */
+    double importance[3];                      /* a, b, c (saliency, view, user) */
+    size_t view_count;                         /* --view: 0 is the upper hemisphere */
+    double views[3 * WEIGHT_VIEWS_MAX];
 } weight_args;
 
-/* If argv[*i] is --saliency, --weights or --weight, takes it (and its value),
+/* If argv[*i] is --saliency, --weights, --weight, --importance or --view, takes it (and its value),
    sets *rc (RC_OK, or RC_USAGE after a complaint) and returns 1; else 0. */
 int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc);
 int weights_given(const weight_args *w);

@@ -232,6 +232,75 @@ static void weights_and_orient(void)
     cli_free(&r);
 }
 
+/* The blend of saliency-preserving slicing: with --importance 0,1,0 the
+   weights are the view importance alone (divided by its largest), so the
+   sphere's top faces weigh 1 and its bottom ones 0; the default blend lies in
+   [0, 1] with its largest value 1 and differs from saliency alone; a named
+   view and a direction list are taken, bad values refused. */
+static void importance_blends_saliency_view_and_user_weights(void)
+{
+    const char *model = bump_obj(), *out = cli_path("blend.txt"), *only = cli_path("saliency.txt");
+    adaslice_mesh m = gen_sphere(5, 64, 32, 0);
+    cli_result r;
+    double *w, *sal, top = 0, bottom = 1, lo = 1, hi = 0;
+    size_t n = 0, ns = 0, t, differ = 0;
+    r = cli_run("saliency", model, "--importance", "0,1,0", "-o", out, NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    w = read_values(out, &n);
+    CHECK(n == m.triangle_count);
+    for (t = 0; w && t < n; t++) {
+        const float *a = m.vertices + 3 * m.triangles[3 * t];
+        if (a[2] > 9.9) top = top > w[t] ? top : w[t];
+        if (a[2] < 0.1) bottom = bottom < w[t] ? bottom : w[t];
+    }
+    CHECKF(top == 1 && bottom == 0, "view only: top %g, bottom %g", top, bottom);
+    free(w);
+    r = cli_run("saliency", model, "--view", "hemisphere", "-o", out, NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    r = cli_run("saliency", model, "-o", only, NULL);
+    cli_free(&r);
+    w = read_values(out, &n);
+    sal = read_values(only, &ns);
+    for (t = 0; w && sal && t < n && t < ns; t++) {
+        lo = lo < w[t] ? lo : w[t];
+        hi = hi > w[t] ? hi : w[t];
+        differ += fabs(w[t] - sal[t]) > 1e-3;
+    }
+    CHECKF(n == ns && lo >= 0 && hi == 1 && differ > n / 4, "blend in [%g, %g], %zu of %zu differ from saliency", lo, hi, differ, n);
+    free(w);
+    free(sal);
+    {
+        const char *png = cli_path("view.png");
+        char *bytes;
+        r = cli_run("saliency", model, "--importance", "0,1,0", "--png", png, NULL);
+        bytes = cli_read(png);
+        CHECKF(r.status == 0 && bytes && !memcmp(bytes, "\x89PNG\r\n\x1a\n", 8), "--png: %s", r.err);
+        free(bytes);
+        cli_free(&r);
+    }
+    r = cli_run("plan", model, "--view", "front", "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "layers") > 0, "%s", r.err);
+    cli_free(&r);
+    r = cli_run("plan", model, "--view", "0,0,1,1,0,0", "--importance", "0.2,0.8,0", "--json", NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    {
+        static const char *const bad[][2] = {{"--view", "up"}, {"--view", "0,0"}, {"--view", "0,0,0"}, {"--view", "1,2,x"},
+                                             {"--importance", "1,2"}, {"--importance", "-1,0,1"}, {"--importance", "0,0,0"},
+                                             {"--importance", "a,b,c"}};
+        size_t k;
+        for (k = 0; k < sizeof bad / sizeof *bad; k++) {
+            r = cli_run("plan", model, bad[k][0], bad[k][1], NULL);
+            CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, bad[k][1]), "%s %s: exit %d, '%s'", bad[k][0],
+                   bad[k][1], r.status, r.err);
+            cli_free(&r);
+        }
+    }
+    gen_free(&m);
+}
+
 void test_cli_weights(void)
 {
     if (!cli_begin("adaslice-weights")) return;
@@ -241,5 +310,6 @@ void test_cli_weights(void)
     RUN(weight_option_errors);
     RUN(curvature_method);
     RUN(weights_and_orient);
+    RUN(importance_blends_saliency_view_and_user_weights);
     cli_end();
 }
