@@ -19,7 +19,7 @@ void weights_usage(FILE *f, int saliency_option)
     if (saliency_option)
         fputs("  --saliency          weight faces by their mesh saliency (Lee et al. 2005);\n"
               "                      adaslice saliency shows it\n", f);
-    fputs("  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
+    fprintf(f, "  --weights FILE      one weight in [0,1] per line for each triangle, in the\n"
           "                      order the model loads (adaslice saliency -o writes one)\n"
           "  --weight REGION=W   weight W in [0,1] for the faces whose centroid lies in\n"
           "                      REGION: box:X0,Y0,Z0,X1,Y1,Z1 or sphere:X,Y,Z,R (mm, after\n"
@@ -33,7 +33,11 @@ void weights_usage(FILE *f, int saliency_option)
           "                      hemisphere (the upper one, looked at from above the\n"
           "                      plate), all, top, bottom, front (-y), back (+y), left\n"
           "                      (-x), right (+x): that half of the sphere; or\n"
-          "                      X,Y,Z[,X,Y,Z...] towards the viewer    [hemisphere]\n", f);
+          "                      X,Y,Z[,X,Y,Z...] towards the viewer    [hemisphere]\n"
+          "  --view-count N      views in a named half of the sphere (all: twice as many)\n"
+          "                                                             [%d]\n"
+          "  --view-res PX       pixels across the part in each view        [%d]\n",
+          ADASLICE_DEFAULT_VIEWS, ADASLICE_DEFAULT_VIEW_RESOLUTION);
 }
 
 static const struct { const char *name; double axis[3]; } VIEW_NAMES[] = {
@@ -44,23 +48,14 @@ static const struct { const char *name; double axis[3]; } VIEW_NAMES[] = {
    upper hemisphere is the library's default) or a list of directions */
 static int parse_view(const char *v, weight_args *w)
 {
-    size_t i, n = 0;
+    size_t i, n;
     const char *p = v;
-    for (i = 0; i < sizeof VIEW_NAMES / sizeof *VIEW_NAMES; i++) {
-        const double *a = VIEW_NAMES[i].axis;
-        double lattice[3 * WEIGHT_VIEWS_MAX];
-        size_t k;
-        if (strcmp(v, VIEW_NAMES[i].name)) continue;
-        w->view_count = 0;
-        if (a[2] == 1) return RC_OK;
-        adaslice_fibonacci_directions(WEIGHT_VIEWS_MAX, lattice);
-        for (k = 0; k < WEIGHT_VIEWS_MAX; k++)
-            if (a[0] * lattice[3 * k] + a[1] * lattice[3 * k + 1] + a[2] * lattice[3 * k + 2] >= 0) {
-                memcpy(w->views + 3 * w->view_count, lattice + 3 * k, 3 * sizeof(double));
-                w->view_count++;
-            }
-        return RC_OK;
-    }
+    for (i = 0; i < sizeof VIEW_NAMES / sizeof *VIEW_NAMES; i++)
+        if (!strcmp(v, VIEW_NAMES[i].name)) {
+            w->view_half = (int)i;
+            return RC_OK;
+        }
+    w->view_half = -1;
     for (n = 1; *p; p++) n += *p == ',';
     if (n % 3 == 0 && n <= 3 * WEIGHT_VIEWS_MAX && parse_numbers(v, ',', (int)n, w->views)) {
         for (i = 0; i < n / 3; i++)
@@ -136,6 +131,10 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
         if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] + c[1] + c[2] <= 0)
             *rc = complain(RC_USAGE, "--importance %g,%g,%g: each weight must be >= 0 and one above 0", c[0], c[1], c[2]);
         w->blend = 2; /* the weights given */
+    } else if (!strcmp(o, "--view-count")) {
+        *rc = count_option(argc, argv, i, WEIGHT_VIEW_COUNT_MAX, &w->view_lattice);
+    } else if (!strcmp(o, "--view-res")) {
+        *rc = count_option(argc, argv, i, 8192, &w->view_res);
     } else if (!strcmp(o, "--view")) {
         if ((*rc = file_option(argc, argv, i, &v)) != RC_OK) return 1;
         if ((*rc = parse_view(v, w)) == RC_OK && !w->blend) w->blend = 1;
@@ -247,10 +246,27 @@ static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
     }
     if (!rc && c[1] > 0) {
         adaslice_view_options vo;
+        size_t half = w->view_lattice ? w->view_lattice : ADASLICE_DEFAULT_VIEWS, k;
+        double *lattice = NULL;
         memset(&vo, 0, sizeof vo);
-        vo.directions = w->view_count ? w->views : NULL;
-        vo.count = w->view_count;
-        if (adaslice_view_importance(mesh, term, &vo, &e) != ADASLICE_OK) rc = library_error(&e);
+        vo.resolution = (int)w->view_res;
+        vo.count = half;
+        if (w->view_half < 0) {
+            vo.directions = w->views;
+            vo.count = w->view_count;
+        } else if (w->view_half > 1) {
+            /* the lattice's directions in that half of the sphere (all of it for "all") */
+            const double *a = VIEW_NAMES[w->view_half].axis;
+            lattice = (double *)malloc(2 * half * 3 * sizeof *lattice);
+            if (!lattice) rc = complain(RC_FAIL, "out of memory for %zu views", 2 * half);
+            if (lattice) adaslice_fibonacci_directions(2 * half, lattice);
+            for (k = 0, vo.count = 0; lattice && k < 2 * half; k++)
+                if (a[0] * lattice[3 * k] + a[1] * lattice[3 * k + 1] + a[2] * lattice[3 * k + 2] >= 0)
+                    memmove(lattice + 3 * vo.count++, lattice + 3 * k, 3 * sizeof *lattice);
+            vo.directions = lattice;
+        }
+        if (!rc && adaslice_view_importance(mesh, term, &vo, &e) != ADASLICE_OK) rc = library_error(&e);
+        free(lattice);
         normalise(term, n);
         for (t = 0; !rc && t < n; t++) out[t] += (float)c[1] * term[t];
     }

@@ -7,7 +7,7 @@
 #include <stdio.h>
 #include "../adaslice.h"
 
-enum { WEIGHT_BOX = 0, WEIGHT_SPHERE = 1, WEIGHT_REGIONS_MAX = 32, WEIGHT_VIEWS_MAX = 2 * ADASLICE_DEFAULT_VIEWS };
+enum { WEIGHT_BOX = 0, WEIGHT_SPHERE = 1, WEIGHT_REGIONS_MAX = 32, WEIGHT_VIEWS_MAX = 64, WEIGHT_VIEW_COUNT_MAX = 4096 };
 
 /* A face is in a region when its centroid is: inside the box or on its faces,
    or within the sphere's radius of its centre. */
@@ -24,8 +24,11 @@ typedef struct weight_args {
     weight_region regions[WEIGHT_REGIONS_MAX]; /* --weight REGION=W, in the order given */
     int blend;                                 /* --importance or --view given */
     double importance[3];                      /* a, b, c (saliency, view, user) */
-    size_t view_count;                         /* --view: 0 is the upper hemisphere */
+    int view_half;                             /* --view NAME: an index of the names, -1: a list */
+    size_t view_count;                         /* a list's directions */
     double views[3 * WEIGHT_VIEWS_MAX];
+    size_t view_lattice;                       /* --view-count: directions in a named half; 0: default */
+    size_t view_res;                           /* --view-res: pixels across the part; 0: default */
 } weight_args;
 
 /* If argv[*i] is --saliency, --weights, --weight, --importance or --view, takes it (and its value),

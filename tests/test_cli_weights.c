@@ -280,6 +280,23 @@ static void importance_blends_saliency_view_and_user_weights(void)
         free(bytes);
         cli_free(&r);
     }
+    {
+        /* four views of 64 px: coarser, so different weights, still in [0, 1] */
+        const char *coarse = cli_path("coarse.txt");
+        double *a, *b;
+        size_t na = 0, nb = 0, k, changed = 0;
+        r = cli_run("saliency", model, "--importance", "0,1,0", "--view-count", "4", "--view-res", "64", "-o", coarse, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        r = cli_run("saliency", model, "--importance", "0,1,0", "-o", out, NULL);
+        cli_free(&r);
+        a = read_values(coarse, &na);
+        b = read_values(out, &nb);
+        for (k = 0; a && b && k < na && k < nb; k++) changed += fabs(a[k] - b[k]) > 1e-6 && a[k] >= 0 && a[k] <= 1;
+        CHECKF(na == nb && changed > na / 10, "--view-count 4 --view-res 64 changed %zu of %zu weights", changed, na);
+        free(a);
+        free(b);
+    }
     r = cli_run("plan", model, "--view", "front", "--json", NULL);
     CHECKF(r.status == 0 && cli_json_number(r.out, "layers") > 0, "%s", r.err);
     cli_free(&r);
@@ -287,7 +304,7 @@ static void importance_blends_saliency_view_and_user_weights(void)
     CHECKF(r.status == 0, "%s", r.err);
     cli_free(&r);
     {
-        static const char *const bad[][2] = {{"--view", "up"}, {"--view", "0,0"}, {"--view", "0,0,0"}, {"--view", "1,2,x"},
+        static const char *const bad[][2] = {{"--view-count", "0"}, {"--view-res", "9000"}, {"--view", "up"}, {"--view", "0,0"}, {"--view", "0,0,0"}, {"--view", "1,2,x"},
                                              {"--importance", "1,2"}, {"--importance", "-1,0,1"}, {"--importance", "0,0,0"},
                                              {"--importance", "a,b,c"}};
         size_t k;
