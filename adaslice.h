@@ -2358,9 +2358,12 @@ ADASLICE_DEF adaslice_result adaslice_mesh_weld(adaslice_mesh *mesh, const adasl
    surface wound one way uses each of its edges once each way. */
 static uint32_t adaslice__he_to(const uint32_t *tri, size_t h) { return tri[h % 3 == 2 ? h - 2 : h + 1]; }
 
-/* Half-edges grouped by edge: slot[] of a hash table names one half-edge of
-   each edge, next[] links the rest. Zero-area facets, which every stage skips,
-   are left out. */
+/* Half-edges grouped by edge: slot[0 .. cap) names one half-edge of each
+   edge, next[] links the rest. They are found by bucketing the half-edges by
+   their lower-numbered vertex (a counting sort) and matching the few in each
+   bucket by the other vertex, which keeps to arrays walked in order rather
+   than a hash table's random probes. Zero-area facets, which every stage
+   skips, are left out. */
 typedef struct adaslice__edges {
     uint32_t *slot, *next;
     size_t cap;
@@ -2373,35 +2376,100 @@ static void adaslice__edges_free(const adaslice_allocator *al, adaslice__edges *
     memset(e, 0, sizeof *e);
 }
 
+static int adaslice__u64_cmp(const void *a, const void *b)
+{
+    uint64_t x = *ADASLICE__CAST(const uint64_t *, a), y = *ADASLICE__CAST(const uint64_t *, b);
+    return x < y ? -1 : x > y;
+}
+
+static uint32_t adaslice__he_low(const uint32_t *tri, size_t h)
+{
+    uint32_t a = tri[h], b = adaslice__he_to(tri, h);
+    return a < b ? a : b;
+}
+
+static uint32_t adaslice__he_high(const uint32_t *tri, size_t h)
+{
+    uint32_t a = tri[h], b = adaslice__he_to(tri, h);
+    return a < b ? b : a;
+}
+
 static adaslice_result adaslice__edges_build(const adaslice_mesh *m, const adaslice_allocator *al, adaslice__edges *e,
                                              adaslice_error *err)
 {
     const uint32_t *tri = m->triangles;
-    size_t n = 3 * m->triangle_count, h, k;
+    size_t n = 3 * m->triangle_count, nv = m->vertex_count, h, v, i, j, used = 0;
+    uint32_t *first = NULL, *order = NULL;
+    uint64_t *keys = NULL;
+    size_t keys_cap = 0;
+    adaslice_result r = ADASLICE_OK;
     memset(e, 0, sizeof *e);
     if (m->triangle_count >= ADASLICE__NONE / 3)
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "edges: %zu triangles is too many", m->triangle_count);
-    e->cap = adaslice__table_size(n);
-    e->slot = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, e->cap, sizeof(uint32_t)));
-    e->next = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
-    if (!e->slot || !e->next) {
-        adaslice__edges_free(al, e);
-        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "edges: out of memory for %zu triangles", m->triangle_count);
-    }
-    memset(e->slot, 0xff, e->cap * sizeof(uint32_t));
+    e->slot = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n ? n : 1, sizeof(uint32_t)));
+    e->next = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n ? n : 1, sizeof(uint32_t)));
+    first = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, nv + 1, sizeof(uint32_t)));
+    order = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n ? n : 1, sizeof(uint32_t)));
+    if (!e->slot || !e->next || !first || !order) goto nomem;
+    memset(first, 0, (nv + 1) * sizeof(uint32_t));
     memset(e->next, 0xff, n * sizeof(uint32_t));
-    for (h = 0; h < n; h++) {
-        uint32_t a = tri[h], b = adaslice__he_to(tri, h), lo = a < b ? a : b, hi = a < b ? b : a;
-        if (h % 3 == 0 && adaslice__zero_area(m->vertices, tri + h)) { h += 2; continue; }
-        k = (size_t)adaslice__mix((uint64_t)lo << 32 | hi) & (e->cap - 1);
-        for (; e->slot[k] != ADASLICE__NONE; k = (k + 1) & (e->cap - 1)) {
-            uint32_t g = e->slot[k], c = tri[g], d = adaslice__he_to(tri, g);
-            if ((c == lo && d == hi) || (c == hi && d == lo)) break;
-        }
-        if (e->slot[k] == ADASLICE__NONE) e->slot[k] = (uint32_t)h;
-        else { e->next[h] = e->next[e->slot[k]]; e->next[e->slot[k]] = (uint32_t)h; }
+    for (h = 0; h < n; h += 3) {
+        int k;
+        if (adaslice__zero_area(m->vertices, tri + h)) continue;
+        for (k = 0; k < 3; k++) first[adaslice__he_low(tri, h + (size_t)k) + 1]++;
     }
-    return ADASLICE_OK;
+    for (v = 0; v < nv; v++) first[v + 1] += first[v];
+    for (h = 0; h < n; h += 3) {
+        int k;
+        if (adaslice__zero_area(m->vertices, tri + h)) continue;
+        for (k = 0; k < 3; k++) order[first[adaslice__he_low(tri, h + (size_t)k)]++] = (uint32_t)(h + (size_t)k);
+    }
+    for (v = nv; v > 0; v--) first[v] = first[v - 1];
+    first[0] = 0;
+    for (v = 0; v < nv; v++) {
+        uint32_t *b = order + first[v];
+        size_t k = first[v + 1] - first[v];
+        if (k > 16) {
+            /* a vertex of many facets (a fan's centre): sort its bucket by the other vertex */
+            if (k > keys_cap) {
+                adaslice__free(al, keys);
+                keys_cap = 2 * k;
+                keys = ADASLICE__CAST(uint64_t *, adaslice__alloc(al, keys_cap, sizeof(uint64_t)));
+                if (!keys) goto nomem;
+            }
+            for (i = 0; i < k; i++) keys[i] = (uint64_t)adaslice__he_high(tri, b[i]) << 32 | b[i];
+            qsort(keys, k, sizeof *keys, adaslice__u64_cmp);
+            for (i = 0; i < k; i++) b[i] = (uint32_t)keys[i];
+            for (i = 0; i < k; i = j) {
+                uint32_t hi = adaslice__he_high(tri, b[i]);
+                e->slot[used++] = b[i];
+                for (j = i + 1; j < k && adaslice__he_high(tri, b[j]) == hi; j++) e->next[b[j - 1]] = b[j];
+            }
+            continue;
+        }
+        for (i = 0; i < k; i++) {
+            uint32_t hi, tail;
+            if (b[i] == ADASLICE__NONE) continue; /* joined an earlier edge */
+            hi = adaslice__he_high(tri, b[i]);
+            e->slot[used++] = tail = b[i];
+            for (j = i + 1; j < k; j++)
+                if (b[j] != ADASLICE__NONE && adaslice__he_high(tri, b[j]) == hi) {
+                    e->next[tail] = b[j];
+                    tail = b[j];
+                    b[j] = ADASLICE__NONE;
+                }
+        }
+    }
+    e->cap = used;
+    goto done;
+nomem:
+    adaslice__edges_free(al, e);
+    r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "edges: out of memory for %zu triangles", m->triangle_count);
+done:
+    adaslice__free(al, first);
+    adaslice__free(al, order);
+    adaslice__free(al, keys);
+    return r;
 }
 
 /* The facets using an edge, and how many more run from its lower-numbered
@@ -2430,25 +2498,24 @@ static size_t adaslice__drop_degenerate(adaslice_mesh *m)
     return t;
 }
 
-/* Welds the vertices of open edges within `tolerance` of each other (the
-   lowest index stays, as adaslice_mesh_weld does); *merged counts the moved. */
-static adaslice_result adaslice__weld_open(adaslice_mesh *m, double tolerance, const adaslice_allocator *al,
-                                           size_t *merged, adaslice_error *err)
+/* Welds the vertices of the open edges of e within `tolerance` of each
+   other (the lowest index stays, as adaslice_mesh_weld does); *merged counts
+   the moved. */
+static adaslice_result adaslice__weld_open(adaslice_mesh *m, const adaslice__edges *e, double tolerance,
+                                           const adaslice_allocator *al, size_t *merged, adaslice_error *err)
 {
-    adaslice__edges e;
     adaslice_result r;
     uint32_t *index = NULL, *remap = NULL, *first = NULL;
     float *pos = NULL, *kept_pos = NULL;
     size_t i, n = 0, kept = 0;
     *merged = 0;
-    if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
     /* index[v]: v's place among the open-edge vertices, or NONE */
     index = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof(uint32_t)));
     if (!index) goto nomem;
     memset(index, 0xff, m->vertex_count * sizeof(uint32_t));
-    for (i = 0; i < e.cap; i++) {
-        uint32_t h = e.slot[i];
-        if (h == ADASLICE__NONE || e.next[h] != ADASLICE__NONE) continue;
+    for (i = 0; i < e->cap; i++) {
+        uint32_t h = e->slot[i];
+        if (h == ADASLICE__NONE || e->next[h] != ADASLICE__NONE) continue;
         index[m->triangles[h]] = index[adaslice__he_to(m->triangles, h)] = 0;
     }
     for (i = 0; i < m->vertex_count; i++) if (index[i] == 0) index[i] = (uint32_t)n++;
@@ -2481,7 +2548,6 @@ done:
     adaslice__free(al, kept_pos);
     adaslice__free(al, remap);
     adaslice__free(al, first);
-    adaslice__edges_free(al, &e);
     return r;
 }
 
@@ -2701,12 +2767,6 @@ static void adaslice__shell_probes(const adaslice_mesh *m, adaslice__shells *s, 
     s->probes[shell] = (unsigned char)n;
 }
 
-static int adaslice__u64_cmp(const void *a, const void *b)
-{
-    uint64_t x = *ADASLICE__CAST(const uint64_t *, a), y = *ADASLICE__CAST(const uint64_t *, b);
-    return x < y ? -1 : x > y;
-}
-
 static double adaslice__min3(double a, double b, double c) { return a < b ? (a < c ? a : c) : (b < c ? b : c); }
 static double adaslice__max3(double a, double b, double c) { return a > b ? (a > c ? a : c) : (b > c ? b : c); }
 
@@ -2826,11 +2886,20 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
     adaslice_mesh_bounds(m, lo, hi);
     if (tolerance == 0)
         tolerance = 1e-4 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if (tolerance > 0 && (r = adaslice__weld_open(m, tolerance, &al, &rep.welded_nearby, err)) != ADASLICE_OK) return r;
-    if (rep.welded_nearby) rep.degenerate_dropped += adaslice__drop_degenerate(m);
-    if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
-    if ((r = adaslice__drop_unused(m, &al, err)) != ADASLICE_OK) return r;
     if ((r = adaslice__edges_build(m, &al, &e, err)) != ADASLICE_OK) return r;
+    if (tolerance > 0 && (r = adaslice__weld_open(m, &e, tolerance, &al, &rep.welded_nearby, err)) != ADASLICE_OK) goto done;
+    if (rep.welded_nearby) {
+        /* the cracks closed: the facets and the edges change */
+        rep.degenerate_dropped += adaslice__drop_degenerate(m);
+        if (!m->triangle_count) {
+            r = adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
+            goto done;
+        }
+        adaslice__edges_free(&al, &e);
+        if ((r = adaslice__edges_build(m, &al, &e, err)) != ADASLICE_OK) return r;
+    }
+    /* last: vertex numbers leave the edges' grouping as it is */
+    if ((r = adaslice__drop_unused(m, &al, err)) != ADASLICE_OK) goto done;
     nt = m->triangle_count;
     s.of = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, nt, sizeof(uint32_t)));
     s.facets = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, nt, sizeof(uint32_t)));
