@@ -101,7 +101,9 @@ RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 test: $(TEST_PROGRAMS)
 	$(RUN_TESTS) --without-tools
 
-check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf
+# The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
+BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
+check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two
@@ -179,8 +181,7 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 
-bench: $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/adaslice $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs \
-       $(B)/bench-plan-mps2.elf
+bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
