@@ -6,6 +6,7 @@
 #define FAKE_MAX_BINS 45000u /* the firmware core, given the RAM for these parts */
 #include "fakeport.h"
 #include "prusa_check.h"
+#include "contour_length.h"
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -380,7 +381,6 @@ static int check_masks(const char *dir, const char *name)
     for (i = 0; i < c.polygon_count; i++) open += !c.polygons[i].closed;
     for (k = 0; k < 16 && ok; k++) {
         int x, y;
-        size_t p;
         double perimeter = 0, lit, area, d;
         if (adaslice_masker_slice(&mk, z[k], &e) != ADASLICE_OK) { snprintf(why, sizeof why, "%s", e.message); ok = 0; break; }
         for (y = 3; watertight && y < g.height; y += 7)
@@ -390,14 +390,7 @@ static int check_masks(const char *dir, const char *name)
                 if (adaslice_contours_distance(&c, (size_t)k, px, py) <= g.pitch[0]) continue;
                 wrong += (adaslice_contours_winding(&c, (size_t)k, px, py) > 0) != bit;
             }
-        for (p = c.first_polygon[k]; p < c.first_polygon[k + 1]; p++) {
-            const adaslice_polygon *poly = &c.polygons[p];
-            size_t q;
-            for (q = 0; q < poly->count; q++) {
-                const double *u = c.points + 2 * (poly->first + q), *v = c.points + 2 * (poly->first + (q + 1) % poly->count);
-                perimeter += hypot(v[0] - u[0], v[1] - u[1]);
-            }
-        }
+        perimeter = contour_length(&c, (size_t)k);
         lit = mk.lit * g.pitch[0] * g.pitch[1];
         area = prof.area[(size_t)((z[k] - prof.z0) / prof.bin)];
         d = fabs(lit - area);

@@ -2,6 +2,7 @@
    same heights, point-in-polygon at pixel centres; lit areas against A(h). */
 #include "../adaslice.h"
 #include "check.h"
+#include "contour_length.h"
 #include "meshgen.h"
 #include <math.h>
 #include <string.h>
@@ -46,7 +47,7 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double px
     CHECK(adaslice_profile_exact(m, &po, &prof, &e) == ADASLICE_OK);
     for (k = 0; k < heights; k++) {
         int i, j;
-        size_t wrong = 0, near = 0, p;
+        size_t wrong = 0, near = 0;
         double perimeter = 0, lit, area;
         CHECK(adaslice_masker_slice(&mk, z[k], &e) == ADASLICE_OK);
         for (j = 0; j < h; j++)
@@ -55,14 +56,7 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double px
                 if (adaslice_contours_distance(&c, (size_t)k, x, y) <= reach) { near++; continue; }
                 wrong += (adaslice_contours_winding(&c, (size_t)k, x, y) > 0) != mask_bit(&mk, i, j);
             }
-        for (p = c.first_polygon[k]; p < c.first_polygon[k + 1]; p++) {
-            const adaslice_polygon *poly = &c.polygons[p];
-            size_t q;
-            for (q = 0; q < poly->count; q++) {
-                const double *a = c.points + 2 * (poly->first + q), *b = c.points + 2 * (poly->first + (q + 1) % poly->count);
-                perimeter += hypot(b[0] - a[0], b[1] - a[1]);
-            }
-        }
+        perimeter = contour_length(&c, (size_t)k);
         lit = mk.lit * px * py;
         area = prof.area[(size_t)((z[k] - prof.z0) / prof.bin)];
         CHECKF(wrong == 0, "%s at z %g: %zu pixels differ from the contours (%zu near an edge skipped)", what, z[k], wrong, near);

@@ -5,6 +5,7 @@
    and the missing surface. */
 #include "../adaslice.h"
 #include "check.h"
+#include "contour_length.h"
 #include "meshgen.h"
 #include <math.h>
 #include <string.h>
@@ -100,7 +101,7 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
         int i, j;
         size_t wrong = 0;
         double perimeter = 0, area;
-        size_t p, bin = (size_t)((z[k] - pa.z0) / pa.bin);
+        size_t bin = (size_t)((z[k] - pa.z0) / pa.bin);
         CHECKF(adaslice_masker_slice(&a, z[k], &e) == ADASLICE_OK, "%s: %s", what, e.message);
         CHECK(adaslice_masker_slice(&b, z[k], &e) == ADASLICE_OK);
         for (j = 0; j < H; j++)
@@ -113,14 +114,7 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
                 for (h = 0; h < hole_count; h++) at_hole |= hypot(x - holes[4 * h], y - holes[4 * h + 1]) <= reach;
                 wrong += !at_hole;
             }
-        for (p = c.first_polygon[k]; p < c.first_polygon[k + 1]; p++) {
-            const adaslice_polygon *poly = &c.polygons[p];
-            size_t q;
-            for (q = 0; q < poly->count; q++) {
-                const double *u = c.points + 2 * (poly->first + q), *v = c.points + 2 * (poly->first + (q + 1) % poly->count);
-                perimeter += hypot(v[0] - u[0], v[1] - u[1]);
-            }
-        }
+        perimeter = contour_length(&c, (size_t)k);
         CHECKF(wrong == 0, "%s at z %g: %zu pixels differ from the closed mesh's away from the gap", what, z[k], wrong);
         CHECKF(fabs(a.lit - b.lit) * PITCH * PITCH <= slack + perimeter * PITCH * 1.5, "%s at z %g: lit %g mm^2, closed %g mm^2",
                what, z[k], a.lit * PITCH * PITCH, b.lit * PITCH * PITCH);
