@@ -31,6 +31,7 @@
        adaslice_rle_encode              code a mask
        adaslice_rle_decoder_init        a streaming decoder
        adaslice_rle_decode              decode the next bytes, row by row
+       adaslice_rle_decode_rows         the same, at most so many rows a call
        adaslice_rle_finished            every row decoded
        ADASLICE_RLE_CRC                 CRC-32 of the rows decoded
 
@@ -193,6 +194,7 @@ typedef struct adaslice_rle_decoder { /* its fields are private */
     uint32_t rows;          /* rows emitted */
     uint32_t x;             /* pixels of the current row decoded */
     uint32_t runs;          /* runs left in the current row */
+    uint32_t repeat;        /* rows a repeat record still owes */
     adaslice_varint number; /* the varint being read */
     int state;              /* what the next varint or byte is */
     unsigned char pixel;    /* 8-bit: the current run's value; 1-bit: 0 or 1 */
@@ -211,6 +213,16 @@ ADASLICE_DEF adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec
 ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
                                                  void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
                                                  void *ctx);
+/* The same, emitting at most `max_rows` rows before it returns, for a caller
+   whose every pass must stay short (firmware: a repeat of a thousand rows is
+   a thousand rows of CRC). *used gets the bytes taken; the rest are to be
+   given again. While ADASLICE_RLE_PENDING(dec), rows of a repeat wait for
+   the next call (which may have no bytes). */
+ADASLICE_DEF adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec, const unsigned char *data,
+                                                      size_t size, uint32_t max_rows, size_t *used,
+                                                      void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                      void *ctx);
+#define ADASLICE_RLE_PENDING(dec) ((dec)->repeat != 0)
 /* 1 when every row has been emitted and no record is half read. */
 ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec);
 /* CRC-32 of the rows emitted so far. */
@@ -732,7 +744,7 @@ static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t 
         if (v & 1u) {
             uint32_t times = (v >> 1) + 1u;
             if (times > dec->height - dec->rows) return ADASLICE_ERR_ROWS;
-            while (times--) adaslice__rle_emit(dec, emit, ctx);
+            dec->repeat = times; /* emitted by the caller, as its budget allows */
             return ADASLICE_OK;
         }
         if (dec->rows >= dec->height) return ADASLICE_ERR_ROWS;
@@ -761,14 +773,23 @@ static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t 
     return ADASLICE_OK;
 }
 
-ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
-                                                 void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
-                                                 void *ctx)
+ADASLICE_DEF adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec, const unsigned char *data,
+                                                      size_t size, uint32_t max_rows, size_t *used,
+                                                      void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                      void *ctx)
 {
-    size_t i;
+    size_t i = 0;
+    uint32_t start = dec->rows;
+    if (used) *used = 0;
     if (!dec->row) return dec->error = ADASLICE_ERR_ARGUMENT;
-    for (i = 0; i < size && !dec->error; i++) {
-        unsigned char c = data[i];
+    for (;; i++) {
+        unsigned char c;
+        while (dec->repeat && dec->rows - start < max_rows) {
+            dec->repeat--;
+            adaslice__rle_emit(dec, emit, ctx);
+        }
+        if (dec->repeat || dec->rows - start >= max_rows || i >= size || dec->error) break;
+        c = data[i];
         if (dec->state == ADASLICE__RLE_VALUE) {
             dec->pixel = c;
             dec->state = ADASLICE__RLE_LENGTH;
@@ -780,12 +801,20 @@ ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, cons
         }
         dec->offset++;
     }
+    if (used) *used = i;
     return dec->error;
+}
+
+ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                                 void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                 void *ctx)
+{
+    return adaslice_rle_decode_rows(dec, data, size, UINT32_MAX, NULL, emit, ctx);
 }
 
 ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec)
 {
-    return !dec->error && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->number.shift == 0;
+    return !dec->error && !dec->repeat && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->number.shift == 0;
 }
 
 #endif /* ADASLICE_MCU_IMPLEMENTATION_DONE */

@@ -294,23 +294,44 @@ static void mask_begin(fw_state *fw, const link_mask *m, uint8_t seq)
     else if (!m->exposure_ms || m->exposure_ms > FW_EXPOSURE_MAX_MS) mask_refuse(fw, LINK_ERR_MASK_EXPOSURE, seq);
 }
 
-static void mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
+/* One pass's share of the MASK_DATA frame being decoded: FW_DECODE_ROWS
+   rows at most (each a row's CRC and its copy to the display), so that no
+   pass of the loop runs long, whatever the code holds: a repeat of a
+   thousand rows takes a thousand passes. Returns 1 when the frame is done. */
+static int mask_decode(fw_state *fw)
 {
-    if (!fw->mask_layer) { fail(fw, LINK_ERR_MASK_ORDER, seq); return; }
-    if (size > fw->mask_size - fw->mask_got ||
-        adaslice_rle_decode(&fw->decoder, p, size, mask_row, fw) != ADASLICE_OK) {
-        mask_refuse(fw, LINK_ERR_MASK_CODE, seq);
-        return;
+    size_t used;
+    if (adaslice_rle_decode_rows(&fw->decoder, fw->decode_at, fw->decode_left, FW_DECODE_ROWS, &used, mask_row, fw) !=
+        ADASLICE_OK) {
+        mask_refuse(fw, LINK_ERR_MASK_CODE, fw->decode_seq);
+        return 1;
     }
-    fw->mask_got += (uint32_t)size;
-    if (fw->mask_got < fw->mask_size) return;
+    fw->decode_at += used;
+    fw->decode_left -= used;
+    if (fw->decode_left || ADASLICE_RLE_PENDING(&fw->decoder)) return 0;
+    if (fw->mask_got < fw->mask_size) return 1;
     if (!adaslice_rle_finished(&fw->decoder) || ADASLICE_RLE_CRC(&fw->decoder) != fw->mask_crc) {
-        mask_refuse(fw, LINK_ERR_MASK_CRC, seq);
-        return;
+        mask_refuse(fw, LINK_ERR_MASK_CRC, fw->decode_seq);
+        return 1;
     }
     fw->exposure_ms[fw->mask_layer & 1u] = fw->mask_exposure_ms;
     fw->mask_ready = fw->mask_layer;
     fw->mask_layer = 0;
+    return 1;
+}
+
+/* Starts decoding a MASK_DATA frame; 1 when it is done at once. */
+static int mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
+{
+    if (!fw->mask_layer) { fail(fw, LINK_ERR_MASK_ORDER, seq); return 1; }
+    if (size > fw->mask_size - fw->mask_got) { mask_refuse(fw, LINK_ERR_MASK_CODE, seq); return 1; }
+    fw->mask_got += (uint32_t)size;
+    fw->decode_at = p;
+    fw->decode_left = size;
+    fw->decode_seq = seq;
+    if (mask_decode(fw)) return 1;
+    fw->decoding = 1;
+    return 0;
 }
 
 /* -------------------------------------------------------------------- print */
@@ -524,7 +545,10 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
         break;
     case LINK_MSG_PLAN_DATA: plan_data(fw, p, size, seq); break;
     case LINK_MSG_MASK: (void)link_get_mask(&m.mask, p, size); mask_begin(fw, &m.mask, seq); break;
-    case LINK_MSG_MASK_DATA: mask_data(fw, p, size, seq); break;
+    case LINK_MSG_MASK_DATA:
+        /* acknowledged once decoded, in a later pass if it is long */
+        if (!mask_data(fw, p, size, seq)) return;
+        break;
     case LINK_MSG_HOME:
         if (!can_move(fw) || fw->state == LINK_STATE_PAUSED) fail(fw, LINK_ERR_BUSY, seq);
         else if (axis_error(fw, fw_axis_home(&fw->axis, now), seq)) fw->state = LINK_STATE_HOMING;
@@ -641,20 +665,22 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     fw_gcode_init(&fw->gcode, &fw->axis, &io);
 }
 
-void fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
+size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
 {
     size_t i;
-    for (i = 0; i < size; i++) {
+    for (i = 0; i < size && !fw->decoding; i++) {
         size_t n;
         if (!fw->binary) { gcode_byte(fw, data[i], now); fill_steps(fw, now); }
         link_deframe_push(&fw->deframer, data[i]);
-        while ((n = link_deframe_next(&fw->deframer)) != 0) {
+        while (!fw->decoding && (n = link_deframe_next(&fw->deframer)) != 0) {
             on_frame(fw, fw->deframer.buf, n, now);
-            link_deframe_consume(&fw->deframer);
+            /* a frame still decoding keeps the deframer's buffer */
+            if (!fw->decoding) link_deframe_consume(&fw->deframer);
             /* a move just asked for starts one step lead from `now` */
             fill_steps(fw, now);
         }
     }
+    return i;
 }
 
 static uint64_t earliest(uint64_t a, uint64_t b) { return a < b ? a : b; }
@@ -720,6 +746,11 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     uint64_t next = FW_NEVER;
     if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
     fill_steps(fw, now);
+    if (fw->decoding && mask_decode(fw)) {
+        fw->decoding = 0;
+        link_deframe_consume(&fw->deframer);
+        send_ack(fw, 0);
+    }
     if (!moving(fw)) {
         if (fw->state == LINK_STATE_HOMING) {
             fw->state = resting(fw);
@@ -752,6 +783,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
     else if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
     if (fw->config.watchdog_ms) next = earliest(next, now + FW_MS(fw, fw->config.watchdog_ms) / 2u);
+    if (fw->decoding) next = now; /* the next rows, in the next pass */
     if (fw->state == LINK_STATE_PRINTING) {
         if (fw->phase == LINK_PHASE_SETTLE || fw->phase == LINK_PHASE_EXPOSE) next = earliest(next, fw->phase_end);
         /* once the pause is asked for, the silence has done its work */

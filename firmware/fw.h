@@ -7,7 +7,7 @@
 
        fw_init(&fw, &config, &port, workspace, sizeof workspace);
        for (;;) {
-           feed received bytes:         fw_receive(&fw, bytes, n, now);
+           feed received bytes:         taken = fw_receive(&fw, bytes, n, now);
            when now >= deadline:        deadline = fw_run(&fw, now);
            otherwise sleep until a byte arrives or the deadline
        }
@@ -111,6 +111,11 @@ typedef struct fw_config {
 #define FW_EXPOSURE_MAX_MS 3600000u
 #define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
 
+/* Mask rows decoded in one pass of the loop: a pass stays short (a row's
+   CRC and copy) whatever a mask's code holds. */
+#ifndef FW_DECODE_ROWS
+#define FW_DECODE_ROWS 1u
+#endif
 /* A display row at most this many bytes (1-bit: 8 pixels a byte). */
 #ifndef FW_ROW_BYTES
 #define FW_ROW_BYTES 480u
@@ -138,6 +143,9 @@ typedef struct fw_state {
     uint32_t cursor_layer, cursor_plane; /* reading the plan bottom-up */
     /* masks: decoded into display buffer (layer & 1) as they stream */
     adaslice_rle_decoder decoder;
+    const uint8_t *decode_at;  /* the MASK_DATA frame decoding across passes */
+    size_t decode_left;
+    uint8_t decode_seq, decoding;
     uint8_t row[FW_ROW_BYTES];
     uint32_t mask_layer, mask_size, mask_got, mask_crc, mask_exposure_ms;
     uint32_t exposure_ms[2];   /* of the ready mask in each display buffer */
@@ -163,8 +171,10 @@ typedef struct fw_state {
 
 /* plan_workspace: FW_PLAN_WORKSPACE(config->max_bins) bytes, 8-byte aligned. */
 void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *plan_workspace, size_t workspace_size);
-/* Bytes from the host, in order, from the main loop (not an interrupt). */
-void fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
+/* Bytes from the host, in order, from the main loop (not an interrupt).
+   Returns how many it took: it stops after a frame whose work goes on in
+   the next passes of fw_run (a long mask frame); offer the rest again. */
+size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
 /* Does what is due at tick `now`; returns the tick of the next deadline. */
 uint64_t fw_run(fw_state *fw, uint64_t now);
 /* The step timer's interrupt, at the tick it was armed for: the step out

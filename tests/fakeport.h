@@ -37,6 +37,7 @@ typedef struct fake_printer {
     uint8_t plan[LINK_FRAME_MAX];
     size_t plan_size;
     int acks, naks, statuses, identifies, plans;
+    uint32_t rows;               /* mask rows the core wrote to the display */
     char text[16384];            /* everything sent, as text (G-code replies) */
     size_t text_len;
     uint64_t heartbeat, last_beat; /* a STATUS every `heartbeat` ticks while running, if set */
@@ -134,6 +135,7 @@ static inline void fake_motor(void *ctx, int on) { (void)ctx; (void)on; }
 static inline void fake_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, uint32_t size)
 {
     fake_printer *p = (fake_printer *)ctx;
+    p->rows++;
     if ((size_t)(y + 1) * size <= sizeof p->display[0]) memcpy(p->display[slot] + (size_t)y * size, row, size);
 }
 
@@ -186,7 +188,17 @@ static inline void fake_init(fake_printer *p, uint16_t w, uint16_t h, uint8_t bi
 
 static inline void fake_free(fake_printer *p) { free(p->events); p->events = NULL; }
 
-static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size) { fw_receive(&p->fw, data, size, p->now); }
+/* Bytes to the core, which may take them over several passes (a long mask
+   frame): the passes run at once, at p->now. */
+static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size)
+{
+    while (size) {
+        size_t n = fw_receive(&p->fw, data, size, p->now);
+        data += n;
+        size -= n;
+        while (p->fw.decoding) (void)fw_run(&p->fw, p->now);
+    }
+}
 
 /* Frames a message from the host with the next sequence number. */
 static inline void fake_send(fake_printer *p, uint8_t type, const uint8_t *payload, size_t size)

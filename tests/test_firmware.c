@@ -158,6 +158,7 @@ static void start_print(fake_printer *p, uint32_t first)
     m.peel_speed_um_s = 3000;   /* 3 mm/s up */
     m.return_speed_um_s = 0;    /* down as fast as the axis goes */
     m.settle_ms = 200;
+    m.job = 0x600d;
     fake_send(p, LINK_MSG_PRINT, pr, link_put_print(pr, &m));
 }
 
@@ -171,6 +172,45 @@ static void home(fake_printer *p)
 
 /* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
    waits with UV off until a good copy arrives. */
+/* A mask of 400 equal rows is a row and one repeat record: the core decodes
+   it a row a pass (each row's CRC and copy), never the whole repeat in one
+   call, and acknowledges the frame once it is decoded. */
+static void long_repeats_take_a_row_a_pass(void)
+{
+    static fake_printer p;
+    static uint8_t image[400 * 8], code[256], frame[LINK_FRAME_MAX];
+    uint8_t lengths[1] = {30}, hdr[LINK_SIZE_MASK];
+    size_t n, k, taken, framed;
+    uint32_t rows, passes = 0, worst = 0;
+    int acks;
+    link_mask m;
+    fake_init(&p, 64, 400, 1);
+    for (k = 0; k < sizeof image; k++) image[k] = (uint8_t)(k % 8 == 3 ? 0x3c : 0);
+    CHECK(adaslice_rle_encode(image, 8, 64, 400, 1, code, sizeof code, &n) == ADASLICE_OK && n < 16);
+    send_plan(&p, lengths, 1, 2000);
+    m.layer = 1;
+    m.code_bytes = (uint32_t)n;
+    m.crc32 = adaslice_crc32(0, image, sizeof image);
+    m.exposure_ms = 1000;
+    fake_send(&p, LINK_MSG_MASK, hdr, link_put_mask(hdr, &m));
+    framed = link_frame_build(frame, p.seq++, LINK_MSG_MASK_DATA, code, n);
+    acks = p.acks;
+    rows = p.rows;
+    taken = fw_receive(&p.fw, frame, framed, p.now);
+    CHECKF(taken == framed && p.fw.decoding && p.rows - rows <= FW_DECODE_ROWS && p.acks == acks,
+           "took %zu of %zu bytes, %u rows at once", taken, framed, p.rows - rows);
+    CHECK(fw_receive(&p.fw, frame, framed, p.now) == 0); /* nothing more while it decodes */
+    while (p.fw.decoding && passes < 1000) {
+        rows = p.rows;
+        (void)fw_run(&p.fw, p.now);
+        if (p.rows - rows > worst) worst = p.rows - rows;
+        passes++;
+    }
+    CHECKF(worst <= FW_DECODE_ROWS && passes >= 399 && p.rows == 400 && p.acks == acks + 1,
+           "%u passes, at most %u rows in one, %u rows, %d acks", passes, worst, p.rows, p.acks - acks);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.mask_ready == 1 && p.status.masks_refused == 0);
+}
+
 static void bad_masks_are_never_shown(void)
 {
     static fake_printer p;
@@ -406,6 +446,7 @@ void test_firmware(void)
     RUN(twelve_thousand_bins_fit);
     RUN(link_recovers);
     RUN(bad_masks_are_never_shown);
+    RUN(long_repeats_take_a_row_a_pass);
     RUN(thousand_layers_without_drift);
     RUN(pause_and_link_loss);
 }

@@ -653,6 +653,68 @@ static void printcore_drives_gcode_mode(void)
     free(l.ev);
 }
 
+/* The loop hangs as an exposure begins (fw-sim --hang-at-exposure N): the UV
+   timer still ends the exposure at its tick, and the watchdog restarts the
+   MCU within its period with the light off and Z still. Exposure 1 (a bottom
+   layer, 0.5 s) outlasts the 250 ms watchdog, so the restart puts it out;
+   exposure 3 (0.1 s) ends by its timer first. */
+static void hung_loop_keeps_light_and_watchdog(void)
+{
+    static const char *const hang_at[2] = {"1", "3"};
+    const uint64_t hz = 10000000u, period = hz / 4u;
+    int c;
+    for (c = 0; c < 2; c++) {
+        char log_path[256], port[256], *text = NULL, *line, *save = NULL;
+        char *argv[] = {(char *)SIM_BIN, (char *)"--log", log_path, (char *)"--speed", (char *)"10", (char *)"--display",
+                        (char *)"240x200", (char *)"--pitch-um", (char *)"100", (char *)"--watchdog-ms", (char *)"250",
+                        (char *)"--hang-at-exposure", (char *)hang_at[c], NULL};
+        char *args[] = {(char *)"print", (char *)MODEL, (char *)"--scale", (char *)"15", (char *)"--port", port,
+                        /* a deep penetration: every layer's exposure is 0.1 s to the ms */
+                        (char *)"--exposure", (char *)"0.1", (char *)"--penetration", (char *)"1000",
+                        (char *)"--bottom-layers", (char *)"2", (char *)"--bottom-exposure", (char *)"0.5",
+                        (char *)"--settle", (char *)"0.05", (char *)"--give-up", (char *)"2", NULL};
+        unsigned long long uv_on = 0, hang = 0, uv_off = 0, reset = 0, t;
+        int i, moved = 0, lit_again = 0, st;
+        child sim;
+        pid_t host;
+        snprintf(log_path, sizeof log_path, "%s", cli_path(c ? "hang3.log" : "hang1.log"));
+        if (!child_start(&sim, argv, "pty ", 10)) { CHECK(!"the simulator did not start"); child_stop(&sim); return; }
+        snprintf(port, sizeof port, "%s", sim.line + 4);
+        host = print_in_background(args, cli_path("hang.out"));
+        for (i = 0; i < 1500; i++) {
+            free(text);
+            text = cli_read(log_path);
+            if (text && strstr(text, " reset watchdog")) break;
+            { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
+        }
+        kill(host, SIGKILL);
+        waitpid(host, &st, 0);
+        CHECKF(child_stop(&sim) == 0, "the simulator failed");
+        free(text);
+        text = cli_read(log_path);
+        for (line = text ? strtok_r(text, "\n", &save) : NULL; line; line = strtok_r(NULL, "\n", &save)) {
+            char what[16] = "", arg[32] = "";
+            if (line[0] == '#' || sscanf(line, "%llu %15s %31s", &t, what, arg) < 2) continue;
+            if (!strcmp(what, "uv") && arg[0] == '1') { if (hang) lit_again = 1; else uv_on = t; }
+            else if (!strcmp(what, "uv") && hang && !uv_off) uv_off = t;
+            else if (!strcmp(what, "hang")) hang = t;
+            else if (!strcmp(what, "reset") && !reset) reset = t;
+            else if (!strcmp(what, "step") && hang && !reset) moved = 1;
+        }
+        free(text);
+        CHECKF(hang && reset && uv_off, "exposure %s: hang at %llu, reset at %llu, UV off at %llu", hang_at[c], hang,
+               reset, uv_off);
+        if (check_case_failed()) return;
+        /* the watchdog was last refreshed as the hanging pass began */
+        CHECKF(reset > hang && reset - hang <= period, "the watchdog restarted the MCU %llu ticks after the hang",
+               reset - hang);
+        if (c == 0) CHECKF(uv_off == reset, "exposure 1: UV off at %llu, the restart at %llu", uv_off, reset);
+        else CHECKF(uv_off == uv_on + hz / 10u, "exposure 3: UV on at %llu, off at %llu (0.1 s is %llu ticks)", uv_on,
+                    uv_off, (unsigned long long)(hz / 10u));
+        CHECKF(!moved && !lit_again, "while hung: %s%s", moved ? "Z moved " : "", lit_again ? "UV on again" : "");
+    }
+}
+
 void test_print(void)
 {
     if (!cli_begin("adaslice-print")) { CHECK(!"no temporary directory"); return; }
@@ -666,5 +728,6 @@ void test_print(void)
     RUN(silent_port_is_named);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", short_print_under_qemu);
     RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
+    RUN(hung_loop_keeps_light_and_watchdog);
     cli_end();
 }

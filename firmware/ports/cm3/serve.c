@@ -17,7 +17,7 @@ void cm3_serve(fw_state *fw)
         if (!cm3_stack_ok()) board_fault(CM3_FAULT_STACK);
         if (n) {
             if (n > CHUNK) n = CHUNK;
-            fw_receive(fw, data, n, cm3_ticks());
+            n = fw_receive(fw, data, n, cm3_ticks());
             cm3_rx_consume(n);
             /* fw_receive returns no deadline, and what the bytes started
                (a move, an exposure) may be due before the old one */

@@ -17,7 +17,7 @@
        <tick> motor 1 | motor 0          the stepper driver enabled
        <tick> state <state> <flags>      the print state and STATUS flags
                                          (link/messages.h) whenever they change
-       <tick> hang                       the loop stops (--hang-at-ms)
+       <tick> hang                       the loop stops (--hang-at-exposure)
        <tick> reset watchdog|signal      the MCU restarts: the watchdog was not
                                          refreshed, or SIGUSR1 (a reset button)
 
@@ -77,7 +77,7 @@ static const char USAGE[] =
     "  --window N            frames the host may have unacknowledged         [8]\n"
     "  --link-timeout-ms MS  wall-clock silence that pauses a print          [1000]\n"
     "  --watchdog-ms MS      the watchdog's period, virtual time              [250]\n"
-    "  --hang-at-ms MS       the loop hangs at that virtual time (tests)      [never]\n"
+    "  --hang-at-exposure N  the loop hangs as the Nth exposure begins (tests) [never]\n"
     "  --boot-id N           the first boot id (then one more each restart)   [random]\n"
     "  --help                this text\n";
 
@@ -87,7 +87,7 @@ typedef struct sim_options {
     unsigned long width, height, bits;
     double pitch_um, z_start, steps_per_mm, max_speed, accel, home_speed, z_max, home_travel;
     unsigned long max_bins, window, link_timeout_ms, watchdog_ms, boot_id;
-    double hang_at_ms;
+    unsigned long hang_at_exposure;
 } sim_options;
 
 /* The printer's hardware: the display buffers, the carriage, the log. */
@@ -101,6 +101,9 @@ typedef struct sim {
     uint64_t watchdog_at;        /* the watchdog bites then, FW_NEVER off */
     uint64_t watchdog_ticks;     /* its period */
     fw_state *fw;
+    unsigned long exposures;     /* UV turned on, since the start */
+    unsigned long hang_at;       /* the loop hangs at this exposure (0 never) */
+    int hang;                    /* ... which has begun */
     int32_t true_position;       /* steps above the endstop's switching point */
     uint8_t *display[2];
     size_t stride;               /* bytes per display row */
@@ -218,8 +221,10 @@ static int hw_endstop(void *ctx)
 static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
 {
     sim *s = (sim *)ctx;
-    if (on) s->uv_off_at = until;
-    else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
+    if (on) {
+        s->uv_off_at = until;
+        if (++s->exposures == s->hang_at) s->hang = 1;
+    } else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
     else s->uv_off_at = FW_NEVER;
     log_line(s, when, on ? "uv 1" : "uv 0");
 }
@@ -409,7 +414,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
     o->window = 8;
     o->link_timeout_ms = 1000;
     o->watchdog_ms = 250;
-    o->hang_at_ms = -1;
+    o->hang_at_exposure = 0;
     o->boot_id = 0;
     for (i = 1; i < argc; i++) {
         const char *opt = argv[i], *v;
@@ -446,7 +451,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
         else if (!strcmp(opt, "--window")) ok = parse_whole(opt, v, 1, 255, &o->window);
         else if (!strcmp(opt, "--link-timeout-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->link_timeout_ms);
         else if (!strcmp(opt, "--watchdog-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->watchdog_ms);
-        else if (!strcmp(opt, "--hang-at-ms")) ok = parse_number(opt, v, 0, 1e9, &o->hang_at_ms);
+        else if (!strcmp(opt, "--hang-at-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->hang_at_exposure);
         else if (!strcmp(opt, "--boot-id")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->boot_id);
         else {
             fprintf(stderr, "fw-sim: unknown option %s (fw-sim --help lists the options)\n", opt);
@@ -565,8 +570,10 @@ int main(int argc, char **argv)
     static sim s;
     static fw_state fw;
     fw_port port;
-    uint64_t *workspace = NULL, deadline = 0, hang_at;
+    uint64_t *workspace = NULL, deadline = 0;
     int hung = 0;
+    static uint8_t rx[4096]; /* read from the terminal: rx[held .. have) not taken yet */
+    size_t have = 0, held = 0;
     size_t ws_bytes;
     char name[128];
     int slave;
@@ -624,7 +631,7 @@ int main(int argc, char **argv)
     s.fw = &fw;
     s.watchdog_ticks = (uint64_t)opt.watchdog_ms * (SIM_TICK_HZ / 1000u);
     s.config.boot_id = opt.boot_id ? (uint32_t)opt.boot_id : (uint32_t)(time(NULL) ^ (getpid() << 16)) | 1u;
-    hang_at = opt.hang_at_ms < 0 ? FW_NEVER : (uint64_t)(opt.hang_at_ms * (SIM_TICK_HZ / 1000u));
+    s.hang_at = opt.hang_at_exposure;
     clock_speed = opt.speed;
     clock_gettime(CLOCK_MONOTONIC, &clock_start);
     restart(&s, &fw, &port, workspace, ws_bytes, NULL);
@@ -638,7 +645,6 @@ int main(int argc, char **argv)
         uint64_t due = s.step_at < s.uv_off_at ? s.step_at : s.uv_off_at;
         if (s.watchdog_at < due) due = s.watchdog_at;
         if (!hung && deadline < due) due = deadline;
-        if (!hung && hang_at < due) due = hang_at;
         if (due < s.now) due = s.now; /* overdue: now, never back in time */
         s.now = clock_at_most(due);
         /* the interrupts first, as on an MCU: they preempt the loop */
@@ -655,12 +661,12 @@ int main(int argc, char **argv)
         if (s.now >= s.watchdog_at || reset_signal) {
             restart(&s, &fw, &port, workspace, ws_bytes, reset_signal ? "signal" : "watchdog");
             reset_signal = 0;
-            hung = 0;
-            hang_at = FW_NEVER;
+            hung = s.hang = 0;
+            s.hang_at = 0;
             deadline = 0;
             continue;
         }
-        if (!hung && s.now >= hang_at) {
+        if (!hung && s.hang) {
             hung = 1;
             log_line(&s, s.now, "hang");
             continue;
@@ -668,6 +674,14 @@ int main(int argc, char **argv)
         if (!hung && s.now >= deadline) {
             deadline = fw_run(&fw, s.now);
             log_state(&s, &fw);
+            continue;
+        }
+        if (!hung && held < have) { /* bytes the core did not take yet */
+            held += fw_receive(&fw, rx + held, have - held, s.now);
+            if (held == have) held = have = 0;
+            log_state(&s, &fw);
+            /* what the bytes asked for may be due before the old deadline */
+            deadline = s.now;
             continue;
         }
         timeout = wall_timeout_ms(due, s.now);
@@ -682,17 +696,14 @@ int main(int argc, char **argv)
             break;
         }
         if (r > 0 && (p.revents & POLLIN)) {
-            uint8_t buf[4096];
             ssize_t n;
             /* what fell due while waiting runs first, as its interrupt would */
             if (virtual_now() >= due) continue;
-            n = read(s.master, buf, sizeof buf);
+            n = read(s.master, rx, sizeof rx);
             if (n > 0) {
                 s.now = clock_at_most(due);
-                fw_receive(&fw, buf, (size_t)n, s.now);
-                log_state(&s, &fw);
-                /* what the bytes asked for may be due before the old deadline */
-                deadline = s.now;
+                have = (size_t)n;
+                held = 0;
             }
         }
     }
