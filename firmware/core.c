@@ -433,7 +433,7 @@ static void print_step(fw_state *fw, uint64_t now)
                 fw->state = LINK_STATE_PAUSED;
                 return;
             }
-            uv(fw, 0, fw->phase_end, fw->phase_end);
+            fw->uv_on = 0; /* the port's timer put it out at phase_end */
             fw->exposed = fw->layer;
             fw->port.show(fw->port.ctx, -1, fw->phase_end);
             fw->phase = LINK_PHASE_PEEL;
@@ -766,7 +766,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     /* a manual exposure */
     if (fw->exposing && now >= fw->phase_end) {
         fw->exposing = 0;
-        uv(fw, 0, fw->phase_end, fw->phase_end);
+        fw->uv_on = 0; /* the port's timer put it out */
         fw->port.show(fw->port.ctx, -1, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&

@@ -69,8 +69,13 @@ typedef struct fw_port {
     void (*step_pulse)(void *ctx, int dir);
     /* 1 while the Z endstop is closed */
     int (*endstop)(void *ctx);
-    /* The UV light on at tick `when` and off, by the port's timer, at tick
-       `until` (on = 1); or off now (on = 0, `when` the tick). */
+    /* The UV light on at tick `when` (at once if that has passed) for
+       `until` - `when` ticks, ended by the port's own timer (on = 1): the
+       core never ends an exposure itself, so its length is the timer's
+       whatever the loop does. Or off now (on = 0: a pause, an abort, a
+       fault). A port that switches on late by L keeps the length and ends L
+       late; L stays under step_lead, so the light is out before a move
+       that starts at the exposure's end takes its first step. */
     void (*uv)(void *ctx, int on, uint64_t when, uint64_t until);
     /* stepper driver enable (M17/M18) */
     void (*motor)(void *ctx, int on);

@@ -22,14 +22,14 @@ static int port_step_arm(void *ctx, uint64_t when, int dir)
 static void port_step_pulse(void *ctx, int dir) { (void)ctx; board_step(dir); }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
 /* The light goes on when the core's loop gets to `when` (at or just after
-   it); its end is the UV alarm's, on time. */
+   it); the UV alarm ends it that much later, so its length is exact. */
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until)
 {
     (void)ctx;
-    (void)when;
     if (on) {
+        uint64_t now = cm3_ticks();
         board_uv(1);
-        if (!cm3_alarm_at(CM3_ALARM_UV, until)) board_uv(0);
+        if (!cm3_alarm_at(CM3_ALARM_UV, (now > when ? now : when) + (until - when))) board_uv(0);
     } else {
         (void)cm3_alarm_at(CM3_ALARM_UV, UINT64_MAX);
         board_uv(0);
