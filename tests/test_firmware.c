@@ -170,8 +170,6 @@ static void home(fake_printer *p)
     CHECK((p->status.flags & LINK_FLAG_HOMED) && p->true_position == 0);
 }
 
-/* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
-   waits with UV off until a good copy arrives. */
 /* A mask of 400 equal rows is a row and one repeat record: the core decodes
    it a row a pass (each row's CRC and copy), never the whole repeat in one
    call, and acknowledges the frame once it is decoded. */
@@ -211,6 +209,47 @@ static void long_repeats_take_a_row_a_pass(void)
     CHECK(fake_state(&p) == LINK_STATE_READY && p.status.mask_ready == 1 && p.status.masks_refused == 0);
 }
 
+/* The loop stalls 20 ms in the middle of a move while the step interrupt
+   goes on: the queued steps leave on time, then the core finds the next step
+   past due and stops dead (STEP_LATE, UV and motor off, Z unhomed) instead of
+   sending the missed steps in a burst. */
+static void a_stalled_loop_stops_the_motion(void)
+{
+    static fake_printer p;
+    uint8_t mv[LINK_SIZE_MOVE];
+    link_move move;
+    uint64_t stall;
+    size_t k, steps = 0;
+    uint64_t last = 0, shortest = UINT64_MAX;
+    fake_init(&p, 8, 8, 1);
+    home(&p);
+    p.keep_events = 1;
+    move.z_nm = 10000000;
+    move.speed_um_s = 0;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + FAKE_TICK_HZ / 2);
+    CHECK(fake_state(&p) == LINK_STATE_MOVING);
+    /* only the interrupts run for 20 ms */
+    stall = p.now + FAKE_TICK_HZ / 50;
+    while (p.step_at <= stall) { p.now = p.step_at; fake_interrupts(&p); }
+    p.now = stall;
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(fake_state(&p) != LINK_STATE_MOVING && p.status.error == LINK_ERR_STEP_LATE);
+    CHECK(!(p.status.flags & (LINK_FLAG_HOMED | LINK_FLAG_MOVING | LINK_FLAG_UV)));
+    for (k = 0; k < p.event_count; k++) {
+        if (p.events[k].kind != ZEV_STEP) continue;
+        if (steps && p.events[k].when - last < shortest) shortest = p.events[k].when - last;
+        last = p.events[k].when;
+        steps++;
+    }
+    /* 4000 steps/s: no two steps closer than 2500 ticks; the move stopped short of its 4000 steps */
+    CHECKF(steps > 100 && steps < 4000 && shortest >= FAKE_TICK_HZ / 4000u, "%zu steps, the closest %llu ticks apart",
+           steps, (unsigned long long)shortest);
+    CHECK(last < stall);
+}
+
+/* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
+   waits with UV off until a good copy arrives. */
 static void bad_masks_are_never_shown(void)
 {
     static fake_printer p;
@@ -447,6 +486,7 @@ void test_firmware(void)
     RUN(link_recovers);
     RUN(bad_masks_are_never_shown);
     RUN(long_repeats_take_a_row_a_pass);
+    RUN(a_stalled_loop_stops_the_motion);
     RUN(thousand_layers_without_drift);
     RUN(pause_and_link_loss);
 }
