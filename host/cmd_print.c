@@ -241,6 +241,10 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
         if ((rc = serial_status(l))) return rc;
     } else {
         if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
+        if (l->st.state == LINK_STATE_PRINTING) {
+            printf("printing layers %u to %u\n", first, pj->layers);
+            fflush(stdout);
+        }
     }
     if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_DONE)
         return complain(RC_FAIL, "the printer would not %s layer %u: %s", in_place ? "resume" : "start", first,

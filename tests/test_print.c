@@ -837,17 +837,17 @@ static void mcu_reset_mid_print_under_qemu(void)
     for (i = 0; extra[i]; i++) pargv[n++] = (char *)extra[i];
     pargv[n] = NULL;
     pid = print_in_background(pargv, cli_path("print10.out"));
-    /* into the print: planned, homed, a few layers */
-    for (i = 0; i < 1500; i++) {
+    /* into the print: planned, homed, printing, a few of its 21 layers */
+    for (i = 0; i < 3000; i++) {
         out = cli_read(cli_path("print10.out"));
-        if (out && strstr(out, "planned by the printer")) break;
+        if (out && strstr(out, "printing layers 1 to ")) break;
         free(out);
         out = NULL;
         sleep_ms(20);
     }
     CHECKF(out != NULL, "the print on QEMU did not get to printing");
     free(out);
-    sleep_ms(10000); /* homing (up to 6 s), then a few of its 21 layers */
+    sleep_ms(2000);
     fd = socket(AF_UNIX, SOCK_STREAM, 0);
     memset(&addr, 0, sizeof addr);
     addr.sun_family = AF_UNIX;
