@@ -30,6 +30,7 @@ typedef struct print_args {
     long baud;
     size_t resume_from;
     int plan_on_host;
+    int home;               /* --home: a resumed print may home Z */
     int then_exit;          /* emulators: EXIT after the print */
     double give_up_s;       /* a printer silent this long ends the print */
 } print_args;
@@ -44,6 +45,7 @@ typedef struct print_job {
     uint32_t *exposure_ms;         /* per layer */
     link_print motion;             /* PRINT's fields but the first layer */
     uint32_t width, height, bits;
+    uint32_t job;                  /* the job's hash (job_hash), sent with PRINT */
     int from_model;
     layer_masks masks;             /* a MODEL: rendered as they are needed */
     job_masks file;                /* a JOBDIR: its masks.rle */
@@ -86,6 +88,40 @@ static void print_job_free(print_job *pj)
     if (pj->from_model) { free(pj->code); free(pj->lengths); free(pj->exposure_ms); }
     job_masks_free(&pj->file);
     memset(pj, 0, sizeof *pj);
+}
+
+/* The job's hash, sent with PRINT and kept by the printer, so that a
+   resume can tell this job from another: CRC-32 over the layers' lengths,
+   bin_nm, the display, each layer's exposure and its mask's CRC. A MODEL's
+   masks are rendered only as they are sent, so their CRCs are not known up
+   front: for a MODEL the model's identity stands in for them, the mesh as
+   planned (loaded, scaled and turned) and the options that place and draw it
+   on the display. 0 means no job, so it is never 0. */
+static uint32_t crc_u32(uint32_t crc, uint32_t v)
+{
+    unsigned char b[4];
+    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8); b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+    return adaslice_crc32(crc, b, 4);
+}
+
+static uint32_t job_hash(const print_job *pj, const adaslice_mesh *mesh, const slice_args *s)
+{
+    uint32_t crc = crc_u32(crc_u32(0, pj->layers), pj->bin_nm), k;
+    crc = crc_u32(crc_u32(crc_u32(crc, pj->width), pj->height), pj->bits);
+    for (k = 0; k < pj->layers; k++) {
+        crc = crc_u32(crc_u32(crc, pj->lengths[k]), pj->exposure_ms[k]);
+        if (!pj->from_model) crc = crc_u32(crc, pj->file.crcs[k]);
+    }
+    if (mesh) {
+        int v[7];
+        v[0] = s->supersample; v[1] = s->slice_at; v[2] = s->mirror_x; v[3] = s->mirror_y; v[4] = s->rotate;
+        v[5] = s->placed ? (int)lround(s->place[0] * 1e6) : 0;
+        v[6] = s->placed ? (int)lround(s->place[1] * 1e6) : 0;
+        for (k = 0; k < 7; k++) crc = crc_u32(crc, (uint32_t)v[k]);
+        crc = adaslice_crc32(crc, mesh->vertices, mesh->vertex_count * 3 * sizeof *mesh->vertices);
+        crc = adaslice_crc32(crc, mesh->triangles, mesh->triangle_count * 3 * sizeof *mesh->triangles);
+    }
+    return crc ? crc : 1;
 }
 
 /* ------------------------------------------------------------ planning */
@@ -176,9 +212,14 @@ static void print_progress(progress *bar, const print_job *pj, const link_status
     progress_show(bar, done, pj->layers - first + 1, "layers", z);
 }
 
-typedef struct report_layer { uint32_t crc, code_bytes, exposure_ms; } report_layer;
+/* What was sent of each layer's mask (0 for layers not sent) */
+typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
 
-static int print_loop(serial_link *l, const print_args *pa, print_job *pj, report_layer *rep, unsigned long *mask_bytes)
+/* Prints from --resume-from (or 1); in_place: the printer holds this job,
+   paused at that layer, with the masks up to mask_ready: it is resumed, not
+   started again, and exposes only the light the layer still owes. */
+static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int in_place, report_layer *rep,
+                      unsigned long *mask_bytes)
 {
     uint8_t buf[LINK_PAYLOAD_MAX];
     uint32_t first = pa->resume_from ? (uint32_t)pa->resume_from : 1, next = first, tries = 0;
@@ -190,8 +231,24 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
     link_print m = pj->motion;
     memset(&bar, 0, sizeof bar);
     m.first_layer = first;
-    if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
-    if (l->st.state != LINK_STATE_PRINTING) return complain(RC_FAIL, "the printer would not start: %s", link_error_name(l->st.error));
+    m.job = pj->job;
+    if (in_place) {
+        next = l->st.mask_ready + 1;
+        printf("resuming layer %u in place: %u ms of its exposure left, masks from layer %u on\n", first,
+               l->st.exposure_left_ms, next);
+        fflush(stdout);
+        if (l->st.state == LINK_STATE_PAUSED && (rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
+        if ((rc = serial_status(l))) return rc;
+    } else {
+        if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
+        if (l->st.state == LINK_STATE_PRINTING) {
+            printf("printing layers %u to %u\n", first, pj->layers);
+            fflush(stdout);
+        }
+    }
+    if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_DONE)
+        return complain(RC_FAIL, "the printer would not %s layer %u: %s", in_place ? "resume" : "start", first,
+                        link_error_name(l->st.error));
     refused = l->st.masks_refused;
     for (;;) {
         if (interrupted) {
@@ -231,7 +288,6 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, repor
             if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask)))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
-            rep[next - 1].exposure_ms = mask.exposure_ms;
             sending = 1;
             sent = 0;
         }
@@ -270,7 +326,7 @@ static void write_report(FILE *f, const void *ctx)
         z += r->pj->lengths[k];
         fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
                 k ? "," : "", k + 1, z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes,
-                (unsigned)r->layers[k].exposure_ms);
+                (unsigned)r->pj->exposure_ms[k]);
     }
     fputs("\n  ]\n}\n", f);
 }
@@ -286,12 +342,19 @@ static void print_usage(FILE *f)
           "plan equals its own; masks are rendered as they are needed, and each layer's\n"
           "exposure follows its thickness (below). A JOBDIR from adaslice slice is printed\n"
           "with its plan, exposures and motion, from JOBDIR/masks.rle. Ctrl-C pauses\n"
-          "(UV off, Z held) and exits 3; --resume-from K continues at layer K.\n"
+          "(UV off, Z held) and exits 3; --resume-from K continues at layer K. A printer\n"
+          "that restarts mid-print ends it with exit 4, naming the layer to resume from.\n"
           "\n"
           "print options\n"
           "  --port DEV            the printer's serial port (required)\n"
           "  --baud B              9600 ... 230400                               [115200]\n"
-          "  --resume-from K       start at layer K (the printer must be homed)  [1]\n"
+          "  --resume-from K       continue at layer K: a paused print of this job is\n"
+          "                        resumed in place (K: its layer), giving only the\n"
+          "                        light the layer still owes; a printer that lost the\n"
+          "                        job (restarted) needs --home\n"
+          "  --home                home Z before resuming if it is not homed. WARNING:\n"
+          "                        homing drives the platform down to the endstop, into\n"
+          "                        the vat and the half-built part: clear it first\n"
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer silent this long ends the print     [30]\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
@@ -322,6 +385,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--resume-from")) rc = count_option(argc, argv, &i, UINT32_MAX, &pa->resume_from);
         else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
+        else if (!strcmp(o, "--home")) pa->home = 1;
         else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
         else rest[(*rest_argc)++] = argv[i];
@@ -405,18 +469,53 @@ static int job_from_dir(print_job *pj, const char *dir)
     return RC_OK;
 }
 
-/* A print paused earlier is put down, the plan goes (again), and Z is homed
-   unless it is. */
+/* --resume-from K against what the printer holds: this job, paused at layer
+   K (resumed in place, *in_place set); or this job stopped after layer K - 1
+   was exposed; or, with --home, a printer that lost the job. Every refusal
+   is RC_USAGE and names the layer. */
+static int check_resume(const serial_link *l, const print_args *pa, const print_job *pj, int *in_place)
+{
+    const link_status *s = &l->st;
+    uint32_t k = (uint32_t)pa->resume_from;
+    int busy = s->state == LINK_STATE_PRINTING || s->state == LINK_STATE_PAUSED;
+    if (s->job && s->job != pj->job)
+        return complain(RC_USAGE, "--resume-from %u: the printer %s layer %u of another job (%08x; this one is %08x): "
+                                  "give the same model, options and exposures, or print afresh", k,
+                        busy ? "is paused at" : "stopped after", busy ? s->layer : s->exposed, (unsigned)s->job,
+                        (unsigned)pj->job);
+    if (busy) {
+        if (k != s->layer)
+            return complain(RC_USAGE, "--resume-from %u: the printer is paused at layer %u: resume from %u", k, s->layer, s->layer);
+        if (!(s->flags & LINK_FLAG_HOMED))
+            return complain(RC_USAGE, "--resume-from %u: the printer is paused at layer %u with Z unhomed", k, s->layer);
+        *in_place = 1;
+        return RC_OK;
+    }
+    if (!s->job && !pa->home)
+        return complain(RC_USAGE, "--resume-from %u: the printer does not know the job (it restarted; Z %s): "
+                                  "clear the platform and give --home to home Z and print from layer %u", k,
+                        s->flags & LINK_FLAG_HOMED ? "homed since" : "not homed", k);
+    if (s->job && k != s->exposed + 1)
+        return complain(RC_USAGE, "--resume-from %u: the printer exposed this job up to layer %u: resume from %u", k,
+                        s->exposed, s->exposed + 1);
+    if (!(s->flags & LINK_FLAG_HOMED) && !pa->home)
+        return complain(RC_USAGE, "--resume-from %u: Z is not homed: clear the platform and give --home to home it "
+                                  "and print from layer %u", k, k);
+    return RC_OK;
+}
+
+/* A print paused earlier is resumed in place (*in_place) or refused; else
+   the plan goes (again), and Z is homed unless it is (a resume only with
+   --home). */
 static int prepare(serial_link *l, const print_args *pa, const plan_job *j, print_job *pj, int planned_by_printer,
-                   const char *name)
+                   const char *name, int *in_place)
 {
     adaslice_plan_options o;
     int rc;
     if ((rc = serial_status(l))) return rc;
-    if (l->st.state == LINK_STATE_PRINTING || l->st.state == LINK_STATE_PAUSED) {
-        if (!pa->resume_from) return complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from", l->st.layer);
-        if ((rc = serial_send(l, LINK_MSG_ABORT, NULL, 0))) return rc;
-    }
+    if (!pa->resume_from && (l->st.state == LINK_STATE_PRINTING || l->st.state == LINK_STATE_PAUSED))
+        return complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from %u", l->st.layer, l->st.layer);
+    if (pa->resume_from && ((rc = check_resume(l, pa, pj, in_place)) || *in_place)) return rc;
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
     rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
     if (rc) return rc;
@@ -485,7 +584,7 @@ int cmd_print(int argc, char **argv)
     print_job pj;
     serial_link l;
     report_layer *rep = NULL;
-    int rc, planned_by_printer = 0;
+    int rc, planned_by_printer = 0, in_place = 0;
     unsigned long mask_bytes = 0;
     double started;
     const char *jobdir;
@@ -513,13 +612,14 @@ int cmd_print(int argc, char **argv)
         goto done;
     }
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+    pj.job = job_hash(&pj, jobdir ? NULL : &j.mesh, &s);
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, NULL);
     started = now_ms();
-    if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model)))) goto done;
-    rc = print_loop(&l, &pa, &pj, rep, &mask_bytes);
+    if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model), &in_place))) goto done;
+    rc = print_loop(&l, &pa, &pj, in_place, rep, &mask_bytes);
     if (!rc && pa.then_exit) rc = end_emulator(&l);
     if (!rc) {
         uint32_t printed = pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0);

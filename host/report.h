@@ -5,8 +5,9 @@
 #include <stddef.h>
 #include "../adaslice.h"
 
-/* 0 done; 1 the work failed; 2 the command line is wrong; 3 a print paused */
-enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3 };
+/* 0 done; 1 the work failed; 2 the command line is wrong; 3 a print paused;
+   4 the printer restarted mid-print (Z must be homed again) */
+enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3, RC_RESET = 4 };
 
 /* "adaslice: " + the message on stderr; returns rc. */
 int complain(int rc, const char *fmt, ...);

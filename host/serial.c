@@ -85,6 +85,12 @@ static int serial_resend_all(serial_link *l)
         f[n - 2] = (uint8_t)crc;
         if (serial_write(l, f, n)) return RC_FAIL;
     }
+    /* a round counts towards giving up only if, since the last one, the
+       printer answered with an acknowledgement outside the frames in flight:
+       a numbering this host did not give (a lossy line or a dead one is the
+       silence timer's: their acknowledgements stay in the window) */
+    if (l->stray) l->stalled++;
+    l->stray = 0;
     l->retransmits += (unsigned long)l->count;
     l->last_progress = now_ms();
     l->clean = 0;
@@ -98,12 +104,14 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
     size_t size = n - LINK_FRAME_MIN;
     uint8_t ack = f[1], acked = (uint8_t)(ack - l->base);
     /* every reply acknowledges what came before ack */
+    if (acked > l->count) l->stray = 1;
     if (acked && acked <= l->count) {
         memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
         memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
         l->count -= acked;
         l->base = ack;
         l->last_progress = now_ms();
+        l->stalled = l->rehellos = 0;
         l->clean += acked;
         if (l->clean >= 32 && l->data_max < LINK_PAYLOAD_MAX) {
             l->data_max = l->data_max * 2 > LINK_PAYLOAD_MAX ? LINK_PAYLOAD_MAX : l->data_max * 2;
@@ -120,11 +128,17 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
         }
         break;
     }
-    case LINK_MSG_STATUS_REPLY:
-        if (link_get_status(&l->st, p, size)) l->status_count++;
+    case LINK_MSG_STATUS_REPLY: {
+        link_status st;
+        if (!link_get_status(&st, p, size)) break;
+        if (l->boot_id && st.boot_id != l->boot_id) l->new_boot_id = st.boot_id;
+        else { l->st = st; l->status_count++; }
         break;
+    }
     case LINK_MSG_IDENTIFY:
-        if (link_get_identify(&l->id, p, size)) l->identify_count++;
+        if (!link_get_identify(&l->id, p, size)) break;
+        if (l->boot_id && l->id.boot_id != l->boot_id) l->new_boot_id = l->id.boot_id;
+        l->identify_count++;
         break;
     case LINK_MSG_PLAN:
         memcpy(l->plan, p, size);
@@ -136,12 +150,11 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
     }
 }
 
-/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. */
-int serial_pump(serial_link *l, int wait_ms)
+/* Reads what has arrived, waiting up to wait_ms. */
+static int serial_read(serial_link *l, int wait_ms)
 {
     uint8_t buf[4096];
     struct pollfd p = {l->fd, POLLIN, 0};
-    double t;
     if (poll(&p, 1, wait_ms) > 0) {
         ssize_t n = read(l->fd, buf, sizeof buf), i;
         if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO)
@@ -157,10 +170,71 @@ int serial_pump(serial_link *l, int wait_ms)
         }
         if (n > 0) l->bytes_in += (unsigned long)n;
     }
+    return RC_OK;
+}
+
+static int printing(const link_status *s) { return s->state == LINK_STATE_PRINTING || s->state == LINK_STATE_PAUSED; }
+
+/* The printer restarted: what it last said before (l->st) is what is known. */
+static int serial_restarted(const serial_link *l)
+{
+    const link_status *s = &l->st;
+    if (!printing(s))
+        return complain(RC_RESET, "the printer on %s restarted (boot id %u -> %u): its state is lost and Z must be homed again",
+                        l->dev, l->boot_id, l->new_boot_id);
+    return complain(RC_RESET, "the printer on %s restarted (boot id %u -> %u) at layer %u: layer %u was the last fully "
+                              "exposed; Z must be homed before printing again: clear the platform, then continue with "
+                              "--resume-from %u --home", l->dev, l->boot_id, l->new_boot_id, s->layer, s->exposed,
+                    s->exposed + 1);
+}
+
+/* For SERIAL_STALL_ROUNDS rounds nothing advanced the acknowledged number
+   and the printer acknowledged numbers this host never sent: a restarted
+   MCU answers every frame with a NAK or an ACK of its own count, each of
+   which restarts the silence timer. HELLO asks who is there. It carries
+   base - 1, so an MCU that did not restart but lost the numbering expects
+   `base` next, and the frames in flight stay valid. */
+static int serial_rehello(serial_link *l)
+{
+    uint8_t payload[LINK_SIZE_HELLO], frame[LINK_FRAME_MAX];
+    unsigned long seen = l->identify_count;
+    double start = now_ms(), sent = 0;
+    link_hello m;
+    size_t n;
+    int rc;
+    m.version = LINK_PROTOCOL_VERSION;
+    n = link_frame_build(frame, (uint8_t)(l->base - 1), LINK_MSG_HELLO, payload, link_put_hello(payload, &m));
+    while (l->identify_count == seen && !l->new_boot_id) {
+        if (now_ms() - start > 2000)
+            return complain(RC_FAIL, "the printer on %s stopped answering at layer %u (%u resend rounds unacknowledged, "
+                                     "no IDENTIFY to HELLO in 2 s)", l->dev, l->st.layer, l->stalled);
+        if (now_ms() - sent > 250) {
+            if ((rc = serial_write(l, frame, n))) return rc;
+            sent = now_ms();
+        }
+        if ((rc = serial_read(l, 20))) return rc;
+    }
+    if (l->new_boot_id) return serial_restarted(l);
+    if (++l->rehellos > 1)
+        return complain(RC_FAIL, "the printer on %s at layer %u takes no frame: %u resend rounds without progress after "
+                                 "a HELLO", l->dev, l->st.layer, SERIAL_STALL_ROUNDS);
+    l->stalled = 0;
+    return serial_resend_all(l);
+}
+
+/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. */
+int serial_pump(serial_link *l, int wait_ms)
+{
+    double t;
+    int rc;
+    if ((rc = serial_read(l, wait_ms))) return rc;
+    if (l->new_boot_id) return serial_restarted(l);
     t = now_ms();
     if (l->count && t - l->last_progress > l->rto_ms && serial_resend_all(l)) return RC_FAIL;
+    if (l->stalled >= SERIAL_STALL_ROUNDS) return serial_rehello(l);
     if (t - l->last_heard > l->give_up_ms)
-        return complain(RC_FAIL, "the printer on %s has been silent for %.0f s", l->dev, l->give_up_ms / 1000);
+        return complain(RC_FAIL, "the printer on %s stopped answering at layer %u (silent for %.0f s)", l->dev, l->st.layer,
+                        l->give_up_ms / 1000);
     return RC_OK;
 }
 
@@ -224,6 +298,7 @@ static int serial_hello(serial_link *l)
     l->base = l->next_seq;
     l->count = 0;
     l->window = l->id.window ? l->id.window : 1;
+    l->boot_id = l->id.boot_id;
     return RC_OK;
 }
 

@@ -32,7 +32,19 @@ typedef struct serial_link {
     unsigned clean;
     uint8_t round;              /* LINK_ROUND_BIT of the frames sent now */
     double srtt, rttvar;        /* request-to-reply times, as TCP keeps them (RFC 6298) */
+    /* resets: IDENTIFY's boot id at connect; a reply from another boot is
+       not taken (l->st stays what the old boot said last) */
+    uint32_t boot_id, new_boot_id;
+    /* resend rounds in which the acknowledged number did not advance and
+       the printer acknowledged a number outside the frames in flight (as a
+       restarted MCU does); the re-HELLOs that followed them without progress */
+    unsigned stalled, rehellos;
+    int stray;
 } serial_link;
+
+/* Resend rounds without progress, the printer answering out of step, after
+   which the host says HELLO again to learn whether it restarted. */
+#define SERIAL_STALL_ROUNDS 8
 
 /* Opens DEV raw 8N1 at a standard baud rate, says hello until the printer
    answers (IDENTIFY), and sizes the window and timeouts. RC_OK, or a
@@ -40,7 +52,10 @@ typedef struct serial_link {
 int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s);
 void serial_close(serial_link *l);
 /* Reads what has arrived (waiting up to wait_ms), resends on a timeout; a
-   printer silent for give_up_s ends it with a complaint. */
+   printer silent for give_up_s ends it with a complaint. A reply with
+   another boot id, or SERIAL_STALL_ROUNDS resend rounds without progress
+   and then an IDENTIFY with another boot id, ends it with RC_RESET and the
+   message of serial_restarted; no answer to that HELLO with RC_FAIL. */
 int serial_pump(serial_link *l, int wait_ms);
 /* Queues a frame, waiting while the printer's window is full. */
 int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size);

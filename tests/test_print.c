@@ -13,6 +13,8 @@
 #include <signal.h>
 #include <stdint.h>
 #include <time.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 
 #define SIM_BIN "build/fw-sim"
 #define RELAY_BIN "build/relay"
@@ -243,14 +245,20 @@ static void check_print(const char *log_path, const char *report_path, int expec
 
 static const char *MODEL = "examples/models/hand_closed.obj";
 
-static int start_sim(child *sim, const char *log, const char *speed)
+/* The simulator with the display of these tests and `extra` options (or NULL). */
+static int start_sim_with(child *sim, const char *log, const char *speed, const char *const *extra)
 {
-    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)log, (char *)"--speed", (char *)speed,
-                    (char *)"--display", (char *)"240x200", (char *)"--pitch-um", (char *)"100", NULL};
-    int ok = child_start(sim, argv, "pty ", 10);
+    char *argv[16] = {(char *)SIM_BIN, (char *)"--log", (char *)log, (char *)"--speed", (char *)speed,
+                      (char *)"--display", (char *)"240x200", (char *)"--pitch-um", (char *)"100", NULL};
+    int n = 9, ok;
+    while (extra && *extra && n < 15) argv[n++] = (char *)*extra++;
+    argv[n] = NULL;
+    ok = child_start(sim, argv, "pty ", 10);
     CHECKF(ok, "the simulator %s did not start (make builds it)", SIM_BIN);
     return ok;
 }
+
+static int start_sim(child *sim, const char *log, const char *speed) { return start_sim_with(sim, log, speed, NULL); }
 
 /* The simulator behind tests/relay.c, which damages the line as `faults`
    (relay options) ask and writes what it did to `stats`; the host talks to
@@ -358,8 +366,8 @@ static pid_t print_in_background(char *const extra[], const char *out_path)
     return pid;
 }
 
-/* Events from the show of `layer` in the second run on: where a resumed
-   print's record begins. */
+/* Events from the show of the layer `shows_from_end` shows before the end:
+   where a print started again at a layer begins. */
 static size_t nth_show_from_end(const sim_log *l, size_t shows_from_end)
 {
     size_t k = l->count, seen = 0;
@@ -370,79 +378,280 @@ static size_t nth_show_from_end(const sim_log *l, size_t shows_from_end)
     return 0;
 }
 
-/* Ctrl-C mid-print: the host pauses the printer (UV off at once, Z held) and
-   exits 3 naming the layer; a second run with --resume-from K finishes the
-   print from layer K, every layer from K on shown once with its mask at its
-   exact height. */
-static void ctrl_c_pauses_and_resume_finishes(void)
+/* The record from event `from` on against layers first .. of the report. */
+static void check_record_from(const sim_log *l, const report *rep, size_t from, uint32_t first)
 {
-    child sim;
-    char port[256], *out, *at;
-    char *args[] = {(char *)"print", (char *)MODEL, (char *)"--scale", (char *)"15", (char *)"--port", port,
-                    (char *)"--exposure", (char *)"0.1", (char *)"--penetration", (char *)"0.1", (char *)"--bottom-layers",
-                    (char *)"2", (char *)"--bottom-exposure", (char *)"0.5", (char *)"--peel", (char *)"2", (char *)"--peel-speed", (char *)"10", (char *)"--return-speed",
-                    (char *)"10", (char *)"--settle", (char *)"0.05", NULL};
-    pid_t pid;
-    int st, status = -1, i;
-    unsigned layer = 0;
-    cli_result r;
-    sim_log l;
-    report rep;
-    if (!start_sim(&sim, cli_path("sim5.log"), "10")) return;
-    snprintf(port, sizeof port, "%s", sim.line + 4);
-    pid = print_in_background(args, cli_path("print5.out"));
-    /* into the print: the log shows a few exposures */
+    size_t k;
+    long pos = l->start_steps;
+    zexpect e;
+    for (k = 0; k < from; k++) if (l->ev[k].kind == ZEV_STEP) pos += l->ev[k].value;
+    memset(&e, 0, sizeof e);
+    e.tick_hz = l->tick_hz;
+    e.steps_per_mm = (uint32_t)l->steps_per_mm;
+    e.max_speed = (uint32_t)l->max_speed;
+    e.accel = (uint32_t)l->accel;
+    e.start_position = pos;
+    e.layers = rep->layers;
+    e.first = first;
+    e.top_bins = rep->tops;
+    e.bin_nm = rep->bin_nm;
+    e.crcs = rep->crcs;
+    e.exposure_ms = rep->exposures;
+    (void)zcheck_record(l->ev + from, l->count - from, &e);
+}
+
+static void sleep_ms(long ms) { struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L}; nanosleep(&ts, NULL); }
+
+static double seconds_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + t.tv_nsec / 1e9;
+}
+
+/* Waits (up to 12 s) until the simulator's log shows n exposures begun. */
+static int wait_for_exposures(const char *log_path, int n)
+{
+    int i;
     for (i = 0; i < 600; i++) {
-        char *log = cli_read(cli_path("sim5.log"));
+        char *log = cli_read(log_path), *at;
         int lit = 0;
         for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
         free(log);
-        if (lit >= 6) break;
-        { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
+        if (lit >= n) return 1;
+        sleep_ms(20);
     }
+    return 0;
+}
+
+/* The exit status of pid within `seconds` (killed and -1 if it has not). */
+static int wait_exit(pid_t pid, double seconds)
+{
+    double t0 = seconds_now();
+    int st;
+    while (seconds_now() - t0 < seconds) {
+        if (waitpid(pid, &st, WNOHANG) == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+        sleep_ms(5);
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, &st, 0);
+    return -1;
+}
+
+/* The print of these tests on `port` and `extra` arguments in the background,
+   its output (both streams) to out_path. */
+static pid_t hand_print_in_background(const char *port, const char *const *extra, const char *out_path)
+{
+    const char *base[] = {"print", MODEL, "--scale", "15", "--port", port, "--peel", "2", "--peel-speed", "10",
+                          "--return-speed", "10", "--settle", "0.05", NULL};
+    char *argv[40];
+    int n = 0, i;
+    for (i = 0; base[i]; i++) argv[n++] = (char *)base[i];
+    while (*extra && n < 39) argv[n++] = (char *)*extra++;
+    argv[n] = NULL;
+    return print_in_background(argv, out_path);
+}
+
+/* A print interrupted and resumed in place is one record from the start to
+   the end: every layer shown once (with the host's mask where the report
+   knows it), exposed at its exact height, with exactly its light in all its
+   pieces: one UV-on period a layer, and one more for each of `split_min` ..
+   `split_max` exposures a pause split. */
+static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max)
+{
+    sim_log l;
+    report rep;
+    zexpect e;
+    size_t k, on = 0;
+    CHECK(read_sim_log(log_path, &l) && read_report(report_path, &rep));
+    if (check_case_failed()) { free(l.ev); report_free(&rep); return; }
+    memset(&e, 0, sizeof e);
+    e.tick_hz = l.tick_hz;
+    e.steps_per_mm = (uint32_t)l.steps_per_mm;
+    e.max_speed = (uint32_t)l.max_speed;
+    e.accel = (uint32_t)l.accel;
+    e.start_position = l.start_steps;
+    e.layers = rep.layers;
+    e.first = 1;
+    e.top_bins = rep.tops;
+    e.bin_nm = rep.bin_nm;
+    e.crcs = rep.crcs;
+    e.exposure_ms = rep.exposures;
+    (void)zcheck_record(l.ev, l.count, &e);
+    for (k = 0; k < l.count; k++) on += l.ev[k].kind == ZEV_UV && l.ev[k].value;
+    CHECKF(on >= rep.layers + split_min && on <= rep.layers + split_max, "%zu UV-on periods for %u layers, %zu to %zu split",
+           on, rep.layers, split_min, split_max);
+    CHECKF(!l.steps_while_paused && !l.uv_while_paused, "%d steps and %d UV-on while paused", l.steps_while_paused,
+           l.uv_while_paused);
+    free(l.ev);
+    report_free(&rep);
+}
+
+/* Ctrl-C mid-print: the host pauses the printer (UV off at once, Z held) and
+   exits 3 naming the layer; a second run with --resume-from K resumes it in
+   place: from the first run's homing to the end, every layer shown once
+   with its mask at its exact height and its exposure to the tick. */
+static void ctrl_c_pauses_and_resume_finishes(void)
+{
+    child sim;
+    char port[256], *out, *at, k[16];
+    const char *extra[] = {CURE, NULL};
+    pid_t pid;
+    int status;
+    unsigned layer = 0;
+    cli_result r;
+    sim_log l;
+    if (!start_sim(&sim, cli_path("sim5.log"), "10")) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print5.out"));
+    (void)wait_for_exposures(cli_path("sim5.log"), 6);
     kill(pid, SIGINT);
-    if (waitpid(pid, &st, 0) == pid && WIFEXITED(st)) status = WEXITSTATUS(st);
+    status = wait_exit(pid, 30);
     out = cli_read(cli_path("print5.out"));
     CHECKF(status == 3, "Ctrl-C: exit %d: %s", status, out ? out : "");
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
     free(out);
     if (check_case_failed()) { child_stop(&sim); return; }
-    {
-        char k[16];
-        snprintf(k, sizeof k, "%u", layer);
-        r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
-                    "0.05", "--resume-from", k, "--report", cli_path("report5.json"), NULL);
-    }
-    CHECKF(r.status == 0, "resume: exit %d: %s", r.status, r.err);
+    snprintf(k, sizeof k, "%u", layer);
+    r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed",
+                "10", "--settle", "0.05", "--resume-from", k, "--report", cli_path("report5.json"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume: exit %d: %s %s", r.status, r.out, r.err);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (check_case_failed()) return;
-    CHECK(read_sim_log(cli_path("sim5.log"), &l) && read_report(cli_path("report5.json"), &rep));
-    if (!check_case_failed()) {
-        /* the resumed run's record: from its first layer's show to the end */
-        size_t from = nth_show_from_end(&l, rep.layers - layer + 1), k;
-        long pos = l.start_steps;
-        zexpect e;
-        for (k = 0; k < from; k++) if (l.ev[k].kind == ZEV_STEP) pos += l.ev[k].value;
-        memset(&e, 0, sizeof e);
-        e.tick_hz = l.tick_hz;
-        e.steps_per_mm = (uint32_t)l.steps_per_mm;
-        e.max_speed = (uint32_t)l.max_speed;
-        e.accel = (uint32_t)l.accel;
-        e.start_position = pos;
-        e.layers = rep.layers;
-        e.first = layer;
-        e.top_bins = rep.tops;
-        e.bin_nm = rep.bin_nm;
-        e.crcs = rep.crcs;
-        e.exposure_ms = rep.exposures;
+    CHECK(read_sim_log(cli_path("sim5.log"), &l));
+    CHECKF(l.user_pauses == 1, "%zu pauses", l.user_pauses);
+    free(l.ev);
+    {
+        report rep;
+        CHECK(read_report(cli_path("report5.json"), &rep));
         check_exposures(&rep);
+        report_free(&rep);
+    }
+    /* the pause split one exposure, or came between two */
+    check_resumed_in_place(cli_path("sim5.log"), cli_path("report5.json"), 0, 1);
+}
+
+/* The host killed (SIGKILL) while layer 2 exposes: the printer pauses itself
+   when the link goes silent, keeping the light it still owes; --resume-from
+   another layer or with another job is refused (exit 2, naming the layers),
+   and --resume-from 2 of the same job resumes in place: layer 2's light in
+   two pieces adds up to its exposure to the tick, every layer once. */
+static void host_killed_mid_exposure_resumes_in_place(void)
+{
+    child sim;
+    char port[256];
+    const char *sim_extra[] = {"--link-timeout-ms", "500", NULL};
+    const char *extra[] = {"--exposure", "0.1", "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", "20", NULL};
+    pid_t pid;
+    cli_result r;
+    sim_log l;
+    if (!start_sim_with(&sim, cli_path("sim8.log"), "10", sim_extra)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print8.out"));
+    CHECK(wait_for_exposures(cli_path("sim8.log"), 2));
+    kill(pid, SIGKILL);
+    (void)wait_exit(pid, 10);
+    sleep_ms(1000); /* the link timeout, twice */
+#define RESUME_ARGS "--port", port, "--exposure", "0.1", "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", \
+                    "20", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05"
+    r = cli_run("print", MODEL, "--scale", "14", RESUME_ARGS, "--resume-from", "2", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--resume-from 2: the printer is paused at layer 2 of another job"),
+           "another job: %d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, "--scale", "15", RESUME_ARGS, "--resume-from", "3", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--resume-from 3: the printer is paused at layer 2"),
+           "another layer: %d %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", MODEL, "--scale", "15", RESUME_ARGS, "--resume-from", "2", "--report", cli_path("report8.json"), NULL);
+#undef RESUME_ARGS
+    CHECKF(r.status == 0 && strstr(r.out, "resuming layer 2 in place"), "resume: exit %d: %s %s", r.status, r.out, r.err);
+    {
+        unsigned left = 0;
+        const char *at = strstr(r.out, "in place: ");
+        CHECKF(at && sscanf(at + 10, "%u", &left) == 1 && left > 0 && left < 20000, "the light left: %s", r.out);
+    }
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (check_case_failed()) return;
+    CHECK(read_sim_log(cli_path("sim8.log"), &l));
+    CHECKF(l.link_pauses == 1 && !l.user_pauses, "%zu pauses for the lost link, %zu others", l.link_pauses, l.user_pauses);
+    free(l.ev);
+    check_resumed_in_place(cli_path("sim8.log"), cli_path("report8.json"), 1, 1);
+}
+
+/* The host's message after the printer restarted mid-print, found in `out`:
+   one line, the boot ids, the layer to continue from; 0 if it is not there. */
+static unsigned restart_message(const char *out, unsigned *old_id, unsigned *new_id)
+{
+    const char *at = out ? strstr(out, "restarted (boot id ") : NULL, *line = at;
+    unsigned k = 0, lines = 0;
+    const char *p;
+    for (p = out; p && (p = strstr(p, "adaslice: ")) != NULL; p++) lines++;
+    CHECKF(lines == 1, "%u messages: %s", lines, out ? out : "");
+    if (!at || sscanf(at, "restarted (boot id %u -> %u)", old_id, new_id) != 2) return 0;
+    while (line > out && line[-1] != '\n') line--;
+    CHECKF(strstr(line, "Z must be homed") && strstr(line, "was the last fully exposed"), "the message: %s", line);
+    at = strstr(at, "--resume-from ");
+    if (!at || sscanf(at, "--resume-from %u --home", &k) != 1 || !strstr(at, "--home")) return 0;
+    return k;
+}
+
+/* SIGUSR1 resets the simulated MCU mid-print (a new boot id, the state lost,
+   Z unhomed): the host stops within 5 s with exit 4 and one message naming
+   the boot ids, the last layer exposed and how to continue. Resuming there
+   without --home is refused (exit 2, naming the layer); with --home the
+   printer homes and prints from that layer on, each at its exact height. */
+static void mcu_reset_mid_print_on_the_simulator(void)
+{
+    child sim;
+    char port[256], *out, k[16];
+    const char *extra[] = {CURE, NULL};
+    pid_t pid;
+    int status;
+    unsigned layer, old_id = 0, new_id = 0;
+    double reset_at, took;
+    cli_result r;
+    sim_log l;
+    report rep;
+    if (!start_sim(&sim, cli_path("sim9.log"), "10")) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print9.out"));
+    CHECK(wait_for_exposures(cli_path("sim9.log"), 6));
+    kill(sim.pid, SIGUSR1);
+    reset_at = seconds_now();
+    status = wait_exit(pid, 30);
+    took = seconds_now() - reset_at;
+    out = cli_read(cli_path("print9.out"));
+    CHECKF(status == 4 && took < 5, "after the reset: exit %d in %.2f s: %s", status, took, out ? out : "");
+    layer = restart_message(out, &old_id, &new_id);
+    CHECKF(layer >= 3 && new_id == old_id + 1, "no restart message (boot id %u -> %u, layer %u): %s", old_id, new_id, layer,
+           out ? out : "");
+    free(out);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    snprintf(k, sizeof k, "%u", layer);
+#define HAND_ARGS MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", \
+                  "--settle", "0.05", "--resume-from", k
+    r = cli_run("print", HAND_ARGS, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--home") && strstr(r.err, k), "unhomed: %d %s", r.status,
+           r.err);
+    cli_free(&r);
+    r = cli_run("print", HAND_ARGS, "--home", "--report", cli_path("report9.json"), NULL);
+#undef HAND_ARGS
+    CHECKF(r.status == 0, "--home: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (check_case_failed()) return;
+    CHECK(read_sim_log(cli_path("sim9.log"), &l) && read_report(cli_path("report9.json"), &rep));
+    if (!check_case_failed()) {
+        /* from the show of layer K after the restart to the end: homed again, Z at each layer's top */
+        size_t from = nth_show_from_end(&l, rep.layers - layer + 1);
+        char *log = cli_read(cli_path("sim9.log"));
+        CHECK(log && strstr(log, " reset signal"));
+        free(log);
         CHECK(rep.first == layer);
-        (void)zcheck_record(l.ev + from, l.count - from, &e);
-        /* between the Ctrl-C and the resume: the light off, Z still */
-        CHECKF(l.user_pauses == 1 && !l.steps_while_paused && !l.uv_while_paused,
-               "%zu pauses; %d steps and %d UV-on while paused", l.user_pauses, l.steps_while_paused, l.uv_while_paused);
+        check_record_from(&l, &rep, from, layer);
     }
     free(l.ev);
     report_free(&rep);
@@ -593,6 +802,74 @@ static void short_print_under_qemu(void)
     cli_free(&r);
 }
 
+/* QEMU's system_reset mid-print, from its monitor: the image starts again
+   with another boot id (a counter in RAM that startup does not clear), and
+   the host stops within 5 s with exit 4 and the restart message. */
+static void mcu_reset_mid_print_under_qemu(void)
+{
+    child qemu;
+    char monitor[100], mon_opt[140], port[64] = "", *at, *out = NULL;
+    const char *extra[] = {"--exposure", "0.3", "--penetration", "0.1", "--bottom-layers", "1", "--bottom-exposure", "0.5", NULL};
+    char *argv[] = {(char *)"/usr/bin/timeout", (char *)"300", (char *)"qemu-system-arm", (char *)"-M", (char *)"mps2-an385",
+                    (char *)"-nographic", (char *)"-monitor", mon_opt, (char *)"-serial", (char *)"pty",
+                    (char *)"-semihosting-config", (char *)"enable=on,target=native", (char *)"-icount",
+                    (char *)"shift=5,align=off,sleep=off", (char *)"-kernel", (char *)"build/fw-mps2-busy.elf", NULL};
+    const char *base[] = {"print", MODEL, "--scale", "5", "--port", port, "--peel", "0.5", "--peel-speed", "10",
+                          "--return-speed", "10", "--settle", "0.02", NULL};
+    char *pargv[40];
+    struct sockaddr_un addr;
+    int i, n = 0, status, fd;
+    unsigned old_id = 0, new_id = 0, layer;
+    double reset_at = 0, took;
+    pid_t pid;
+    /* a socket's path is at most 107 bytes */
+    CHECKF(snprintf(monitor, sizeof monitor, "%s", cli_path("qemu.monitor")) < (int)sizeof monitor, "%s: too long", cli_path("qemu.monitor"));
+    snprintf(mon_opt, sizeof mon_opt, "unix:%s,server=on,wait=off", monitor);
+    if (!child_start(&qemu, argv, "char device redirected to ", 20)) {
+        CHECK(!"qemu-system-arm did not start with build/fw-mps2-busy.elf");
+        child_stop(&qemu);
+        return;
+    }
+    at = strstr(qemu.line, "/dev/");
+    for (i = 0; at && at[i] && at[i] != ' ' && i < 63; i++) port[i] = at[i];
+    port[i] = 0;
+    for (i = 0; base[i]; i++) pargv[n++] = (char *)base[i];
+    for (i = 0; extra[i]; i++) pargv[n++] = (char *)extra[i];
+    pargv[n] = NULL;
+    pid = print_in_background(pargv, cli_path("print10.out"));
+    /* into the print: planned, homed, printing, a few of its 21 layers */
+    for (i = 0; i < 3000; i++) {
+        out = cli_read(cli_path("print10.out"));
+        if (out && strstr(out, "printing layers 1 to ")) break;
+        free(out);
+        out = NULL;
+        sleep_ms(20);
+    }
+    CHECKF(out != NULL, "the print on QEMU did not get to printing");
+    free(out);
+    sleep_ms(2000);
+    fd = socket(AF_UNIX, SOCK_STREAM, 0);
+    memset(&addr, 0, sizeof addr);
+    addr.sun_family = AF_UNIX;
+    snprintf(addr.sun_path, sizeof addr.sun_path, "%s", monitor);
+    CHECKF(fd >= 0 && connect(fd, (struct sockaddr *)&addr, sizeof addr) == 0, "QEMU's monitor %s: %s", monitor, strerror(errno));
+    if (fd >= 0) {
+        const char cmd[] = "system_reset\n";
+        CHECK(write(fd, cmd, sizeof cmd - 1) == (ssize_t)(sizeof cmd - 1));
+        reset_at = seconds_now();
+    }
+    status = wait_exit(pid, 60);
+    took = seconds_now() - reset_at;
+    if (fd >= 0) close(fd);
+    out = cli_read(cli_path("print10.out"));
+    CHECKF(status == 4 && took < 5, "after system_reset: exit %d in %.2f s: %s", status, took, out ? out : "");
+    layer = restart_message(out, &old_id, &new_id);
+    CHECKF(layer >= 1 && old_id != new_id && old_id && new_id, "no restart message (boot id %u -> %u, layer %u): %s", old_id,
+           new_id, layer, out ? out : "");
+    free(out);
+    child_stop(&qemu);
+}
+
 /* printrun's printcore sends a G-code file to the simulator in G-code mode:
    every line is acknowledged, Z lands where the file says, the light is on
    only while Z stands still. */
@@ -723,10 +1000,13 @@ void test_print(void)
     RUN(print_survives_a_lost_link);
     RUN(thousand_layers_on_the_simulator);
     RUN(ctrl_c_pauses_and_resume_finishes);
+    RUN(host_killed_mid_exposure_resumes_in_place);
+    RUN(mcu_reset_mid_print_on_the_simulator);
     RUN(print_a_sliced_job);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", short_print_under_qemu);
+    RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_reset_mid_print_under_qemu);
     RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
     RUN(hung_loop_keeps_light_and_watchdog);
     cli_end();

@@ -27,7 +27,7 @@ typedef struct zexpect {
     uint32_t layers, first;       /* layers exposed: first .. layers */
     const uint32_t *top_bins;     /* [layers]: top plane of each layer, bins */
     uint32_t bin_nm;
-    const uint32_t *crcs;         /* [layers] or NULL */
+    const uint32_t *crcs;         /* [layers] or NULL; 0: a mask not known */
     const uint32_t *exposure_ms;  /* [layers]: the light each layer must get */
 } zexpect;
 
@@ -98,7 +98,7 @@ static inline zsummary zcheck_record(const zevent *ev, size_t count, const zexpe
                 lit = 0;
                 s.shows++;
                 shown_crc = v->crc;
-                if (layer <= e->layers && e->crcs && shown_crc != e->crcs[layer - 1] && bad_mask++ < 3)
+                if (layer <= e->layers && e->crcs && e->crcs[layer - 1] && shown_crc != e->crcs[layer - 1] && bad_mask++ < 3)
                     CHECKF(0, "layer %u shows a mask of CRC %08x, the host sent %08x", layer, (unsigned)shown_crc,
                            (unsigned)e->crcs[layer - 1]);
             }

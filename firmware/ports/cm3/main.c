@@ -56,6 +56,24 @@ static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, u
     board_mask_row(slot, y, row, size);
 }
 
+/* The boot id: a counter in RAM that the reset code leaves alone (.noinit,
+   outside .data and .bss), one more at every start. A reset (the button, the
+   watchdog, QEMU's system_reset) keeps RAM; after power-up it holds garbage,
+   so a magic word tells a counter that survived from one to seed afresh,
+   from that garbage. Never 0 (the host's "no boot id"). */
+#define BOOT_MAGIC 0xB007C0DEu
+static struct { uint32_t magic, count; } boot __attribute__((section(".noinit")));
+
+static uint32_t next_boot_id(void)
+{
+    if (boot.magic != BOOT_MAGIC) {
+        boot.magic = BOOT_MAGIC;
+        boot.count = boot.count * 2654435761u + 0x9E3779B9u;
+    }
+    if (!++boot.count) boot.count = 1;
+    return boot.count;
+}
+
 int main(void)
 {
     fw_config config;
@@ -70,7 +88,7 @@ int main(void)
     config.window = BOARD_WINDOW;
     config.watchdog_ms = 0;
     config.step_lead = BOARD_CLOCK_HZ / 1000u; /* 1 ms: the loop's longest pass, and more */
-    config.boot_id = 1;
+    config.boot_id = next_boot_id();
     port.ctx = NULL;
     port.write = port_write;
     port.step_arm = port_step_arm;
