@@ -16,6 +16,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* JOBDIR/layer_00001.EXT: five digits, more if the plan has 100,000 layers or more. */
 int layer_digits(size_t layers)
@@ -221,10 +222,28 @@ static int is_layer_file(const char *name)
     return dot - p >= 5 && (!strcmp(dot, ".png") || !strcmp(dot, ".svg"));
 }
 
+/* A layer PNG under the very name this job of `layers` gives one of its own
+   (`digits` wide, 1 to layers). */
+static int is_own_layer_png(const char *name, size_t layers, int digits)
+{
+    char own[40];
+    size_t v = 0;
+    int n = 0;
+    for (; name[6 + n] >= '0' && name[6 + n] <= '9' && n <= digits; n++) v = v * 10 + (size_t)(name[6 + n] - '0');
+    if (n != digits || v < 1 || v > layers) return 0;
+    layer_name(own, v - 1, digits, "png"); /* the name it would write: same digits, same extension */
+    return !strcmp(name, own);
+}
+
 /* What an earlier job left in dir: its manifest first (so that an interrupted
    clean leaves no job that looks whole), then its masks, previews, plan and
-   layer files; nothing else. path is room for a file's path. */
-static int remove_old_job(const char *dir, char *path, size_t size)
+   layer files; nothing else. The layer PNGs this job writes under the same
+   names stay, to be overwritten: creating a file costs the file system an
+   inode, under the directory's lock, so a re-slice that removed and made
+   each again spent a quarter of its time there, and two threads waited on
+   each other for it. Without the manifest they are no job. path is room for
+   a file's path. */
+static int remove_old_job(const char *dir, size_t layers, int digits, char *path, size_t size)
 {
     static const char *const files[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
     DIR *d;
@@ -237,7 +256,9 @@ static int remove_old_job(const char *dir, char *path, size_t size)
     }
     if (!(d = opendir(dir))) return complain(RC_FAIL, "cannot read %s: %s", dir, strerror(errno));
     while (!rc && (e = readdir(d)) != NULL) {
-        if (!is_layer_file(e->d_name) || strlen(dir) + strlen(e->d_name) + 2 > size) continue;
+        if (!is_layer_file(e->d_name) || is_own_layer_png(e->d_name, layers, digits) ||
+            strlen(dir) + strlen(e->d_name) + 2 > size)
+            continue;
         snprintf(path, size, "%s/%s", dir, e->d_name);
         if (remove(path) != 0 && errno != ENOENT) rc = complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
     }
@@ -261,7 +282,7 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     w->path_size = strlen(dir) + 64;
     if (mkdir(dir, 0777) != 0 && errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) { rc = complain(RC_FAIL, "%s is not a directory", dir); goto fail; }
-    if ((rc = remove_old_job(dir, w->path, w->path_size))) goto fail;
+    if ((rc = remove_old_job(dir, d->layer_count, w->digits, w->path, w->path_size))) goto fail;
     if ((rc = job_masks_alloc(&w->masks, (uint32_t)d->layer_count))) goto fail;
     w->masks.width = (uint32_t)d->width;
     w->masks.height = (uint32_t)d->height;
@@ -299,14 +320,21 @@ static int write_png(const char *path, unsigned char *png, size_t size)
 /* A layer's PNG straight under its name: the manifest, removed before the
    first layer and written after the last, is what says the job is whole, so
    the layers need no temporary name (which would double the directory's
-   work); a failed write removes its file. */
+   work); a failed write removes its file. An earlier job's file of the name
+   is written over in place and cut to size: truncated to nothing first, the
+   file system would free its blocks on open and (ext4, which guards files
+   replaced by truncation) write it out to disk on close, a tenth of a
+   re-slice's time. */
 static int write_layer_png(const char *path, unsigned char *png, size_t size)
 {
-    FILE *f = fopen(path, "wb");
+    FILE *f = fopen(path, "r+b");
     int err = 0;
+    if (!f) f = fopen(path, "wb");
     if (!f) err = errno;
     else {
-        if (fwrite(png, 1, size, f) != size) err = errno ? errno : EIO;
+        errno = 0; /* not the first open's */
+        if (fwrite(png, 1, size, f) != size || fflush(f) != 0 || ftruncate(fileno(f), (off_t)size) != 0)
+            err = errno ? errno : EIO;
         if (fclose(f) != 0 && !err) err = errno;
         if (err) remove(path);
     }
