@@ -395,6 +395,8 @@ static int write_manifest_file(dir_writer *w)
     return write_atomic(w->path, write_manifest, w);
 }
 
+enum { DIR_PREVIEW_W = 400, DIR_PREVIEW_H = 300 };
+
 /* masks.rle (unless the bin is not a whole number of nanometres, which a
    printer cannot count), preview.png, then the manifest. */
 static int dir_finish(dir_writer *w)
@@ -403,7 +405,7 @@ static int dir_finish(dir_writer *w)
     double nm = d->bin_mm * 1e6;
     unsigned char *rgb, *png = NULL;
     size_t size;
-    int rc = RC_OK, pw = 400, ph = 300;
+    int rc = RC_OK, pw = DIR_PREVIEW_W, ph = DIR_PREVIEW_H;
     w->masks.bin_nm = (uint32_t)(nm + 0.5);
     if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
         snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
@@ -439,7 +441,7 @@ static int dir_close(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
-                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close};
+                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close, {{DIR_PREVIEW_W, DIR_PREVIEW_H}}};
 
 /* ------------------------------------------------------------ reading */
 

@@ -106,6 +106,9 @@ typedef struct job_format {
     /* ok: finish and put the file in place; !ok: remove what was written.
        Frees the writer either way. */
     int (*close)(void *writer, int ok);
+    /* The sizes (w, h; 0: none) of the previews it asks d->preview for, so
+       that they can be drawn ahead on a thread of their own. */
+    int previews[2][2];
 } job_format;
 
 /* encode and put one after the other: a layer on one thread. */
