@@ -54,6 +54,9 @@ typedef struct dir_writer {
     size_t path_size;
     int digits;
     job_masks masks;
+    int whole_bin;               /* the bin is a whole number of nanometres: masks.rle is written */
+    FILE *masks_file;            /* masks.rle, written as the layers are put */
+    char *masks_path;
     int has_masks;               /* masks.rle written, its CRC-32 below (the manifest names it) */
     uint32_t masks_crc;
 } dir_writer;
@@ -165,17 +168,19 @@ void job_masks_free(job_masks *m)
     memset(m, 0, sizeof *m);
 }
 
-/* masks.rle's bytes go to a sink: the file, or the CRC the manifest keeps of it */
-typedef void (*byte_sink)(void *ctx, const void *bytes, size_t n);
-
-static void sink_u32(byte_sink out, void *ctx, uint32_t v)
+/* masks.rle's bytes go to the file and into the CRC the manifest keeps of it */
+static void masks_out(dir_writer *w, const void *bytes, size_t n)
 {
-    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
-    out(ctx, b, 4);
+    if (!n) return;
+    fwrite(bytes, 1, n, w->masks_file);
+    w->masks_crc = adaslice_crc32(w->masks_crc, bytes, n);
 }
 
-static void to_file(void *ctx, const void *bytes, size_t n) { fwrite(bytes, 1, n, (FILE *)ctx); }
-static void to_crc(void *ctx, const void *bytes, size_t n) { *(uint32_t *)ctx = adaslice_crc32(*(uint32_t *)ctx, bytes, n); }
+static void masks_u32(dir_writer *w, uint32_t v)
+{
+    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
+    masks_out(w, b, 4);
+}
 
 static uint32_t get_u32(const unsigned char *p)
 {
@@ -185,29 +190,30 @@ static uint32_t get_u32(const unsigned char *p)
 #define MASKS_HEADER 44   /* magic and nine u32 */
 #define MASKS_LAYER 16    /* bins, exposure, CRC, code bytes */
 
-static void emit_masks(const job_masks *m, byte_sink out, void *ctx)
+static void emit_masks_header(dir_writer *w)
 {
-    uint32_t k;
-    out(ctx, "ADASMSK2", 8);
-    sink_u32(out, ctx, m->width);
-    sink_u32(out, ctx, m->height);
-    sink_u32(out, ctx, m->bits);
-    sink_u32(out, ctx, m->layers);
-    sink_u32(out, ctx, m->bin_nm);
-    sink_u32(out, ctx, m->peel_nm);
-    sink_u32(out, ctx, m->peel_speed_um_s);
-    sink_u32(out, ctx, m->return_speed_um_s);
-    sink_u32(out, ctx, m->settle_ms);
-    for (k = 0; k < m->layers; k++) {
-        sink_u32(out, ctx, m->lengths[k]);
-        sink_u32(out, ctx, m->exposure_ms[k]);
-        sink_u32(out, ctx, m->crcs[k]);
-        sink_u32(out, ctx, (uint32_t)m->sizes[k]);
-        out(ctx, m->codes[k], m->sizes[k]);
-    }
+    const job_masks *m = &w->masks;
+    masks_out(w, "ADASMSK2", 8);
+    masks_u32(w, m->width);
+    masks_u32(w, m->height);
+    masks_u32(w, m->bits);
+    masks_u32(w, m->layers);
+    masks_u32(w, m->bin_nm);
+    masks_u32(w, m->peel_nm);
+    masks_u32(w, m->peel_speed_um_s);
+    masks_u32(w, m->return_speed_um_s);
+    masks_u32(w, m->settle_ms);
 }
 
-static void write_mask_file(FILE *f, const void *ctx) { emit_masks((const job_masks *)ctx, to_file, f); }
+static void emit_masks_layer(dir_writer *w, uint32_t k, const unsigned char *code)
+{
+    const job_masks *m = &w->masks;
+    masks_u32(w, m->lengths[k]);
+    masks_u32(w, m->exposure_ms[k]);
+    masks_u32(w, m->crcs[k]);
+    masks_u32(w, (uint32_t)m->sizes[k]);
+    masks_out(w, code, m->sizes[k]);
+}
 
 static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
 
@@ -291,6 +297,23 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     w->masks.peel_speed_um_s = milli(d->motion.lift_speed);
     w->masks.return_speed_um_s = milli(d->motion.retract_speed);
     w->masks.settle_ms = milli(d->motion.wait_before_cure_s);
+    {
+        double nm = d->bin_mm * 1e6;
+        w->masks.bin_nm = (uint32_t)(nm + 0.5);
+        w->whole_bin = fabs(nm - w->masks.bin_nm) <= 1e-6 * nm;
+    }
+    /* masks.rle, like the layers, straight under its name and written as they
+       are put (by whichever thread puts them, while others code): the
+       manifest, written last, names its CRC-32. At the end it took the job's
+       one thread a hundredth of the time. */
+    if (w->whole_bin) {
+        if (!(w->masks_path = dir_file(dir, "masks.rle"))) { rc = RC_FAIL; goto fail; }
+        if (!(w->masks_file = fopen(w->masks_path, "wb"))) {
+            rc = complain(RC_FAIL, "cannot write %s: %s", w->masks_path, strerror(errno));
+            goto fail;
+        }
+        emit_masks_header(w);
+    }
     *writer = w;
     return RC_OK;
 fail:
@@ -374,18 +397,13 @@ static int dir_put(void *writer, size_t k, job_blob *blob)
     dir_writer *w = (dir_writer *)writer;
     job_masks *m = &w->masks;
     const job_layer *l = &w->d->layers[k];
-    unsigned char *code = (unsigned char *)realloc(blob->data, blob->size ? blob->size : 1); /* kept at its size */
-    if (!code) {
-        free(blob->data);
-        blob->data = NULL;
-        return complain(RC_FAIL, "out of memory keeping layer %zu", k + 1);
-    }
-    blob->data = NULL;
-    m->codes[k] = code;
     m->sizes[k] = blob->size;
     m->crcs[k] = blob->crc;
     m->lengths[k] = (uint32_t)(l->thickness / w->d->bin_mm + 0.5);
     m->exposure_ms[k] = milli(l->exposure_s);
+    if (w->masks_file) emit_masks_layer(w, (uint32_t)k, blob->data);
+    free(blob->data);
+    blob->data = NULL;
     return RC_OK;
 }
 
@@ -402,16 +420,15 @@ enum { DIR_PREVIEW_W = 400, DIR_PREVIEW_H = 300 };
 static int dir_finish(dir_writer *w)
 {
     const job_desc *d = w->d;
-    double nm = d->bin_mm * 1e6;
     unsigned char *rgb, *png = NULL;
     size_t size;
     int rc = RC_OK, pw = DIR_PREVIEW_W, ph = DIR_PREVIEW_H;
-    w->masks.bin_nm = (uint32_t)(nm + 0.5);
-    if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
-        snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
-        if ((rc = write_atomic(w->path, write_mask_file, &w->masks))) return rc;
-        w->masks_crc = 0;
-        emit_masks(&w->masks, to_crc, &w->masks_crc);
+    if (w->masks_file) {
+        FILE *f = w->masks_file;
+        int err = ferror(f) ? (errno ? errno : EIO) : 0;
+        w->masks_file = NULL;
+        if (fclose(f) != 0 && !err) err = errno;
+        if (err) return complain(RC_FAIL, "cannot write %s: %s", w->masks_path, strerror(err));
         w->has_masks = 1;
     } else {
         fprintf(stderr, "adaslice: warning: %s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
@@ -433,7 +450,10 @@ static int dir_close(void *writer, int ok)
 {
     dir_writer *w = (dir_writer *)writer;
     int rc = ok ? dir_finish(w) : RC_FAIL;
+    if (w->masks_file) fclose(w->masks_file);
+    if (rc && w->masks_path) remove(w->masks_path); /* a job that failed leaves no masks */
     job_masks_free(&w->masks);
+    free(w->masks_path);
     free(w->dir);
     free(w->path);
     free(w);
