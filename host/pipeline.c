@@ -135,7 +135,7 @@ int pipeline_run(const pipeline_job *job)
     p.count = pipeline_images(helpers + 1);
     if (!(p.slots = (slot *)calloc((size_t)p.count, sizeof *p.slots))) return complain(RC_FAIL, "out of memory");
     for (i = 0; i < p.count; i++)
-        if (!(p.slots[i].image = (unsigned char *)malloc(job->image_bytes ? job->image_bytes : 1))) {
+        if (!(p.slots[i].image = (unsigned char *)calloc(job->image_bytes ? job->image_bytes : 1, 1))) {
             rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
                           job->image_bytes);
             goto done;

@@ -16,7 +16,9 @@ typedef struct pipeline_job {
     size_t image_bytes, stride;  /* of each layer's image */
     int threads;                 /* the calling one and threads - 1 more; 1: all on the calling one */
     /* Layer k into image; RC_OK or a complaint made (which stops the job).
-       Called for k = 0, 1, ... in turn, never two at once, on any thread. */
+       Called for k = 0, 1, ... in turn, never two at once, on any thread.
+       The images start zeroed and keep what render leaves in them (the
+       coding only reads them), so it need write only where a layer can differ. */
     int (*render)(void *ctx, size_t k, unsigned char *image);
     /* Layer k is in the job (in turn, on any thread). */
     void (*done)(void *ctx, size_t k);
