@@ -516,19 +516,25 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     FILE *f;
     long size;
     int rc = RC_FAIL;
+    struct stat st;
+    char *manifest = dir_file(dir, "manifest.json");
     memset(m, 0, sizeof *m);
-    if (!path) return RC_FAIL;
-    if (!(f = fopen(path, "rb"))) {
-        int why = errno;
-        char *manifest = dir_file(dir, "manifest.json");
-        FILE *sealed = manifest ? fopen(manifest, "rb") : NULL;
-        /* a slice removes the manifest first and writes it last */
-        if (why == ENOENT && manifest && !sealed)
-            complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", manifest);
-        else
-            complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(why));
-        if (sealed) fclose(sealed);
+    if (!path || !manifest) {
         free(manifest);
+        free(path);
+        return RC_FAIL;
+    }
+    /* a slice removes the manifest first and writes it last, masks.rle and
+       the layers going straight under their names meanwhile: without it the
+       job is not whole, whatever masks.rle holds */
+    if (stat(manifest, &st) != 0 && errno == ENOENT) {
+        complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", manifest);
+        free(manifest);
+        goto done;
+    }
+    free(manifest);
+    if (!(f = fopen(path, "rb"))) {
+        complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno));
         goto done;
     }
     if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0 ||
