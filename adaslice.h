@@ -2145,16 +2145,21 @@ ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh)
 
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
 {
+    /* in floats, without a test of the first corner in the loop: branch-free
+       min and max, as the slicer takes the bounds several times a job */
+    float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
     size_t i;
     int k;
-    for (k = 0; k < 3; k++) lo[k] = hi[k] = 0;
-    for (i = 0; i < 3 * mesh->triangle_count; i++) {
+    if (mesh->triangle_count)
+        for (k = 0; k < 3; k++) l[k] = h[k] = mesh->vertices[3 * (size_t)mesh->triangles[0] + k];
+    for (i = 1; i < 3 * mesh->triangle_count; i++) {
         const float *v = mesh->vertices + 3 * (size_t)mesh->triangles[i];
         for (k = 0; k < 3; k++) {
-            if (i == 0 || v[k] < lo[k]) lo[k] = v[k];
-            if (i == 0 || v[k] > hi[k]) hi[k] = v[k];
+            l[k] = v[k] < l[k] ? v[k] : l[k];
+            h[k] = v[k] > h[k] ? v[k] : h[k];
         }
     }
+    for (k = 0; k < 3; k++) { lo[k] = l[k]; hi[k] = h[k]; }
 }
 
 /* ---- welding */
@@ -5849,12 +5854,39 @@ ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, si
 
 /* ==================================================== masks and contours */
 
-typedef struct adaslice__zkey { float z; uint32_t t; } adaslice__zkey;
+/* A triangle under its lowest z as an unsigned key in the same order. */
+typedef struct adaslice__zkey { uint32_t z, t; } adaslice__zkey;
 
-static int adaslice__zkey_cmp(const void *a, const void *b)
+/* -0 counts as +0; then the sign bit set for positives, every bit flipped
+   for negatives, so unsigned order is the floats' order. */
+static uint32_t adaslice__zbits(float z)
 {
-    const adaslice__zkey *x = ADASLICE__CAST(const adaslice__zkey *, a), *y = ADASLICE__CAST(const adaslice__zkey *, b);
-    return x->z < y->z ? -1 : (x->z > y->z ? 1 : (x->t < y->t ? -1 : x->t > y->t));
+    uint32_t u;
+    z += 0.0f;
+    memcpy(&u, &z, sizeof u);
+    return (u & 0x80000000u) ? ~u : u | 0x80000000u;
+}
+
+/* keys (given in triangle order) by z, ties by triangle: a stable radix
+   sort a byte at a time, through tmp (as many keys). qsort's comparisons
+   took most of the masker's set-up, which no other thread can share.
+   Returns where the sorted keys are: keys or tmp. */
+static adaslice__zkey *adaslice__sort_zkeys(adaslice__zkey *keys, adaslice__zkey *tmp, size_t n)
+{
+    size_t count[4][256], i;
+    int d, b;
+    memset(count, 0, sizeof count);
+    for (i = 0; i < n; i++)
+        for (d = 0; d < 4; d++) count[d][(keys[i].z >> (8 * d)) & 255]++;
+    for (d = 0; d < 4 && n; d++) {
+        size_t sum = 0;
+        adaslice__zkey *t;
+        if (count[d][(keys[0].z >> (8 * d)) & 255] == n) continue; /* one byte for all: in order */
+        for (b = 0; b < 256; b++) { size_t c = count[d][b]; count[d][b] = sum; sum += c; }
+        for (i = 0; i < n; i++) tmp[count[d][(keys[i].z >> (8 * d)) & 255]++] = keys[i];
+        t = keys; keys = tmp; tmp = t;
+    }
+    return keys;
 }
 
 static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
@@ -5872,7 +5904,7 @@ ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int s
        coverage per pixel when anti-aliased, and three words per triangle */
     double s = supersample > 1 ? supersample : 1, pixels = (double)width * height;
     double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * sizeof(int16_t) +
-                   (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + sizeof(adaslice__zkey));
+                   (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
     return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
 
@@ -5914,7 +5946,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
                                                   adaslice_error *err)
 {
     adaslice_result r, res;
-    adaslice__zkey *keys;
+    adaslice__zkey *keys, *sorted;
     size_t t, rays, pixels;
     int k, s = options && options->supersample ? options->supersample : 1;
     if (!mk) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker given");
@@ -5946,7 +5978,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
-    keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(adaslice__zkey)));
+    keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, 2 * mesh->triangle_count, sizeof(adaslice__zkey)));
     if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
         adaslice__free(&mk->allocator, keys);
         adaslice_masker_free(mk);
@@ -5955,9 +5987,9 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     memset(mk->image, 0, mk->stride * (size_t)grid->height);
     if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
     if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
-    for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__tri_z(mesh, t, 0); keys[t].t = (uint32_t)t; }
-    qsort(keys, mesh->triangle_count, sizeof *keys, adaslice__zkey_cmp);
-    for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = keys[t].t;
+    for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__zbits(adaslice__tri_z(mesh, t, 0)); keys[t].t = (uint32_t)t; }
+    sorted = adaslice__sort_zkeys(keys, keys + mesh->triangle_count, mesh->triangle_count);
+    for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = sorted[t].t;
     adaslice__free(&mk->allocator, keys);
     for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
     adaslice__ok(err);

@@ -79,7 +79,7 @@ static int time_formats(const char *tool, const char *dir)
         {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
     enum { JOBS = sizeof jobs / sizeof jobs[0] };
     char model[4096], out[JOBS][128];
-    double t[JOBS][RUNS], rate[JOBS];
+    double t[JOBS][RUNS], rate[JOBS], ratio[RUNS];
     size_t layers[JOBS] = {0};
     int r, k;
     snprintf(model, sizeof model, "%s/turbineblade.ply", dir);
@@ -107,6 +107,7 @@ static int time_formats(const char *tool, const char *dir)
                 return 1;
             }
         }
+    for (r = 0; r < RUNS; r++) ratio[r] = t[4][r] / t[0][r]; /* before median sorts the times */
     printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", RUNS);
     printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
     for (k = 0; k < JOBS; k++) {
@@ -117,6 +118,11 @@ static int time_formats(const char *tool, const char *dir)
         if (k != base) printf(" %.2fx", rate[k] / rate[base]);
         printf("\n");
     }
+    /* the two threads' ratio run by run (the two jobs of one round of the
+       seven), so that a drift of the machine's speed between rounds moves both */
+    median(ratio, RUNS); /* sorts */
+    printf("  all %ld cores against --threads 1, the directory: %.2fx (median of each run's ratio; %.2f-%.2fx)\n",
+           sysconf(_SC_NPROCESSORS_ONLN), ratio[RUNS / 2], ratio[0], ratio[RUNS - 1]);
     return 0;
 }
 

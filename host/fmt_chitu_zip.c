@@ -149,4 +149,5 @@ static int close_job(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1,
-                                          ZIP_MEMBERS_MAX - 3 /* two previews, run.gcode */, open_job, encode, put, close_job};
+                                          ZIP_MEMBERS_MAX - 3 /* two previews, run.gcode */, open_job, encode, put, close_job,
+                                          {{PREVIEW_W, PREVIEW_H}, {CROPPING_W, CROPPING_H}}};

@@ -513,4 +513,5 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, 0, open_job, encode, put, close_job};
+const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, 0, open_job, encode, put, close_job,
+                                  {{400, 300}, {200, 125}}};

@@ -411,4 +411,5 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, 0, open_job, encode, put, close_job};
+const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, 0, open_job, encode, put, close_job,
+                                  {{116, 116}, {290, 290}}};

@@ -214,4 +214,5 @@ static int close_job(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0,
-                                    ZIP_MEMBERS_MAX - 4 /* two thumbnails, two inis */, open_job, encode, put, close_job};
+                                    ZIP_MEMBERS_MAX - 4 /* two thumbnails, two inis */, open_job, encode, put, close_job,
+                                    {{400, 400}, {800, 480}}};

@@ -16,6 +16,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* JOBDIR/layer_00001.EXT: five digits, more if the plan has 100,000 layers or more. */
 int layer_digits(size_t layers)
@@ -53,6 +54,9 @@ typedef struct dir_writer {
     size_t path_size;
     int digits;
     job_masks masks;
+    int whole_bin;               /* the bin is a whole number of nanometres: masks.rle is written */
+    FILE *masks_file;            /* masks.rle, written as the layers are put */
+    char *masks_path;
     int has_masks;               /* masks.rle written, its CRC-32 below (the manifest names it) */
     uint32_t masks_crc;
 } dir_writer;
@@ -164,17 +168,19 @@ void job_masks_free(job_masks *m)
     memset(m, 0, sizeof *m);
 }
 
-/* masks.rle's bytes go to a sink: the file, or the CRC the manifest keeps of it */
-typedef void (*byte_sink)(void *ctx, const void *bytes, size_t n);
-
-static void sink_u32(byte_sink out, void *ctx, uint32_t v)
+/* masks.rle's bytes go to the file and into the CRC the manifest keeps of it */
+static void masks_out(dir_writer *w, const void *bytes, size_t n)
 {
-    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
-    out(ctx, b, 4);
+    if (!n) return;
+    fwrite(bytes, 1, n, w->masks_file);
+    w->masks_crc = adaslice_crc32(w->masks_crc, bytes, n);
 }
 
-static void to_file(void *ctx, const void *bytes, size_t n) { fwrite(bytes, 1, n, (FILE *)ctx); }
-static void to_crc(void *ctx, const void *bytes, size_t n) { *(uint32_t *)ctx = adaslice_crc32(*(uint32_t *)ctx, bytes, n); }
+static void masks_u32(dir_writer *w, uint32_t v)
+{
+    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
+    masks_out(w, b, 4);
+}
 
 static uint32_t get_u32(const unsigned char *p)
 {
@@ -184,29 +190,30 @@ static uint32_t get_u32(const unsigned char *p)
 #define MASKS_HEADER 44   /* magic and nine u32 */
 #define MASKS_LAYER 16    /* bins, exposure, CRC, code bytes */
 
-static void emit_masks(const job_masks *m, byte_sink out, void *ctx)
+static void emit_masks_header(dir_writer *w)
 {
-    uint32_t k;
-    out(ctx, "ADASMSK2", 8);
-    sink_u32(out, ctx, m->width);
-    sink_u32(out, ctx, m->height);
-    sink_u32(out, ctx, m->bits);
-    sink_u32(out, ctx, m->layers);
-    sink_u32(out, ctx, m->bin_nm);
-    sink_u32(out, ctx, m->peel_nm);
-    sink_u32(out, ctx, m->peel_speed_um_s);
-    sink_u32(out, ctx, m->return_speed_um_s);
-    sink_u32(out, ctx, m->settle_ms);
-    for (k = 0; k < m->layers; k++) {
-        sink_u32(out, ctx, m->lengths[k]);
-        sink_u32(out, ctx, m->exposure_ms[k]);
-        sink_u32(out, ctx, m->crcs[k]);
-        sink_u32(out, ctx, (uint32_t)m->sizes[k]);
-        out(ctx, m->codes[k], m->sizes[k]);
-    }
+    const job_masks *m = &w->masks;
+    masks_out(w, "ADASMSK2", 8);
+    masks_u32(w, m->width);
+    masks_u32(w, m->height);
+    masks_u32(w, m->bits);
+    masks_u32(w, m->layers);
+    masks_u32(w, m->bin_nm);
+    masks_u32(w, m->peel_nm);
+    masks_u32(w, m->peel_speed_um_s);
+    masks_u32(w, m->return_speed_um_s);
+    masks_u32(w, m->settle_ms);
 }
 
-static void write_mask_file(FILE *f, const void *ctx) { emit_masks((const job_masks *)ctx, to_file, f); }
+static void emit_masks_layer(dir_writer *w, uint32_t k, const unsigned char *code)
+{
+    const job_masks *m = &w->masks;
+    masks_u32(w, m->lengths[k]);
+    masks_u32(w, m->exposure_ms[k]);
+    masks_u32(w, m->crcs[k]);
+    masks_u32(w, (uint32_t)m->sizes[k]);
+    masks_out(w, code, m->sizes[k]);
+}
 
 static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
 
@@ -221,10 +228,28 @@ static int is_layer_file(const char *name)
     return dot - p >= 5 && (!strcmp(dot, ".png") || !strcmp(dot, ".svg"));
 }
 
+/* A layer PNG under the very name this job of `layers` gives one of its own
+   (`digits` wide, 1 to layers). */
+static int is_own_layer_png(const char *name, size_t layers, int digits)
+{
+    char own[40];
+    size_t v = 0;
+    int n = 0;
+    for (; name[6 + n] >= '0' && name[6 + n] <= '9' && n <= digits; n++) v = v * 10 + (size_t)(name[6 + n] - '0');
+    if (n != digits || v < 1 || v > layers) return 0;
+    layer_name(own, v - 1, digits, "png"); /* the name it would write: same digits, same extension */
+    return !strcmp(name, own);
+}
+
 /* What an earlier job left in dir: its manifest first (so that an interrupted
    clean leaves no job that looks whole), then its masks, previews, plan and
-   layer files; nothing else. path is room for a file's path. */
-static int remove_old_job(const char *dir, char *path, size_t size)
+   layer files; nothing else. The layer PNGs this job writes under the same
+   names stay, to be overwritten: creating a file costs the file system an
+   inode, under the directory's lock, so a re-slice that removed and made
+   each again spent a quarter of its time there, and two threads waited on
+   each other for it. Without the manifest they are no job. path is room for
+   a file's path. */
+static int remove_old_job(const char *dir, size_t layers, int digits, char *path, size_t size)
 {
     static const char *const files[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
     DIR *d;
@@ -237,7 +262,9 @@ static int remove_old_job(const char *dir, char *path, size_t size)
     }
     if (!(d = opendir(dir))) return complain(RC_FAIL, "cannot read %s: %s", dir, strerror(errno));
     while (!rc && (e = readdir(d)) != NULL) {
-        if (!is_layer_file(e->d_name) || strlen(dir) + strlen(e->d_name) + 2 > size) continue;
+        if (!is_layer_file(e->d_name) || is_own_layer_png(e->d_name, layers, digits) ||
+            strlen(dir) + strlen(e->d_name) + 2 > size)
+            continue;
         snprintf(path, size, "%s/%s", dir, e->d_name);
         if (remove(path) != 0 && errno != ENOENT) rc = complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
     }
@@ -261,7 +288,7 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     w->path_size = strlen(dir) + 64;
     if (mkdir(dir, 0777) != 0 && errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) { rc = complain(RC_FAIL, "%s is not a directory", dir); goto fail; }
-    if ((rc = remove_old_job(dir, w->path, w->path_size))) goto fail;
+    if ((rc = remove_old_job(dir, d->layer_count, w->digits, w->path, w->path_size))) goto fail;
     if ((rc = job_masks_alloc(&w->masks, (uint32_t)d->layer_count))) goto fail;
     w->masks.width = (uint32_t)d->width;
     w->masks.height = (uint32_t)d->height;
@@ -270,6 +297,23 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     w->masks.peel_speed_um_s = milli(d->motion.lift_speed);
     w->masks.return_speed_um_s = milli(d->motion.retract_speed);
     w->masks.settle_ms = milli(d->motion.wait_before_cure_s);
+    {
+        double nm = d->bin_mm * 1e6;
+        w->masks.bin_nm = (uint32_t)(nm + 0.5);
+        w->whole_bin = fabs(nm - w->masks.bin_nm) <= 1e-6 * nm;
+    }
+    /* masks.rle, like the layers, straight under its name and written as they
+       are put (by whichever thread puts them, while others code): the
+       manifest, written last, names its CRC-32. At the end it took the job's
+       one thread a hundredth of the time. */
+    if (w->whole_bin) {
+        if (!(w->masks_path = dir_file(dir, "masks.rle"))) { rc = RC_FAIL; goto fail; }
+        if (!(w->masks_file = fopen(w->masks_path, "wb"))) {
+            rc = complain(RC_FAIL, "cannot write %s: %s", w->masks_path, strerror(errno));
+            goto fail;
+        }
+        emit_masks_header(w);
+    }
     *writer = w;
     return RC_OK;
 fail:
@@ -299,14 +343,21 @@ static int write_png(const char *path, unsigned char *png, size_t size)
 /* A layer's PNG straight under its name: the manifest, removed before the
    first layer and written after the last, is what says the job is whole, so
    the layers need no temporary name (which would double the directory's
-   work); a failed write removes its file. */
+   work); a failed write removes its file. An earlier job's file of the name
+   is written over in place and cut to size: truncated to nothing first, the
+   file system would free its blocks on open and (ext4, which guards files
+   replaced by truncation) write it out to disk on close, a tenth of a
+   re-slice's time. */
 static int write_layer_png(const char *path, unsigned char *png, size_t size)
 {
-    FILE *f = fopen(path, "wb");
+    FILE *f = fopen(path, "r+b");
     int err = 0;
+    if (!f) f = fopen(path, "wb");
     if (!f) err = errno;
     else {
-        if (fwrite(png, 1, size, f) != size) err = errno ? errno : EIO;
+        errno = 0; /* not the first open's */
+        if (fwrite(png, 1, size, f) != size || fflush(f) != 0 || ftruncate(fileno(f), (off_t)size) != 0)
+            err = errno ? errno : EIO;
         if (fclose(f) != 0 && !err) err = errno;
         if (err) remove(path);
     }
@@ -346,18 +397,13 @@ static int dir_put(void *writer, size_t k, job_blob *blob)
     dir_writer *w = (dir_writer *)writer;
     job_masks *m = &w->masks;
     const job_layer *l = &w->d->layers[k];
-    unsigned char *code = (unsigned char *)realloc(blob->data, blob->size ? blob->size : 1); /* kept at its size */
-    if (!code) {
-        free(blob->data);
-        blob->data = NULL;
-        return complain(RC_FAIL, "out of memory keeping layer %zu", k + 1);
-    }
-    blob->data = NULL;
-    m->codes[k] = code;
     m->sizes[k] = blob->size;
     m->crcs[k] = blob->crc;
     m->lengths[k] = (uint32_t)(l->thickness / w->d->bin_mm + 0.5);
     m->exposure_ms[k] = milli(l->exposure_s);
+    if (w->masks_file) emit_masks_layer(w, (uint32_t)k, blob->data);
+    free(blob->data);
+    blob->data = NULL;
     return RC_OK;
 }
 
@@ -367,21 +413,22 @@ static int write_manifest_file(dir_writer *w)
     return write_atomic(w->path, write_manifest, w);
 }
 
+enum { DIR_PREVIEW_W = 400, DIR_PREVIEW_H = 300 };
+
 /* masks.rle (unless the bin is not a whole number of nanometres, which a
    printer cannot count), preview.png, then the manifest. */
 static int dir_finish(dir_writer *w)
 {
     const job_desc *d = w->d;
-    double nm = d->bin_mm * 1e6;
     unsigned char *rgb, *png = NULL;
     size_t size;
-    int rc = RC_OK, pw = 400, ph = 300;
-    w->masks.bin_nm = (uint32_t)(nm + 0.5);
-    if (fabs(nm - w->masks.bin_nm) <= 1e-6 * nm) {
-        snprintf(w->path, w->path_size, "%s/masks.rle", w->dir);
-        if ((rc = write_atomic(w->path, write_mask_file, &w->masks))) return rc;
-        w->masks_crc = 0;
-        emit_masks(&w->masks, to_crc, &w->masks_crc);
+    int rc = RC_OK, pw = DIR_PREVIEW_W, ph = DIR_PREVIEW_H;
+    if (w->masks_file) {
+        FILE *f = w->masks_file;
+        int err = ferror(f) ? (errno ? errno : EIO) : 0;
+        w->masks_file = NULL;
+        if (fclose(f) != 0 && !err) err = errno;
+        if (err) return complain(RC_FAIL, "cannot write %s: %s", w->masks_path, strerror(err));
         w->has_masks = 1;
     } else {
         fprintf(stderr, "adaslice: warning: %s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
@@ -403,7 +450,10 @@ static int dir_close(void *writer, int ok)
 {
     dir_writer *w = (dir_writer *)writer;
     int rc = ok ? dir_finish(w) : RC_FAIL;
+    if (w->masks_file) fclose(w->masks_file);
+    if (rc && w->masks_path) remove(w->masks_path); /* a job that failed leaves no masks */
     job_masks_free(&w->masks);
+    free(w->masks_path);
     free(w->dir);
     free(w->path);
     free(w);
@@ -411,7 +461,7 @@ static int dir_close(void *writer, int ok)
 }
 
 const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
-                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close};
+                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close, {{DIR_PREVIEW_W, DIR_PREVIEW_H}}};
 
 /* ------------------------------------------------------------ reading */
 
@@ -466,19 +516,25 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     FILE *f;
     long size;
     int rc = RC_FAIL;
+    struct stat st;
+    char *manifest = dir_file(dir, "manifest.json");
     memset(m, 0, sizeof *m);
-    if (!path) return RC_FAIL;
-    if (!(f = fopen(path, "rb"))) {
-        int why = errno;
-        char *manifest = dir_file(dir, "manifest.json");
-        FILE *sealed = manifest ? fopen(manifest, "rb") : NULL;
-        /* a slice removes the manifest first and writes it last */
-        if (why == ENOENT && manifest && !sealed)
-            complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", manifest);
-        else
-            complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(why));
-        if (sealed) fclose(sealed);
+    if (!path || !manifest) {
         free(manifest);
+        free(path);
+        return RC_FAIL;
+    }
+    /* a slice removes the manifest first and writes it last, masks.rle and
+       the layers going straight under their names meanwhile: without it the
+       job is not whole, whatever masks.rle holds */
+    if (stat(manifest, &st) != 0 && errno == ENOENT) {
+        complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", manifest);
+        free(manifest);
+        goto done;
+    }
+    free(manifest);
+    if (!(f = fopen(path, "rb"))) {
+        complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno));
         goto done;
     }
     if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0 ||

@@ -96,16 +96,19 @@ typedef struct job_format {
     int (*open)(void **writer, const char *path, const job_desc *d);
     /* Layer k's image coded into *blob (zeroed by the caller): rows top
        first, `stride` bytes apart, d->bits per pixel (1-bit rows packed MSB
-       first, 1 = lit). Called for several layers at once from worker
-       threads (cmd_slice.c), so it reads the writer and the desc and changes
-       nothing shared. RC_OK or a complaint made. */
+       first, 1 = lit). Called for several layers at once on any threads
+       (pipeline.h), so it reads the writer and the desc and changes nothing
+       shared. RC_OK or a complaint made. */
     int (*encode)(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob);
-    /* The coded layers into the file, in order of k, on one thread; takes
-       the blob's data (and frees it) either way. */
+    /* The coded layers into the file, in order of k, one at a time (on any
+       thread); takes the blob's data (and frees it) either way. */
     int (*put)(void *writer, size_t k, job_blob *blob);
     /* ok: finish and put the file in place; !ok: remove what was written.
        Frees the writer either way. */
     int (*close)(void *writer, int ok);
+    /* The sizes (w, h; 0: none) of the previews it asks d->preview for, so
+       that they can be drawn ahead on a thread of their own. */
+    int previews[2][2];
 } job_format;
 
 /* encode and put one after the other: a layer on one thread. */

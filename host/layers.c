@@ -164,12 +164,19 @@ static int mask_pixel(const adaslice_masker *mk, int x, int y)
     return mk->supersample > 1 ? row[x] : (row[x >> 3] >> (7 - (x & 7))) & 1;
 }
 
-static void orient_image(const adaslice_masker *mk, const slice_args *s, unsigned char *out, size_t out_stride)
+static void orient_image(const layer_masks *m, const slice_args *s, unsigned char *out, size_t out_stride)
 {
+    const adaslice_masker *mk = &m->masker;
     int w = mk->grid.width, h = mk->grid.height, r, i;
     int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h;
-    if (!s->rotate && !s->mirror_x) { /* the common case: whole rows */
-        for (r = 0; r < h; r++) memcpy(out + (size_t)r * out_stride, mk->image + (size_t)(s->mirror_y ? r : h - 1 - r) * mk->stride, mk->stride);
+    if (!s->rotate && !s->mirror_x) {
+        /* the common case: rows as they are, and only the part's band of
+           each (out is zero elsewhere): the copy was the one pass over the
+           whole image on the masker's thread, and the slowest to share the
+           memory with threads coding other layers */
+        for (r = m->row_lo; r < m->row_hi; r++)
+            memcpy(out + (size_t)(s->mirror_y ? r : h - 1 - r) * out_stride + m->byte_lo,
+                   mk->image + (size_t)r * mk->stride + m->byte_lo, m->byte_hi - m->byte_lo);
         return;
     }
     memset(out, 0, out_stride * (size_t)out_h);
@@ -265,6 +272,27 @@ double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
     return 0.5 * (l->z_bottom + l->z_top);
 }
 
+/* The masker's rows and row bytes the part can light, a pixel of margin
+   round its box: a pixel is lit only where a ray inside the part's section
+   runs, and an open mesh's section is closed by chords between its own
+   points, so no lit pixel lies outside the box. */
+static void part_band(layer_masks *m, const adaslice_mesh *mesh)
+{
+    const adaslice_grid *g = &m->grid;
+    double lo[3], hi[3], x0, x1, y0, y1;
+    adaslice_mesh_bounds(mesh, lo, hi);
+    x0 = floor((lo[0] - g->origin[0]) / g->pitch[0]) - 1;
+    x1 = floor((hi[0] - g->origin[0]) / g->pitch[0]) + 2;
+    y0 = floor((lo[1] - g->origin[1]) / g->pitch[1]) - 1;
+    y1 = floor((hi[1] - g->origin[1]) / g->pitch[1]) + 2;
+    x0 = x0 < 0 ? 0 : x0 > g->width ? g->width : x0;
+    x1 = x1 < x0 ? x0 : x1 > g->width ? g->width : x1;
+    m->row_lo = (int)(y0 < 0 ? 0 : y0 > g->height ? g->height : y0);
+    m->row_hi = (int)(y1 < m->row_lo ? m->row_lo : y1 > g->height ? g->height : y1);
+    m->byte_lo = m->bits == 8 ? (size_t)x0 : (size_t)x0 / 8;
+    m->byte_hi = m->bits == 8 ? (size_t)x1 : ((size_t)x1 + 7) / 8;
+}
+
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
 {
     adaslice_mask_options mo;
@@ -282,7 +310,8 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
     m->bits = s->supersample > 1 ? 8 : 1;
     m->stride = m->bits == 8 ? (size_t)m->width : ((size_t)m->width + 7) / 8;
-    if (!(m->image = (unsigned char *)malloc(m->stride * (size_t)m->height))) {
+    part_band(m, &j->mesh);
+    if (!(m->image = (unsigned char *)calloc(m->stride * (size_t)m->height, 1))) {
         adaslice_masker_free(&m->masker);
         return complain(RC_FAIL, "out of memory for a %d x %d mask", m->width, m->height);
     }
@@ -294,7 +323,7 @@ int layer_masks_render(layer_masks *m, size_t k, unsigned char *out)
     adaslice_error err;
     if (adaslice_masker_slice(&m->masker, m->j->profile.z0 + layer_slice_height(m->s, m->j, k), &err) != ADASLICE_OK)
         return library_error(&err);
-    orient_image(&m->masker, m->s, out, m->stride);
+    orient_image(m, m->s, out, m->stride);
     return RC_OK;
 }
 

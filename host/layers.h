@@ -48,6 +48,8 @@ typedef struct layer_masks {
     unsigned char *image;          /* width x height, rows of `stride` bytes */
     size_t stride;
     int width, height, bits;
+    int row_lo, row_hi;            /* the masker's rows [lo, hi) and bytes of a row */
+    size_t byte_lo, byte_hi;       /* [lo, hi) the part can light: zero outside, always */
     double part[3];                /* the part's size, mm */
 } layer_masks;
 /* The bytes the masks of s's grid take with `buffers` layers in flight: the
@@ -63,7 +65,8 @@ int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh);
    the masker. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
 /* Layer k's (0-based; k never decreasing) mask into out (m->image or
-   another buffer of m->stride * m->height bytes). */
+   another buffer of m->stride * m->height bytes), which holds zeros or an
+   earlier mask of m: where the part cannot reach, out is left as it is. */
 int layer_masks_render(layer_masks *m, size_t k, unsigned char *out);
 /* Where layer k is sliced, mm above the part's bottom. */
 double layer_slice_height(const slice_args *s, const plan_job *j, size_t k);

@@ -1,6 +1,10 @@
 /* The layer loop on every core: see pipeline.h. A ring of slots, each an
-   image and its blob, moves free -> rendered (by the calling thread) ->
-   encoded (by a worker) -> put (by the calling thread, in order) -> free. */
+   image and its blob, moves free -> rendered -> encoded -> put -> free.
+   Every thread, the calling one among them, takes whatever step is ready:
+   the masker and the writer are each held by one thread at a time (the
+   masker sweeps bottom-up, the job is written in order), a slot's coding by
+   any. A calling thread that only rendered left the cores to three threads
+   on two, each waiting on another a thousand times a job. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
@@ -12,7 +16,7 @@
 #include <string.h>
 #include <unistd.h>
 
-enum { SLOT_FREE, SLOT_RENDERED, SLOT_ENCODING, SLOT_ENCODED };
+enum { SLOT_FREE, SLOT_BUSY, SLOT_RENDERED, SLOT_ENCODED };
 
 typedef struct slot {
     unsigned char *image;
@@ -26,9 +30,11 @@ typedef struct pipeline {
     slot *slots;
     int count;
     pthread_mutex_t lock;
-    pthread_cond_t work;         /* a slot was rendered, or the job is over */
-    pthread_cond_t coded;        /* a slot was encoded */
-    int over;
+    pthread_cond_t change;       /* a step became ready, or the job is over */
+    int waiting;                 /* threads asleep on change */
+    size_t next_render, next_put;
+    int rendering, putting;      /* the masker, the writer: a thread's */
+    int rc;                      /* the first failure, which stops every thread */
 } pipeline;
 
 int pipeline_cores(void)
@@ -37,13 +43,9 @@ int pipeline_cores(void)
     return n > 0 ? (int)n : 1;
 }
 
-/* Two images a worker: one it codes while the next waits for it. */
-int pipeline_images(int threads) { return threads > 1 ? 2 * threads : 1; }
-
-static void encode_slot(const pipeline_job *job, slot *s)
-{
-    s->rc = job->format->encode(job->writer, s->k, s->image, job->stride, &s->blob);
-}
+/* Four images a thread: coded layers wait in them for the one before, which
+   may take longer, so that the masker need not wait for a free one. */
+int pipeline_images(int threads) { return threads > 1 ? 4 * threads : 1; }
 
 /* The lowest layer waiting in `state`, or NULL. */
 static slot *lowest(pipeline *p, int state)
@@ -55,25 +57,70 @@ static slot *lowest(pipeline *p, int state)
     return best;
 }
 
-static void *worker(void *arg)
+/* Called with the lock held, after a step: wakes the threads asleep. */
+static void changed(pipeline *p)
 {
-    pipeline *p = (pipeline *)arg;
+    if (p->waiting) pthread_cond_broadcast(&p->change);
+}
+
+/* One thread's share: steps until every layer is put or one failed. The
+   next layer in order goes into the job first (it frees an image), then the
+   masker renders the next layer while an image is free (it is the one step
+   no other thread can take), else the lowest rendered layer is coded. */
+static void take_steps(pipeline *p)
+{
+    const pipeline_job *job = p->job;
     pthread_mutex_lock(&p->lock);
-    for (;;) {
-        slot *s = lowest(p, SLOT_RENDERED);
-        if (!s) {
-            if (p->over) break;
-            pthread_cond_wait(&p->work, &p->lock);
+    while (!p->rc && p->next_put < job->layers) {
+        slot *s = lowest(p, SLOT_ENCODED);
+        int rc;
+        if (!p->putting && s && s->k == p->next_put) {
+            s->state = SLOT_BUSY;
+            p->putting = 1;
+            pthread_mutex_unlock(&p->lock);
+            rc = s->rc;
+            if (!rc) {
+                rc = job->format->put(job->writer, s->k, &s->blob);
+                if (!rc && job->done) job->done(job->ctx, s->k);
+            }
+            free(s->blob.data);
+            memset(&s->blob, 0, sizeof s->blob);
+            pthread_mutex_lock(&p->lock);
+            s->state = SLOT_FREE;
+            p->next_put++;
+            p->putting = 0;
+            if (rc && !p->rc) p->rc = rc;
+        } else if (!p->rendering && p->next_render < job->layers && (s = lowest(p, SLOT_FREE)) != NULL) {
+            s->state = SLOT_BUSY;
+            s->k = p->next_render++;
+            p->rendering = 1;
+            pthread_mutex_unlock(&p->lock);
+            rc = job->render(job->ctx, s->k, s->image);
+            pthread_mutex_lock(&p->lock);
+            s->state = rc ? SLOT_FREE : SLOT_RENDERED;
+            p->rendering = 0;
+            if (rc && !p->rc) p->rc = rc;
+        } else if ((s = lowest(p, SLOT_RENDERED)) != NULL) {
+            s->state = SLOT_BUSY;
+            pthread_mutex_unlock(&p->lock);
+            s->rc = job->format->encode(job->writer, s->k, s->image, job->stride, &s->blob);
+            pthread_mutex_lock(&p->lock);
+            s->state = SLOT_ENCODED;
+        } else {
+            p->waiting++;
+            pthread_cond_wait(&p->change, &p->lock);
+            p->waiting--;
             continue;
         }
-        s->state = SLOT_ENCODING;
-        pthread_mutex_unlock(&p->lock);
-        encode_slot(p->job, s);
-        pthread_mutex_lock(&p->lock);
-        s->state = SLOT_ENCODED;
-        pthread_cond_signal(&p->coded);
+        changed(p);
     }
+    changed(p); /* over: the others leave too */
     pthread_mutex_unlock(&p->lock);
+}
+
+static void *worker(void *arg)
+{
+    take_steps((pipeline *)arg);
     return NULL;
 }
 
@@ -81,62 +128,26 @@ int pipeline_run(const pipeline_job *job)
 {
     pipeline p;
     pthread_t threads[64];
-    int workers = job->threads > 1 ? job->threads : 0, started = 0, i, rc = RC_OK;
-    size_t next_render = 0, next_put = 0;
-    if (workers > 64) workers = 64;
+    int helpers = job->threads > 1 ? job->threads - 1 : 0, started = 0, i, rc = RC_OK;
+    if (helpers > 63) helpers = 63;
     memset(&p, 0, sizeof p);
     p.job = job;
-    p.count = pipeline_images(workers ? workers : 1);
+    p.count = pipeline_images(helpers + 1);
     if (!(p.slots = (slot *)calloc((size_t)p.count, sizeof *p.slots))) return complain(RC_FAIL, "out of memory");
     for (i = 0; i < p.count; i++)
-        if (!(p.slots[i].image = (unsigned char *)malloc(job->image_bytes ? job->image_bytes : 1))) {
+        if (!(p.slots[i].image = (unsigned char *)calloc(job->image_bytes ? job->image_bytes : 1, 1))) {
             rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
                           job->image_bytes);
             goto done;
         }
     pthread_mutex_init(&p.lock, NULL);
-    pthread_cond_init(&p.work, NULL);
-    pthread_cond_init(&p.coded, NULL);
-    for (; started < workers; started++)
+    pthread_cond_init(&p.change, NULL);
+    for (; started < helpers; started++) /* fewer threads to be had: the job is the same on fewer */
         if (pthread_create(&threads[started], NULL, worker, &p) != 0) break;
-    if (workers && !started) workers = 0; /* no thread to be had: all on this one */
-
-    pthread_mutex_lock(&p.lock);
-    while (next_put < job->layers && !rc) {
-        slot *s = lowest(&p, SLOT_ENCODED);
-        if (s && s->k == next_put) { /* the next layer is coded: into the job */
-            pthread_mutex_unlock(&p.lock);
-            rc = s->rc;
-            if (!rc) {
-                rc = job->format->put(job->writer, s->k, &s->blob);
-                if (!rc && job->done) job->done(job->ctx, s->k);
-            }
-            pthread_mutex_lock(&p.lock);
-            free(s->blob.data);
-            memset(&s->blob, 0, sizeof s->blob);
-            s->state = SLOT_FREE;
-            next_put++;
-            continue;
-        }
-        if (next_render < job->layers && (s = lowest(&p, SLOT_FREE)) != NULL) {
-            s->state = SLOT_ENCODING; /* ours while it renders */
-            pthread_mutex_unlock(&p.lock);
-            s->k = next_render++;
-            rc = job->render(job->ctx, s->k, s->image);
-            if (!rc && !workers) encode_slot(job, s);
-            pthread_mutex_lock(&p.lock);
-            s->state = rc ? SLOT_FREE : workers ? SLOT_RENDERED : SLOT_ENCODED;
-            if (workers) pthread_cond_signal(&p.work);
-            continue;
-        }
-        pthread_cond_wait(&p.coded, &p.lock);
-    }
-    p.over = 1;
-    pthread_cond_broadcast(&p.work);
-    pthread_mutex_unlock(&p.lock);
+    take_steps(&p);
     for (i = 0; i < started; i++) pthread_join(threads[i], NULL);
-    pthread_cond_destroy(&p.coded);
-    pthread_cond_destroy(&p.work);
+    rc = p.rc;
+    pthread_cond_destroy(&p.change);
     pthread_mutex_destroy(&p.lock);
 done:
     for (i = 0; i < p.count; i++) {

@@ -1,8 +1,9 @@
-/* The layer loop on every core: layers are rendered in order on the calling
-   thread (the masker sweeps bottom-up), coded on worker threads (the
-   format's `encode`: PNGs, run-length codes), and put into the job in order
-   on the calling thread (the format's `put`), so the job is the same bytes
-   whatever the number of threads. */
+/* The layer loop on every core: layers are rendered one at a time in order
+   (the masker sweeps bottom-up), coded several at once (the format's
+   `encode`: PNGs, run-length codes), and put into the job one at a time in
+   order (the format's `put`), so the job is the same bytes whatever the
+   number of threads. Each step runs on whichever of the threads, the
+   calling one among them, is free for it. */
 #ifndef ADASLICE_HOST_PIPELINE_H
 #define ADASLICE_HOST_PIPELINE_H
 #include <stddef.h>
@@ -13,10 +14,13 @@ typedef struct pipeline_job {
     void *writer;                /* the format's, open */
     size_t layers;
     size_t image_bytes, stride;  /* of each layer's image */
-    int threads;                 /* 1: everything on the calling thread */
-    /* Layer k into image; RC_OK or a complaint made (which stops the job). */
+    int threads;                 /* the calling one and threads - 1 more; 1: all on the calling one */
+    /* Layer k into image; RC_OK or a complaint made (which stops the job).
+       Called for k = 0, 1, ... in turn, never two at once, on any thread.
+       The images start zeroed and keep what render leaves in them (the
+       coding only reads them), so it need write only where a layer can differ. */
     int (*render)(void *ctx, size_t k, unsigned char *image);
-    /* Layer k is in the job. */
+    /* Layer k is in the job (in turn, on any thread). */
     void (*done)(void *ctx, size_t k);
     void *ctx;
 } pipeline_job;

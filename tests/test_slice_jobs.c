@@ -399,6 +399,103 @@ static void jobs_are_reproducible(void)
     unsetenv("SOURCE_DATE_EPOCH");
 }
 
+/* Every file of directory a is in b with the same bytes, and b has no more;
+   what differs in *what. */
+static int same_directories(const char *a, const char *b, char what[300])
+{
+    DIR *d = opendir(a);
+    struct dirent *e;
+    size_t files = 0, others = 0;
+    int same = d != NULL;
+    snprintf(what, 300, "%s: cannot read", a);
+    while (same && (e = readdir(d)) != NULL) {
+        char x[600], y[600];
+        unsigned char *p, *q;
+        size_t np = 0, nq = 0;
+        if (e->d_name[0] == '.') continue;
+        snprintf(x, sizeof x, "%s/%s", a, e->d_name);
+        snprintf(y, sizeof y, "%s/%s", b, e->d_name);
+        p = read_file(x, &np);
+        q = read_file(y, &nq);
+        same = p && q && np == nq && !memcmp(p, q, np);
+        if (!same) snprintf(what, 300, "%s differs", e->d_name);
+        files++;
+        free(p);
+        free(q);
+    }
+    if (d) closedir(d);
+    for (d = same ? opendir(b) : NULL; d && (e = readdir(d)) != NULL;) others += e->d_name[0] != '.';
+    if (d) closedir(d);
+    if (same && others != files) { snprintf(what, 300, "%zu files against %zu", others, files); same = 0; }
+    return same && files > 0;
+}
+
+/* Any number of threads writes the same job as one, byte for byte: each step
+   of the pipeline (render, code, put) may run on any thread. Two models (the
+   sphere and the bundled hand), 1-bit and --aa 4 masks on a grid of odd
+   width and height, 2 and 3 threads, a job
+   directory (every file) and a ctb; the directory re-sliced over a job with
+   more and larger layers (its layer files are written over in place) is the
+   same as well. */
+static void threads_write_the_same_job(void)
+{
+    static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3"};
+    char models[2][256], one[300], many[300], what[300];
+    int m, a, t;
+    snprintf(models[0], sizeof models[0], "%s", sphere_obj());
+    snprintf(models[1], sizeof models[1], "examples/models/hand_closed.obj");
+    snprintf(one, sizeof one, "%s/one", cli_dir);
+    snprintf(many, sizeof many, "%s/many", cli_dir);
+    setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
+    for (m = 0; m < 2; m++)
+        for (a = 0; a < 2; a++) {
+            const char *scale = m ? "12" : "1";
+            cli_result r = cli_run("slice", models[m], "--scale", scale, "--pixels", "301x253", "--pitch", "0.05",
+                                   "--aa", aa[a], "--threads", "1", "-o", one, NULL);
+            CHECKF(r.status == 0, "%s: %s", models[m], r.err);
+            cli_free(&r);
+            for (t = 0; t < 2; t++) {
+                r = cli_run("slice", models[m], "--scale", scale, "--pixels", "301x253", "--pitch", "0.05", "--aa", aa[a],
+                            "--threads", threads[t], "-o", many, NULL);
+                CHECKF(r.status == 0, "%s: %s", models[m], r.err);
+                cli_free(&r);
+                CHECKF(same_directories(one, many, what), "%s --aa %s --threads %s: %s", models[m], aa[a], threads[t], what);
+            }
+        }
+    /* over the hand's --aa 4 job in `many`: the sphere's 1-bit layers, fewer and smaller */
+    {
+        cli_result r = cli_run("slice", models[0], "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        r = cli_run("slice", models[0], "--pixels", "301x253", "--pitch", "0.05", "--threads", "2", "-o", many, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        CHECKF(same_directories(one, many, what), "re-sliced over a larger job: %s", what);
+    }
+    for (a = 0; a < 2; a++) {
+        char x[320], y[320];
+        unsigned char *p, *q;
+        size_t np = 0, nq = 0;
+        cli_result r;
+        snprintf(x, sizeof x, "%s/one.ctb", cli_dir);
+        snprintf(y, sizeof y, "%s/many.ctb", cli_dir);
+        r = cli_run("slice", models[1], "--scale", "12", "--pixels", "301x253", "--pitch", "0.05", "--aa", aa[a],
+                    "--threads", "1", "-o", x, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        r = cli_run("slice", models[1], "--scale", "12", "--pixels", "301x253", "--pitch", "0.05", "--aa", aa[a],
+                    "--threads", "2", "-o", y, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        p = read_file(x, &np);
+        q = read_file(y, &nq);
+        CHECKF(p && q && np == nq && !memcmp(p, q, np), "ctb --aa %s: one thread and two differ", aa[a]);
+        free(p);
+        free(q);
+    }
+    unsetenv("SOURCE_DATE_EPOCH");
+}
+
 /* A uniform job's top layer is what is left of the part: the headers' one
    layer height and exposure are the regular layers', not the top's. */
 static void headers_hold_the_regular_layers(void)
@@ -545,6 +642,7 @@ void test_slice_jobs(void)
     RUN(refusals_leave_nothing_behind);
     RUN(resin_files_hold_the_directory_jobs_masks);
     RUN(jobs_are_reproducible);
+    RUN(threads_write_the_same_job);
     RUN(headers_hold_the_regular_layers);
     RUN(job_directories_cannot_go_stale);
     RUN(an_interrupted_reslice_cannot_be_printed);
