@@ -193,6 +193,11 @@ int cm3_tx_pop(uint8_t *byte)
     return 1;
 }
 
+int cm3_tx_empty(void)
+{
+    return tx_tail == tx_head;
+}
+
 uint32_t cm3_tx_dropped(void)
 {
     return tx_dropped;

@@ -122,6 +122,7 @@ uint32_t cm3_rx_lost_count(void);
 #endif
 int cm3_tx_write(const uint8_t *data, size_t size); /* 0: dropped */
 int cm3_tx_pop(uint8_t *byte);                       /* 0: empty */
+int cm3_tx_empty(void);
 uint32_t cm3_tx_dropped(void);
 
 /* Alarms at absolute ticks, from hardware timers, so that what they do

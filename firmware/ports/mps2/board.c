@@ -171,7 +171,11 @@ void board_exit(int code)
     /* SYS_EXIT_EXTENDED with ADP_Stopped_ApplicationExit: QEMU exits with
        `code` (plain SYS_EXIT cannot carry one on 32-bit ARM). */
     uint32_t block[2];
+    uint64_t until = cm3_ticks() + BOARD_CLOCK_HZ / 20u;
     safe_outputs();
+    /* the last reply (EXIT's ACK) out of the ring first, for up to 50 ms: the
+       transmit interrupt sends it unless a fault has interrupts held */
+    while (!cm3_tx_empty() && cm3_ticks() < until) {}
 #ifdef CM3_TRACE
     trace_report();
 #endif
