@@ -103,7 +103,8 @@ test: $(TEST_PROGRAMS)
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
 BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
-check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(BENCH_PROGRAMS)
+check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-mps2-trace.elf $(B)/fw-mps2-hang.elf \
+       $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two
@@ -181,13 +182,14 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 
-bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf
+bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-trace.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
 	$(B)/bench_jobs $(B)/adaslice $(MODELS)
 	$(B)/bench_wire $(MODELS)
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
+	bench/qemu_timing.sh $(B)/fw-mps2-trace.elf $(B)/adaslice
 
 clean:
 	rm -rf $(B)

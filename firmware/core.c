@@ -781,7 +781,10 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
 
     /* refilled as each step leaves; homing reads the switch after each */
     if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
-    else if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
+    /* moving with nothing queued: the interrupt took the last queued step
+       after fill_steps ran (homing queues one), so refill at once; waiting
+       for the next step's own tick would find it past (STEP_LATE) */
+    else if (fw_axis_busy(&fw->axis)) next = now;
     if (fw->config.watchdog_ms) next = earliest(next, now + FW_MS(fw, fw->config.watchdog_ms) / 2u);
     if (fw->decoding) next = now; /* the next rows, in the next pass */
     if (fw->state == LINK_STATE_PRINTING) {

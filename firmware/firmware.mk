@@ -4,6 +4,11 @@
 #   $(B)/fw-mps2.elf          the Cortex-M3 image QEMU's mps2-an385 runs
 #   $(B)/fw-mps2-busy.elf     the same, idling by spinning: for -icount runs
 #                             (a core asleep in WFI there can wake a period late)
+#   $(B)/fw-mps2-trace.elf    the busy image that also records every step's
+#                             scheduled and emitted tick and the worst loop
+#                             pass (-DCM3_TRACE, tests/test_qemu_timing.c)
+#   $(B)/fw-mps2-hang.elf     the trace image whose loop hangs in layer 2's
+#                             exposure: the watchdog test
 #   $(B)/fw-stm32f103.elf     an STM32F103C8 printer board, built, not run
 #   firmware                  all three, and each image's flash and RAM;
 #                             fails if one needs more than 20 KiB of RAM
@@ -25,6 +30,11 @@ FW_ARM_FLAGS = -mcpu=cortex-m3 -mthumb -Os -std=c99 -Wall -Wextra -Wpedantic -We
                -ffreestanding -fno-tree-loop-distribute-patterns -ffunction-sections -fdata-sections \
                -nostdlib -Wl,--gc-sections
 FW_ARM_LIBS  = -lgcc
+# 1536 bytes of stack (the linker scripts' default is 2048): the trace image
+# painted it and a print under QEMU (planned by the printer, masks
+# streaming, steps and replies from interrupts) went 992 bytes deep; the
+# rest of the 20 KiB holds the transmit ring. The canary still guards it.
+FW_ARM_FLAGS += -Wl,--defsym=STACK_SIZE=1536
 
 .PHONY: firmware
 
@@ -37,22 +47,37 @@ FW_MPS2 = firmware/ports/mps2
 FW_MPS2_SRC = $(FW_CM3)/main.c $(FW_MPS2)/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
 FW_MPS2_DEPS = $(FW_MPS2_SRC) $(FW_MPS2)/board.h $(FW_MPS2)/mps2.ld $(FW_CM3_HDRS) $(FW_HDRS)
 
+# The transmit ring (1024 bytes by default) holds the replies to the
+# window's 4 frames, up to 255 bytes each (board.h).
+FW_MPS2_FLAGS = $(FW_ARM_FLAGS)
+
 $(B)/fw-mps2.elf: $(FW_MPS2_DEPS)
 	@mkdir -p $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+	$(ARM_CC) $(FW_MPS2_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
 
 $(B)/fw-mps2-busy.elf: $(FW_MPS2_DEPS)
 	@mkdir -p $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_BUSY_WAIT -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+	$(ARM_CC) $(FW_MPS2_FLAGS) -DCM3_BUSY_WAIT -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+
+$(B)/fw-mps2-trace.elf: $(FW_MPS2_DEPS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_MPS2_FLAGS) -DCM3_BUSY_WAIT -DCM3_TRACE -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) -o $@ $(FW_ARM_LIBS)
+
+$(B)/fw-mps2-hang.elf: $(FW_MPS2_DEPS)
+	@mkdir -p $(B)
+	$(ARM_CC) $(FW_MPS2_FLAGS) -DCM3_BUSY_WAIT -DCM3_TRACE -DCM3_HANG_LAYER=2 -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(FW_MPS2_SRC) \
+	    -o $@ $(FW_ARM_LIBS)
 
 # The receive ring holds the protocol's window of 4 full frames (4 x 255
-# bytes): a real USART cannot hold the line the way QEMU's does.
+# bytes): a real USART cannot hold the line the way QEMU's does; the
+# transmit ring the 4 replies of up to 255 bytes they may draw. A display
+# row is 2560 / 8 = 320 bytes (FW_ROW_BYTES; the core's default is 480).
 FW_STM32 = firmware/ports/stm32f103
 FW_STM32_SRC = $(FW_CM3)/main.c $(FW_STM32)/board.c $(FW_CM3_SRC) $(FW_CORE_SRC)
 
 $(B)/fw-stm32f103.elf: $(FW_STM32_SRC) $(FW_STM32)/board.h $(FW_STM32)/stm32f103.ld $(FW_CM3_HDRS) $(FW_HDRS)
 	@mkdir -p $(B)
-	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_RX_SIZE=1024u -DBOARD_WINDOW=4u -I$(FW_STM32) -T $(FW_STM32)/stm32f103.ld \
+	$(ARM_CC) $(FW_ARM_FLAGS) -DCM3_RX_SIZE=1024u -DCM3_TX_SIZE=1024u -DBOARD_WINDOW=4u -DFW_ROW_BYTES=320u -I$(FW_STM32) -T $(FW_STM32)/stm32f103.ld \
 	    $(FW_STM32_SRC) -o $@ $(FW_ARM_LIBS)
 
 # The planner bench image: the mps2 board code and cm3 reset/tick with its

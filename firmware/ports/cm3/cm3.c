@@ -23,6 +23,13 @@ void cm3_reset(void)
     for (to = __bss_start; to < __bss_end; ) *to++ = 0;
     /* The stack grows down into this word; main's loop checks it. */
     __stack_bottom[0] = CM3_CANARY;
+#ifdef CM3_TRACE
+    {   /* the rest painted, to see how deep it went (cm3_stack_used) */
+        uint32_t *sp;
+        __asm__ volatile("mov %0, sp" : "=r"(sp));
+        for (to = __stack_bottom + 1; to < sp - 16; ) *to++ = CM3_CANARY;
+    }
+#endif
     board_exit(main());
 }
 
@@ -43,7 +50,7 @@ struct cm3_system_vectors {
 __attribute__((section(".vectors"), used))
 static const struct cm3_system_vectors system_vectors = {
     __stack_top,
-    { cm3_reset, F, F, F, F, F, 0, 0, 0, 0, F, F, 0, F, SysTick_Handler }
+    { cm3_reset, board_nmi, F, F, F, F, 0, 0, 0, 0, F, F, 0, F, SysTick_Handler }
 };
 #undef F
 
@@ -51,6 +58,15 @@ int cm3_stack_ok(void)
 {
     return __stack_bottom[0] == CM3_CANARY;
 }
+
+#ifdef CM3_TRACE
+uint32_t cm3_stack_used(void)
+{
+    const uint32_t *p = __stack_bottom + 1;
+    while (p < __stack_top && *p == CM3_CANARY) p++;
+    return (uint32_t)((uintptr_t)__stack_top - (uintptr_t)p);
+}
+#endif
 
 /* ---- the tick ------------------------------------------------------------
    SysTick counts the core clock down from 2^24 - 1 and interrupts at each
@@ -145,6 +161,48 @@ uint32_t cm3_rx_lost_count(void)
     return rx_lost;
 }
 
+/* ---- the transmit ring ------------------------------------------------- */
+#define TX_SIZE CM3_TX_SIZE
+typedef char cm3_tx_size_is_a_power_of_two[(TX_SIZE & (TX_SIZE - 1u)) == 0 ? 1 : -1];
+
+static uint8_t tx_buf[TX_SIZE];
+static volatile uint32_t tx_head;   /* advanced by the main loop */
+static volatile uint32_t tx_tail;   /* advanced by the transmit interrupt */
+static uint32_t tx_dropped;
+
+int cm3_tx_write(const uint8_t *data, size_t size)
+{
+    uint32_t head = tx_head, i;
+    if (size > TX_SIZE - (head - tx_tail)) {
+        tx_dropped++;
+        return 0;
+    }
+    for (i = 0; i < size; i++) tx_buf[(head + i) % TX_SIZE] = data[i];
+    __asm__ volatile("" ::: "memory");
+    tx_head = head + (uint32_t)size; /* published after the bytes */
+    return 1;
+}
+
+int cm3_tx_pop(uint8_t *byte)
+{
+    uint32_t tail = tx_tail;
+    if (tail == tx_head) return 0;
+    *byte = tx_buf[tail % TX_SIZE];
+    __asm__ volatile("" ::: "memory");
+    tx_tail = tail + 1u;
+    return 1;
+}
+
+int cm3_tx_empty(void)
+{
+    return tx_tail == tx_head;
+}
+
+uint32_t cm3_tx_dropped(void)
+{
+    return tx_dropped;
+}
+
 /* ---- alarms ---------------------------------------------------------------- */
 static volatile uint64_t alarm_when[CM3_ALARMS] = {UINT64_MAX, UINT64_MAX};
 
@@ -170,6 +228,9 @@ void cm3_alarm(int which)
         return;
     }
     alarm_when[which] = UINT64_MAX;
+#ifdef CM3_TRACE
+    if (which == CM3_ALARM_STEP) board_trace_step(when, now);
+#endif
     cm3_alarm_due(which, now - when);
 }
 

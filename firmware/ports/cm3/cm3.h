@@ -31,6 +31,11 @@
 static inline void cm3_irq_enable(unsigned irq) { NVIC_ISER(irq / 32u) = 1u << (irq % 32u); }
 static inline void cm3_irq_pend(unsigned irq) { NVIC_ISPR(irq / 32u) = 1u << (irq % 32u); }
 static inline void cm3_irq_unpend(unsigned irq) { NVIC_ICPR(irq / 32u) = 1u << (irq % 32u); }
+/* Priorities (NVIC_IPR, a byte per interrupt; a part implements the top
+   bits): the alarms stay at 0, the highest; the UARTs and the wake-up timer
+   go below them, so a step never waits behind a byte. */
+#define CM3_PRIORITY_LOW 0x80u
+static inline void cm3_irq_priority(unsigned irq, uint8_t prio) { *(volatile uint8_t *)(uintptr_t)(0xE000E400u + irq) = prio; }
 static inline void cm3_interrupts_off(void) { __asm__ volatile("cpsid i" ::: "memory"); }
 static inline void cm3_interrupts_on(void) { __asm__ volatile("cpsie i" ::: "memory"); }
 
@@ -40,7 +45,8 @@ enum { CM3_FAULT_STACK = 1, CM3_FAULT_HARD = 2, CM3_FAULT_CLOCK = 3 };
 /* ---- supplied by the board ------------------------------------------- */
 /* Clocks, UART, timers, pins; SysTick is started by cm3_tick_start. */
 void board_init(void);
-/* Sends bytes to the host, waiting for room in the UART. */
+/* Queues one whole reply for the host (cm3_tx_write) and starts the UART's
+   transmit interrupt; never waits for the line. */
 void board_write(const uint8_t *data, size_t size);
 /* The board's one-shot alarms (CM3_ALARM_*): interrupts `delay` ticks from
    now, or as far as the timer counts (cm3 arms it again for the rest), that
@@ -53,6 +59,12 @@ void board_wake_at(uint64_t deadline, uint64_t now);
 /* Makes the UART receive interrupt run again (cm3_rx_consume calls this
    after the ring had stalled). */
 void board_rx_resume(void);
+/* Starts (on the first call) and refreshes the hardware watchdog; from
+   port.watchdog, i.e. fw_run, only. */
+void board_watchdog(void);
+/* The non-maskable interrupt: mps2's watchdog warning; a board without a
+   source for it treats it as a fault. */
+void board_nmi(void);
 /* Leaves the firmware: semihosting exit under QEMU, a reset on a board. */
 void board_exit(int code) __attribute__((noreturn));
 /* Stops everything safely after a fault (UV off first). */
@@ -96,6 +108,23 @@ void cm3_rx_consume(size_t n);
 void cm3_rx_lost(void);
 uint32_t cm3_rx_lost_count(void);
 
+/* The transmit ring. The loop puts whole replies in (cm3_tx_write); the
+   UART's transmit interrupt takes bytes out (cm3_tx_pop) as the line
+   drains them, so a reply never stalls the loop. The boards size it
+   (CM3_TX_SIZE) for the protocol's worst case: the host's window of frames,
+   each answered by at most one reply of LINK_FRAME_MAX bytes. Should it
+   still be full (a host that ignores the window, G-code chatter faster than
+   the line), the reply that does not fit is dropped whole and counted, never
+   cut: the host repeats a request whose answer does not come, and an ACK is
+   superseded by the next (link/PROTOCOL.md). */
+#ifndef CM3_TX_SIZE
+#define CM3_TX_SIZE 1024u /* a power of two */
+#endif
+int cm3_tx_write(const uint8_t *data, size_t size); /* 0: dropped */
+int cm3_tx_pop(uint8_t *byte);                       /* 0: empty */
+int cm3_tx_empty(void);
+uint32_t cm3_tx_dropped(void);
+
 /* Alarms at absolute ticks, from hardware timers, so that what they do
    happens on time whatever the loop is doing: the next Z step
    (fw_step_interrupt) and the end of an exposure (UV off). */
@@ -119,6 +148,16 @@ void cm3_idle(uint64_t deadline);
 
 /* 1 while the word at the bottom of the stack is intact. */
 int cm3_stack_ok(void);
+
+#ifdef CM3_TRACE
+/* Test images only: the step alarm's scheduled and actual ticks (cm3_alarm,
+   before the step goes out), a line to the emulator's log, the worst
+   loop pass in ticks (serve.c) and the deepest the stack went. */
+void board_trace_step(uint64_t scheduled, uint64_t emitted);
+void board_trace_text(const char *prefix, uint64_t value);
+extern uint64_t cm3_worst_pass;
+uint32_t cm3_stack_used(void);
+#endif
 
 /* ---- serve.c ---------------------------------------------------------------- */
 struct fw_state;

@@ -13,6 +13,7 @@ static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 static struct { uint32_t steps; uint64_t worst_late; } step_timing;
 
 static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
+static void port_watchdog(void *ctx) { (void)ctx; board_watchdog(); }
 static int port_step_arm(void *ctx, uint64_t when, int dir)
 {
     (void)ctx;
@@ -86,14 +87,18 @@ int main(void)
     config.pitch_nm = BOARD_PITCH_NM;
     config.max_bins = BOARD_MAX_BINS;
     config.window = BOARD_WINDOW;
-    config.watchdog_ms = 0;
-    config.step_lead = BOARD_CLOCK_HZ / 1000u; /* 1 ms: the loop's longest pass, and more */
+    config.watchdog_ms = BOARD_WATCHDOG_MS;
+    /* 5 ms: a move's first step is armed by the loop pass that started it,
+       which may go on for a whole 64-byte chunk of frames after the tick it
+       was given; the longest pass measured under QEMU was 4.1 ms (101,798
+       cycles at 25 MHz, tests/test_qemu_timing.c), 1 ms was too little. */
+    config.step_lead = BOARD_CLOCK_HZ / 200u;
     config.boot_id = next_boot_id();
     port.ctx = NULL;
     port.write = port_write;
     port.step_arm = port_step_arm;
     port.step_pulse = port_step_pulse;
-    port.watchdog = NULL;
+    port.watchdog = port_watchdog;
     port.endstop = port_endstop;
     port.uv = port_uv;
     port.motor = port_motor;

@@ -7,6 +7,13 @@
    core's work on this many bytes. */
 #define CHUNK 64u
 
+#ifdef CM3_TRACE
+uint64_t cm3_worst_pass; /* ticks of the longest pass's work (idle left out) */
+#define PASS_END() do { uint64_t t_ = cm3_ticks() - pass_start; if (t_ > cm3_worst_pass) cm3_worst_pass = t_; } while (0)
+#else
+#define PASS_END() do {} while (0)
+#endif
+
 void cm3_serve(fw_state *fw)
 {
     uint64_t deadline = 0;
@@ -14,7 +21,20 @@ void cm3_serve(fw_state *fw)
         const uint8_t *data;
         size_t n = cm3_rx_peek(&data);
         uint64_t now;
+        int idle;
+#ifdef CM3_TRACE
+        uint64_t pass_start = cm3_ticks();
+#endif
         if (!cm3_stack_ok()) board_fault(CM3_FAULT_STACK);
+#ifdef CM3_HANG_LAYER
+        /* the watchdog test's image: the loop stops dead in this layer's
+           exposure, interrupts still on (the UV alarm, the watchdog's NMI) */
+        if (fw->layer == CM3_HANG_LAYER && fw->uv_on) {
+            board_trace_text("fw-mps2: loop hung in the exposure of layer ", fw->layer);
+            board_trace_text("fw-mps2: hung at tick ", cm3_ticks());
+            for (;;) {}
+        }
+#endif
         if (n) {
             if (n > CHUNK) n = CHUNK;
             n = fw_receive(fw, data, n, cm3_ticks());
@@ -24,8 +44,10 @@ void cm3_serve(fw_state *fw)
             deadline = 0;
         }
         now = cm3_ticks();
+        idle = now < deadline && !n;
         if (now >= deadline) deadline = fw_run(fw, now);
-        else if (!n) cm3_idle(deadline);
+        PASS_END();
+        if (idle) cm3_idle(deadline);
     }
 }
 

@@ -23,9 +23,20 @@
 #ifndef BOARD_MAX_BINS
 #define BOARD_MAX_BINS 12000u
 #endif
-/* QEMU's UART holds the line while the ring is full, so no window overruns
-   it; 8 frames keep the link busy. */
-#define BOARD_WINDOW 8u
+/* Frames the host may send ahead. QEMU's UART holds the line while the
+   receive ring is full, so no window overruns that; the limit is the
+   transmit ring, which must hold a reply to each (BOARD_TX_WORST): 4, as on
+   the STM32F103, whose 20 KiB this image is held to. */
+#ifndef BOARD_WINDOW
+#define BOARD_WINDOW 4u
+#endif
+/* The watchdog's period: the loop refreshes it at least every half of it
+   (fw_run bounds its deadline so); a hung loop is reset within it. */
+#define BOARD_WATCHDOG_MS 250u
+/* The transmit ring: the window's frames each answered by at most one
+   reply of LINK_FRAME_MAX (255) bytes, rounded up to a power of two
+   (CM3_TX_SIZE, 1024 by default; board.c checks it). */
+#define BOARD_TX_WORST (BOARD_WINDOW * 255u)
 /* EXIT ends QEMU with its code (semihosting) */
 #define BOARD_CAN_EXIT 1
 /* the carriage's start above the endstop */

@@ -1,7 +1,8 @@
 /* The STM32F103C8's hardware layer: clocks, USART1, the wake-up timer, the
    printer's pins and the vector table. Register addresses and bit positions
    are from ST's reference manual RM0008 (its RCC, embedded flash, GPIO,
-   general-purpose timer, USART and interrupt vector chapters) and, for the
+   general-purpose timer, independent watchdog, USART and interrupt vector
+   chapters) and, for the
    flash wait states, PM0075; see board.h for the pins. */
 #include "../cm3/cm3.h"
 #include "board.h"
@@ -65,6 +66,7 @@
 #define USART_CR1_RE     (1u << 2)
 #define USART_CR1_TE     (1u << 3)
 #define USART_CR1_RXNEIE (1u << 5)
+#define USART_CR1_TXEIE  (1u << 7)
 #define USART_CR1_UE     (1u << 13)
 #define USART1_IRQ 37u
 
@@ -89,6 +91,25 @@
 #define TIM_ARR(t)  CM3_REG((t) + 0x2Cu)
 #define TIM3_IRQ 29u
 #define TIM4_IRQ 30u
+
+/* The independent watchdog (RM0008, "Independent watchdog (IWDG)"): counts
+   the LSI (40 kHz nominal, 30-60 kHz) divided by 4 << PR down from RLR
+   (12 bits); at zero it resets the MCU. KR takes 0xCCCC (start; from then on
+   only a reset stops it), 0x5555 (PR and RLR writable) and 0xAAAA (reload);
+   SR's PVU and RVU are set while a PR or RLR write is still being taken. */
+#define IWDG_KR  CM3_REG(0x40003000u)
+#define IWDG_PR  CM3_REG(0x40003004u)
+#define IWDG_RLR CM3_REG(0x40003008u)
+#define IWDG_SR  CM3_REG(0x4000300Cu)
+#define IWDG_KEY_START  0xCCCCu
+#define IWDG_KEY_ACCESS 0x5555u
+#define IWDG_KEY_RELOAD 0xAAAAu
+#define IWDG_PR_DIV8    1u      /* 40 kHz / 8 = 5 kHz */
+#define IWDG_LSI_HZ     40000u
+#define IWDG_RELOAD (IWDG_LSI_HZ / 8u * BOARD_WATCHDOG_MS / 1000u - 1u) /* 1249: 250 ms */
+typedef char iwdg_reload_fits_12_bits[IWDG_RELOAD <= 0xFFFu ? 1 : -1];
+
+typedef char tx_ring_holds_the_window[CM3_TX_SIZE >= BOARD_TX_WORST ? 1 : -1];
 
 #ifndef BAUD
 #define BAUD 115200u
@@ -186,10 +207,26 @@ static void pins_init(void)
     pin_mode(GPIOA, PIN_RX, PIN_IN_PULL);
 }
 
+/* TXE is a level: while TXEIE is set the interrupt takes one byte each time
+   the data register empties, and clears TXEIE when the ring is empty.
+   CR1 is also changed by the receive side, from the loop and from this
+   interrupt, so the loop changes it with interrupts off. */
+static void cr1_set(uint32_t bits)
+{
+    cm3_interrupts_off();
+    USART1_CR1 |= bits;
+    cm3_interrupts_on();
+}
+
 /* ---- USART1 ------------------------------------------------------------------------ */
 void usart1_handler(void);
 void usart1_handler(void)
 {
+    if ((USART1_CR1 & USART_CR1_TXEIE) && (USART1_SR & USART_SR_TXE)) {
+        uint8_t byte;
+        if (cm3_tx_pop(&byte)) USART1_DR = byte;
+        else USART1_CR1 &= ~USART_CR1_TXEIE;
+    }
     for (;;) {
         uint32_t sr = USART1_SR;
         if (!(sr & (USART_SR_RXNE | USART_SR_ORE))) return;
@@ -211,16 +248,13 @@ void usart1_handler(void)
 void board_rx_resume(void)
 {
     /* RXNE is a level: enabling its interrupt again takes the waiting byte */
-    USART1_CR1 |= USART_CR1_RXNEIE;
+    cr1_set(USART_CR1_RXNEIE);
 }
 
 void board_write(const uint8_t *data, size_t size)
 {
-    size_t i;
-    for (i = 0; i < size; i++) {
-        while (!(USART1_SR & USART_SR_TXE)) {}
-        USART1_DR = data[i];
-    }
+    (void)cm3_tx_write(data, size);
+    cr1_set(USART_CR1_TXEIE);
 }
 
 static void usart_init(uint32_t pclk2)
@@ -228,6 +262,8 @@ static void usart_init(uint32_t pclk2)
     /* BRR holds pclk / baud in sixteenths of the 16x oversampled bit */
     USART1_BRR = (pclk2 + BAUD / 2u) / BAUD;
     USART1_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
+    /* below the alarms (TIM3, TIM4 at 0): a step never waits behind a byte */
+    cm3_irq_priority(USART1_IRQ, CM3_PRIORITY_LOW);
     cm3_irq_enable(USART1_IRQ);
 }
 
@@ -310,7 +346,35 @@ static void timer_init(void)
     TIM2_EGR = 1u; /* loads the prescaler */
     TIM2_SR = 0;
     TIM2_DIER = 1u; /* update interrupt */
+    cm3_irq_priority(TIM2_IRQ, CM3_PRIORITY_LOW);
     cm3_irq_enable(TIM2_IRQ);
+}
+
+/* ---- the watchdog ------------------------------------------------------------------
+   Started by the first refresh (fw_run's first pass), then reloaded by each;
+   nothing else reloads it. */
+static int watchdog_on;
+
+void board_watchdog(void)
+{
+    if (!watchdog_on) {
+        uint32_t i;
+        IWDG_KR = IWDG_KEY_START;
+        IWDG_KR = IWDG_KEY_ACCESS;
+        IWDG_PR = IWDG_PR_DIV8;
+        IWDG_RLR = IWDG_RELOAD;
+        /* the LSI clock domain takes a few of its cycles (well under 1 ms) */
+        for (i = 0; (IWDG_SR & 3u) && i < 1000000u; i++) {}
+        watchdog_on = 1;
+    }
+    IWDG_KR = IWDG_KEY_RELOAD;
+}
+
+/* The NMI: only the clock security system raises it, which this board does
+   not enable; a fault, then. */
+void board_nmi(void)
+{
+    board_fault(CM3_FAULT_HARD);
 }
 
 /* ---- start and stop ---------------------------------------------------------------------- */
@@ -335,8 +399,11 @@ void board_exit(int code)
 
 void board_fault(int why)
 {
-    /* Stop dead, light off, driver off, LED on, until the reset button: a
-       printer that restarted itself mid-print could expose the wrong layer. */
+    /* Stop dead, light off, driver off, LED on. Once the watchdog runs (the
+       core's first pass) nothing here reloads it, so within its period the
+       MCU resets and starts idle, light off, unhomed (the host sees the new
+       boot and stops the print); a fault before that stays here until the
+       reset button. */
     cm3_interrupts_off();
     board_uv(0);
     board_motor(0);

@@ -50,5 +50,12 @@
 #ifndef BOARD_WINDOW
 #define BOARD_WINDOW 4u
 #endif
+/* The independent watchdog's period at the LSI's nominal 40 kHz (board.c):
+   the loop refreshes it at least every half of it, 125 ms, below the
+   shortest the LSI's spread (30-60 kHz) can make it, 167 ms. */
+#define BOARD_WATCHDOG_MS 250u
+/* The transmit ring: the window's frames each answered by at most one
+   reply of LINK_FRAME_MAX (255) bytes (CM3_TX_SIZE, set by firmware.mk). */
+#define BOARD_TX_WORST (BOARD_WINDOW * 255u)
 #define BOARD_CAN_EXIT 0 /* a real board does not end */
 #endif
