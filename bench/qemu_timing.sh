@@ -34,9 +34,10 @@ wait "$qemu"
 awk -F' ' '
     /trace steps/ { steps = $NF }
     /worst step lateness/ { late = $NF }
-    /worst loop pass/ { pass = $NF }
+    /worst loop pass \(cycles\)/ { pass = $NF }
+    /worst loop pass while Z moves/ { moving = $NF }
     END {
         if (steps == "") { print "qemu timing: no summary from the image"; exit 1 }
-        printf "QEMU -icount, mps2 (25 MHz), a print with masks streaming: %d steps, worst step lateness %d cycles (%.1f us), worst loop pass %d cycles (%.2f ms; the step interval at 10 mm/s is 6250)\n", \
-            steps, late, late / 25, pass, pass / 25000
+        printf "QEMU -icount, mps2 (25 MHz), a print with masks streaming: %d steps, worst step lateness %d cycles (%.1f us), worst loop pass %d cycles (%.2f ms), %d while Z moves (%.2f ms; the step interval at 10 mm/s is 6250)\n", \
+            steps, late, late / 25, pass, pass / 25000, moving, moving / 25000
     }' qemu.err

@@ -204,9 +204,10 @@ static void steps_on_time_under_qemu(void)
            worst_late * 1e6 / QEMU_TICK_HZ);
     if (!check_case_failed())
         printf("     %zu steps, worst lateness %llu cycles (%.1f us), shortest interval %llu cycles (limit %u); "
-               "worst loop pass %lld cycles; stack %lld bytes\n",
+               "worst loop pass %lld cycles, %lld while Z moves; stack %lld bytes\n",
                steps, (unsigned long long)worst_late, worst_late * 1e6 / QEMU_TICK_HZ, (unsigned long long)shortest, min_interval,
                err ? qemu_said(err, "fw-mps2: worst loop pass (cycles) ", 0) : -1,
+               err ? qemu_said(err, "fw-mps2: worst loop pass while Z moves (cycles) ", 0) : -1,
                err ? qemu_said(err, "fw-mps2: stack used (bytes) ", 0) : -1);
     free(bin);
     free(err);

@@ -155,7 +155,7 @@ int cm3_stack_ok(void);
    loop pass in ticks (serve.c) and the deepest the stack went. */
 void board_trace_step(uint64_t scheduled, uint64_t emitted);
 void board_trace_text(const char *prefix, uint64_t value);
-extern uint64_t cm3_worst_pass;
+extern uint64_t cm3_worst_pass, cm3_worst_moving_pass;
 uint32_t cm3_stack_used(void);
 #endif
 

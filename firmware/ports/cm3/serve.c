@@ -8,8 +8,15 @@
 #define CHUNK 64u
 
 #ifdef CM3_TRACE
-uint64_t cm3_worst_pass; /* ticks of the longest pass's work (idle left out) */
-#define PASS_END() do { uint64_t t_ = cm3_ticks() - pass_start; if (t_ > cm3_worst_pass) cm3_worst_pass = t_; } while (0)
+uint64_t cm3_worst_pass;        /* ticks of the longest pass's work (idle left out) */
+uint64_t cm3_worst_moving_pass; /* the same while Z moves: what the step queue must cover */
+#define PASS_END()                                                                                                  \
+    do {                                                                                                            \
+        uint64_t t_ = cm3_ticks() - pass_start;                                                                     \
+        if (t_ > cm3_worst_pass) cm3_worst_pass = t_;                                                               \
+        if ((moving || fw_axis_busy(&fw->axis) || fw->steps.head != fw->steps.tail) && t_ > cm3_worst_moving_pass)  \
+            cm3_worst_moving_pass = t_;                                                                             \
+    } while (0)
 #else
 #define PASS_END() do {} while (0)
 #endif
@@ -24,6 +31,7 @@ void cm3_serve(fw_state *fw)
         int idle;
 #ifdef CM3_TRACE
         uint64_t pass_start = cm3_ticks();
+        int moving = fw_axis_busy(&fw->axis) || fw->steps.head != fw->steps.tail;
 #endif
         if (!cm3_stack_ok()) board_fault(CM3_FAULT_STACK);
 #ifdef CM3_HANG_LAYER

@@ -161,6 +161,7 @@ static void trace_report(void)
     board_trace_text("fw-mps2: trace records lost ", trace_lost);
     board_trace_text("fw-mps2: worst step lateness (cycles) ", worst);
     board_trace_text("fw-mps2: worst loop pass (cycles) ", cm3_worst_pass);
+    board_trace_text("fw-mps2: worst loop pass while Z moves (cycles) ", cm3_worst_moving_pass);
     board_trace_text("fw-mps2: stack used (bytes) ", cm3_stack_used());
     board_trace_text("fw-mps2: replies dropped ", cm3_tx_dropped());
 }
