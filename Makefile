@@ -90,9 +90,13 @@ $(B)/san/run_tests: $(call objs,san,$(TEST_SRC))
 	$(CC) $(SAN) -pthread $^ -o $@ -lm
 $(B)/relay: $(call objs,rel,tests/relay.c link/tty.c)
 	$(CC) $^ -o $@
+# The ATmega2560 images under simavr (libsimavr-dev, libelf-dev)
+$(B)/avr-run: $(call objs,rel,tests/avr_run.c link/tty.c)
+	$(CC) $^ -o $@ -lsimavr -lelf
 
 # What the test runner starts: the tool (sanitized), the firmware simulator
-# and the faulty-line relay; make check adds the Cortex-M3 image for QEMU.
+# and the faulty-line relay; make check adds the Cortex-M3 image for QEMU and
+# the ATmega2560 images with their simavr harness.
 TEST_PROGRAMS = $(B)/san/run_tests $(B)/san/adaslice $(B)/fw-sim $(B)/relay
 RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 
@@ -103,7 +107,7 @@ test: $(TEST_PROGRAMS)
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
 BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
-check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(BENCH_PROGRAMS)
+check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-ramps-test.elf $(B)/avr-run $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two

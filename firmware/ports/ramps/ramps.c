@@ -10,7 +10,14 @@
      - Timer4 runs in step with Timer5 (both started together under GTCCR's
        TSM) and switches the UV MOSFET on and off with COM4C at the queued
        ticks, so an exposure's end does not wait for the main loop.
-     - Timer5's compare unit B wakes the idle loop at its deadline.
+     - Timer3 (in step too) wakes the idle loop at its deadline.
+   One invariant keeps the pins clean under simavr too: a compare unit's
+   COM mode always matches its pin's level ("set on match" while low,
+   "clear on match" while high, disconnected with PORT equal to the level
+   while waiting). simavr 1.6 re-runs the timer setup on every OCR write and
+   drives each connected OC pin to the level opposite its mode then; with
+   the invariant that is the level the pin already has. A real ATmega2560
+   does nothing on those writes, so the same code is right on both.
    Register names and bits are avr-libc's <avr/io.h> for the ATmega2560
    (datasheet sections 17, 22, 28, 12). File-static state here is the
    hardware's: one UART, one Z axis, one UV output. */
@@ -94,13 +101,14 @@ static void step_arm(void)
         }
         if (ahead >= (int32_t)FAR) {
             step_state = WAIT;
-            TCCR5A &= (uint8_t)~COM5A_BITS;
+            TCCR5A &= (uint8_t)~COM5A_BITS; /* the pin follows PORTL3: low */
             OCR5A = (uint16_t)(TCNT5 + 0x8000u);
         } else {
-            if (step_dir[i] > 0) PORTL |= _BV(PL1);
-            else PORTL &= (uint8_t)~_BV(PL1);
+            /* DIR, never writing PL3's PORT bit high (the pin is low now) */
+            uint8_t l = (uint8_t)(PORTL & ~(_BV(PL1) | _BV(PL3)));
+            PORTL = step_dir[i] > 0 ? (uint8_t)(l | _BV(PL1)) : l;
+            TCCR5A |= COM5A_BITS; /* set on match, then the compare value */
             OCR5A = (uint16_t)step_tick[i];
-            TCCR5A |= COM5A_BITS; /* set on match */
             step_state = RISE;
             step_tail++;
         }
@@ -180,26 +188,44 @@ static uint32_t uv_tick[UV_QUEUE];
 static uint8_t uv_on[UV_QUEUE];
 static volatile uint8_t uv_head, uv_tail, uv_state;
 
-/* Interrupts off. COM4C stays in the mode of the last transition, so a
-   match while waiting or idle changes nothing. */
+static uint8_t uv_level, uv_next;
+
+/* Interrupts off. Between transitions COM4C is disconnected and PORTH5
+   holds the level, so waiting (or a match) changes nothing. */
+static void uv_hold(void)
+{
+    if (uv_level) PORTH |= _BV(PH5);
+    else PORTH &= (uint8_t)~_BV(PH5);
+    TCCR4A &= (uint8_t)~COM4C_BITS;
+}
+
 static void uv_arm(void)
 {
     if (uv_head == uv_tail) {
         uv_state = IDLE;
+        uv_hold();
         TIMSK4 &= (uint8_t)~_BV(OCIE4C);
         return;
     }
     {
         uint8_t i = uv_tail % UV_QUEUE;
         int32_t ahead = (int32_t)(uv_tick[i] - ticks32());
+        if (uv_on[i] == uv_level) {
+            /* no change: nothing to switch */
+            uv_tail++;
+            uv_arm();
+            return;
+        }
         if (ahead >= (int32_t)FAR) {
             uv_state = WAIT;
+            uv_hold();
             OCR4C = (uint16_t)(TCNT4 + 0x8000u);
         } else {
-            uint8_t mode = uv_on[i] ? COM4C_BITS : _BV(COM4C1); /* set / clear on match */
-            TCCR4A = (uint8_t)((TCCR4A & ~COM4C_BITS) | mode);
-            /* a transition already due (a late "on", or "off" now) happens at once */
+            /* set on match while off, clear on match while on, then the value;
+               a transition already due (a late "on", or "off" now) happens at once */
+            TCCR4A = (uint8_t)((TCCR4A & ~COM4C_BITS) | (uv_level ? _BV(COM4C1) : COM4C_BITS));
             OCR4C = ahead < (int32_t)ARM_LEAD ? (uint16_t)(TCNT4 + 2u) : (uint16_t)uv_tick[i];
+            uv_next = uv_on[i];
             uv_state = RISE;
             uv_tail++;
         }
@@ -208,7 +234,11 @@ static void uv_arm(void)
     TIMSK4 |= _BV(OCIE4C);
 }
 
-ISR(TIMER4_COMPC_vect) { uv_arm(); }
+ISR(TIMER4_COMPC_vect)
+{
+    if (uv_state == RISE) uv_level = uv_next; /* the pin switched at the match */
+    uv_arm();
+}
 
 void board_uv_at(int on, uint64_t when)
 {
@@ -281,7 +311,9 @@ uint16_t board_rx_lost(void) { uint16_t n; cli(); n = rx_lost; sei(); return n; 
 uint16_t board_tx_lost(void) { uint16_t n; cli(); n = tx_lost; sei(); return n; }
 
 /* ---- idle, watchdog, EEPROM ------------------------------------------------------------------ */
-ISR(TIMER5_COMPB_vect) { TIMSK5 &= (uint8_t)~_BV(OCIE5B); }
+/* The wake-up alarm is Timer3's compare A (Timer3 runs with 4 and 5): an
+   OCR write on Timer5 itself made simavr miss the step compare's match. */
+ISR(TIMER3_COMPA_vect) { TIMSK3 &= (uint8_t)~_BV(OCIE3A); }
 
 void board_idle(uint64_t deadline)
 {
@@ -290,9 +322,9 @@ void board_idle(uint64_t deadline)
     now = board_ticks();
     if (rx_head != rx_tail || now >= deadline) { sei(); return; }
     if (deadline - now < FAR) {
-        OCR5B = (uint16_t)deadline;
-        TIFR5 = _BV(OCF5B);
-        TIMSK5 |= _BV(OCIE5B);
+        OCR3A = (uint16_t)deadline;
+        TIFR3 = _BV(OCF3A);
+        TIMSK3 |= _BV(OCIE3A);
     }
     GPIOR0 = BOARD_MARK_IDLE;
     /* sei's next instruction runs before any interrupt: none is missed
@@ -338,14 +370,17 @@ void board_init(void)
     DDRH |= _BV(PH5);
     DDRD &= (uint8_t)~_BV(PD3);
     PORTD |= _BV(PD3);
-    /* Timers 4 and 5 at clk/8, started together */
+    /* Timers 3, 4 and 5 at clk/8, started together */
     GTCCR = _BV(TSM) | _BV(PSRSYNC);
     TCCR5A = 0;
     TCCR5B = _BV(CS51);
     TCCR4A = 0;
     TCCR4B = _BV(CS41);
+    TCCR3A = 0;
+    TCCR3B = _BV(CS31);
     TCNT5 = 0;
     TCNT4 = 0;
+    TCNT3 = 0;
     GTCCR = 0;
     TIMSK5 = _BV(TOIE5);
     /* UART0: 8N1, double speed */
