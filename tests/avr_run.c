@@ -57,6 +57,8 @@
 #define GPIOR1_ADDR 0x4Au
 #define GPIOR2_ADDR 0x4Bu
 #define PIND_ADDR   0x29u
+#define UCSR0B_ADDR 0xC1u
+#define UCSR0B_RXEN 0x10u
 #define POLL_CYCLES 1000u /* between looks at the pty: < a byte at 115200 baud (1389 cycles) */
 
 static const char USAGE[] =
@@ -88,6 +90,7 @@ typedef struct run {
     uint64_t pass_begin, worst_pass, passes;
     unsigned long resets, late, uv_ons, hang_at_uv;
     int in_pass;
+    uint64_t slept;              /* cycles the core spent asleep */
 } run;
 
 static run R;
@@ -172,7 +175,7 @@ static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *pa
         R.passes++;
         if (getenv("AVR_RUN_TRACE") && R.log) fprintf(R.log, "# %llu loop\n", (unsigned long long)avr->cycle);
     } else if (v == BOARD_MARK_IDLE) {
-        if (getenv("AVR_RUN_TRACE") && R.log) fprintf(R.log, "# %llu idle ocr5b=%u\n", (unsigned long long)avr->cycle, avr->data[0x12A] | avr->data[0x12B] << 8);
+        if (getenv("AVR_RUN_TRACE") && R.log) fprintf(R.log, "# %llu idle ocr3a=%u\n", (unsigned long long)avr->cycle, avr->data[0x88] | avr->data[0x89] << 8);
         if (R.in_pass && avr->cycle - R.pass_begin > R.worst_pass) R.worst_pass = avr->cycle - R.pass_begin;
         R.in_pass = 0;
     } else if (v == BOARD_MARK_LATE) {
@@ -249,7 +252,8 @@ static void run_one(avr_t *avr)
             avr->state = cpu_Done; /* asleep with interrupts off: nothing can wake it */
             return;
         }
-        avr->cycle += 1 + (avr_has_pending_interrupts(avr) ? 0 : sleep);
+        if (!avr_has_pending_interrupts(avr)) { avr->cycle += sleep; R.slept += sleep; }
+        avr->cycle += 1;
     }
     if (avr->state == cpu_Running || avr->state == cpu_Sleeping) avr_service_interrupts(avr);
 }
@@ -276,7 +280,9 @@ static void serve_pty(void)
         R.in_at = 0;
         R.in_len = n > 0 ? (size_t)n : 0;
     }
-    if (R.xon && R.in_at < R.in_len) avr_raise_irq(R.uart_in, R.in[R.in_at++]);
+    /* only once the firmware has enabled the receiver (after each reset):
+       simavr drops bytes a disabled UART gets */
+    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len) avr_raise_irq(R.uart_in, R.in[R.in_at++]);
 }
 
 static int open_pty(int *master, char *name, size_t size)
@@ -410,9 +416,9 @@ int main(int argc, char **argv)
     }
     if (R.out_len) (void)!write(R.master, R.out, R.out_len);
     if (R.log) {
-        fprintf(R.log, "# end cycles=%llu worst_pass=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu\n",
+        fprintf(R.log, "# end cycles=%llu worst_pass=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
                 (unsigned long long)R.avr->cycle, (unsigned long long)R.worst_pass, (unsigned long long)R.passes,
-                stack_peak(), R.resets, R.late);
+                stack_peak(), R.resets, R.late, R.avr->cycle ? 1.0 - (double)R.slept / (double)R.avr->cycle : 0.0);
         fclose(R.log);
     }
     fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles over %llu passes; stack peak %lu bytes; %lu resets; %lu late steps\n",
