@@ -7,6 +7,12 @@
 /* a binary host silent for this many link timeouts hands the port back to G-code */
 #define FW_BINARY_IDLE 5u
 
+static uint8_t steps_queued(const fw_state *fw) { return (uint8_t)(fw->steps.head - fw->steps.tail); }
+
+/* Z moves until its last step is out, not merely computed. */
+static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_queued(fw); }
+static void fill_steps(fw_state *fw, uint64_t now);
+
 /* ------------------------------------------------------------------ replies */
 
 static void send(fw_state *fw, uint8_t type, const uint8_t *payload, size_t size)
@@ -50,7 +56,16 @@ static void send_identify(fw_state *fw)
     m.z_max_nm = (uint32_t)((uint64_t)c->axis.max_steps * 1000000u / c->axis.steps_per_mm);
     m.tick_hz = c->tick_hz;
     m.link_timeout_ms = c->link_timeout_ms;
+    m.boot_id = c->boot_id;
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
+}
+
+/* A paused exposure's rest, in whole ms rounded up: a host never believes
+   less light is owed than is. */
+static uint32_t exposure_left_ms(const fw_state *fw)
+{
+    uint64_t hz = fw->config.tick_hz;
+    return (uint32_t)((fw->exposure_left * 1000u + hz - 1u) / hz);
 }
 
 static void send_status(fw_state *fw)
@@ -64,7 +79,7 @@ static void send_status(fw_state *fw)
     m.flags = 0;
     if (fw->axis.homed) m.flags |= LINK_FLAG_HOMED;
     if (fw->uv_on) m.flags |= LINK_FLAG_UV;
-    if (fw_axis_busy(&fw->axis)) m.flags |= LINK_FLAG_MOVING;
+    if (moving(fw)) m.flags |= LINK_FLAG_MOVING;
     if (fw->paused_by_link) m.flags |= LINK_FLAG_LINK_LOST;
     m.layer = fw->layer;
     m.layers = fw->layers;
@@ -76,6 +91,10 @@ static void send_status(fw_state *fw)
     m.bins_in = fw->bins_in;
     m.bad_frames = fw->deframer.bad;
     m.window = fw->config.window;
+    m.boot_id = fw->config.boot_id;
+    m.exposed = fw->exposed;
+    m.exposure_left_ms = exposure_left_ms(fw);
+    m.job = fw->job;
     send(fw, LINK_MSG_STATUS_REPLY, p, link_put_status(p, &m));
 }
 
@@ -296,10 +315,11 @@ static void mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 
 /* -------------------------------------------------------------------- print */
 
-static void uv(fw_state *fw, int on, uint64_t when)
+/* On from `when` until `until`: the port's timer ends it, whatever the loop does. */
+static void uv(fw_state *fw, int on, uint64_t when, uint64_t until)
 {
     fw->uv_on = (uint8_t)on;
-    fw->port.uv(fw->port.ctx, on, when);
+    fw->port.uv(fw->port.ctx, on, when, until);
 }
 
 static uint32_t um_s_to_steps(const fw_state *fw, uint32_t um_s)
@@ -318,7 +338,7 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
 {
     uint32_t first = m->first_layer;
     if (!fw->plan_kind) { fail(fw, LINK_ERR_NO_PLAN, seq); return; }
-    if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE) || fw->uv_on || fw_axis_busy(&fw->axis)) {
+    if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE) || fw->uv_on || moving(fw)) {
         fail(fw, LINK_ERR_BUSY, seq);
         return;
     }
@@ -328,6 +348,8 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
     fw->peel_speed = m->peel_speed_um_s;
     fw->return_speed = m->return_speed_um_s;
     fw->settle_ms = m->settle_ms;
+    fw->job = m->job;
+    fw->exposed = first - 1;
     fw->layer = first;
     fw->top_plane = layer_bottom(fw, first) + layer_length(fw, first);
     if (steps_of_plane(fw, fw->top_plane, 0) > fw->config.axis.max_steps ||
@@ -358,7 +380,7 @@ static void print_step(fw_state *fw, uint64_t now)
     for (;;) {
         switch (fw->phase) {
         case LINK_PHASE_MOVE:
-            if (fw_axis_busy(&fw->axis)) return;
+            if (moving(fw)) return;
             if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
             fw->phase = LINK_PHASE_WAIT_MASK;
             break;
@@ -372,9 +394,12 @@ static void print_step(fw_state *fw, uint64_t now)
         case LINK_PHASE_SETTLE:
             if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
             if (now < fw->phase_end) return;
-            uv(fw, 1, fw->phase_end);
             fw->phase = LINK_PHASE_EXPOSE;
-            fw->phase_end += fw->exposure_left ? fw->exposure_left : exposure_ticks(fw);
+            {
+                uint64_t on = fw->phase_end;
+                fw->phase_end += fw->exposure_left ? fw->exposure_left : exposure_ticks(fw);
+                uv(fw, 1, on, fw->phase_end);
+            }
             fw->exposure_left = 0;
             break;
         case LINK_PHASE_EXPOSE:
@@ -382,18 +407,19 @@ static void print_step(fw_state *fw, uint64_t now)
                 if (!fw->pause_wanted) return;
                 /* UV off at once; the rest of the exposure waits for resume */
                 fw->exposure_left = fw->phase_end - now;
-                uv(fw, 0, now);
+                uv(fw, 0, now, now);
                 fw->phase = LINK_PHASE_SETTLE;
                 fw->state = LINK_STATE_PAUSED;
                 return;
             }
-            uv(fw, 0, fw->phase_end);
+            uv(fw, 0, fw->phase_end, fw->phase_end);
+            fw->exposed = fw->layer;
             fw->port.show(fw->port.ctx, -1, fw->phase_end);
             fw->phase = LINK_PHASE_PEEL;
             move_layer(fw, fw->peel_nm, fw->peel_speed, fw->phase_end);
             break;
         case LINK_PHASE_PEEL:
-            if (fw_axis_busy(&fw->axis)) return;
+            if (moving(fw)) return;
             if (fw->layer == fw->layers) { fw->state = LINK_STATE_DONE; return; }
             if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
             fw->layer++;
@@ -438,7 +464,7 @@ static void resume(fw_state *fw, uint8_t seq, uint64_t now)
 static void abort_all(fw_state *fw, uint64_t now)
 {
     fw->exposing = 0;
-    if (fw->uv_on) uv(fw, 0, now);
+    if (fw->uv_on) uv(fw, 0, now, now);
     fw->port.show(fw->port.ctx, -1, now);
     fw_axis_halt(&fw->axis, now);
     fw->mask_layer = 0;
@@ -487,13 +513,13 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
     case LINK_MSG_PLAN_GET: (void)link_get_plan_get(&m.plan_get, p, size); plan_get(fw, &m.plan_get, seq); return;
     case LINK_MSG_PROFILE:
         (void)link_get_profile(&m.profile, p, size);
-        if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || fw_axis_busy(&fw->axis)) fail(fw, LINK_ERR_BUSY, seq);
+        if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || moving(fw)) fail(fw, LINK_ERR_BUSY, seq);
         else profile_begin(fw, &m.profile, seq);
         break;
     case LINK_MSG_PROFILE_DATA: profile_data(fw, p, size, seq); break;
     case LINK_MSG_PLAN_SET:
         (void)link_get_plan_set(&m.plan_set, p, size);
-        if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || fw_axis_busy(&fw->axis)) fail(fw, LINK_ERR_BUSY, seq);
+        if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || moving(fw)) fail(fw, LINK_ERR_BUSY, seq);
         else plan_set(fw, &m.plan_set, seq);
         break;
     case LINK_MSG_PLAN_DATA: plan_data(fw, p, size, seq); break;
@@ -516,16 +542,17 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
         break;
     }
     case LINK_MSG_EXPOSE:
-        if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE && fw->state != LINK_STATE_IDLE) || fw_axis_busy(&fw->axis) ||
+        if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE && fw->state != LINK_STATE_IDLE) || moving(fw) ||
             fw->uv_on || !fw->mask_ready) {
             fail(fw, LINK_ERR_BUSY, seq);
             break;
         }
-        fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
-        uv(fw, 1, now);
-        fw->exposing = 1;
         (void)link_get_expose(&m.expose, p, size);
+        if (!m.expose.ms || m.expose.ms > FW_EXPOSURE_MAX_MS) { fail(fw, LINK_ERR_MASK_EXPOSURE, seq); break; }
+        fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
         fw->phase_end = now + FW_MS(fw, m.expose.ms);
+        uv(fw, 1, now, fw->phase_end);
+        fw->exposing = 1;
         break;
     case LINK_MSG_PRINT: (void)link_get_print(&m.print, p, size); print_start(fw, &m.print, seq, now); break;
     case LINK_MSG_PAUSE: print_pause(fw, 0, now); break;
@@ -542,7 +569,13 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 
 /* ----------------------------------------------------------------- the port */
 
-static void gcode_uv(void *ctx, int on, uint64_t when) { uv((fw_state *)ctx, on, when); }
+static int gcode_moving(void *ctx) { return moving((const fw_state *)ctx); }
+/* M106 has no end: the light's hard limit is the longest exposure */
+static void gcode_uv(void *ctx, int on, uint64_t when)
+{
+    fw_state *fw = (fw_state *)ctx;
+    uv(fw, on, when, on ? when + FW_MS(fw, FW_EXPOSURE_MAX_MS) : when);
+}
 static void gcode_write(void *ctx, const uint8_t *data, size_t size) { fw_state *fw = (fw_state *)ctx; fw->port.write(fw->port.ctx, data, size); }
 static void gcode_motor(void *ctx, int on) { fw_state *fw = (fw_state *)ctx; if (fw->port.motor) fw->port.motor(fw->port.ctx, on); }
 
@@ -597,12 +630,14 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
         fw->config.max_bins = workspace_size > fixed ? (uint32_t)(workspace_size - fixed) : 0;
     }
     fw_axis_init(&fw->axis, &config->axis, config->tick_hz);
+    fw->axis.start_lead = config->step_lead;
     link_deframer_init(&fw->deframer, link_host_to_mcu_type);
     fw->state = LINK_STATE_IDLE;
     io.ctx = fw;
     io.write = gcode_write;
     io.uv = gcode_uv;
     io.motor = gcode_motor;
+    io.moving = gcode_moving;
     fw_gcode_init(&fw->gcode, &fw->axis, &io);
 }
 
@@ -611,28 +646,81 @@ void fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
     size_t i;
     for (i = 0; i < size; i++) {
         size_t n;
-        if (!fw->binary) gcode_byte(fw, data[i], now);
+        if (!fw->binary) { gcode_byte(fw, data[i], now); fill_steps(fw, now); }
         link_deframe_push(&fw->deframer, data[i]);
         while ((n = link_deframe_next(&fw->deframer)) != 0) {
             on_frame(fw, fw->deframer.buf, n, now);
             link_deframe_consume(&fw->deframer);
+            /* a move just asked for starts one step lead from `now` */
+            fill_steps(fw, now);
         }
     }
 }
 
 static uint64_t earliest(uint64_t a, uint64_t b) { return a < b ? a : b; }
 
+/* ------------------------------------------------------------------ steps */
+
+/* A step that cannot go out on time: everything stops dead (Klipper's "timer
+   too close" shutdown). The steps still queued are dropped, so the position
+   is lost: the axis is left unhomed. */
+static void step_fault(fw_state *fw, uint64_t now)
+{
+    fw->port.step_arm(fw->port.ctx, FW_NEVER, 0);
+    fw->steps.running = 0;
+    fw->steps.late = 0;
+    fw->steps.tail = fw->steps.head;
+    fw_axis_stop(&fw->axis);
+    if (fw->port.motor) fw->port.motor(fw->port.ctx, 0);
+    abort_all(fw, now);
+    fail(fw, LINK_ERR_STEP_LATE, 0);
+}
+
+/* Tops the queue up from the closed form. Homing queues one step at a time:
+   each reads the switch after the step before it went out. */
+static void fill_steps(fw_state *fw, uint64_t now)
+{
+    fw_steps *q = &fw->steps;
+    uint8_t room = fw->axis.phase ? 1u : FW_STEP_QUEUE;
+    if (q->late) { step_fault(fw, now); return; }
+    while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
+        uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
+        int dir;
+        if (fw_axis_next(&fw->axis) < now) { step_fault(fw, now); return; }
+        dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
+        if (!dir) continue;
+        q->tick[at] = fw->axis.last;
+        q->dir[at] = (int8_t)dir;
+        q->head = (uint8_t)(q->head + 1u);
+        /* the interrupt clears `running` only on an empty queue, so one
+           that reads 1 here will also take the step just added */
+        if (!q->running) {
+            q->running = 1;
+            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) { step_fault(fw, now); return; }
+        }
+    }
+}
+
+void fw_step_interrupt(fw_state *fw)
+{
+    fw_steps *q = &fw->steps;
+    uint8_t t = q->tail;
+    fw->port.step_pulse(fw->port.ctx, q->dir[t % FW_STEP_QUEUE]);
+    t = (uint8_t)(t + 1u);
+    q->tail = t;
+    if (t == q->head) { q->running = 0; return; }
+    if (!fw->port.step_arm(fw->port.ctx, q->tick[t % FW_STEP_QUEUE], q->dir[t % FW_STEP_QUEUE])) {
+        q->late = 1;
+        q->running = 0;
+    }
+}
+
 uint64_t fw_run(fw_state *fw, uint64_t now)
 {
     uint64_t next = FW_NEVER;
-    while (fw_axis_busy(&fw->axis)) {
-        uint64_t when = fw_axis_next(&fw->axis);
-        int dir;
-        if (when > now) break;
-        dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
-        if (dir) fw->port.step(fw->port.ctx, dir, when);
-    }
-    if (!fw_axis_busy(&fw->axis)) {
+    if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
+    fill_steps(fw, now);
+    if (!moving(fw)) {
         if (fw->state == LINK_STATE_HOMING) {
             fw->state = resting(fw);
             if (!fw->axis.homed) fail(fw, LINK_ERR_HOME_FAILED, 0);
@@ -647,7 +735,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     /* a manual exposure */
     if (fw->exposing && now >= fw->phase_end) {
         fw->exposing = 0;
-        uv(fw, 0, fw->phase_end);
+        uv(fw, 0, fw->phase_end, fw->phase_end);
         fw->port.show(fw->port.ctx, -1, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&
@@ -657,8 +745,13 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         next = fw_gcode_run(&fw->gcode, now);
         gcode_feed(fw, now);
     }
+    /* what the print or G-code just started */
+    fill_steps(fw, now);
 
-    if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
+    /* refilled as each step leaves; homing reads the switch after each */
+    if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
+    else if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
+    if (fw->config.watchdog_ms) next = earliest(next, now + FW_MS(fw, fw->config.watchdog_ms) / 2u);
     if (fw->state == LINK_STATE_PRINTING) {
         if (fw->phase == LINK_PHASE_SETTLE || fw->phase == LINK_PHASE_EXPOSE) next = earliest(next, fw->phase_end);
         /* once the pause is asked for, the silence has done its work */

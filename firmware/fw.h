@@ -12,11 +12,24 @@
            otherwise sleep until a byte arrives or the deadline
        }
 
-   fw_run issues every step whose time has come (each with its scheduled
-   tick), ends exposures, notices a silent link, and returns the tick of the
-   next thing it must do (FW_NEVER: nothing until a byte arrives). Nothing in
-   the core blocks; fw_receive may call fw_port.write. The wire protocol is in
-   link/PROTOCOL.md. */
+   Steps leave from the port's step timer, never from the loop (Klipper's and
+   GRBL's rule): fw_run computes the next steps from motion.c's closed form
+   into a small queue (fw_steps) ahead of their ticks; the port's compare
+   interrupt calls fw_step_interrupt at each step's tick, which puts the
+   step out and arms the timer for the next one. A step that could not be
+   queued before its tick, or a timer that could not be armed in time, is a
+   fault (LINK_ERR_STEP_LATE): the motion stops dead, the axis is unhomed, UV
+   off, the motor disabled. A step is never sent late.
+
+   The UV light is switched off by the port's own timer at the end the core
+   gives with it (uv's `until`), so an exposure ends on time, whatever the
+   loop is doing. fw_run refreshes the port's watchdog and never returns a
+   deadline further than half its period away.
+
+   fw_run issues nothing itself: it refills the step queue, ends exposures,
+   notices a silent link and returns the tick of the next thing it must do
+   (FW_NEVER: nothing until a byte arrives). Nothing in the core blocks. The
+   wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>
@@ -28,16 +41,43 @@
 #include "gcode.h"
 
 
+/* The steps queued for the step timer: written by the loop (head), read by
+   the interrupt (tail). Single producer, single consumer, indices of one
+   byte so that each side's update is one store on any MCU. The queue must
+   cover the steps due while the loop is away: more than the loop's worst
+   pass (plus its wake-up) divided by the shortest step interval. A port
+   whose passes are long against its steps sets its own (a power of two up
+   to 128; each entry costs 9 bytes of RAM). */
+#ifndef FW_STEP_QUEUE
+#define FW_STEP_QUEUE 8u
+#endif
+typedef struct fw_steps {
+    volatile uint64_t tick[FW_STEP_QUEUE];
+    volatile int8_t dir[FW_STEP_QUEUE];
+    volatile uint8_t head;     /* the loop's: the next free entry */
+    volatile uint8_t tail;     /* the interrupt's: the next step out */
+    volatile uint8_t running;  /* the timer is armed; the interrupt clears it when the queue ends */
+    volatile uint8_t late;     /* the timer could not be armed for the next step in time */
+} fw_steps;
+
 typedef struct fw_port {
     void *ctx;
-    /* bytes to the host; may block until sent */
+    /* bytes to the host, into the port's transmit ring (sent by its
+       interrupt); must not wait for the line */
     void (*write)(void *ctx, const uint8_t *data, size_t size);
-    /* one step pulse, dir +1 (up) or -1, scheduled for tick `when` */
-    void (*step)(void *ctx, int dir, uint64_t when);
+    /* Arms the step timer to call fw_step_interrupt at tick `when`, with the
+       direction pin set to `dir` (+1 up, -1 down) by then; returns 0 if
+       `when` is too close or past to be armed. `when` FW_NEVER: disarm. From
+       the loop (the first step of a run) and from fw_step_interrupt. */
+    int (*step_arm)(void *ctx, uint64_t when, int dir);
+    /* In fw_step_interrupt: the step pulse in direction `dir`, now (a port
+       whose compare unit sets the pin itself ends the pulse here). */
+    void (*step_pulse)(void *ctx, int dir);
     /* 1 while the Z endstop is closed */
     int (*endstop)(void *ctx);
-    /* the UV light source on or off, at tick `when` */
-    void (*uv)(void *ctx, int on, uint64_t when);
+    /* The UV light on at tick `when` and off, by the port's timer, at tick
+       `until` (on = 1); or off now (on = 0, `when` the tick). */
+    void (*uv)(void *ctx, int on, uint64_t when, uint64_t until);
     /* stepper driver enable (M17/M18) */
     void (*motor)(void *ctx, int on);
     /* a decoded mask row into display buffer `slot` (0 or 1): row y of the
@@ -46,6 +86,8 @@ typedef struct fw_port {
     void (*mask_row)(void *ctx, int slot, uint32_t y, const uint8_t *row, uint32_t size);
     /* display buffer `slot` on the screen (a verified mask), or -1: dark */
     void (*show)(void *ctx, int slot, uint64_t when);
+    /* refreshes the hardware watchdog (NULL: none); from fw_run only */
+    void (*watchdog)(void *ctx);
     /* emulators only (NULL on a real board): end the program with `code` */
     void (*exit)(void *ctx, int code);
 } fw_port;
@@ -60,12 +102,18 @@ typedef struct fw_config {
     uint32_t link_timeout_ms;  /* printing pauses when the host is silent this long;
                                   5 times as long outside a print hands the port to G-code */
     uint8_t window;            /* frames the host may have unacknowledged */
+    uint32_t watchdog_ms;      /* the watchdog's period (0: none) */
+    uint32_t step_lead;        /* ticks the step timer needs to be armed: a move's
+                                  first step comes this long after it starts */
+    uint32_t boot_id;          /* differs at every start of the MCU (a boot counter
+                                  or random): the host sees a reset */
 } fw_config;
 
 /* Layers of up to 127 bins: the planner's rings have 128 entries of 24
    bytes, plus 1 byte of back-pointer per bin. */
 #define FW_MAX_LAYER_BINS 127u
-/* The longest exposure a mask may ask for: an hour (as the host checks). */
+/* The longest exposure a mask may ask for: an hour (as the host checks); also
+   the longest the light stays on in G-code mode (M106 without M107). */
 #define FW_EXPOSURE_MAX_MS 3600000u
 #define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
 
@@ -78,6 +126,7 @@ typedef struct fw_state {
     fw_config config;
     fw_port port;
     fw_axis axis;
+    fw_steps steps;
     /* link */
     link_deframer deframer;
     uint8_t expect;            /* the host's next sequence number */
@@ -107,6 +156,8 @@ typedef struct fw_state {
     uint32_t peel_nm, peel_speed, return_speed, settle_ms;
     uint64_t phase_end;        /* tick when a timed phase ends */
     uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
+    uint32_t exposed;          /* the last layer whose exposure ended, 0 none */
+    uint32_t job;              /* the job hash PRINT came with, 0 none */
     uint8_t uv_on;
     uint8_t exposing;          /* an EXPOSE message's light, until phase_end */
     /* G-code mode, until a good frame arrives */
@@ -122,4 +173,7 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *p
 void fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
 /* Does what is due at tick `now`; returns the tick of the next deadline. */
 uint64_t fw_run(fw_state *fw, uint64_t now);
+/* The step timer's interrupt, at the tick it was armed for: the step out
+   (port.step_pulse), the timer armed for the next one or stopped. */
+void fw_step_interrupt(fw_state *fw);
 #endif

@@ -460,6 +460,11 @@ static void finish(fw_gcode *g)
     g->wait = WAIT_NONE;
 }
 
+static int moving(const fw_gcode *g)
+{
+    return g->io.moving ? g->io.moving(g->io.ctx) : fw_axis_busy(g->axis);
+}
+
 /* Ends what has ended and runs the held line, as often as that frees it. */
 static void advance(fw_gcode *g, uint64_t now)
 {
@@ -469,10 +474,10 @@ static void advance(fw_gcode *g, uint64_t now)
             g->wait = WAIT_NONE;
             say(g, "ok");
         } else if (g->wait != WAIT_NONE) {
-            if (fw_axis_busy(g->axis)) return;
+            if (moving(g)) return;
             finish(g);
         }
-        if (!g->held || fw_axis_busy(g->axis)) return;
+        if (!g->held || moving(g)) return;
         execute(g, now);
         g->held = 0;
         g->len = 0;

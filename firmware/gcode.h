@@ -92,6 +92,9 @@ typedef struct fw_gcode_io {
     void (*uv)(void *ctx, int on, uint64_t when);
     /* stepper driver enable (M17 / M18 / M84); may be NULL */
     void (*motor)(void *ctx, int on);
+    /* 1 while Z still moves: steps computed but not yet out (a step queue);
+       NULL: while the axis is busy */
+    int (*moving)(void *ctx);
 } fw_gcode_io;
 
 typedef struct fw_gcode { /* fields private to gcode.c */

@@ -286,6 +286,7 @@ void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
     axis->seen = 0;
     axis->count = 0;
     axis->interval = (uint32_t)min_c;
+    axis->start_lead = 0;
     axis->offset = axis->end = axis->latest = axis->earlier = 0;
     go_idle(axis);
 }
@@ -298,7 +299,8 @@ int fw_axis_move_to(fw_axis *axis, int32_t target, uint32_t speed, uint64_t now)
     if (target < 0 || target > axis->config.max_steps) return FW_AXIS_LIMIT;
     delta = (int64_t)target - axis->position;
     if (delta == 0) return FW_AXIS_OK;
-    begin_move(axis, delta > 0 ? 1 : -1, (uint32_t)(delta > 0 ? delta : -delta), interval_of(axis, speed), now);
+    begin_move(axis, delta > 0 ? 1 : -1, (uint32_t)(delta > 0 ? delta : -delta), interval_of(axis, speed),
+               now + axis->start_lead);
     return FW_AXIS_OK;
 }
 
@@ -315,7 +317,7 @@ int fw_axis_home(fw_axis *axis, uint64_t now)
     axis->count = 0;
     axis->dir = 0;
     axis->steps = axis->done = 0;
-    axis->next = earliest(axis, now);
+    axis->next = earliest(axis, now + axis->start_lead);
     return FW_AXIS_OK;
 }
 
@@ -334,6 +336,12 @@ void fw_axis_halt(fw_axis *axis, uint64_t now)
     } else {
         brake(axis);
     }
+}
+
+void fw_axis_stop(fw_axis *axis)
+{
+    go_idle(axis);
+    axis->homed = 0;
 }
 
 int fw_axis_busy(const fw_axis *axis) { return axis->next != FW_NEVER; }

@@ -67,6 +67,9 @@ typedef struct fw_axis { /* fields private to motion.c; position, homed,
     uint32_t rest_interval;  /* the interval of a step from rest: homing's
                                 slow speed and the pause between moves */
     uint32_t home_interval;  /* the fast approach's cruising interval */
+    uint32_t start_lead;     /* ticks from a move's start to its first step at the
+                                earliest (0 after init; a caller whose steps go
+                                through a timer sets the time it needs to arm it) */
     uint32_t backoff_limit;  /* steps homing may take off the switch */
     /* the move under way: step j (0-based) of `steps` at start + t(j) */
     int dir;                 /* +1, -1; 0 when idle */
@@ -109,12 +112,18 @@ int fw_axis_home(fw_axis *axis, uint64_t now);
    the axis stays homed and its position stays exact. Homing stops the same
    way (its one-step phases at once) and leaves the axis unhomed. */
 void fw_axis_halt(fw_axis *axis, uint64_t now);
+/* Ends a move or homing at once, without braking, and leaves the axis
+   unhomed: for faults, when steps can no longer be issued on time (a motor
+   stopped dead from speed may have lost steps, so the position is unknown). */
+void fw_axis_stop(fw_axis *axis);
 int fw_axis_busy(const fw_axis *axis);
 /* Tick of the next step, FW_NEVER when idle. */
 uint64_t fw_axis_next(const fw_axis *axis);
 /* Takes the step due at fw_axis_next(): +1 or -1 for the pin; 0 when the
    step is not taken (homing reacting to the endstop). `endstop`: 1 while the
-   switch is closed, read just before the call. */
+   switch is closed, read just before the call. The step's tick is then in
+   `last`: homing turning from one phase to the next can put it later than
+   fw_axis_next() said (a step from rest waits its interval). */
 int fw_axis_step(fw_axis *axis, int endstop);
 /* Steps for `nm` nanometres, rounded to nearest (exact integers, no drift). */
 int32_t fw_axis_steps_of_nm(const fw_axis *axis, uint64_t nm);

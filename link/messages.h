@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LINK_PROTOCOL_VERSION 2
+#define LINK_PROTOCOL_VERSION 3
 
 /* ------------------------------------------------------------- the fields */
 
@@ -31,17 +31,19 @@
 #define LINK_FIELDS_MOVE(F) F(i32, z_nm) F(u32, speed_um_s)
 #define LINK_FIELDS_EXPOSE(F) F(u32, ms)
 #define LINK_FIELDS_PRINT(F)                                                                                        \
-    F(u32, first_layer) F(u32, peel_nm) F(u32, peel_speed_um_s) F(u32, return_speed_um_s) F(u32, settle_ms)
+    F(u32, first_layer) F(u32, peel_nm) F(u32, peel_speed_um_s) F(u32, return_speed_um_s) F(u32, settle_ms)        \
+    F(u32, job)
 #define LINK_FIELDS_EXIT(F) F(u8, code)
 /* MCU -> host */
 #define LINK_FIELDS_ACK(F) F(u8, nak)
 #define LINK_FIELDS_IDENTIFY(F)                                                                                     \
     F(u8, version) F(u8, window) F(u32, max_bins) F(u8, max_layer_bins) F(u32, steps_per_mm) F(u16, width)          \
-    F(u16, height) F(u8, bits) F(u32, pitch_nm) F(u32, z_max_nm) F(u32, tick_hz) F(u32, link_timeout_ms)
+    F(u16, height) F(u8, bits) F(u32, pitch_nm) F(u32, z_max_nm) F(u32, tick_hz) F(u32, link_timeout_ms)        \
+    F(u32, boot_id)
 #define LINK_FIELDS_STATUS(F)                                                                                       \
     F(u8, state) F(u8, phase) F(u8, error) F(u8, error_seq) F(u8, flags) F(u32, layer) F(u32, layers)               \
     F(u32, mask_ready) F(u32, mask_layer) F(u32, mask_got) F(u16, masks_refused) F(i32, z_nm) F(u32, bins_in)       \
-    F(u32, bad_frames) F(u8, window)
+    F(u32, bad_frames) F(u8, window) F(u32, boot_id) F(u32, exposed) F(u32, exposure_left_ms) F(u32, job)
 #define LINK_FIELDS_PLAN(F) F(u32, first) F(u32, layers) F(u32, bin_nm)
 /* no fixed fields */
 #define LINK_FIELDS_NONE(F)
@@ -108,7 +110,8 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(HOME_FAILED, "homing failed")                                                                                 \
     S(BUSY, "busy")                             /* not in this state */                                             \
     S(PLAN_SIZE, "more bins than the printer takes")                                                                \
-    S(MASK_EXPOSURE, "bad exposure")            /* a mask's exposure of 0 ms or over an hour */
+    S(MASK_EXPOSURE, "bad exposure")            /* a mask's exposure of 0 ms or over an hour */                     \
+    S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,

@@ -14,7 +14,8 @@
        <cycle> show <slot> 0 0       the core shows a display buffer (GPIOR1; there is
        <cycle> show -1               no display on this board, so no CRC: 0)
        <cycle> reset                 the MCU reset (the watchdog): every pin an input
-       <cycle> late                  the firmware dropped a step it could not arm in time
+       <cycle> late                  the firmware could not arm a step in time (STEP_LATE)
+       <cycle> pass <cycles>         a loop pass of at least --log-passes cycles
        # end cycles=C worst_pass=P passes=N stack_peak=S resets=R late=L
 
    worst_pass: the longest main-loop pass in cycles, from the firmware's
@@ -69,6 +70,7 @@ static const char USAGE[] =
     "  --speed S          at most S times real time (0: unpaced)      [0]\n"
     "  --max-seconds S    virtual time budget                          [600]\n"
     "  --timeout S        wall-clock budget                            [300]\n"
+    "  --log-passes C     log the loop passes of C cycles or more      [none]\n"
     "  --hang-at-uv N     make the main loop hang when UV goes on the Nth time\n"
     "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n";
 
@@ -87,7 +89,7 @@ typedef struct run {
     size_t in_len, in_at;
     uint8_t *out;
     size_t out_len, out_cap;
-    uint64_t pass_begin, worst_pass, passes;
+    uint64_t pass_begin, worst_pass, passes, log_passes;
     unsigned long resets, late, uv_ons, hang_at_uv;
     int in_pass;
     uint64_t slept;              /* cycles the core spent asleep */
@@ -118,11 +120,6 @@ static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
     (void)param;
     if (v == R.step) return;
     R.step = v;
-    if (getenv("AVR_RUN_TRACE") && R.log) {
-        const uint8_t *d = R.avr->data;
-        fprintf(R.log, "# ocr5a=%u ocr5b=%u tccr5a=%02x timsk5=%02x pc=%x\n", d[0x128] | d[0x129] << 8, d[0x12A] | d[0x12B] << 8,
-                d[0x120], d[0x73], (unsigned)R.avr->pc);
-    }
     if (v) {
         R.position += R.dir ? 1 : -1;
         log_event(R.dir ? "step +1" : "step -1");
@@ -163,31 +160,32 @@ static void on_uv(struct avr_irq_t *irq, uint32_t value, void *param)
     if (v && ++R.uv_ons == R.hang_at_uv) R.avr->data[GPIOR2_ADDR] = 0xA5; /* the RAMPS_TEST_HANG hook */
 }
 
+/* A loop pass from R.pass_begin to `end`: the worst, and logged when it
+   takes at least --log-passes cycles. */
+static void end_pass(uint64_t end)
+{
+    uint64_t took = end - R.pass_begin;
+    if (took > R.worst_pass) R.worst_pass = took;
+    if (R.log_passes && took >= R.log_passes && R.log)
+        fprintf(R.log, "%llu pass %llu\n", (unsigned long long)R.pass_begin, (unsigned long long)took);
+}
+
 /* The firmware's marks (board.h): loop passes, boot, late steps. */
 static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
 {
     (void)param;
     avr->data[addr] = v;
     if (v == BOARD_MARK_LOOP) {
-        if (R.in_pass && avr->cycle - R.pass_begin > R.worst_pass) R.worst_pass = avr->cycle - R.pass_begin;
+        if (R.in_pass) end_pass(avr->cycle);
         R.in_pass = 1;
         R.pass_begin = avr->cycle;
         R.passes++;
-        if (getenv("AVR_RUN_TRACE") && R.log) fprintf(R.log, "# %llu loop\n", (unsigned long long)avr->cycle);
     } else if (v == BOARD_MARK_IDLE) {
-        if (getenv("AVR_RUN_TRACE") && R.log) fprintf(R.log, "# %llu idle ocr3a=%u\n", (unsigned long long)avr->cycle, avr->data[0x88] | avr->data[0x89] << 8);
-        if (R.in_pass && avr->cycle - R.pass_begin > R.worst_pass) R.worst_pass = avr->cycle - R.pass_begin;
+        if (R.in_pass) end_pass(avr->cycle);
         R.in_pass = 0;
     } else if (v == BOARD_MARK_LATE) {
         R.late++;
         log_event("late");
-        if (getenv("AVR_RUN_TRACE") && R.log) {
-            const uint8_t *d = avr->data;
-            unsigned k, head = d[0x1ddd], tail = d[0x1ddc];
-            fprintf(R.log, "# head=%u tail=%u wraps=%u tcnt5=%u tifr5=%02x:", head, tail, d[0x1e7e] | d[0x1e7f] << 8, d[0x124] | d[0x125] << 8, d[0x3A]);
-            for (k = 0; k < 32; k++) fprintf(R.log, " %u:%lu", k, (unsigned long)(d[0x1dfe + 4 * k] | d[0x1dff + 4 * k] << 8 | (unsigned long)d[0x1e00 + 4 * k] << 16 | (unsigned long)d[0x1e01 + 4 * k] << 24));
-            fprintf(R.log, "\n");
-        }
     } else if (v == BOARD_MARK_BOOT) {
         R.in_pass = 0;
     }
@@ -333,6 +331,7 @@ int main(int argc, char **argv)
         else if (!strcmp(o, "--max-seconds")) max_seconds = atof(argv[++i]);
         else if (!strcmp(o, "--timeout")) timeout = atof(argv[++i]);
         else if (!strcmp(o, "--hang-at-uv")) R.hang_at_uv = strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
         else { fprintf(stderr, "avr-run: unknown option %s\n%s", o, USAGE); return 2; }
     }
     if (!elf) { fputs(USAGE, stderr); return 2; }
@@ -350,7 +349,7 @@ int main(int argc, char **argv)
     R.position = (int32_t)(z_start * BOARD_STEPS_PER_MM + 0.5);
     if (R.log)
         fprintf(R.log, "# avr-run tick_hz=%u steps_per_mm=%u max_speed=%u accel=%u start_steps=%ld cpu_hz=%u tick_div=%u image=%s\n",
-                BOARD_CPU_HZ, BOARD_STEPS_PER_MM, BOARD_MAX_SPEED_MM_S * BOARD_STEPS_PER_MM,
+                BOARD_CPU_HZ, BOARD_STEPS_PER_MM, (unsigned)BOARD_MAX_STEPS_S,
                 BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
 
     avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 3), on_step, NULL);

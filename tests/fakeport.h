@@ -21,6 +21,8 @@ typedef struct fake_printer {
     fw_config config;
     uint64_t workspace[(FW_PLAN_WORKSPACE(FAKE_MAX_BINS) + 7) / 8];
     uint64_t now;
+    uint64_t step_at;            /* the step timer's compare, FW_NEVER when disarmed */
+    uint64_t uv_off_at;          /* the UV timer's end, FW_NEVER when the light is off */
     int32_t true_position;       /* steps above the endstop's switching point */
     uint8_t display[2][64 * 1024];
     /* what the core did */
@@ -78,16 +80,54 @@ static inline void fake_write(void *ctx, const uint8_t *data, size_t size)
     }
 }
 
-static inline void fake_step(void *ctx, int dir, uint64_t when)
+/* The timers are ideal: the step interrupt runs at the tick it was armed
+   for (fake_run stops there), so a step is late only if the core queued it
+   late, which the core itself refuses. */
+static inline int fake_step_arm(void *ctx, uint64_t when, int dir)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    (void)dir;
+    if (when != FW_NEVER && when < p->now) return 0;
+    p->step_at = when;
+    return 1;
+}
+
+static inline void fake_step_pulse(void *ctx, int dir)
 {
     fake_printer *p = (fake_printer *)ctx;
     p->true_position += dir;
-    fake_record(p, when, ZEV_STEP, dir, 0);
+    fake_record(p, p->now, ZEV_STEP, dir, 0);
 }
 
 static inline int fake_endstop(void *ctx) { return ((fake_printer *)ctx)->true_position <= 0; }
 
-static inline void fake_uv(void *ctx, int on, uint64_t when) { fake_record((fake_printer *)ctx, when, ZEV_UV, on, 0); }
+static inline void fake_uv(void *ctx, int on, uint64_t when, uint64_t until)
+{
+    fake_printer *p = (fake_printer *)ctx;
+    if (on) p->uv_off_at = until;
+    else if (p->uv_off_at == FW_NEVER) return; /* its timer has put it out already */
+    else p->uv_off_at = FW_NEVER;
+    fake_record(p, when, ZEV_UV, on, 0);
+}
+
+/* The interrupts due by p->now, in the order their ticks come. */
+static inline void fake_interrupts(fake_printer *p)
+{
+    for (;;) {
+        uint64_t t = p->step_at < p->uv_off_at ? p->step_at : p->uv_off_at;
+        if (t > p->now) return;
+        if (t == p->uv_off_at) {
+            p->uv_off_at = FW_NEVER;
+            fake_record(p, t, ZEV_UV, 0, 0);
+        } else {
+            uint64_t now = p->now;
+            p->step_at = FW_NEVER;
+            p->now = t;
+            fw_step_interrupt(&p->fw);
+            p->now = now;
+        }
+    }
+}
 
 static inline void fake_motor(void *ctx, int on) { (void)ctx; (void)on; }
 
@@ -128,9 +168,12 @@ static inline void fake_init(fake_printer *p, uint16_t w, uint16_t h, uint8_t bi
     p->config.link_timeout_ms = 1000;
     p->config.window = 8;
     p->true_position = 400 * 37 + 123;
+    p->step_at = p->uv_off_at = FW_NEVER;
     port.ctx = p;
     port.write = fake_write;
-    port.step = fake_step;
+    port.step_arm = fake_step_arm;
+    port.step_pulse = fake_step_pulse;
+    port.watchdog = NULL;
     port.endstop = fake_endstop;
     port.uv = fake_uv;
     port.motor = fake_motor;
@@ -213,12 +256,16 @@ static inline uint32_t fake_read_plan(fake_printer *p, uint32_t *lengths, uint32
 static inline void fake_run(fake_printer *p, uint64_t until)
 {
     for (;;) {
-        uint64_t next = fw_run(&p->fw, p->now);
+        uint64_t next;
+        fake_interrupts(p);
+        next = fw_run(&p->fw, p->now);
+        if (p->step_at < next) next = p->step_at;
+        if (p->uv_off_at < next) next = p->uv_off_at;
         if (p->heartbeat) {
             if (p->now - p->last_beat >= p->heartbeat) { fake_send(p, LINK_MSG_STATUS, NULL, 0); p->last_beat = p->now; continue; }
             if (next > p->last_beat + p->heartbeat) next = p->last_beat + p->heartbeat;
         }
-        if (next > until) { p->now = until; fw_run(&p->fw, p->now); return; }
+        if (next > until) { p->now = until; fake_interrupts(p); fw_run(&p->fw, p->now); return; }
         if (next > p->now) p->now = next;
     }
 }

@@ -105,6 +105,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     io.write = on_write;
     io.uv = on_uv;
     io.motor = on_motor;
+    io.moving = NULL;
     fw_gcode_init(&f.g, &f.axis, &io);
     f.phys = (int32_t)(next_random(&seed) % (uint32_t)c.max_steps);
     f.endstop_broken = next_random(&seed) % 16 == 0;

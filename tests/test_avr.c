@@ -197,9 +197,9 @@ static void board_axis(fw_axis *axis)
 {
     fw_axis_config c;
     c.steps_per_mm = BOARD_STEPS_PER_MM;
-    c.max_speed = BOARD_MAX_SPEED_MM_S * BOARD_STEPS_PER_MM;
+    c.max_speed = BOARD_MAX_STEPS_S;
     c.accel = BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
-    c.home_speed = BOARD_HOME_SPEED_MM_S * BOARD_STEPS_PER_MM;
+    c.home_speed = BOARD_HOME_STEPS_S;
     c.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
     c.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
     fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
@@ -215,8 +215,8 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
     size_t total = 0, k, i, at, bad = 0, short_intervals = 0;
     int32_t from = 0;
     long worst = 0;
-    uint64_t min_cycles = (uint64_t)CYCLES_PER_TICK * ((BOARD_CLOCK_HZ + BOARD_MAX_SPEED_MM_S * BOARD_STEPS_PER_MM - 1) /
-                                                       (BOARD_MAX_SPEED_MM_S * BOARD_STEPS_PER_MM));
+    uint64_t min_cycles = (uint64_t)CYCLES_PER_TICK * ((BOARD_CLOCK_HZ + BOARD_MAX_STEPS_S - 1) /
+                                                       (BOARD_MAX_STEPS_S));
     for (k = 0; k < count; k++) { total += (size_t)labs((long)(moves[k].target - from)); from = moves[k].target; }
     CHECKF(l->steps >= total, "%zu steps in the record, the moves need %zu after homing", l->steps, total);
     if (l->steps < total) return -1;

@@ -81,6 +81,7 @@ static void machine_init(machine *m, const fw_axis_config *c, int32_t phys)
     io.write = on_write;
     io.uv = on_uv;
     io.motor = on_motor;
+    io.moving = NULL;
     fw_gcode_init(&m->g, &m->axis, &io);
     m->phys = phys;
     m->now = 1000;
@@ -673,6 +674,7 @@ static void io_without_callbacks(void)
     none.write = NULL;
     none.uv = NULL;
     none.motor = NULL;
+    none.moving = NULL;
     fw_gcode_init(&bare, &m.axis, &none);
     CHECK(fw_gcode_receive(&bare, (const uint8_t *)in, strlen(in), m.now) == strlen(in));
     CHECK(fw_axis_busy(&m.axis));

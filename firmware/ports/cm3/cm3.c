@@ -145,6 +145,34 @@ uint32_t cm3_rx_lost_count(void)
     return rx_lost;
 }
 
+/* ---- alarms ---------------------------------------------------------------- */
+static volatile uint64_t alarm_when[CM3_ALARMS] = {UINT64_MAX, UINT64_MAX};
+
+int cm3_alarm_at(int which, uint64_t when)
+{
+    uint64_t now;
+    alarm_when[which] = UINT64_MAX;
+    board_alarm(which, 0);
+    if (when == UINT64_MAX) return 1;
+    now = cm3_ticks();
+    if (when < now + CM3_ALARM_LEAD) return 0;
+    alarm_when[which] = when;
+    board_alarm(which, when - now);
+    return 1;
+}
+
+void cm3_alarm(int which)
+{
+    uint64_t when = alarm_when[which], now = cm3_ticks();
+    if (when == UINT64_MAX) return;
+    if (now < when) { /* the timer's range ended first */
+        board_alarm(which, when - now);
+        return;
+    }
+    alarm_when[which] = UINT64_MAX;
+    cm3_alarm_due(which, now - when);
+}
+
 /* ---- idle ----------------------------------------------------------------- */
 static volatile int woken;
 

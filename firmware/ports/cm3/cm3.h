@@ -42,6 +42,10 @@ enum { CM3_FAULT_STACK = 1, CM3_FAULT_HARD = 2, CM3_FAULT_CLOCK = 3 };
 void board_init(void);
 /* Sends bytes to the host, waiting for room in the UART. */
 void board_write(const uint8_t *data, size_t size);
+/* The board's one-shot alarms (CM3_ALARM_*): interrupts `delay` ticks from
+   now, or as far as the timer counts (cm3 arms it again for the rest), that
+   call cm3_alarm(which); delay 0 stops it. */
+void board_alarm(int which, uint64_t delay);
 /* Arms the wake-up timer to interrupt at or after tick `deadline` (or
    earlier when the delay is past its range; the loop arms it again) and to
    call cm3_wake() then; UINT64_MAX (FW_NEVER) disarms it. */
@@ -91,6 +95,22 @@ void cm3_rx_consume(size_t n);
    hold the line counts these, through cm3_rx_lost). */
 void cm3_rx_lost(void);
 uint32_t cm3_rx_lost_count(void);
+
+/* Alarms at absolute ticks, from hardware timers, so that what they do
+   happens on time whatever the loop is doing: the next Z step
+   (fw_step_interrupt) and the end of an exposure (UV off). */
+enum { CM3_ALARM_STEP, CM3_ALARM_UV, CM3_ALARMS };
+/* The ticks an alarm needs to be armed ahead: a step closer than this is
+   refused (the core stops the motion rather than step late). */
+#define CM3_ALARM_LEAD 64u
+/* Arms alarm `which` for tick `when` (UINT64_MAX stops it); 0 if `when` is
+   closer than CM3_ALARM_LEAD. */
+int cm3_alarm_at(int which, uint64_t when);
+/* From the board's alarm interrupts. */
+void cm3_alarm(int which);
+/* Supplied by main.c: what an alarm does when its tick has come (`late`:
+   the ticks it came after it). */
+void cm3_alarm_due(int which, uint64_t late);
 
 /* Called by the board's wake-up timer interrupt. */
 void cm3_wake(void);

@@ -28,6 +28,24 @@
 #define TIMER_CTRL_IRQ 8u
 #define TIMER0_IRQ 8u
 
+/* timer 1: the step alarm */
+#define TIMER1_CTRL     CM3_REG(0x40001000u)
+#define TIMER1_VALUE    CM3_REG(0x40001004u)
+#define TIMER1_RELOAD   CM3_REG(0x40001008u)
+#define TIMER1_INTCLEAR CM3_REG(0x4000100Cu)
+#define TIMER1_IRQ 9u
+
+/* the dual timer's first counter (DDI 0479, "APB dual-input timers"): the UV
+   alarm; one-shot, 32-bit, interrupt enabled, enabled */
+#define DUAL1_LOAD     CM3_REG(0x40002000u)
+#define DUAL1_CTRL     CM3_REG(0x40002008u)
+#define DUAL1_INTCLEAR CM3_REG(0x4000200Cu)
+#define DUAL_CTRL_ONESHOT 1u
+#define DUAL_CTRL_32BIT   2u
+#define DUAL_CTRL_IRQ     0x20u
+#define DUAL_CTRL_EN      0x80u
+#define DUAL_IRQ 10u
+
 #define BAUD 115200u /* QEMU ignores it; a real CMSDK UART needs it */
 
 /* ---- semihosting ---------------------------------------------------------- */
@@ -111,12 +129,50 @@ void board_wake_at(uint64_t deadline, uint64_t now)
     TIMER0_CTRL = TIMER_CTRL_EN | TIMER_CTRL_IRQ;
 }
 
+/* ---- the alarms: timer 1 for steps, the dual timer for the UV light --------- */
+void timer1_handler(void);
+void timer1_handler(void)
+{
+    TIMER1_INTCLEAR = 1u;
+    TIMER1_CTRL = 0;
+    cm3_alarm(CM3_ALARM_STEP);
+}
+
+void dualtimer_handler(void);
+void dualtimer_handler(void)
+{
+    DUAL1_INTCLEAR = 1u;
+    DUAL1_CTRL = 0;
+    cm3_alarm(CM3_ALARM_UV);
+}
+
+void board_alarm(int which, uint64_t delay)
+{
+    uint32_t count = delay > 0xFFFFFFFFu ? 0xFFFFFFFFu : (uint32_t)delay;
+    if (which == CM3_ALARM_STEP) {
+        TIMER1_CTRL = 0;
+        TIMER1_INTCLEAR = 1u;
+        if (!count) return;
+        TIMER1_RELOAD = count;
+        TIMER1_VALUE = count;
+        TIMER1_CTRL = TIMER_CTRL_EN | TIMER_CTRL_IRQ;
+    } else {
+        DUAL1_CTRL = 0;
+        DUAL1_INTCLEAR = 1u;
+        if (!count) return;
+        DUAL1_LOAD = count;
+        DUAL1_CTRL = DUAL_CTRL_ONESHOT | DUAL_CTRL_32BIT | DUAL_CTRL_IRQ | DUAL_CTRL_EN;
+    }
+}
+
 void board_init(void)
 {
     UART0_BAUDDIV = BOARD_CLOCK_HZ / BAUD;
     UART0_CTRL = UART_CTRL_TX_EN | UART_CTRL_RX_EN | UART_CTRL_RX_IRQ;
     cm3_irq_enable(UART0_RX_IRQ);
     cm3_irq_enable(TIMER0_IRQ);
+    cm3_irq_enable(TIMER1_IRQ);
+    cm3_irq_enable(DUAL_IRQ);
     cm3_tick_start();
 }
 
@@ -151,7 +207,7 @@ void board_mask_row(int slot, uint32_t y, const uint8_t *row, uint32_t size)
 /* ---- the interrupt vectors ------------------------------------------------------ */
 #define F cm3_fault_handler
 CM3_IRQ_VECTORS irq_vectors[32] = { /* the an385's external interrupts */
-    uart0_rx_handler, F, F, F, F, F, F, F, timer0_handler, F, F, F, F, F, F, F,
+    uart0_rx_handler, F, F, F, F, F, F, F, timer0_handler, timer1_handler, dualtimer_handler, F, F, F, F, F,
     F, F, F, F, F, F, F, F, F, F, F, F, F, F, F, F
 };
 #undef F

@@ -23,9 +23,14 @@
 #ifndef BOARD_STEPS_PER_MM
 #define BOARD_STEPS_PER_MM 400u            /* T8x8 lead screw, 1/16 microsteps */
 #endif
-#define BOARD_MAX_SPEED_MM_S 10u
+#ifndef BOARD_MAX_SPEED_UM_S
+#define BOARD_MAX_SPEED_UM_S 10000ul       /* 10 mm/s: a step every 250 us */
+#endif
 #define BOARD_ACCEL_MM_S2    50u
-#define BOARD_HOME_SPEED_MM_S 5u
+#define BOARD_HOME_SPEED_UM_S 5000ul
+/* the same in steps per second (the core's units) */
+#define BOARD_MAX_STEPS_S  (BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
+#define BOARD_HOME_STEPS_S (BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
 #define BOARD_Z_MAX_MM       200u
 #define BOARD_HOME_TRAVEL_MM 220u
 #define BOARD_LINK_TIMEOUT_MS 1000u
@@ -55,8 +60,14 @@
 #define BOARD_TX_SIZE 256u
 #define BOARD_WINDOW  2u
 
-/* The watchdog (reset mode), refreshed by the main loop only. */
+/* The watchdog (reset mode), refreshed by the main loop only (fw_run). */
 #define BOARD_WDT_MS 120u
+
+/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
+   and the core's step queue holds FW_STEP_QUEUE steps. Both must cover the
+   loop's worst pass (see main.c). */
+#define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 250u) /* 4 ms */
+#define FW_STEP_QUEUE 32u
 
 /* Test hooks the simavr harness watches (one OUT instruction each): the
    general purpose I/O registers, never read by the firmware. */
@@ -85,17 +96,20 @@ void board_rx_consume(size_t n);
 void board_write(const uint8_t *data, size_t size);
 uint16_t board_rx_lost(void);
 uint16_t board_tx_lost(void);
-/* Z: a step with direction `dir` (+1 up) at tick `when`, emitted by Timer5's
-   compare unit; 0 when the queue is full. board_step_late counts steps that
-   were due before they could be armed (dropped, never sent late). */
-int board_step_at(int dir, uint64_t when);
-uint8_t board_step_room(void);
-uint16_t board_step_late(void);
-void board_step_flush(void);
+/* Z: arms Timer5's compare unit A to raise STEP at tick `when` with DIR set
+   to `dir` (+1 up) now; 0 (nothing armed, a BOARD_MARK_LATE) when `when` is
+   too close or past; UINT64_MAX disarms. board_step_pulse ends the pulse
+   (in the compare interrupt, which calls ramps_step_due: main.c's). */
+int board_step_arm(uint64_t when, int dir);
+void board_step_pulse(void);
+void ramps_step_due(void);
 int board_endstop(void);
 void board_motor(int on);
-/* UV on or off at tick `when`, switched by Timer4's compare unit C. */
-void board_uv_at(int on, uint64_t when);
+/* UV on from tick `when` to `until` (on = 1), switched by Timer4's compare
+   unit C at both ticks (a start already past moves both by as much), or off
+   at `when` (on = 0; now if that has passed). */
+void board_uv(int on, uint64_t when, uint64_t until);
+uint8_t board_uv_lit(void);
 void board_show(int slot);
 void board_mask_row(void);
 #endif

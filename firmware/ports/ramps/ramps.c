@@ -1,15 +1,16 @@
 /* The RAMPS 1.4 / Arduino Mega 2560 board layer (board.h has the pin map).
    Timing is done by the timers' compare units, not by code:
      - Timer5 runs free at 2 MHz (prescaler 8) and is the tick; its overflow
-       interrupt counts the upper bits. Each queued step is armed in OCR5A
-       with COM5A "set on match", so the STEP pin rises in hardware at its
-       tick; the compare interrupt then switches COM5A to "clear on match"
-       STEP_PULSE ticks later and, once the pulse has ended, sets DIR and arms
-       the next step. A step whose tick has passed before it could be armed
-       is never sent: the queue is dropped and the step counted late.
+       interrupt counts the upper bits. The core arms each step of its
+       queue (board_step_arm): OCR5A with COM5A "set on match", so the STEP
+       pin rises in hardware at its tick; the compare interrupt runs
+       fw_step_interrupt, which ends the pulse (board_step_pulse) and arms
+       the next. A step too close or past to be armed is refused (the core
+       stops: STEP_LATE), never sent late.
      - Timer4 runs in step with Timer5 (both started together under GTCCR's
-       TSM) and switches the UV MOSFET on and off with COM4C at the queued
-       ticks, so an exposure's end does not wait for the main loop.
+       TSM: datasheet section 19, GTCCR) and switches the UV MOSFET on and off
+       with COM4C at an exposure's two ticks, so its end does not wait for
+       the main loop.
      - Timer3 (in step too) wakes the idle loop at its deadline.
    One invariant keeps the pins clean under simavr too: a compare unit's
    COM mode always matches its pin's level ("set on match" while low,
@@ -19,8 +20,11 @@
    the invariant that is the level the pin already has. A real ATmega2560
    does nothing on those writes, so the same code is right on both.
    Register names and bits are avr-libc's <avr/io.h> for the ATmega2560
-   (datasheet sections 17, 22, 28, 12). File-static state here is the
-   hardware's: one UART, one Z axis, one UV output. */
+   (ATmega2560 datasheet, Atmel 2549: section 17, the 16-bit timers, and
+   17.11 their registers TCCRnA/B, OCRnx, TIMSKn, TIFRn, with table 17-3 for
+   the non-PWM compare output modes; 22, the USART; 12, reset and the
+   watchdog; 8, the EEPROM). File-static state here is the hardware's: one
+   UART, one Z axis, one UV output. */
 #include "board.h"
 #include <avr/eeprom.h>
 #include <avr/interrupt.h>
@@ -49,15 +53,8 @@ static volatile uint32_t wraps;
 
 ISR(TIMER5_OVF_vect) { wraps++; }
 
-/* Interrupts off. A wrap whose interrupt has not run yet belongs to this
-   reading if the counter reads low. */
-static uint32_t ticks32(void)
-{
-    uint16_t t = TCNT5;
-    uint32_t w = wraps;
-    if ((TIFR5 & _BV(TOV5)) && t < 0x8000u) w++;
-    return (w << 16) | t;
-}
+/* A wrap whose interrupt has not run yet belongs to this reading if the
+   counter reads low (TOV5 in TIFR5). */
 
 uint64_t board_ticks(void)
 {
@@ -72,106 +69,103 @@ uint64_t board_ticks(void)
     return (w << 16) | t;
 }
 
-/* ---- steps --------------------------------------------------------------------- */
-#define STEP_QUEUE 32u         /* a power of two */
-#define STEP_PULSE 10u         /* ticks high: 5 us (A4988 needs 1 us, DRV8825 1.9 us) */
-#define ARM_LEAD   24u         /* ticks: the least time from arming a compare to its match */
+/* ---- steps ---------------------------------------------------------------------
+   The core's step queue (fw_steps) is the only one: board_step_arm puts the
+   next step's tick in OCR5A with COM5A "set on match" (datasheet 17.11,
+   TCCR5A; 17.7, the output compare units), so STEP rises in hardware at that
+   tick; the compare interrupt (OCF5A in TIFR5) calls
+   ramps_step_due, which runs fw_step_interrupt: board_step_pulse ends the
+   pulse and the core arms the next step. */
+#define STEP_PULSE 4u          /* ticks high at least: 2 us (A4988 needs 1 us, DRV8825 1.9 us) */
+#define ARM_LEAD   16u         /* ticks: the least time from arming a compare to its match */
 #define FAR        0xF000u     /* further than this: wait for the next pass of the counter */
 #define COM5A_BITS (_BV(COM5A1) | _BV(COM5A0))
 #define COM4C_BITS (_BV(COM4C1) | _BV(COM4C0))
-enum { IDLE, WAIT, RISE, FALL };
+enum { IDLE, WAIT, ARMED };
 
-static uint32_t step_tick[STEP_QUEUE];
-static int8_t step_dir[STEP_QUEUE];
-static volatile uint8_t step_head, step_tail, step_state;
-static volatile uint16_t steps_late;
+static uint64_t step_when;
+static volatile uint8_t step_state;
 
-/* Interrupts off: arms the oldest queued step, or waits, or stops. */
-static void step_arm(void)
+/* Interrupts off. The pin low through its PORT bit (COM5A disconnected:
+   table 17-3); PORTL is written so that simavr, which does not
+   re-drive a pin the compare unit let go of, sees it low too. */
+static void step_pin_low(void)
 {
-    while (step_head != step_tail) {
-        uint8_t i = step_tail % STEP_QUEUE;
-        int32_t ahead = (int32_t)(step_tick[i] - ticks32());
-        if (ahead < (int32_t)ARM_LEAD) {
-            /* too late to be on time: never sent, the rest dropped with it */
-            GPIOR0 = BOARD_MARK_LATE;
-            steps_late = (uint16_t)(steps_late + (uint8_t)(step_head - step_tail));
-            step_tail = step_head;
-            break;
-        }
-        if (ahead >= (int32_t)FAR) {
-            step_state = WAIT;
-            TCCR5A &= (uint8_t)~COM5A_BITS; /* the pin follows PORTL3: low */
-            OCR5A = (uint16_t)(TCNT5 + 0x8000u);
-        } else {
-            /* DIR, never writing PL3's PORT bit high (the pin is low now) */
-            uint8_t l = (uint8_t)(PORTL & ~(_BV(PL1) | _BV(PL3)));
-            PORTL = step_dir[i] > 0 ? (uint8_t)(l | _BV(PL1)) : l;
-            TCCR5A |= COM5A_BITS; /* set on match, then the compare value */
-            OCR5A = (uint16_t)step_tick[i];
-            step_state = RISE;
-            step_tail++;
-        }
-        TIFR5 = _BV(OCF5A);
-        TIMSK5 |= _BV(OCIE5A);
-        return;
-    }
-    step_state = IDLE;
-    TIMSK5 &= (uint8_t)~_BV(OCIE5A);
-    TCCR5A &= (uint8_t)~COM5A_BITS; /* the pin follows PORTL3: low */
+    TCCR5A &= (uint8_t)~COM5A_BITS;
+    PORTL &= (uint8_t)~_BV(PL3);
 }
 
-ISR(TIMER5_COMPA_vect)
+/* Interrupts off: the compare for step_when, or a wait while it is more
+   than one turn of the 16-bit counter away. 0 if too close. */
+static int step_compare(void)
 {
-    if (step_state == RISE) {
-        /* the pin went high at the match: clear it STEP_PULSE ticks on */
-        uint16_t fall = (uint16_t)(OCR5A + STEP_PULSE);
-        TCCR5A = (uint8_t)((TCCR5A & ~COM5A_BITS) | _BV(COM5A1));
-        OCR5A = fall;
-        if ((uint16_t)(TCNT5 - fall) < 0x8000u) OCR5A = (uint16_t)(TCNT5 + 2u); /* passed already */
-        step_state = FALL;
-        return;
+    uint64_t now = board_ticks();
+    uint64_t ahead = step_when > now ? step_when - now : 0;
+    if (ahead < ARM_LEAD) return 0;
+    if (ahead >= FAR) {
+        step_state = WAIT;
+        OCR5A = (uint16_t)(TCNT5 + 0x8000u);
+    } else {
+        /* set on match, then the compare value (simavr drives the pin
+           opposite the mode on the OCR write: low, as it is) */
+        TCCR5A |= COM5A_BITS;
+        OCR5A = (uint16_t)step_when;
+        step_state = ARMED;
     }
-    step_arm(); /* FALL (the pulse is over) or WAIT */
+    TIFR5 = _BV(OCF5A);
+    TIMSK5 |= _BV(OCIE5A);
+    return 1;
 }
 
-int board_step_at(int dir, uint64_t when)
+int board_step_arm(uint64_t when, int dir)
 {
-    uint8_t sreg = SREG, ok = 0;
+    uint8_t sreg = SREG;
+    int ok = 1;
     cli();
-    if ((uint8_t)(step_head - step_tail) < STEP_QUEUE) {
-        uint8_t i = step_head % STEP_QUEUE;
-        step_tick[i] = (uint32_t)when;
-        step_dir[i] = (int8_t)dir;
-        step_head++;
-        ok = 1;
-        if (step_state == IDLE) step_arm();
+    if (when == UINT64_MAX) {
+        TIMSK5 &= (uint8_t)~_BV(OCIE5A);
+        step_state = IDLE;
+        step_pin_low();
+    } else {
+        /* DIR now: the pin is low, the step at least ARM_LEAD away (the
+           drivers need 200 ns / 650 ns of DIR before STEP) */
+        if (dir > 0) PORTL |= _BV(PL1);
+        else PORTL &= (uint8_t)~_BV(PL1);
+        step_when = when;
+        ok = step_compare();
+        if (!ok) {
+            GPIOR0 = BOARD_MARK_LATE;
+            TIMSK5 &= (uint8_t)~_BV(OCIE5A);
+            step_state = IDLE;
+        }
     }
     SREG = sreg;
     return ok;
 }
 
-uint8_t board_step_room(void)
+/* In the compare interrupt: the pin rose at the match; it falls once it has
+   been high STEP_PULSE ticks. */
+void board_step_pulse(void)
 {
-    return (uint8_t)(STEP_QUEUE - (uint8_t)(step_head - step_tail));
+    uint16_t rise = OCR5A;
+    while ((uint16_t)(TCNT5 - rise) < STEP_PULSE) {}
+    step_pin_low();
+    step_state = IDLE;
 }
 
-uint16_t board_step_late(void)
+ISR(TIMER5_COMPA_vect)
 {
-    uint16_t n;
-    uint8_t sreg = SREG;
-    cli();
-    n = steps_late;
-    SREG = sreg;
-    return n;
-}
-
-void board_step_flush(void)
-{
-    uint8_t sreg = SREG;
-    cli();
-    step_tail = step_head;
-    SREG = sreg;
+    if (step_state == WAIT) {
+        if (!step_compare()) { /* cannot happen: a wait ends FAR - 0x8000 ticks early */
+            GPIOR0 = BOARD_MARK_LATE;
+            TIMSK5 &= (uint8_t)~_BV(OCIE5A);
+            step_state = IDLE;
+        }
+        return;
+    }
+    if (step_state != ARMED) return;
+    TIMSK5 &= (uint8_t)~_BV(OCIE5A); /* the core arms the next */
+    ramps_step_due();
 }
 
 int board_endstop(void) { return (PIND & _BV(PD3)) != 0; }
@@ -182,75 +176,92 @@ void board_motor(int on)
     else PORTK |= _BV(PK0);
 }
 
-/* ---- UV ------------------------------------------------------------------------------ */
-#define UV_QUEUE 4u
-static uint32_t uv_tick[UV_QUEUE];
-static uint8_t uv_on[UV_QUEUE];
-static volatile uint8_t uv_head, uv_tail, uv_state;
+/* ---- UV --------------------------------------------------------------------------------
+   Timer4's compare unit C switches the D8 MOSFET (PH5, OC4C) at the
+   exposure's two ticks: "set on match" for its start, "clear on match" for
+   its end (TCCR4A, table 17-3). An exposure whose start has passed
+   when it is handed over (the loop gets to it a little after its tick)
+   starts ARM_LEAD from now and ends as much later, so the light is on for
+   exactly until - when ticks; an early end (pause, M107, a fault) is moved
+   by the same shift, so the light given is still what the core counts.
+   Between transitions COM4C is disconnected and PORTH5 holds the level. */
+static uint64_t uv_on_at, uv_off_at, uv_shift;
+static volatile uint8_t uv_level, uv_want, uv_target, uv_state;
 
-static uint8_t uv_level, uv_next;
-
-/* Interrupts off. Between transitions COM4C is disconnected and PORTH5
-   holds the level, so waiting (or a match) changes nothing. */
 static void uv_hold(void)
 {
+    TCCR4A &= (uint8_t)~COM4C_BITS;
     if (uv_level) PORTH |= _BV(PH5);
     else PORTH &= (uint8_t)~_BV(PH5);
-    TCCR4A &= (uint8_t)~COM4C_BITS;
 }
 
+/* Interrupts off: arms the next transition, or switches now if it is due. */
 static void uv_arm(void)
 {
-    if (uv_head == uv_tail) {
-        uv_state = IDLE;
-        uv_hold();
-        TIMSK4 &= (uint8_t)~_BV(OCIE4C);
-        return;
-    }
-    {
-        uint8_t i = uv_tail % UV_QUEUE;
-        int32_t ahead = (int32_t)(uv_tick[i] - ticks32());
-        if (uv_on[i] == uv_level) {
-            /* no change: nothing to switch */
-            uv_tail++;
-            uv_arm();
+    for (;;) {
+        uint64_t at, now, ahead;
+        uint8_t to;
+        if (!uv_level && uv_want) { at = uv_on_at; to = 1; }
+        else if (uv_level) { at = uv_off_at; to = 0; }
+        else {
+            uv_state = IDLE;
+            TIMSK4 &= (uint8_t)~_BV(OCIE4C);
+            uv_hold();
             return;
         }
-        if (ahead >= (int32_t)FAR) {
-            uv_state = WAIT;
+        now = board_ticks();
+        ahead = at > now ? at - now : 0;
+        if (ahead < ARM_LEAD) { /* due: switch now */
+            uv_level = to;
+            if (!to) uv_want = 0;
             uv_hold();
+            continue;
+        }
+        uv_hold();
+        if (ahead >= FAR) {
+            uv_state = WAIT;
             OCR4C = (uint16_t)(TCNT4 + 0x8000u);
         } else {
-            /* set on match while off, clear on match while on, then the value;
-               a transition already due (a late "on", or "off" now) happens at once */
-            TCCR4A = (uint8_t)((TCCR4A & ~COM4C_BITS) | (uv_level ? _BV(COM4C1) : COM4C_BITS));
-            OCR4C = ahead < (int32_t)ARM_LEAD ? (uint16_t)(TCNT4 + 2u) : (uint16_t)uv_tick[i];
-            uv_next = uv_on[i];
-            uv_state = RISE;
-            uv_tail++;
+            TCCR4A |= to ? COM4C_BITS : _BV(COM4C1);
+            OCR4C = (uint16_t)at;
+            uv_target = to;
+            uv_state = ARMED;
         }
+        TIFR4 = _BV(OCF4C);
+        TIMSK4 |= _BV(OCIE4C);
+        return;
     }
-    TIFR4 = _BV(OCF4C);
-    TIMSK4 |= _BV(OCIE4C);
 }
 
 ISR(TIMER4_COMPC_vect)
 {
-    if (uv_state == RISE) uv_level = uv_next; /* the pin switched at the match */
+    if (uv_state == ARMED) { /* the pin switched at the match */
+        uv_level = uv_target;
+        if (!uv_level) uv_want = 0;
+    }
     uv_arm();
 }
 
-void board_uv_at(int on, uint64_t when)
+void board_uv(int on, uint64_t when, uint64_t until)
 {
     uint8_t sreg = SREG;
     cli();
-    if ((uint8_t)(uv_head - uv_tail) == UV_QUEUE) uv_tail++; /* cannot happen: the core alternates */
-    uv_tick[uv_head % UV_QUEUE] = (uint32_t)when;
-    uv_on[uv_head % UV_QUEUE] = (uint8_t)(on != 0);
-    uv_head++;
-    if (uv_state == IDLE) uv_arm();
+    if (on) {
+        uint64_t earliest = board_ticks() + 2u * ARM_LEAD;
+        uv_shift = when < earliest ? earliest - when : 0;
+        uv_on_at = when + uv_shift;
+        uv_off_at = until + uv_shift;
+        uv_want = 1;
+    } else if (uv_want) {
+        uint64_t off = when + uv_shift;
+        if (!uv_level) uv_want = 0; /* not on yet: it never goes on */
+        else if (off < uv_off_at) uv_off_at = off;
+    }
+    uv_arm();
     SREG = sreg;
 }
+
+uint8_t board_uv_lit(void) { return uv_level; }
 
 /* ---- UART0 ------------------------------------------------------------------------------ */
 static uint8_t rx_buf[BOARD_RX_SIZE], tx_buf[BOARD_TX_SIZE];

@@ -5,7 +5,10 @@
    it was scheduled for:
 
        # fw-sim tick_hz=10000000 steps_per_mm=400 ... start_steps=12000 ...
-       <tick> step +1 | step -1          a step pulse up or down
+       <tick> step +1 <sched> | step -1 <sched>
+                                         a step pulse up or down, put out by
+                                         the step timer at <tick>, scheduled
+                                         for tick <sched>
        <tick> uv 1 | uv 0                the UV light
        <tick> show <slot> <crc32> <lit>  a display buffer on the screen: the
                                          CRC-32 of the whole buffer (8 hex
@@ -14,11 +17,25 @@
        <tick> motor 1 | motor 0          the stepper driver enabled
        <tick> state <state> <flags>      the print state and STATUS flags
                                          (link/messages.h) whenever they change
+       <tick> hang                       the loop stops (--hang-at-ms)
+       <tick> reset watchdog|signal      the MCU restarts: the watchdog was not
+                                         refreshed, or SIGUSR1 (a reset button)
 
    Time is virtual: 10 MHz ticks, running --speed times faster than the wall
    clock, so tests can print with real exposure times in a fraction of the
-   time. The Z carriage is modelled: it starts --z-start mm above the endstop,
-   which is closed while the carriage is at or below its switching point.
+   time. The clock never runs past the next thing due (a timer interrupt,
+   the core's deadline): when the wall has run ahead, because the host
+   machine was busy, the simulator holds its clock there and catches up.
+   So the sim shows the firmware's own timing, not the host's scheduling;
+   the cycle counts of real MCUs come from QEMU and simavr. The timers are
+   the MCU's: the step timer calls fw_step_interrupt at the tick it was
+   armed for, the UV timer puts the light out at the end it was given, the
+   watchdog (--watchdog-ms) restarts the MCU when the core has not
+   refreshed it for that long. The Z carriage is modelled: it starts
+   --z-start mm above the endstop, which is closed while the carriage is at
+   or below its switching point. A restart keeps the carriage where it is,
+   turns the pins off (UV, motor, display), and starts the core afresh with
+   the next boot id.
 
    It exits 0 on SIGTERM or SIGINT, with the core's code when the core asks to
    exit (the EXIT message), 2 on a bad command line, 3 when the core misused
@@ -59,6 +76,9 @@ static const char USAGE[] =
     "  --max-bins N          the planner's largest profile                   [12000]\n"
     "  --window N            frames the host may have unacknowledged         [8]\n"
     "  --link-timeout-ms MS  wall-clock silence that pauses a print          [1000]\n"
+    "  --watchdog-ms MS      the watchdog's period, virtual time              [250]\n"
+    "  --hang-at-ms MS       the loop hangs at that virtual time (tests)      [never]\n"
+    "  --boot-id N           the first boot id (then one more each restart)   [random]\n"
     "  --help                this text\n";
 
 typedef struct sim_options {
@@ -66,7 +86,8 @@ typedef struct sim_options {
     double speed;
     unsigned long width, height, bits;
     double pitch_um, z_start, steps_per_mm, max_speed, accel, home_speed, z_max, home_travel;
-    unsigned long max_bins, window, link_timeout_ms;
+    unsigned long max_bins, window, link_timeout_ms, watchdog_ms, boot_id;
+    double hang_at_ms;
 } sim_options;
 
 /* The printer's hardware: the display buffers, the carriage, the log. */
@@ -74,7 +95,12 @@ typedef struct sim {
     fw_config config;
     FILE *log;
     int master;
-    uint64_t now;                /* the tick the core was last called at */
+    uint64_t now;                /* the clock: the tick of what runs now */
+    uint64_t step_at;            /* the step timer's compare, FW_NEVER disarmed */
+    uint64_t uv_off_at;          /* the UV timer's end, FW_NEVER while dark */
+    uint64_t watchdog_at;        /* the watchdog bites then, FW_NEVER off */
+    uint64_t watchdog_ticks;     /* its period */
+    fw_state *fw;
     int32_t true_position;       /* steps above the endstop's switching point */
     uint8_t *display[2];
     size_t stride;               /* bytes per display row */
@@ -83,17 +109,19 @@ typedef struct sim {
     int logged_state, logged_flags;
 } sim;
 
-static volatile sig_atomic_t stop_signal;
+static volatile sig_atomic_t stop_signal, reset_signal;
 
 static void on_signal(int sig)
 {
-    stop_signal = sig;
+    if (sig == SIGUSR1) reset_signal = 1;
+    else stop_signal = sig;
 }
 
 /* ------------------------------------------------------------ the clock */
 
 static struct timespec clock_start;
 static double clock_speed = 1.0;
+static uint64_t clock_held;      /* ticks the clock was held back for, in all */
 
 static double wall_ns(void)
 {
@@ -106,18 +134,29 @@ static double wall_ns(void)
    years), and the product is monotonic in the wall clock. */
 static uint64_t virtual_now(void)
 {
-    return (uint64_t)(wall_ns() * clock_speed / (1e9 / SIM_TICK_HZ));
+    return (uint64_t)(wall_ns() * clock_speed / (1e9 / SIM_TICK_HZ)) - clock_held;
 }
 
-/* poll's timeout until tick `deadline`, rounded up to a whole millisecond so
-   that waking never comes early; -1 (no timeout) for FW_NEVER. */
+/* The clock, never past `due`: what is due runs at its own tick. */
+static uint64_t clock_at_most(uint64_t due)
+{
+    uint64_t t = virtual_now();
+    if (t <= due) return t;
+    clock_held += t - due;
+    return due;
+}
+
+/* poll's timeout until tick `deadline` in whole milliseconds, rounded down
+   (the loop looks again); 0 below one: a sleep is that coarse, and the
+   steps of a move come faster than that at high --speed, so the loop spins
+   for them instead. -1 (no timeout) for FW_NEVER. */
 static int wall_timeout_ms(uint64_t deadline, uint64_t now)
 {
     double ms;
     if (deadline == FW_NEVER) return -1;
     if (deadline <= now) return 0;
     ms = (double)(deadline - now) * (1e3 / SIM_TICK_HZ) / clock_speed;
-    return ms >= 1000.0 ? 1000 : (int)ceil(ms);
+    return ms >= 1000.0 ? 1000 : (int)ms;
 }
 
 /* ------------------------------------------------------------ the hardware */
@@ -152,11 +191,23 @@ static void hw_write(void *ctx, const uint8_t *data, size_t size)
     }
 }
 
-static void hw_step(void *ctx, int dir, uint64_t when)
+static int hw_step_arm(void *ctx, uint64_t when, int dir)
 {
     sim *s = (sim *)ctx;
+    (void)dir;
+    if (when != FW_NEVER && when < s->now) return 0;
+    s->step_at = when;
+    return 1;
+}
+
+static void hw_step_pulse(void *ctx, int dir)
+{
+    sim *s = (sim *)ctx;
+    const fw_steps *q = &s->fw->steps;
     s->true_position += dir;
-    log_line(s, when, dir > 0 ? "step +1" : "step -1");
+    if (s->log)
+        fprintf(s->log, "%llu step %+d %llu\n", (unsigned long long)s->now, dir,
+                (unsigned long long)q->tick[q->tail % FW_STEP_QUEUE]);
 }
 
 static int hw_endstop(void *ctx)
@@ -164,9 +215,19 @@ static int hw_endstop(void *ctx)
     return ((sim *)ctx)->true_position <= 0;
 }
 
-static void hw_uv(void *ctx, int on, uint64_t when)
+static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
 {
-    log_line((sim *)ctx, when, on ? "uv 1" : "uv 0");
+    sim *s = (sim *)ctx;
+    if (on) s->uv_off_at = until;
+    else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
+    else s->uv_off_at = FW_NEVER;
+    log_line(s, when, on ? "uv 1" : "uv 0");
+}
+
+static void hw_watchdog(void *ctx)
+{
+    sim *s = (sim *)ctx;
+    s->watchdog_at = s->now + s->watchdog_ticks;
 }
 
 static void hw_motor(void *ctx, int on)
@@ -256,6 +317,26 @@ static void log_state(sim *s, const fw_state *fw)
     log_line(s, s->now, line);
 }
 
+/* A start of the MCU: at power-up (why NULL) and at each reset. The pins
+   fall back to off before the core starts again with the next boot id. */
+static void restart(sim *s, fw_state *fw, const fw_port *port, uint64_t *workspace, size_t ws_bytes, const char *why)
+{
+    if (why) {
+        char line[32];
+        snprintf(line, sizeof line, "reset %s", why);
+        log_line(s, s->now, line);
+        if (s->uv_off_at != FW_NEVER) log_line(s, s->now, "uv 0");
+        if (fw->port.show) log_line(s, s->now, "show -1");
+        log_line(s, s->now, "motor 0");
+        s->config.boot_id++;
+    }
+    s->step_at = s->uv_off_at = FW_NEVER;
+    s->watchdog_at = s->watchdog_ticks ? s->now + s->watchdog_ticks : FW_NEVER;
+    s->logged_state = s->logged_flags = -1;
+    memset(workspace, 0, ws_bytes);
+    fw_init(fw, &s->config, port, workspace, ws_bytes);
+}
+
 /* --------------------------------------------------------- the command line */
 
 static int bad_value(const char *option, const char *value, const char *want)
@@ -327,6 +408,9 @@ static int parse_options(int argc, char **argv, sim_options *o)
     o->max_bins = 12000;
     o->window = 8;
     o->link_timeout_ms = 1000;
+    o->watchdog_ms = 250;
+    o->hang_at_ms = -1;
+    o->boot_id = 0;
     for (i = 1; i < argc; i++) {
         const char *opt = argv[i], *v;
         int ok;
@@ -361,6 +445,9 @@ static int parse_options(int argc, char **argv, sim_options *o)
         else if (!strcmp(opt, "--max-bins")) ok = parse_whole(opt, v, 1, 1000000000ul, &o->max_bins);
         else if (!strcmp(opt, "--window")) ok = parse_whole(opt, v, 1, 255, &o->window);
         else if (!strcmp(opt, "--link-timeout-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->link_timeout_ms);
+        else if (!strcmp(opt, "--watchdog-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->watchdog_ms);
+        else if (!strcmp(opt, "--hang-at-ms")) ok = parse_number(opt, v, 0, 1e9, &o->hang_at_ms);
+        else if (!strcmp(opt, "--boot-id")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->boot_id);
         else {
             fprintf(stderr, "fw-sim: unknown option %s (fw-sim --help lists the options)\n", opt);
             return 0;
@@ -419,6 +506,10 @@ static int make_config(const sim_options *o, fw_config *c)
     /* A silent host is silent in wall-clock time; the core counts virtual. */
     c->link_timeout_ms = (uint32_t)timeout;
     c->window = (uint8_t)o->window;
+    c->watchdog_ms = (uint32_t)o->watchdog_ms;
+    /* a real step timer needs time to be armed; the sim's does not, but
+       moves start as late as on a board */
+    c->step_lead = SIM_TICK_HZ / 5000u;
     return 1;
 }
 
@@ -474,7 +565,8 @@ int main(int argc, char **argv)
     static sim s;
     static fw_state fw;
     fw_port port;
-    uint64_t *workspace = NULL, deadline = 0;
+    uint64_t *workspace = NULL, deadline = 0, hang_at;
+    int hung = 0;
     size_t ws_bytes;
     char name[128];
     int slave;
@@ -514,48 +606,89 @@ int main(int argc, char **argv)
     sa.sa_flags = 0; /* no SA_RESTART: a blocked poll or write returns to check */
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGUSR1, &sa, NULL);
     sa.sa_handler = SIG_IGN;
     sigaction(SIGPIPE, &sa, NULL);
 
     port.ctx = &s;
     port.write = hw_write;
-    port.step = hw_step;
+    port.step_arm = hw_step_arm;
+    port.step_pulse = hw_step_pulse;
     port.endstop = hw_endstop;
     port.uv = hw_uv;
     port.motor = hw_motor;
     port.mask_row = hw_mask_row;
     port.show = hw_show;
+    port.watchdog = hw_watchdog;
     port.exit = hw_exit;
+    s.fw = &fw;
+    s.watchdog_ticks = (uint64_t)opt.watchdog_ms * (SIM_TICK_HZ / 1000u);
+    s.config.boot_id = opt.boot_id ? (uint32_t)opt.boot_id : (uint32_t)(time(NULL) ^ (getpid() << 16)) | 1u;
+    hang_at = opt.hang_at_ms < 0 ? FW_NEVER : (uint64_t)(opt.hang_at_ms * (SIM_TICK_HZ / 1000u));
     clock_speed = opt.speed;
     clock_gettime(CLOCK_MONOTONIC, &clock_start);
-    fw_init(&fw, &s.config, &port, workspace, ws_bytes);
+    restart(&s, &fw, &port, workspace, ws_bytes, NULL);
 
     printf("pty %s\n", name);
     fflush(stdout);
 
     while (!stop_signal && !s.exit_requested) {
         struct pollfd p;
-        int r;
-        s.now = virtual_now();
-        if (s.now >= deadline) {
+        int r, timeout;
+        uint64_t due = s.step_at < s.uv_off_at ? s.step_at : s.uv_off_at;
+        if (s.watchdog_at < due) due = s.watchdog_at;
+        if (!hung && deadline < due) due = deadline;
+        if (!hung && hang_at < due) due = hang_at;
+        if (due < s.now) due = s.now; /* overdue: now, never back in time */
+        s.now = clock_at_most(due);
+        /* the interrupts first, as on an MCU: they preempt the loop */
+        if (s.now >= s.uv_off_at) {
+            s.uv_off_at = FW_NEVER;
+            log_line(&s, s.now, "uv 0");
+            continue;
+        }
+        if (s.now >= s.step_at) {
+            s.step_at = FW_NEVER;
+            fw_step_interrupt(&fw);
+            continue;
+        }
+        if (s.now >= s.watchdog_at || reset_signal) {
+            restart(&s, &fw, &port, workspace, ws_bytes, reset_signal ? "signal" : "watchdog");
+            reset_signal = 0;
+            hung = 0;
+            hang_at = FW_NEVER;
+            deadline = 0;
+            continue;
+        }
+        if (!hung && s.now >= hang_at) {
+            hung = 1;
+            log_line(&s, s.now, "hang");
+            continue;
+        }
+        if (!hung && s.now >= deadline) {
             deadline = fw_run(&fw, s.now);
             log_state(&s, &fw);
             continue;
         }
-        if (s.log) fflush(s.log);
+        timeout = wall_timeout_ms(due, s.now);
+        if (timeout && s.log) fflush(s.log);
         p.fd = s.master;
-        p.events = POLLIN;
+        /* a hung loop reads nothing: the bytes wait in the terminal */
+        p.events = hung ? 0 : POLLIN;
         p.revents = 0;
-        r = poll(&p, 1, wall_timeout_ms(deadline, s.now));
+        r = poll(&p, 1, timeout);
         if (r < 0 && errno != EINTR) {
             fprintf(stderr, "fw-sim: poll: %s\n", strerror(errno));
             break;
         }
         if (r > 0 && (p.revents & POLLIN)) {
             uint8_t buf[4096];
-            ssize_t n = read(s.master, buf, sizeof buf);
+            ssize_t n;
+            /* what fell due while waiting runs first, as its interrupt would */
+            if (virtual_now() >= due) continue;
+            n = read(s.master, buf, sizeof buf);
             if (n > 0) {
-                s.now = virtual_now();
+                s.now = clock_at_most(due);
                 fw_receive(&fw, buf, (size_t)n, s.now);
                 log_state(&s, &fw);
                 /* what the bytes asked for may be due before the old deadline */

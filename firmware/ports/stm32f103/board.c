@@ -26,6 +26,8 @@
 #define RCC_APB2ENR_IOPC   (1u << 4)
 #define RCC_APB2ENR_USART1 (1u << 14)
 #define RCC_APB1ENR_TIM2   (1u << 0)
+#define RCC_APB1ENR_TIM3   (1u << 1)
+#define RCC_APB1ENR_TIM4   (1u << 2)
 
 #define FLASH_ACR CM3_REG(0x40022000u)
 #define FLASH_ACR_LATENCY2 2u        /* 48 MHz < SYSCLK <= 72 MHz */
@@ -76,6 +78,17 @@
 #define TIM_CR1_URS (1u << 2)
 #define TIM_CR1_OPM (1u << 3)
 #define TIM2_IRQ 28u
+/* TIM3 (steps) and TIM4 (the UV light): the same registers at their bases */
+#define TIM3 0x40000400u
+#define TIM4 0x40000800u
+#define TIM_CR1(t)  CM3_REG((t) + 0x00u)
+#define TIM_DIER(t) CM3_REG((t) + 0x0Cu)
+#define TIM_SR(t)   CM3_REG((t) + 0x10u)
+#define TIM_EGR(t)  CM3_REG((t) + 0x14u)
+#define TIM_PSC(t)  CM3_REG((t) + 0x28u)
+#define TIM_ARR(t)  CM3_REG((t) + 0x2Cu)
+#define TIM3_IRQ 29u
+#define TIM4_IRQ 30u
 
 #ifndef BAUD
 #define BAUD 115200u
@@ -127,12 +140,12 @@ void board_step(int dir)
         last_dir = dir;
         delay_ticks(BOARD_CLOCK_HZ / 1000000u); /* direction setup: 1 us */
     }
-    /* 2 us high and 2 us low cover the slowest common driver (DRV8825:
-       1.9 us each), also when a late loop issues due steps back to back */
+    /* 2 us high covers the slowest common driver (DRV8825: 1.9 us); steps
+       come from the step alarm, never closer than the speed limit allows,
+       so the low time is always long */
     pin_set(GPIOB, PIN_STEP);
     delay_ticks(2u * (BOARD_CLOCK_HZ / 1000000u));
     pin_clear(GPIOB, PIN_STEP);
-    delay_ticks(2u * (BOARD_CLOCK_HZ / 1000000u));
 }
 
 int board_endstop(void)
@@ -244,8 +257,53 @@ void board_wake_at(uint64_t deadline, uint64_t now)
     TIM2_CR1 = TIM_CR1_URS | TIM_CR1_OPM | TIM_CR1_CEN;
 }
 
+/* ---- the alarms ------------------------------------------------------------------------
+   TIM3 (steps) and TIM4 (the UV light's end) count the 72 MHz timer clock
+   itself, in one-pulse mode: a delay past their 16 bits (910 us) interrupts
+   early and cm3_alarm arms the rest. */
+static uint32_t alarm_timer(int which) { return which == CM3_ALARM_STEP ? TIM3 : TIM4; }
+
+void tim3_handler(void);
+void tim3_handler(void)
+{
+    TIM_SR(TIM3) = 0;
+    cm3_alarm(CM3_ALARM_STEP);
+}
+
+void tim4_handler(void);
+void tim4_handler(void)
+{
+    TIM_SR(TIM4) = 0;
+    cm3_alarm(CM3_ALARM_UV);
+}
+
+void board_alarm(int which, uint64_t delay)
+{
+    uint32_t t = alarm_timer(which);
+    TIM_CR1(t) = TIM_CR1_URS | TIM_CR1_OPM;
+    if (!delay) return;
+    if (delay > 0x10000u) delay = 0x10000u;
+    TIM_ARR(t) = (uint32_t)(delay - 1u);
+    TIM_EGR(t) = 1u;
+    TIM_SR(t) = 0;
+    TIM_CR1(t) = TIM_CR1_URS | TIM_CR1_OPM | TIM_CR1_CEN;
+}
+
+static void alarm_init(uint32_t t, unsigned irq)
+{
+    TIM_PSC(t) = 0;
+    TIM_CR1(t) = TIM_CR1_URS | TIM_CR1_OPM;
+    TIM_EGR(t) = 1u;
+    TIM_SR(t) = 0;
+    TIM_DIER(t) = 1u;
+    cm3_irq_enable(irq);
+}
+
 static void timer_init(void)
 {
+    RCC_APB1ENR |= RCC_APB1ENR_TIM3 | RCC_APB1ENR_TIM4;
+    alarm_init(TIM3, TIM3_IRQ);
+    alarm_init(TIM4, TIM4_IRQ);
     RCC_APB1ENR |= RCC_APB1ENR_TIM2;
     TIM2_PSC = BOARD_CLOCK_HZ / 1000000u - 1u;
     TIM2_CR1 = TIM_CR1_URS | TIM_CR1_OPM;
@@ -309,7 +367,7 @@ void board_show(int slot) { if (slot >= 0) masks_shown++; }
 #define F cm3_fault_handler
 CM3_IRQ_VECTORS irq_vectors[60] = { /* RM0008 table 63: positions 0-59 */
     F, F, F, F, F, F, F, F, F, F,  F, F, F, F, F, F, F, F, F, F,
-    F, F, F, F, F, F, F, F, tim2_handler, F,  F, F, F, F, F, F, F, usart1_handler, F, F,
+    F, F, F, F, F, F, F, F, tim2_handler, tim3_handler, tim4_handler, F, F, F, F, F, F, usart1_handler, F, F,
     F, F, F, F, F, F, F, F, F, F,  F, F, F, F, F, F, F, F, F, F
 };
 #undef F
