@@ -107,7 +107,7 @@ test: $(TEST_PROGRAMS)
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
 BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
-check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-ramps-test.elf $(B)/avr-run $(BENCH_PROGRAMS)
+check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-ramps-test.elf $(B)/avr-run $(B)/avr-bench.elf $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two

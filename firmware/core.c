@@ -631,6 +631,7 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     }
     fw_axis_init(&fw->axis, &config->axis, config->tick_hz);
     fw->axis.start_lead = config->step_lead;
+    fw->steps.budget = FW_STEP_FILL;
     link_deframer_init(&fw->deframer, link_host_to_mcu_type);
     fw->state = LINK_STATE_IDLE;
     io.ctx = fw;
@@ -682,10 +683,13 @@ static void fill_steps(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
     uint8_t room = fw->axis.phase ? 1u : FW_STEP_QUEUE;
+    q->short_by = 0;
     if (q->late) { step_fault(fw, now); return; }
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir;
+        if (!q->budget) { q->short_by = 1; return; }
+        q->budget--;
         if (fw_axis_next(&fw->axis) < now) { step_fault(fw, now); return; }
         dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
         if (!dir) continue;
@@ -719,6 +723,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
 {
     uint64_t next = FW_NEVER;
     if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
+    fw->steps.budget = FW_STEP_FILL;
     fill_steps(fw, now);
     if (!moving(fw)) {
         if (fw->state == LINK_STATE_HOMING) {
@@ -749,7 +754,8 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     fill_steps(fw, now);
 
     /* refilled as each step leaves; homing reads the switch after each */
-    if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
+    if (fw->steps.short_by) next = now; /* the rest of the queue on the next pass */
+    else if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
     else if (fw_axis_busy(&fw->axis)) next = earliest(next, fw_axis_next(&fw->axis));
     if (fw->config.watchdog_ms) next = earliest(next, now + FW_MS(fw, fw->config.watchdog_ms) / 2u);
     if (fw->state == LINK_STATE_PRINTING) {

@@ -88,6 +88,12 @@ $(B)/fw-ramps-test.elf: $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_HDRS)
 	@mkdir -p $(B)
 	$(AVR_CC) $(FW_AVR_FLAGS) $(FW_RAMPS_TEST) $(FW_RAMPS_SRC) -o $@
 
+# The RAMPS bench image (make bench: bench/bench_avr.c runs it under avr-run):
+# motion.c's step computation and the planner, timed in cycles on the part.
+$(B)/avr-bench.elf: bench/avr_bench.c bench/mcu_profile.h firmware/motion.c firmware/adaslice_fw.c $(FW_RAMPS)/board.h $(FW_HDRS)
+	@mkdir -p $(B)
+	$(AVR_CC) $(FW_AVR_FLAGS) bench/avr_bench.c firmware/motion.c firmware/adaslice_fw.c -o $@
+
 # flash = text + data (.data's image lives in flash), RAM = data + bss
 # (.bss includes the stack on the Cortex-M3 images).
 firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf

@@ -51,6 +51,14 @@
 #ifndef FW_STEP_QUEUE
 #define FW_STEP_QUEUE 8u
 #endif
+/* At most this many steps are computed from one fw_run to the next (the
+   fills of fw_receive and fw_run share it), so that a loop pass does a
+   bounded amount of motion arithmetic; fw_run asks to be called again at
+   once (its deadline `now`) while the queue is short for want of it. The
+   default is the queue's length. */
+#ifndef FW_STEP_FILL
+#define FW_STEP_FILL FW_STEP_QUEUE
+#endif
 typedef struct fw_steps {
     volatile uint64_t tick[FW_STEP_QUEUE];
     volatile int8_t dir[FW_STEP_QUEUE];
@@ -58,6 +66,8 @@ typedef struct fw_steps {
     volatile uint8_t tail;     /* the interrupt's: the next step out */
     volatile uint8_t running;  /* the timer is armed; the interrupt clears it when the queue ends */
     volatile uint8_t late;     /* the timer could not be armed for the next step in time */
+    uint8_t budget;            /* the loop's: steps it may still compute before fw_run */
+    uint8_t short_by;          /* the loop's: the last fill stopped for want of budget */
 } fw_steps;
 
 typedef struct fw_port {

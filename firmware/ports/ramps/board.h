@@ -23,11 +23,20 @@
 #ifndef BOARD_STEPS_PER_MM
 #define BOARD_STEPS_PER_MM 400u            /* T8x8 lead screw, 1/16 microsteps */
 #endif
+/* Z's top speed on this MCU: 2.5 mm/s, a step every 400 us at 400
+   steps/mm is 1,000 steps/s, one step per 16,000 cycles. An 8-bit core
+   computes motion.c's closed form in 64-bit integers: measured under simavr
+   (make bench, bench/avr_bench.c), 1,571 cycles a cruising step, 3,900 on
+   average and up to 7,650 on a ramp (a square root when the guess from
+   the steps before misses), and a loop pass while Z moves takes up to
+   about 11,000 cycles with its one step. 10 mm/s (4,000 cycles a step)
+   cannot be sustained, 5 mm/s (8,000) not with a pass under the interval;
+   2.5 mm/s keeps the worst moving pass a third under it. */
 #ifndef BOARD_MAX_SPEED_UM_S
-#define BOARD_MAX_SPEED_UM_S 10000ul       /* 10 mm/s: a step every 250 us */
+#define BOARD_MAX_SPEED_UM_S 2500ul
 #endif
 #define BOARD_ACCEL_MM_S2    50u
-#define BOARD_HOME_SPEED_UM_S 5000ul
+#define BOARD_HOME_SPEED_UM_S 2500ul
 /* the same in steps per second (the core's units) */
 #define BOARD_MAX_STEPS_S  (BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
 #define BOARD_HOME_STEPS_S (BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
@@ -63,11 +72,17 @@
 /* The watchdog (reset mode), refreshed by the main loop only (fw_run). */
 #define BOARD_WDT_MS 120u
 
-/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
-   and the core's step queue holds FW_STEP_QUEUE steps. Both must cover the
-   loop's worst pass (see main.c). */
-#define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 250u) /* 4 ms */
-#define FW_STEP_QUEUE 32u
+/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts:
+   more than the longest pass that can start one (a G1 line: parsed, the
+   move shaped, 46,000 cycles = 2.9 ms measured). The loop computes at most
+   FW_STEP_FILL steps per pass (so a pass stays short) and runs again at
+   once while the queue is short; the queue holds FW_STEP_QUEUE steps, which
+   must outlast the longest pass while Z moves plus one wake-up: 16 steps
+   are 256,000 cycles at the top speed, against a worst moving pass
+   measured at most 2 x 25,000 (make bench). */
+#define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
+#define FW_STEP_QUEUE 16u
+#define FW_STEP_FILL 1u
 
 /* Test hooks the simavr harness watches (one OUT instruction each): the
    general purpose I/O registers, never read by the firmware. */
@@ -75,6 +90,7 @@
 #define BOARD_MARK_IDLE  2u   /* GPIOR0: the pass ends, the loop sleeps */
 #define BOARD_MARK_BOOT  3u   /* GPIOR0: reset, before anything else */
 #define BOARD_MARK_LATE  4u   /* GPIOR0: a step could not be issued on time */
+#define BOARD_MARK_MOVING 5u  /* GPIOR0: a pass begins while Z moves (steps computed or queued) */
 /* GPIOR1: the display buffer shown + 1, 0 for dark (there is no display here) */
 
 #ifndef __ASSEMBLER__

@@ -77,7 +77,7 @@ int main(void)
         const uint8_t *data;
         size_t n;
         uint64_t now;
-        GPIOR0 = BOARD_MARK_LOOP;
+        GPIOR0 = fw_axis_busy(&fw.axis) || fw.steps.head != fw.steps.tail ? BOARD_MARK_MOVING : BOARD_MARK_LOOP;
 #ifdef RAMPS_TEST_HANG
         /* test builds only: the simavr harness writes 0xA5 into GPIOR2
            (which nothing else uses) to make the loop hang */
