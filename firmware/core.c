@@ -677,20 +677,22 @@ static void step_fault(fw_state *fw, uint64_t now)
     fail(fw, LINK_ERR_STEP_LATE, 0);
 }
 
-/* Tops the queue up from the closed form. Homing queues one step at a time:
-   each reads the switch after the step before it went out. */
-static void fill_steps(fw_state *fw, uint64_t now)
+/* Tops the queue up from the closed form, at most `budget` steps; 0 when a
+   step cannot go out on time (its tick passed, or the timer could not be
+   armed). Homing queues one step at a time: each reads the switch after
+   the step before it went out. */
+static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
     uint8_t room = fw->axis.phase ? 1u : FW_STEP_QUEUE;
     q->short_by = 0;
-    if (q->late) { step_fault(fw, now); return; }
+    if (q->late) return 0;
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir;
-        if (!q->budget) { q->short_by = 1; return; }
+        if (!q->budget) { q->short_by = 1; return 1; }
         q->budget--;
-        if (fw_axis_next(&fw->axis) < now) { step_fault(fw, now); return; }
+        if (fw_axis_next(&fw->axis) < now) return 0;
         dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
         if (!dir) continue;
         q->tick[at] = fw->axis.last;
@@ -700,9 +702,22 @@ static void fill_steps(fw_state *fw, uint64_t now)
            that reads 1 here will also take the step just added */
         if (!q->running) {
             q->running = 1;
-            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) { step_fault(fw, now); return; }
+            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) return 0;
         }
     }
+    return 1;
+}
+
+static void fill_steps(fw_state *fw, uint64_t now)
+{
+    if (!fill(fw, now)) step_fault(fw, now);
+}
+
+void fw_refill(fw_state *fw, uint64_t now)
+{
+    if (fw->axis.phase) return; /* homing reads the switch: fw_run's */
+    fw->steps.budget = FW_STEP_FILL;
+    if (!fill(fw, now)) fw->steps.late = 1; /* fw_run's next fill stops the motion */
 }
 
 void fw_step_interrupt(fw_state *fw)

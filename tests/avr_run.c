@@ -16,11 +16,13 @@
        <cycle> reset                 the MCU reset (the watchdog): every pin an input
        <cycle> late                  the firmware could not arm a step in time (STEP_LATE)
        <cycle> pass <cycles>         a loop pass of at least --log-passes cycles
-       # end cycles=C worst_pass=P worst_moving_pass=M passes=N stack_peak=S resets=R late=L
+       # end cycles=C worst_pass=P worst_moving_pass=M worst_refill_gap=G passes=N stack_peak=S resets=R late=L
 
    worst_pass: the longest main-loop pass in cycles, from the firmware's
    GPIOR0 marks (a pass begins, the loop goes to sleep); worst_moving_pass
-   the longest of those that began while Z moved; stack_peak: bytes
+   the longest of those that began while Z moved; worst_refill_gap the
+   longest stretch of those without a top-up of the step queue (a pass
+   begins, or a decoded mask row calls fw_refill); stack_peak: bytes
    of SRAM below RAMEND the stack reached (SRAM is painted before the run).
 
    The UART: simavr's own uart_pty part raced and corrupted bulk data (team
@@ -90,7 +92,7 @@ typedef struct run {
     size_t in_len, in_at;
     uint8_t *out;
     size_t out_len, out_cap;
-    uint64_t pass_begin, worst_pass, worst_moving, passes, log_passes;
+    uint64_t pass_begin, worst_pass, worst_moving, passes, log_passes, stretch_begin, worst_stretch;
     int pass_moving;
     unsigned long resets, late, uv_ons, hang_at_uv;
     int in_pass;
@@ -164,6 +166,14 @@ static void on_uv(struct avr_irq_t *irq, uint32_t value, void *param)
 
 /* A loop pass from R.pass_begin to `end`: the worst, and logged when it
    takes at least --log-passes cycles. */
+/* The stretch of a moving pass since the queue was last topped up (the
+   pass began, or a mask row refilled it) */
+static void end_stretch(uint64_t end)
+{
+    if (R.pass_moving && end - R.stretch_begin > R.worst_stretch) R.worst_stretch = end - R.stretch_begin;
+    R.stretch_begin = end;
+}
+
 static void end_pass(uint64_t end)
 {
     uint64_t took = end - R.pass_begin;
@@ -178,14 +188,17 @@ static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *pa
 {
     (void)param;
     avr->data[addr] = v;
-    if (v == BOARD_MARK_LOOP || v == BOARD_MARK_MOVING) {
-        if (R.in_pass) end_pass(avr->cycle);
+    if (v == BOARD_MARK_REFILL) {
+        if (R.in_pass) end_stretch(avr->cycle);
+    } else if (v == BOARD_MARK_LOOP || v == BOARD_MARK_MOVING) {
+        if (R.in_pass) { end_pass(avr->cycle); end_stretch(avr->cycle); }
+        R.stretch_begin = avr->cycle;
         R.in_pass = 1;
         R.pass_moving = v == BOARD_MARK_MOVING;
         R.pass_begin = avr->cycle;
         R.passes++;
     } else if (v == BOARD_MARK_IDLE) {
-        if (R.in_pass) end_pass(avr->cycle);
+        if (R.in_pass) { end_pass(avr->cycle); end_stretch(avr->cycle); }
         R.in_pass = 0;
     } else if (v == BOARD_MARK_LATE) {
         R.late++;
@@ -419,15 +432,15 @@ int main(int argc, char **argv)
     }
     if (R.out_len) (void)!write(R.master, R.out, R.out_len);
     if (R.log) {
-        fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
+        fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu worst_refill_gap=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
                 (unsigned long long)R.avr->cycle, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
-                (unsigned long long)R.passes,
+                (unsigned long long)R.worst_stretch, (unsigned long long)R.passes,
                 stack_peak(), R.resets, R.late, R.avr->cycle ? 1.0 - (double)R.slept / (double)R.avr->cycle : 0.0);
         fclose(R.log);
     }
-    fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles (%llu while Z moves) over %llu passes; stack peak %lu bytes; %lu resets; %lu late steps\n",
+    fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles (%llu while Z moves, %llu between step refills) over %llu passes; stack peak %lu bytes; %lu resets; %lu late steps\n",
             (double)R.avr->cycle / BOARD_CPU_HZ, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
-            (unsigned long long)R.passes, stack_peak(),
+            (unsigned long long)R.worst_stretch, (unsigned long long)R.passes, stack_peak(),
             R.resets, R.late);
     close(slave);
     close(R.master);

@@ -1,17 +1,29 @@
 /* The RAMPS 1.4 / ATmega2560 image (build/fw-ramps-test.elf) under simavr
    through tests/avr_run.c (build/avr-run), checked from its pin edges, which
-   are cycle-exact:
-     - a 200-layer print in G-code mode as NanoDLP drives one (each move
+   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick):
+     - a 100-layer print in G-code mode as NanoDLP drives one (each move
        waited for with Z_move_comp, the light on for a G4 dwell): every step
        within 10 us of the tick motion.c's closed form gives it (a host
-       fw_axis on the board's config replays each move), no interval under
-       the speed limit, the step count the moves' heights x steps/mm, the
-       light never on while Z moves, no step dropped as late;
+       fw_axis on the board's config, the real firmware/motion.c, replays
+       each move from its first step), no interval under the speed limit,
+       the step count the moves' heights x steps/mm, the light never on
+       while Z moves, no step refused as late. G-code's light is on from
+       M106 to M107, lines the host sends when it likes: the firmware
+       switches both edges on Timer4 at the ticks the lines ran, so the
+       light lasts exactly from one line to the other, which is the G4 dwell
+       plus the host's round trip (as exact as the host, not the firmware):
+       what is asserted is that it is never shorter than the dwell;
+     - a binary-protocol print by the host tool (adaslice print), masks
+       streaming while Z moves: the same step checks, and tests/zcheck.h's
+       (each exposure at its layer's height, exactly its exposure in ticks,
+       no light while Z moves, acceleration and speed within limits);
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
        and it answers again afterwards. */
 #define _XOPEN_SOURCE 700
 #include "check.h"
+#include "cli_run.h"
+#include "zcheck.h"
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
 #include "../link/tty.h"
@@ -143,9 +155,58 @@ typedef struct avr_log {
     uint64_t reset_at[8];
     size_t resets;
     size_t steps_lit;            /* steps taken with the light on */
-    unsigned long late, worst_pass, stack_peak;
+    unsigned long late, worst_pass, worst_moving_pass, worst_refill_gap, stack_peak;
     long start_steps;
+    zevent *ev;                  /* steps, UV, shows: tests/zcheck.h's record, in ticks (cycle / 8) */
+    size_t events, events_cap;
 } avr_log;
+
+static void add_event(avr_log *l, uint64_t at, int kind, int value)
+{
+    if (l->events == l->events_cap) {
+        size_t cap = l->events_cap ? 2 * l->events_cap : 65536;
+        zevent *e = (zevent *)realloc(l->ev, cap * sizeof *e);
+        if (!e) return;
+        l->ev = e;
+        l->events_cap = cap;
+    }
+    l->ev[l->events].when = at;
+    l->ev[l->events].kind = kind;
+    l->ev[l->events].value = value;
+    l->ev[l->events].crc = 0;
+    l->events++;
+}
+
+/* The record's cycles as ticks. A compare's edge comes at the end of the
+   instruction its cycle falls in (0-4 cycles on), and Timer4 runs a few
+   cycles behind Timer5 (their counters were cleared one after the other):
+   each timer's edges are read against their own phase, the residue mod 8
+   from which all of them fall within the next 8 cycles. */
+static unsigned edge_phase(const avr_log *l, int kind)
+{
+    unsigned seen = 0, r, best = 0, best_span = 8;
+    size_t i;
+    for (i = 0; i < l->events; i++)
+        if (l->ev[i].kind == kind) seen |= 1u << (l->ev[i].when % CYCLES_PER_TICK);
+    for (r = 0; r < CYCLES_PER_TICK; r++) {
+        unsigned span = 0, k;
+        for (k = 0; k < CYCLES_PER_TICK; k++)
+            if (seen & (1u << ((r + k) % CYCLES_PER_TICK))) span = k + 1;
+        if (span < best_span) { best_span = span; best = r; }
+    }
+    return best;
+}
+
+static void events_to_ticks(avr_log *l)
+{
+    unsigned step_phase = edge_phase(l, ZEV_STEP), uv_phase = edge_phase(l, ZEV_UV);
+    size_t i;
+    for (i = 0; i < l->events; i++) {
+        unsigned phase = l->ev[i].kind == ZEV_UV ? uv_phase : l->ev[i].kind == ZEV_STEP ? step_phase : 0;
+        uint64_t c = l->ev[i].when;
+        l->ev[i].when = c >= phase ? (c - phase) / CYCLES_PER_TICK : 0;
+    }
+}
 
 static int read_avr_log(const char *path, avr_log *l)
 {
@@ -163,6 +224,8 @@ static int read_avr_log(const char *path, avr_log *l)
             if ((v = strstr(line, "start_steps="))) l->start_steps = strtol(v + 12, NULL, 10);
             if ((v = strstr(line, " late="))) l->late = strtoul(v + 6, NULL, 10);
             if ((v = strstr(line, "worst_pass="))) l->worst_pass = strtoul(v + 11, NULL, 10);
+            if ((v = strstr(line, "worst_moving_pass="))) l->worst_moving_pass = strtoul(v + 18, NULL, 10);
+            if ((v = strstr(line, "worst_refill_gap="))) l->worst_refill_gap = strtoul(v + 17, NULL, 10);
             if ((v = strstr(line, "stack_peak="))) l->stack_peak = strtoul(v + 11, NULL, 10);
             continue;
         }
@@ -178,19 +241,24 @@ static int read_avr_log(const char *path, avr_log *l)
             l->step_at[l->steps] = at;
             l->step_dir[l->steps++] = arg[0] == '-' ? -1 : 1;
             if (uv) l->steps_lit++;
+            add_event(l, at, ZEV_STEP, arg[0] == '-' ? -1 : 1);
         } else if (!strcmp(what, "uv") && l->uvs < 1024) {
             uv = atoi(arg);
             l->uv_at[l->uvs] = at;
             l->uv_on[l->uvs++] = uv;
+            add_event(l, at, ZEV_UV, uv);
+        } else if (!strcmp(what, "show")) {
+            add_event(l, at, ZEV_SHOW, atoi(arg));
         } else if (!strcmp(what, "reset") && l->resets < 8) {
             l->reset_at[l->resets++] = at;
         }
     }
     fclose(f);
+    events_to_ticks(l);
     return 1;
 }
 
-static void free_avr_log(avr_log *l) { free(l->step_at); free(l->step_dir); }
+static void free_avr_log(avr_log *l) { free(l->step_at); free(l->step_dir); free(l->ev); }
 
 /* The board's Z axis as the firmware configures it (ports/ramps/main.c). */
 static void board_axis(fw_axis *axis)
@@ -245,32 +313,35 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
         }
         from = moves[k].target;
     }
-    /* intervals: the closed form allows none under the speed limit; simavr's
-       compare timing rounds to +-1 cycle */
+    /* intervals, in ticks (the log's cycle / 8: simavr puts a compare's
+       edge at the end of the instruction it falls in, 0-4 cycles on): the
+       closed form allows none under the speed limit */
     for (i = 1; i < l->steps; i++)
-        if (l->step_at[i] - l->step_at[i - 1] + 1 < min_cycles) short_intervals++;
-    CHECKF(!short_intervals, "%zu step intervals under %llu cycles", short_intervals, (unsigned long long)min_cycles);
+        if (l->step_at[i] / CYCLES_PER_TICK - l->step_at[i - 1] / CYCLES_PER_TICK < min_cycles / CYCLES_PER_TICK) short_intervals++;
+    CHECKF(!short_intervals, "%zu step intervals under %llu ticks", short_intervals, (unsigned long long)(min_cycles / CYCLES_PER_TICK));
     return worst;
 }
 
-#define LAYERS 200
+#define LAYERS 100
 #define LAYER_UM 50
-#define PEEL_UM 300
+#define PEEL_UM 100
 #define EXPOSE_MS 20
+#define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
 
 /* NanoDLP's way: per layer lift, lower to the layer, wait for Z_move_comp,
    light on for a dwell, off. */
 static void gcode_print_nanodlp_style(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "20", "--speed", "20", "--max-seconds", "2400", "--timeout", "240", NULL};
+    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "60", NULL};
     static zmove moves[2 * LAYERS + 1];
     char got[256];
     size_t n = 0, k;
     int layer, ok = 1;
     avr_log l;
     long worst;
-    const uint32_t peel_speed = 5 * BOARD_STEPS_PER_MM, layer_speed = 3 * BOARD_STEPS_PER_MM; /* F300, F180 */
+    uint64_t longest = 0;
+    const uint32_t peel_speed = 5 * BOARD_STEPS_PER_MM, layer_speed = 3 * BOARD_STEPS_PER_MM; /* F300, F180: over the top speed */
     if (!avr_start(&c, "build/test_avr/print.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf (make check builds both)"); avr_stop(&c); return; }
     got[0] = 0;
     ok &= gline(&c, "M115", "ok", 10, got, sizeof got);
@@ -296,6 +367,12 @@ static void gcode_print_nanodlp_style(void)
         ok &= gline(&c, "M107", "ok", 5, NULL, 0);
     }
     CHECKF(ok, "the G-code stream stopped at layer %d", layer - 1);
+    {
+        /* M107's light goes off on Timer4 a shift after the line (the same
+           shift as M106's start): let the simulation run past it */
+        struct timespec ts = {0, 200000000};
+        nanosleep(&ts, NULL);
+    }
     CHECKF(avr_stop(&c) == 0, "avr-run failed");
     if (check_case_failed()) return;
     CHECK(read_avr_log("build/test_avr/print.log", &l));
@@ -303,16 +380,131 @@ static void gcode_print_nanodlp_style(void)
     CHECKF(l.uvs == 2 * LAYERS, "%zu UV edges for %d layers", l.uvs, LAYERS);
     CHECKF(!l.steps_lit, "%zu steps with the light on", l.steps_lit);
     for (k = 0; k + 1 < l.uvs; k += 2) {
-        /* G-code's light: from M106 to the M107 after the dwell */
-        uint64_t lit = l.uv_at[k + 1] - l.uv_at[k];
-        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit >= (uint64_t)EXPOSE_MS * (BOARD_CPU_HZ / 1000u) &&
-                   lit <= (uint64_t)(EXPOSE_MS + 5) * (BOARD_CPU_HZ / 1000u),
-               "exposure %zu: %llu cycles for a G4 P%d", k / 2, (unsigned long long)lit, EXPOSE_MS);
+        /* from M106's tick to M107's: the dwell and the host's round trip,
+           switched by Timer4's compare unit, so whole ticks */
+        uint64_t lit = l.uv_at[k + 1] / CYCLES_PER_TICK - l.uv_at[k] / CYCLES_PER_TICK;
+        if (lit > longest) longest = lit;
+        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit >= (uint64_t)EXPOSE_MS * (BOARD_CLOCK_HZ / 1000u),
+               "exposure %zu: %llu ticks for a G4 P%d", k / 2, (unsigned long long)lit, EXPOSE_MS);
         if (check_case_failed()) break;
     }
-    CHECKF(!l.late && !l.resets, "%lu steps dropped as late, %zu resets", l.late, l.resets);
-    printf("    avr: %zu steps, worst step %ld cycles from its tick, worst loop pass %lu cycles, stack peak %lu bytes\n",
-           l.steps, worst, l.worst_pass, l.stack_peak);
+    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    CHECKF(l.worst_refill_gap < FW_STEP_QUEUE / 2u * (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           "%lu cycles without a step refill while Z moved, %u steps of %lu", l.worst_refill_gap, FW_STEP_QUEUE / 2u,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S));
+    printf("    avr: %zu steps, worst step %ld cycles from its tick; light %.3f..%.3f ms for G4 P%d; worst loop pass %lu cycles "
+           "(%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
+           l.steps, worst, (double)EXPOSE_MS, (double)longest / (BOARD_CLOCK_HZ / 1000u), EXPOSE_MS, l.worst_pass, l.worst_moving_pass,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.stack_peak);
+    free_avr_log(&l);
+}
+
+/* The host's --report: each layer's top (bins) and exposure (ms). */
+typedef struct avr_report { uint32_t layers, first, bin_nm, *tops, *exposures; } avr_report;
+
+static int read_avr_report(const char *path, avr_report *r)
+{
+    char *text = cli_read(path), *at;
+    uint32_t k = 0;
+    const char *f;
+    memset(r, 0, sizeof *r);
+    if (!text) return 0;
+    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
+    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
+    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
+    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
+    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
+        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
+        at = strstr(at, "\"exposure_ms\": ");
+        if (!at) break;
+        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
+    }
+    free(text);
+    return r->layers && k == r->layers;
+}
+
+#define BPRINT_PEEL_UM 300
+
+/* adaslice print over the pty, as tests/test_print.c drives fw-sim: the
+   printer plans, the host streams every mask while Z moves (the window of
+   frames in flight), and the pins show the print the report describes. */
+static void binary_print_with_masks_streaming(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "3", "--max-seconds", "300", "--timeout", "60", NULL};
+    cli_result r;
+    avr_log l;
+    avr_report rep;
+    zexpect e;
+    zsummary s;
+    zmove *moves;
+    size_t n = 0;
+    uint32_t k;
+    long worst, final_pos;
+    int32_t peel;
+    fw_axis axis;
+    char report[256];
+    snprintf(report, sizeof report, "%s", cli_path("avr-report.json"));
+    if (!avr_start(&c, "build/test_avr/bprint.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    close(c.tty);
+    c.tty = 0;
+    r = cli_run("print", "examples/models/hand_closed.obj", "--scale", "5", "--port", c.pty, "--exposure", "0.05", "--penetration", "0.1",
+                "--bottom-layers", "1", "--bottom-exposure", "0.1", "--peel", "0.3", "--peel-speed", "5", "--return-speed", "5",
+                "--settle", "0.02", "--report", report, NULL);
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    cli_free(&r);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    if (check_case_failed()) return;
+    CHECK(read_avr_log("build/test_avr/bprint.log", &l));
+    CHECK(read_avr_report(report, &rep));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    /* the moves the plan makes: to each layer's top, then the peel above it */
+    board_axis(&axis);
+    peel = fw_axis_steps_of_nm(&axis, (uint64_t)BPRINT_PEEL_UM * 1000u);
+    moves = (zmove *)calloc(2u * rep.layers + 1u, sizeof *moves);
+    for (k = 0; moves && k < rep.layers; k++) {
+        int32_t top = fw_axis_steps_of_nm(&axis, (uint64_t)rep.tops[k] * rep.bin_nm);
+        moves[n].target = top;
+        moves[n++].speed = 0; /* the peel and return speeds (5 mm/s) are over the top speed */
+        moves[n].target = fw_axis_steps_of_nm(&axis, (uint64_t)rep.tops[k] * rep.bin_nm + BPRINT_PEEL_UM * 1000u);
+        moves[n++].speed = 0;
+    }
+    (void)peel;
+    final_pos = l.start_steps;
+    for (k = 0; k < l.steps; k++) final_pos += l.step_dir[k];
+    CHECKF(moves && n && final_pos == moves[n - 1].target, "Z ends at %ld steps, the last peel at %ld", final_pos, moves && n ? (long)moves[n - 1].target : -1L);
+    worst = moves ? check_moves(&l, moves, n) : -1;
+    memset(&e, 0, sizeof e);
+    e.tick_hz = BOARD_CLOCK_HZ; /* the record in ticks */
+    e.steps_per_mm = BOARD_STEPS_PER_MM;
+    e.max_speed = BOARD_MAX_STEPS_S;
+    e.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    e.start_position = l.start_steps;
+    e.layers = rep.layers;
+    e.first = rep.first ? rep.first : 1;
+    e.top_bins = rep.tops;
+    e.bin_nm = rep.bin_nm;
+    e.crcs = NULL; /* no display on this board: the core checks the CRCs */
+    e.exposure_ms = rep.exposures;
+    s = zcheck_record(l.ev, l.events, &e);
+    CHECKF(s.shows == rep.layers, "%zu masks shown for %u layers", s.shows, rep.layers);
+    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    /* A mask frame's long row repeat makes a pass of a million cycles; the
+       rows top the step queue up as they go (fw_refill). The longest
+       stretch without a top-up must be covered by half the queue at the
+       top speed. */
+    CHECKF(l.worst_refill_gap < FW_STEP_QUEUE / 2u * (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           "%lu cycles without a step refill while Z moved, %u steps of %lu", l.worst_refill_gap, FW_STEP_QUEUE / 2u,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S));
+    printf("    avr: %u layers, %zu steps, worst step %ld cycles from its tick, every exposure exact to the tick; worst loop pass %lu cycles "
+           "(%lu while Z moved, %lu between step refills; a step every %lu at the top speed), stack peak %lu bytes\n",
+           rep.layers, l.steps, worst, l.worst_pass, l.worst_moving_pass, l.worst_refill_gap, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           l.stack_peak);
+    free(moves);
+    free(rep.tops);
+    free(rep.exposures);
     free_avr_log(&l);
 }
 
@@ -355,10 +547,9 @@ static void watchdog_resets_a_hung_loop(void)
 void test_avr(void)
 {
     if (system("mkdir -p build/test_avr") != 0) { CHECK(!"mkdir build/test_avr"); return; }
-    /* Not run yet: the 200-layer print completes (52,423 steps) but fails its
-       checks (399 UV edges, the first exposure 25 ms for a G4 P20, a step far
-       from its tick after one of the moves) and takes 2.5 minutes at the
-       harness's speed; to be fixed before it joins make check. */
-    (void)gcode_print_nanodlp_style;
+    if (!cli_begin("adaslice-avr")) { CHECK(!"no temporary directory"); return; }
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", watchdog_resets_a_hung_loop);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_print_nanodlp_style);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);
+    cli_end();
 }

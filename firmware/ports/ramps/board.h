@@ -62,7 +62,7 @@
    planner's 3 KiB of rings and a byte per bin, the UART rings and the stack
    (firmware.mk prints the figures). Larger parts are planned by the host. */
 #ifndef BOARD_MAX_BINS
-#define BOARD_MAX_BINS 1200u /* the stack peaked at 779 bytes under simavr (test image) */
+#define BOARD_MAX_BINS 1200u /* the stack peaked at 837 bytes under simavr (a binary print, make bench): 33 to spare */
 #endif
 /* A UART cannot hold the line: the receive ring takes the whole window. */
 #define BOARD_RX_SIZE 512u
@@ -82,7 +82,7 @@
    measured at most 2 x 25,000 (make bench). */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
-#define FW_STEP_FILL 1u
+#define FW_STEP_FILL 2u /* homing at the switch: the brake and the step after it in one pass */
 
 /* Test hooks the simavr harness watches (one OUT instruction each): the
    general purpose I/O registers, never read by the firmware. */
@@ -91,6 +91,7 @@
 #define BOARD_MARK_BOOT  3u   /* GPIOR0: reset, before anything else */
 #define BOARD_MARK_LATE  4u   /* GPIOR0: a step could not be issued on time */
 #define BOARD_MARK_MOVING 5u  /* GPIOR0: a pass begins while Z moves (steps computed or queued) */
+#define BOARD_MARK_REFILL 6u  /* GPIOR0: a mask row tops the step queue up (fw_refill) */
 /* GPIOR1: the display buffer shown + 1, 0 for dark (there is no display here) */
 
 #ifndef __ASSEMBLER__

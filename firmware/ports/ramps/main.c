@@ -36,6 +36,9 @@ static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, u
     (void)row;
     (void)size;
     board_mask_row();
+    /* a long repeated row is expanded in one frame: keep the steps coming */
+    GPIOR0 = BOARD_MARK_REFILL;
+    fw_refill(&fw, board_ticks());
 }
 
 int main(void)
@@ -83,7 +86,11 @@ int main(void)
            (which nothing else uses) to make the loop hang */
         if (GPIOR2 == 0xA5u) for (;;) {}
 #endif
-        n = board_rx_peek(&data);
+        /* Homing queues one step at a time (each reads the switch after the
+           step before), so every pass must be shorter than its interval:
+           the host's bytes wait in the receive ring (it holds the window)
+           until Z is home, and a mask frame's decoding cannot come between. */
+        n = fw.axis.phase ? 0 : board_rx_peek(&data);
         if (n) {
             if (n > CHUNK) n = CHUNK;
             fw_receive(&fw, data, n, board_ticks());

@@ -48,25 +48,27 @@ void ramps_init3(void)
 
 uint8_t board_reset_cause(void) { return reset_cause; }
 
-/* ---- the tick ---------------------------------------------------------------- */
-static volatile uint32_t wraps;
+/* ---- the tick ----------------------------------------------------------------
+   TCNT5 extended to 64 bits by the last reading: a reading below the one
+   before is in the next turn of the counter. Readings come at least once a
+   turn (the overflow interrupt takes one), so none is ambiguous. This does
+   not lean on TOV5 being visible the moment the counter wraps: under
+   simavr 1.6 the flag came late now and then, a reading just past the wrap
+   came out a turn early, and a step armed from it waited a turn (32 ms). */
+static uint64_t last_ticks;
 
-ISR(TIMER5_OVF_vect) { wraps++; }
-
-/* A wrap whose interrupt has not run yet belongs to this reading if the
-   counter reads low (TOV5 in TIFR5). */
+ISR(TIMER5_OVF_vect) { (void)board_ticks(); }
 
 uint64_t board_ticks(void)
 {
     uint8_t sreg = SREG;
-    uint16_t t;
-    uint64_t w;
+    uint64_t now;
     cli();
-    t = TCNT5;
-    w = wraps;
-    if ((TIFR5 & _BV(TOV5)) && t < 0x8000u) w++;
+    now = (last_ticks & ~(uint64_t)0xFFFFu) | TCNT5;
+    if (now < last_ticks) now += 0x10000u;
+    last_ticks = now;
     SREG = sreg;
-    return (w << 16) | t;
+    return now;
 }
 
 /* ---- steps ---------------------------------------------------------------------
@@ -77,7 +79,7 @@ uint64_t board_ticks(void)
    ramps_step_due, which runs fw_step_interrupt: board_step_pulse ends the
    pulse and the core arms the next step. */
 #define STEP_PULSE 4u          /* ticks high at least: 2 us (A4988 needs 1 us, DRV8825 1.9 us) */
-#define ARM_LEAD   16u         /* ticks: the least time from arming a compare to its match */
+#define ARM_LEAD   64u         /* ticks: the least time from arming a compare to its match (32 us: simavr 1.6 mistimed closer ones) */
 #define FAR        0xF000u     /* further than this: wait for the next pass of the counter */
 #define COM5A_BITS (_BV(COM5A1) | _BV(COM5A0))
 #define COM4C_BITS (_BV(COM4C1) | _BV(COM4C0))
@@ -85,6 +87,8 @@ enum { IDLE, WAIT, ARMED };
 
 static uint64_t step_when;
 static volatile uint8_t step_state;
+static volatile uint8_t uv_state, uv_target;
+static void uv_compare(void);
 
 /* Interrupts off. The pin low through its PORT bit (COM5A disconnected:
    table 17-3); PORTL is written so that simavr, which does not
@@ -185,8 +189,13 @@ void board_motor(int on)
    exactly until - when ticks; an early end (pause, M107, a fault) is moved
    by the same shift, so the light given is still what the core counts.
    Between transitions COM4C is disconnected and PORTH5 holds the level. */
+/* The least time from arming a UV transition to it, and from a match to
+   arming the next: 128 us (simavr 1.6 lost or advanced compares armed
+   closer, by 39 ticks; the part itself needs a few cycles). An exposure
+   is at least 1 ms. */
+#define UV_SETTLE 256u
 static uint64_t uv_on_at, uv_off_at, uv_shift;
-static volatile uint8_t uv_level, uv_want, uv_target, uv_state;
+static volatile uint8_t uv_level, uv_want;
 
 static void uv_hold(void)
 {
@@ -233,11 +242,22 @@ static void uv_arm(void)
     }
 }
 
-ISR(TIMER4_COMPC_vect)
+ISR(TIMER4_COMPC_vect) { uv_compare(); }
+
+static void uv_compare(void)
 {
     if (uv_state == ARMED) { /* the pin switched at the match */
         uv_level = uv_target;
         if (!uv_level) uv_want = 0;
+        if (uv_level) {
+            /* the next compare a while after this one, COM4C disconnected:
+               simavr 1.6 switched the pin at once when the end was armed
+               straight from the start's match */
+            uv_state = WAIT;
+            uv_hold();
+            OCR4C = (uint16_t)(OCR4C + UV_SETTLE);
+            return;
+        }
     }
     uv_arm();
 }
@@ -247,7 +267,7 @@ void board_uv(int on, uint64_t when, uint64_t until)
     uint8_t sreg = SREG;
     cli();
     if (on) {
-        uint64_t earliest = board_ticks() + 2u * ARM_LEAD;
+        uint64_t earliest = board_ticks() + UV_SETTLE;
         uv_shift = when < earliest ? earliest - when : 0;
         uv_on_at = when + uv_shift;
         uv_off_at = until + uv_shift;
