@@ -106,7 +106,7 @@ test: $(TEST_PROGRAMS)
 	$(RUN_TESTS) --without-tools
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
-BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
+BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs $(B)/bench_avr
 check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-ramps-test.elf $(B)/avr-run $(B)/avr-bench.elf $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
@@ -184,14 +184,17 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
+$(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c)
+	$(CC) $^ -o $@ -lm
 
-bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf
+bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
 	$(B)/bench_jobs $(B)/adaslice $(MODELS)
 	$(B)/bench_wire $(MODELS)
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
+	$(B)/bench_avr $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/adaslice $(AVR_SIZE)
 
 clean:
 	rm -rf $(B)
