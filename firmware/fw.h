@@ -189,8 +189,8 @@ void fw_step_interrupt(fw_state *fw);
 /* Tops the step queue up (at most FW_STEP_FILL steps) from inside a slow
    callback, for a port on which one call into the core can outlast the
    queue: a mask frame that repeats a row down a whole display expands it
-   in one fw_receive, each row CRC-checked (about 800,000 cycles for 200
-   rows of 240 px on an ATmega2560). The RAMPS port calls it from
+   in one fw_receive, each row CRC-checked (1.2 million cycles for 200
+   rows of 240 px on an ATmega2560, measured under simavr). The RAMPS port calls it from
    port.mask_row. A step that cannot be queued in time is left for fw_run,
    which stops the motion. Not while homing. */
 void fw_refill(fw_state *fw, uint64_t now);

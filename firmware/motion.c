@@ -34,10 +34,8 @@
 
 enum { PHASE_NONE, PHASE_PROBE, PHASE_APPROACH, PHASE_BACKOFF, PHASE_SLOW };
 
-/* floor(sqrt(x)), one result bit per round: no division, which the
-   Cortex-M3 has only for 32 bits. Below 2^32 the same rounds in 32 bits,
-   which an 8-bit core does several times faster (the root is unique, so
-   the result is the same). */
+/* floor(sqrt(x)) for x < 2^32, one result bit per round, no division: in
+   32 bits, which an 8-bit core does several times faster than 64. */
 static uint32_t floor_sqrt32(uint32_t x)
 {
     uint32_t root = 0, bit = (uint32_t)1 << 30;

@@ -23,15 +23,16 @@
 #ifndef BOARD_STEPS_PER_MM
 #define BOARD_STEPS_PER_MM 400u            /* T8x8 lead screw, 1/16 microsteps */
 #endif
-/* Z's top speed on this MCU: 2.5 mm/s, a step every 400 us at 400
-   steps/mm is 1,000 steps/s, one step per 16,000 cycles. An 8-bit core
-   computes motion.c's closed form in 64-bit integers: measured under simavr
-   (make bench, bench/avr_bench.c), 1,571 cycles a cruising step, 3,900 on
-   average and up to 7,650 on a ramp (a square root when the guess from
-   the steps before misses), and a loop pass while Z moves takes up to
-   about 11,000 cycles with its one step. 10 mm/s (4,000 cycles a step)
-   cannot be sustained, 5 mm/s (8,000) not with a pass under the interval;
-   2.5 mm/s keeps the worst moving pass a third under it. */
+/* Z's top speed on this MCU: 2.5 mm/s, at 400 steps/mm 1,000 steps/s, one
+   step per 16,000 cycles. An 8-bit core computes motion.c's closed form in
+   64-bit integers: measured under simavr (make bench, bench/avr_bench.c),
+   1,571 cycles a cruising step, 3,700-5,800 on average and up to 7,600 on
+   a ramp (a square root when the guess from the steps before misses),
+   10,700 for a halt; a loop pass computes up to FW_STEP_FILL (2) of them
+   plus its own ~3,000. At 10 mm/s (4,000 cycles a step) the ramps alone
+   outrun the core; at 5 mm/s (8,000) a pass with two ramp steps does; at
+   2.5 mm/s the step work of a pass fits one interval with room, and the
+   queue (below) absorbs the passes that parse a line or a frame. */
 #ifndef BOARD_MAX_SPEED_UM_S
 #define BOARD_MAX_SPEED_UM_S 2500ul
 #endif
@@ -74,12 +75,14 @@
 
 /* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts:
    more than the longest pass that can start one (a G1 line: parsed, the
-   move shaped, 46,000 cycles = 2.9 ms measured). The loop computes at most
-   FW_STEP_FILL steps per pass (so a pass stays short) and runs again at
-   once while the queue is short; the queue holds FW_STEP_QUEUE steps, which
-   must outlast the longest pass while Z moves plus one wake-up: 16 steps
-   are 256,000 cycles at the top speed, against a worst moving pass
-   measured at most 2 x 25,000 (make bench). */
+   move shaped, up to 52,000 cycles = 3.3 ms measured). The loop computes
+   at most FW_STEP_FILL steps per pass and runs again at once while the
+   queue is short; the queue holds FW_STEP_QUEUE steps, which must outlast
+   the longest stretch without a refill while Z moves: measured 17,600
+   cycles in G-code mode (a line parsed as the last steps leave) and 54,800
+   in a binary print (a mask frame's decoding, refilled row by row through
+   fw_refill), against 16 steps = 256,000 cycles at the top speed (the
+   tests assert under half of that). 16 x 9 bytes of SRAM. */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 2u /* homing at the switch: the brake and the step after it in one pass */
