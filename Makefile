@@ -90,9 +90,13 @@ $(B)/san/run_tests: $(call objs,san,$(TEST_SRC))
 	$(CC) $(SAN) -pthread $^ -o $@ -lm
 $(B)/relay: $(call objs,rel,tests/relay.c link/tty.c)
 	$(CC) $^ -o $@
+# The ATmega2560 images under simavr (libsimavr-dev, libelf-dev)
+$(B)/avr-run: $(call objs,rel,tests/avr_run.c link/tty.c)
+	$(CC) $^ -o $@ -lsimavr -lelf
 
 # What the test runner starts: the tool (sanitized), the firmware simulator
-# and the faulty-line relay; make check adds the Cortex-M3 image for QEMU.
+# and the faulty-line relay; make check adds the Cortex-M3 image for QEMU and
+# the ATmega2560 images with their simavr harness.
 TEST_PROGRAMS = $(B)/san/run_tests $(B)/san/adaslice $(B)/fw-sim $(B)/relay
 RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 
@@ -102,9 +106,9 @@ test: $(TEST_PROGRAMS)
 	$(RUN_TESTS) --without-tools
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
-BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs
+BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs $(B)/bench_avr
 check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-mps2-trace.elf $(B)/fw-mps2-hang.elf \
-       $(BENCH_PROGRAMS)
+       $(B)/fw-ramps-test.elf $(B)/avr-run $(B)/avr-bench.elf $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two
@@ -181,8 +185,11 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
+$(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c)
+	$(CC) $^ -o $@ -lm
 
-bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-trace.elf
+bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-trace.elf $(B)/avr-run $(B)/avr-bench.elf \
+       $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_saliency $(MODELS)
@@ -190,6 +197,7 @@ bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-tra
 	$(B)/bench_wire $(MODELS)
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
 	bench/qemu_timing.sh $(B)/fw-mps2-trace.elf $(B)/adaslice
+	$(B)/bench_avr $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/adaslice $(AVR_SIZE)
 
 clean:
 	rm -rf $(B)

@@ -663,8 +663,8 @@ ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, siz
     uint32_t y, repeat = 0, rs = adaslice__rle_stride(width, bits);
     const unsigned char *prev = NULL;
     if (size) *size = 0;
-    if (!image || !out || !size || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) ||
-        height >= (1u << 24) || stride < rs)
+    if (!image || !out || !size || (bits != 1 && bits != 8) || !width || !height || width >= ((uint32_t)1 << 24) ||
+        height >= ((uint32_t)1 << 24) || stride < rs)
         return ADASLICE_ERR_ARGUMENT;
     for (y = 0; y <= height; y++) {
         const unsigned char *row = y < height ? image + (size_t)y * stride : NULL;
@@ -705,7 +705,7 @@ ADASLICE_DEF adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec
 {
     if (!dec) return ADASLICE_ERR_ARGUMENT;
     memset(dec, 0, sizeof *dec);
-    if (!row || (bits != 1 && bits != 8) || !width || !height || width >= (1u << 24) || height >= (1u << 24) ||
+    if (!row || (bits != 1 && bits != 8) || !width || !height || width >= ((uint32_t)1 << 24) || height >= ((uint32_t)1 << 24) ||
         row_size < adaslice__rle_stride(width, bits))
         return dec->error = ADASLICE_ERR_ARGUMENT;
     dec->width = width;

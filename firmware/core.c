@@ -655,6 +655,7 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     }
     fw_axis_init(&fw->axis, &config->axis, config->tick_hz);
     fw->axis.start_lead = config->step_lead;
+    fw->steps.budget = FW_STEP_FILL;
     link_deframer_init(&fw->deframer, link_host_to_mcu_type);
     fw->state = LINK_STATE_IDLE;
     io.ctx = fw;
@@ -702,17 +703,22 @@ static void step_fault(fw_state *fw, uint64_t now)
     fail(fw, LINK_ERR_STEP_LATE, 0);
 }
 
-/* Tops the queue up from the closed form. Homing queues one step at a time:
-   each reads the switch after the step before it went out. */
-static void fill_steps(fw_state *fw, uint64_t now)
+/* Tops the queue up from the closed form, at most `budget` steps; 0 when a
+   step cannot go out on time (its tick passed, or the timer could not be
+   armed). Homing queues one step at a time: each reads the switch after
+   the step before it went out. */
+static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
     uint8_t room = fw->axis.phase ? 1u : FW_STEP_QUEUE;
-    if (q->late) { step_fault(fw, now); return; }
+    q->short_by = 0;
+    if (q->late) return 0;
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir;
-        if (fw_axis_next(&fw->axis) < now) { step_fault(fw, now); return; }
+        if (!q->budget) { q->short_by = 1; return 1; }
+        q->budget--;
+        if (fw_axis_next(&fw->axis) < now) return 0;
         dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
         if (!dir) continue;
         q->tick[at] = fw->axis.last;
@@ -722,9 +728,15 @@ static void fill_steps(fw_state *fw, uint64_t now)
            that reads 1 here will also take the step just added */
         if (!q->running) {
             q->running = 1;
-            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) { step_fault(fw, now); return; }
+            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) return 0;
         }
     }
+    return 1;
+}
+
+static void fill_steps(fw_state *fw, uint64_t now)
+{
+    if (!fill(fw, now)) step_fault(fw, now);
 }
 
 void fw_step_interrupt(fw_state *fw)
@@ -745,6 +757,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
 {
     uint64_t next = FW_NEVER;
     if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
+    fw->steps.budget = FW_STEP_FILL;
     fill_steps(fw, now);
     if (fw->decoding && mask_decode(fw)) {
         fw->decoding = 0;
@@ -780,7 +793,8 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     fill_steps(fw, now);
 
     /* refilled as each step leaves; homing reads the switch after each */
-    if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
+    if (fw->steps.short_by) next = now; /* the rest of the queue on the next pass */
+    else if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
     /* moving with nothing queued: the interrupt took the last queued step
        after fill_steps ran (homing queues one), so refill at once; waiting
        for the next step's own tick would find it past (STEP_LATE) */

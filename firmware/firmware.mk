@@ -10,8 +10,12 @@
 #   $(B)/fw-mps2-hang.elf     the trace image whose loop hangs in layer 2's
 #                             exposure: the watchdog test
 #   $(B)/fw-stm32f103.elf     an STM32F103C8 printer board, built, not run
-#   firmware                  all three, and each image's flash and RAM;
-#                             fails if one needs more than 20 KiB of RAM
+#   $(B)/fw-ramps.elf         RAMPS 1.4 on an Arduino Mega 2560 (ATmega2560)
+#   $(B)/fw-ramps-test.elf    the same for the simavr tests: a 240 x 200 display
+#                             (small masks over a real-time UART) and a hang hook
+#   firmware                  all of them, and each image's flash and RAM;
+#                             fails if a Cortex-M3 image needs more than 20 KiB
+#                             of RAM or the Mega's more than 8 KiB
 
 # The core every port links: adaslice_fw.c is adaslice_mcu.h's implementation.
 FW_CORE_SRC = firmware/core.c firmware/motion.c firmware/gcode.c link/frame.c link/messages.c firmware/adaslice_fw.c
@@ -88,11 +92,44 @@ $(B)/bench-plan-mps2.elf: $(BENCH_PLAN_SRC) bench/mcu_profile.h $(FW_MPS2)/board
 	@mkdir -p $(B)
 	$(ARM_CC) $(FW_ARM_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(BENCH_PLAN_SRC) -o $@ $(FW_ARM_LIBS)
 
+# The ATmega2560: board.h is force-included so that the core's row buffer
+# (FW_ROW_BYTES) follows the board's display. The stack is not in .bss here:
+# what is left of the 8 KiB is the stack's, and the simavr harness measures
+# its peak (avr-run prints stack_peak at exit).
+AVR_CC   ?= avr-gcc
+AVR_SIZE ?= avr-size
+FW_RAMPS = firmware/ports/ramps
+FW_RAMPS_SRC = $(FW_RAMPS)/main.c $(FW_RAMPS)/ramps.c $(FW_CORE_SRC)
+FW_AVR_FLAGS = -mmcu=atmega2560 -Os -std=c99 -Wall -Wextra -Wpedantic -Werror -ffunction-sections -fdata-sections \
+               -Wl,--gc-sections -I$(FW_RAMPS) -include $(FW_RAMPS)/board.h
+FW_AVR_RAM = 8192
+FW_RAMPS_TEST = -DBOARD_DISPLAY_W=240u -DBOARD_DISPLAY_H=200u -DBOARD_PITCH_NM=100000u -DRAMPS_TEST_HANG
+
+$(B)/fw-ramps.elf: $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_HDRS)
+	@mkdir -p $(B)
+	$(AVR_CC) $(FW_AVR_FLAGS) $(FW_RAMPS_SRC) -o $@
+
+$(B)/fw-ramps-test.elf: $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_HDRS)
+	@mkdir -p $(B)
+	$(AVR_CC) $(FW_AVR_FLAGS) $(FW_RAMPS_TEST) $(FW_RAMPS_SRC) -o $@
+
+# The RAMPS bench image (make bench: bench/bench_avr.c runs it under avr-run):
+# motion.c's step computation and the planner, timed in cycles on the part.
+$(B)/avr-bench.elf: bench/avr_bench.c bench/mcu_profile.h firmware/motion.c firmware/adaslice_fw.c $(FW_RAMPS)/board.h $(FW_HDRS)
+	@mkdir -p $(B)
+	$(AVR_CC) $(FW_AVR_FLAGS) bench/avr_bench.c firmware/motion.c firmware/adaslice_fw.c -o $@
+
 # flash = text + data (.data's image lives in flash), RAM = data + bss
-# (.bss includes the stack).
-firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf
+# (.bss includes the stack on the Cortex-M3 images).
+firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf
 	@for elf in $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf; do \
 	    $(ARM_SIZE) $$elf | awk -v elf=$$elf -v max=$(FW_RAM_MAX) 'NR == 2 { \
 	        printf "%s: %d bytes of flash, %d bytes of RAM (of %d)\n", elf, $$1 + $$2, $$2 + $$3, max; \
 	        if ($$2 + $$3 > max) { print elf ": over the RAM budget"; exit 1 } }' || exit 1; \
+	done
+	@for elf in $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf; do \
+	    $(AVR_SIZE) $$elf | awk -v elf=$$elf -v max=$(FW_AVR_RAM) 'NR == 2 { \
+	        printf "%s: %d bytes of flash, %d bytes of SRAM in data + bss (of %d), %d left for the stack\n", \
+	            elf, $$1 + $$2, $$2 + $$3, max, max - $$2 - $$3; \
+	        if ($$2 + $$3 > max) { print elf ": over the SRAM budget"; exit 1 } }' || exit 1; \
 	done

@@ -43,8 +43,22 @@
 
 /* The steps queued for the step timer: written by the loop (head), read by
    the interrupt (tail). Single producer, single consumer, indices of one
-   byte so that each side's update is one store on any MCU. */
-#define FW_STEP_QUEUE 8u /* a power of two */
+   byte so that each side's update is one store on any MCU. The queue must
+   cover the steps due while the loop is away: more than the loop's worst
+   pass (plus its wake-up) divided by the shortest step interval. A port
+   whose passes are long against its steps sets its own (a power of two up
+   to 128; each entry costs 9 bytes of RAM). */
+#ifndef FW_STEP_QUEUE
+#define FW_STEP_QUEUE 8u
+#endif
+/* At most this many steps are computed from one fw_run to the next (the
+   fills of fw_receive and fw_run share it), so that a loop pass does a
+   bounded amount of motion arithmetic; fw_run asks to be called again at
+   once (its deadline `now`) while the queue is short for want of it. The
+   default is the queue's length. */
+#ifndef FW_STEP_FILL
+#define FW_STEP_FILL FW_STEP_QUEUE
+#endif
 typedef struct fw_steps {
     volatile uint64_t tick[FW_STEP_QUEUE];
     volatile int8_t dir[FW_STEP_QUEUE];
@@ -52,6 +66,8 @@ typedef struct fw_steps {
     volatile uint8_t tail;     /* the interrupt's: the next step out */
     volatile uint8_t running;  /* the timer is armed; the interrupt clears it when the queue ends */
     volatile uint8_t late;     /* the timer could not be armed for the next step in time */
+    uint8_t budget;            /* the loop's: steps it may still compute before fw_run */
+    uint8_t short_by;          /* the loop's: the last fill stopped for want of budget */
 } fw_steps;
 
 typedef struct fw_port {

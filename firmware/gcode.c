@@ -393,7 +393,7 @@ static void execute(fw_gcode *g, uint64_t now)
     if (k == 0) { say(g, "ok"); return; } /* "N5*cs": a line number alone */
     w.seen = 0;
     while (code >= 0 && (k = word(b, &i, end, &letter, &at, &len)) == 1) {
-        w.seen |= 1u << (letter - 'A');
+        w.seen |= (uint32_t)1 << (letter - 'A');
         w.at[letter - 'A'] = (uint8_t)at;
         w.len[letter - 'A'] = (uint8_t)len;
     }

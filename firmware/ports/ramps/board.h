@@ -1,0 +1,134 @@
+/* RAMPS 1.4 on an Arduino Mega 2560: the printer's figures (-D to change)
+   and the board layer (ramps.c) that main.c hands to the core. Plain
+   #defines and prototypes only, so the simavr harness (tests/avr_run.c)
+   includes this file for the same figures.
+
+   Pins (RAMPS 1.4 as Marlin's pins_RAMPS.h names them, Arduino Mega 2560
+   pin mapping from the Arduino "mega" variant's pins_arduino.h):
+       Z_STEP    D46 = PL3 (OC5A)   step pulses from Timer5's compare unit A
+       Z_DIR     D48 = PL1          high = up (away from the vat)
+       Z_ENABLE  D62 = PK0 (A8)     active low: high = driver off
+       Z_MIN     D18 = PD3          endstop: NC switch to ground with the pull-up on,
+                                    so high = pressed (a broken wire reads pressed)
+       UV        D8  = PH5 (OC4C)   RAMPS's D8 MOSFET, switched by Timer4's compare unit C
+       UART0     PE0/PE1            through the Mega's USB bridge to the host */
+#ifndef FW_RAMPS_BOARD_H
+#define FW_RAMPS_BOARD_H
+
+#define BOARD_CPU_HZ   16000000u           /* the Mega's crystal */
+#define BOARD_TICK_DIV 8u                  /* Timer5's prescaler */
+#define BOARD_CLOCK_HZ (BOARD_CPU_HZ / BOARD_TICK_DIV) /* the tick: 2 MHz, 0.5 us */
+#define BOARD_BAUD     115200u             /* U2X, UBRR 16: 117,647 baud, the Arduino setting */
+
+#ifndef BOARD_STEPS_PER_MM
+#define BOARD_STEPS_PER_MM 400u            /* T8x8 lead screw, 1/16 microsteps */
+#endif
+/* Z's top speed on this MCU: 2.5 mm/s, at 400 steps/mm 1,000 steps/s, one
+   step per 16,000 cycles. An 8-bit core computes motion.c's closed form in
+   64-bit integers: measured under simavr (make bench, bench/avr_bench.c),
+   1,571 cycles a cruising step, 3,700-5,800 on average and up to 7,600 on
+   a ramp (a square root when the guess from the steps before misses),
+   10,700 for a halt; a loop pass computes up to FW_STEP_FILL (2) of them
+   plus its own ~3,000. At 10 mm/s (4,000 cycles a step) the ramps alone
+   outrun the core; at 5 mm/s (8,000) a pass with two ramp steps does; at
+   2.5 mm/s the step work of a pass fits one interval with room, and the
+   queue (below) absorbs the passes that parse a line or a frame. */
+#ifndef BOARD_MAX_SPEED_UM_S
+#define BOARD_MAX_SPEED_UM_S 2500ul
+#endif
+#define BOARD_ACCEL_MM_S2    50u
+#define BOARD_HOME_SPEED_UM_S 2500ul
+/* the same in steps per second (the core's units) */
+#define BOARD_MAX_STEPS_S  (BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
+#define BOARD_HOME_STEPS_S (BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
+#define BOARD_Z_MAX_MM       200u
+#define BOARD_HOME_TRAVEL_MM 220u
+#define BOARD_LINK_TIMEOUT_MS 1000u
+
+/* The display is driven by another computer (NanoDLP on a Raspberry Pi):
+   masks sent here are decoded and CRC-checked by the core and counted. */
+#ifndef BOARD_DISPLAY_W
+#define BOARD_DISPLAY_W 2560u
+#endif
+#ifndef BOARD_DISPLAY_H
+#define BOARD_DISPLAY_H 1440u
+#endif
+#define BOARD_DISPLAY_BITS 1u
+/* the core's row buffer: one row (firmware.mk force-includes this file) */
+#define FW_ROW_BYTES ((BOARD_DISPLAY_W + 7u) / 8u)
+#ifndef BOARD_PITCH_NM
+#define BOARD_PITCH_NM 50000u
+#endif
+/* The planner's largest profile: 8 KiB of SRAM hold the core's state, the
+   planner's 3 KiB of rings and a byte per bin, the UART rings and the stack
+   (firmware.mk prints the figures). Larger parts are planned by the host. */
+#ifndef BOARD_MAX_BINS
+#define BOARD_MAX_BINS 1200u /* the stack peaked at 837 bytes under simavr (a binary print, make bench): 33 to spare */
+#endif
+/* A UART cannot hold the line: the receive ring takes the whole window. */
+#define BOARD_RX_SIZE 512u
+#define BOARD_TX_SIZE 256u
+#define BOARD_WINDOW  2u
+
+/* The watchdog (reset mode), refreshed by the main loop only (fw_run). */
+#define BOARD_WDT_MS 120u
+
+/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts:
+   more than the longest pass that can start one (a G1 line: parsed, the
+   move shaped, up to 52,000 cycles = 3.3 ms measured). The loop computes
+   at most FW_STEP_FILL steps per pass and runs again at once while the
+   queue is short; the queue holds FW_STEP_QUEUE steps, which must outlast
+   the longest stretch without a refill while Z moves: measured 17,600
+   cycles in G-code mode (a line parsed as the last steps leave) and 54,800
+   in a binary print (a pass of a mask frame's decoding: a row a pass), against 16 steps = 256,000 cycles at the top speed (the
+   tests assert under half of that). 16 x 9 bytes of SRAM. */
+#define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
+#define FW_STEP_QUEUE 16u
+#define FW_STEP_FILL 2u /* homing at the switch: the brake and the step after it in one pass */
+
+/* Test hooks the simavr harness watches (one OUT instruction each): the
+   general purpose I/O registers, never read by the firmware. */
+#define BOARD_MARK_LOOP  1u   /* GPIOR0: a loop pass begins */
+#define BOARD_MARK_IDLE  2u   /* GPIOR0: the pass ends, the loop sleeps */
+#define BOARD_MARK_BOOT  3u   /* GPIOR0: reset, before anything else */
+#define BOARD_MARK_LATE  4u   /* GPIOR0: a step could not be issued on time */
+#define BOARD_MARK_MOVING 5u  /* GPIOR0: a pass begins while Z moves (steps computed or queued) */
+/* GPIOR1: the display buffer shown + 1, 0 for dark (there is no display here) */
+
+#ifndef __ASSEMBLER__
+#include <stdint.h>
+#include <stddef.h>
+/* ---- ramps.c ---------------------------------------------------------- */
+void board_init(void);
+uint32_t board_boot_count(void);          /* from EEPROM, counted at this boot */
+uint8_t board_reset_cause(void);          /* MCUSR as it was at reset */
+uint64_t board_ticks(void);               /* 2 MHz, from Timer5 */
+void board_watchdog(void);                /* refresh: the main loop only */
+/* Sleeps until an interrupt, at the latest at tick `deadline` or after a Timer5 wrap. */
+void board_idle(uint64_t deadline);
+/* UART0: the receive ring (filled by the RX interrupt) and the transmit ring
+   (drained by the data-register-empty interrupt); board_write never blocks:
+   bytes that do not fit are counted and dropped. */
+size_t board_rx_peek(const uint8_t **data);
+void board_rx_consume(size_t n);
+void board_write(const uint8_t *data, size_t size);
+uint16_t board_rx_lost(void);
+uint16_t board_tx_lost(void);
+/* Z: arms Timer5's compare unit A to raise STEP at tick `when` with DIR set
+   to `dir` (+1 up) now; 0 (nothing armed, a BOARD_MARK_LATE) when `when` is
+   too close or past; UINT64_MAX disarms. board_step_pulse ends the pulse
+   (in the compare interrupt, which calls ramps_step_due: main.c's). */
+int board_step_arm(uint64_t when, int dir);
+void board_step_pulse(void);
+void ramps_step_due(void);
+int board_endstop(void);
+void board_motor(int on);
+/* UV on from tick `when` to `until` (on = 1), switched by Timer4's compare
+   unit C at both ticks (a start already past moves both by as much), or off
+   at `when` (on = 0; now if that has passed). */
+void board_uv(int on, uint64_t when, uint64_t until);
+uint8_t board_uv_lit(void);
+void board_show(int slot);
+void board_mask_row(void);
+#endif
+#endif

@@ -1,0 +1,101 @@
+/* The firmware on RAMPS 1.4 / Arduino Mega 2560: the core's fw_port handed
+   to the board layer (ramps.c), and the main loop.
+
+   The core runs at the hardware's tick (Timer5, 2 MHz). Steps leave from
+   Timer5's compare unit at the ticks the core's step queue holds (the core
+   arms each; the compare interrupt calls fw_step_interrupt), and the UV
+   light is switched by Timer4's compare unit at an exposure's two ticks,
+   so neither waits for the loop. The loop only has to refill the step
+   queue before it runs dry: BOARD_STEP_LEAD and FW_STEP_QUEUE (board.h)
+   are sized from its worst pass as measured under simavr. */
+#include "../../fw.h"
+#include "board.h"
+#include <avr/io.h>
+
+/* Bytes handed to the core per pass; between passes the loop runs the
+   core's timed work (and fw_run refreshes the watchdog). */
+#define CHUNK 32u
+
+static fw_state fw;
+static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
+
+static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
+static int port_step_arm(void *ctx, uint64_t when, int dir) { (void)ctx; return board_step_arm(when, dir); }
+static void port_step_pulse(void *ctx, int dir) { (void)ctx; (void)dir; board_step_pulse(); }
+void ramps_step_due(void) { fw_step_interrupt(&fw); }
+static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
+static void port_uv(void *ctx, int on, uint64_t when, uint64_t until) { (void)ctx; board_uv(on, when, until); }
+static void port_motor(void *ctx, int on) { (void)ctx; board_motor(on); }
+static void port_show(void *ctx, int slot, uint64_t when) { (void)ctx; (void)when; board_show(slot); }
+static void port_watchdog(void *ctx) { (void)ctx; board_watchdog(); }
+static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, uint32_t size)
+{
+    (void)ctx;
+    (void)slot;
+    (void)y;
+    (void)row;
+    (void)size;
+    board_mask_row();
+}
+
+int main(void)
+{
+    fw_config config;
+    fw_port port;
+    uint64_t deadline = 0;
+    board_init();
+    config.tick_hz = BOARD_CLOCK_HZ;
+    config.axis.steps_per_mm = BOARD_STEPS_PER_MM;
+    config.axis.max_speed = BOARD_MAX_STEPS_S;
+    config.axis.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    config.axis.home_speed = BOARD_HOME_STEPS_S;
+    config.axis.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
+    config.axis.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    config.display_width = BOARD_DISPLAY_W;
+    config.display_height = BOARD_DISPLAY_H;
+    config.display_bits = BOARD_DISPLAY_BITS;
+    config.pitch_nm = BOARD_PITCH_NM;
+    config.max_bins = BOARD_MAX_BINS;
+    config.link_timeout_ms = BOARD_LINK_TIMEOUT_MS;
+    config.window = BOARD_WINDOW;
+    config.watchdog_ms = BOARD_WDT_MS;
+    config.step_lead = BOARD_STEP_LEAD;
+    config.boot_id = board_boot_count();
+    port.ctx = NULL;
+    port.write = port_write;
+    port.step_arm = port_step_arm;
+    port.step_pulse = port_step_pulse;
+    port.endstop = port_endstop;
+    port.uv = port_uv;
+    port.motor = port_motor;
+    port.mask_row = port_mask_row;
+    port.show = port_show;
+    port.watchdog = port_watchdog;
+    port.exit = NULL; /* a board does not end */
+    fw_init(&fw, &config, &port, plan_workspace, sizeof plan_workspace);
+    for (;;) {
+        const uint8_t *data;
+        size_t n;
+        uint64_t now;
+        GPIOR0 = fw_axis_busy(&fw.axis) || fw.steps.head != fw.steps.tail ? BOARD_MARK_MOVING : BOARD_MARK_LOOP;
+#ifdef RAMPS_TEST_HANG
+        /* test builds only: the simavr harness writes 0xA5 into GPIOR2
+           (which nothing else uses) to make the loop hang */
+        if (GPIOR2 == 0xA5u) for (;;) {}
+#endif
+        /* Homing queues one step at a time (each reads the switch after the
+           step before), so every pass must be shorter than its interval:
+           the host's bytes wait in the receive ring (it holds the window)
+           until Z is home, and a mask frame's decoding cannot come between. */
+        n = fw.axis.phase ? 0 : board_rx_peek(&data);
+        if (n) {
+            if (n > CHUNK) n = CHUNK;
+            n = fw_receive(&fw, data, n, board_ticks());
+            board_rx_consume(n);
+            deadline = 0; /* what the bytes started may be due before the old deadline */
+        }
+        now = board_ticks();
+        if (now >= deadline) deadline = fw_run(&fw, now);
+        else if (!n) board_idle(deadline);
+    }
+}

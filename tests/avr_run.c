@@ -1,0 +1,446 @@
+/* avr-run: an ATmega2560 firmware image (build/fw-ramps*.elf) under simavr,
+   cycle-exact, as the RAMPS printer it drives. It prints "pty /dev/pts/N",
+   serves that terminal as the Mega's USB serial port (UART0), models the Z
+   carriage from the STEP and DIR pins and drives the Z-min endstop from it,
+   and writes every pin edge to a log with its CPU cycle, in fw-sim's format
+   where the events are the same (tests/test_print.c's reader takes both):
+
+       # avr-run tick_hz=16000000 steps_per_mm=400 max_speed=4000 accel=20000 start_steps=12000 ...
+       <cycle> step +1 | step -1     STEP rises (DIR as it is then)
+       <cycle> step_end              STEP falls
+       <cycle> dir 1 | dir 0         DIR (1 = up)
+       <cycle> motor 1 | motor 0     the driver enabled (Z_ENABLE low)
+       <cycle> uv 1 | uv 0           the D8 MOSFET
+       <cycle> show <slot> 0 0       the core shows a display buffer (GPIOR1; there is
+       <cycle> show -1               no display on this board, so no CRC: 0)
+       <cycle> reset                 the MCU reset (the watchdog): every pin an input
+       <cycle> late                  the firmware could not arm a step in time (STEP_LATE)
+       <cycle> pass <cycles>         a loop pass of at least --log-passes cycles
+       # end cycles=C worst_pass=P worst_moving_pass=M worst_refill_gap=G passes=N stack_peak=S resets=R late=L
+
+   worst_pass: the longest main-loop pass in cycles, from the firmware's
+   GPIOR0 marks (a pass begins, the loop goes to sleep); worst_moving_pass
+   the longest of those that began while Z moved; worst_refill_gap the
+   longest stretch of those without a top-up of the step queue (a pass
+   begins, or a decoded mask row calls fw_refill); stack_peak: bytes
+   of SRAM below RAMEND the stack reached (SRAM is painted before the run).
+
+   The UART: simavr's own uart_pty part raced and corrupted bulk data (team
+   notes), so bytes from the pty are handed to the UART here, in the
+   simulator's thread, only while the UART signals room (XON). Idle sleep is
+   skipped, so virtual time runs as fast as the host allows, or at most
+   --speed times the wall clock.
+
+   Exit: 0 on SIGTERM/SIGINT, 4 when --max-seconds of virtual time or
+   --timeout seconds of wall time pass first (said on stderr), 3 when the
+   image crashes, 2 on a bad command line. */
+#define _XOPEN_SOURCE 700 /* posix_openpt, grantpt, unlockpt, ptsname */
+#include "../firmware/ports/ramps/board.h"
+#include "../link/tty.h"
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <simavr/sim_avr.h>
+#include <simavr/sim_elf.h>
+#include <simavr/sim_io.h>
+#include <simavr/sim_core.h>
+#include <simavr/sim_interrupts.h>
+#include <simavr/sim_cycle_timers.h>
+#include <simavr/avr_ioport.h>
+#include <simavr/avr_uart.h>
+
+#define RAMSTART 0x200u
+#define RAMEND   0x21FFu
+#define PAINT    0xAAu
+#define GPIOR0_ADDR 0x3Eu
+#define GPIOR1_ADDR 0x4Au
+#define GPIOR2_ADDR 0x4Bu
+#define PIND_ADDR   0x29u
+#define UCSR0B_ADDR 0xC1u
+#define UCSR0B_RXEN 0x10u
+#define POLL_CYCLES 1000u /* between looks at the pty: < a byte at 115200 baud (1389 cycles) */
+
+static const char USAGE[] =
+    "usage: avr-run [options] IMAGE.elf\n"
+    "Runs an ATmega2560 image under simavr as a RAMPS printer; prints \"pty PATH\" and serves it.\n"
+    "  --log FILE         pin edges with their cycle                   [none]\n"
+    "  --z-start MM       carriage height above the endstop at start  [30]\n"
+    "  --speed S          at most S times real time (0: unpaced)      [0]\n"
+    "  --max-seconds S    virtual time budget                          [600]\n"
+    "  --timeout S        wall-clock budget                            [300]\n"
+    "  --log-passes C     log the loop passes of C cycles or more      [none]\n"
+    "  --hang-at-uv N     make the main loop hang when UV goes on the Nth time\n"
+    "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n";
+
+static volatile sig_atomic_t stop_signal;
+static void on_signal(int sig) { stop_signal = sig; }
+
+typedef struct run {
+    avr_t *avr;
+    FILE *log;
+    int master;
+    int32_t position;            /* carriage, steps above the switching point */
+    int step, dir, en, uv, endstop;
+    avr_irq_t *endstop_irq, *uart_in;
+    int xon;
+    uint8_t in[4096];
+    size_t in_len, in_at;
+    uint8_t *out;
+    size_t out_len, out_cap;
+    uint64_t pass_begin, worst_pass, worst_moving, passes, log_passes, stretch_begin, worst_stretch;
+    int pass_moving;
+    unsigned long resets, late, uv_ons, hang_at_uv;
+    int in_pass;
+    uint64_t slept;              /* cycles the core spent asleep */
+} run;
+
+static run R;
+
+static void log_event(const char *event)
+{
+    if (R.log) fprintf(R.log, "%llu %s\n", (unsigned long long)R.avr->cycle, event);
+}
+
+/* The switch's level on PD3, raised again whenever the pin reads otherwise
+   (the firmware's pull-up write makes simavr read the pin high). */
+static void drive_endstop(void)
+{
+    int pressed = R.position <= 0;
+    if (pressed != R.endstop || ((R.avr->data[PIND_ADDR] >> 3) & 1) != pressed) {
+        R.endstop = pressed;
+        avr_raise_irq(R.endstop_irq, (uint32_t)pressed); /* NC switch: high = pressed */
+    }
+}
+
+static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    int v = value != 0;
+    (void)irq;
+    (void)param;
+    if (v == R.step) return;
+    R.step = v;
+    if (v) {
+        R.position += R.dir ? 1 : -1;
+        log_event(R.dir ? "step +1" : "step -1");
+        drive_endstop();
+    } else {
+        log_event("step_end");
+    }
+}
+
+static void on_dir(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    int v = value != 0;
+    (void)irq;
+    (void)param;
+    if (v == R.dir) return;
+    R.dir = v;
+    log_event(v ? "dir 1" : "dir 0");
+}
+
+static void on_enable(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    int on = value == 0; /* active low */
+    (void)irq;
+    (void)param;
+    if (on == R.en) return;
+    R.en = on;
+    log_event(on ? "motor 1" : "motor 0");
+}
+
+static void on_uv(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    int v = value != 0;
+    (void)irq;
+    (void)param;
+    if (v == R.uv) return;
+    R.uv = v;
+    log_event(v ? "uv 1" : "uv 0");
+    if (v && ++R.uv_ons == R.hang_at_uv) R.avr->data[GPIOR2_ADDR] = 0xA5; /* the RAMPS_TEST_HANG hook */
+}
+
+/* A loop pass from R.pass_begin to `end`: the worst, and logged when it
+   takes at least --log-passes cycles. */
+/* The stretch of a moving pass since the queue was last topped up (the
+   pass began, or a mask row refilled it) */
+static void end_stretch(uint64_t end)
+{
+    if (R.pass_moving && end - R.stretch_begin > R.worst_stretch) R.worst_stretch = end - R.stretch_begin;
+    R.stretch_begin = end;
+}
+
+static void end_pass(uint64_t end)
+{
+    uint64_t took = end - R.pass_begin;
+    if (took > R.worst_pass) R.worst_pass = took;
+    if (R.pass_moving && took > R.worst_moving) R.worst_moving = took;
+    if (R.log_passes && took >= R.log_passes && R.log)
+        fprintf(R.log, "%llu pass %llu\n", (unsigned long long)R.pass_begin, (unsigned long long)took);
+}
+
+/* The firmware's marks (board.h): loop passes, boot, late steps. */
+static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    (void)param;
+    avr->data[addr] = v;
+    if (v == BOARD_MARK_LOOP || v == BOARD_MARK_MOVING) {
+        if (R.in_pass) { end_pass(avr->cycle); end_stretch(avr->cycle); }
+        R.stretch_begin = avr->cycle;
+        R.in_pass = 1;
+        R.pass_moving = v == BOARD_MARK_MOVING;
+        R.pass_begin = avr->cycle;
+        R.passes++;
+    } else if (v == BOARD_MARK_IDLE) {
+        if (R.in_pass) { end_pass(avr->cycle); end_stretch(avr->cycle); }
+        R.in_pass = 0;
+    } else if (v == BOARD_MARK_LATE) {
+        R.late++;
+        log_event("late");
+    } else if (v == BOARD_MARK_BOOT) {
+        R.in_pass = 0;
+    }
+}
+
+static void on_gpior1(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    (void)param;
+    avr->data[addr] = v;
+    if (v) {
+        char line[32];
+        snprintf(line, sizeof line, "show %d 0 0", v - 1);
+        log_event(line);
+    } else {
+        log_event("show -1");
+    }
+}
+
+/* A reset makes every pin an input: the drivers' and the MOSFET's inputs
+   fall to their pull resistors (STEP, DIR, UV low; ENABLE high: off). */
+static void on_reset(void)
+{
+    R.resets++;
+    log_event("reset");
+    if (R.uv) { R.uv = 0; log_event("uv 0"); }
+    if (R.step) { R.step = 0; log_event("step_end"); }
+    if (R.en) { R.en = 0; log_event("motor 0"); }
+}
+
+static void on_uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (R.out_len == R.out_cap) {
+        size_t cap = R.out_cap ? 2 * R.out_cap : 4096;
+        uint8_t *p = (uint8_t *)realloc(R.out, cap);
+        if (!p) return;
+        R.out = p;
+        R.out_cap = cap;
+    }
+    R.out[R.out_len++] = (uint8_t)value;
+}
+
+static void on_xon(struct avr_irq_t *irq, uint32_t value, void *param) { (void)irq; (void)value; (void)param; R.xon = 1; }
+static void on_xoff(struct avr_irq_t *irq, uint32_t value, void *param) { (void)irq; (void)value; (void)param; R.xon = 0; }
+
+/* simavr 1.6's avr_callback_run_raw, with two changes: sleeping costs no
+   wall time (the cycles slept are added at once), and an interrupt already
+   pending when the core executes SLEEP wakes it at once, as on the part.
+   1.6 first skips to the next timer event: with "sei; sleep" an interrupt
+   that arrived during the cli section then waited for the next Timer5
+   event (a step's compare was served 4 ms late). */
+static void run_one(avr_t *avr)
+{
+    avr_flashaddr_t new_pc = avr->pc;
+    avr_cycle_count_t sleep;
+    if (avr->state == cpu_Running) new_pc = avr_run_one(avr);
+    sleep = avr_cycle_timer_process(avr);
+    avr->pc = new_pc;
+    if (avr->state == cpu_Sleeping) {
+        if (!avr->sreg[S_I]) {
+            avr->state = cpu_Done; /* asleep with interrupts off: nothing can wake it */
+            return;
+        }
+        if (!avr_has_pending_interrupts(avr)) { avr->cycle += sleep; R.slept += sleep; }
+        avr->cycle += 1;
+    }
+    if (avr->state == cpu_Running || avr->state == cpu_Sleeping) avr_service_interrupts(avr);
+}
+
+static double wall_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
+}
+
+/* The pty: bytes to the host, bytes from it into the UART while it has room. */
+static void serve_pty(void)
+{
+    if (R.out_len) {
+        ssize_t n = write(R.master, R.out, R.out_len);
+        if (n > 0) {
+            memmove(R.out, R.out + n, R.out_len - (size_t)n);
+            R.out_len -= (size_t)n;
+        }
+    }
+    if (R.in_at == R.in_len) {
+        ssize_t n = read(R.master, R.in, sizeof R.in);
+        R.in_at = 0;
+        R.in_len = n > 0 ? (size_t)n : 0;
+    }
+    /* only once the firmware has enabled the receiver (after each reset):
+       simavr drops bytes a disabled UART gets */
+    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len) avr_raise_irq(R.uart_in, R.in[R.in_at++]);
+}
+
+static int open_pty(int *master, char *name, size_t size)
+{
+    const char *path;
+    int slave;
+    *master = posix_openpt(O_RDWR | O_NOCTTY);
+    if (*master < 0 || grantpt(*master) || unlockpt(*master) || !(path = ptsname(*master)) || strlen(path) >= size) return -1;
+    strcpy(name, path);
+    if (fcntl(*master, F_SETFL, fcntl(*master, F_GETFL) | O_NONBLOCK) != 0) return -1;
+    /* kept open so the master never sees a hangup while no host has it */
+    slave = open(name, O_RDWR | O_NOCTTY);
+    if (slave < 0 || tty_raw(slave, 0) != 0) return -1;
+    return slave;
+}
+
+static unsigned long stack_peak(void)
+{
+    /* the longest painted run is the gap between .bss and the stack */
+    unsigned a, best_end = RAMEND, best_len = 0, len = 0;
+    for (a = RAMSTART; a <= RAMEND; a++) {
+        len = R.avr->data[a] == PAINT ? len + 1 : 0;
+        if (len > best_len) { best_len = len; best_end = a; }
+    }
+    return RAMEND - best_end;
+}
+
+int main(int argc, char **argv)
+{
+    const char *elf = NULL, *log_path = NULL;
+    double z_start = 30, speed = 0, max_seconds = 600, timeout = 300, t0, next_pace = 0;
+    elf_firmware_t fw;
+    char name[128];
+    int i, slave, status = 0;
+    uint64_t next_poll = 0, max_cycles;
+    uint32_t flags = 0;
+    uint16_t last_pc = 1;
+    struct sigaction sa;
+
+    for (i = 1; i < argc; i++) {
+        const char *o = argv[i];
+        if (!strcmp(o, "--help")) { fputs(USAGE, stdout); return 0; }
+        if (o[0] != '-') { elf = o; continue; }
+        if (i + 1 >= argc) { fprintf(stderr, "avr-run: %s needs a value\n%s", o, USAGE); return 2; }
+        if (!strcmp(o, "--log")) log_path = argv[++i];
+        else if (!strcmp(o, "--z-start")) z_start = atof(argv[++i]);
+        else if (!strcmp(o, "--speed")) speed = atof(argv[++i]);
+        else if (!strcmp(o, "--max-seconds")) max_seconds = atof(argv[++i]);
+        else if (!strcmp(o, "--timeout")) timeout = atof(argv[++i]);
+        else if (!strcmp(o, "--hang-at-uv")) R.hang_at_uv = strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
+        else { fprintf(stderr, "avr-run: unknown option %s\n%s", o, USAGE); return 2; }
+    }
+    if (!elf) { fputs(USAGE, stderr); return 2; }
+    memset(&fw, 0, sizeof fw);
+    if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "avr-run: cannot read %s\n", elf); return 2; }
+    R.avr = avr_make_mcu_by_name("atmega2560");
+    if (!R.avr || avr_init(R.avr) != 0) { fprintf(stderr, "avr-run: simavr has no atmega2560\n"); return 2; }
+    fw.frequency = BOARD_CPU_HZ;
+    avr_load_firmware(R.avr, &fw);
+    R.avr->run = run_one;
+    memset(R.avr->data + RAMSTART, PAINT, RAMEND - RAMSTART + 1);
+    max_cycles = (uint64_t)(max_seconds * BOARD_CPU_HZ);
+
+    if (log_path && !(R.log = fopen(log_path, "w"))) { fprintf(stderr, "avr-run: --log %s: %s\n", log_path, strerror(errno)); return 2; }
+    R.position = (int32_t)(z_start * BOARD_STEPS_PER_MM + 0.5);
+    if (R.log)
+        fprintf(R.log, "# avr-run tick_hz=%u steps_per_mm=%u max_speed=%u accel=%u start_steps=%ld cpu_hz=%u tick_div=%u image=%s\n",
+                BOARD_CPU_HZ, BOARD_STEPS_PER_MM, (unsigned)BOARD_MAX_STEPS_S,
+                BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
+
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 3), on_step, NULL);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 1), on_dir, NULL);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('K'), 0), on_enable, NULL);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('H'), 5), on_uv, NULL);
+    R.endstop_irq = avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3);
+    R.endstop = -1;
+    drive_endstop();
+    avr_register_io_write(R.avr, GPIOR0_ADDR, on_gpior0, NULL);
+    avr_register_io_write(R.avr, GPIOR1_ADDR, on_gpior1, NULL);
+    avr_ioctl(R.avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
+    avr_ioctl(R.avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    R.uart_in = avr_io_getirq(R.avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart_out, NULL);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), on_xon, NULL);
+    avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
+    R.xon = 1;
+
+    slave = open_pty(&R.master, name, sizeof name);
+    if (slave < 0) { fprintf(stderr, "avr-run: cannot open a pseudo-terminal: %s\n", strerror(errno)); return 1; }
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    printf("pty %s\n", name);
+    fflush(stdout);
+
+    t0 = wall_now();
+    while (!stop_signal) {
+        int state = avr_run(R.avr);
+        if (state == cpu_Done || state == cpu_Crashed) {
+            fprintf(stderr, "avr-run: the image %s at cycle %llu (pc 0x%x)\n", state == cpu_Crashed ? "crashed" : "stopped",
+                    (unsigned long long)R.avr->cycle, (unsigned)R.avr->pc);
+            status = 3;
+            break;
+        }
+        if (R.avr->pc == 0 && last_pc != 0) on_reset();
+        last_pc = (uint16_t)R.avr->pc;
+        if (R.avr->cycle < next_poll) continue;
+        next_poll = R.avr->cycle + POLL_CYCLES;
+        drive_endstop();
+        serve_pty();
+        if (R.avr->cycle >= next_pace) {
+            double virt = (double)R.avr->cycle / BOARD_CPU_HZ, wall = wall_now() - t0;
+            next_pace = R.avr->cycle + BOARD_CPU_HZ / 100u;
+            if (R.avr->cycle > max_cycles || wall > timeout) {
+                fprintf(stderr, "avr-run: %s budget spent (%.1f s virtual, %.1f s wall): stopped\n",
+                        R.avr->cycle > max_cycles ? "--max-seconds" : "--timeout", virt, wall);
+                status = 4;
+                break;
+            }
+            if (speed > 0 && virt > speed * wall) {
+                double ahead = virt / speed - wall;
+                struct timespec ts;
+                ts.tv_sec = (time_t)ahead;
+                ts.tv_nsec = (long)((ahead - (double)ts.tv_sec) * 1e9);
+                nanosleep(&ts, NULL);
+            }
+        }
+    }
+    if (R.out_len) (void)!write(R.master, R.out, R.out_len);
+    if (R.log) {
+        fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu worst_refill_gap=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
+                (unsigned long long)R.avr->cycle, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
+                (unsigned long long)R.worst_stretch, (unsigned long long)R.passes,
+                stack_peak(), R.resets, R.late, R.avr->cycle ? 1.0 - (double)R.slept / (double)R.avr->cycle : 0.0);
+        fclose(R.log);
+    }
+    fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles (%llu while Z moves, %llu between step refills) over %llu passes; stack peak %lu bytes; %lu resets; %lu late steps\n",
+            (double)R.avr->cycle / BOARD_CPU_HZ, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
+            (unsigned long long)R.worst_stretch, (unsigned long long)R.passes, stack_peak(),
+            R.resets, R.late);
+    close(slave);
+    close(R.master);
+    return status;
+}

@@ -1,0 +1,555 @@
+/* The RAMPS 1.4 / ATmega2560 image (build/fw-ramps-test.elf) under simavr
+   through tests/avr_run.c (build/avr-run), checked from its pin edges, which
+   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick):
+     - a 100-layer print in G-code mode as NanoDLP drives one (each move
+       waited for with Z_move_comp, the light on for a G4 dwell): every step
+       within 10 us of the tick motion.c's closed form gives it (a host
+       fw_axis on the board's config, the real firmware/motion.c, replays
+       each move from its first step), no interval under the speed limit,
+       the step count the moves' heights x steps/mm, the light never on
+       while Z moves, no step refused as late. G-code's light is on from
+       M106 to M107, lines the host sends when it likes: the firmware
+       switches both edges on Timer4 at the ticks the lines ran, so the
+       light lasts exactly from one line to the other, which is the G4 dwell
+       plus the host's round trip (as exact as the host, not the firmware):
+       what is asserted is that it is never shorter than the dwell;
+     - a binary-protocol print by the host tool (adaslice print), masks
+       streaming while Z moves: the same step checks, and tests/zcheck.h's
+       (each exposure at its layer's height, exactly its exposure in ticks,
+       no light while Z moves, acceleration and speed within limits);
+     - the watchdog: the main loop made to hang while the light is on; the
+       MCU resets within the watchdog period, which switches the light off,
+       and it answers again afterwards. */
+#define _XOPEN_SOURCE 700
+#include "check.h"
+#include "cli_run.h"
+#include "zcheck.h"
+#include "../firmware/motion.h"
+#include "../firmware/ports/ramps/board.h"
+#include "../link/tty.h"
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#define AVR_RUN "build/avr-run"
+#define AVR_ELF "build/fw-ramps-test.elf"
+#define CYCLES_PER_TICK BOARD_TICK_DIV
+#define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
+
+typedef struct avr_child { pid_t pid; int out, tty; char pty[256]; } avr_child;
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
+}
+
+/* avr-run with `extra` options, its log at `log`; the pty opened raw. */
+static int avr_start(avr_child *c, const char *log, const char *const *extra)
+{
+    char *argv[24], line[256];
+    int fds[2], n = 0;
+    size_t len = 0;
+    double t0 = now_s();
+    memset(c, 0, sizeof *c);
+    argv[n++] = (char *)AVR_RUN;
+    argv[n++] = (char *)"--log";
+    argv[n++] = (char *)log;
+    while (extra && *extra && n < 20) argv[n++] = (char *)*extra++;
+    argv[n++] = (char *)AVR_ELF;
+    argv[n] = NULL;
+    if (pipe(fds) != 0) return 0;
+    fflush(NULL);
+    c->pid = fork();
+    if (c->pid == 0) {
+        dup2(fds[1], 1);
+        close(fds[0]);
+        execv(argv[0], argv);
+        _exit(127);
+    }
+    close(fds[1]);
+    c->out = fds[0];
+    while (now_s() - t0 < 10) {
+        struct pollfd p = {c->out, POLLIN, 0};
+        char ch;
+        if (poll(&p, 1, 100) <= 0) continue;
+        if (read(c->out, &ch, 1) != 1) break;
+        if (ch != '\n') { if (len + 1 < sizeof line) line[len++] = ch; continue; }
+        line[len] = 0;
+        len = 0;
+        if (!strncmp(line, "pty ", 4)) {
+            snprintf(c->pty, sizeof c->pty, "%s", line + 4);
+            c->tty = open(c->pty, O_RDWR | O_NOCTTY | O_NONBLOCK);
+            return c->tty >= 0 && tty_raw(c->tty, 0) == 0;
+        }
+    }
+    return 0;
+}
+
+/* SIGTERM; avr-run's exit status (-1 if it did not exit). */
+static int avr_stop(avr_child *c)
+{
+    int st, i;
+    if (c->tty > 0) close(c->tty);
+    if (c->pid <= 0) return -1;
+    kill(c->pid, SIGTERM);
+    for (i = 0; i < 250; i++) {
+        struct timespec ts = {0, 20000000};
+        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
+        nanosleep(&ts, NULL);
+    }
+    kill(c->pid, SIGKILL);
+    waitpid(c->pid, &st, 0);
+    close(c->out);
+    return -1;
+}
+
+/* Sends a G-code line and reads replies until `until` is seen (or
+   `seconds` pass); 1 when seen. Replies are appended to `got`. */
+static int gline(avr_child *c, const char *cmd, const char *until, double seconds, char *got, size_t got_size)
+{
+    char buf[512];
+    size_t len = 0;
+    double t0 = now_s();
+    buf[0] = 0;
+    if (cmd) {
+        char l[128];
+        int n = snprintf(l, sizeof l, "%s\n", cmd);
+        if (write(c->tty, l, (size_t)n) != n) return 0;
+    }
+    while (now_s() - t0 < seconds) {
+        struct pollfd p = {c->tty, POLLIN, 0};
+        ssize_t n;
+        if (poll(&p, 1, 50) <= 0) continue;
+        n = read(c->tty, buf + len, sizeof buf - 1 - len);
+        if (n <= 0) continue;
+        len += (size_t)n;
+        buf[len] = 0;
+        if (strstr(buf, until)) {
+            if (got) strncat(got, buf, got_size - strlen(got) - 1);
+            return 1;
+        }
+        if (len > sizeof buf / 2) { memmove(buf, buf + len / 2, len - len / 2 + 1); len -= len / 2; }
+    }
+    if (got) strncat(got, buf, got_size - strlen(got) - 1);
+    CHECKF(0, "%s: no \"%s\" within %.0f s (got \"%.80s\")", cmd ? cmd : "(reading)", until, seconds, buf);
+    return 0;
+}
+
+/* avr-run's log: steps (cycle, direction), UV edges, resets, the end line. */
+typedef struct avr_log {
+    uint64_t *step_at;
+    int *step_dir;
+    size_t steps;
+    uint64_t uv_at[1024];
+    int uv_on[1024];
+    size_t uvs;
+    uint64_t reset_at[8];
+    size_t resets;
+    size_t steps_lit;            /* steps taken with the light on */
+    unsigned long late, worst_pass, worst_moving_pass, worst_refill_gap, stack_peak;
+    long start_steps;
+    zevent *ev;                  /* steps, UV, shows: tests/zcheck.h's record, in ticks (cycle / 8) */
+    size_t events, events_cap;
+} avr_log;
+
+static void add_event(avr_log *l, uint64_t at, int kind, int value)
+{
+    if (l->events == l->events_cap) {
+        size_t cap = l->events_cap ? 2 * l->events_cap : 65536;
+        zevent *e = (zevent *)realloc(l->ev, cap * sizeof *e);
+        if (!e) return;
+        l->ev = e;
+        l->events_cap = cap;
+    }
+    l->ev[l->events].when = at;
+    l->ev[l->events].kind = kind;
+    l->ev[l->events].value = value;
+    l->ev[l->events].crc = 0;
+    l->events++;
+}
+
+/* The record's cycles as ticks. A compare's edge comes at the end of the
+   instruction its cycle falls in (0-4 cycles on), and Timer4 runs a few
+   cycles behind Timer5 (their counters were cleared one after the other):
+   each timer's edges are read against their own phase, the residue mod 8
+   from which all of them fall within the next 8 cycles. */
+static unsigned edge_phase(const avr_log *l, int kind)
+{
+    unsigned seen = 0, r, best = 0, best_span = 8;
+    size_t i;
+    for (i = 0; i < l->events; i++)
+        if (l->ev[i].kind == kind) seen |= 1u << (l->ev[i].when % CYCLES_PER_TICK);
+    for (r = 0; r < CYCLES_PER_TICK; r++) {
+        unsigned span = 0, k;
+        for (k = 0; k < CYCLES_PER_TICK; k++)
+            if (seen & (1u << ((r + k) % CYCLES_PER_TICK))) span = k + 1;
+        if (span < best_span) { best_span = span; best = r; }
+    }
+    return best;
+}
+
+static void events_to_ticks(avr_log *l)
+{
+    unsigned step_phase = edge_phase(l, ZEV_STEP), uv_phase = edge_phase(l, ZEV_UV);
+    size_t i;
+    for (i = 0; i < l->events; i++) {
+        unsigned phase = l->ev[i].kind == ZEV_UV ? uv_phase : l->ev[i].kind == ZEV_STEP ? step_phase : 0;
+        uint64_t c = l->ev[i].when;
+        l->ev[i].when = c >= phase ? (c - phase) / CYCLES_PER_TICK : 0;
+    }
+}
+
+static int read_avr_log(const char *path, avr_log *l)
+{
+    FILE *f = fopen(path, "r");
+    char line[512];
+    size_t cap = 0;
+    int uv = 0;
+    memset(l, 0, sizeof *l);
+    if (!f) return 0;
+    while (fgets(line, sizeof line, f)) {
+        unsigned long long at;
+        char what[16], arg[16];
+        const char *v;
+        if (line[0] == '#') {
+            if ((v = strstr(line, "start_steps="))) l->start_steps = strtol(v + 12, NULL, 10);
+            if ((v = strstr(line, " late="))) l->late = strtoul(v + 6, NULL, 10);
+            if ((v = strstr(line, "worst_pass="))) l->worst_pass = strtoul(v + 11, NULL, 10);
+            if ((v = strstr(line, "worst_moving_pass="))) l->worst_moving_pass = strtoul(v + 18, NULL, 10);
+            if ((v = strstr(line, "worst_refill_gap="))) l->worst_refill_gap = strtoul(v + 17, NULL, 10);
+            if ((v = strstr(line, "stack_peak="))) l->stack_peak = strtoul(v + 11, NULL, 10);
+            continue;
+        }
+        arg[0] = 0;
+        if (sscanf(line, "%llu %15s %15s", &at, what, arg) < 2) continue;
+        if (!strcmp(what, "step")) {
+            if (l->steps == cap) {
+                cap = cap ? 2 * cap : 65536;
+                l->step_at = (uint64_t *)realloc(l->step_at, cap * sizeof *l->step_at);
+                l->step_dir = (int *)realloc(l->step_dir, cap * sizeof *l->step_dir);
+                if (!l->step_at || !l->step_dir) { fclose(f); return 0; }
+            }
+            l->step_at[l->steps] = at;
+            l->step_dir[l->steps++] = arg[0] == '-' ? -1 : 1;
+            if (uv) l->steps_lit++;
+            add_event(l, at, ZEV_STEP, arg[0] == '-' ? -1 : 1);
+        } else if (!strcmp(what, "uv") && l->uvs < 1024) {
+            uv = atoi(arg);
+            l->uv_at[l->uvs] = at;
+            l->uv_on[l->uvs++] = uv;
+            add_event(l, at, ZEV_UV, uv);
+        } else if (!strcmp(what, "show")) {
+            add_event(l, at, ZEV_SHOW, atoi(arg));
+        } else if (!strcmp(what, "reset") && l->resets < 8) {
+            l->reset_at[l->resets++] = at;
+        }
+    }
+    fclose(f);
+    events_to_ticks(l);
+    return 1;
+}
+
+static void free_avr_log(avr_log *l) { free(l->step_at); free(l->step_dir); free(l->ev); }
+
+/* The board's Z axis as the firmware configures it (ports/ramps/main.c). */
+static void board_axis(fw_axis *axis)
+{
+    fw_axis_config c;
+    c.steps_per_mm = BOARD_STEPS_PER_MM;
+    c.max_speed = BOARD_MAX_STEPS_S;
+    c.accel = BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    c.home_speed = BOARD_HOME_STEPS_S;
+    c.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
+    c.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
+}
+
+typedef struct zmove { int32_t target; uint32_t speed; } zmove; /* steps, steps/s */
+
+/* Every step of `moves` (after homing, which ends at the switch) against
+   the closed form: each move's first step is its start, and step j must
+   come t(j) ticks after it. Returns the worst lateness in cycles. */
+static long check_moves(const avr_log *l, const zmove *moves, size_t count)
+{
+    size_t total = 0, k, i, at, bad = 0, short_intervals = 0;
+    int32_t from = 0;
+    long worst = 0;
+    uint64_t min_cycles = (uint64_t)CYCLES_PER_TICK * ((BOARD_CLOCK_HZ + BOARD_MAX_STEPS_S - 1) /
+                                                       (BOARD_MAX_STEPS_S));
+    for (k = 0; k < count; k++) { total += (size_t)labs((long)(moves[k].target - from)); from = moves[k].target; }
+    CHECKF(l->steps >= total, "%zu steps in the record, the moves need %zu after homing", l->steps, total);
+    if (l->steps < total) return -1;
+    at = l->steps - total;
+    {
+        long pos = l->start_steps;
+        for (i = 0; i < at; i++) pos += l->step_dir[i];
+        CHECKF(pos == 0, "homing ended %ld steps from the switch", pos);
+    }
+    from = 0;
+    for (k = 0; k < count; k++) {
+        fw_axis axis;
+        uint64_t start = l->step_at[at];
+        board_axis(&axis);
+        axis.homed = 1;
+        axis.position = from;
+        CHECK(fw_axis_move_to(&axis, moves[k].target, moves[k].speed, 0) == FW_AXIS_OK);
+        while (fw_axis_busy(&axis)) {
+            uint64_t want = fw_axis_next(&axis) * CYCLES_PER_TICK;
+            int dir = fw_axis_step(&axis, 0);
+            long late = (long)(l->step_at[at] - start) - (long)want;
+            if (labs(late) > worst) worst = labs(late);
+            if ((labs(late) > (long)LATE_MAX_CYCLES || dir != l->step_dir[at]) && bad++ < 3)
+                CHECKF(0, "move %zu step %zu: %ld cycles from its tick (dir %d, pin %d)", k, at, late, dir, l->step_dir[at]);
+            at++;
+        }
+        from = moves[k].target;
+    }
+    /* intervals: the closed form allows none under the speed limit. simavr
+       puts a compare's edge at the end of the instruction it falls in, 0-4
+       cycles on, so an interval may read up to 4 cycles short of the
+       hardware's (the pin itself is set by the compare unit, exactly) */
+    for (i = 1; i < l->steps; i++)
+        if (l->step_at[i] - l->step_at[i - 1] + 4u < min_cycles) short_intervals++;
+    CHECKF(!short_intervals, "%zu step intervals under %llu cycles", short_intervals, (unsigned long long)min_cycles);
+    return worst;
+}
+
+#define LAYERS 100
+#define LAYER_UM 50
+#define PEEL_UM 100
+#define EXPOSE_MS 20
+#define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
+
+/* NanoDLP's way: per layer lift, lower to the layer, wait for Z_move_comp,
+   light on for a dwell, off. */
+static void gcode_print_nanodlp_style(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "60", NULL};
+    static zmove moves[2 * LAYERS + 1];
+    char got[256];
+    size_t n = 0, k;
+    int layer, ok = 1;
+    avr_log l;
+    long worst;
+    uint64_t longest = 0;
+    const uint32_t peel_speed = 5 * BOARD_STEPS_PER_MM, layer_speed = 3 * BOARD_STEPS_PER_MM; /* F300, F180: over the top speed */
+    if (!avr_start(&c, "build/test_avr/print.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf (make check builds both)"); avr_stop(&c); return; }
+    got[0] = 0;
+    ok &= gline(&c, "M115", "ok", 10, got, sizeof got);
+    CHECKF(ok && strstr(got, "FIRMWARE_NAME:adaslice"), "M115: %s", got);
+    ok &= gline(&c, "G28", "ok", 30, NULL, 0);
+    ok &= gline(&c, "G90", "ok", 5, NULL, 0);
+    for (layer = 1; ok && layer <= LAYERS; layer++) {
+        char cmd[64];
+        int32_t top = layer * LAYER_UM * (int32_t)BOARD_STEPS_PER_MM / 1000;
+        if (layer > 1) {
+            int32_t lift = (layer - 1) * LAYER_UM * (int32_t)BOARD_STEPS_PER_MM / 1000 + PEEL_UM * (int32_t)BOARD_STEPS_PER_MM / 1000;
+            snprintf(cmd, sizeof cmd, "G1 Z%.3f F300", lift / (double)BOARD_STEPS_PER_MM);
+            ok &= gline(&c, cmd, "Z_move_comp", 10, NULL, 0);
+            moves[n].target = lift;
+            moves[n++].speed = peel_speed;
+        }
+        snprintf(cmd, sizeof cmd, "G1 Z%.3f F180", top / (double)BOARD_STEPS_PER_MM);
+        ok &= gline(&c, cmd, "Z_move_comp", 10, NULL, 0);
+        moves[n].target = top;
+        moves[n++].speed = layer_speed;
+        ok &= gline(&c, "M106 S255", "ok", 5, NULL, 0);
+        ok &= gline(&c, "G4 P" "20", "ok", 5, NULL, 0);
+        ok &= gline(&c, "M107", "ok", 5, NULL, 0);
+    }
+    CHECKF(ok, "the G-code stream stopped at layer %d", layer - 1);
+    {
+        /* M107's light goes off on Timer4 a shift after the line (the same
+           shift as M106's start): let the simulation run past it */
+        struct timespec ts = {0, 200000000};
+        nanosleep(&ts, NULL);
+    }
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    if (check_case_failed()) return;
+    CHECK(read_avr_log("build/test_avr/print.log", &l));
+    worst = check_moves(&l, moves, n);
+    CHECKF(l.uvs == 2 * LAYERS, "%zu UV edges for %d layers", l.uvs, LAYERS);
+    CHECKF(!l.steps_lit, "%zu steps with the light on", l.steps_lit);
+    for (k = 0; k + 1 < l.uvs; k += 2) {
+        /* from M106's tick to M107's: the dwell and the host's round trip,
+           switched by Timer4's compare unit, so whole ticks */
+        uint64_t lit = l.uv_at[k + 1] / CYCLES_PER_TICK - l.uv_at[k] / CYCLES_PER_TICK;
+        if (lit > longest) longest = lit;
+        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit >= (uint64_t)EXPOSE_MS * (BOARD_CLOCK_HZ / 1000u),
+               "exposure %zu: %llu ticks for a G4 P%d", k / 2, (unsigned long long)lit, EXPOSE_MS);
+        if (check_case_failed()) break;
+    }
+    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    CHECKF(l.worst_refill_gap < FW_STEP_QUEUE / 2u * (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           "%lu cycles without a step refill while Z moved, %u steps of %lu", l.worst_refill_gap, FW_STEP_QUEUE / 2u,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S));
+    printf("    avr: %zu steps, worst step %ld cycles from its tick; light %.3f..%.3f ms for G4 P%d; worst loop pass %lu cycles "
+           "(%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
+           l.steps, worst, (double)EXPOSE_MS, (double)longest / (BOARD_CLOCK_HZ / 1000u), EXPOSE_MS, l.worst_pass, l.worst_moving_pass,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.stack_peak);
+    free_avr_log(&l);
+}
+
+/* The host's --report: each layer's top (bins) and exposure (ms). */
+typedef struct avr_report { uint32_t layers, first, bin_nm, *tops, *exposures; } avr_report;
+
+static int read_avr_report(const char *path, avr_report *r)
+{
+    char *text = cli_read(path), *at;
+    uint32_t k = 0;
+    const char *f;
+    memset(r, 0, sizeof *r);
+    if (!text) return 0;
+    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
+    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
+    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
+    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
+    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
+        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
+        at = strstr(at, "\"exposure_ms\": ");
+        if (!at) break;
+        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
+    }
+    free(text);
+    return r->layers && k == r->layers;
+}
+
+#define BPRINT_PEEL_UM 300
+
+/* adaslice print over the pty, as tests/test_print.c drives fw-sim: the
+   printer plans, the host streams every mask while Z moves (the window of
+   frames in flight), and the pins show the print the report describes. */
+static void binary_print_with_masks_streaming(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "3", "--max-seconds", "300", "--timeout", "60", NULL};
+    cli_result r;
+    avr_log l;
+    avr_report rep;
+    zexpect e;
+    zsummary s;
+    zmove *moves;
+    size_t n = 0;
+    uint32_t k;
+    long worst, final_pos;
+    int32_t peel;
+    fw_axis axis;
+    char report[256];
+    snprintf(report, sizeof report, "%s", cli_path("avr-report.json"));
+    if (!avr_start(&c, "build/test_avr/bprint.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    close(c.tty);
+    c.tty = 0;
+    r = cli_run("print", "examples/models/hand_closed.obj", "--scale", "5", "--port", c.pty, "--exposure", "0.05", "--penetration", "0.1",
+                "--bottom-layers", "1", "--bottom-exposure", "0.1", "--peel", "0.3", "--peel-speed", "5", "--return-speed", "5",
+                "--settle", "0.02", "--report", report, NULL);
+    CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
+    CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    cli_free(&r);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    if (check_case_failed()) return;
+    CHECK(read_avr_log("build/test_avr/bprint.log", &l));
+    CHECK(read_avr_report(report, &rep));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    /* the moves the plan makes: to each layer's top, then the peel above it */
+    board_axis(&axis);
+    peel = fw_axis_steps_of_nm(&axis, (uint64_t)BPRINT_PEEL_UM * 1000u);
+    moves = (zmove *)calloc(2u * rep.layers + 1u, sizeof *moves);
+    for (k = 0; moves && k < rep.layers; k++) {
+        int32_t top = fw_axis_steps_of_nm(&axis, (uint64_t)rep.tops[k] * rep.bin_nm);
+        moves[n].target = top;
+        moves[n++].speed = 0; /* the peel and return speeds (5 mm/s) are over the top speed */
+        moves[n].target = fw_axis_steps_of_nm(&axis, (uint64_t)rep.tops[k] * rep.bin_nm + BPRINT_PEEL_UM * 1000u);
+        moves[n++].speed = 0;
+    }
+    (void)peel;
+    final_pos = l.start_steps;
+    for (k = 0; k < l.steps; k++) final_pos += l.step_dir[k];
+    CHECKF(moves && n && final_pos == moves[n - 1].target, "Z ends at %ld steps, the last peel at %ld", final_pos, moves && n ? (long)moves[n - 1].target : -1L);
+    worst = moves ? check_moves(&l, moves, n) : -1;
+    memset(&e, 0, sizeof e);
+    e.tick_hz = BOARD_CLOCK_HZ; /* the record in ticks */
+    e.steps_per_mm = BOARD_STEPS_PER_MM;
+    e.max_speed = BOARD_MAX_STEPS_S;
+    e.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    e.start_position = l.start_steps;
+    e.layers = rep.layers;
+    e.first = rep.first ? rep.first : 1;
+    e.top_bins = rep.tops;
+    e.bin_nm = rep.bin_nm;
+    e.crcs = NULL; /* no display on this board: the core checks the CRCs */
+    e.exposure_ms = rep.exposures;
+    s = zcheck_record(l.ev, l.events, &e);
+    CHECKF(s.shows == rep.layers, "%zu masks shown for %u layers", s.shows, rep.layers);
+    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    /* Each pass tops the step queue up (a mask frame decodes a row a pass):
+       the longest stretch between two refills must be covered by half the
+       queue at the top speed. */
+    CHECKF(l.worst_refill_gap < FW_STEP_QUEUE / 2u * (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           "%lu cycles without a step refill while Z moved, %u steps of %lu", l.worst_refill_gap, FW_STEP_QUEUE / 2u,
+           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S));
+    printf("    avr: %u layers, %zu steps, worst step %ld cycles from its tick, every exposure exact to the tick; worst loop pass %lu cycles "
+           "(%lu while Z moved, %lu between step refills; a step every %lu at the top speed), stack peak %lu bytes\n",
+           rep.layers, l.steps, worst, l.worst_pass, l.worst_moving_pass, l.worst_refill_gap, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
+           l.stack_peak);
+    free(moves);
+    free(rep.tops);
+    free(rep.exposures);
+    free_avr_log(&l);
+}
+
+/* The loop hangs as the light goes on (RAMPS_TEST_HANG): the watchdog
+   resets the MCU, the reset switches the light off, and it answers again. */
+static void watchdog_resets_a_hung_loop(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "2", "--hang-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "60", NULL};
+    char got[256] = "";
+    avr_log l;
+    int ok = 1;
+    if (!avr_start(&c, "build/test_avr/wdt.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    ok &= gline(&c, "G28", "ok", 30, NULL, 0);
+    ok &= gline(&c, "M106", "ok", 5, NULL, 0);
+    CHECK(ok);
+    /* the hung MCU does not answer; once reset it does */
+    {
+        /* bytes into a hung loop: nothing comes back */
+        struct timespec ts = {1, 0};
+        CHECK(write(c.tty, "M115\n", 5) == 5);
+        nanosleep(&ts, NULL);
+    }
+    got[0] = 0;
+    ok = gline(&c, "M115", "FIRMWARE_NAME", 5, got, sizeof got);
+    CHECKF(ok, "no answer after the reset: %s", got);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    CHECK(read_avr_log("build/test_avr/wdt.log", &l));
+    CHECKF(l.uvs >= 2 && l.uv_on[0] && !l.uv_on[1], "%zu UV edges", l.uvs);
+    CHECKF(l.resets == 1, "%zu resets", l.resets);
+    if (l.uvs >= 2 && l.resets == 1) {
+        double ms = (double)(l.uv_at[1] - l.uv_at[0]) * 1000.0 / BOARD_CPU_HZ;
+        /* the watchdog's nominal period; its oscillator is +-10 % */
+        CHECKF(l.uv_at[1] == l.reset_at[0] && ms <= BOARD_WDT_MS * 1.1 + 1, "UV off %.2f ms after the hang", ms);
+        printf("    avr: the watchdog reset the hung MCU %.2f ms after the light went on\n", ms);
+    }
+    free_avr_log(&l);
+}
+
+void test_avr(void)
+{
+    if (system("mkdir -p build/test_avr") != 0) { CHECK(!"mkdir build/test_avr"); return; }
+    if (!cli_begin("adaslice-avr")) { CHECK(!"no temporary directory"); return; }
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", watchdog_resets_a_hung_loop);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_print_nanodlp_style);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);
+    cli_end();
+}
