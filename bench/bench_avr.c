@@ -209,7 +209,7 @@ int main(int argc, char **argv)
         }
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
                "%llu refused as late\n", steps, late_worst, late_worst / 16.0, refused);
-        printf("  worst loop pass %llu cycles (%llu while Z moves: a long row repeat's mask frame; %llu between step refills), "
+        printf("  worst loop pass %llu cycles (%llu while Z moves, %llu between step refills), "
                "a step every %lu cycles at the top speed; stack peak %llu bytes\n",
                worst_pass, worst_moving, gap, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), stack);
         free(at);
