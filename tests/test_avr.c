@@ -24,6 +24,7 @@
 #include "check.h"
 #include "cli_run.h"
 #include "zcheck.h"
+#include "print_report.h"
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
 #include "../link/tty.h"
@@ -400,31 +401,6 @@ static void gcode_print_nanodlp_style(void)
     free_avr_log(&l);
 }
 
-/* The host's --report: each layer's top (bins) and exposure (ms). */
-typedef struct avr_report { uint32_t layers, first, bin_nm, *tops, *exposures; } avr_report;
-
-static int read_avr_report(const char *path, avr_report *r)
-{
-    char *text = cli_read(path), *at;
-    uint32_t k = 0;
-    const char *f;
-    memset(r, 0, sizeof *r);
-    if (!text) return 0;
-    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
-    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
-    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
-    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
-    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
-    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
-        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
-        at = strstr(at, "\"exposure_ms\": ");
-        if (!at) break;
-        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
-    }
-    free(text);
-    return r->layers && k == r->layers;
-}
-
 #define BPRINT_PEEL_UM 300
 
 /* adaslice print over the pty, as tests/test_print.c drives fw-sim: the
@@ -436,7 +412,7 @@ static void binary_print_with_masks_streaming(void)
     const char *opts[] = {"--z-start", "3", "--max-seconds", "300", "--timeout", "60", NULL};
     cli_result r;
     avr_log l;
-    avr_report rep;
+    print_report rep;
     zexpect e;
     zsummary s;
     zmove *moves;
@@ -459,7 +435,7 @@ static void binary_print_with_masks_streaming(void)
     CHECKF(avr_stop(&c) == 0, "avr-run failed");
     if (check_case_failed()) return;
     CHECK(read_avr_log("build/test_avr/bprint.log", &l));
-    CHECK(read_avr_report(report, &rep));
+    CHECK(read_print_report(report, &rep));
     if (check_case_failed()) { free_avr_log(&l); return; }
     /* the moves the plan makes: to each layer's top, then the peel above it */
     board_axis(&axis);
@@ -503,8 +479,7 @@ static void binary_print_with_masks_streaming(void)
            rep.layers, l.steps, worst, l.worst_pass, l.worst_moving_pass, l.worst_refill_gap, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S),
            l.stack_peak);
     free(moves);
-    free(rep.tops);
-    free(rep.exposures);
+    print_report_free(&rep);
     free_avr_log(&l);
 }
 

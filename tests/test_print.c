@@ -6,6 +6,7 @@
 #define _XOPEN_SOURCE 700 /* posix_openpt, ptsname */
 #include "cli_run.h"
 #include "zcheck.h"
+#include "print_report.h"
 #include "../adaslice.h"
 #include "meshgen.h"
 #include <errno.h>
@@ -154,39 +155,6 @@ static int read_sim_log(const char *path, sim_log *l)
     return l->tick_hz && l->steps_per_mm && l->max_speed && l->accel;
 }
 
-/* The host's --report: each layer's top (bins) and mask CRC. */
-typedef struct report { uint32_t layers, first, bin_nm, *tops, *crcs, *exposures; unsigned long retransmits, mask_bytes; int by_printer; } report;
-
-static int read_report(const char *path, report *r)
-{
-    char *text = cli_read(path), *at;
-    uint32_t k = 0;
-    const char *f;
-    memset(r, 0, sizeof *r);
-    if (!text) return 0;
-    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
-    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
-    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
-    if ((f = strstr(text, "\"retransmitted_frames\": "))) r->retransmits = strtoul(f + 24, NULL, 10);
-    if ((f = strstr(text, "\"mask_code_bytes\": "))) r->mask_bytes = strtoul(f + 19, NULL, 10);
-    r->by_printer = strstr(text, "\"planned_by_printer\": true") != NULL;
-    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
-    r->crcs = (uint32_t *)calloc(r->layers + 1, sizeof *r->crcs);
-    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
-    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
-        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
-        at = strstr(at, "\"crc32\": \"");
-        if (!at) break;
-        r->crcs[k] = (uint32_t)strtoul(at + 10, &at, 16);
-        at = strstr(at, "\"exposure_ms\": ");
-        if (!at) break;
-        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
-    }
-    free(text);
-    return r->layers && k == r->layers;
-}
-
-static void report_free(report *r) { free(r->tops); free(r->crcs); free(r->exposures); }
 
 /* Every print here runs with CURE: 0.1 s cure a layer of tmin on a resin of
    Dp 0.1 mm, two bottom layers of 0.5 s. */
@@ -194,7 +162,7 @@ static void report_free(report *r) { free(r->tops); free(r->crcs); free(r->expos
 
 /* The exposures the host sent are Jacobs' working curve, E(t) = 0.1 s x
    exp((t - tmin) / 0.1 mm), to the millisecond the protocol carries. */
-static void check_exposures(const report *r)
+static void check_exposures(const print_report *r)
 {
     uint32_t k, bad = 0;
     for (k = r->first ? r->first - 1 : 0; k < r->layers; k++) {
@@ -205,31 +173,40 @@ static void check_exposures(const report *r)
     }
 }
 
+/* The record from event `from` on against layers first .. of the report. */
+static zsummary check_record_from(const sim_log *l, const print_report *rep, size_t from, uint32_t first)
+{
+    size_t k;
+    long pos = l->start_steps;
+    zexpect e;
+    for (k = 0; k < from; k++) if (l->ev[k].kind == ZEV_STEP) pos += l->ev[k].value;
+    memset(&e, 0, sizeof e);
+    e.tick_hz = l->tick_hz;
+    e.steps_per_mm = (uint32_t)l->steps_per_mm;
+    e.max_speed = (uint32_t)l->max_speed;
+    e.accel = (uint32_t)l->accel;
+    e.start_position = pos;
+    e.layers = rep->layers;
+    e.first = first;
+    e.top_bins = rep->tops;
+    e.bin_nm = rep->bin_nm;
+    e.crcs = rep->crcs;
+    e.exposure_ms = rep->exposures;
+    return zcheck_record(l->ev + from, l->count - from, &e);
+}
+
 /* The record against the report: every layer shown once with the host's
    mask, at its exact height, the motion within limits. */
 static void check_print(const char *log_path, const char *report_path, int expect_link_pause)
 {
     sim_log l;
-    report r;
-    zexpect e;
+    print_report r;
     zsummary s;
     CHECKF(read_sim_log(log_path, &l), "cannot read the simulator's log %s", log_path);
-    CHECKF(read_report(report_path, &r), "cannot read the report %s", report_path);
-    if (check_case_failed()) { free(l.ev); report_free(&r); return; }
-    memset(&e, 0, sizeof e);
-    e.tick_hz = l.tick_hz;
-    e.steps_per_mm = (uint32_t)l.steps_per_mm;
-    e.max_speed = (uint32_t)l.max_speed;
-    e.accel = (uint32_t)l.accel;
-    e.start_position = l.start_steps;
-    e.layers = r.layers;
-    e.first = r.first;
-    e.top_bins = r.tops;
-    e.bin_nm = r.bin_nm;
-    e.crcs = r.crcs;
-    e.exposure_ms = r.exposures;
+    CHECKF(read_print_report(report_path, &r), "cannot read the report %s", report_path);
+    if (check_case_failed()) { free(l.ev); print_report_free(&r); return; }
     check_exposures(&r);
-    s = zcheck_record(l.ev, l.count, &e);
+    s = check_record_from(&l, &r, 0, r.first);
     CHECKF(s.shows == r.layers, "%zu masks shown for %u layers", s.shows, r.layers);
     /* each step left at its tick: 10 us is 100 ticks of the sim's clock */
     CHECKF(!l.unscheduled && l.worst_step_offset * 100000u <= l.tick_hz,
@@ -240,7 +217,7 @@ static void check_print(const char *log_path, const char *report_path, int expec
                l.uv_while_paused);
     }
     free(l.ev);
-    report_free(&r);
+    print_report_free(&r);
 }
 
 static const char *MODEL = "examples/models/hand_closed.obj";
@@ -378,28 +355,6 @@ static size_t nth_show_from_end(const sim_log *l, size_t shows_from_end)
     return 0;
 }
 
-/* The record from event `from` on against layers first .. of the report. */
-static void check_record_from(const sim_log *l, const report *rep, size_t from, uint32_t first)
-{
-    size_t k;
-    long pos = l->start_steps;
-    zexpect e;
-    for (k = 0; k < from; k++) if (l->ev[k].kind == ZEV_STEP) pos += l->ev[k].value;
-    memset(&e, 0, sizeof e);
-    e.tick_hz = l->tick_hz;
-    e.steps_per_mm = (uint32_t)l->steps_per_mm;
-    e.max_speed = (uint32_t)l->max_speed;
-    e.accel = (uint32_t)l->accel;
-    e.start_position = pos;
-    e.layers = rep->layers;
-    e.first = first;
-    e.top_bins = rep->tops;
-    e.bin_nm = rep->bin_nm;
-    e.crcs = rep->crcs;
-    e.exposure_ms = rep->exposures;
-    (void)zcheck_record(l->ev + from, l->count - from, &e);
-}
-
 static void sleep_ms(long ms) { struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L}; nanosleep(&ts, NULL); }
 
 static double seconds_now(void)
@@ -460,31 +415,18 @@ static pid_t hand_print_in_background(const char *port, const char *const *extra
 static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max)
 {
     sim_log l;
-    report rep;
-    zexpect e;
+    print_report rep;
     size_t k, on = 0;
-    CHECK(read_sim_log(log_path, &l) && read_report(report_path, &rep));
-    if (check_case_failed()) { free(l.ev); report_free(&rep); return; }
-    memset(&e, 0, sizeof e);
-    e.tick_hz = l.tick_hz;
-    e.steps_per_mm = (uint32_t)l.steps_per_mm;
-    e.max_speed = (uint32_t)l.max_speed;
-    e.accel = (uint32_t)l.accel;
-    e.start_position = l.start_steps;
-    e.layers = rep.layers;
-    e.first = 1;
-    e.top_bins = rep.tops;
-    e.bin_nm = rep.bin_nm;
-    e.crcs = rep.crcs;
-    e.exposure_ms = rep.exposures;
-    (void)zcheck_record(l.ev, l.count, &e);
+    CHECK(read_sim_log(log_path, &l) && read_print_report(report_path, &rep));
+    if (check_case_failed()) { free(l.ev); print_report_free(&rep); return; }
+    (void)check_record_from(&l, &rep, 0, 1);
     for (k = 0; k < l.count; k++) on += l.ev[k].kind == ZEV_UV && l.ev[k].value;
     CHECKF(on >= rep.layers + split_min && on <= rep.layers + split_max, "%zu UV-on periods for %u layers, %zu to %zu split",
            on, rep.layers, split_min, split_max);
     CHECKF(!l.steps_while_paused && !l.uv_while_paused, "%d steps and %d UV-on while paused", l.steps_while_paused,
            l.uv_while_paused);
     free(l.ev);
-    report_free(&rep);
+    print_report_free(&rep);
 }
 
 /* Ctrl-C mid-print: the host pauses the printer (UV off at once, Z held) and
@@ -524,10 +466,10 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     CHECKF(l.user_pauses == 1, "%zu pauses", l.user_pauses);
     free(l.ev);
     {
-        report rep;
-        CHECK(read_report(cli_path("report5.json"), &rep));
+        print_report rep;
+        CHECK(read_print_report(cli_path("report5.json"), &rep));
         check_exposures(&rep);
-        report_free(&rep);
+        print_report_free(&rep);
     }
     /* the pause split one exposure, or came between two */
     check_resumed_in_place(cli_path("sim5.log"), cli_path("report5.json"), 0, 1);
@@ -614,7 +556,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     double reset_at, took;
     cli_result r;
     sim_log l;
-    report rep;
+    print_report rep;
     if (!start_sim(&sim, cli_path("sim9.log"), "10")) return;
     snprintf(port, sizeof port, "%s", sim.line + 4);
     pid = hand_print_in_background(port, extra, cli_path("print9.out"));
@@ -643,7 +585,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (check_case_failed()) return;
-    CHECK(read_sim_log(cli_path("sim9.log"), &l) && read_report(cli_path("report9.json"), &rep));
+    CHECK(read_sim_log(cli_path("sim9.log"), &l) && read_print_report(cli_path("report9.json"), &rep));
     if (!check_case_failed()) {
         /* from the show of layer K after the restart to the end: homed again, Z at each layer's top */
         size_t from = nth_show_from_end(&l, rep.layers - layer + 1);
@@ -654,7 +596,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
         check_record_from(&l, &rep, from, layer);
     }
     free(l.ev);
-    report_free(&rep);
+    print_report_free(&rep);
 }
 
 /* adaslice slice writes masks.rle; print JOBDIR sends its plan (PLAN_SET)

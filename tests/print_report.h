@@ -1,0 +1,44 @@
+/* adaslice print's --report read back, for the tests that drive a printer
+   (test_print.c on fw-sim and QEMU, test_avr.c under simavr). One includer
+   per program (static functions). */
+#ifndef ADASLICE_PRINT_REPORT_H
+#define ADASLICE_PRINT_REPORT_H
+#include "cli_run.h"
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The host's --report: each layer's top (bins), mask CRC and exposure. */
+typedef struct print_report { uint32_t layers, first, bin_nm, *tops, *crcs, *exposures; unsigned long retransmits, mask_bytes; int by_printer; } print_report;
+
+static inline int read_print_report(const char *path, print_report *r)
+{
+    char *text = cli_read(path), *at;
+    uint32_t k = 0;
+    const char *f;
+    memset(r, 0, sizeof *r);
+    if (!text) return 0;
+    if ((f = strstr(text, "\"layers\": "))) r->layers = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"first_layer\": "))) r->first = (uint32_t)strtoul(f + 15, NULL, 10);
+    if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
+    if ((f = strstr(text, "\"retransmitted_frames\": "))) r->retransmits = strtoul(f + 24, NULL, 10);
+    if ((f = strstr(text, "\"mask_code_bytes\": "))) r->mask_bytes = strtoul(f + 19, NULL, 10);
+    r->by_printer = strstr(text, "\"planned_by_printer\": true") != NULL;
+    r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
+    r->crcs = (uint32_t *)calloc(r->layers + 1, sizeof *r->crcs);
+    r->exposures = (uint32_t *)calloc(r->layers + 1, sizeof *r->exposures);
+    for (at = strstr(text, "\"masks\""); at && k < r->layers && (at = strstr(at, "\"top_bins\": ")); k++) {
+        r->tops[k] = (uint32_t)strtoul(at + 12, &at, 10);
+        at = strstr(at, "\"crc32\": \"");
+        if (!at) break;
+        r->crcs[k] = (uint32_t)strtoul(at + 10, &at, 16);
+        at = strstr(at, "\"exposure_ms\": ");
+        if (!at) break;
+        r->exposures[k] = (uint32_t)strtoul(at + 15, &at, 10);
+    }
+    free(text);
+    return r->layers && k == r->layers;
+}
+
+static inline void print_report_free(print_report *r) { free(r->tops); free(r->crcs); free(r->exposures); }
+#endif
