@@ -331,7 +331,7 @@ static void restart(sim *s, fw_state *fw, const fw_port *port, uint64_t *workspa
         snprintf(line, sizeof line, "reset %s", why);
         log_line(s, s->now, line);
         if (s->uv_off_at != FW_NEVER) log_line(s, s->now, "uv 0");
-        if (fw->port.show) log_line(s, s->now, "show -1");
+        log_line(s, s->now, "show -1");
         log_line(s, s->now, "motor 0");
         s->config.boot_id++;
     }
