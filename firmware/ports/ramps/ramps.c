@@ -197,11 +197,14 @@ void board_motor(int on)
 static uint64_t uv_on_at, uv_off_at, uv_shift;
 static volatile uint8_t uv_level, uv_want;
 
+/* The port bit first: while COM4C is connected it does not drive the pin,
+   and the moment COM4C lets go the pin takes the port bit, which must
+   already be the level (the other order put out a stale one). */
 static void uv_hold(void)
 {
-    TCCR4A &= (uint8_t)~COM4C_BITS;
     if (uv_level) PORTH |= _BV(PH5);
     else PORTH &= (uint8_t)~_BV(PH5);
+    TCCR4A &= (uint8_t)~COM4C_BITS;
 }
 
 /* Interrupts off: arms the next transition, or switches now if it is due. */
