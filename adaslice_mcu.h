@@ -22,6 +22,7 @@
        adaslice_dp_layers               fewest layers up to the last bin pushed
        adaslice_dp_layer_below          read the plan top-down
        adaslice_dp_reverse              turn it around in place
+       adaslice_dp_reverse_some         the same, at most so many planes a call
        adaslice_dp_layer_above          read it bottom-up
      job output: what travels to a printer
        adaslice_crc32                   CRC-32 (IEEE 802.3, as zlib and PNG)
@@ -134,6 +135,11 @@ typedef struct adaslice_dp { /* its fields are private */
     uint32_t scan;            /* queue positions [0, scan) are known to lose on worst error */
     unsigned char *back;      /* (planes + 1) * width bytes */
     uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
+    /* the reversal, which goes top-down a plane at a time */
+    int turning;              /* 0 not begun, 1 under way, 2 done */
+    uint32_t turn_at;         /* the next plane it visits */
+    uint32_t turn_next;       /* the next plane of the plan below it */
+    uint32_t turn_above;      /* the bins of the plan's layer above turn_next */
 } adaslice_dp;
 
 /* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
@@ -155,6 +161,11 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t pl
    bottom-up with adaslice_dp_layer_above (no pushes after this). Returns the
    layer count, or ADASLICE_UNREACHED (nothing changes). */
 ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp);
+/* The same work in slices, for a caller whose every pass must stay short (a
+   firmware: 12,000 planes are a few hundred thousand cycles): at most
+   `budget` planes a call. Returns 1 while planes are left, 0 once the plan
+   reads bottom-up (at once when no plan reaches the top). */
+ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget);
 /* After adaslice_dp_reverse: the bins of the layer whose bottom is `plane`
    (0 for the top plane or a plane not in the plan). */
 ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane);
@@ -303,6 +314,7 @@ static void adaslice__dp_start(adaslice_dp *dp)
     dp->floor = 0;
     dp->reach = 0;
     dp->head = dp->count = dp->scan = 0;
+    dp->turning = 0;
     dp->prefix[0] = 0;
     dp->layers[0] = 0;
     dp->worst[0] = 0;
@@ -467,28 +479,40 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t pl
     return plane <= dp->plane ? adaslice__dp_back(dp, plane) : 0;
 }
 
+/* One walk down from the top plane: a plane on the best plan gets the
+   length of the layer above it in place of the one below (read first, it
+   leads to the next plane of the plan); a plane off it is cleared, so that
+   it reads 0. */
+ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget)
+{
+    if (dp->turning == 2 || adaslice_dp_layers(dp) == ADASLICE__UNREACHED) return 0;
+    if (!dp->turning) {
+        dp->turning = 1;
+        dp->turn_at = dp->turn_next = dp->plane;
+        dp->turn_above = 0;
+    }
+    for (; budget; budget--) {
+        uint32_t plane = dp->turn_at, len = adaslice__dp_back(dp, plane);
+        if (plane == dp->turn_next) {
+            adaslice__dp_set_back(dp, plane, dp->turn_above);
+            dp->turn_above = len;
+            dp->turn_next = plane - len;
+        } else {
+            adaslice__dp_set_back(dp, plane, 0);
+        }
+        if (!plane) {
+            dp->turning = 2;
+            return 0;
+        }
+        dp->turn_at = plane - 1;
+    }
+    return 1;
+}
+
 ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp)
 {
-    uint32_t layers = adaslice_dp_layers(dp), at = dp->plane, above = 0;
-    if (layers == ADASLICE__UNREACHED) return layers;
-    /* planes off the plan keep stale values: clear them so they read 0 */
-    {
-        uint32_t plane = dp->plane, next = dp->plane;
-        for (;;) {
-            uint32_t len = adaslice__dp_back(dp, plane);
-            if (plane == next) next = plane - len;
-            else adaslice__dp_set_back(dp, plane, 0);
-            if (!plane) break;
-            plane--;
-        }
-    }
-    while (at) {
-        uint32_t len = adaslice__dp_back(dp, at);
-        adaslice__dp_set_back(dp, at, above);
-        above = len;
-        at -= len;
-    }
-    adaslice__dp_set_back(dp, 0, above);
+    uint32_t layers = adaslice_dp_layers(dp);
+    while (adaslice_dp_reverse_some(dp, UINT32_MAX)) {}
     return layers;
 }
 

@@ -22,6 +22,14 @@ static void send(fw_state *fw, uint8_t type, const uint8_t *payload, size_t size
     if (n) fw->port.write(fw->port.ctx, frame, n);
 }
 
+/* The same for a payload built at frame + 3 (frame: LINK_FRAME_MAX bytes):
+   a long reply then takes one buffer of the stack, not two. */
+static void send_built(fw_state *fw, uint8_t *frame, uint8_t type, size_t size)
+{
+    size_t n = link_frame_build(frame, fw->expect, type, frame + 3, size);
+    if (n) fw->port.write(fw->port.ctx, frame, n);
+}
+
 /* nak: LINK_NAK | the round bit of the frame that showed the gap (PROTOCOL.md) */
 static void send_ack(fw_state *fw, int nak)
 {
@@ -182,28 +190,63 @@ static void profile_begin(fw_state *fw, const link_profile *m, uint8_t seq)
     fw->state = LINK_STATE_PLANNING;
 }
 
-static void profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
+/* A refused profile: no plan, and what arrives next is not pushed. */
+static void profile_refuse(fw_state *fw, uint8_t error, uint8_t seq)
 {
-    size_t i;
-    if (fw->state != LINK_STATE_PLANNING || fw->receiving != LINK_MSG_PROFILE_DATA) { fail(fw, LINK_ERR_BUSY, seq); return; }
-    for (i = 0; i < size; i++) {
+    fw->receiving = 0;
+    fw->state = LINK_STATE_IDLE;
+    fail(fw, error, seq);
+}
+
+/* One pass's share of a PROFILE_DATA frame (fw->decode_at): FW_PLAN_BINS
+   bins through the planner at most; once the profile's last bin is in and
+   the frame read to its end, FW_REVERSE_PLANES planes of the plan's
+   reversal a pass. A frame of a hundred bins is a few hundred thousand
+   cycles of planning on an 8-bit core: no pass may hold the steps up that
+   long. Returns 1 when the frame is done. */
+static int profile_work(fw_state *fw)
+{
+    uint32_t pushed = 0;
+    uint8_t seq = fw->decode_seq;
+    while (fw->decode_left && pushed < FW_PLAN_BINS) {
         uint32_t v = 0;
         int done;
-        if (adaslice_varint_push(&fw->varint, p[i], &done, &v) != ADASLICE_OK) break;
-        if (!done) continue;
-        if (fw->bins_in >= fw->bins) break;
-        adaslice_dp_push(&fw->dp, v >> 1, (v & 1u) && fw->bins_in + 1 < fw->bins);
-        if (++fw->bins_in == fw->bins) {
-            uint32_t k = adaslice_dp_reverse(&fw->dp);
-            fw->receiving = 0;
-            if (k == ADASLICE_UNREACHED) { fw->state = LINK_STATE_IDLE; fail(fw, LINK_ERR_INFEASIBLE, seq); return; }
-            fw->layers = k;
-            fw->plan_kind = 1;
-            fw->cursor_layer = 0;
-            fw->state = LINK_STATE_READY;
+        if (adaslice_varint_push(&fw->varint, *fw->decode_at, &done, &v) != ADASLICE_OK) {
+            profile_refuse(fw, LINK_ERR_PROFILE_DATA, seq);
+            return 1;
         }
+        fw->decode_at++;
+        fw->decode_left--;
+        if (!done) continue;
+        /* a number past the last bin: the profile is not what was announced */
+        if (fw->bins_in >= fw->bins) { profile_refuse(fw, LINK_ERR_PROFILE_DATA, seq); return 1; }
+        adaslice_dp_push(&fw->dp, v >> 1, (v & 1u) && fw->bins_in + 1 < fw->bins);
+        fw->bins_in++;
+        pushed++;
     }
-    if (i < size) { fw->receiving = 0; fw->state = LINK_STATE_IDLE; fail(fw, LINK_ERR_PROFILE_DATA, seq); }
+    if (fw->decode_left) return 0;
+    if (fw->bins_in < fw->bins) return 1; /* more frames to come */
+    if (adaslice_dp_layers(&fw->dp) == ADASLICE_UNREACHED) { profile_refuse(fw, LINK_ERR_INFEASIBLE, seq); return 1; }
+    /* the plan is read bottom-up: turn it around, a slice a pass (the pass
+       that pushed bins does not turn planes as well) */
+    if (pushed || adaslice_dp_reverse_some(&fw->dp, FW_REVERSE_PLANES)) return 0;
+    fw->receiving = 0;
+    fw->layers = adaslice_dp_layers(&fw->dp);
+    fw->plan_kind = 1;
+    fw->cursor_layer = 0;
+    fw->state = LINK_STATE_READY;
+    return 1;
+}
+
+/* Starts a PROFILE_DATA frame's work; 1 when it is done (refused) at once. */
+static int profile_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
+{
+    if (fw->state != LINK_STATE_PLANNING || fw->receiving != LINK_MSG_PROFILE_DATA) { fail(fw, LINK_ERR_BUSY, seq); return 1; }
+    fw->decode_at = p;
+    fw->decode_left = size;
+    fw->decode_seq = seq;
+    fw->decoding = LINK_MSG_PROFILE_DATA;
+    return 0;
 }
 
 static void plan_set(fw_state *fw, const link_plan_set *m, uint8_t seq)
@@ -241,7 +284,7 @@ static void plan_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 
 static void plan_get(fw_state *fw, const link_plan_get *m, uint8_t seq)
 {
-    uint8_t out[LINK_PAYLOAD_MAX];
+    uint8_t frame[LINK_FRAME_MAX], *out = frame + 3;
     uint32_t k;
     link_plan page;
     size_t n;
@@ -250,8 +293,8 @@ static void plan_get(fw_state *fw, const link_plan_get *m, uint8_t seq)
     page.layers = fw->layers;
     page.bin_nm = fw->bin_nm;
     n = link_put_plan(out, &page);
-    for (k = m->first; k >= 1 && k <= fw->layers && n < sizeof out; k++) out[n++] = (uint8_t)layer_length(fw, k);
-    send(fw, LINK_MSG_PLAN, out, n);
+    for (k = m->first; k >= 1 && k <= fw->layers && n < LINK_PAYLOAD_MAX; k++) out[n++] = (uint8_t)layer_length(fw, k);
+    send_built(fw, frame, LINK_MSG_PLAN, n);
 }
 
 /* -------------------------------------------------------------------- masks */
@@ -320,7 +363,9 @@ static int mask_decode(fw_state *fw)
     return 1;
 }
 
-/* Starts decoding a MASK_DATA frame; 1 when it is done at once. */
+/* Starts decoding a MASK_DATA frame (its rows come in the next passes of
+   fw_run, after the pass that received it); 1 when it is done (refused) at
+   once. */
 static int mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 {
     if (!fw->mask_layer) { fail(fw, LINK_ERR_MASK_ORDER, seq); return 1; }
@@ -329,8 +374,7 @@ static int mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
     fw->decode_at = p;
     fw->decode_left = size;
     fw->decode_seq = seq;
-    if (mask_decode(fw)) return 1;
-    fw->decoding = 1;
+    fw->decoding = LINK_MSG_MASK_DATA;
     return 0;
 }
 
@@ -537,7 +581,10 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
         if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || moving(fw)) fail(fw, LINK_ERR_BUSY, seq);
         else profile_begin(fw, &m.profile, seq);
         break;
-    case LINK_MSG_PROFILE_DATA: profile_data(fw, p, size, seq); break;
+    case LINK_MSG_PROFILE_DATA:
+        /* acknowledged once planned, in later passes */
+        if (!profile_data(fw, p, size, seq)) return;
+        break;
     case LINK_MSG_PLAN_SET:
         (void)link_get_plan_set(&m.plan_set, p, size);
         if (fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED || moving(fw)) fail(fw, LINK_ERR_BUSY, seq);
@@ -546,7 +593,7 @@ static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
     case LINK_MSG_PLAN_DATA: plan_data(fw, p, size, seq); break;
     case LINK_MSG_MASK: (void)link_get_mask(&m.mask, p, size); mask_begin(fw, &m.mask, seq); break;
     case LINK_MSG_MASK_DATA:
-        /* acknowledged once decoded, in a later pass if it is long */
+        /* acknowledged once decoded, in later passes */
         if (!mask_data(fw, p, size, seq)) return;
         break;
     case LINK_MSG_HOME:
@@ -653,6 +700,9 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
         size_t fixed = adaslice_dp_workspace(0, FW_MAX_LAYER_BINS, 0);
         fw->config.max_bins = workspace_size > fixed ? (uint32_t)(workspace_size - fixed) : 0;
     }
+    fw->link_timeout = FW_MS(fw, config->link_timeout_ms);
+    fw->binary_idle = FW_BINARY_IDLE * fw->link_timeout;
+    fw->watchdog_half = FW_MS(fw, config->watchdog_ms) / 2u;
     fw_axis_init(&fw->axis, &config->axis, config->tick_hz);
     fw->axis.start_lead = config->step_lead;
     fw->steps.budget = FW_STEP_FILL;
@@ -757,9 +807,9 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
 {
     uint64_t next = FW_NEVER;
     if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
-    fw->steps.budget = FW_STEP_FILL;
     fill_steps(fw, now);
-    if (fw->decoding && mask_decode(fw)) {
+    /* the held frame's next slice; the frame is acknowledged once done */
+    if (fw->decoding && (fw->decoding == LINK_MSG_MASK_DATA ? mask_decode(fw) : profile_work(fw))) {
         fw->decoding = 0;
         link_deframe_consume(&fw->deframer);
         send_ack(fw, 0);
@@ -773,7 +823,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         }
     }
     if (fw->state == LINK_STATE_PRINTING) {
-        if (now - fw->heard >= FW_MS(fw, fw->config.link_timeout_ms)) print_pause(fw, 1, now);
+        if (now - fw->heard >= fw->link_timeout) print_pause(fw, 1, now);
         else print_step(fw, now);
     }
     /* a manual exposure */
@@ -783,7 +833,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         fw->port.show(fw->port.ctx, -1, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&
-        now - fw->heard >= FW_BINARY_IDLE * FW_MS(fw, fw->config.link_timeout_ms))
+        now - fw->heard >= fw->binary_idle)
         fw->binary = 0;
     if (!fw->binary) {
         next = fw_gcode_run(&fw->gcode, now);
@@ -799,16 +849,18 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
        after fill_steps ran (homing queues one), so refill at once; waiting
        for the next step's own tick would find it past (STEP_LATE) */
     else if (fw_axis_busy(&fw->axis)) next = now;
-    if (fw->config.watchdog_ms) next = earliest(next, now + FW_MS(fw, fw->config.watchdog_ms) / 2u);
-    if (fw->decoding) next = now; /* the next rows, in the next pass */
+    if (fw->watchdog_half) next = earliest(next, now + fw->watchdog_half);
+    if (fw->decoding) next = now; /* the frame's next slice, in the next pass */
     if (fw->state == LINK_STATE_PRINTING) {
         if (fw->phase == LINK_PHASE_SETTLE || fw->phase == LINK_PHASE_EXPOSE) next = earliest(next, fw->phase_end);
         /* once the pause is asked for, the silence has done its work */
-        if (!fw->pause_wanted) next = earliest(next, fw->heard + FW_MS(fw, fw->config.link_timeout_ms));
+        if (!fw->pause_wanted) next = earliest(next, fw->heard + fw->link_timeout);
     } else if (fw->exposing) {
         next = earliest(next, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED)
-        next = earliest(next, fw->heard + FW_BINARY_IDLE * FW_MS(fw, fw->config.link_timeout_ms));
+        next = earliest(next, fw->heard + fw->binary_idle);
+    /* the next pass's steps: its fw_receive and its fw_run share them */
+    fw->steps.budget = FW_STEP_FILL;
     return next;
 }

@@ -51,11 +51,11 @@
 #ifndef FW_STEP_QUEUE
 #define FW_STEP_QUEUE 8u
 #endif
-/* At most this many steps are computed from one fw_run to the next (the
-   fills of fw_receive and fw_run share it), so that a loop pass does a
-   bounded amount of motion arithmetic; fw_run asks to be called again at
-   once (its deadline `now`) while the queue is short for want of it. The
-   default is the queue's length. */
+/* At most this many steps are computed in one pass of the loop (the fills
+   of its fw_receive and of the fw_run that ends it share them), so that a
+   pass does a bounded amount of motion arithmetic; fw_run asks to be called
+   again at once (its deadline `now`) while the queue is short for want of
+   it. The default is the queue's length. */
 #ifndef FW_STEP_FILL
 #define FW_STEP_FILL FW_STEP_QUEUE
 #endif
@@ -132,10 +132,21 @@ typedef struct fw_config {
 #define FW_EXPOSURE_MAX_MS 3600000u
 #define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
 
-/* Mask rows decoded in one pass of the loop: a pass stays short (a row's
-   CRC and copy) whatever a mask's code holds. */
+/* The work of a long frame goes on over passes of the loop (fw_run), the
+   frame held in the deframer and acknowledged once done, so that a pass
+   stays short whatever a frame holds. In one pass: mask rows decoded (a
+   row's CRC and copy; a repeat of a thousand rows takes a thousand
+   passes), profile bins pushed through the planner, and planes of the
+   plan's reversal once its last bin is in. A port whose passes must be
+   shorter than these make them sets its own. */
 #ifndef FW_DECODE_ROWS
 #define FW_DECODE_ROWS 1u
+#endif
+#ifndef FW_PLAN_BINS
+#define FW_PLAN_BINS 8u
+#endif
+#ifndef FW_REVERSE_PLANES
+#define FW_REVERSE_PLANES 64u
 #endif
 /* A display row at most this many bytes (1-bit: 8 pixels a byte). */
 #ifndef FW_ROW_BYTES
@@ -145,6 +156,10 @@ typedef struct fw_config {
 typedef struct fw_state {
     fw_config config;
     fw_port port;
+    /* the config's times in ticks, worked out once (on an 8-bit core a
+       64-bit division is thousands of cycles, and fw_run needs these on
+       every pass) */
+    uint64_t link_timeout, binary_idle, watchdog_half;
     fw_axis axis;
     fw_steps steps;
     /* link */
@@ -164,9 +179,10 @@ typedef struct fw_state {
     uint32_t cursor_layer, cursor_plane; /* reading the plan bottom-up */
     /* masks: decoded into display buffer (layer & 1) as they stream */
     adaslice_rle_decoder decoder;
-    const uint8_t *decode_at;  /* the MASK_DATA frame decoding across passes */
+    const uint8_t *decode_at;  /* the held frame's bytes still to work through */
     size_t decode_left;
-    uint8_t decode_seq, decoding;
+    uint8_t decode_seq;
+    uint8_t decoding;          /* the held frame's type (MASK_DATA, PROFILE_DATA), 0 none */
     uint8_t row[FW_ROW_BYTES];
     uint32_t mask_layer, mask_size, mask_got, mask_crc, mask_exposure_ms;
     uint32_t exposure_ms[2];   /* of the ready mask in each display buffer */
@@ -194,7 +210,8 @@ typedef struct fw_state {
 void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *plan_workspace, size_t workspace_size);
 /* Bytes from the host, in order, from the main loop (not an interrupt).
    Returns how many it took: it stops after a frame whose work goes on in
-   the next passes of fw_run (a long mask frame); offer the rest again. */
+   the next passes of fw_run (a mask or profile frame); offer the rest
+   again. */
 size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
 /* Does what is due at tick `now`; returns the tick of the next deadline. */
 uint64_t fw_run(fw_state *fw, uint64_t now);

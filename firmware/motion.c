@@ -57,6 +57,14 @@ static uint32_t floor_sqrt32(uint32_t x)
    than a full 64-bit one. */
 static uint64_t mul32(uint32_t a, uint32_t b) { return (uint64_t)a * b; }
 
+/* 32-bit division when both fit: the same quotient, a fraction of the
+   cycles of a 64-bit one on a small core (and on the Cortex-M3, UDIV). */
+static uint64_t div64(uint64_t x, uint64_t y)
+{
+    if (((x | y) >> 32) == 0) return (uint32_t)x / (uint32_t)y;
+    return x / y;
+}
+
 /* Above 2^32: the root of x's top 30 to 32 bits, shifted back, is within
    2^k of the root (k the half shift), one Newton step from below brings it
    within 2 above, and the squares settle it. Same result as one bit per
@@ -69,7 +77,7 @@ static uint64_t floor_sqrt(uint64_t x)
     while ((x >> (2u * k)) > 0xFFFFFFFFu) k++;
     s = (uint64_t)floor_sqrt32((uint32_t)(x >> (2u * k))) << k; /* s * s <= x, s < 2^32 */
     e = x - mul32((uint32_t)s, (uint32_t)s);
-    s += e / (2u * s);
+    s += div64(e, 2u * s); /* e is small: 32 bits as a rule */
     if (s > 0xFFFFFFFFu) s = 0xFFFFFFFFu;
     while (mul32((uint32_t)s, (uint32_t)s) > x) s--;
     return s;
@@ -84,14 +92,6 @@ static uint64_t ceil_sqrt(uint64_t x)
     return mul32((uint32_t)s, (uint32_t)s) < x ? s + 1 : s;
 }
 
-/* 32-bit division when both fit: the same quotient, a fraction of the
-   cycles of a 64-bit one on a small core (and on the Cortex-M3, UDIV). */
-static uint64_t div64(uint64_t x, uint64_t y)
-{
-    if (((x | y) >> 32) == 0) return (uint32_t)x / (uint32_t)y;
-    return x / y;
-}
-
 static uint64_t ceil_div(uint64_t x, uint64_t y)
 {
     if (x == 0) return 0; /* T^2 is often a multiple of accel: k_rem 0 */
@@ -102,21 +102,41 @@ static uint64_t ceil_div(uint64_t x, uint64_t y)
     return x / y + (x % y != 0);
 }
 
-/* The same, searched from `guess` when that is within a few ticks: the
-   result is still the least t with t * t >= x. Past a ramp's first few
-   dozen steps a step's tick is its extrapolation from the three before
-   give or take a few ticks, and checking that costs a few multiplications
-   where the root costs 30 rounds. */
+/* The same, searched from `guess`: the result is still the least t with
+   t * t >= x, whatever the guess. A step's tick is its extrapolation from
+   the three before give or take a few ticks past a ramp's first few dozen
+   steps; short ramps (an 8-bit core's, two dozen steps at its top speed)
+   miss by tens to hundreds. One Newton step from the guess, t - g being
+   about (x - g^2) / 2g, brings a miss within a tick or two, and the search
+   walks the squares by adding 2g + 1: one multiplication and at most one
+   32-bit division where the root costs 30 rounds. */
 static uint64_t ceil_sqrt_near(uint64_t x, uint64_t guess)
 {
     int tries;
     uint32_t g;
+    uint64_t sq, off;
     if (guess == 0 || guess >= 0xFFFFFFFFu) return ceil_sqrt(x);
     g = (uint32_t)guess;
+    sq = mul32(g, g);
+    off = sq < x ? x - sq : sq - x;
+    if (off > 8u * (uint64_t)g) { /* more than about 4 off */
+        uint64_t step;
+        if (off >> 32) return ceil_sqrt(x);
+        step = div64(off, 2u * (uint64_t)g); /* from above: < g / 2 */
+        if (sq < x && step >= 0xFFFFFFFFu - g) return ceil_sqrt(x);
+        g = sq < x ? g + (uint32_t)step : g - (uint32_t)step;
+        sq = mul32(g, g);
+    }
     for (tries = 0; tries < 4; tries++) {
-        if (mul32(g, g) < x) g++;
-        else if (mul32(g - 1u, g - 1u) >= x) g--;
-        else return g;
+        if (sq < x) { /* (g + 1)^2 */
+            sq += 2u * (uint64_t)g + 1u;
+            g++;
+        } else if (sq - 2u * (uint64_t)g + 1u >= x) { /* (g - 1)^2 >= x; g >= 1 here */
+            sq -= 2u * (uint64_t)g - 1u;
+            g--;
+        } else {
+            return g;
+        }
         if (g == 0 || g == 0xFFFFFFFFu) break;
     }
     return ceil_sqrt(x);
@@ -132,7 +152,7 @@ static uint64_t accel_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
     uint64_t twice = 2u * (uint64_t)j, quot, rem;
     if (((twice | axis->k_quot | axis->k_rem) >> 32) == 0) {
         quot = mul32((uint32_t)twice, (uint32_t)axis->k_quot);
-        rem = mul32((uint32_t)twice, (uint32_t)axis->k_rem);
+        rem = axis->k_rem ? mul32((uint32_t)twice, (uint32_t)axis->k_rem) : 0; /* 0 when a divides T^2 */
     } else {
         quot = twice * axis->k_quot;
         rem = twice * axis->k_rem;

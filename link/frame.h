@@ -15,7 +15,8 @@
 
 uint16_t link_crc16(const uint8_t *data, size_t size);
 /* Builds a frame into out (LINK_FRAME_MAX bytes); returns its length, 0 if the
-   payload is too long. */
+   payload is too long. The payload may be at out + 3 already (a reply built
+   in place, which saves a buffer on a small stack). */
 size_t link_frame_build(uint8_t *out, uint8_t seq, uint8_t type, const uint8_t *payload, size_t size);
 
 /* Reassembles frames from a byte stream. After a frame that fails its CRC or
@@ -28,6 +29,8 @@ typedef struct link_deframer {
     uint8_t buf[LINK_FRAME_MAX];
     uint16_t len;
     uint8_t hunting;     /* dropping bytes until a sync byte */
+    uint16_t crc;        /* the CRC of buf[0 .. checked), carried as bytes arrive */
+    uint16_t checked;
     uint32_t bad;        /* frames that failed their check */
 } link_deframer;
 

@@ -53,6 +53,7 @@
 #include <simavr/sim_cycle_timers.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
+#include <gelf.h>
 
 #define RAMSTART 0x200u
 #define RAMEND   0x21FFu
@@ -74,6 +75,7 @@ static const char USAGE[] =
     "  --max-seconds S    virtual time budget                          [600]\n"
     "  --timeout S        wall-clock budget                            [300]\n"
     "  --log-passes C     log the loop passes of C cycles or more      [none]\n"
+    "  --profile-passes C the same with the functions they spent their cycles in [none]\n"
     "  --hang-at-uv N     make the main loop hang when UV goes on the Nth time\n"
     "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n";
 
@@ -100,6 +102,95 @@ typedef struct run {
 } run;
 
 static run R;
+
+/* --profile-passes: each instruction's cycles go to the function its PC is
+   in (the image's symbol table), summed over a pass; a pass of at least C
+   cycles is logged with the functions that took most of it. */
+#define PROFILE_TOP 10
+typedef struct func { uint32_t addr, size; char name[48]; } func;
+static struct { func *f; size_t n; uint16_t *at; uint64_t *cycles, threshold; } P;
+
+static int by_addr(const void *a, const void *b)
+{
+    const func *x = (const func *)a, *y = (const func *)b;
+    return x->addr < y->addr ? -1 : x->addr > y->addr;
+}
+
+/* Functions (sized) and the global labels of assembly routines (libgcc's,
+   unsized: up to the next symbol) of the image's code. */
+static int load_functions(const char *path)
+{
+    int fd = open(path, O_RDONLY);
+    Elf *e;
+    Elf_Scn *scn = NULL;
+    size_t i, cap = 0, words = 0;
+    if (fd < 0 || elf_version(EV_CURRENT) == EV_NONE || !(e = elf_begin(fd, ELF_C_READ, NULL))) return 0;
+    while ((scn = elf_nextscn(e, scn)) != NULL) {
+        GElf_Shdr sh;
+        Elf_Data *d;
+        if (!gelf_getshdr(scn, &sh) || sh.sh_type != SHT_SYMTAB || !(d = elf_getdata(scn, NULL))) continue;
+        for (i = 0; i < sh.sh_size / sh.sh_entsize; i++) {
+            GElf_Sym sym;
+            GElf_Shdr in;
+            const char *name;
+            int type;
+            if (!gelf_getsym(d, (int)i, &sym) || !(name = elf_strptr(e, sh.sh_link, sym.st_name)) || !name[0]) continue;
+            type = GELF_ST_TYPE(sym.st_info);
+            if (sym.st_shndx == SHN_UNDEF || sym.st_shndx >= SHN_LORESERVE ||
+                !gelf_getshdr(elf_getscn(e, sym.st_shndx), &in) || !(in.sh_flags & SHF_EXECINSTR))
+                continue;
+            if (!(type == STT_FUNC && sym.st_size) && !(type == STT_NOTYPE && GELF_ST_BIND(sym.st_info) == STB_GLOBAL)) continue;
+            if (P.n == cap) {
+                cap = cap ? 2 * cap : 256;
+                if (!(P.f = (func *)realloc(P.f, (cap + 1) * sizeof *P.f))) return 0;
+            }
+            P.f[P.n].addr = (uint32_t)sym.st_value;
+            P.f[P.n].size = (uint32_t)sym.st_size;
+            snprintf(P.f[P.n].name, sizeof P.f[P.n].name, "%s", name);
+            if ((sym.st_value + sym.st_size) / 2 + 1 > words) words = (sym.st_value + sym.st_size) / 2 + 1;
+            P.n++;
+        }
+    }
+    elf_end(e);
+    close(fd);
+    if (!P.n || P.n >= 0xFFFF) return 0;
+    qsort(P.f, P.n, sizeof *P.f, by_addr);
+    snprintf(P.f[P.n].name, sizeof P.f[P.n].name, "(other)");
+    words += 64; /* an unsized routine at the end */
+    P.at = (uint16_t *)malloc(words * sizeof *P.at);
+    P.cycles = (uint64_t *)calloc(P.n + 1, sizeof *P.cycles);
+    if (!P.at || !P.cycles) return 0;
+    for (i = 0; i < words; i++) P.at[i] = (uint16_t)P.n;
+    /* each symbol up to the next, then the sized functions over them */
+    for (i = 0; i < P.n; i++) {
+        uint32_t w, end = i + 1 < P.n ? P.f[i + 1].addr / 2 : (uint32_t)words;
+        for (w = P.f[i].addr / 2; w < end && w < words; w++) P.at[w] = (uint16_t)i;
+    }
+    for (i = 0; i < P.n; i++) {
+        uint32_t w;
+        for (w = P.f[i].addr / 2; w < (P.f[i].addr + P.f[i].size) / 2; w++) P.at[w] = (uint16_t)i;
+    }
+    P.f[P.n].addr = (uint32_t)words; /* the table's end */
+    return 1;
+}
+
+static void profile_pass(uint64_t begin, uint64_t took)
+{
+    size_t i, k;
+    if (took >= P.threshold && R.log) {
+        fprintf(R.log, "%llu pass %llu%s:", (unsigned long long)begin, (unsigned long long)took, R.pass_moving ? " moving" : "");
+        for (k = 0; k < PROFILE_TOP; k++) {
+            size_t best = P.n + 1;
+            for (i = 0; i <= P.n; i++)
+                if (P.cycles[i] && (best > P.n || P.cycles[i] > P.cycles[best])) best = i;
+            if (best > P.n) break;
+            fprintf(R.log, " %s %llu", P.f[best].name, (unsigned long long)P.cycles[best]);
+            P.cycles[best] = 0;
+        }
+        fputc('\n', R.log);
+    }
+    memset(P.cycles, 0, (P.n + 1) * sizeof *P.cycles);
+}
 
 static void log_event(const char *event)
 {
@@ -179,7 +270,8 @@ static void end_pass(uint64_t end)
     uint64_t took = end - R.pass_begin;
     if (took > R.worst_pass) R.worst_pass = took;
     if (R.pass_moving && took > R.worst_moving) R.worst_moving = took;
-    if (R.log_passes && took >= R.log_passes && R.log)
+    if (P.cycles) profile_pass(R.pass_begin, took);
+    else if (R.log_passes && took >= R.log_passes && R.log)
         fprintf(R.log, "%llu pass %llu\n", (unsigned long long)R.pass_begin, (unsigned long long)took);
 }
 
@@ -255,8 +347,9 @@ static void on_xoff(struct avr_irq_t *irq, uint32_t value, void *param) { (void)
    event (a step's compare was served 4 ms late). */
 static void run_one(avr_t *avr)
 {
-    avr_flashaddr_t new_pc = avr->pc;
+    avr_flashaddr_t new_pc = avr->pc, pc = avr->pc;
     avr_cycle_count_t sleep;
+    uint64_t c0 = avr->cycle;
     if (avr->state == cpu_Running) new_pc = avr_run_one(avr);
     sleep = avr_cycle_timer_process(avr);
     avr->pc = new_pc;
@@ -269,6 +362,7 @@ static void run_one(avr_t *avr)
         avr->cycle += 1;
     }
     if (avr->state == cpu_Running || avr->state == cpu_Sleeping) avr_service_interrupts(avr);
+    if (P.cycles && R.in_pass) P.cycles[pc / 2 < P.f[P.n].addr ? P.at[pc / 2] : P.n] += avr->cycle - c0;
 }
 
 static double wall_now(void)
@@ -347,11 +441,13 @@ int main(int argc, char **argv)
         else if (!strcmp(o, "--timeout")) timeout = atof(argv[++i]);
         else if (!strcmp(o, "--hang-at-uv")) R.hang_at_uv = strtoul(argv[++i], NULL, 10);
         else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
+        else if (!strcmp(o, "--profile-passes")) P.threshold = strtoull(argv[++i], NULL, 10);
         else { fprintf(stderr, "avr-run: unknown option %s\n%s", o, USAGE); return 2; }
     }
     if (!elf) { fputs(USAGE, stderr); return 2; }
     memset(&fw, 0, sizeof fw);
     if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "avr-run: cannot read %s\n", elf); return 2; }
+    if (P.threshold && !load_functions(elf)) { fprintf(stderr, "avr-run: no function symbols in %s\n", elf); return 2; }
     R.avr = avr_make_mcu_by_name("atmega2560");
     if (!R.avr || avr_init(R.avr) != 0) { fprintf(stderr, "avr-run: simavr has no atmega2560\n"); return 2; }
     fw.frequency = BOARD_CPU_HZ;

@@ -85,6 +85,8 @@
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 2u /* homing at the switch: the brake and the step after it in one pass */
+#define FW_PLAN_BINS 2u
+#define FW_REVERSE_PLANES 32u
 
 /* Test hooks the simavr harness watches (one OUT instruction each): the
    general purpose I/O registers, never read by the firmware. */
