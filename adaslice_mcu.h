@@ -136,10 +136,10 @@ typedef struct adaslice_dp { /* its fields are private */
     unsigned char *back;      /* (planes + 1) * width bytes */
     uint32_t width;           /* bytes per back-pointer: 1 while hi <= 255, else 2 */
     /* the reversal, which goes top-down a plane at a time */
-    int turning;              /* 0 not begun, 1 under way, 2 done */
     uint32_t turn_at;         /* the next plane it visits */
     uint32_t turn_next;       /* the next plane of the plan below it */
-    uint32_t turn_above;      /* the bins of the plan's layer above turn_next */
+    uint16_t turn_above;      /* the bins of the plan's layer above turn_next */
+    unsigned char turning;    /* 0 not begun, 1 under way, 2 done */
 } adaslice_dp;
 
 /* Bytes of workspace for `bins` bins with layers of at most bins_max bins. */
@@ -495,7 +495,7 @@ ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget)
         uint32_t plane = dp->turn_at, len = adaslice__dp_back(dp, plane);
         if (plane == dp->turn_next) {
             adaslice__dp_set_back(dp, plane, dp->turn_above);
-            dp->turn_above = len;
+            dp->turn_above = (uint16_t)len; /* a layer is at most bins_max <= 65535 bins */
             dp->turn_next = plane - len;
         } else {
             adaslice__dp_set_back(dp, plane, 0);

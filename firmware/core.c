@@ -39,12 +39,17 @@ static void send_ack(fw_state *fw, int nak)
     send(fw, LINK_MSG_ACK, p, link_put_ack(p, &m));
 }
 
+/* Z in nm, rounded to nearest (half away from 0), in whole steps per mm and
+   the rest apart: 32-bit divisions, as every STATUS asks for it and a
+   64-bit one is thousands of cycles on an 8-bit core. */
 static int32_t z_nm(const fw_state *fw)
 {
-    int64_t steps = fw->axis.position;
-    int64_t per_mm = fw->config.axis.steps_per_mm;
-    int64_t nm = steps * 1000000 + (steps >= 0 ? per_mm / 2 : -per_mm / 2);
-    return (int32_t)(nm / per_mm);
+    int32_t steps = fw->axis.position;
+    uint32_t per_mm = fw->config.axis.steps_per_mm;
+    uint32_t a = steps < 0 ? 0u - (uint32_t)steps : (uint32_t)steps, q = a / per_mm, r = a % per_mm;
+    uint64_t part = (uint64_t)r * 1000000u + per_mm / 2u;
+    uint64_t nm = (uint64_t)q * 1000000u + (part >> 32 ? part / per_mm : (uint32_t)part / per_mm);
+    return (int32_t)(steps < 0 ? 0u - (uint32_t)nm : (uint32_t)nm);
 }
 
 static void send_identify(fw_state *fw)
@@ -73,6 +78,7 @@ static void send_identify(fw_state *fw)
 static uint32_t exposure_left_ms(const fw_state *fw)
 {
     uint64_t hz = fw->config.tick_hz;
+    if (!fw->exposure_left) return 0; /* as a rule: no 64-bit division for it */
     return (uint32_t)((fw->exposure_left * 1000u + hz - 1u) / hz);
 }
 
@@ -337,15 +343,15 @@ static void mask_begin(fw_state *fw, const link_mask *m, uint8_t seq)
     else if (!m->exposure_ms || m->exposure_ms > FW_EXPOSURE_MAX_MS) mask_refuse(fw, LINK_ERR_MASK_EXPOSURE, seq);
 }
 
-/* One pass's share of the MASK_DATA frame being decoded: FW_DECODE_ROWS
-   rows at most (each a row's CRC and its copy to the display), so that no
-   pass of the loop runs long, whatever the code holds: a repeat of a
-   thousand rows takes a thousand passes. Returns 1 when the frame is done. */
+/* One pass's share of the MASK_DATA frame being decoded: FW_DECODE_BYTES
+   of code and FW_DECODE_ROWS rows at most (each a row's CRC and its copy
+   to the display), so that no pass of the loop runs long, whatever the
+   code holds: a row of many runs takes several passes, a repeat of a
+   thousand rows a thousand. Returns 1 when the frame is done. */
 static int mask_decode(fw_state *fw)
 {
-    size_t used;
-    if (adaslice_rle_decode_rows(&fw->decoder, fw->decode_at, fw->decode_left, FW_DECODE_ROWS, &used, mask_row, fw) !=
-        ADASLICE_OK) {
+    size_t used, bytes = fw->decode_left < FW_DECODE_BYTES ? fw->decode_left : FW_DECODE_BYTES;
+    if (adaslice_rle_decode_rows(&fw->decoder, fw->decode_at, bytes, FW_DECODE_ROWS, &used, mask_row, fw) != ADASLICE_OK) {
         mask_refuse(fw, LINK_ERR_MASK_CODE, fw->decode_seq);
         return 1;
     }
@@ -389,14 +395,19 @@ static void uv(fw_state *fw, int on, uint64_t when, uint64_t until)
 
 static uint32_t um_s_to_steps(const fw_state *fw, uint32_t um_s)
 {
-    uint64_t s = (uint64_t)um_s * fw->config.axis.steps_per_mm / 1000u;
+    uint64_t p = (uint64_t)um_s * fw->config.axis.steps_per_mm, s;
+    /* 32 bits when it fits: a 64-bit division is thousands of cycles on an 8-bit core */
+    s = p >> 32 ? p / 1000u : (uint32_t)p / 1000u;
     return s > 0xffffffffu ? 0xffffffffu : (uint32_t)s;
 }
 
-/* Moves to the top of the current layer (plus `extra_nm`). */
-static void move_layer(fw_state *fw, uint32_t extra_nm, uint32_t speed_um_s, uint64_t now)
+/* Moves to the top of the current layer (plus `extra_nm`) at `speed` steps/s.
+   The move's first step, which shapes its trapezoid, is the next pass's
+   work: this one has had the layer's (its height, the phase's bookkeeping). */
+static void move_layer(fw_state *fw, uint32_t extra_nm, uint32_t speed, uint64_t now)
 {
-    (void)fw_axis_move_to(&fw->axis, steps_of_plane(fw, fw->top_plane, extra_nm), um_s_to_steps(fw, speed_um_s), now);
+    (void)fw_axis_move_to(&fw->axis, steps_of_plane(fw, fw->top_plane, extra_nm), speed, now);
+    fw->steps.budget = 0;
 }
 
 static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t now)
@@ -410,16 +421,16 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
     if (!fw->axis.homed) { fail(fw, LINK_ERR_NOT_HOMED, seq); return; }
     if (first < 1 || first > fw->layers) { fail(fw, LINK_ERR_MESSAGE, seq); return; }
     fw->peel_nm = m->peel_nm;
-    fw->peel_speed = m->peel_speed_um_s;
-    fw->return_speed = m->return_speed_um_s;
+    fw->peel_speed = um_s_to_steps(fw, m->peel_speed_um_s);
+    fw->return_speed = um_s_to_steps(fw, m->return_speed_um_s);
     fw->settle_ms = m->settle_ms;
     fw->job = m->job;
     fw->exposed = first - 1;
     fw->layer = first;
     fw->top_plane = layer_bottom(fw, first) + layer_length(fw, first);
-    if (steps_of_plane(fw, fw->top_plane, 0) > fw->config.axis.max_steps ||
-        steps_of_plane(fw, layer_bottom(fw, fw->layers) + layer_length(fw, fw->layers), fw->peel_nm) >
-            fw->config.axis.max_steps) {
+    /* the highest the print goes: the plan's top (its last bin, no walk
+       through the plan) and a peel; every layer's top is below it */
+    if (steps_of_plane(fw, fw->bins, fw->peel_nm) > fw->config.axis.max_steps) {
         fail(fw, LINK_ERR_LIMIT, seq);
         return;
     }
@@ -548,7 +559,16 @@ static int can_move(const fw_state *fw)
     return fw->state == LINK_STATE_IDLE || fw->state == LINK_STATE_READY || fw->state == LINK_STATE_DONE || fw->state == LINK_STATE_PAUSED;
 }
 
-static void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
+/* Kept out of fw_receive: a compiler inlines a function called once, and
+   with it its locals, which would then sit under every G-code byte's call
+   into the G-code reader, the deepest the stack goes (on the AVR, 180 of
+   its 8 KiB). */
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 {
     uint8_t seq = f[1], type = (uint8_t)(f[2] & ~LINK_ROUND_BIT), round = f[2] & LINK_ROUND_BIT;
     const uint8_t *p = f + 3;
@@ -718,19 +738,30 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
 
 size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
 {
-    size_t i;
-    for (i = 0; i < size && !fw->decoding; i++) {
-        size_t n;
-        if (!fw->binary) { gcode_byte(fw, data[i], now); fill_steps(fw, now); }
-        link_deframe_push(&fw->deframer, data[i]);
-        while (!fw->decoding && (n = link_deframe_next(&fw->deframer)) != 0) {
-            on_frame(fw, fw->deframer.buf, n, now);
-            /* a frame still decoding keeps the deframer's buffer */
-            if (!fw->decoding) link_deframe_consume(&fw->deframer);
-            /* a move just asked for starts one step lead from `now` */
-            fill_steps(fw, now);
+    link_deframer *d = &fw->deframer;
+    size_t i = 0, n = 0;
+    int gcode = !fw->binary, line = 0; /* only a frame (below) changes `binary` */
+    if (fw->decoding) return 0;
+    /* Up to the byte that ends a frame or a G-code line: either's work is
+       its pass's share, and the steps (a move it started has its first
+       step a step lead on, far beyond a pass) come in the next. */
+    while (i < size && !n && !line) {
+        uint8_t c = data[i++];
+        if (gcode) {
+            gcode_byte(fw, c, now);
+            line = c == '\n' || c == '\r';
         }
+        if (link_deframe_push(d, c)) n = link_deframe_next(d);
     }
+    if (line) fw->steps.budget = 0;
+    if (!n) return i;
+    /* more than one only when a damaged frame left good ones buffered */
+    do {
+        on_frame(fw, fw->deframer.buf, n, now);
+        if (fw->decoding) break; /* it keeps the deframer's buffer */
+        link_deframe_consume(&fw->deframer);
+    } while ((n = link_deframe_next(&fw->deframer)) != 0);
+    fw->steps.budget = 0;
     return i;
 }
 
@@ -767,10 +798,12 @@ static int fill(fw_state *fw, uint64_t now)
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir;
         if (!q->budget) { q->short_by = 1; return 1; }
-        q->budget--;
         if (fw_axis_next(&fw->axis) < now) return 0;
         dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
+        /* no step (homing braking at the switch): the step after it is
+           computed in the same pass, so it is never late for a pass */
         if (!dir) continue;
+        q->budget--;
         q->tick[at] = fw->axis.last;
         q->dir[at] = (int8_t)dir;
         q->head = (uint8_t)(q->head + 1u);
@@ -808,12 +841,6 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     uint64_t next = FW_NEVER;
     if (fw->port.watchdog) fw->port.watchdog(fw->port.ctx);
     fill_steps(fw, now);
-    /* the held frame's next slice; the frame is acknowledged once done */
-    if (fw->decoding && (fw->decoding == LINK_MSG_MASK_DATA ? mask_decode(fw) : profile_work(fw))) {
-        fw->decoding = 0;
-        link_deframe_consume(&fw->deframer);
-        send_ack(fw, 0);
-    }
     if (!moving(fw)) {
         if (fw->state == LINK_STATE_HOMING) {
             fw->state = resting(fw);
@@ -822,9 +849,25 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
             fw->state = resting(fw);
         }
     }
+    /* One piece of work a pass, after the steps: on an 8-bit core a frame,
+       a ramp step, a move's start and a slice of a held frame are each a
+       good part of a step interval. The pass that received a frame (its
+       budget spent) or computed a step leaves the print's next phase and
+       the next slice to the next pass; steps leave no faster than one an
+       interval, so a full queue leaves passes for them. */
     if (fw->state == LINK_STATE_PRINTING) {
         if (now - fw->heard >= fw->link_timeout) print_pause(fw, 1, now);
-        else print_step(fw, now);
+        else if (fw->steps.budget == FW_STEP_FILL) print_step(fw, now); /* a move it starts spends the budget */
+        else next = now;
+    }
+    /* the held frame's next slice; the frame is acknowledged once done */
+    if (fw->decoding && fw->steps.budget == FW_STEP_FILL) {
+        fw->steps.budget = 0; /* the slice is this pass's work: steps in the next */
+        if (fw->decoding == LINK_MSG_MASK_DATA ? mask_decode(fw) : profile_work(fw)) {
+            fw->decoding = 0;
+            link_deframe_consume(&fw->deframer);
+            send_ack(fw, 0);
+        }
     }
     /* a manual exposure */
     if (fw->exposing && now >= fw->phase_end) {

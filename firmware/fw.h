@@ -134,13 +134,16 @@ typedef struct fw_config {
 
 /* The work of a long frame goes on over passes of the loop (fw_run), the
    frame held in the deframer and acknowledged once done, so that a pass
-   stays short whatever a frame holds. In one pass: mask rows decoded (a
-   row's CRC and copy; a repeat of a thousand rows takes a thousand
-   passes), profile bins pushed through the planner, and planes of the
-   plan's reversal once its last bin is in. A port whose passes must be
-   shorter than these make them sets its own. */
+   stays short whatever a frame holds. In one pass: mask code bytes
+   decoded and rows finished (a row's CRC and copy; a repeat of a thousand
+   rows takes a thousand passes), profile bins pushed through the planner,
+   and planes of the plan's reversal once its last bin is in. A port whose
+   passes must be shorter than these make them sets its own. */
 #ifndef FW_DECODE_ROWS
 #define FW_DECODE_ROWS 1u
+#endif
+#ifndef FW_DECODE_BYTES
+#define FW_DECODE_BYTES 64u
 #endif
 #ifndef FW_PLAN_BINS
 #define FW_PLAN_BINS 8u
@@ -192,7 +195,8 @@ typedef struct fw_state {
     uint8_t state, phase, error, error_seq, pause_wanted, paused_by_link;
     uint32_t layer;            /* the layer being printed (1-based), 0 before */
     uint32_t top_plane;        /* its top, in bins */
-    uint32_t peel_nm, peel_speed, return_speed, settle_ms;
+    uint32_t peel_nm, settle_ms;
+    uint32_t peel_speed, return_speed; /* steps/s */
     uint64_t phase_end;        /* tick when a timed phase ends */
     uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
     uint32_t exposed;          /* the last layer whose exposure ended, 0 none */

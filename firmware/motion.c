@@ -188,17 +188,26 @@ static uint64_t next_ticks(const fw_axis *axis, uint64_t latest)
 }
 
 /* The trapezoid's constants for cruising at `interval` ticks per step. */
+static uint32_t ramp_of(const fw_axis *axis, uint64_t interval)
+{
+    return (uint32_t)div64(div64(axis->half_k, interval), interval);
+}
+
 static void shape(fw_axis *axis, uint64_t interval)
 {
-    uint32_t distance = axis->steps - 1;
+    uint32_t distance = axis->steps - 1, ramp = ramp_of(axis, interval);
     if (distance > 0) {
-        /* the smallest interval whose ramps fit: half_k / c^2 < m + 1 */
+        /* ramps that do not fit (ramp > m, i.e. half_k / c^2 >= m + 1):
+           the smallest interval whose ramps fit. Tested on the ramp, so a
+           move long enough to reach its speed takes no root */
         uint32_t m = (distance - 1) / 2;
-        uint64_t fit = ceil_sqrt(div64(axis->half_k, (uint64_t)m + 1) + 1);
-        if (interval < fit) interval = fit;
+        if (ramp > m) {
+            interval = ceil_sqrt(div64(axis->half_k, (uint64_t)m + 1) + 1);
+            ramp = ramp_of(axis, interval);
+        }
     }
     axis->interval = (uint32_t)interval;
-    axis->ramp = (uint32_t)div64(div64(axis->half_k, interval), interval);
+    axis->ramp = ramp;
     axis->offset = ceil_div(axis->half_k_up, interval);
     axis->end = (uint64_t)distance * interval + 2u * axis->offset;
 }
@@ -219,12 +228,16 @@ static uint64_t earliest(const fw_axis *axis, uint64_t now)
     return now;
 }
 
+/* The first step is at the start, whatever the trapezoid: it is shaped
+   when that step is taken (take_step), so starting a move costs no
+   division, and a caller that budgets the steps it computes in a pass
+   budgets the shaping with them. `interval` waits in axis->interval. */
 static void begin_move(fw_axis *axis, int dir, uint32_t steps, uint64_t interval, uint64_t now)
 {
     axis->dir = dir;
     axis->steps = steps;
     axis->done = 0;
-    shape(axis, interval);
+    axis->interval = (uint32_t)interval;
     axis->start = earliest(axis, now);
     axis->next = axis->start;
 }
@@ -262,6 +275,7 @@ static void move_over(fw_axis *axis)
 static int take_step(fw_axis *axis)
 {
     int dir = axis->dir;
+    if (axis->done == 0) shape(axis, axis->interval);
     axis->position += dir;
     axis->last = axis->next;
     axis->stepped = 1;
@@ -492,11 +506,17 @@ int fw_axis_step(fw_axis *axis, int endstop)
 
 int32_t fw_axis_steps_of_nm(const fw_axis *axis, uint64_t nm)
 {
-    uint64_t per_mm = axis->config.steps_per_mm;
-    uint64_t mm = nm / 1000000u, rest = nm % 1000000u, steps;
+    uint64_t per_mm = axis->config.steps_per_mm, mm, rest, whole, steps;
+    /* in 32 bits when nm fits, as heights do (4 m): on an 8-bit core a
+       64-bit division is thousands of cycles */
+    if (nm >> 32) { mm = nm / 1000000u; rest = nm % 1000000u; }
+    else { mm = (uint32_t)nm / 1000000u; rest = (uint32_t)nm % 1000000u; }
+    if (per_mm == 0) return 0;
     /* whole millimetres exactly, then the rest rounded: rest * per_mm
        < 10^6 * 2^32 fits */
-    if (per_mm != 0 && mm > (uint64_t)INT32_MAX / per_mm) return INT32_MAX;
-    steps = mm * per_mm + (rest * per_mm + 500000u) / 1000000u;
+    if (mm >> 32) return INT32_MAX;
+    whole = mul32((uint32_t)mm, (uint32_t)per_mm);
+    if (whole > (uint64_t)INT32_MAX) return INT32_MAX;
+    steps = whole + div64(rest * per_mm + 500000u, 1000000u);
     return steps > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)steps;
 }

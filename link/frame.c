@@ -57,11 +57,16 @@ static void crc_upto(link_deframer *d, size_t upto)
     while (d->checked < upto) d->crc = crc16_byte(d->crc, d->buf[d->checked++]);
 }
 
-void link_deframe_push(link_deframer *d, uint8_t byte)
+/* A frame still arriving, its LEN and type checked when they came (next()
+   after each byte): nothing for next() to decide, as on most bytes. */
+static int arriving(const link_deframer *d) { return !d->hunting && d->len > 3 && d->len < d->buf[0]; }
+
+int link_deframe_push(link_deframer *d, uint8_t byte)
 {
     /* next() never lets a full buffer stand, so there is always room */
     if (d->len < LINK_FRAME_MAX) d->buf[d->len++] = byte;
     if (!d->hunting && d->buf[0] >= LINK_FRAME_MIN) crc_upto(d, d->buf[0] - 3u);
+    return !arriving(d);
 }
 
 static void drop(link_deframer *d, size_t n)
@@ -74,9 +79,7 @@ static void drop(link_deframer *d, size_t n)
 
 size_t link_deframe_next(link_deframer *d)
 {
-    /* a frame still arriving, its LEN and type checked when they came (the
-       call after each byte): nothing to decide, as on most bytes */
-    if (!d->hunting && d->len > 3 && d->len < d->buf[0]) return 0;
+    if (arriving(d)) return 0;
     for (;;) {
         size_t n;
         if (!d->len) return 0;

@@ -26,18 +26,22 @@ typedef struct link_deframer {
     /* the message types this end takes (NULL: any): a frame of another type
        is damage, dropped at once rather than after LEN bytes */
     int (*accept)(uint8_t type);
-    uint8_t buf[LINK_FRAME_MAX];
+    /* the small fields before the buffer: an 8-bit core reaches them by a
+       short displacement, as it does on every byte */
     uint16_t len;
     uint8_t hunting;     /* dropping bytes until a sync byte */
     uint16_t crc;        /* the CRC of buf[0 .. checked), carried as bytes arrive */
-    uint16_t checked;
+    uint8_t checked;
     uint32_t bad;        /* frames that failed their check */
+    uint8_t buf[LINK_FRAME_MAX];
 } link_deframer;
 
 /* accept: link_host_to_mcu_type or link_mcu_to_host_type (link/messages.h) */
 void link_deframer_init(link_deframer *d, int (*accept)(uint8_t type));
-/* Appends a byte; then call link_deframe_next until it returns 0. */
-void link_deframe_push(link_deframer *d, uint8_t byte);
+/* Appends a byte; then call link_deframe_next until it returns 0. Returns
+   0 when that would return 0 at once (a frame still arriving, most bytes),
+   so a small core may skip the call. */
+int link_deframe_push(link_deframer *d, uint8_t byte);
 /* The length of a good frame at d->buf, or 0 when none is complete; the
    caller handles it and calls link_deframe_consume. */
 size_t link_deframe_next(link_deframer *d);

@@ -5,7 +5,7 @@
 /* Bytes handed to the core at a time: between chunks the loop looks at the
    clock, so a long burst from the host delays a due step by at most the
    core's work on this many bytes. */
-#define CHUNK 64u
+#define CHUNK 32u
 
 #ifdef CM3_TRACE
 uint64_t cm3_worst_pass;        /* ticks of the longest pass's work (idle left out) */

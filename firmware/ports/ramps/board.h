@@ -84,7 +84,8 @@
    tests assert under half of that). 16 x 9 bytes of SRAM. */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
-#define FW_STEP_FILL 2u /* homing at the switch: the brake and the step after it in one pass */
+#define FW_STEP_FILL 1u
+#define FW_DECODE_BYTES 8u
 #define FW_PLAN_BINS 2u
 #define FW_REVERSE_PLANES 32u
 

@@ -14,10 +14,11 @@
 
 /* Bytes handed to the core per pass; between passes the loop runs the
    core's timed work (and fw_run refreshes the watchdog). Each costs the
-   deframer and the frame's CRC about 200 cycles, so 16 keep a pass's share
-   near 3,000 of the 16,000 a step may take; the line brings one byte in
-   1,389 cycles, so the loop still drains the ring far faster than it fills. */
-#define CHUNK 16u
+   deframer and its CRC about 250 cycles (make bench: avr-run
+   --profile-passes), so 8 keep a pass's share near 2,000 of the 16,000 a
+   step may take at the top speed; the line brings a byte every 1,389
+   cycles, so the loop still drains the ring faster than it fills. */
+#define CHUNK 8u
 
 static fw_state fw;
 static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];

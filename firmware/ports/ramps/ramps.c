@@ -325,20 +325,23 @@ void board_rx_consume(size_t n)
     sei();
 }
 
+/* The room is read once: the interrupt only makes more. What does not fit
+   is counted and dropped. */
 void board_write(const uint8_t *data, size_t size)
 {
-    size_t i;
-    for (i = 0; i < size; i++) {
-        uint16_t head = tx_head;
-        cli();
-        if ((uint16_t)(head - tx_tail) == BOARD_TX_SIZE) { tx_lost++; sei(); continue; }
-        sei();
-        tx_buf[head % BOARD_TX_SIZE] = data[i];
-        cli();
-        tx_head = (uint16_t)(head + 1u);
-        UCSR0B |= _BV(UDRIE0);
-        sei();
+    uint16_t head = tx_head, room, i;
+    cli();
+    room = (uint16_t)(BOARD_TX_SIZE - (uint16_t)(head - tx_tail));
+    sei();
+    if (size > room) {
+        tx_lost = (uint16_t)(tx_lost + (size - room));
+        size = room;
     }
+    for (i = 0; i < size; i++) tx_buf[(uint16_t)(head + i) % BOARD_TX_SIZE] = data[i];
+    cli();
+    tx_head = (uint16_t)(head + size);
+    if (size) UCSR0B |= _BV(UDRIE0);
+    sei();
 }
 
 uint16_t board_rx_lost(void) { uint16_t n; cli(); n = rx_lost; sei(); return n; }
