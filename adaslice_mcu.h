@@ -485,18 +485,23 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t pl
    it reads 0. */
 ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget)
 {
+    uint32_t plane, next, above;
     if (dp->turning == 2 || adaslice_dp_layers(dp) == ADASLICE__UNREACHED) return 0;
+    if (!budget) return 1;
     if (!dp->turning) {
         dp->turning = 1;
         dp->turn_at = dp->turn_next = dp->plane;
         dp->turn_above = 0;
     }
-    for (; budget; budget--) {
-        uint32_t plane = dp->turn_at, len = adaslice__dp_back(dp, plane);
-        if (plane == dp->turn_next) {
-            adaslice__dp_set_back(dp, plane, dp->turn_above);
-            dp->turn_above = (uint16_t)len; /* a layer is at most bins_max <= 65535 bins */
-            dp->turn_next = plane - len;
+    plane = dp->turn_at;
+    next = dp->turn_next;
+    above = dp->turn_above;
+    for (;;) {
+        uint32_t len = adaslice__dp_back(dp, plane);
+        if (plane == next) {
+            adaslice__dp_set_back(dp, plane, above);
+            above = len;
+            next = plane - len;
         } else {
             adaslice__dp_set_back(dp, plane, 0);
         }
@@ -504,8 +509,12 @@ ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget)
             dp->turning = 2;
             return 0;
         }
-        dp->turn_at = plane - 1;
+        plane--;
+        if (!--budget) break;
     }
+    dp->turn_at = plane;
+    dp->turn_next = next;
+    dp->turn_above = (uint16_t)above; /* a layer is at most bins_max <= 65535 bins */
     return 1;
 }
 

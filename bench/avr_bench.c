@@ -10,6 +10,7 @@
        a 10 mm move at 10 mm/s and at the board's top speed, with the
        board's acceleration (the accelerating and decelerating ramps and the
        cruise apart), the worst of a halt (brake), and of homing's approach;
+     - adaslice_crc32 over a 2560-pixel 1-bit row (320 bytes);
      - the planner: adaslice_dp_init / push / reverse over
        bench/mcu_profile.h's profile cut to AVR_BENCH_BINS bins (the board's
        BOARD_MAX_BINS), cycles per bin, and the plan's hash for the host to
@@ -103,11 +104,14 @@ static void move(uint32_t max_speed, stat *ramp, stat *cruise)
 }
 static uint64_t workspace[(FW_PLAN_WORKSPACE(AVR_BENCH_BINS) + 7u) / 8u];
 static adaslice_dp dp;
+/* a row of the 2560-pixel display the shipped image drives: its CRC is
+   what a pass of mask decoding cannot split */
+static uint8_t row[2560u / 8u];
 
 int main(void)
 {
     stat ramp10 = {0, 0, 0}, cruise10 = {0, 0, 0}, ramp = {0, 0, 0}, cruise = {0, 0, 0}, halt = {0, 0, 0}, home = {0, 0, 0};
-    uint32_t t0, hash = 0, i, init, push = 0, reverse, layers, plane, k;
+    uint32_t t0, hash = 0, i, init, push = 0, reverse, layers, plane, k, row_crc, row_crc32;
     mcu_gen g;
     int forced;
     UBRR0 = (uint16_t)(BOARD_CPU_HZ / 8u / BOARD_BAUD - 1u);
@@ -154,6 +158,12 @@ int main(void)
         }
     }
 
+    /* a mask row's CRC */
+    for (i = 0; i < sizeof row; i++) row[i] = (uint8_t)(i * 37u);
+    t0 = cycles();
+    row_crc32 = adaslice_crc32(0, row, sizeof row);
+    row_crc = cycles() - t0 - overhead;
+
     /* the planner */
     t0 = cycles();
     if (adaslice_dp_init(&dp, workspace, FW_PLAN_WORKSPACE(AVR_BENCH_BINS), AVR_BENCH_BINS, MCU_BINS_MIN, MCU_BINS_MAX,
@@ -198,6 +208,8 @@ int main(void)
     field("halt_worst", halt.worst);
     field("home_steps", home.n);
     field("home_worst", home.worst);
+    field("row_crc", row_crc);
+    field("row_crc32", row_crc32);
     field("ticks_hash", ticks_hash);
     field("bins", AVR_BENCH_BINS);
     field("workspace", (uint32_t)FW_PLAN_WORKSPACE(AVR_BENCH_BINS));

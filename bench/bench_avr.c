@@ -11,7 +11,7 @@
       from avr-run's pin log, the worst step's distance from the tick the
       closed form gives it (each move replayed by the real motion.c from its
       first step), steps refused as late, and the worst loop pass (all, and
-      while Z moves, and the longest stretch without a step refill), the
+      while Z moves; its interrupts in, and the loop's own work), the
       stack's peak.
    3. SRAM: the shipped image's data + bss (avr-size), the planner's share,
       and the largest BOARD_MAX_BINS that still leaves the measured stack
@@ -136,6 +136,7 @@ int main(int argc, char **argv)
            field(text, "ramp_worst"), field(text, "cruise_mean"), field(text, "cruise_worst"));
     printf("  a halt (brake and the next step): worst %llu cycles; homing: worst %llu cycles a step\n", field(text, "halt_worst"),
            field(text, "home_worst"));
+    printf("a mask row's CRC-32, 2560 pixels (320 bytes): %llu cycles\n", field(text, "row_crc"));
     printf("the planner on the MCU, %llu bins (%llu bytes of workspace): init %llu, push %llu cycles/bin (%.1f ms for all), "
            "reverse %llu cycles; %llu layers\n",
            field(text, "bins"), field(text, "workspace"), field(text, "init"), field(text, "push") / (field(text, "bins") ? field(text, "bins") : 1),
@@ -150,7 +151,7 @@ int main(int argc, char **argv)
         int *dir = NULL;
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
         long pos, start_steps = 0;
-        unsigned long long worst_pass = 0, worst_moving = 0, gap = 0, stack = 0, refused = 0;
+        unsigned long long worst_pass = 0, worst_moving = 0, work = 0, moving_work = 0, stack = 0, refused = 0;
         int status;
         pid = start(arg_test, log, "3", pty, sizeof pty);
         if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", arg_test); stop(pid); return 1; }
@@ -170,7 +171,8 @@ int main(int argc, char **argv)
                 if ((v = strstr(line, "start_steps="))) start_steps = strtol(v + 12, NULL, 10);
                 if ((v = strstr(line, "worst_pass="))) worst_pass = strtoull(v + 11, NULL, 10);
                 if ((v = strstr(line, "worst_moving_pass="))) worst_moving = strtoull(v + 18, NULL, 10);
-                if ((v = strstr(line, "worst_refill_gap="))) gap = strtoull(v + 17, NULL, 10);
+                if ((v = strstr(line, "worst_work="))) work = strtoull(v + 11, NULL, 10);
+                if ((v = strstr(line, "worst_moving_work="))) moving_work = strtoull(v + 18, NULL, 10);
                 if ((v = strstr(line, "stack_peak="))) stack = strtoull(v + 11, NULL, 10);
                 if ((v = strstr(line, " late="))) refused = strtoull(v + 6, NULL, 10);
                 continue;
@@ -209,9 +211,9 @@ int main(int argc, char **argv)
         }
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
                "%llu refused as late\n", steps, late_worst, late_worst / 16.0, refused);
-        printf("  worst loop pass %llu cycles (%llu while Z moves, %llu between step refills), "
+        printf("  worst loop pass %llu cycles, %llu while Z moves (its interrupts in; the loop's own work %llu, %llu), "
                "a step every %lu cycles at the top speed; stack peak %llu bytes\n",
-               worst_pass, worst_moving, gap, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), stack);
+               worst_pass, worst_moving, work, moving_work, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), stack);
         free(at);
         free(dir);
 

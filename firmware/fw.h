@@ -28,8 +28,18 @@
 
    fw_run issues nothing itself: it refills the step queue, ends exposures,
    notices a silent link and returns the tick of the next thing it must do
-   (FW_NEVER: nothing until a byte arrives). Nothing in the core blocks. The
-   wire protocol is in link/PROTOCOL.md. */
+   (FW_NEVER: nothing until a byte arrives). Nothing in the core blocks.
+
+   Bounded work a pass: a pass of the loop (fw_receive, then fw_run) does
+   one piece of work beyond its bookkeeping, so that it stays shorter than
+   a step interval at the top speed and the loop computes steps faster
+   than they leave, whatever else it does: up to FW_STEP_FILL steps (the
+   first of a move shapes it), or one frame or G-code line received (its
+   reply; the rest of the bytes wait for the next pass), or a move's start
+   by the print, or one slice of a held frame's work (FW_DECODE_BYTES and
+   FW_DECODE_ROWS of a mask, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES
+   of the plan's reversal). The steps come first; the others wait for a
+   pass that computed none. The wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>

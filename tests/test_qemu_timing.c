@@ -117,8 +117,9 @@ typedef struct trace_record { uint64_t tick; uint32_t late; int32_t kind; } trac
 /* A short print with masks streaming, on the trace image: every step was
    emitted at or after its tick and within QEMU's -icount error of it, no
    step interval is below the speed limit, each exposure comes with Z at its
-   layer's top (so the steps are the plan's heights x steps/mm), and the
-   light is never on while Z moves. */
+   layer's top (so the steps are the plan's heights x steps/mm), the
+   light is never on while Z moves, and no loop pass takes as long as a
+   step interval at the top speed. */
 static void steps_on_time_under_qemu(void)
 {
     qemu_run q;
@@ -127,7 +128,7 @@ static void steps_on_time_under_qemu(void)
     trace_record *rec;
     size_t n, i, steps = 0, lit_steps = 0, bad_height = 0, short_sched = 0, short_emitted = 0;
     uint64_t worst_late = 0, last_sched = 0, last_emitted = 0, shortest = UINT64_MAX;
-    long long summary_steps;
+    long long summary_steps, work, moving_work;
     long pos = QEMU_START_STEPS;
     int status, uv = 0;
     char *err, *bin;
@@ -202,11 +203,25 @@ static void steps_on_time_under_qemu(void)
        a step later than the core's step lead would have stopped the print. */
     CHECKF(worst_late <= 50u * (QEMU_TICK_HZ / 1000000u), "worst step lateness %llu ticks (%.1f us)", (unsigned long long)worst_late,
            worst_late * 1e6 / QEMU_TICK_HZ);
+    /* Bounded work a pass (fw.h): every pass of the loop, while Z moves and
+       while it is still (planning, a print's start), is shorter than the
+       shortest step interval at the top speed, so the loop computes steps
+       faster than they leave whatever else it does. The loop's own work,
+       its interrupts' ticks taken out (serve.c): QEMU's UART sends a
+       reply's bytes, and takes a burst of the host's, as fast as the
+       handlers run, so one pass can carry dozens of their interrupts that a
+       line at 115200 baud spreads over milliseconds. */
+    work = err ? qemu_said(err, "fw-mps2: the loop's own work, worst pass (cycles) ", 0) : -1;
+    moving_work = err ? qemu_said(err, "fw-mps2: the loop's own work, worst pass while Z moves (cycles) ", 0) : -1;
+    CHECKF(moving_work > 0 && moving_work < (long long)min_interval, "the loop's worst pass while Z moves took %lld cycles, a step comes every %u",
+           moving_work, min_interval);
+    CHECKF(work > 0 && work < (long long)min_interval, "the loop's worst pass took %lld cycles, a step comes every %u at the top speed", work,
+           min_interval);
     if (!check_case_failed())
         printf("     %zu steps, worst lateness %llu cycles (%.1f us), shortest interval %llu cycles (limit %u); "
-               "worst loop pass %lld cycles, %lld while Z moves; stack %lld bytes\n",
+               "worst loop pass %lld cycles, %lld while Z moves (its interrupts in: %lld, %lld); stack %lld bytes\n",
                steps, (unsigned long long)worst_late, worst_late * 1e6 / QEMU_TICK_HZ, (unsigned long long)shortest, min_interval,
-               err ? qemu_said(err, "fw-mps2: worst loop pass (cycles) ", 0) : -1,
+               work, moving_work, err ? qemu_said(err, "fw-mps2: worst loop pass (cycles) ", 0) : -1,
                err ? qemu_said(err, "fw-mps2: worst loop pass while Z moves (cycles) ", 0) : -1,
                err ? qemu_said(err, "fw-mps2: stack used (bytes) ", 0) : -1);
     free(bin);

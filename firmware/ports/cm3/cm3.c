@@ -66,6 +66,22 @@ uint32_t cm3_stack_used(void)
     while (p < __stack_top && *p == CM3_CANARY) p++;
     return (uint32_t)((uintptr_t)__stack_top - (uintptr_t)p);
 }
+
+/* The outermost handler's ticks, entry to return: one that preempts
+   another is inside it (and runs whole before it resumes). */
+volatile uint64_t cm3_isr_ticks;
+static volatile uint32_t isr_depth;
+static uint64_t isr_entered;
+
+void cm3_trace_isr_enter(void)
+{
+    if (isr_depth++ == 0) isr_entered = cm3_ticks();
+}
+
+void cm3_trace_isr_leave(void)
+{
+    if (--isr_depth == 0) cm3_isr_ticks += cm3_ticks() - isr_entered;
+}
 #endif
 
 /* ---- the tick ------------------------------------------------------------
@@ -76,7 +92,7 @@ static volatile uint32_t tick_wraps;
 void SysTick_Handler(void);
 void SysTick_Handler(void)
 {
-    tick_wraps++;
+    tick_wraps++; /* a few instructions: not counted in cm3_isr_ticks */
 }
 
 void cm3_tick_start(void)

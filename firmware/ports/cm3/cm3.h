@@ -157,6 +157,15 @@ void board_trace_step(uint64_t scheduled, uint64_t emitted);
 void board_trace_text(const char *prefix, uint64_t value);
 extern uint64_t cm3_worst_pass, cm3_worst_moving_pass;
 uint32_t cm3_stack_used(void);
+/* The board's interrupt handlers call these first and last: the ticks they
+   took, so that a loop pass's own work can be told from the interrupts
+   that came in it (serve.c). Under QEMU those bunch up: its UART sends a
+   reply's bytes, and takes a burst of the host's, as fast as the handler
+   runs, so one pass can carry all of their interrupts. */
+void cm3_trace_isr_enter(void);
+void cm3_trace_isr_leave(void);
+extern volatile uint64_t cm3_isr_ticks;
+extern uint64_t cm3_worst_work, cm3_worst_moving_work;
 #endif
 
 /* ---- serve.c ---------------------------------------------------------------- */

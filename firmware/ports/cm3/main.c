@@ -88,10 +88,10 @@ int main(void)
     config.max_bins = BOARD_MAX_BINS;
     config.window = BOARD_WINDOW;
     config.watchdog_ms = BOARD_WATCHDOG_MS;
-    /* 5 ms: a move's first step is armed by the loop pass that started it,
-       which may go on for a whole 64-byte chunk of frames after the tick it
-       was given; the longest pass measured under QEMU was 4.1 ms (101,798
-       cycles at 25 MHz, tests/test_qemu_timing.c), 1 ms was too little. */
+    /* 5 ms: a move's first step is computed in a pass after the one that
+       started it (passes are held under a step interval at the top speed,
+       6,250 cycles: 4,100 measured under QEMU, tests/test_qemu_timing.c);
+       1 ms was too little when a pass could take 4 ms. */
     config.step_lead = BOARD_CLOCK_HZ / 200u;
     config.boot_id = next_boot_id();
     port.ctx = NULL;

@@ -162,6 +162,8 @@ static void trace_report(void)
     board_trace_text("fw-mps2: worst step lateness (cycles) ", worst);
     board_trace_text("fw-mps2: worst loop pass (cycles) ", cm3_worst_pass);
     board_trace_text("fw-mps2: worst loop pass while Z moves (cycles) ", cm3_worst_moving_pass);
+    board_trace_text("fw-mps2: the loop's own work, worst pass (cycles) ", cm3_worst_work);
+    board_trace_text("fw-mps2: the loop's own work, worst pass while Z moves (cycles) ", cm3_worst_moving_work);
     board_trace_text("fw-mps2: stack used (bytes) ", cm3_stack_used());
     board_trace_text("fw-mps2: replies dropped ", cm3_tx_dropped());
 }
@@ -196,18 +198,28 @@ void board_fault(int why)
 }
 
 /* ---- UART ------------------------------------------------------------------ */
+#ifdef CM3_TRACE
+#define ISR_ENTER() cm3_trace_isr_enter()
+#define ISR_LEAVE() cm3_trace_isr_leave()
+#else
+#define ISR_ENTER() do {} while (0)
+#define ISR_LEAVE() do {} while (0)
+#endif
+
 void uart0_rx_handler(void);
 void uart0_rx_handler(void)
 {
+    ISR_ENTER();
     /* Cleared before reading: a byte that lands while we read raises it again. */
     UART0_INTCLEAR = UART_INT_RX;
     while (UART0_STATE & UART_STATE_RX_FULL) {
         if (cm3_rx_full()) {
             cm3_rx_stall();
-            return;
+            break;
         }
         cm3_rx_push((uint8_t)UART0_DATA);
     }
+    ISR_LEAVE();
 }
 
 void board_rx_resume(void)
@@ -225,8 +237,10 @@ void uart0_tx_handler(void);
 void uart0_tx_handler(void)
 {
     uint8_t byte;
+    ISR_ENTER();
     UART0_INTCLEAR = UART_INT_TX;
     while (!(UART0_STATE & UART_STATE_TX_FULL) && cm3_tx_pop(&byte)) UART0_DATA = byte;
+    ISR_LEAVE();
 }
 
 void board_write(const uint8_t *data, size_t size)
@@ -276,9 +290,11 @@ void board_nmi(void)
 void timer0_handler(void);
 void timer0_handler(void)
 {
+    ISR_ENTER();
     TIMER0_INTCLEAR = 1u;
     TIMER0_CTRL = 0;
     cm3_wake();
+    ISR_LEAVE();
 }
 
 void board_wake_at(uint64_t deadline, uint64_t now)
@@ -297,17 +313,21 @@ void board_wake_at(uint64_t deadline, uint64_t now)
 void timer1_handler(void);
 void timer1_handler(void)
 {
+    ISR_ENTER();
     TIMER1_INTCLEAR = 1u;
     TIMER1_CTRL = 0;
     cm3_alarm(CM3_ALARM_STEP);
+    ISR_LEAVE();
 }
 
 void dualtimer_handler(void);
 void dualtimer_handler(void)
 {
+    ISR_ENTER();
     DUAL1_INTCLEAR = 1u;
     DUAL1_CTRL = 0;
     cm3_alarm(CM3_ALARM_UV);
+    ISR_LEAVE();
 }
 
 void board_alarm(int which, uint64_t delay)

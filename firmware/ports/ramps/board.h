@@ -26,13 +26,15 @@
 /* Z's top speed on this MCU: 2.5 mm/s, at 400 steps/mm 1,000 steps/s, one
    step per 16,000 cycles. An 8-bit core computes motion.c's closed form in
    64-bit integers: measured under simavr (make bench, bench/avr_bench.c),
-   1,571 cycles a cruising step, 3,700-5,800 on average and up to 7,600 on
-   a ramp (a square root when the guess from the steps before misses),
-   10,700 for a halt; a loop pass computes up to FW_STEP_FILL (2) of them
-   plus its own ~3,000. At 10 mm/s (4,000 cycles a step) the ramps alone
-   outrun the core; at 5 mm/s (8,000) a pass with two ramp steps does; at
-   2.5 mm/s the step work of a pass fits one interval with room, and the
-   queue (below) absorbs the passes that parse a line or a frame. */
+   about 1,600 cycles a cruising step, 3,600-4,700 on average and up to
+   6,800 on a ramp (the first step shapes the move), 7,700 for a halt and
+   the step after it. A loop pass does one piece of work (fw_run: a step,
+   a frame or a G-code line, a move's start, a slice of a held frame) on
+   top of its own 3,000-4,000 (64-bit ticks), and every pass is held under
+   the 16,000 of a step at this speed, interrupts included: the worst
+   measured is under 15,000 (tests/test_avr.c asserts it; a G1 line's parse
+   in gcode.c, with Z still, takes 22,000). At 5 mm/s (8,000 a step) a pass
+   with a ramp step and a frame would not fit. */
 #ifndef BOARD_MAX_SPEED_UM_S
 #define BOARD_MAX_SPEED_UM_S 2500ul
 #endif
@@ -73,15 +75,19 @@
 /* The watchdog (reset mode), refreshed by the main loop only (fw_run). */
 #define BOARD_WDT_MS 120u
 
-/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts:
-   more than the longest pass that can start one (a G1 line: parsed, the
-   move shaped, up to 52,000 cycles = 3.3 ms measured). The loop computes
-   at most FW_STEP_FILL steps per pass and runs again at once while the
-   queue is short; the queue holds FW_STEP_QUEUE steps, which must outlast
-   the longest stretch without a refill while Z moves: measured 17,600
-   cycles in G-code mode (a line parsed as the last steps leave) and 54,800
-   in a binary print (a pass of a mask frame's decoding: a row a pass), against 16 steps = 256,000 cycles at the top speed (the
-   tests assert under half of that). 16 x 9 bytes of SRAM. */
+/* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
+   computed in the pass after the one that started it (a G1 line's, 22,000
+   cycles = 1.4 ms, is the longest). The loop computes one step a pass
+   (FW_STEP_FILL) and runs again at once while the queue is short; the
+   queue holds FW_STEP_QUEUE steps, 256,000 cycles at the top speed, far
+   more than a pass (under 16,000): room for the wake-up and for a pass
+   that one day runs long. 16 x 9 bytes of SRAM. The pieces of a pass,
+   each a few thousand cycles here (avr-run --profile-passes): 8 mask code
+   bytes and a row's CRC (240-pixel test display: 3,700 cycles for the
+   CRC of its 30-byte rows; a 2560-pixel display's 320-byte rows take
+   39,000, make bench: more than a step interval, which the queue covers
+   but the bound does not hold for), 2 profile bins
+   (2,860 cycles each), 32 planes of the plan's reversal (150 each). */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 1u

@@ -6,8 +6,9 @@
    arms each; the compare interrupt calls fw_step_interrupt), and the UV
    light is switched by Timer4's compare unit at an exposure's two ticks,
    so neither waits for the loop. The loop only has to refill the step
-   queue before it runs dry: BOARD_STEP_LEAD and FW_STEP_QUEUE (board.h)
-   are sized from its worst pass as measured under simavr. */
+   queue before it runs dry; each of its passes is held under a step
+   interval at the top speed (board.h, FW_STEP_FILL and the pieces of a
+   pass; measured under simavr by tests/test_avr.c). */
 #include "../../fw.h"
 #include "board.h"
 #include <avr/io.h>
