@@ -600,6 +600,12 @@ static void gcode_uv(void *ctx, int on, uint64_t when)
     fw_state *fw = (fw_state *)ctx;
     uv(fw, on, when, on ? when + FW_MS(fw, FW_EXPOSURE_MAX_MS) : when);
 }
+/* uv_on stays set: the light is the port's until M107 says it is out */
+static void gcode_uv_end(void *ctx, uint64_t when)
+{
+    fw_state *fw = (fw_state *)ctx;
+    fw->port.uv(fw->port.ctx, 0, when, when);
+}
 static void gcode_write(void *ctx, const uint8_t *data, size_t size) { fw_state *fw = (fw_state *)ctx; fw->port.write(fw->port.ctx, data, size); }
 static void gcode_motor(void *ctx, int on) { fw_state *fw = (fw_state *)ctx; if (fw->port.motor) fw->port.motor(fw->port.ctx, on); }
 
@@ -661,6 +667,7 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     io.ctx = fw;
     io.write = gcode_write;
     io.uv = gcode_uv;
+    io.uv_end = gcode_uv_end;
     io.motor = gcode_motor;
     io.moving = gcode_moving;
     fw_gcode_init(&fw->gcode, &fw->axis, &io);

@@ -225,7 +225,10 @@ static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
         s->uv_off_at = until;
         if (++s->exposures == s->hang_at) s->hang = 1;
     } else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
-    else s->uv_off_at = FW_NEVER;
+    else if (when > s->now) { /* the timer puts it out */
+        if (when < s->uv_off_at) s->uv_off_at = when;
+        return;
+    } else s->uv_off_at = FW_NEVER;
     log_line(s, when, on ? "uv 1" : "uv 0");
 }
 
