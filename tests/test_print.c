@@ -823,8 +823,9 @@ static void printcore_drives_gcode_mode(void)
     const char *line;
     sim_log l;
     size_t k;
-    int uv = 0, moving_lit = 0;
+    int uv = 0, moving_lit = 0, exposures = 0;
     long pos;
+    uint64_t lit_at = 0, lit = 0;
     cli_write(cli_path("job.gcode"), "; a layer by hand\nG28\nG90\nG1 Z5 F300\nG4 P100\nM106 S255\nG4 P300\nM107\n"
                                      "G91\nG1 Z1.5 F600 ; relative\nG90\nM114\nG1 Z10\nM400\nM18\n");
     {
@@ -866,9 +867,17 @@ static void printcore_drives_gcode_mode(void)
     pos = l.start_steps;
     for (k = 0; k < l.count; k++) {
         if (l.ev[k].kind == ZEV_STEP) { pos += l.ev[k].value; moving_lit += uv; }
-        if (l.ev[k].kind == ZEV_UV) uv = l.ev[k].value;
+        if (l.ev[k].kind == ZEV_UV) {
+            uv = l.ev[k].value;
+            if (uv) lit_at = l.ev[k].when;
+            else { lit = l.ev[k].when - lit_at; exposures++; }
+        }
     }
     CHECKF(pos == 10 * (long)l.steps_per_mm && !moving_lit && !uv, "ends at %ld steps; %d steps lit", pos, moving_lit);
+    /* M106's G4 P300 is the exposure to the tick, printcore's round trips
+       between the three lines not in it */
+    CHECKF(exposures == 1 && lit == 3 * l.tick_hz / 10, "%d exposures, the light on for %llu ticks for G4 P300", exposures,
+           (unsigned long long)lit);
     free(l.ev);
 }
 
