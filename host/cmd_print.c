@@ -270,13 +270,16 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
                 continue;
             }
             if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_PAUSED) {
-                /* READY mid-print is the core's abort: an ABORT, or a fault
-                   (which leaves Z unhomed; the error stays from the last refusal) */
+                /* READY mid-print is the core's abort: an ABORT (Z stays
+                   homed), or a fault, which leaves Z unhomed; STATUS's error
+                   is the last refusal, so a command refused since (the next
+                   mask) may hide the fault's */
                 int homed = (l->st.flags & LINK_FLAG_HOMED) != 0;
                 char what[96];
                 snprintf(what, sizeof what, "stopped printing (%s)",
                          l->st.state != LINK_STATE_READY ? link_state_name(l->st.state)
-                         : !homed && l->st.error != LINK_ERR_NONE ? link_error_name(l->st.error) : "aborted");
+                         : homed ? "aborted"
+                         : l->st.error == LINK_ERR_STEP_LATE ? link_error_name(l->st.error) : "a fault that left Z unhomed");
                 return serial_stopped(l, RC_FAIL, what, 1, homed);
             }
             if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {
@@ -328,9 +331,9 @@ static void write_report(FILE *f, const void *ctx)
             r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
     fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
                "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n"
-               "  \"longest_wait_ms\": %.1f,\n  \"masks\": [",
+               "  \"longest_wait_ms\": %.1f,\n  \"longest_homing_wait_ms\": %.1f,\n  \"masks\": [",
             r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
-            r->l->retransmits, r->l->naks, r->l->longest_wait);
+            r->l->retransmits, r->l->naks, r->l->longest_wait, r->l->longest_homing_wait);
     for (k = 0; k < r->pj->layers; k++) {
         z += r->pj->lengths[k];
         fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
@@ -367,10 +370,11 @@ static void print_usage(FILE *f)
           "                        homing drives the platform down to the endstop, into\n"
           "                        the vat and the half-built part: clear it first\n"
           "  --plan-on-host        send the host's plan instead of the profile\n"
-          "  --give-up S           a printer that answers nothing this long ends   [3]\n"
-          "                        the print (exit 5); slow lines add a window of\n"
-          "                        frames' time; while Z homes on a printer that\n"
-          "                        reads no frame then (RAMPS), up to 120 s\n"
+          "  --give-up S           a printer that answers nothing this long ends      [3]\n"
+          "                        the print (exit 5); longer while a mask frame\n"
+          "                        decodes (10 us a row byte) and on slow lines; up\n"
+          "                        to 120 s while Z homes on a printer that reads\n"
+          "                        no frame then (RAMPS)\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"

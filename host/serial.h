@@ -25,9 +25,11 @@ typedef struct serial_link {
        homes on a printer that has not answered since homing began, the host
        allows homing_ms (a port may hold the host's frames until Z is home). */
     double silent_ms, homing_ms;
+    double mask_decode_ms;      /* a whole mask decoded at SERIAL_ROW_BYTE_US */
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
-    double longest_wait;        /* the longest wait for a reply that came, ms */
+    double longest_wait;        /* the longest wait for a reply that came, ms, */
+    double longest_homing_wait; /* ... outside homing and while Z homed */
     int homing;                 /* the caller waits for Z to home */
     const char *task;           /* what the caller is doing before a layer prints
                                    ("planning"), for messages; NULL: the printer's state */
@@ -37,6 +39,7 @@ typedef struct serial_link {
     /* the latest replies, each with a count so a caller sees a fresh one */
     link_status st;
     unsigned long status_count, identify_count, plan_count;
+    uint8_t status_ack;         /* the acknowledgement l->st came with */
     link_identify id;
     uint8_t plan[LINK_FRAME_MAX];
     size_t plan_size;
@@ -66,6 +69,13 @@ typedef struct serial_link {
    the step interval), and 220 mm of travel at 2.5 mm/s take 88 s, its slow
    back-off and creep back (2.06 mm each at 0.25 mm/s) up to 16.5 s more. */
 #define SERIAL_HOMING_S 120
+/* A MASK_DATA frame is answered once decoded, a row a pass, and one frame
+   can hold a whole mask (an empty one is two bytes): the host allows, while
+   one waits, a whole mask's rows at this pace, microseconds per row byte.
+   The slowest port, RAMPS (ATmega2560, 16 MHz), took about 2.05 s for the
+   1,440 rows of 320 bytes of an empty 2560 x 1440 mask under simavr: 4.4 us
+   a byte (a row's CRC-32 and the pass around it). */
+#define SERIAL_ROW_BYTE_US 10
 /* A gap longer than this, ms, between two looks at the line (serial_pump,
    a write waiting for room) is the host's own absence, not time it waited
    for the printer. */
