@@ -667,6 +667,12 @@ static void gcode_uv(void *ctx, int on, uint64_t when)
     fw_state *fw = (fw_state *)ctx;
     uv(fw, on, when, on ? when + FW_MS(fw, FW_EXPOSURE_MAX_MS) : when);
 }
+/* uv_on stays set: the light is the port's until M107 says it is out */
+static void gcode_uv_end(void *ctx, uint64_t when)
+{
+    fw_state *fw = (fw_state *)ctx;
+    fw->port.uv(fw->port.ctx, 0, when, when);
+}
 static void gcode_write(void *ctx, const uint8_t *data, size_t size) { fw_state *fw = (fw_state *)ctx; fw->port.write(fw->port.ctx, data, size); }
 static void gcode_motor(void *ctx, int on) { fw_state *fw = (fw_state *)ctx; if (fw->port.motor) fw->port.motor(fw->port.ctx, on); }
 
@@ -721,7 +727,6 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
         fw->config.max_bins = workspace_size > fixed ? (uint32_t)(workspace_size - fixed) : 0;
     }
     fw->link_timeout = FW_MS(fw, config->link_timeout_ms);
-    fw->binary_idle = FW_BINARY_IDLE * fw->link_timeout;
     fw->watchdog_half = FW_MS(fw, config->watchdog_ms) / 2u;
     fw_axis_init(&fw->axis, &config->axis, config->tick_hz);
     fw->axis.start_lead = config->step_lead;
@@ -731,6 +736,7 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     io.ctx = fw;
     io.write = gcode_write;
     io.uv = gcode_uv;
+    io.uv_end = gcode_uv_end;
     io.motor = gcode_motor;
     io.moving = gcode_moving;
     fw_gcode_init(&fw->gcode, &fw->axis, &io);
@@ -876,7 +882,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         fw->port.show(fw->port.ctx, -1, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&
-        now - fw->heard >= fw->binary_idle)
+        now - fw->heard >= FW_BINARY_IDLE * fw->link_timeout)
         fw->binary = 0;
     if (!fw->binary) {
         next = fw_gcode_run(&fw->gcode, now);
@@ -902,7 +908,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         next = earliest(next, fw->phase_end);
     }
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED)
-        next = earliest(next, fw->heard + fw->binary_idle);
+        next = earliest(next, fw->heard + FW_BINARY_IDLE * fw->link_timeout);
     /* the next pass's steps: its fw_receive and its fw_run share them */
     fw->steps.budget = FW_STEP_FILL;
     return next;

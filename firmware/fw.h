@@ -98,10 +98,13 @@ typedef struct fw_port {
     /* The UV light on at tick `when` (at once if that has passed) for
        `until` - `when` ticks, ended by the port's own timer (on = 1): the
        core never ends an exposure itself, so its length is the timer's
-       whatever the loop does. Or off now (on = 0: a pause, an abort, a
-       fault). A port that switches on late by L keeps the length and ends L
-       late; L stays under step_lead, so the light is out before a move
-       that starts at the exposure's end takes its first step. */
+       whatever the loop does. Or off at `when` (on = 0), by the same timer
+       if that is still ahead and earlier than the end it has, else at once:
+       a pause, an abort or a fault pass the present tick, G-code's lit
+       dwell its end. A port that switches on late by L keeps the length and
+       ends L late (an off at a later tick too); L stays under step_lead, so
+       the light is out before a move that starts at the exposure's end
+       takes its first step. */
     void (*uv)(void *ctx, int on, uint64_t when, uint64_t until);
     /* stepper driver enable (M17/M18) */
     void (*motor)(void *ctx, int on);
@@ -172,7 +175,7 @@ typedef struct fw_state {
     /* the config's times in ticks, worked out once (on an 8-bit core a
        64-bit division is thousands of cycles, and fw_run needs these on
        every pass) */
-    uint64_t link_timeout, binary_idle, watchdog_half;
+    uint64_t link_timeout, watchdog_half;
     fw_axis axis;
     fw_steps steps;
     /* link */

@@ -274,6 +274,7 @@ static int move(fw_gcode *g, const words *w, uint64_t now)
     g->z_nm = target;
     g->target = (int32_t)steps;
     g->wait = WAIT_MOVE;
+    g->lit = 0; /* a dwell after a move is not an exposure's */
     return 1;
 }
 
@@ -289,7 +290,23 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
     ticks = has_s ? muldiv((uint64_t)s, g->axis->tick_hz, MILLION, 2)
                   : muldiv((uint64_t)p, g->axis->tick_hz, 1000u * MILLION, 2);
     if (!ticks) return 1;
-    g->deadline = now < FW_NEVER - 1 && ticks < FW_NEVER - 1 - now ? now + ticks : FW_NEVER - 1;
+    if (g->lit) {
+        /* the exposure: counted from M106, ended by the port's timer */
+        uint64_t end = g->lit_at < FW_NEVER - 1 && ticks < FW_NEVER - 1 - g->lit_at ? g->lit_at + ticks : FW_NEVER - 1;
+        g->lit = 0;
+        if (g->io.uv_end) g->io.uv_end(g->io.ctx, end);
+        if (end <= now) {
+            /* the host was slower than the exposure: say by how much */
+            reply r;
+            r.n = 0;
+            put(&r, "echo:Exposure ran over: G4 came ");
+            put_milli(&r, (int64_t)muldiv(now - end, 1000u * 1000u, g->axis->tick_hz, 0));
+            put(&r, " ms after its end");
+            send(g, &r);
+            return 1;
+        }
+        g->deadline = end;
+    } else g->deadline = now < FW_NEVER - 1 && ticks < FW_NEVER - 1 - now ? now + ticks : FW_NEVER - 1;
     g->wait = WAIT_DWELL;
     return 0;
 }
@@ -409,6 +426,7 @@ static void execute(fw_gcode *g, uint64_t now)
         if (fw_axis_home(g->axis, now) == FW_AXIS_OK) {
             if (!g->motor_on) motor(g, 1);
             g->wait = WAIT_HOME;
+            g->lit = 0;
             ok = 0;
         } else say(g, "Error:Homing refused");
         break;
@@ -422,7 +440,9 @@ static void execute(fw_gcode *g, uint64_t now)
         int has_s = 0;
         if (code == 10106 && !number(g, &w, 'S', &s, &has_s)) break;
         if (s < 0) { out_of_range(g, 'S'); break; }
-        if (g->io.uv) g->io.uv(g->io.ctx, code == 10106 && (!has_s || s > 0), now);
+        g->lit = (uint8_t)(code == 10106 && (!has_s || s > 0));
+        g->lit_at = now;
+        if (g->io.uv) g->io.uv(g->io.ctx, g->lit, now);
         break;
     }
     case 10110:

@@ -20,7 +20,16 @@
        G0/G1 Z F      move; F is remembered and clamped to max_speed
                       (before any F: max_speed)
        G4 P<ms>|S<s>  dwell after the moves before it; ok when it ends
-                      (S wins when both are given)
+                      (S wins when both are given). The first dwell after
+                      M106, with no move or homing between, is the
+                      exposure: it counts from M106 and the
+                      port's timer puts the light out at its end, so
+                      "M106 S255, G4 P3000, M107" (NanoDLP's layer) gives
+                      3000 ms of light to the timer's tick, not 3000 ms
+                      plus the host's round trips between the lines (a G4
+                      that comes after its end puts the light out at once
+                      and says "echo:Exposure ran over: G4 came <ms> ms
+                      after its end")
        M17 / M18 M84  stepper driver on / off (a move turns it on)
        M106 [S] M107  UV on / off; M106 S0 is off
        M105           plain "ok" (no heaters; printcore's handshake)
@@ -90,6 +99,10 @@ typedef struct fw_gcode_io {
     void (*write)(void *ctx, const uint8_t *data, size_t size);
     /* UV light on or off at tick `when` (M106 / M107); may be NULL */
     void (*uv)(void *ctx, int on, uint64_t when);
+    /* the light M106 put on goes out at tick `when` by the port's timer (at
+       once if that has passed): the end of the exposure's dwell; NULL: it
+       stays on until M107 */
+    void (*uv_end)(void *ctx, uint64_t when);
     /* stepper driver enable (M17 / M18 / M84); may be NULL */
     void (*motor)(void *ctx, int on);
     /* 1 while Z still moves: steps computed but not yet out (a step queue);
@@ -107,11 +120,13 @@ typedef struct fw_gcode { /* fields private to gcode.c */
     uint8_t relative;        /* G91 */
     uint8_t wait;            /* what the last command still waits for */
     uint8_t motor_on;        /* as last set through io.motor */
+    uint8_t lit;             /* M106 put the light on; no dwell has ended it */
     int32_t last_line;       /* N of the last numbered line accepted */
     int32_t target;          /* steps: where the move under way ends */
     uint32_t speed;          /* steps/s from the last F; 0: max_speed */
     int64_t z_nm;            /* commanded Z, nm, valid while the axis is at it */
     uint64_t deadline;       /* tick a dwell ends */
+    uint64_t lit_at;         /* tick of the last M106 / M107 */
 } fw_gcode;
 
 /* The axis must outlive g; io is copied. Sends nothing. */

@@ -32,7 +32,7 @@ typedef struct print_args {
     int plan_on_host;
     int home;               /* --home: a resumed print may home Z */
     int then_exit;          /* emulators: EXIT after the print */
-    double give_up_s;       /* a printer silent this long ends the print */
+    double give_up_s;       /* a printer that answers nothing this long ends the print */
 } print_args;
 
 /* ------------------------------------------------------------- the job */
@@ -151,7 +151,7 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
         size_t used = link_profile_chunk(buf, l->data_max, units, forced, n, &i);
         if ((rc = serial_send(l, LINK_MSG_PROFILE_DATA, buf, used))) goto done;
     }
-    if ((rc = serial_wait(l, plan_ready, NULL, 600000))) { rc = complain(RC_FAIL, "the printer did not finish planning"); goto done; }
+    if ((rc = serial_wait(l, plan_ready, NULL, 600000, "finish planning"))) goto done;
     if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
     if (l->st.layers != pj->layers) {
         rc = complain(RC_FAIL, "the printer planned %u layer%s, the host %u: the planners disagree", l->st.layers,
@@ -255,7 +255,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
             if ((rc = serial_send(l, LINK_MSG_PAUSE, NULL, 0)) || (rc = serial_status(l))) return rc;
             while (l->st.state == LINK_STATE_PRINTING) if ((rc = serial_pump(l, 50)) || (rc = serial_status(l))) return rc;
             fprintf(stderr, "\nadaslice: paused at layer %u of %u (UV off, Z held at %.3f mm); "
-                            "continue with --resume-from %u\n", l->st.layer, pj->layers, l->st.z_nm / 1e6, l->st.layer);
+                            "continue with --resume-from %u\n", l->st.layer, pj->layers, l->st.z_nm / 1e6, l->st.exposed + 1);
             return RC_PAUSED;
         }
         /* between masks, and once a mask is all sent, the next STATUS decides what comes next */
@@ -269,8 +269,19 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
                 if ((rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
                 continue;
             }
-            if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_PAUSED)
-                return complain(RC_FAIL, "the printer stopped printing (state %u): %s", l->st.state, link_error_name(l->st.error));
+            if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_PAUSED) {
+                /* READY mid-print is the core's abort: an ABORT (Z stays
+                   homed), or a fault, which leaves Z unhomed; STATUS's error
+                   is the last refusal, so a command refused since (the next
+                   mask) may hide the fault's */
+                int homed = (l->st.flags & LINK_FLAG_HOMED) != 0;
+                char what[96];
+                snprintf(what, sizeof what, "stopped printing (%s)",
+                         l->st.state != LINK_STATE_READY ? link_state_name(l->st.state)
+                         : homed ? "aborted"
+                         : l->st.error == LINK_ERR_STEP_LATE ? link_error_name(l->st.error) : "a fault that left Z unhomed");
+                return serial_stopped(l, RC_FAIL, what, 1, homed);
+            }
             if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {
                 if (l->st.mask_ready >= next) { next++; tries = 0; }
                 else if (++tries > 5) return complain(RC_FAIL, "layer %u: the printer refused the mask %u times", next, tries);
@@ -319,9 +330,10 @@ static void write_report(FILE *f, const void *ctx)
     fprintf(f, "{\n  \"layers\": %u,\n  \"first_layer\": %u,\n  \"bin_nm\": %u,\n  \"planned_by_printer\": %s,\n",
             r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
     fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
-               "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n  \"masks\": [",
+               "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n"
+               "  \"longest_wait_ms\": %.1f,\n  \"longest_homing_wait_ms\": %.1f,\n  \"masks\": [",
             r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
-            r->l->retransmits, r->l->naks);
+            r->l->retransmits, r->l->naks, r->l->longest_wait, r->l->longest_homing_wait);
     for (k = 0; k < r->pj->layers; k++) {
         z += r->pj->lengths[k];
         fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
@@ -343,20 +355,26 @@ static void print_usage(FILE *f)
           "exposure follows its thickness (below). A JOBDIR from adaslice slice is printed\n"
           "with its plan, exposures and motion, from JOBDIR/masks.rle. Ctrl-C pauses\n"
           "(UV off, Z held) and exits 3; --resume-from K continues at layer K. A printer\n"
-          "that restarts mid-print ends it with exit 4, naming the layer to resume from.\n"
+          "that restarts mid-print ends it with exit 4, one that stops answering with\n"
+          "exit 5, each naming the layer to resume from.\n"
           "\n"
           "print options\n"
           "  --port DEV            the printer's serial port (required)\n"
           "  --baud B              9600 ... 230400                               [115200]\n"
-          "  --resume-from K       continue at layer K: a paused print of this job is\n"
-          "                        resumed in place (K: its layer), giving only the\n"
-          "                        light the layer still owes; a printer that lost the\n"
-          "                        job (restarted) needs --home\n"
+          "  --resume-from K       continue at layer K, the one after the last fully\n"
+          "                        exposed: a paused print of this job is resumed in\n"
+          "                        place, giving only the light the layer still owes;\n"
+          "                        a printer that lost the job (restarted) or Z's home\n"
+          "                        (a fault) needs --home\n"
           "  --home                home Z before resuming if it is not homed. WARNING:\n"
           "                        homing drives the platform down to the endstop, into\n"
           "                        the vat and the half-built part: clear it first\n"
           "  --plan-on-host        send the host's plan instead of the profile\n"
-          "  --give-up S           a printer silent this long ends the print     [30]\n"
+          "  --give-up S           a printer that answers nothing this long ends      [3]\n"
+          "                        the print (exit 5); longer while a mask frame\n"
+          "                        decodes (10 us a row byte) and on slow lines; up\n"
+          "                        to 120 s while Z homes on a printer that reads\n"
+          "                        no frame then (RAMPS)\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"
@@ -374,7 +392,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     int i, rc = RC_OK;
     memset(pa, 0, sizeof *pa);
     pa->baud = 115200;
-    pa->give_up_s = 30;
+    pa->give_up_s = 3;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
@@ -469,14 +487,15 @@ static int job_from_dir(print_job *pj, const char *dir)
     return RC_OK;
 }
 
-/* --resume-from K against what the printer holds: this job, paused at layer
-   K (resumed in place, *in_place set); or this job stopped after layer K - 1
-   was exposed; or, with --home, a printer that lost the job. Every refusal
-   is RC_USAGE and names the layer. */
+/* --resume-from K against what the printer holds: K is the layer after the
+   last fully exposed one of this job, which is paused (resumed in place,
+   *in_place set) or stopped (an abort or a fault); or, with --home, any
+   layer on a printer that lost the job. Every refusal is RC_USAGE and names
+   the layer. */
 static int check_resume(const serial_link *l, const print_args *pa, const print_job *pj, int *in_place)
 {
     const link_status *s = &l->st;
-    uint32_t k = (uint32_t)pa->resume_from;
+    uint32_t k = (uint32_t)pa->resume_from, from = s->exposed + 1;
     int busy = s->state == LINK_STATE_PRINTING || s->state == LINK_STATE_PAUSED;
     if (s->job && s->job != pj->job)
         return complain(RC_USAGE, "--resume-from %u: the printer %s layer %u of another job (%08x; this one is %08x): "
@@ -484,8 +503,10 @@ static int check_resume(const serial_link *l, const print_args *pa, const print_
                         busy ? "is paused at" : "stopped after", busy ? s->layer : s->exposed, (unsigned)s->job,
                         (unsigned)pj->job);
     if (busy) {
-        if (k != s->layer)
-            return complain(RC_USAGE, "--resume-from %u: the printer is paused at layer %u: resume from %u", k, s->layer, s->layer);
+        /* paused while it peels, the layer it holds is exposed already */
+        if (k != from)
+            return complain(RC_USAGE, "--resume-from %u: the printer is paused at layer %u, layer %u the last fully exposed: "
+                                      "resume from %u", k, s->layer, s->exposed, from);
         if (!(s->flags & LINK_FLAG_HOMED))
             return complain(RC_USAGE, "--resume-from %u: the printer is paused at layer %u with Z unhomed", k, s->layer);
         *in_place = 1;
@@ -495,9 +516,9 @@ static int check_resume(const serial_link *l, const print_args *pa, const print_
         return complain(RC_USAGE, "--resume-from %u: the printer does not know the job (it restarted; Z %s): "
                                   "clear the platform and give --home to home Z and print from layer %u", k,
                         s->flags & LINK_FLAG_HOMED ? "homed since" : "not homed", k);
-    if (s->job && k != s->exposed + 1)
-        return complain(RC_USAGE, "--resume-from %u: the printer exposed this job up to layer %u: resume from %u", k,
-                        s->exposed, s->exposed + 1);
+    if (s->job && k != from)
+        return complain(RC_USAGE, "--resume-from %u: the printer stopped this job after layer %u was fully exposed: "
+                                  "resume from %u", k, s->exposed, from);
     if (!(s->flags & LINK_FLAG_HOMED) && !pa->home)
         return complain(RC_USAGE, "--resume-from %u: Z is not homed: clear the platform and give --home to home it "
                                   "and print from layer %u", k, k);
@@ -517,14 +538,23 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
         return complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from %u", l->st.layer, l->st.layer);
     if (pa->resume_from && ((rc = check_resume(l, pa, pj, in_place)) || *in_place)) return rc;
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
+    l->task = planned_by_printer ? "planning" : "taking the plan";
     rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
+    l->task = NULL;
     if (rc) return rc;
     printf("%s: %u layer%s, %s\n", name, pj->layers, plural(pj->layers),
            planned_by_printer ? "planned by the printer, identical to the host's plan" : "the host's plan");
     fflush(stdout);
     if ((rc = serial_status(l))) return rc;
     if (!(l->st.flags & LINK_FLAG_HOMED)) {
-        if ((rc = serial_send(l, LINK_MSG_HOME, NULL, 0)) || (rc = serial_wait(l, homed, NULL, 600000))) return rc;
+        /* a port may read no frame until Z is home: the silence allowed is the homing's */
+        l->homing = 1;
+        l->homing_seen = 0;
+        l->task = "homing";
+        if (!(rc = serial_send(l, LINK_MSG_HOME, NULL, 0))) rc = serial_wait(l, homed, NULL, 600000, "home Z");
+        l->homing = 0;
+        l->task = NULL;
+        if (rc) return rc;
         if (!(l->st.flags & LINK_FLAG_HOMED)) return complain(RC_FAIL, "homing failed: %s", link_error_name(l->st.error));
     }
     return RC_OK;

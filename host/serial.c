@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <poll.h>
+#include <stdio.h>
 #include <string.h>
 #include <termios.h>
 #include <unistd.h>
@@ -54,13 +55,70 @@ static void serial_rtt(serial_link *l, double rtt)
     if (l->rto_ms > 1000) l->rto_ms = 1000;
 }
 
+static int printing(const link_status *s) { return s->state == LINK_STATE_PRINTING || s->state == LINK_STATE_PAUSED; }
+
+int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept)
+{
+    const link_status *s = &l->st;
+    char phase[40] = "";
+    if (!at_layer)
+        return complain(rc, "the printer on %s %s while %s, before this run exposed a layer: Z must be homed before "
+                            "printing again: clear the platform and print again (a --resume-from needs --home)",
+                        l->dev, what, l->task ? l->task : link_state_name(s->state));
+    if (printing(s)) snprintf(phase, sizeof phase, " (%s)", link_phase_name(s->phase));
+    if (z_kept)
+        return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed; continue with "
+                            "--resume-from %u", l->dev, what, s->layer, phase, s->exposed, s->exposed + 1);
+    /* a printer that lost only the line pauses itself and keeps Z homed:
+       the same command resumes it in place */
+    return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed; Z must be homed before "
+                        "printing again%s: clear the platform, then continue with --resume-from %u --home%s",
+                    l->dev, what, s->layer, phase, s->exposed, rc == RC_LOST ? " (unless the printer kept the print paused)" : "",
+                    s->exposed + 1, rc == RC_LOST ? ", which resumes a paused print in place" : "");
+}
+
+/* The printer answered nothing for `ms` while the host waited (`how`). */
+static int serial_silent(const serial_link *l, const char *how, double ms)
+{
+    char what[80];
+    snprintf(what, sizeof what, "stopped answering (%s for %.1f s)", how, ms / 1000);
+    return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
+}
+
+/* How long the printer may answer nothing: silent_ms, and a mask's decoding
+   while a MASK_DATA frame waits; or homing_ms while Z homes on a printer
+   that has not shown it reads frames while it homes. */
+static double serial_bound(const serial_link *l)
+{
+    double bound = l->silent_ms;
+    int i;
+    for (i = 0; i < l->count; i++)
+        if ((l->frames[i][2] & ~LINK_ROUND_BIT) == LINK_MSG_MASK_DATA) { bound += l->mask_decode_ms; break; }
+    return l->homing && !l->answers_homing && l->homing_ms > bound ? l->homing_ms : bound;
+}
+
+/* A printer that stopped reads nothing, and the line fills: a write that
+   cannot get a byte out for as long as the printer may be silent is lost. */
 static int serial_write(serial_link *l, const uint8_t *data, size_t size)
 {
+    double moved = now_ms();
     while (size) {
         ssize_t n = write(l->fd, data, size);
-        if (n > 0) { data += n; size -= (size_t)n; l->bytes_out += (unsigned long)n; continue; }
+        if (n > 0) {
+            data += n;
+            size -= (size_t)n;
+            l->bytes_out += (unsigned long)n;
+            moved = now_ms();
+            continue;
+        }
         if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
             return complain(RC_FAIL, "writing %s: %s", l->dev, strerror(errno));
+        /* the printer's silence, as serial_pump would find it, or the line's;
+           waiting here is waiting for the printer, not time away */
+        l->last_looked = now_ms();
+        if (l->count && now_ms() - l->waiting_since > serial_bound(l))
+            return serial_silent(l, "nothing", now_ms() - l->waiting_since);
+        if (now_ms() - moved > serial_bound(l)) return serial_silent(l, "the line took no byte", now_ms() - moved);
         {
             struct pollfd p = {l->fd, POLLOUT, 0};
             (void)poll(&p, 1, 100);
@@ -73,7 +131,7 @@ static int serial_write(serial_link *l, const uint8_t *data, size_t size)
    told apart from those older copies draw), and smaller data frames. */
 static int serial_resend_all(serial_link *l)
 {
-    int i;
+    int i, rc;
     l->round ^= LINK_ROUND_BIT;
     for (i = 0; i < l->count; i++) {
         uint8_t *f = l->frames[i];
@@ -83,7 +141,7 @@ static int serial_resend_all(serial_link *l)
         crc = link_crc16(f, n - 3);
         f[n - 3] = (uint8_t)(crc >> 8);
         f[n - 2] = (uint8_t)crc;
-        if (serial_write(l, f, n)) return RC_FAIL;
+        if ((rc = serial_write(l, f, n))) return rc;
     }
     /* a round counts towards giving up only if, since the last one, the
        printer answered with an acknowledgement outside the frames in flight:
@@ -124,15 +182,24 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
         /* frames sent before our last resend still draw NAKs: those are answered */
         if (link_get_ack(&m, p, size) && (m.nak & LINK_NAK) && l->count) {
             l->naks++;
-            if ((m.nak & LINK_ROUND_BIT) == l->round) (void)serial_resend_all(l);
+            /* said already; serial_pump returns it */
+            if ((m.nak & LINK_ROUND_BIT) == l->round && !l->failed) l->failed = serial_resend_all(l);
         }
         break;
     }
     case LINK_MSG_STATUS_REPLY: {
         link_status st;
         if (!link_get_status(&st, p, size)) break;
-        if (l->boot_id && st.boot_id != l->boot_id) l->new_boot_id = st.boot_id;
-        else { l->st = st; l->status_count++; }
+        if (l->boot_id && st.boot_id != l->boot_id) { l->new_boot_id = st.boot_id; break; }
+        l->st = st;
+        l->status_count++;
+        l->status_ack = ack;
+        /* Z moving between two answers while it homes: this printer reads
+           frames while homing, and is held to silent_ms then too */
+        if (l->homing && st.state == LINK_STATE_HOMING) {
+            if (!l->homing_seen) { l->homing_seen = 1; l->homing_z = st.z_nm; }
+            else if (st.z_nm != l->homing_z) l->answers_homing = 1;
+        }
         break;
     }
     case LINK_MSG_IDENTIFY:
@@ -163,7 +230,10 @@ static int serial_read(serial_link *l, int wait_ms)
             size_t m;
             link_deframe_push(&l->rx, buf[i]);
             while ((m = link_deframe_next(&l->rx)) != 0) {
-                l->last_heard = now_ms();
+                double t = now_ms();
+                double *longest = l->homing ? &l->longest_homing_wait : &l->longest_wait;
+                if (l->count && t - l->waiting_since > *longest) *longest = t - l->waiting_since;
+                l->waiting_since = t;
                 take_reply(l, l->rx.buf, m);
                 link_deframe_consume(&l->rx);
             }
@@ -173,19 +243,12 @@ static int serial_read(serial_link *l, int wait_ms)
     return RC_OK;
 }
 
-static int printing(const link_status *s) { return s->state == LINK_STATE_PRINTING || s->state == LINK_STATE_PAUSED; }
-
 /* The printer restarted: what it last said before (l->st) is what is known. */
 static int serial_restarted(const serial_link *l)
 {
-    const link_status *s = &l->st;
-    if (!printing(s))
-        return complain(RC_RESET, "the printer on %s restarted (boot id %u -> %u): its state is lost and Z must be homed again",
-                        l->dev, l->boot_id, l->new_boot_id);
-    return complain(RC_RESET, "the printer on %s restarted (boot id %u -> %u) at layer %u: layer %u was the last fully "
-                              "exposed; Z must be homed before printing again: clear the platform, then continue with "
-                              "--resume-from %u --home", l->dev, l->boot_id, l->new_boot_id, s->layer, s->exposed,
-                    s->exposed + 1);
+    char what[64];
+    snprintf(what, sizeof what, "restarted (boot id %u -> %u)", l->boot_id, l->new_boot_id);
+    return serial_stopped(l, RC_RESET, what, printing(&l->st), 0);
 }
 
 /* For SERIAL_STALL_ROUNDS rounds nothing advanced the acknowledged number
@@ -205,9 +268,12 @@ static int serial_rehello(serial_link *l)
     m.version = LINK_PROTOCOL_VERSION;
     n = link_frame_build(frame, (uint8_t)(l->base - 1), LINK_MSG_HELLO, payload, link_put_hello(payload, &m));
     while (l->identify_count == seen && !l->new_boot_id) {
-        if (now_ms() - start > 2000)
-            return complain(RC_FAIL, "the printer on %s stopped answering at layer %u (%u resend rounds unacknowledged, "
-                                     "no IDENTIFY to HELLO in 2 s)", l->dev, l->st.layer, l->stalled);
+        if (now_ms() - start > 2000) {
+            char what[96];
+            snprintf(what, sizeof what, "stopped answering (no IDENTIFY to HELLO in 2 s, after %u resend rounds out of step)",
+                     l->stalled);
+            return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
+        }
         if (now_ms() - sent > 250) {
             if ((rc = serial_write(l, frame, n))) return rc;
             sent = now_ms();
@@ -215,9 +281,11 @@ static int serial_rehello(serial_link *l)
         if ((rc = serial_read(l, 20))) return rc;
     }
     if (l->new_boot_id) return serial_restarted(l);
-    if (++l->rehellos > 1)
-        return complain(RC_FAIL, "the printer on %s at layer %u takes no frame: %u resend rounds without progress after "
-                                 "a HELLO", l->dev, l->st.layer, SERIAL_STALL_ROUNDS);
+    if (++l->rehellos > 1) {
+        char what[80];
+        snprintf(what, sizeof what, "takes no frame (%u resend rounds without progress after a HELLO)", SERIAL_STALL_ROUNDS);
+        return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
+    }
     l->stalled = 0;
     return serial_resend_all(l);
 }
@@ -227,14 +295,19 @@ int serial_pump(serial_link *l, int wait_ms)
 {
     double t;
     int rc;
-    if ((rc = serial_read(l, wait_ms))) return rc;
+    if (l->failed) return l->failed;
+    /* a host that was away (its own work, descheduled, stopped) did not
+       wait for the printer meanwhile: the wait starts again */
+    t = now_ms();
+    if (l->count && t - l->last_looked > SERIAL_AWAY_MS) l->waiting_since = t;
+    l->last_looked = t;
+    if ((rc = serial_read(l, wait_ms)) || (rc = l->failed)) return rc;
     if (l->new_boot_id) return serial_restarted(l);
     t = now_ms();
-    if (l->count && t - l->last_progress > l->rto_ms && serial_resend_all(l)) return RC_FAIL;
+    /* what arrived was read first: a reply the host was too busy to read is not silence */
+    if (l->count && t - l->waiting_since > serial_bound(l)) return serial_silent(l, "nothing", t - l->waiting_since);
+    if (l->count && t - l->last_progress > l->rto_ms && (rc = serial_resend_all(l))) return rc;
     if (l->stalled >= SERIAL_STALL_ROUNDS) return serial_rehello(l);
-    if (t - l->last_heard > l->give_up_ms)
-        return complain(RC_FAIL, "the printer on %s stopped answering at layer %u (silent for %.0f s)", l->dev, l->st.layer,
-                        l->give_up_ms / 1000);
     return RC_OK;
 }
 
@@ -245,7 +318,7 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
     while (l->count >= l->window || l->count >= SERIAL_QUEUE)
         if ((rc = serial_pump(l, 20))) return rc;
     l->lens[l->count] = link_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
-    if (!l->count) l->last_progress = now_ms();
+    if (!l->count) l->last_progress = l->waiting_since = now_ms();
     rc = serial_write(l, l->frames[l->count], l->lens[l->count]);
     l->count++;
     l->next_seq++;
@@ -253,9 +326,19 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
 }
 
 /* A fresh STATUS: asked again if its reply is lost. */
+/* A STATUS_REPLY since `seen` that answers a request from sequence number
+   `first` on: its acknowledgement is past that request. Replies to older
+   requests still come after a printer held them (RAMPS, homing), and say
+   what was true before. */
+static int fresh_status(const serial_link *l, unsigned long seen, uint8_t first)
+{
+    return l->status_count != seen && (uint8_t)(l->status_ack - (uint8_t)(first + 1)) < 128;
+}
+
 int serial_status(serial_link *l)
 {
     unsigned long seen = l->status_count;
+    uint8_t first = l->next_seq;
     int rc;
     for (;;) {
         double asked;
@@ -263,9 +346,9 @@ int serial_status(serial_link *l)
         if ((rc = serial_send(l, LINK_MSG_STATUS, NULL, 0))) return rc;
         asked = now_ms(); /* after any wait for the window: that is not the line's round trip */
         resends = l->retransmits;
-        while (l->status_count == seen && now_ms() - asked < l->rto_ms * 2)
+        while (!fresh_status(l, seen, first) && now_ms() - asked < l->rto_ms * 2)
             if ((rc = serial_pump(l, 2))) return rc;
-        if (l->status_count != seen) {
+        if (fresh_status(l, seen, first)) {
             if (l->retransmits == resends) serial_rtt(l, now_ms() - asked); /* Karn: no sample across a resend */
             return RC_OK;
         }
@@ -281,7 +364,6 @@ static int serial_hello(serial_link *l)
     int rc;
     m.version = LINK_PROTOCOL_VERSION;
     n = link_frame_build(frame, l->next_seq, LINK_MSG_HELLO, payload, link_put_hello(payload, &m));
-    l->last_heard = start;
     /* an emulator may drop what arrives before it looks at the port: say hello until answered */
     while (!l->identify_count) {
         if (now_ms() - start > 5000) return complain(RC_FAIL, "no adaslice printer answers on %s (5 s)", l->dev);
@@ -290,7 +372,6 @@ static int serial_hello(serial_link *l)
             sent = now_ms();
         }
         if ((rc = serial_pump(l, 20))) return rc;
-        l->last_heard = now_ms();
     }
     if (l->id.version != LINK_PROTOCOL_VERSION)
         return complain(RC_FAIL, "the printer speaks protocol %u; this tool speaks %u", l->id.version, LINK_PROTOCOL_VERSION);
@@ -303,14 +384,16 @@ static int serial_hello(serial_link *l)
 }
 
 /* Waits until a STATUS shows `done` true. */
-int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms)
+int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms,
+                const char *what)
 {
     double start = now_ms();
     int rc;
     for (;;) {
         if ((rc = serial_status(l))) return rc;
         if (done(&l->st, ctx)) return RC_OK;
-        if (now_ms() - start > timeout_ms) return RC_FAIL;
+        if (now_ms() - start > timeout_ms)
+            return complain(RC_FAIL, "the printer on %s did not %s in %.0f s", l->dev, what, timeout_ms / 1000);
         if ((rc = serial_pump(l, 20))) return rc;
     }
 }
@@ -318,17 +401,24 @@ int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), 
 
 int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s)
 {
+    /* a full frame's time on the line both ways, in ms */
+    double frame_ms = 2000.0 * LINK_FRAME_MAX * 10 / (double)baud;
     int rc;
     memset(l, 0, sizeof *l);
     l->fd = -1;
     if ((rc = serial_open_port(dev, baud, &l->fd))) return rc;
     l->dev = dev;
     link_deframer_init(&l->rx, link_mcu_to_host_type);
-    l->give_up_ms = give_up_s * 1000;
+    l->silent_ms = give_up_s * 1000 + frame_ms;
     /* a window of frames at the line rate, with room for the printer's turnaround */
-    l->rto_ms = 200 + 2000.0 * LINK_FRAME_MAX * 10 / (double)baud;
+    l->rto_ms = 200 + frame_ms;
     if ((rc = serial_hello(l))) return rc;
-    l->rto_ms += 2000.0 * LINK_FRAME_MAX * 10 * l->window / (double)baud;
+    l->rto_ms += frame_ms * l->window;
+    /* the reply to the last frame of a window comes after the whole window */
+    l->silent_ms += frame_ms * (l->window - 1);
+    l->homing_ms = SERIAL_HOMING_S * 1000.0;
+    l->mask_decode_ms = (double)l->id.height * (l->id.bits == 8 ? l->id.width : (l->id.width + 7u) / 8u) *
+                        SERIAL_ROW_BYTE_US / 1000;
     l->data_max = LINK_PAYLOAD_MAX;
     return RC_OK;
 }

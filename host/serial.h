@@ -18,10 +18,28 @@ typedef struct serial_link {
     int count, window;
     uint8_t frames[SERIAL_QUEUE][LINK_FRAME_MAX];
     size_t lens[SERIAL_QUEUE];
-    double rto_ms, last_progress, last_heard, give_up_ms;
+    double rto_ms, last_progress;
+    /* A printer that answers nothing for silent_ms while the host waits for
+       it (frames in flight) has stopped: the firmware answers every frame
+       within a loop pass, bar a mask frame decoded a row a pass. While Z
+       homes on a printer that has not answered since homing began, the host
+       allows homing_ms (a port may hold the host's frames until Z is home). */
+    double silent_ms, homing_ms;
+    double mask_decode_ms;      /* a whole mask decoded at SERIAL_ROW_BYTE_US */
+    double waiting_since;       /* the host has waited for a reply since then */
+    double last_looked;         /* the host last read or waited on the line */
+    double longest_wait;        /* the longest wait for a reply that came, ms, */
+    double longest_homing_wait; /* ... outside homing and while Z homed */
+    int homing;                 /* the caller waits for Z to home */
+    const char *task;           /* what the caller is doing before a layer prints
+                                   ("planning"), for messages; NULL: the printer's state */
+    int answers_homing;         /* a STATUS showed Z moving while homing */
+    int homing_seen;            /* ... and the first such STATUS's height */
+    int32_t homing_z;
     /* the latest replies, each with a count so a caller sees a fresh one */
     link_status st;
     unsigned long status_count, identify_count, plan_count;
+    uint8_t status_ack;         /* the acknowledgement l->st came with */
     link_identify id;
     uint8_t plan[LINK_FRAME_MAX];
     size_t plan_size;
@@ -40,29 +58,57 @@ typedef struct serial_link {
        restarted MCU does); the re-HELLOs that followed them without progress */
     unsigned stalled, rehellos;
     int stray;
+    int failed;                 /* a resend in a reply's handling failed (and said so): its code */
 } serial_link;
 
 /* Resend rounds without progress, the printer answering out of step, after
    which the host says HELLO again to learn whether it restarted. */
 #define SERIAL_STALL_ROUNDS 8
+/* The longest homing of the ports in firmware/ports, in seconds: the RAMPS
+   board reads no frame while it homes (each of its one-step passes must beat
+   the step interval), and 220 mm of travel at 2.5 mm/s take 88 s, its slow
+   back-off and creep back (2.06 mm each at 0.25 mm/s) up to 16.5 s more. */
+#define SERIAL_HOMING_S 120
+/* A MASK_DATA frame is answered once decoded, a row a pass, and one frame
+   can hold a whole mask (an empty one is two bytes): the host allows, while
+   one waits, a whole mask's rows at this pace, microseconds per row byte.
+   The slowest port, RAMPS (ATmega2560, 16 MHz), took about 2.05 s for the
+   1,440 rows of 320 bytes of an empty 2560 x 1440 mask under simavr: 4.4 us
+   a byte (a row's CRC-32 and the pass around it). */
+#define SERIAL_ROW_BYTE_US 10
+/* A gap longer than this, ms, between two looks at the line (serial_pump,
+   a write waiting for room) is the host's own absence, not time it waited
+   for the printer. */
+#define SERIAL_AWAY_MS 1000
 
 /* Opens DEV raw 8N1 at a standard baud rate, says hello until the printer
-   answers (IDENTIFY), and sizes the window and timeouts. RC_OK, or a
-   complaint made (RC_USAGE for a bad rate). */
+   answers (IDENTIFY), and sizes the window and timeouts: a printer that
+   answers nothing for give_up_s, plus the time a window of frames takes on
+   the line both ways, has stopped. RC_OK, or a complaint made (RC_USAGE for
+   a bad rate). */
 int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s);
 void serial_close(serial_link *l);
-/* Reads what has arrived (waiting up to wait_ms), resends on a timeout; a
-   printer silent for give_up_s ends it with a complaint. A reply with
-   another boot id, or SERIAL_STALL_ROUNDS resend rounds without progress
-   and then an IDENTIFY with another boot id, ends it with RC_RESET and the
-   message of serial_restarted; no answer to that HELLO with RC_FAIL. */
+/* Reads what has arrived (waiting up to wait_ms), resends on a timeout. A
+   printer that answers nothing for silent_ms (homing_ms, see above) while
+   frames wait, or a line that takes no byte that long, ends it with
+   RC_LOST; a reply with another boot id, or SERIAL_STALL_ROUNDS resend
+   rounds without progress and then an IDENTIFY with another boot id, with
+   RC_RESET; no answer to that HELLO with RC_LOST. Each complaint is one
+   line made by serial_stopped. */
 int serial_pump(serial_link *l, int wait_ms);
+/* The one line for a print the printer ended or lost (rc returned): `what`
+   happened ("restarted (boot id 1 -> 2)"); at_layer: l->st's layer and
+   the last fully exposed are where the print stands, and it continues at
+   the layer after that one; z_kept: Z is still homed, so no --home. */
+int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept);
 /* Queues a frame, waiting while the printer's window is full. */
 int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size);
 /* A fresh STATUS in l->st: asked again if its reply is lost. */
 int serial_status(serial_link *l);
-/* Asks for STATUS until `done` holds (RC_FAIL after timeout_ms). */
-int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms);
+/* Asks for STATUS until `done` holds; after timeout_ms, RC_FAIL and "the
+   printer did not <what> in N s". */
+int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms,
+                const char *what);
 /* Page `first` of the printer's plan into l->plan: 1 if it came. */
 int serial_plan_page(serial_link *l, uint32_t first, int *rc);
 #endif

@@ -20,6 +20,8 @@ typedef struct fake {
     int endstop_broken;
     long steps;         /* steps this input so far */
     int halted;         /* the move under way was halted */
+    int lit;            /* M106 put the light on; no end given yet */
+    uint64_t lit_at;
 } fake;
 
 static void on_write(void *ctx, const uint8_t *data, size_t size)
@@ -36,6 +38,16 @@ static void on_uv(void *ctx, int on, uint64_t when)
 {
     fake *f = (fake *)ctx;
     if ((on != 0 && on != 1) || when != f->now || fw_axis_busy(&f->axis)) abort();
+    f->lit = on;
+    f->lit_at = when;
+}
+
+/* the light's end: never before M106 put it on (the fake keeps that tick) */
+static void on_uv_end(void *ctx, uint64_t when)
+{
+    fake *f = (fake *)ctx;
+    if (!f->lit || when <= f->lit_at || fw_axis_busy(&f->axis)) abort();
+    f->lit = 0;
 }
 
 static void on_motor(void *ctx, int on)
@@ -104,6 +116,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     io.ctx = &f;
     io.write = on_write;
     io.uv = on_uv;
+    io.uv_end = on_uv_end;
     io.motor = on_motor;
     io.moving = NULL;
     fw_gcode_init(&f.g, &f.axis, &io);

@@ -1,26 +1,24 @@
 /* The RAMPS 1.4 / ATmega2560 image (build/fw-ramps-test.elf) under simavr
    through tests/avr_run.c (build/avr-run), checked from its pin edges, which
    are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick):
-     - a 100-layer print in G-code mode as NanoDLP drives one (each move
-       waited for with Z_move_comp, the light on for a G4 dwell): every step
-       within 10 us of the tick motion.c's closed form gives it (a host
-       fw_axis on the board's config, the real firmware/motion.c, replays
-       each move from its first step), no interval under the speed limit,
-       the step count the moves' heights x steps/mm, the light never on
-       while Z moves, no step refused as late. G-code's light is on from
-       M106 to M107, lines the host sends when it likes: the firmware
-       switches both edges on Timer4 at the ticks the lines ran, so the
-       light lasts exactly from one line to the other, which is the G4 dwell
-       plus the host's round trip (as exact as the host, not the firmware):
-       what is asserted is that it is never shorter than the dwell;
+     - G-code mode: a 100-layer print as NanoDLP drives one (each move
+       waited for with Z_move_comp, the light on for a G4 dwell) and a
+       200-layer file printed by printrun's printcore: every step within
+       10 us of the tick motion.c's closed form gives it (a host fw_axis on
+       the board's config, the real firmware/motion.c, replays each move
+       from its first step), no interval under the speed limit, the step
+       count the moves' heights x steps/mm, the light never on while Z
+       moves, no step refused as late, every exposure its G4 dwell to
+       the tick (the dwell after M106 counts from M106 and Timer4 ends it,
+       so the host's round trips between the lines add nothing), and every
+       loop pass while Z moves shorter than a step interval at the top
+       speed (with Z still a G1 line's parse, in gcode.c, takes longer);
      - a binary-protocol print by the host tool (adaslice print), masks
        streaming while Z moves: the same step checks, and tests/zcheck.h's
        (each exposure at its layer's height, exactly its exposure in ticks,
        no light while Z moves, acceleration and speed within limits); every
        loop pass, its interrupts included, shorter than a step interval at
-       the top speed (16,000 cycles), while Z moves and while it is still
-       (the G-code print: while Z moves; a G1 line's parse, in gcode.c,
-       takes longer);
+       the top speed (16,000 cycles), while Z moves and while it is still;
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
        and it answers again afterwards. */
@@ -331,80 +329,178 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
     return worst;
 }
 
-#define LAYERS 100
 #define LAYER_UM 50
 #define PEEL_UM 100
-#define EXPOSE_MS 20
+/* a dwell well above a host's round trip, even a loaded machine's (the
+   light is on longer when the G4 comes after its end) */
+#define EXPOSE_MS 100
 #define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
 
-/* NanoDLP's way: per layer lift, lower to the layer, wait for Z_move_comp,
-   light on for a dwell, off. */
+/* Layer `layer` of a G-code print as resin hosts send it: the lift above
+   the last layer (from layer 2 on) and the way down to this one's top,
+   then the light on for a dwell and off. The moves go into `moves` (F300
+   and F180 are over the board's top speed, so both run at it). Returns the
+   number of lines in `lines`: the moves first, then M106, G4, M107. */
+static int gcode_layer(int layer, char lines[5][48], zmove *moves, size_t *n)
+{
+    const int32_t spmm = (int32_t)BOARD_STEPS_PER_MM;
+    int32_t top = layer * LAYER_UM * spmm / 1000;
+    int k = 0;
+    if (layer > 1) {
+        int32_t lift = (layer - 1) * LAYER_UM * spmm / 1000 + PEEL_UM * spmm / 1000;
+        snprintf(lines[k++], 48, "G1 Z%.3f F300", lift / (double)spmm);
+        moves[*n].target = lift;
+        moves[(*n)++].speed = 5 * BOARD_STEPS_PER_MM;
+    }
+    snprintf(lines[k++], 48, "G1 Z%.3f F180", top / (double)spmm);
+    moves[*n].target = top;
+    moves[(*n)++].speed = 3 * BOARD_STEPS_PER_MM;
+    snprintf(lines[k++], 48, "M106 S255");
+    snprintf(lines[k++], 48, "G4 P%d", EXPOSE_MS);
+    snprintf(lines[k++], 48, "M107");
+    return k;
+}
+
+/* A G-code print of `layers` from avr-run's log at `path`: every step
+   against the closed form, the light never on while Z moves, each exposure
+   its dwell to the tick, no step late, every pass while Z moves shorter
+   than a step interval at the top speed. */
+static void check_gcode_print(const char *path, const zmove *moves, size_t n, int layers, const char *who)
+{
+    avr_log l;
+    long worst;
+    uint64_t longest = 0, shortest = UINT64_MAX;
+    const uint64_t want = (uint64_t)EXPOSE_MS * CYCLES_PER_MS;
+    size_t k;
+    CHECK(read_avr_log(path, &l));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    worst = check_moves(&l, moves, n);
+    CHECKF(l.uvs == 2u * (size_t)layers, "%zu UV edges for %d layers", l.uvs, layers);
+    CHECKF(!l.steps_lit, "%zu steps with the light on", l.steps_lit);
+    for (k = 0; k + 1 < l.uvs; k += 2) {
+        /* M106's dwell is the exposure, to the tick: Timer4's compare unit
+           switches at both ends, whatever the host's round trips (simavr
+           puts a compare's pin edge out 0 or 1 cycle after the match) */
+        uint64_t lit = l.uv_at[k + 1] - l.uv_at[k];
+        if (lit > longest) longest = lit;
+        if (lit < shortest) shortest = lit;
+        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit + CYCLES_PER_TICK > want && lit < want + CYCLES_PER_TICK,
+               "exposure %zu: %llu cycles for a G4 P%d (%llu)", k / 2, (unsigned long long)lit, EXPOSE_MS,
+               (unsigned long long)want);
+        if (check_case_failed()) break;
+    }
+    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    /* bounded work a pass (fw.h) while Z moves; with Z still a G1 line's
+       parse (gcode.c) takes longer, which the queue covers */
+    CHECKF(l.worst_moving_pass < STEP_CYCLES, "a loop pass while Z moved took %lu cycles, a step comes every %lu", l.worst_moving_pass,
+           STEP_CYCLES);
+    printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; light %.4f..%.4f ms for G4 P%d; "
+           "worst loop pass %lu cycles (%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
+           who, layers, l.steps, worst, (double)shortest / CYCLES_PER_MS, (double)longest / CYCLES_PER_MS, EXPOSE_MS,
+           l.worst_pass, l.worst_moving_pass, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.stack_peak);
+    free_avr_log(&l);
+}
+
+/* NanoDLP's way: each move waited for with Z_move_comp, then the light on
+   for a dwell, off. */
+#define NANODLP_LAYERS 100
 static void gcode_print_nanodlp_style(void)
 {
     avr_child c;
     const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "60", NULL};
-    static zmove moves[2 * LAYERS + 1];
+    static zmove moves[2 * NANODLP_LAYERS + 1];
     char got[256];
-    size_t n = 0, k;
+    size_t n = 0;
     int layer, ok = 1;
-    avr_log l;
-    long worst;
-    uint64_t longest = 0;
-    const uint32_t peel_speed = 5 * BOARD_STEPS_PER_MM, layer_speed = 3 * BOARD_STEPS_PER_MM; /* F300, F180: over the top speed */
     if (!avr_start(&c, "build/test_avr/print.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf (make check builds both)"); avr_stop(&c); return; }
     got[0] = 0;
     ok &= gline(&c, "M115", "ok", 10, got, sizeof got);
     CHECKF(ok && strstr(got, "FIRMWARE_NAME:adaslice"), "M115: %s", got);
     ok &= gline(&c, "G28", "ok", 30, NULL, 0);
     ok &= gline(&c, "G90", "ok", 5, NULL, 0);
-    for (layer = 1; ok && layer <= LAYERS; layer++) {
-        char cmd[64];
-        int32_t top = layer * LAYER_UM * (int32_t)BOARD_STEPS_PER_MM / 1000;
-        if (layer > 1) {
-            int32_t lift = (layer - 1) * LAYER_UM * (int32_t)BOARD_STEPS_PER_MM / 1000 + PEEL_UM * (int32_t)BOARD_STEPS_PER_MM / 1000;
-            snprintf(cmd, sizeof cmd, "G1 Z%.3f F300", lift / (double)BOARD_STEPS_PER_MM);
-            ok &= gline(&c, cmd, "Z_move_comp", 10, NULL, 0);
-            moves[n].target = lift;
-            moves[n++].speed = peel_speed;
-        }
-        snprintf(cmd, sizeof cmd, "G1 Z%.3f F180", top / (double)BOARD_STEPS_PER_MM);
-        ok &= gline(&c, cmd, "Z_move_comp", 10, NULL, 0);
-        moves[n].target = top;
-        moves[n++].speed = layer_speed;
-        ok &= gline(&c, "M106 S255", "ok", 5, NULL, 0);
-        ok &= gline(&c, "G4 P" "20", "ok", 5, NULL, 0);
-        ok &= gline(&c, "M107", "ok", 5, NULL, 0);
+    for (layer = 1; ok && layer <= NANODLP_LAYERS; layer++) {
+        char lines[5][48];
+        int k, count = gcode_layer(layer, lines, moves, &n);
+        for (k = 0; ok && k < count; k++) ok &= gline(&c, lines[k], lines[k][0] == 'G' && lines[k][1] == '1' ? "Z_move_comp" : "ok", 10, NULL, 0);
     }
     CHECKF(ok, "the G-code stream stopped at layer %d", layer - 1);
     {
-        /* M107's light goes off on Timer4 a shift after the line (the same
-           shift as M106's start): let the simulation run past it */
+        /* the last exposure ends on Timer4 a shift after its dwell: let the
+           simulation run past it */
         struct timespec ts = {0, 200000000};
         nanosleep(&ts, NULL);
     }
     CHECKF(avr_stop(&c) == 0, "avr-run failed");
     if (check_case_failed()) return;
-    CHECK(read_avr_log("build/test_avr/print.log", &l));
-    worst = check_moves(&l, moves, n);
-    CHECKF(l.uvs == 2 * LAYERS, "%zu UV edges for %d layers", l.uvs, LAYERS);
-    CHECKF(!l.steps_lit, "%zu steps with the light on", l.steps_lit);
-    for (k = 0; k + 1 < l.uvs; k += 2) {
-        /* from M106's tick to M107's: the dwell and the host's round trip,
-           switched by Timer4's compare unit, so whole ticks */
-        uint64_t lit = l.uv_at[k + 1] / CYCLES_PER_TICK - l.uv_at[k] / CYCLES_PER_TICK;
-        if (lit > longest) longest = lit;
-        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit >= (uint64_t)EXPOSE_MS * (BOARD_CLOCK_HZ / 1000u),
-               "exposure %zu: %llu ticks for a G4 P%d", k / 2, (unsigned long long)lit, EXPOSE_MS);
+    check_gcode_print("build/test_avr/print.log", moves, n, NANODLP_LAYERS, "NanoDLP-style");
+}
+
+/* printrun's printcore (Debian's printrun) prints a 200-layer G-code file
+   over avr-run's pty: numbered, checksummed lines, one in flight, each sent
+   on the last one's ok (a move's comes as it starts; the firmware holds the
+   next line until Z has stopped). */
+#define PRINTCORE_LAYERS 200
+static void gcode_print_by_printcore(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "900", "--timeout", "120", NULL};
+    static zmove moves[2 * PRINTCORE_LAYERS + 1];
+    char job[256], out[256], *text;
+    size_t n = 0;
+    int layer, st = -1, sent = 0, oks = 0;
+    const char *line;
+    FILE *f;
+    pid_t pc;
+    double t0;
+    snprintf(job, sizeof job, "%s", cli_path("printcore200.gcode"));
+    snprintf(out, sizeof out, "%s", cli_path("printcore200.out"));
+    f = fopen(job, "w");
+    if (!f) { CHECK(!"cannot write the G-code file"); return; }
+    fputs("; 200 layers of 50 um, NanoDLP's layer (lift, down, M106, G4, M107)\nG28\nG90\n", f);
+    for (layer = 1; layer <= PRINTCORE_LAYERS; layer++) {
+        char lines[5][48];
+        int k, count = gcode_layer(layer, lines, moves, &n);
+        for (k = 0; k < count; k++) fprintf(f, "%s\n", lines[k]);
+    }
+    fputs("M18\n", f);
+    CHECK(fclose(f) == 0);
+    if (!avr_start(&c, "build/test_avr/printcore.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf"); avr_stop(&c); return; }
+    close(c.tty); /* printcore opens the pty itself */
+    c.tty = 0;
+    fflush(NULL);
+    pc = fork();
+    if (pc == 0) {
+        int fd = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); }
+        execl("/usr/bin/python3", "python3", "/usr/bin/printcore", "-v", c.pty, job, (char *)NULL);
+        _exit(127);
+    }
+    t0 = now_s();
+    while (pc > 0 && now_s() - t0 < 300) {
+        struct timespec ts = {0, 50000000};
+        int s;
+        if (waitpid(pc, &s, WNOHANG) == pc) { st = WIFEXITED(s) ? WEXITSTATUS(s) : -1; pc = 0; break; }
+        nanosleep(&ts, NULL);
+    }
+    if (pc > 0) { kill(pc, SIGKILL); waitpid(pc, NULL, 0); }
+    {
+        struct timespec ts = {0, 200000000}; /* past the last exposure's end */
+        nanosleep(&ts, NULL);
+    }
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    text = cli_read(out);
+    CHECKF(st == 0, "printcore (Debian printrun) exited %d after %.0f s: %.300s", st, now_s() - t0, text ? text : "");
+    for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
+        if (!strncmp(line, "RECV: ok", 8)) oks++;
+        CHECKF(strncmp(line, "RECV: Error", 11) && strncmp(line, "RECV: echo:Exposure", 19), "printcore was told %.70s", line);
         if (check_case_failed()) break;
     }
-    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
-    CHECKF(l.worst_moving_pass < STEP_CYCLES, "a loop pass while Z moved took %lu cycles, a step comes every %lu", l.worst_moving_pass,
-           STEP_CYCLES);
-    printf("    avr: %zu steps, worst step %ld cycles from its tick; light %.3f..%.3f ms for G4 P%d; worst loop pass %lu cycles "
-           "(%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
-           l.steps, worst, (double)EXPOSE_MS, (double)longest / (BOARD_CLOCK_HZ / 1000u), EXPOSE_MS, l.worst_pass, l.worst_moving_pass,
-           (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.stack_peak);
-    free_avr_log(&l);
+    free(text);
+    /* G28, G90, M18 and per layer its moves and three lines */
+    CHECKF(sent == 3 + 5 * PRINTCORE_LAYERS - 1 && oks >= sent, "printcore sent %d lines, %d acknowledged", sent, oks);
+    if (check_case_failed()) return;
+    check_gcode_print("build/test_avr/printcore.log", moves, n, PRINTCORE_LAYERS, "printcore");
 }
 
 #define BPRINT_PEEL_UM 300
@@ -532,6 +628,7 @@ void test_avr(void)
     if (!cli_begin("adaslice-avr")) { CHECK(!"no temporary directory"); return; }
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", watchdog_resets_a_hung_loop);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_print_nanodlp_style);
+    RUN_NEEDING("simavr, avr-gcc and printcore (Debian printrun): build/avr-run, build/fw-ramps-test.elf", gcode_print_by_printcore);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);
     cli_end();
 }

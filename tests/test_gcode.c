@@ -35,6 +35,8 @@ typedef struct machine {
     int uv, motor;             /* as the io left them */
     int uv_calls;
     uint64_t uv_when;
+    int uv_end_calls;
+    uint64_t uv_end_at;        /* the tick the port's timer was to end the light */
     int not_ascii;             /* a reply byte outside printable ASCII */
 } machine;
 
@@ -67,6 +69,14 @@ static void on_uv(void *ctx, int on, uint64_t when)
     CHECK(!fw_axis_busy(&m->axis)); /* never light while Z moves */
 }
 
+static void on_uv_end(void *ctx, uint64_t when)
+{
+    machine *m = (machine *)ctx;
+    CHECK(m->uv == 1); /* only a light M106 put on */
+    m->uv_end_calls++;
+    m->uv_end_at = when;
+}
+
 static void on_motor(void *ctx, int on)
 {
     ((machine *)ctx)->motor = on;
@@ -80,6 +90,7 @@ static void machine_init(machine *m, const fw_axis_config *c, int32_t phys)
     io.ctx = m;
     io.write = on_write;
     io.uv = on_uv;
+    io.uv_end = on_uv_end;
     io.motor = on_motor;
     io.moving = NULL;
     fw_gcode_init(&m->g, &m->axis, &io);
@@ -632,8 +643,60 @@ static void dwell(void)
     start = m.now;
     settle(&m);
     CHECK(m.now == m.last_step + 100000);
+    CHECK(m.uv_end_calls == 0); /* M106 before the move: not an exposure's dwell */
     EXPECT(&m, "ok\nZ_move_comp\nok\n");
     CHECK(start < m.last_step);
+}
+
+/* M106, G4, M107 (NanoDLP's layer): the dwell after M106 counts from M106
+   and the port's timer ends the light at its end, so the host's round trips
+   between the lines add nothing to the exposure. */
+static void lit_dwell_is_the_exposure(void)
+{
+    static machine m;
+    fw_axis_config c = test_config();
+    uint64_t lit;
+    machine_init(&m, &c, 10);
+    lit = m.now;
+    host(&m, "M106 S255\n");
+    EXPECT(&m, "ok\n");
+    m.now += 3000; /* the ok's and the next line's way over the wire */
+    host(&m, "G4 P100\n");
+    CHECKF(m.uv_end_calls == 1 && m.uv_end_at == lit + 100000, "the light to end at %llu, M106 at %llu",
+           (unsigned long long)m.uv_end_at, (unsigned long long)lit);
+    CHECK(fw_gcode_run(&m.g, m.now) == lit + 100000);
+    EXPECT(&m, "");
+    CHECK(fw_gcode_run(&m.g, lit + 100000) == FW_NEVER);
+    EXPECT(&m, "ok\n");
+    m.now = lit + 100000 + 2000;
+    host(&m, "M107\n");
+    EXPECT(&m, "ok\n");
+    CHECK(m.uv == 0 && m.uv_calls == 2);
+    /* a dwell with the light out is a plain one, from its own line */
+    host(&m, "G4 P10\n");
+    CHECK(m.uv_end_calls == 1 && fw_gcode_run(&m.g, m.now) == m.now + 10000);
+    settle(&m);
+    EXPECT(&m, "ok\n");
+    /* only the first dwell after M106 is the exposure */
+    lit = m.now;
+    host(&m, "M106\nG4 P5\n");
+    settle(&m);
+    host(&m, "G4 P5\n");
+    settle(&m);
+    EXPECT(&m, "ok\nok\nok\n");
+    CHECK(m.uv_end_calls == 2 && m.uv_end_at == lit + 5000 && m.now == lit + 10000);
+    /* a dwell that comes after its time: the light out at once, ok now */
+    lit = m.now;
+    host(&m, "M106\n");
+    m.now += 50000;
+    host(&m, "G4 P20\n");
+    EXPECT(&m, "ok\necho:Exposure ran over: G4 came 30.000 ms after its end\nok\n");
+    CHECK(m.uv_end_calls == 3 && m.uv_end_at == lit + 20000);
+    /* M106 S0 puts it out: the dwell after it is plain */
+    host(&m, "M106 S0\nG4 P1\n");
+    settle(&m);
+    CHECK(m.uv_end_calls == 3);
+    EXPECT(&m, "ok\nok\n");
 }
 
 /* The core may halt a move; no Z_move_comp then, and Z is where the axis is. */
@@ -673,6 +736,7 @@ static void io_without_callbacks(void)
     none.ctx = NULL;
     none.write = NULL;
     none.uv = NULL;
+    none.uv_end = NULL;
     none.motor = NULL;
     none.moving = NULL;
     fw_gcode_init(&bare, &m.axis, &none);
@@ -707,6 +771,7 @@ void test_gcode(void)
     RUN(long_lines);
     RUN(binary_noise);
     RUN(dwell);
+    RUN(lit_dwell_is_the_exposure);
     RUN(halted_move);
     RUN(io_without_callbacks);
 }

@@ -8,6 +8,9 @@
 #include "zcheck.h"
 #include "print_report.h"
 #include "../adaslice.h"
+#include "../link/frame.h"
+#include "../link/messages.h"
+#include "../link/tty.h"
 #include "meshgen.h"
 #include <errno.h>
 #include <poll.h>
@@ -60,11 +63,13 @@ static int child_start(child *c, char *const argv[], const char *prefix, double 
     }
 }
 
-/* SIGTERM, then the exit status (-1 if it did not exit normally). */
+/* SIGTERM (after SIGCONT, for one a test halted), then the exit status (-1
+   if it did not exit normally). */
 static int child_stop(child *c)
 {
     int st, i;
     if (c->pid <= 0) return -1;
+    kill(c->pid, SIGCONT);
     kill(c->pid, SIGTERM);
     for (i = 0; i < 100; i++) {
         if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); c->pid = 0; return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
@@ -305,13 +310,15 @@ static void print_through_a_faulty_line(void)
     cli_free(&r);
 }
 
-/* The line goes dead for 5 s mid-print: the printer pauses itself (UV off, Z
-   held), and the print resumes and completes when the line is back. */
+/* The line goes dead for 2 s mid-print, more than the printer's link timeout
+   (1 s) and less than the host's --give-up (3 s): the printer pauses itself
+   (UV off, Z held), and the print resumes and completes when the line is
+   back. */
 static void print_survives_a_lost_link(void)
 {
     child sim, relay;
     cli_result r;
-    const char *faults[] = {"--outage-after", "12000", "--outage-for", "5", NULL};
+    const char *faults[] = {"--outage-after", "12000", "--outage-for", "2", NULL};
     if (!start_relayed(&sim, &relay, cli_path("sim3.log"), cli_path("relay3.txt"), faults)) return;
     r = run_print(relay.line + 4, cli_path("report3.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
@@ -599,6 +606,284 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     print_report_free(&rep);
 }
 
+/* The host's one line when the printer stopped answering: exit 5 within 5 s
+   of the halt (the bound, --give-up's 3 s and a window of frames' time on
+   the line, plus the host's poll). Returns the layer it says to resume from
+   (0 when the print had not begun, -1 if the line is not there); `where` is
+   what the line must say of the state or layer the printer was in. */
+static int check_lost_message(int status, double took, const char *out, const char *where)
+{
+    const char *at = out ? strstr(out, "stopped answering (nothing for ") : NULL, *p;
+    unsigned k = 0, lines = 0;
+    double silent = 0;
+    for (p = out; p && (p = strstr(p, "adaslice: ")) != NULL; p++) lines++;
+    CHECKF(status == 5 && took < 5 && lines == 1, "after the halt: exit %d in %.2f s, %u messages: %s", status, took, lines,
+           out ? out : "");
+    CHECKF(at && sscanf(at, "stopped answering (nothing for %lf s)", &silent) == 1 && silent >= 3 && silent < 4,
+           "the silence: %s", out ? out : "");
+    CHECKF(at && strstr(at, where) && strstr(at, "Z must be homed before printing again"), "not '%s': %s", where,
+           out ? out : "");
+    if (check_case_failed() || !at) return -1;
+    if (strstr(at, "before this run exposed a layer")) return 0;
+    at = strstr(at, "--resume-from ");
+    CHECKF(at && sscanf(at, "--resume-from %u --home", &k) == 1 && strstr(at, "--home"), "no layer to resume from: %s", out);
+    return check_case_failed() ? -1 : (int)k;
+}
+
+/* The simulated MCU halted mid-exposure (SIGSTOP: no byte read or sent, no
+   timer runs): the host exits 5 within 5 s, naming the layer, the last one
+   fully exposed, that Z must be homed and how to continue. Let go again
+   (SIGCONT), the printer pauses itself for the silent link, keeping the
+   light it owes, and the command the line gives resumes it in place: every
+   layer gets exactly its light. */
+static void mcu_halted_mid_exposure_on_the_simulator(void)
+{
+    child sim;
+    char port[256], *out, k[16];
+    /* 20 s bottom exposures: 2 s of the wall at --speed 10 */
+    const char *extra[] = {"--exposure", "0.1", "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", "20",
+                           "--report", cli_path("report11.json"), NULL};
+    pid_t pid;
+    int status, layer;
+    double halted, took;
+    cli_result r;
+    if (!start_sim(&sim, cli_path("sim11.log"), "10")) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print11.out"));
+    CHECK(wait_for_exposures(cli_path("sim11.log"), 2));
+    sleep_ms(300);
+    kill(sim.pid, SIGSTOP);
+    halted = seconds_now();
+    status = wait_exit(pid, 30);
+    took = seconds_now() - halted;
+    out = cli_read(cli_path("print11.out"));
+    layer = check_lost_message(status, took, out, "at layer 2 (exposing): layer 1 was the last fully exposed");
+    printf("    halted mid-exposure: exit %d %.2f s after SIGSTOP\n", status, took);
+    free(out);
+    CHECKF(layer == 2, "resume from layer %d", layer);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    kill(sim.pid, SIGCONT);
+    sleep_ms(2000); /* the printer's link timeout, 1 s, twice */
+    snprintf(k, sizeof k, "%d", layer);
+    r = cli_run("print", MODEL, "--scale", "15", "--port", port, "--exposure", "0.1", "--penetration", "0.1", "--bottom-layers",
+                "2", "--bottom-exposure", "20", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle",
+                "0.05", "--resume-from", k, "--home", "--report", cli_path("report11.json"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "resuming layer 2 in place"), "resume: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_resumed_in_place(cli_path("sim11.log"), cli_path("report11.json"), 1, 1);
+}
+
+/* Halted where the print has not begun: while Z homes (the simulator answers
+   STATUS while it homes, so the host holds it to --give-up then too, not to
+   the homing allowance of a port that reads nothing while homing) and while
+   it plans (fw-sim --stop-at-state 3 stops itself as the profile arrives). */
+static void mcu_halted_while_homing_or_planning(void)
+{
+    int c;
+    for (c = 0; c < 2; c++) {
+        child sim;
+        char port[256], *out, *log = NULL;
+        const char *homing[] = {"--z-start", "30", NULL}, *planning[] = {"--stop-at-state", "3", NULL}, *extra[] = {CURE, NULL};
+        pid_t pid;
+        int status, i;
+        double halted = 0, took;
+        /* --speed 1: 6 s of homing from 30 mm at 5 mm/s */
+        if (!start_sim_with(&sim, cli_path("sim12.log"), c ? "10" : "1", c ? planning : homing)) return;
+        snprintf(port, sizeof port, "%s", sim.line + 4);
+        pid = hand_print_in_background(port, extra, cli_path("print12.out"));
+        for (i = 0; i < 1000 && !halted; i++) {
+            free(log);
+            log = cli_read(cli_path("sim12.log"));
+            if (c == 0 && log && strstr(log, " step -1 ")) {
+                sleep_ms(500);
+                kill(sim.pid, SIGSTOP);
+                halted = seconds_now();
+            } else if (c == 1 && log && strstr(log, " halt")) {
+                halted = seconds_now();
+            } else {
+                sleep_ms(10);
+            }
+        }
+        free(log);
+        CHECKF(halted, "%s never began", c ? "planning" : "homing");
+        status = wait_exit(pid, 150);
+        took = seconds_now() - halted;
+        out = cli_read(cli_path("print12.out"));
+        CHECK(check_lost_message(status, took, out, c ? "while planning, before" : "while homing, before") == 0);
+        printf("    halted while %s: exit %d %.2f s after the halt\n", c ? "planning" : "homing", status, took);
+        free(out);
+        child_stop(&sim);
+        if (check_case_failed()) return;
+    }
+}
+
+/* Talks to the printer on `port` as a second host would: HELLO, then `type`
+   (a message without a payload), then STATUS, each sent again until its
+   answer comes (2 s at most). The state the printer reports, -1 if it does
+   not answer. */
+static int second_host_sends(const char *port, uint8_t type)
+{
+    const uint8_t types[3] = {LINK_MSG_HELLO, type, LINK_MSG_STATUS};
+    uint8_t frame[LINK_FRAME_MAX], hello[LINK_SIZE_HELLO];
+    link_deframer rx;
+    link_hello h;
+    link_status st;
+    int fd = open(port, O_RDWR | O_NOCTTY | O_NONBLOCK), step, state = -1;
+    if (fd < 0 || tty_raw(fd, 115200)) { if (fd >= 0) close(fd); return -1; }
+    link_deframer_init(&rx, link_mcu_to_host_type);
+    h.version = LINK_PROTOCOL_VERSION;
+    for (step = 0; step < 3; step++) {
+        uint8_t seq = (uint8_t)(100 + step);
+        size_t n = link_frame_build(frame, seq, types[step], hello, step ? 0 : link_put_hello(hello, &h));
+        double t0 = seconds_now(), sent = 0;
+        int got = 0;
+        while (!got && seconds_now() - t0 < 2) {
+            uint8_t b;
+            size_t m;
+            if (seconds_now() - sent > 0.25) { if (write(fd, frame, n) != (ssize_t)n) break; sent = seconds_now(); }
+            if (read(fd, &b, 1) != 1) { sleep_ms(2); continue; }
+            link_deframe_push(&rx, b);
+            while (!got && (m = link_deframe_next(&rx)) != 0) {
+                /* the answer to this step: IDENTIFY, the ACK of `type`, STATUS_REPLY */
+                uint8_t t = rx.buf[2];
+                if (step == 0) got = t == LINK_MSG_IDENTIFY;
+                else if (step == 1) got = t == LINK_MSG_ACK && rx.buf[1] == (uint8_t)(seq + 1);
+                else if (t == LINK_MSG_STATUS_REPLY && link_get_status(&st, rx.buf + 3, m - LINK_FRAME_MIN)) got = 1, state = st.state;
+                link_deframe_consume(&rx);
+            }
+        }
+        if (!got) break;
+    }
+    close(fd);
+    return state;
+}
+
+/* The host's one line when the printer stopped printing (an ABORT, a fault):
+   exit 1, the layer, the last fully exposed, and the layer to continue from
+   (returned; 0 if the line is not there), with --home when Z was lost. */
+static unsigned check_stop_message(int status, const char *out, const char *why, int z_lost)
+{
+    const char *at = out ? strstr(out, "stopped printing (") : NULL, *p;
+    unsigned k = 0, layer = 0, exposed = 0, lines = 0;
+    for (p = out; p && (p = strstr(p, "adaslice: ")) != NULL; p++) lines++;
+    CHECKF(status == 1 && lines == 1 && at && !strncmp(at + 18, why, strlen(why)), "exit %d, %u messages: %s", status, lines,
+           out ? out : "");
+    if (!at || !(at = strstr(at, ") at layer ")) || sscanf(at, ") at layer %u: layer %u was the last fully exposed", &layer,
+                                                               &exposed) != 2) {
+        CHECKF(0, "no layers in: %s", out ? out : "");
+        return 0;
+    }
+    at = strstr(at, "--resume-from ");
+    CHECKF(at && sscanf(at, "--resume-from %u", &k) == 1 && k == exposed + 1 && (strstr(at, "--home") != NULL) == z_lost &&
+           (strstr(out, "Z must be homed") != NULL) == z_lost, "the way on: %s", out);
+    return k;
+}
+
+/* Resumes a print the printer stopped and still knows (the same job, Z as
+   `home` asks) from layer k: a layer either side is refused, naming k (exit
+   2); k prints the rest, each layer once at its exact height with its light
+   to the tick (from the show of layer k on). */
+static void resume_a_stopped_print(child *sim, const char *log, unsigned k, int home)
+{
+    char port[256], wrong[16], right[16];
+    cli_result r;
+    sim_log l;
+    print_report rep;
+    snprintf(port, sizeof port, "%s", sim->line + 4);
+    snprintf(wrong, sizeof wrong, "%u", k + 1);
+    snprintf(right, sizeof right, "%u", k);
+#define STOPPED_ARGS MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", \
+                     "--settle", "0.05", "--resume-from"
+    r = cli_run("print", STOPPED_ARGS, wrong, NULL);
+    snprintf(wrong, sizeof wrong, "resume from %u", k);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, wrong), "--resume-from %u: %d %s", k + 1, r.status, r.err);
+    cli_free(&r);
+    if (home) {
+        r = cli_run("print", STOPPED_ARGS, right, NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "not homed") && strstr(r.err, "--home") &&
+               strstr(r.err, right), "unhomed: %d %s", r.status, r.err);
+        cli_free(&r);
+    }
+    r = home ? cli_run("print", STOPPED_ARGS, right, "--home", "--report", cli_path("report13.json"), NULL)
+             : cli_run("print", STOPPED_ARGS, right, "--report", cli_path("report13.json"), NULL);
+#undef STOPPED_ARGS
+    CHECKF(r.status == 0, "--resume-from %u: exit %d: %s", k, r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(sim) == 0, "the simulator failed");
+    if (check_case_failed()) return;
+    CHECK(read_sim_log(log, &l) && read_print_report(cli_path("report13.json"), &rep));
+    if (!check_case_failed()) {
+        size_t from = nth_show_from_end(&l, rep.layers - k + 1);
+        zsummary s;
+        CHECK(rep.first == k);
+        s = check_record_from(&l, &rep, from, k);
+        CHECKF(s.shows == rep.layers - k + 1, "%zu layers shown from layer %u of %u", s.shows, k, rep.layers);
+    }
+    free(l.ev);
+    print_report_free(&rep);
+}
+
+/* A second host sends ABORT mid-print (the printing host held still the
+   while, SIGSTOP): the printer stops, Z homed, the plan and the job kept.
+   The printing host, let go, finds its frames out of step, says HELLO again
+   (the same boot id), and ends with exit 1 and one line naming the layer to
+   continue from: resuming there prints the rest, without --home. */
+static void aborted_print_resumes(void)
+{
+    child sim;
+    char port[256], *out;
+    const char *extra[] = {CURE, NULL};
+    pid_t pid;
+    int status, state;
+    unsigned k;
+    if (!start_sim(&sim, cli_path("sim13.log"), "10")) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print13.out"));
+    CHECK(wait_for_exposures(cli_path("sim13.log"), 5));
+    kill(pid, SIGSTOP);
+    state = second_host_sends(port, LINK_MSG_ABORT);
+    kill(pid, SIGCONT);
+    CHECKF(state == LINK_STATE_READY, "after ABORT the printer is %s", state < 0 ? "silent" : link_state_name((unsigned)state));
+    status = wait_exit(pid, 30);
+    out = cli_read(cli_path("print13.out"));
+    k = check_stop_message(status, out, "aborted", 0);
+    free(out);
+    CHECKF(k >= 5, "continue from layer %u", k);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    resume_a_stopped_print(&sim, cli_path("sim13.log"), k, 0);
+}
+
+/* A step the timer cannot take on time after the 4th exposure (fw-sim
+   --late-step-after-exposure 4): the printer stops dead in the peel, Z
+   unhomed (STEP_LATE); the host ends with exit 1 and one line: layer 4 the
+   last fully exposed, Z to be homed, --resume-from 5 --home. Without --home
+   that is refused (exit 2); with it Z homes and layers 5 on print. */
+static void step_late_print_resumes_with_home(void)
+{
+    child sim;
+    const char *opts[] = {"--late-step-after-exposure", "4", NULL};
+    cli_result r;
+    char *both;
+    unsigned k;
+    if (!start_sim_with(&sim, cli_path("sim14.log"), "10", opts)) return;
+    r = run_print(sim.line + 4, cli_path("report14.json"));
+    both = (char *)malloc(strlen(r.out) + strlen(r.err) + 1);
+    if (both) { strcpy(both, r.out); strcat(both, r.err); }
+    CHECK(cli_one_message(r.err));
+    k = check_stop_message(r.status, both, "a Z step could not be issued on time", 1);
+    free(both);
+    cli_free(&r);
+    CHECKF(k == 5, "continue from layer %u", k);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    {
+        char *log = cli_read(cli_path("sim14.log"));
+        CHECK(log && strstr(log, " late\n"));
+        free(log);
+    }
+    resume_a_stopped_print(&sim, cli_path("sim14.log"), k, 1);
+}
+
 /* adaslice slice writes masks.rle; print JOBDIR sends its plan (PLAN_SET)
    and streams its masks: the display shows exactly the job's masks. */
 static void print_a_sliced_job(void)
@@ -744,10 +1029,11 @@ static void short_print_under_qemu(void)
     cli_free(&r);
 }
 
-/* QEMU's system_reset mid-print, from its monitor: the image starts again
-   with another boot id (a counter in RAM that startup does not clear), and
-   the host stops within 5 s with exit 4 and the restart message. */
-static void mcu_reset_mid_print_under_qemu(void)
+/* The short print under QEMU with its monitor on a socket; about 2 s into
+   the printing, `command` goes to the monitor. The host's exit status and
+   the seconds from the command to the host's exit; its output (to free),
+   NULL if QEMU did not start. */
+static char *qemu_print_then(const char *command, const char *out_name, int *status, double *took)
 {
     child qemu;
     char monitor[100], mon_opt[140], port[64] = "", *at, *out = NULL;
@@ -760,17 +1046,18 @@ static void mcu_reset_mid_print_under_qemu(void)
                           "--return-speed", "10", "--settle", "0.02", NULL};
     char *pargv[40];
     struct sockaddr_un addr;
-    int i, n = 0, status, fd;
-    unsigned old_id = 0, new_id = 0, layer;
-    double reset_at = 0, took;
+    int i, n = 0, fd;
+    double sent_at = 0;
     pid_t pid;
+    *status = -1;
+    *took = 0;
     /* a socket's path is at most 107 bytes */
     CHECKF(snprintf(monitor, sizeof monitor, "%s", cli_path("qemu.monitor")) < (int)sizeof monitor, "%s: too long", cli_path("qemu.monitor"));
     snprintf(mon_opt, sizeof mon_opt, "unix:%s,server=on,wait=off", monitor);
     if (!child_start(&qemu, argv, "char device redirected to ", 20)) {
         CHECK(!"qemu-system-arm did not start with build/fw-mps2-busy.elf");
         child_stop(&qemu);
-        return;
+        return NULL;
     }
     at = strstr(qemu.line, "/dev/");
     for (i = 0; at && at[i] && at[i] != ' ' && i < 63; i++) port[i] = at[i];
@@ -778,10 +1065,10 @@ static void mcu_reset_mid_print_under_qemu(void)
     for (i = 0; base[i]; i++) pargv[n++] = (char *)base[i];
     for (i = 0; extra[i]; i++) pargv[n++] = (char *)extra[i];
     pargv[n] = NULL;
-    pid = print_in_background(pargv, cli_path("print10.out"));
+    pid = print_in_background(pargv, cli_path(out_name));
     /* into the print: planned, homed, printing, a few of its 21 layers */
     for (i = 0; i < 3000; i++) {
-        out = cli_read(cli_path("print10.out"));
+        out = cli_read(cli_path(out_name));
         if (out && strstr(out, "printing layers 1 to ")) break;
         free(out);
         out = NULL;
@@ -796,20 +1083,48 @@ static void mcu_reset_mid_print_under_qemu(void)
     snprintf(addr.sun_path, sizeof addr.sun_path, "%s", monitor);
     CHECKF(fd >= 0 && connect(fd, (struct sockaddr *)&addr, sizeof addr) == 0, "QEMU's monitor %s: %s", monitor, strerror(errno));
     if (fd >= 0) {
-        const char cmd[] = "system_reset\n";
-        CHECK(write(fd, cmd, sizeof cmd - 1) == (ssize_t)(sizeof cmd - 1));
-        reset_at = seconds_now();
+        size_t len = strlen(command);
+        CHECK(write(fd, command, len) == (ssize_t)len && write(fd, "\n", 1) == 1);
+        sent_at = seconds_now();
     }
-    status = wait_exit(pid, 60);
-    took = seconds_now() - reset_at;
+    *status = wait_exit(pid, 60);
+    *took = seconds_now() - sent_at;
     if (fd >= 0) close(fd);
-    out = cli_read(cli_path("print10.out"));
-    CHECKF(status == 4 && took < 5, "after system_reset: exit %d in %.2f s: %s", status, took, out ? out : "");
+    child_stop(&qemu);
+    return cli_read(cli_path(out_name));
+}
+
+/* QEMU's system_reset mid-print, from its monitor: the image starts again
+   with another boot id (a counter in RAM that startup does not clear), and
+   the host stops within 5 s with exit 4 and the restart message. */
+static void mcu_reset_mid_print_under_qemu(void)
+{
+    int status;
+    unsigned old_id = 0, new_id = 0, layer;
+    double took;
+    char *out = qemu_print_then("system_reset", "print10.out", &status, &took);
+    if (!out) return;
+    CHECKF(status == 4 && took < 5, "after system_reset: exit %d in %.2f s: %s", status, took, out);
     layer = restart_message(out, &old_id, &new_id);
     CHECKF(layer >= 1 && old_id != new_id && old_id && new_id, "no restart message (boot id %u -> %u, layer %u): %s", old_id,
-           new_id, layer, out ? out : "");
+           new_id, layer, out);
+    printf("    system_reset: exit %d %.2f s after the command\n", status, took);
     free(out);
-    child_stop(&qemu);
+}
+
+/* QEMU's stop mid-print: the CPU halts (no byte read or sent, no timer), as
+   a board that hangs with its watchdog off or loses power to its MCU; the
+   host stops within 5 s with exit 5, naming the layer to resume from. */
+static void mcu_halted_mid_print_under_qemu(void)
+{
+    int status, layer;
+    double took;
+    char *out = qemu_print_then("stop", "print15.out", &status, &took);
+    if (!out) return;
+    layer = check_lost_message(status, took, out, "was the last fully exposed");
+    CHECKF(layer >= 1, "resume from layer %d: %s", layer, out);
+    printf("    stop: exit %d %.2f s after the command\n", status, took);
+    free(out);
 }
 
 /* printrun's printcore sends a G-code file to the simulator in G-code mode:
@@ -823,8 +1138,9 @@ static void printcore_drives_gcode_mode(void)
     const char *line;
     sim_log l;
     size_t k;
-    int uv = 0, moving_lit = 0;
+    int uv = 0, moving_lit = 0, exposures = 0;
     long pos;
+    uint64_t lit_at = 0, lit = 0;
     cli_write(cli_path("job.gcode"), "; a layer by hand\nG28\nG90\nG1 Z5 F300\nG4 P100\nM106 S255\nG4 P300\nM107\n"
                                      "G91\nG1 Z1.5 F600 ; relative\nG90\nM114\nG1 Z10\nM400\nM18\n");
     {
@@ -866,9 +1182,17 @@ static void printcore_drives_gcode_mode(void)
     pos = l.start_steps;
     for (k = 0; k < l.count; k++) {
         if (l.ev[k].kind == ZEV_STEP) { pos += l.ev[k].value; moving_lit += uv; }
-        if (l.ev[k].kind == ZEV_UV) uv = l.ev[k].value;
+        if (l.ev[k].kind == ZEV_UV) {
+            uv = l.ev[k].value;
+            if (uv) lit_at = l.ev[k].when;
+            else { lit = l.ev[k].when - lit_at; exposures++; }
+        }
     }
     CHECKF(pos == 10 * (long)l.steps_per_mm && !moving_lit && !uv, "ends at %ld steps; %d steps lit", pos, moving_lit);
+    /* M106's G4 P300 is the exposure to the tick, printcore's round trips
+       between the three lines not in it */
+    CHECKF(exposures == 1 && lit == 3 * l.tick_hz / 10, "%d exposures, the light on for %llu ticks for G4 P300", exposures,
+           (unsigned long long)lit);
     free(l.ev);
 }
 
@@ -944,11 +1268,16 @@ void test_print(void)
     RUN(ctrl_c_pauses_and_resume_finishes);
     RUN(host_killed_mid_exposure_resumes_in_place);
     RUN(mcu_reset_mid_print_on_the_simulator);
+    RUN(mcu_halted_mid_exposure_on_the_simulator);
+    RUN(mcu_halted_while_homing_or_planning);
+    RUN(aborted_print_resumes);
+    RUN(step_late_print_resumes_with_home);
     RUN(print_a_sliced_job);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", short_print_under_qemu);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_reset_mid_print_under_qemu);
+    RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_halted_mid_print_under_qemu);
     RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
     RUN(hung_loop_keeps_light_and_watchdog);
     cli_end();

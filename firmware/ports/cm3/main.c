@@ -24,16 +24,24 @@ static void port_step_pulse(void *ctx, int dir) { (void)ctx; board_step(dir); }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
 /* The light goes on when the core's loop gets to `when` (at or just after
    it); the UV alarm ends it that much later, so its length is exact. */
+/* the exposure's end on the UV alarm, and how late its start was */
+static uint64_t uv_end, uv_late;
+
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until)
 {
+    uint64_t now = cm3_ticks();
     (void)ctx;
     if (on) {
-        uint64_t now = cm3_ticks();
+        uv_late = now > when ? now - when : 0;
+        uv_end = until + uv_late;
         board_uv(1);
-        if (!cm3_alarm_at(CM3_ALARM_UV, (now > when ? now : when) + (until - when))) board_uv(0);
-    } else {
+        if (!cm3_alarm_at(CM3_ALARM_UV, uv_end)) board_uv(0);
+    } else if (when <= now) { /* a pause, an abort, a fault: now */
         (void)cm3_alarm_at(CM3_ALARM_UV, UINT64_MAX);
         board_uv(0);
+    } else if (when + uv_late < uv_end) {
+        uv_end = when + uv_late;
+        if (!cm3_alarm_at(CM3_ALARM_UV, uv_end)) board_uv(0);
     }
 }
 

@@ -18,6 +18,10 @@
        <tick> state <state> <flags>      the print state and STATUS flags
                                          (link/messages.h) whenever they change
        <tick> hang                       the loop stops (--hang-at-exposure)
+       <tick> halt                       the whole MCU stops (--stop-at-state):
+                                         the process stops itself (SIGSTOP)
+       <tick> late                       the step timer could not be armed
+                                         (--late-step-after-exposure)
        <tick> reset watchdog|signal      the MCU restarts: the watchdog was not
                                          refreshed, or SIGUSR1 (a reset button)
 
@@ -78,6 +82,12 @@ static const char USAGE[] =
     "  --link-timeout-ms MS  wall-clock silence that pauses a print          [1000]\n"
     "  --watchdog-ms MS      the watchdog's period, virtual time              [250]\n"
     "  --hang-at-exposure N  the loop hangs as the Nth exposure begins (tests) [never]\n"
+    "  --stop-at-state S     the MCU halts (the process stops itself, SIGSTOP: nothing\n"
+    "                        read or sent, no timer) when its print state first becomes S\n"
+    "                        (link/messages.h: 1 homing, 3 planning, 5 printing) (tests) [never]\n"
+    "  --late-step-after-exposure N\n"
+    "                        the first step after the Nth exposure cannot be armed in\n"
+    "                        time: a STEP_LATE fault (tests)                  [never]\n"
     "  --boot-id N           the first boot id (then one more each restart)   [random]\n"
     "  --help                this text\n";
 
@@ -87,7 +97,8 @@ typedef struct sim_options {
     unsigned long width, height, bits;
     double pitch_um, z_start, steps_per_mm, max_speed, accel, home_speed, z_max, home_travel;
     unsigned long max_bins, window, link_timeout_ms, watchdog_ms, boot_id;
-    unsigned long hang_at_exposure;
+    unsigned long hang_at_exposure, late_after_exposure;
+    long stop_at_state;
 } sim_options;
 
 /* The printer's hardware: the display buffers, the carriage, the log. */
@@ -104,6 +115,8 @@ typedef struct sim {
     unsigned long exposures;     /* UV turned on, since the start */
     unsigned long hang_at;       /* the loop hangs at this exposure (0 never) */
     int hang;                    /* ... which has begun */
+    long stop_at_state;          /* the MCU halts in this state (-1 never) */
+    unsigned long late_after;    /* a step arm fails after this exposure (0 never) */
     int32_t true_position;       /* steps above the endstop's switching point */
     uint8_t *display[2];
     size_t stride;               /* bytes per display row */
@@ -199,6 +212,12 @@ static int hw_step_arm(void *ctx, uint64_t when, int dir)
     sim *s = (sim *)ctx;
     (void)dir;
     if (when != FW_NEVER && when < s->now) return 0;
+    /* --late-step-after-exposure: once, as a timer that cannot be armed in time */
+    if (when != FW_NEVER && s->late_after && s->exposures >= s->late_after && s->uv_off_at == FW_NEVER) {
+        s->late_after = 0;
+        log_line(s, s->now, "late");
+        return 0;
+    }
     s->step_at = when;
     return 1;
 }
@@ -225,7 +244,10 @@ static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
         s->uv_off_at = until;
         if (++s->exposures == s->hang_at) s->hang = 1;
     } else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
-    else s->uv_off_at = FW_NEVER;
+    else if (when > s->now) { /* the timer puts it out */
+        if (when < s->uv_off_at) s->uv_off_at = when;
+        return;
+    } else s->uv_off_at = FW_NEVER;
     log_line(s, when, on ? "uv 1" : "uv 0");
 }
 
@@ -320,6 +342,13 @@ static void log_state(sim *s, const fw_state *fw)
     s->logged_flags = flags;
     snprintf(line, sizeof line, "state %d %d", fw->state, flags);
     log_line(s, s->now, line);
+    /* --stop-at-state: a halted MCU (a debugger's halt, QEMU's stop), until SIGCONT */
+    if (fw->state == s->stop_at_state) {
+        s->stop_at_state = -1;
+        log_line(s, s->now, "halt");
+        if (s->log) fflush(s->log);
+        raise(SIGSTOP);
+    }
 }
 
 /* A start of the MCU: at power-up (why NULL) and at each reset. The pins
@@ -415,6 +444,8 @@ static int parse_options(int argc, char **argv, sim_options *o)
     o->link_timeout_ms = 1000;
     o->watchdog_ms = 250;
     o->hang_at_exposure = 0;
+    o->late_after_exposure = 0;
+    o->stop_at_state = -1;
     o->boot_id = 0;
     for (i = 1; i < argc; i++) {
         const char *opt = argv[i], *v;
@@ -452,6 +483,12 @@ static int parse_options(int argc, char **argv, sim_options *o)
         else if (!strcmp(opt, "--link-timeout-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->link_timeout_ms);
         else if (!strcmp(opt, "--watchdog-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->watchdog_ms);
         else if (!strcmp(opt, "--hang-at-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->hang_at_exposure);
+        else if (!strcmp(opt, "--late-step-after-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->late_after_exposure);
+        else if (!strcmp(opt, "--stop-at-state")) {
+            unsigned long st;
+            ok = parse_whole(opt, v, 0, LINK_STATE_COUNT - 1, &st);
+            o->stop_at_state = (long)st;
+        }
         else if (!strcmp(opt, "--boot-id")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->boot_id);
         else {
             fprintf(stderr, "fw-sim: unknown option %s (fw-sim --help lists the options)\n", opt);
@@ -632,6 +669,8 @@ int main(int argc, char **argv)
     s.watchdog_ticks = (uint64_t)opt.watchdog_ms * (SIM_TICK_HZ / 1000u);
     s.config.boot_id = opt.boot_id ? (uint32_t)opt.boot_id : (uint32_t)(time(NULL) ^ (getpid() << 16)) | 1u;
     s.hang_at = opt.hang_at_exposure;
+    s.late_after = opt.late_after_exposure;
+    s.stop_at_state = opt.stop_at_state;
     clock_speed = opt.speed;
     clock_gettime(CLOCK_MONOTONIC, &clock_start);
     restart(&s, &fw, &port, workspace, ws_bytes, NULL);
