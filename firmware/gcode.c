@@ -283,16 +283,18 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
 {
     int64_t p = 0, s = 0;
     int has_p, has_s;
-    uint64_t ticks;
+    uint64_t ticks, from, end;
     if (!number(g, w, 'P', &p, &has_p) || !number(g, w, 'S', &s, &has_s)) return 1;
     if (p < 0 || s < 0) { out_of_range(g, p < 0 ? 'P' : 'S'); return 1; }
     /* at least the time asked for, so round up */
     ticks = has_s ? muldiv((uint64_t)s, g->axis->tick_hz, MILLION, 2)
                   : muldiv((uint64_t)p, g->axis->tick_hz, 1000u * MILLION, 2);
     if (!ticks) return 1;
+    /* the exposure's dwell counts from M106 */
+    from = g->lit ? g->lit_at : now;
+    end = from < FW_NEVER - 1 && ticks < FW_NEVER - 1 - from ? from + ticks : FW_NEVER - 1;
     if (g->lit) {
-        /* the exposure: counted from M106, ended by the port's timer */
-        uint64_t end = g->lit_at < FW_NEVER - 1 && ticks < FW_NEVER - 1 - g->lit_at ? g->lit_at + ticks : FW_NEVER - 1;
+        /* ended by the port's timer */
         g->lit = 0;
         if (g->io.uv_end) g->io.uv_end(g->io.ctx, end);
         if (end <= now) {
@@ -305,8 +307,8 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
             send(g, &r);
             return 1;
         }
-        g->deadline = end;
-    } else g->deadline = now < FW_NEVER - 1 && ticks < FW_NEVER - 1 - now ? now + ticks : FW_NEVER - 1;
+    }
+    g->deadline = end;
     g->wait = WAIT_DWELL;
     return 0;
 }

@@ -22,11 +22,11 @@ static int port_step_arm(void *ctx, uint64_t when, int dir)
 }
 static void port_step_pulse(void *ctx, int dir) { (void)ctx; board_step(dir); }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
-/* The light goes on when the core's loop gets to `when` (at or just after
-   it); the UV alarm ends it that much later, so its length is exact. */
 /* the exposure's end on the UV alarm, and how late its start was */
 static uint64_t uv_end, uv_late;
 
+/* The light goes on when the core's loop gets to `when` (at or just after
+   it); the UV alarm ends it that much later, so its length is exact. */
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until)
 {
     uint64_t now = cm3_ticks();

@@ -188,7 +188,13 @@ void board_motor(int on)
    starts ARM_LEAD from now and ends as much later, so the light is on for
    exactly until - when ticks; an early end (pause, M107, a fault) is moved
    by the same shift, so the light given is still what the core counts.
-   Between transitions COM4C is disconnected and PORTH5 holds the level. */
+   Between transitions COM4C is disconnected and PORTH5 holds the level.
+   simavr 1.6 drives a connected OC pin at every overflow, as if in PWM
+   ("clear on match" sets it, "set on match" clears it), which lit the
+   panel again between the end's match and its interrupt: the end toggles
+   (which the overflow leaves alone), and a start in the last UV_SETTLE
+   ticks of Timer4's period moves past the overflow, so its interrupt
+   disconnects COM4C before the next one. */
 /* The least time from arming a UV transition to it, and from a match to
    arming the next: 128 us (simavr 1.6 lost or advanced compares armed
    closer, by 39 ticks; the part itself needs a few cycles). An exposure
@@ -234,7 +240,7 @@ static void uv_arm(void)
             uv_state = WAIT;
             OCR4C = (uint16_t)(TCNT4 + 0x8000u);
         } else {
-            TCCR4A |= to ? COM4C_BITS : _BV(COM4C1);
+            TCCR4A |= to ? COM4C_BITS : _BV(COM4C0);
             OCR4C = (uint16_t)at;
             uv_target = to;
             uv_state = ARMED;
@@ -271,7 +277,10 @@ void board_uv(int on, uint64_t when, uint64_t until)
     cli();
     if (on) {
         uint64_t earliest = board_ticks() + UV_SETTLE;
+        uint16_t in_period;
         uv_shift = when < earliest ? earliest - when : 0;
+        in_period = (uint16_t)(when + uv_shift); /* TCNT4 at the start */
+        if (in_period > 0xFFFFu - UV_SETTLE) uv_shift += 0x10000u - in_period;
         uv_on_at = when + uv_shift;
         uv_off_at = until + uv_shift;
         uv_want = 1;
