@@ -32,7 +32,7 @@
        adaslice_rle_encode              code a mask
        adaslice_rle_decoder_init        a streaming decoder
        adaslice_rle_decode              decode the next bytes, row by row
-       adaslice_rle_decode_rows         the same, at most so many rows a call
+       adaslice_rle_decode_rows         the same, at most so many row bytes a call
        adaslice_rle_finished            every row decoded
        ADASLICE_RLE_CRC                 CRC-32 of the rows decoded
 
@@ -206,6 +206,7 @@ typedef struct adaslice_rle_decoder { /* its fields are private */
     uint32_t x;             /* pixels of the current row decoded */
     uint32_t runs;          /* runs left in the current row */
     uint32_t repeat;        /* rows a repeat record still owes */
+    uint32_t crc_left;      /* bytes of the finished row not yet in the CRC */
     adaslice_varint number; /* the varint being read */
     int state;              /* what the next varint or byte is */
     unsigned char pixel;    /* 8-bit: the current run's value; 1-bit: 0 or 1 */
@@ -224,16 +225,18 @@ ADASLICE_DEF adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec
 ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
                                                  void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
                                                  void *ctx);
-/* The same, emitting at most `max_rows` rows before it returns, for a caller
-   whose every pass must stay short (firmware: a repeat of a thousand rows is
-   a thousand rows of CRC). *used gets the bytes taken; the rest are to be
-   given again. While ADASLICE_RLE_PENDING(dec), rows of a repeat wait for
-   the next call (which may have no bytes). */
+/* The same, putting at most `max_bytes` (>= 1) bytes of rows through the CRC
+   before it returns, for a caller whose every pass must stay short
+   (firmware: a repeat of a thousand rows is a thousand rows of CRC, and on
+   an 8-bit core one 2560-pixel row's is 39,000 cycles). A row is emitted
+   once its CRC is complete. *used gets the code bytes taken; the rest are to
+   be given again. While ADASLICE_RLE_PENDING(dec), a row's CRC or a
+   repeat's rows wait for the next call (which may have no bytes). */
 ADASLICE_DEF adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec, const unsigned char *data,
-                                                      size_t size, uint32_t max_rows, size_t *used,
+                                                      size_t size, uint32_t max_bytes, size_t *used,
                                                       void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
                                                       void *ctx);
-#define ADASLICE_RLE_PENDING(dec) ((dec)->repeat != 0)
+#define ADASLICE_RLE_PENDING(dec) ((dec)->repeat != 0 || (dec)->crc_left != 0)
 /* 1 when every row has been emitted and no record is half read. */
 ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec);
 /* CRC-32 of the rows emitted so far. */
@@ -762,16 +765,30 @@ static void adaslice__rle_fill(adaslice_rle_decoder *dec, uint32_t len)
     while (x < end) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
 }
 
-static void adaslice__rle_emit(adaslice_rle_decoder *dec, void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+/* The finished row's CRC, then a repeat's rows, as far as *budget allows. */
+static void adaslice__rle_flush(adaslice_rle_decoder *dec, uint32_t *budget,
+                                void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
 {
-    dec->crc = adaslice_crc32(dec->crc, dec->row, dec->stride);
-    if (emit) emit(ctx, dec->rows, dec->row);
-    dec->rows++;
+    for (;;) {
+        uint32_t n;
+        if (!dec->crc_left && dec->repeat) {
+            dec->repeat--;
+            dec->crc_left = dec->stride;
+        }
+        if (!dec->crc_left || !*budget) return;
+        n = dec->crc_left < *budget ? dec->crc_left : *budget;
+        dec->crc = adaslice_crc32(dec->crc, dec->row + (dec->stride - dec->crc_left), n);
+        dec->crc_left -= n;
+        *budget -= n;
+        if (!dec->crc_left) {
+            if (emit) emit(ctx, dec->rows, dec->row);
+            dec->rows++;
+        }
+    }
 }
 
 /* One whole number read: what it means depends on the state. */
-static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t v,
-                                            void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
+static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t v)
 {
     if (dec->state == ADASLICE__RLE_HEADER) {
         if (v & 1u) {
@@ -797,7 +814,7 @@ static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t 
     if (dec->bits == 1) dec->pixel ^= 1u;
     if (!dec->runs) {
         if (dec->x != dec->width) return ADASLICE_ERR_RUN;
-        adaslice__rle_emit(dec, emit, ctx);
+        dec->crc_left = dec->stride; /* emitted once its CRC is in */
         dec->state = ADASLICE__RLE_HEADER;
     } else {
         if (dec->x == dec->width) return ADASLICE_ERR_RUN;
@@ -807,21 +824,18 @@ static adaslice_result adaslice__rle_number(adaslice_rle_decoder *dec, uint32_t 
 }
 
 ADASLICE_DEF adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec, const unsigned char *data,
-                                                      size_t size, uint32_t max_rows, size_t *used,
+                                                      size_t size, uint32_t max_bytes, size_t *used,
                                                       void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
                                                       void *ctx)
 {
     size_t i = 0;
-    uint32_t start = dec->rows;
+    uint32_t budget = max_bytes;
     if (used) *used = 0;
-    if (!dec->row) return dec->error = ADASLICE_ERR_ARGUMENT;
+    if (!dec->row || !max_bytes) return dec->error = ADASLICE_ERR_ARGUMENT;
     for (;; i++) {
         unsigned char c;
-        while (dec->repeat && dec->rows - start < max_rows) {
-            dec->repeat--;
-            adaslice__rle_emit(dec, emit, ctx);
-        }
-        if (dec->repeat || dec->rows - start >= max_rows || i >= size || dec->error) break;
+        adaslice__rle_flush(dec, &budget, emit, ctx);
+        if (ADASLICE_RLE_PENDING(dec) || !budget || i >= size || dec->error) break;
         c = data[i];
         if (dec->state == ADASLICE__RLE_VALUE) {
             dec->pixel = c;
@@ -830,7 +844,7 @@ ADASLICE_DEF adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec,
             uint32_t v = 0;
             int done;
             if ((dec->error = adaslice_varint_push(&dec->number, c, &done, &v)) != ADASLICE_OK) break;
-            if (done && (dec->error = adaslice__rle_number(dec, v, emit, ctx)) != ADASLICE_OK) break;
+            if (done && (dec->error = adaslice__rle_number(dec, v)) != ADASLICE_OK) break;
         }
         dec->offset++;
     }
@@ -847,7 +861,7 @@ ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, cons
 
 ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec)
 {
-    return !dec->error && !dec->repeat && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->number.shift == 0;
+    return !dec->error && !ADASLICE_RLE_PENDING(dec) && dec->rows == dec->height && dec->state == ADASLICE__RLE_HEADER && dec->number.shift == 0;
 }
 
 #endif /* ADASLICE_MCU_IMPLEMENTATION_DONE */

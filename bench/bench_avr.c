@@ -13,7 +13,11 @@
       first step), steps refused as late, and the worst loop pass (all, and
       while Z moves; its interrupts in, and the loop's own work), the
       stack's peak.
-   3. SRAM: the shipped image's data + bss (avr-size), the planner's share,
+   3. The shipped image (its 2560 x 1440 display: 320-byte rows, each row's
+      CRC over several passes) printing the hand at scale 2, 9 layers: the
+      worst loop pass, all and while Z moves, the whole command's wall time
+      and the longest wait for a reply (a whole mask decoding).
+   4. SRAM: the shipped image's data + bss (avr-size), the planner's share,
       and the largest BOARD_MAX_BINS that still leaves the measured stack
       peak free. */
 #define _XOPEN_SOURCE 700
@@ -37,6 +41,19 @@ static double now_s(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
+}
+
+/* avr-run's summary line in its log ("# end cycles=... worst_pass=..."). */
+typedef struct passes { unsigned long long worst, moving, work, moving_work, stack, late; } passes;
+static void read_passes(const char *line, passes *p)
+{
+    const char *v;
+    if ((v = strstr(line, "worst_pass="))) p->worst = strtoull(v + 11, NULL, 10);
+    if ((v = strstr(line, "worst_moving_pass="))) p->moving = strtoull(v + 18, NULL, 10);
+    if ((v = strstr(line, "worst_work="))) p->work = strtoull(v + 11, NULL, 10);
+    if ((v = strstr(line, "worst_moving_work="))) p->moving_work = strtoull(v + 18, NULL, 10);
+    if ((v = strstr(line, "stack_peak="))) p->stack = strtoull(v + 11, NULL, 10);
+    if ((v = strstr(line, " late="))) p->late = strtoull(v + 6, NULL, 10);
 }
 
 /* avr-run IMAGE with `log` (or none); its pty name in `pty`; the child's pid. */
@@ -151,7 +168,7 @@ int main(int argc, char **argv)
         int *dir = NULL;
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
         long pos, start_steps = 0;
-        unsigned long long worst_pass = 0, worst_moving = 0, work = 0, moving_work = 0, stack = 0, refused = 0;
+        passes ps = {0, 0, 0, 0, 0, 0};
         int status;
         pid = start(arg_test, log, "3", pty, sizeof pty);
         if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", arg_test); stop(pid); return 1; }
@@ -169,12 +186,7 @@ int main(int argc, char **argv)
             const char *v;
             if (line[0] == '#') {
                 if ((v = strstr(line, "start_steps="))) start_steps = strtol(v + 12, NULL, 10);
-                if ((v = strstr(line, "worst_pass="))) worst_pass = strtoull(v + 11, NULL, 10);
-                if ((v = strstr(line, "worst_moving_pass="))) worst_moving = strtoull(v + 18, NULL, 10);
-                if ((v = strstr(line, "worst_work="))) work = strtoull(v + 11, NULL, 10);
-                if ((v = strstr(line, "worst_moving_work="))) moving_work = strtoull(v + 18, NULL, 10);
-                if ((v = strstr(line, "stack_peak="))) stack = strtoull(v + 11, NULL, 10);
-                if ((v = strstr(line, " late="))) refused = strtoull(v + 6, NULL, 10);
+                read_passes(line, &ps);
                 continue;
             }
             if (sscanf(line, "%llu %15s %15s", &c, what, a) == 3 && !strcmp(what, "step")) {
@@ -210,14 +222,48 @@ int main(int argc, char **argv)
             i = j;
         }
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
-               "%llu refused as late\n", steps, late_worst, late_worst / 16.0, refused);
+               "%llu refused as late\n", steps, late_worst, late_worst / 16.0, ps.late);
         printf("  worst loop pass %llu cycles, %llu while Z moves (its interrupts in; the loop's own work %llu, %llu), "
                "a step every %lu cycles at the top speed; stack peak %llu bytes\n",
-               worst_pass, worst_moving, work, moving_work, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), stack);
+               ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), ps.stack);
         free(at);
         free(dir);
 
-        /* 3. SRAM */
+        /* 3. the shipped image, 2560 x 1440 */
+        {
+            const char *ship_log = "build/bench_avr_ship.log", *report = "build/bench_avr_ship.json";
+            passes sp = {0, 0, 0, 0, 0, 0};
+            double wall, longest = -1;
+            char *j, json[65536];
+            size_t got;
+            pid = start(arg_ship, ship_log, "1", pty, sizeof pty);
+            if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", arg_ship); stop(pid); return 1; }
+            snprintf(cmd, sizeof cmd,
+                     "%s print examples/models/hand_closed.obj --scale 2 --port %s --exposure 0.05 --penetration 0.1 --bottom-layers 1 "
+                     "--bottom-exposure 0.1 --peel 0.3 --peel-speed 5 --return-speed 5 --settle 0.02 --report %s > /dev/null 2>&1",
+                     arg_tool, pty, report);
+            t0 = now_s();
+            status = system(cmd);
+            wall = now_s() - t0;
+            stop(pid);
+            if (status != 0) { printf("bench_avr: FAILED: the print did not complete (%s)\n", cmd); return 1; }
+            if (!(f = fopen(ship_log, "r"))) { printf("bench_avr: FAILED: no log %s\n", ship_log); return 1; }
+            while (fgets(line, sizeof line, f))
+                if (line[0] == '#') read_passes(line, &sp);
+            fclose(f);
+            if ((f = fopen(report, "r"))) {
+                got = fread(json, 1, sizeof json - 1, f);
+                json[got] = 0;
+                fclose(f);
+                if ((j = strstr(json, "\"longest_wait_ms\": "))) longest = strtod(j + 19, NULL);
+            }
+            printf("the shipped image (2560 x 1440, rows of 320 bytes, FW_CRC_BYTES %u of CRC a pass), 9 layers of the hand at "
+                   "scale 2: worst loop pass %llu cycles, %llu while Z moves (the loop's own work %llu, %llu); %llu steps refused "
+                   "as late; the whole print %.1f s of the wall, the longest wait for a reply %.2f s (a whole mask decoding)\n",
+                   (unsigned)FW_CRC_BYTES, sp.worst, sp.moving, sp.work, sp.moving_work, sp.late, wall, longest / 1000);
+        }
+
+        /* 4. SRAM */
         {
             FILE *p;
             unsigned long text_b = 0, data = 0, bss = 0;
@@ -227,7 +273,7 @@ int main(int argc, char **argv)
                 pclose(p);
             }
             if (data + bss) {
-                long left = 8192L - (long)(data + bss) - (long)stack;
+                long left = 8192L - (long)(data + bss) - (long)ps.stack;
                 printf("SRAM (%s): %lu bytes data + bss of 8192, the planner %lu of them (BOARD_MAX_BINS %u: 3,072 of rings "
                        "+ a byte a bin), %ld free beyond the measured stack peak: the largest BOARD_MAX_BINS that fits is %ld\n",
                        arg_ship, data + bss, (unsigned long)(128u * 24u + BOARD_MAX_BINS + 1u), BOARD_MAX_BINS, left,

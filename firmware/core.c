@@ -344,14 +344,15 @@ static void mask_begin(fw_state *fw, const link_mask *m, uint8_t seq)
 }
 
 /* One pass's share of the MASK_DATA frame being decoded: FW_DECODE_BYTES
-   of code and FW_DECODE_ROWS rows at most (each a row's CRC and its copy
-   to the display), so that no pass of the loop runs long, whatever the
-   code holds: a row of many runs takes several passes, a repeat of a
-   thousand rows a thousand. Returns 1 when the frame is done. */
+   of code and FW_CRC_BYTES of rows' CRC at most (a row is copied to the
+   display when its CRC is in), so that no pass of the loop runs long,
+   whatever the code holds: a row of many runs takes several passes, a
+   wide row several, a repeat of a thousand rows a thousand or more.
+   Returns 1 when the frame is done. */
 static int mask_decode(fw_state *fw)
 {
     size_t used, bytes = fw->decode_left < FW_DECODE_BYTES ? fw->decode_left : FW_DECODE_BYTES;
-    if (adaslice_rle_decode_rows(&fw->decoder, fw->decode_at, bytes, FW_DECODE_ROWS, &used, mask_row, fw) != ADASLICE_OK) {
+    if (adaslice_rle_decode_rows(&fw->decoder, fw->decode_at, bytes, FW_CRC_BYTES, &used, mask_row, fw) != ADASLICE_OK) {
         mask_refuse(fw, LINK_ERR_MASK_CODE, fw->decode_seq);
         return 1;
     }
@@ -792,12 +793,15 @@ static void step_fault(fw_state *fw, uint64_t now)
 
 /* Tops the queue up from the closed form, at most `budget` steps; 0 when a
    step cannot go out on time (its tick passed, or the timer could not be
-   armed). Homing queues one step at a time: each reads the switch after
-   the step before it went out. */
+   armed). Homing's one-step phases queue one step at a time: each reads
+   the switch after the step before it went out. The approach queues
+   ahead like a move: it sees the switch a queue's steps late (16 steps,
+   0.04 mm on RAMPS) and brakes from there, and backing off measures from
+   where it stopped, so the zero is the same. */
 static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
-    uint8_t room = fw->axis.phase ? 1u : FW_STEP_QUEUE;
+    uint8_t room = fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE;
     q->short_by = 0;
     if (q->late) return 0;
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {

@@ -36,8 +36,8 @@
    than they leave, whatever else it does: up to FW_STEP_FILL steps (the
    first of a move shapes it), or one frame or G-code line received (its
    reply; the rest of the bytes wait for the next pass), or a move's start
-   by the print, or one slice of a held frame's work (FW_DECODE_BYTES and
-   FW_DECODE_ROWS of a mask, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES
+   by the print, or one slice of a held frame's work (FW_DECODE_BYTES of a
+   mask's code and FW_CRC_BYTES of its rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES
    of the plan's reversal). The steps come first; the others wait for a
    pass that computed none. The wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
@@ -148,12 +148,14 @@ typedef struct fw_config {
 /* The work of a long frame goes on over passes of the loop (fw_run), the
    frame held in the deframer and acknowledged once done, so that a pass
    stays short whatever a frame holds. In one pass: mask code bytes
-   decoded and rows finished (a row's CRC and copy; a repeat of a thousand
-   rows takes a thousand passes), profile bins pushed through the planner,
+   decoded and bytes of finished rows put through the CRC (a row is copied
+   to the display once its CRC is in; a repeat of a thousand rows takes a
+   thousand rows of CRC, over as many passes as their bytes need), profile
+   bins pushed through the planner,
    and planes of the plan's reversal once its last bin is in. A port whose
    passes must be shorter than these make them sets its own. */
-#ifndef FW_DECODE_ROWS
-#define FW_DECODE_ROWS 1u
+#ifndef FW_CRC_BYTES
+#define FW_CRC_BYTES 64u
 #endif
 #ifndef FW_DECODE_BYTES
 #define FW_DECODE_BYTES 64u

@@ -117,6 +117,9 @@ void fw_axis_halt(fw_axis *axis, uint64_t now);
    stopped dead from speed may have lost steps, so the position is unknown). */
 void fw_axis_stop(fw_axis *axis);
 int fw_axis_busy(const fw_axis *axis);
+/* 1 in homing's one-step phases: each step is decided by the switch read
+   after the step before it went out, so none may be queued ahead. */
+int fw_axis_one_step(const fw_axis *axis);
 /* Tick of the next step, FW_NEVER when idle. */
 uint64_t fw_axis_next(const fw_axis *axis);
 /* Takes the step due at fw_axis_next(): +1 or -1 for the pin; 0 when the

@@ -331,9 +331,9 @@ static void write_report(FILE *f, const void *ctx)
             r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
     fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
                "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n"
-               "  \"longest_wait_ms\": %.1f,\n  \"longest_homing_wait_ms\": %.1f,\n  \"masks\": [",
+               "  \"longest_wait_ms\": %.1f,\n  \"masks\": [",
             r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
-            r->l->retransmits, r->l->naks, r->l->longest_wait, r->l->longest_homing_wait);
+            r->l->retransmits, r->l->naks, r->l->longest_wait);
     for (k = 0; k < r->pj->layers; k++) {
         z += r->pj->lengths[k];
         fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
@@ -372,9 +372,7 @@ static void print_usage(FILE *f)
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer that answers nothing this long ends      [3]\n"
           "                        the print (exit 5); longer while a mask frame\n"
-          "                        decodes (10 us a row byte) and on slow lines; up\n"
-          "                        to 120 s while Z homes on a printer that reads\n"
-          "                        no frame then (RAMPS)\n"
+          "                        decodes (16 us a row byte) and on slow lines\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"
@@ -547,12 +545,8 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
     fflush(stdout);
     if ((rc = serial_status(l))) return rc;
     if (!(l->st.flags & LINK_FLAG_HOMED)) {
-        /* a port may read no frame until Z is home: the silence allowed is the homing's */
-        l->homing = 1;
-        l->homing_seen = 0;
         l->task = "homing";
         if (!(rc = serial_send(l, LINK_MSG_HOME, NULL, 0))) rc = serial_wait(l, homed, NULL, 600000, "home Z");
-        l->homing = 0;
         l->task = NULL;
         if (rc) return rc;
         if (!(l->st.flags & LINK_FLAG_HOMED)) return complain(RC_FAIL, "homing failed: %s", link_error_name(l->st.error));

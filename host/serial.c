@@ -86,15 +86,14 @@ static int serial_silent(const serial_link *l, const char *how, double ms)
 }
 
 /* How long the printer may answer nothing: silent_ms, and a mask's decoding
-   while a MASK_DATA frame waits; or homing_ms while Z homes on a printer
-   that has not shown it reads frames while it homes. */
+   while a MASK_DATA frame waits. */
 static double serial_bound(const serial_link *l)
 {
     double bound = l->silent_ms;
     int i;
     for (i = 0; i < l->count; i++)
         if ((l->frames[i][2] & ~LINK_ROUND_BIT) == LINK_MSG_MASK_DATA) { bound += l->mask_decode_ms; break; }
-    return l->homing && !l->answers_homing && l->homing_ms > bound ? l->homing_ms : bound;
+    return bound;
 }
 
 /* A printer that stopped reads nothing, and the line fills: a write that
@@ -194,12 +193,6 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
         l->st = st;
         l->status_count++;
         l->status_ack = ack;
-        /* Z moving between two answers while it homes: this printer reads
-           frames while homing, and is held to silent_ms then too */
-        if (l->homing && st.state == LINK_STATE_HOMING) {
-            if (!l->homing_seen) { l->homing_seen = 1; l->homing_z = st.z_nm; }
-            else if (st.z_nm != l->homing_z) l->answers_homing = 1;
-        }
         break;
     }
     case LINK_MSG_IDENTIFY:
@@ -231,8 +224,7 @@ static int serial_read(serial_link *l, int wait_ms)
             link_deframe_push(&l->rx, buf[i]);
             while ((m = link_deframe_next(&l->rx)) != 0) {
                 double t = now_ms();
-                double *longest = l->homing ? &l->longest_homing_wait : &l->longest_wait;
-                if (l->count && t - l->waiting_since > *longest) *longest = t - l->waiting_since;
+                if (l->count && t - l->waiting_since > l->longest_wait) l->longest_wait = t - l->waiting_since;
                 l->waiting_since = t;
                 take_reply(l, l->rx.buf, m);
                 link_deframe_consume(&l->rx);
@@ -328,8 +320,8 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
 /* A fresh STATUS: asked again if its reply is lost. */
 /* A STATUS_REPLY since `seen` that answers a request from sequence number
    `first` on: its acknowledgement is past that request. Replies to older
-   requests still come after a printer held them (RAMPS, homing), and say
-   what was true before. */
+   requests may still come (a printer that held them while it decoded a mask,
+   a resend round) and say what was true before. */
 static int fresh_status(const serial_link *l, unsigned long seen, uint8_t first)
 {
     return l->status_count != seen && (uint8_t)(l->status_ack - (uint8_t)(first + 1)) < 128;
@@ -416,7 +408,6 @@ int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s)
     l->rto_ms += frame_ms * l->window;
     /* the reply to the last frame of a window comes after the whole window */
     l->silent_ms += frame_ms * (l->window - 1);
-    l->homing_ms = SERIAL_HOMING_S * 1000.0;
     l->mask_decode_ms = (double)l->id.height * (l->id.bits == 8 ? l->id.width : (l->id.width + 7u) / 8u) *
                         SERIAL_ROW_BYTE_US / 1000;
     l->data_max = LINK_PAYLOAD_MAX;

@@ -21,21 +21,14 @@ typedef struct serial_link {
     double rto_ms, last_progress;
     /* A printer that answers nothing for silent_ms while the host waits for
        it (frames in flight) has stopped: the firmware answers every frame
-       within a loop pass, bar a mask frame decoded a row a pass. While Z
-       homes on a printer that has not answered since homing began, the host
-       allows homing_ms (a port may hold the host's frames until Z is home). */
-    double silent_ms, homing_ms;
+       within a loop pass or a few, bar a mask frame decoded over many. */
+    double silent_ms;
     double mask_decode_ms;      /* a whole mask decoded at SERIAL_ROW_BYTE_US */
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
-    double longest_wait;        /* the longest wait for a reply that came, ms, */
-    double longest_homing_wait; /* ... outside homing and while Z homed */
-    int homing;                 /* the caller waits for Z to home */
+    double longest_wait;        /* the longest wait for a reply that came, ms */
     const char *task;           /* what the caller is doing before a layer prints
                                    ("planning"), for messages; NULL: the printer's state */
-    int answers_homing;         /* a STATUS showed Z moving while homing */
-    int homing_seen;            /* ... and the first such STATUS's height */
-    int32_t homing_z;
     /* the latest replies, each with a count so a caller sees a fresh one */
     link_status st;
     unsigned long status_count, identify_count, plan_count;
@@ -64,18 +57,14 @@ typedef struct serial_link {
 /* Resend rounds without progress, the printer answering out of step, after
    which the host says HELLO again to learn whether it restarted. */
 #define SERIAL_STALL_ROUNDS 8
-/* The longest homing of the ports in firmware/ports, in seconds: the RAMPS
-   board reads no frame while it homes (each of its one-step passes must beat
-   the step interval), and 220 mm of travel at 2.5 mm/s take 88 s, its slow
-   back-off and creep back (2.06 mm each at 0.25 mm/s) up to 16.5 s more. */
-#define SERIAL_HOMING_S 120
-/* A MASK_DATA frame is answered once decoded, a row a pass, and one frame
+/* A MASK_DATA frame is answered once decoded, a slice a pass, and one frame
    can hold a whole mask (an empty one is two bytes): the host allows, while
    one waits, a whole mask's rows at this pace, microseconds per row byte.
-   The slowest port, RAMPS (ATmega2560, 16 MHz), took about 2.05 s for the
-   1,440 rows of 320 bytes of an empty 2560 x 1440 mask under simavr: 4.4 us
-   a byte (a row's CRC-32 and the pass around it). */
-#define SERIAL_ROW_BYTE_US 10
+   The slowest port, RAMPS (ATmega2560, 16 MHz), puts 24 bytes of rows
+   through the CRC a pass: under simavr (slower than the part) a whole
+   2560 x 1440 mask took up to 5.8 s of the wall, 12.5 us a row byte (make
+   bench). */
+#define SERIAL_ROW_BYTE_US 16
 /* A gap longer than this, ms, between two looks at the line (serial_pump,
    a write waiting for room) is the host's own absence, not time it waited
    for the printer. */
@@ -89,7 +78,7 @@ typedef struct serial_link {
 int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s);
 void serial_close(serial_link *l);
 /* Reads what has arrived (waiting up to wait_ms), resends on a timeout. A
-   printer that answers nothing for silent_ms (homing_ms, see above) while
+   printer that answers nothing for silent_ms (see above) while
    frames wait, or a line that takes no byte that long, ends it with
    RC_LOST; a reply with another boot id, or SERIAL_STALL_ROUNDS resend
    rounds without progress and then an IDENTIFY with another boot id, with

@@ -83,15 +83,14 @@
    more than a pass (under 16,000): room for the wake-up and for a pass
    that one day runs long. 16 x 9 bytes of SRAM. The pieces of a pass,
    each a few thousand cycles here (avr-run --profile-passes): 8 mask code
-   bytes and a row's CRC (240-pixel test display: 3,700 cycles for the
-   CRC of its 30-byte rows; a 2560-pixel display's 320-byte rows take
-   39,000, make bench: more than a step interval, which the queue covers
-   but the bound does not hold for), 2 profile bins
+   bytes and 24 bytes of rows' CRC (about 122 cycles a byte, make bench: a
+   2560-pixel display's 320-byte row is 39,000 cycles, ten passes), 2 profile bins
    (2,860 cycles each), 32 planes of the plan's reversal (150 each). */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 1u
 #define FW_DECODE_BYTES 8u
+#define FW_CRC_BYTES 24u
 #define FW_PLAN_BINS 2u
 #define FW_REVERSE_PLANES 32u
 

@@ -88,11 +88,7 @@ int main(void)
            (which nothing else uses) to make the loop hang */
         if (GPIOR2 == 0xA5u) for (;;) {}
 #endif
-        /* Homing queues one step at a time (each reads the switch after the
-           step before), so every pass must be shorter than its interval:
-           the host's bytes wait in the receive ring (it holds the window)
-           until Z is home, and a mask frame's decoding cannot come between. */
-        n = fw.axis.phase ? 0 : board_rx_peek(&data);
+        n = board_rx_peek(&data);
         if (n) {
             if (n > CHUNK) n = CHUNK;
             n = fw_receive(&fw, data, n, board_ticks());
