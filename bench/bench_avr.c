@@ -118,6 +118,28 @@ static void board_axis(fw_axis *axis)
     fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
 }
 
+/* adaslice print of the bundled hand at `scale` on IMAGE under avr-run
+   (pin log `log`, Z starting `z` mm up; a --report when `report`), the
+   whole command's wall time in *wall. 0, or 1 after saying what failed. */
+static int print_hand(const char *image, const char *log, const char *z, const char *scale, const char *report, double *wall)
+{
+    char pty[256], cmd[1024];
+    pid_t pid = start(image, log, z, pty, sizeof pty);
+    double t0;
+    int status;
+    if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", image); stop(pid); return 1; }
+    snprintf(cmd, sizeof cmd,
+             "%s print examples/models/hand_closed.obj --scale %s --port %s --exposure 0.05 --penetration 0.1 --bottom-layers 1 "
+             "--bottom-exposure 0.1 --peel 0.3 --peel-speed 5 --return-speed 5 --settle 0.02%s%s > /dev/null 2>&1",
+             arg_tool, scale, pty, report ? " --report " : "", report ? report : "");
+    t0 = now_s();
+    status = system(cmd);
+    *wall = now_s() - t0;
+    stop(pid);
+    if (status != 0) { printf("bench_avr: FAILED: the print did not complete (%s)\n", cmd); return 1; }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     char pty[256], text[2048], cmd[1024];
@@ -169,16 +191,8 @@ int main(int argc, char **argv)
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
         long pos, start_steps = 0;
         passes ps = {0, 0, 0, 0, 0, 0};
-        int status;
-        pid = start(arg_test, log, "3", pty, sizeof pty);
-        if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", arg_test); stop(pid); return 1; }
-        snprintf(cmd, sizeof cmd,
-                 "%s print examples/models/hand_closed.obj --scale 5 --port %s --exposure 0.05 --penetration 0.1 --bottom-layers 1 "
-                 "--bottom-exposure 0.1 --peel 0.3 --peel-speed 5 --return-speed 5 --settle 0.02 > /dev/null 2>&1",
-                 arg_tool, pty);
-        status = system(cmd);
-        stop(pid);
-        if (status != 0) { printf("bench_avr: FAILED: the print did not complete (%s)\n", cmd); return 1; }
+        double wall;
+        if (print_hand(arg_test, log, "3", "5", NULL, &wall)) return 1;
         if (!(f = fopen(log, "r"))) { printf("bench_avr: FAILED: no log %s\n", log); return 1; }
         while (fgets(line, sizeof line, f)) {
             unsigned long long c;
@@ -233,20 +247,10 @@ int main(int argc, char **argv)
         {
             const char *ship_log = "build/bench_avr_ship.log", *report = "build/bench_avr_ship.json";
             passes sp = {0, 0, 0, 0, 0, 0};
-            double wall, longest = -1;
+            double longest = -1;
             char *j, json[65536];
             size_t got;
-            pid = start(arg_ship, ship_log, "1", pty, sizeof pty);
-            if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", arg_ship); stop(pid); return 1; }
-            snprintf(cmd, sizeof cmd,
-                     "%s print examples/models/hand_closed.obj --scale 2 --port %s --exposure 0.05 --penetration 0.1 --bottom-layers 1 "
-                     "--bottom-exposure 0.1 --peel 0.3 --peel-speed 5 --return-speed 5 --settle 0.02 --report %s > /dev/null 2>&1",
-                     arg_tool, pty, report);
-            t0 = now_s();
-            status = system(cmd);
-            wall = now_s() - t0;
-            stop(pid);
-            if (status != 0) { printf("bench_avr: FAILED: the print did not complete (%s)\n", cmd); return 1; }
+            if (print_hand(arg_ship, ship_log, "1", "2", report, &wall)) return 1;
             if (!(f = fopen(ship_log, "r"))) { printf("bench_avr: FAILED: no log %s\n", ship_log); return 1; }
             while (fgets(line, sizeof line, f))
                 if (line[0] == '#') read_passes(line, &sp);
