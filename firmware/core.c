@@ -678,11 +678,11 @@ static void gcode_write(void *ctx, const uint8_t *data, size_t size) { fw_state 
 static void gcode_motor(void *ctx, int on) { fw_state *fw = (fw_state *)ctx; if (fw->port.motor) fw->port.motor(fw->port.ctx, on); }
 
 /* Offers G-code the bytes it held back; keeps what it still cannot take. */
-static void gcode_feed(fw_state *fw, uint64_t now)
+static void gcode_feed(fw_state *fw)
 {
     size_t used;
     if (!fw->gcode_held_len) return;
-    used = fw_gcode_receive(&fw->gcode, fw->gcode_held, fw->gcode_held_len, now);
+    used = fw_gcode_receive(&fw->gcode, fw->gcode_held, fw->gcode_held_len);
     memmove(fw->gcode_held, fw->gcode_held + used, fw->gcode_held_len - used);
     fw->gcode_held_len = (uint16_t)(fw->gcode_held_len - used);
 }
@@ -691,7 +691,7 @@ static void gcode_feed(fw_state *fw, uint64_t now)
    that sends more than fits (an unpaced burst) loses the rest of that line:
    a 0 byte marks the gap, so the damaged line is refused, never run spliced
    to the next; a line that would start with no room left is lost whole. */
-static void gcode_byte(fw_state *fw, uint8_t c, uint64_t now)
+static void gcode_byte(fw_state *fw, uint8_t c)
 {
     size_t room = sizeof fw->gcode_held - fw->gcode_held_len;
     int eol = c == '\n' || c == '\r';
@@ -702,7 +702,7 @@ static void gcode_byte(fw_state *fw, uint8_t c, uint64_t now)
         fw->gcode_overflow = 0;
         return;
     }
-    if (!fw->gcode_held_len && fw_gcode_receive(&fw->gcode, &c, 1, now)) return;
+    if (!fw->gcode_held_len && fw_gcode_receive(&fw->gcode, &c, 1)) return;
     if (room > 2) { fw->gcode_held[fw->gcode_held_len++] = c; return; }
     if (!fw->gcode_held_len || fw->gcode_held[fw->gcode_held_len - 1] == '\n' ||
         fw->gcode_held[fw->gcode_held_len - 1] == '\r') {
@@ -749,18 +749,18 @@ size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
     size_t i = 0, n = 0;
     int gcode = !fw->binary, line = 0; /* only a frame (below) changes `binary` */
     if (fw->decoding) return 0;
-    /* Up to the byte that ends a frame or a G-code line: either's work is
+    /* Up to the byte that ends a frame or a G-code line. A frame's work is
        its pass's share, and the steps (a move it started has its first
-       step a step lead on, far beyond a pass) come in the next. */
+       step a step lead on, far beyond a pass) come in the next; a line
+       waits for fw_run's passes. */
     while (i < size && !n && !line) {
         uint8_t c = data[i++];
         if (gcode) {
-            gcode_byte(fw, c, now);
+            gcode_byte(fw, c);
             line = c == '\n' || c == '\r';
         }
         if (link_deframe_push(d, c)) n = link_deframe_next(d);
     }
-    if (line) fw->steps.budget = 0;
     if (!n) return i;
     /* more than one only when a damaged frame left good ones buffered */
     do {
@@ -888,9 +888,12 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&
         now - fw->heard >= FW_BINARY_IDLE * fw->link_timeout)
         fw->binary = 0;
+    /* G-code's pieces of work (a line's check, its run, a move's end) are
+       passes' work like a frame: one when the pass has none yet */
     if (!fw->binary) {
-        next = fw_gcode_run(&fw->gcode, now);
-        gcode_feed(fw, now);
+        gcode_feed(fw);
+        if (fw->steps.budget != FW_STEP_FILL) next = now;
+        else if ((next = fw_gcode_run(&fw->gcode, now)) == now) fw->steps.budget = 0;
     }
     /* what the print or G-code just started */
     fill_steps(fw, now);

@@ -1,7 +1,8 @@
 /* G-code mode; the dialect and the decisions behind it are in gcode.h. */
 #include "gcode.h"
 
-enum { WAIT_NONE, WAIT_MOVE, WAIT_HOME, WAIT_DWELL };
+enum { WAIT_NONE, WAIT_START, WAIT_MOVE, WAIT_HOME, WAIT_DWELL };
+enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed check() */
 
 /* Every number fits in millionths within int64 with room to add two. */
 #define NUMBER_MAX 10000000
@@ -31,12 +32,37 @@ static uint64_t magnitude(int64_t v)
     return v < 0 ? 0 - (uint64_t)v : (uint64_t)v;
 }
 
+/* On an 8-bit core a 64-bit division costs thousands of cycles and a
+   32-bit one hundreds; nearly every value here (a position, a speed, a
+   dwell) fits 32 bits, so the divisions below take 64 only above that,
+   and a digit's takes none. */
+static uint32_t tenth(uint32_t u)
+{
+    /* u / 10, exact for every 32-bit u (2^35 / 10 rounded up); the high
+       word, then 3 bits, since a 64-bit shift is a loop on an 8-bit core */
+    return (uint32_t)((uint64_t)u * 0xCCCCCCCDu >> 32) >> 3;
+}
+
+/* u in decimal, at least `width` digits */
+static void put_digits(reply *r, uint32_t u, int width)
+{
+    char d[10];
+    int k = 0;
+    do {
+        uint32_t q = tenth(u);
+        d[k++] = (char)('0' + (u - q * 10u));
+        u = q;
+    } while (u || k < width);
+    while (k) put_char(r, d[--k]);
+}
+
 static void put_uint(reply *r, uint64_t u)
 {
-    char d[20];
+    char low[10];
     int k = 0;
-    do { d[k++] = (char)('0' + u % 10); u /= 10; } while (u);
-    while (k) put_char(r, d[--k]);
+    for (; u >> 32; u /= 10) low[k++] = (char)('0' + u % 10);
+    put_digits(r, (uint32_t)u, 1);
+    while (k) put_char(r, low[--k]);
 }
 
 static void put_int(reply *r, int64_t v)
@@ -48,13 +74,11 @@ static void put_int(reply *r, int64_t v)
 /* thousandths as "-12.345" */
 static void put_milli(reply *r, int64_t v)
 {
-    uint64_t u = magnitude(v);
+    uint64_t u = magnitude(v), whole = u >> 32 ? u / 1000 : (uint32_t)u / 1000;
     if (v < 0) put_char(r, '-');
-    put_uint(r, u / 1000);
+    put_uint(r, whole);
     put_char(r, '.');
-    put_char(r, (char)('0' + u / 100 % 10));
-    put_char(r, (char)('0' + u / 10 % 10));
-    put_char(r, (char)('0' + u % 10));
+    put_digits(r, (uint32_t)u - (uint32_t)whole * 1000u, 3); /* below 1000, so exact in 32 bits */
 }
 
 static void send(fw_gcode *g, reply *r)
@@ -78,8 +102,12 @@ static void say(fw_gcode *g, const char *s)
    position), b < 2^32 and d * b < 2^62. */
 static uint64_t muldiv(uint64_t a, uint32_t b, uint32_t d, int round)
 {
-    uint64_t q = a / d, r = a % d, add = round == 1 ? d / 2 : round == 2 ? d - 1 : 0;
-    return q * b + (r * b + add) / d;
+    uint32_t add = round == 1 ? d / 2 : round == 2 ? d - 1 : 0;
+    uint64_t q = a >> 32 ? a / d : (uint32_t)a / d, r;
+    r = (uint32_t)a - (uint32_t)q * d; /* a % d: below d, so exact in 32 bits */
+    r = r * b + add;
+    q = q >> 32 ? q * b : (uint64_t)(uint32_t)q * b;
+    return q + (r >> 32 ? r / d : (uint32_t)r / d);
 }
 
 static uint32_t steps_per_mm(const fw_gcode *g)
@@ -123,19 +151,21 @@ static int upper(uint8_t c) { return c >= 'a' && c <= 'z' ? c - 'a' + 'A' : c; }
 static int parse_fixed(const uint8_t *s, size_t n, int64_t *out)
 {
     size_t i = 0;
-    int neg = 0, digits = 0, round = -1;
-    int64_t whole = 0, frac = 0, scale = MILLION / 10, v;
+    int neg = 0, digits = 0, places = 0, round = -1;
+    uint32_t whole = 0, frac = 0; /* 32 bits and no division: see put_uint */
+    int64_t v;
     if (i < n && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
     for (; i < n && is_digit(s[i]); i++, digits++)
-        if (whole <= NUMBER_MAX) whole = whole * 10 + (s[i] - '0');
+        if (whole <= NUMBER_MAX) whole = whole * 10 + (uint32_t)(s[i] - '0');
     if (i < n && s[i] == '.')
         for (i++; i < n && is_digit(s[i]); i++, digits++) {
-            if (scale) { frac += (s[i] - '0') * scale; scale /= 10; }
+            if (places < 6) { frac = frac * 10 + (uint32_t)(s[i] - '0'); places++; }
             else if (round < 0) round = s[i] >= '5';
         }
+    for (; places < 6; places++) frac *= 10;
     if (i != n || !digits) return 0;
     if (whole > NUMBER_MAX) return -1;
-    v = whole * (int64_t)MILLION + frac + (round > 0);
+    v = (int64_t)((uint64_t)whole * MILLION) + frac + (round > 0);
     if (v > (int64_t)NUMBER_MAX * MILLION) return -1;
     *out = neg ? -v : v;
     return 1;
@@ -241,8 +271,8 @@ static void motor(fw_gcode *g, int on)
     g->motor_on = (uint8_t)on;
 }
 
-/* G0 / G1; 1: ok now */
-static int move(fw_gcode *g, const words *w, uint64_t now)
+/* G0 / G1; 1: ok now, 0: start() sends it */
+static int move(fw_gcode *g, const words *w)
 {
     fw_axis *a = g->axis;
     int64_t z = 0, f = 0, target, steps;
@@ -268,14 +298,27 @@ static int move(fw_gcode *g, const words *w, uint64_t now)
         send(g, &r);
         return 1;
     }
-    /* lines run only while the axis is idle, so this is not refused */
-    if (fw_axis_move_to(a, (int32_t)steps, g->speed, now) != FW_AXIS_OK) { say(g, "Error:Axis busy"); return 1; }
-    if (!g->motor_on) motor(g, 1);
+    /* started by start(), a piece of its own */
     g->z_nm = target;
     g->target = (int32_t)steps;
-    g->wait = WAIT_MOVE;
+    g->wait = WAIT_START;
     g->lit = 0; /* a dwell after a move is not an exposure's */
-    return 1;
+    return 0;
+}
+
+/* The move a G0/G1 asked for, and its ok. */
+static void start(fw_gcode *g, uint64_t now)
+{
+    /* it waited for the axis to be idle; a fault in between unhomes it */
+    int refused = fw_axis_move_to(g->axis, g->target, g->speed, now);
+    if (refused) {
+        say(g, refused == FW_AXIS_NOT_HOMED ? "Error:Home Z first" : "Error:Axis busy");
+        g->wait = WAIT_NONE;
+    } else {
+        if (!g->motor_on) motor(g, 1);
+        g->wait = WAIT_MOVE;
+    }
+    say(g, "ok");
 }
 
 /* G4; 1: ok now */
@@ -362,15 +405,30 @@ static int known(int code)
     return 0;
 }
 
-/* Runs the complete line in g->line and sends its replies. */
-static void execute(fw_gcode *g, uint64_t now)
+/* The command's code from its first word: G codes as they are, M codes
+   plus 10000, -1 for any other word. */
+static int code_of(const uint8_t *b, int k, int letter, size_t at, size_t len)
+{
+    int code = -1;
+    size_t j;
+    if (k == 1 && (letter == 'G' || letter == 'M') && len >= 1 && len <= 4) {
+        for (code = 0, j = 0; j < len && code >= 0; j++)
+            code = is_digit(b[at + j]) ? code * 10 + (b[at + j] - '0') : -1;
+        if (code >= 0 && letter == 'M') code += 10000;
+    }
+    return code;
+}
+
+/* The held line's framing: comments, checksum, line number. A line that
+   fails gets its replies here; one that passes is cut to its command and
+   left for run() with where the command begins. 1: the line is to run. */
+static int check(fw_gcode *g)
 {
     const uint8_t *b = g->line;
     size_t n = g->len, end = n, star = n, i, at = 0, len = 0, from;
-    int letter = 0, k, paren = 0, numbered, code = -1, ok = 1;
+    int letter = 0, k, paren = 0, numbered, code;
     int32_t line = 0;
-    words w;
-    if (g->too_long) { line_error(g, "Line too long", 0); return; }
+    if (g->too_long) { line_error(g, "Line too long", 0); return 0; }
     for (i = 0; i < n; i++) {
         if (paren) { paren = b[i] != ')'; continue; }
         if (b[i] == '(') paren = 1;
@@ -378,38 +436,46 @@ static void execute(fw_gcode *g, uint64_t now)
     }
     i = 0;
     k = word(b, &i, end, &letter, &at, &len);
-    if (k == 0 && star == n) return; /* blank or only comments: Marlin is silent */
+    if (k == 0 && star == n) return 0; /* blank or only comments: Marlin is silent */
     numbered = k == 1 && letter == 'N';
     if (star < n) {
-        if (!checksum_ok(b, star, n)) { line_error(g, "checksum mismatch", numbered); return; }
+        if (!checksum_ok(b, star, n)) { line_error(g, "checksum mismatch", numbered); return 0; }
     } else if (numbered) {
         line_error(g, "No Checksum with line number", 1);
-        return;
+        return 0;
     }
     from = 0;
     if (numbered) {
         if (!parse_int32(b + at, len, &line)) {
             line_error(g, "Line Number is not Last Line Number+1", 1);
-            return;
+            return 0;
         }
         from = i;
         k = word(b, &i, end, &letter, &at, &len);
     }
-    while (from < end && is_blank(b[from])) from++;
-    if (k == 1 && (letter == 'G' || letter == 'M') && len >= 1 && len <= 4) {
-        size_t j;
-        for (code = 0, j = 0; j < len && code >= 0; j++)
-            code = is_digit(b[at + j]) ? code * 10 + (b[at + j] - '0') : -1;
-        if (code >= 0 && letter == 'M') code += 10000;
-    }
+    code = code_of(b, k, letter, at, len);
     if (numbered) {
         if (code != 10110 && (int64_t)line != (int64_t)g->last_line + 1) {
             line_error(g, "Line Number is not Last Line Number+1", 1);
-            return;
+            return 0;
         }
         g->last_line = line;
     }
-    if (k == 0) { say(g, "ok"); return; } /* "N5*cs": a line number alone */
+    if (k == 0) { say(g, "ok"); return 0; } /* "N5*cs": a line number alone */
+    g->command = (uint8_t)from;
+    g->len = (uint8_t)end;
+    return 1;
+}
+
+/* Runs the checked line in g->line and sends its replies. */
+static void run(fw_gcode *g, uint64_t now)
+{
+    const uint8_t *b = g->line;
+    size_t end = g->len, from = g->command, i = from, at = 0, len = 0;
+    int letter = 0, k = word(b, &i, end, &letter, &at, &len), code = code_of(b, k, letter, at, len), ok = 1;
+    int32_t line = 0;
+    words w;
+    while (from < end && is_blank(b[from])) from++;
     w.seen = 0;
     while (code >= 0 && (k = word(b, &i, end, &letter, &at, &len)) == 1) {
         w.seen |= (uint32_t)1 << (letter - 'A');
@@ -422,7 +488,7 @@ static void execute(fw_gcode *g, uint64_t now)
         return;
     }
     switch (code) {
-    case 0: case 1: ok = move(g, &w, now); break;
+    case 0: case 1: ok = move(g, &w); break;
     case 4: ok = dwell(g, &w, now); break;
     case 28:
         if (fw_axis_home(g->axis, now) == FW_AXIS_OK) {
@@ -487,24 +553,39 @@ static int moving(const fw_gcode *g)
     return g->io.moving ? g->io.moving(g->io.ctx) : fw_axis_busy(g->axis);
 }
 
-/* Ends what has ended and runs the held line, as often as that frees it. */
-static void advance(fw_gcode *g, uint64_t now)
+static void line_done(fw_gcode *g)
 {
-    for (;;) {
-        if (g->wait == WAIT_DWELL) {
-            if (now < g->deadline) return;
-            g->wait = WAIT_NONE;
-            say(g, "ok");
-        } else if (g->wait != WAIT_NONE) {
-            if (moving(g)) return;
-            finish(g);
-        }
-        if (!g->held || moving(g)) return;
-        execute(g, now);
-        g->held = 0;
-        g->len = 0;
-        g->too_long = 0;
+    g->held = 0;
+    g->len = 0;
+    g->too_long = 0;
+}
+
+/* One piece of work a call, each a good part of a step interval on an
+   8-bit core: ends what has ended, or checks the held line, or runs it.
+   1: it did one. */
+static int advance(fw_gcode *g, uint64_t now)
+{
+    if (g->wait == WAIT_DWELL) {
+        if (now < g->deadline) return 0;
+        g->wait = WAIT_NONE;
+        say(g, "ok");
+        return 1;
     }
+    if (g->wait != WAIT_NONE) {
+        if (moving(g)) return 0;
+        if (g->wait == WAIT_START) start(g, now);
+        else finish(g);
+        return 1;
+    }
+    if (!g->held || moving(g)) return 0;
+    if (g->held == HELD) {
+        if (check(g)) g->held = CHECKED;
+        else line_done(g);
+        return 1;
+    }
+    run(g, now);
+    line_done(g);
+    return 1;
 }
 
 void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io)
@@ -520,16 +601,14 @@ void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io)
     g->deadline = 0;
 }
 
-size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size, uint64_t now)
+size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size)
 {
     size_t i;
-    advance(g, now);
     for (i = 0; i < size && !g->held; i++) {
         uint8_t c = data[i];
         if (c == '\n' || c == '\r') {
             if (!g->len && !g->too_long) continue; /* blank, or the \n of \r\n */
-            g->held = 1;
-            advance(g, now);
+            g->held = HELD;
         } else if (g->len < FW_GCODE_LINE_MAX) {
             g->line[g->len++] = c;
         } else {
@@ -541,7 +620,7 @@ size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size, uint64_t 
 
 uint64_t fw_gcode_run(fw_gcode *g, uint64_t now)
 {
-    advance(g, now);
+    if (advance(g, now)) return now;
     if (g->wait == WAIT_DWELL) return g->deadline;
     if (g->wait != WAIT_NONE || g->held) return fw_axis_next(g->axis);
     return FW_NEVER;

@@ -7,11 +7,18 @@
    The caller's loop:
        fw_gcode_init(&g, &axis, &io);
        for (;;) {
-           used = fw_gcode_receive(&g, bytes, n, now);   keep bytes[used..n)
+           used = fw_gcode_receive(&g, bytes, n);        keep bytes[used..n)
            step the axis while steps are due (fw_axis_next / fw_axis_step)
            deadline = fw_gcode_run(&g, now);             after stepping
            offer the kept bytes again; sleep until a byte or the deadline
        }
+   Bounded work: fw_gcode_receive only gathers bytes into the line; each
+   call of fw_gcode_run does at most one piece of work (end a move or a
+   dwell with its replies, check a complete line's framing, run a checked
+   line, start the move a G0/G1 asked for), each well under a step
+   interval of an ATmega2560 at its top speed (gcode.c keeps to 32-bit
+   arithmetic for that where values fit), and returns `now` after one so
+   the caller comes back in its next pass.
 
    Commands (units mm and mm/min; Z is the only axis, X/Y/E words are
    ignored):
@@ -116,7 +123,8 @@ typedef struct fw_gcode { /* fields private to gcode.c */
     uint8_t line[FW_GCODE_LINE_MAX];
     uint8_t len;             /* bytes in line */
     uint8_t too_long;        /* the line outgrew `line`; its rest was dropped */
-    uint8_t held;            /* line is complete and waits to run */
+    uint8_t held;            /* line is complete and waits (1), or passed its check (2) */
+    uint8_t command;         /* a checked line: where its command begins (after N) */
     uint8_t relative;        /* G91 */
     uint8_t wait;            /* what the last command still waits for */
     uint8_t motor_on;        /* as last set through io.motor */
@@ -131,14 +139,15 @@ typedef struct fw_gcode { /* fields private to gcode.c */
 
 /* The axis must outlive g; io is copied. Sends nothing. */
 void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io);
-/* Bytes from the host, in order. Runs every line it can at tick `now` and
-   returns how many bytes it consumed: all of them unless a line is held
-   (see Flow control above). */
-size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size, uint64_t now);
-/* Call after stepping the axis and at the returned deadline: ends dwells,
-   sends Z_move_comp and the ok of G28, then runs the held line. Returns the
-   tick it next needs a call: the dwell's end, or the axis's next step while
-   a move (its own or the core's) keeps a command or a held line waiting;
-   FW_NEVER when only a byte from the host can change anything. */
+/* Bytes from the host, in order, up to the end of a line: returns how many
+   it consumed, all of them unless a line is complete, which waits for
+   fw_gcode_run (see Flow control above). */
+size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size);
+/* Call after stepping the axis and at the returned deadline: one piece of
+   work (Bounded work above): ends a dwell, sends Z_move_comp and the ok of
+   G28, or checks or runs the held line. Returns the tick it next needs a
+   call: `now` after a piece of work, the dwell's end, or the axis's next
+   step while a move (its own or the core's) keeps a command or a held line
+   waiting; FW_NEVER when only a byte from the host can change anything. */
 uint64_t fw_gcode_run(fw_gcode *g, uint64_t now);
 #endif

@@ -126,14 +126,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     while (at < size) {
         size_t piece = 1 + next_random(&seed) % 64, used;
         if (piece > size - at) piece = size - at;
-        used = fw_gcode_receive(&f.g, data + at, piece, f.now);
+        used = fw_gcode_receive(&f.g, data + at, piece);
         if (used > piece) abort();
         at += used;
         if (used < piece || next_random(&seed) % 4 == 0) {
             run(&f, next_random(&seed) % 2 ? 1000000000L : (long)(next_random(&seed) % 200));
             /* idle with nothing due: the next byte must go in */
             if (used < piece && !fw_axis_busy(&f.axis) && fw_gcode_run(&f.g, f.now) == FW_NEVER) {
-                if (fw_gcode_receive(&f.g, data + at, 1, f.now) != 1) abort();
+                if (fw_gcode_receive(&f.g, data + at, 1) != 1) abort();
                 at++;
             }
         }

@@ -32,9 +32,10 @@
    a frame or a G-code line, a move's start, a slice of a held frame) on
    top of its own 3,000-4,000 (64-bit ticks), and every pass is held under
    the 16,000 of a step at this speed, interrupts included: the worst
-   measured is under 15,000 (tests/test_avr.c asserts it; a G-code line's
-   parse in gcode.c, with Z still, takes 22,000 to 36,000). At 5 mm/s (8,000
-   a step) a pass with a ramp step and a frame would not fit. */
+   measured is under 15,000 (tests/test_avr.c asserts it, in G-code mode
+   too: a line is checked in one pass and run in the next, a G1's run the
+   longest, about 14,900). At 5 mm/s (8,000 a step) a pass with a ramp step
+   and a frame would not fit. */
 #ifndef BOARD_MAX_SPEED_UM_S
 #define BOARD_MAX_SPEED_UM_S 2500ul
 #endif
@@ -76,8 +77,7 @@
 #define BOARD_WDT_MS 120u
 
 /* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
-   computed in the pass after the one that started it (a G-code line's,
-   up to 36,000 cycles = 2.3 ms, is the longest). The loop computes one step a pass
+   computed in the pass after the one that started it. The loop computes one step a pass
    (FW_STEP_FILL) and runs again at once while the queue is short; the
    queue holds FW_STEP_QUEUE steps, 256,000 cycles at the top speed, far
    more than a pass (under 16,000): room for the wake-up and for a pass
