@@ -9,7 +9,12 @@
 #include <string.h>
 
 /* The host's --report: each layer's top (bins), mask CRC and exposure. */
-typedef struct print_report { uint32_t layers, first, bin_nm, *tops, *crcs, *exposures; unsigned long retransmits, mask_bytes; int by_printer; } print_report;
+typedef struct print_report {
+    uint32_t layers, first, bin_nm, *tops, *crcs, *exposures;
+    unsigned long retransmits, mask_bytes;
+    double longest_wait_ms;
+    int by_printer;
+} print_report;
 
 static inline int read_print_report(const char *path, print_report *r)
 {
@@ -23,6 +28,7 @@ static inline int read_print_report(const char *path, print_report *r)
     if ((f = strstr(text, "\"bin_nm\": "))) r->bin_nm = (uint32_t)strtoul(f + 10, NULL, 10);
     if ((f = strstr(text, "\"retransmitted_frames\": "))) r->retransmits = strtoul(f + 24, NULL, 10);
     if ((f = strstr(text, "\"mask_code_bytes\": "))) r->mask_bytes = strtoul(f + 19, NULL, 10);
+    if ((f = strstr(text, "\"longest_wait_ms\": "))) r->longest_wait_ms = strtod(f + 19, NULL);
     r->by_printer = strstr(text, "\"planned_by_printer\": true") != NULL;
     r->tops = (uint32_t *)calloc(r->layers + 1, sizeof *r->tops);
     r->crcs = (uint32_t *)calloc(r->layers + 1, sizeof *r->crcs);

@@ -506,11 +506,15 @@ static void gcode_print_by_printcore(void)
 
 /* adaslice print over the pty, as tests/test_print.c drives fw-sim: the
    printer plans, the host streams every mask while Z moves (the window of
-   frames in flight), and the pins show the print the report describes. */
+   frames in flight), and the pins show the print the report describes. It
+   homes from 12 mm first, 4.8 s at the homing speed: longer than the
+   host's 3 s give-up, so the printer answers the host's status polls while
+   Z homes or the print fails. */
+#define BPRINT_Z_START "12"
 static void binary_print_with_masks_streaming(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "3", "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "60", NULL};
     cli_result r;
     avr_log l;
     print_report rep;
@@ -569,6 +573,17 @@ static void binary_print_with_masks_streaming(void)
     s = zcheck_record(l.ev, l.events, &e);
     CHECKF(s.shows == rep.layers, "%zu masks shown for %u layers", s.shows, rep.layers);
     CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    {
+        /* homing's approach: down from the start to the switch, where the
+           first step up (the back-off) comes */
+        size_t up = 0;
+        double homing_s;
+        while (up < l.steps && l.step_dir[up] < 0) up++;
+        homing_s = up < l.steps ? (double)(l.step_at[up] - l.step_at[0]) / BOARD_CPU_HZ : 0;
+        CHECKF(homing_s > 3.5 && rep.longest_wait_ms < 500, "homing's approach %.2f s; the longest wait for a reply %.1f ms",
+               homing_s, rep.longest_wait_ms);
+        printf("    avr: homing's approach took %.2f s; the longest wait for a reply %.1f ms\n", homing_s, rep.longest_wait_ms);
+    }
     /* Bounded work a pass (fw.h): every pass of the loop, its interrupts
        included (simavr's UART runs at the line's rate), is shorter than a
        step interval at the top speed, while Z moves (masks streaming) and
