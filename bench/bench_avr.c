@@ -16,7 +16,8 @@
    3. The shipped image (its 2560 x 1440 display: 320-byte rows, each row's
       CRC over several passes) printing the hand at scale 2, 9 layers: the
       worst loop pass, all and while Z moves, the whole command's wall time
-      and the longest wait for a reply (a whole mask decoding).
+      and the longest wait for a reply (a whole mask decoding), and the
+      frames the host sent again (resends while a mask decodes are waste).
    4. SRAM: the shipped image's data + bss (avr-size), the planner's share,
       and the largest BOARD_MAX_BINS that still leaves the measured stack
       peak free. */
@@ -248,6 +249,7 @@ int main(int argc, char **argv)
             const char *ship_log = "build/bench_avr_ship.log", *report = "build/bench_avr_ship.json";
             passes sp = {0, 0, 0, 0, 0, 0};
             double longest = -1;
+            long resent = -1;
             char *j, json[65536];
             size_t got;
             if (print_hand(arg_ship, ship_log, "1", "2", report, &wall)) return 1;
@@ -260,11 +262,13 @@ int main(int argc, char **argv)
                 json[got] = 0;
                 fclose(f);
                 if ((j = strstr(json, "\"longest_wait_ms\": "))) longest = strtod(j + 19, NULL);
+                if ((j = strstr(json, "\"retransmitted_frames\": "))) resent = strtol(j + 24, NULL, 10);
             }
             printf("the shipped image (2560 x 1440, rows of 320 bytes, FW_CRC_BYTES %u of CRC a pass), 9 layers of the hand at "
                    "scale 2: worst loop pass %llu cycles, %llu while Z moves (the loop's own work %llu, %llu); %llu steps refused "
-                   "as late; the whole print %.1f s of the wall, the longest wait for a reply %.2f s (a whole mask decoding)\n",
-                   (unsigned)FW_CRC_BYTES, sp.worst, sp.moving, sp.work, sp.moving_work, sp.late, wall, longest / 1000);
+                   "as late; the whole print %.1f s of the wall, the longest wait for a reply %.2f s (a whole mask decoding), "
+                   "%ld frames sent again\n",
+                   (unsigned)FW_CRC_BYTES, sp.worst, sp.moving, sp.work, sp.moving_work, sp.late, wall, longest / 1000, resent);
         }
 
         /* 4. SRAM */

@@ -53,6 +53,10 @@ typedef struct print_job {
     unsigned char *code;
     size_t code_size, code_cap, rendered;
     uint32_t crc;
+    /* the mask being sent, decoded as it goes: the rows each MASK_DATA
+       frame completes, which the printer decodes before it answers */
+    adaslice_rle_decoder sending;
+    unsigned char *sending_row;
 } print_job;
 
 /* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
@@ -82,8 +86,35 @@ static int job_mask(print_job *pj, uint32_t k)
     return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
 }
 
+/* The current mask is about to be sent from its start. */
+static int job_send_begin(print_job *pj)
+{
+    size_t stride = pj->bits == 8 ? pj->width : (pj->width + 7u) / 8u;
+    if (!pj->sending_row && !(pj->sending_row = (unsigned char *)malloc(stride)))
+        return complain(RC_FAIL, "out of memory for a mask row");
+    if (adaslice_rle_decoder_init(&pj->sending, pj->width, pj->height, (int)pj->bits, pj->sending_row, stride))
+        return complain(RC_FAIL, "a %ux%u display of %u bits cannot take masks", pj->width, pj->height, pj->bits);
+    return RC_OK;
+}
+
+static void count_row(void *ctx, uint32_t y, const unsigned char *row)
+{
+    (void)y;
+    (void)row;
+    ++*(uint32_t *)ctx;
+}
+
+/* The rows that the current mask's next n code bytes complete. */
+static uint32_t job_send_rows(print_job *pj, const unsigned char *code, size_t n)
+{
+    uint32_t rows = 0;
+    (void)adaslice_rle_decode(&pj->sending, code, n, count_row, &rows);
+    return rows;
+}
+
 static void print_job_free(print_job *pj)
 {
+    free(pj->sending_row);
     if (pj->masks.image) layer_masks_close(&pj->masks);
     if (pj->from_model) { free(pj->code); free(pj->lengths); free(pj->exposure_ms); }
     job_masks_free(&pj->file);
@@ -296,7 +327,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
             mask.code_bytes = (uint32_t)pj->code_size;
             mask.crc32 = pj->crc;
             mask.exposure_ms = pj->exposure_ms[next - 1];
-            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask)))) return rc;
+            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask))) || (rc = job_send_begin(pj))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
             sending = 1;
@@ -304,7 +335,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
         }
         if (sending && sent < pj->code_size) {
             size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
-            if ((rc = serial_send(l, LINK_MSG_MASK_DATA, pj->code + sent, chunk))) return rc;
+            if ((rc = serial_send_mask_data(l, pj->code + sent, chunk, job_send_rows(pj, pj->code + sent, chunk)))) return rc;
             sent += chunk;
             *mask_bytes += chunk;
             continue;

@@ -85,15 +85,12 @@ static int serial_silent(const serial_link *l, const char *how, double ms)
     return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
 }
 
-/* How long the printer may answer nothing: silent_ms, and a mask's decoding
-   while a MASK_DATA frame waits. */
+/* How long the printer may answer nothing: silent_ms, and the work of the
+   oldest frame in flight (the one it answers next; each answer restarts
+   the silence timer). */
 static double serial_bound(const serial_link *l)
 {
-    double bound = l->silent_ms;
-    int i;
-    for (i = 0; i < l->count; i++)
-        if ((l->frames[i][2] & ~LINK_ROUND_BIT) == LINK_MSG_MASK_DATA) { bound += l->mask_decode_ms; break; }
-    return bound;
+    return l->silent_ms + (l->count ? l->work_ms[0] : 0);
 }
 
 /* A printer that stopped reads nothing, and the line fills: a write that
@@ -165,6 +162,7 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
     if (acked && acked <= l->count) {
         memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
         memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
+        memmove(l->work_ms, l->work_ms + acked, (size_t)(l->count - acked) * sizeof l->work_ms[0]);
         l->count -= acked;
         l->base = ack;
         l->last_progress = now_ms();
@@ -298,23 +296,36 @@ int serial_pump(serial_link *l, int wait_ms)
     t = now_ms();
     /* what arrived was read first: a reply the host was too busy to read is not silence */
     if (l->count && t - l->waiting_since > serial_bound(l)) return serial_silent(l, "nothing", t - l->waiting_since);
-    if (l->count && t - l->last_progress > l->rto_ms && (rc = serial_resend_all(l))) return rc;
+    /* the oldest frame's work comes before its acknowledgement */
+    if (l->count && t - l->last_progress > l->rto_ms + l->work_ms[0] && (rc = serial_resend_all(l))) return rc;
     if (l->stalled >= SERIAL_STALL_ROUNDS) return serial_rehello(l);
     return RC_OK;
 }
 
-/* Queues a frame, waiting while the printer's window is full. */
-int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size)
+/* Queues a frame that asks work_ms of the printer, waiting while its
+   window is full. */
+static int serial_send_work(serial_link *l, uint8_t type, const uint8_t *payload, size_t size, double work_ms)
 {
     int rc;
     while (l->count >= l->window || l->count >= SERIAL_QUEUE)
         if ((rc = serial_pump(l, 20))) return rc;
     l->lens[l->count] = link_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
+    l->work_ms[l->count] = work_ms;
     if (!l->count) l->last_progress = l->waiting_since = now_ms();
     rc = serial_write(l, l->frames[l->count], l->lens[l->count]);
     l->count++;
     l->next_seq++;
     return rc;
+}
+
+int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size)
+{
+    return serial_send_work(l, type, payload, size, 0);
+}
+
+int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t rows)
+{
+    return serial_send_work(l, LINK_MSG_MASK_DATA, code, size, rows * l->row_ms);
 }
 
 /* A fresh STATUS: asked again if its reply is lost. */
@@ -408,8 +419,7 @@ int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s)
     l->rto_ms += frame_ms * l->window;
     /* the reply to the last frame of a window comes after the whole window */
     l->silent_ms += frame_ms * (l->window - 1);
-    l->mask_decode_ms = (double)l->id.height * (l->id.bits == 8 ? l->id.width : (l->id.width + 7u) / 8u) *
-                        SERIAL_ROW_BYTE_US / 1000;
+    l->row_ms = (double)(l->id.bits == 8 ? l->id.width : (l->id.width + 7u) / 8u) * SERIAL_ROW_BYTE_US / 1000;
     l->data_max = LINK_PAYLOAD_MAX;
     return RC_OK;
 }

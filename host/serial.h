@@ -18,12 +18,15 @@ typedef struct serial_link {
     int count, window;
     uint8_t frames[SERIAL_QUEUE][LINK_FRAME_MAX];
     size_t lens[SERIAL_QUEUE];
+    /* what each frame in flight asks of the printer before it answers (a
+       mask frame's rows), ms: the resend and silence timers allow it */
+    double work_ms[SERIAL_QUEUE];
     double rto_ms, last_progress;
     /* A printer that answers nothing for silent_ms while the host waits for
        it (frames in flight) has stopped: the firmware answers every frame
        within a loop pass or a few, bar a mask frame decoded over many. */
     double silent_ms;
-    double mask_decode_ms;      /* a whole mask decoded at SERIAL_ROW_BYTE_US */
+    double row_ms;              /* a display row decoded at SERIAL_ROW_BYTE_US */
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
     double longest_wait;        /* the longest wait for a reply that came, ms */
@@ -58,8 +61,9 @@ typedef struct serial_link {
    which the host says HELLO again to learn whether it restarted. */
 #define SERIAL_STALL_ROUNDS 8
 /* A MASK_DATA frame is answered once decoded, a slice a pass, and one frame
-   can hold a whole mask (an empty one is two bytes): the host allows, while
-   one waits, a whole mask's rows at this pace, microseconds per row byte.
+   can hold a whole mask (an empty one is two bytes): the host allows the
+   rows a frame completes at this pace, microseconds per row byte, before
+   it resends the frame or takes the printer's silence for a stop.
    The slowest port, RAMPS (ATmega2560, 16 MHz), puts 24 bytes of rows
    through the CRC a pass: under simavr (slower than the part) a whole
    2560 x 1440 mask took up to 5.8 s of the wall, 12.5 us a row byte (make
@@ -92,6 +96,9 @@ int serial_pump(serial_link *l, int wait_ms);
 int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept);
 /* Queues a frame, waiting while the printer's window is full. */
 int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size);
+/* The same for a MASK_DATA frame whose code completes `rows` rows of the
+   mask (the printer answers it once they are decoded). */
+int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t rows);
 /* A fresh STATUS in l->st: asked again if its reply is lost. */
 int serial_status(serial_link *l);
 /* Asks for STATUS until `done` holds; after timeout_ms, RC_FAIL and "the
