@@ -577,7 +577,11 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     union { link_profile profile; link_plan_get plan_get; link_plan_set plan_set; link_mask mask; link_move move;
             link_expose expose; link_print print; link_exit exit; } m;
     fw->heard = now;
-    if (!fw->binary) fw->gcode_held_len = 0; /* a binary host: what looked like G-code was not */
+    if (!fw->binary) {
+        /* a binary host: what looked like G-code was not */
+        fw->gcode_held_len = 0;
+        fw_gcode_drop(&fw->gcode);
+    }
     fw->binary = 1;
     if (type == LINK_MSG_HELLO) {
         /* a host (re)connecting: its numbering starts here */
@@ -888,8 +892,9 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     if (fw->binary && fw->state != LINK_STATE_PRINTING && fw->state != LINK_STATE_PAUSED &&
         now - fw->heard >= FW_BINARY_IDLE * fw->link_timeout)
         fw->binary = 0;
-    /* G-code's pieces of work (a line's check, its run, a move's end) are
-       passes' work like a frame: one when the pass has none yet */
+    /* G-code's pieces of work (a line's check, its run, a G0/G1's start, a
+       move's or a dwell's end) are passes' work like a frame: one when the
+       pass has none yet */
     if (!fw->binary) {
         gcode_feed(fw);
         if (fw->steps.budget != FW_STEP_FILL) next = now;

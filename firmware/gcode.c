@@ -152,7 +152,7 @@ static int parse_fixed(const uint8_t *s, size_t n, int64_t *out)
 {
     size_t i = 0;
     int neg = 0, digits = 0, places = 0, round = -1;
-    uint32_t whole = 0, frac = 0; /* 32 bits and no division: see put_uint */
+    uint32_t whole = 0, frac = 0; /* 32 bits and no division: see tenth() */
     int64_t v;
     if (i < n && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
     for (; i < n && is_digit(s[i]); i++, digits++)
@@ -393,7 +393,7 @@ static int checksum_ok(const uint8_t *b, size_t star, size_t n)
     return (i == n || b[i] == ';') && want == x;
 }
 
-/* Whether the switch in execute() has a case for code (G codes as they are,
+/* Whether the switch in run() has a case for code (G codes as they are,
    M codes plus 10000): only those reject stray bytes, since unknown ones
    such as M117 carry free text that goes back in the echo. */
 static int known(int code)
@@ -624,4 +624,10 @@ uint64_t fw_gcode_run(fw_gcode *g, uint64_t now)
     if (g->wait == WAIT_DWELL) return g->deadline;
     if (g->wait != WAIT_NONE || g->held) return fw_axis_next(g->axis);
     return FW_NEVER;
+}
+
+void fw_gcode_drop(fw_gcode *g)
+{
+    line_done(g);
+    if (g->wait == WAIT_START) g->wait = WAIT_NONE;
 }

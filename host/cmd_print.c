@@ -56,7 +56,8 @@ typedef struct print_job {
     /* the mask being sent, decoded as it goes: the rows each MASK_DATA
        frame completes, which the printer decodes before it answers */
     adaslice_rle_decoder sending;
-    unsigned char *sending_row;
+    unsigned char *sending_row, *sending_prev; /* the row decoded, the one before */
+    uint32_t sending_rows, sending_cost;       /* rows so far; the frame's bytes of CRC */
 } print_job;
 
 /* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
@@ -86,30 +87,45 @@ static int job_mask(print_job *pj, uint32_t k)
     return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
 }
 
+static size_t job_stride(const print_job *pj) { return pj->bits == 8 ? pj->width : (pj->width + 7u) / 8u; }
+
 /* The current mask is about to be sent from its start. */
 static int job_send_begin(print_job *pj)
 {
-    size_t stride = pj->bits == 8 ? pj->width : (pj->width + 7u) / 8u;
-    if (!pj->sending_row && !(pj->sending_row = (unsigned char *)malloc(stride)))
+    size_t stride = job_stride(pj);
+    if (!pj->sending_row && !(pj->sending_row = (unsigned char *)malloc(2 * stride)))
         return complain(RC_FAIL, "out of memory for a mask row");
+    pj->sending_prev = pj->sending_row + stride;
+    pj->sending_rows = 0;
     if (adaslice_rle_decoder_init(&pj->sending, pj->width, pj->height, (int)pj->bits, pj->sending_row, stride))
         return complain(RC_FAIL, "a %ux%u display of %u bits cannot take masks", pj->width, pj->height, pj->bits);
     return RC_OK;
 }
 
+/* A row's CRC as the printer's decoder counts it: the row's bytes, or
+   ADASLICE_RLE_REPEAT_COST for a repeat of the row before (our encoder
+   codes every such row as a repeat). */
 static void count_row(void *ctx, uint32_t y, const unsigned char *row)
 {
+    print_job *pj = (print_job *)ctx;
+    size_t stride = job_stride(pj);
     (void)y;
-    (void)row;
-    ++*(uint32_t *)ctx;
+    if (pj->sending_rows && stride > ADASLICE_RLE_REPEAT_COST && !memcmp(row, pj->sending_prev, stride)) {
+        pj->sending_cost += ADASLICE_RLE_REPEAT_COST;
+    } else {
+        pj->sending_cost += (uint32_t)stride;
+        memcpy(pj->sending_prev, row, stride);
+    }
+    pj->sending_rows++;
 }
 
-/* The rows that the current mask's next n code bytes complete. */
-static uint32_t job_send_rows(print_job *pj, const unsigned char *code, size_t n)
+/* The bytes of rows' CRC that the current mask's next n code bytes ask of
+   the printer's decoder. */
+static uint32_t job_send_cost(print_job *pj, const unsigned char *code, size_t n)
 {
-    uint32_t rows = 0;
-    (void)adaslice_rle_decode(&pj->sending, code, n, count_row, &rows);
-    return rows;
+    pj->sending_cost = 0;
+    (void)adaslice_rle_decode(&pj->sending, code, n, count_row, pj);
+    return pj->sending_cost;
 }
 
 static void print_job_free(print_job *pj)
@@ -335,7 +351,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
         }
         if (sending && sent < pj->code_size) {
             size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
-            if ((rc = serial_send_mask_data(l, pj->code + sent, chunk, job_send_rows(pj, pj->code + sent, chunk)))) return rc;
+            if ((rc = serial_send_mask_data(l, pj->code + sent, chunk, job_send_cost(pj, pj->code + sent, chunk)))) return rc;
             sent += chunk;
             *mask_bytes += chunk;
             continue;

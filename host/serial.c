@@ -85,12 +85,20 @@ static int serial_silent(const serial_link *l, const char *how, double ms)
     return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
 }
 
-/* How long the printer may answer nothing: silent_ms, and the work of the
-   oldest frame in flight (the one it answers next; each answer restarts
-   the silence timer). */
+/* The work the frames in flight ask of the printer: the last one's
+   acknowledgement comes after all of it (an earlier reply may be lost). */
+static double serial_work(const serial_link *l)
+{
+    double ms = 0;
+    int i;
+    for (i = 0; i < l->count; i++) ms += l->work_ms[i];
+    return ms;
+}
+
+/* How long the printer may answer nothing: silent_ms and that work. */
 static double serial_bound(const serial_link *l)
 {
-    return l->silent_ms + (l->count ? l->work_ms[0] : 0);
+    return l->silent_ms + serial_work(l);
 }
 
 /* A printer that stopped reads nothing, and the line fills: a write that
@@ -296,8 +304,7 @@ int serial_pump(serial_link *l, int wait_ms)
     t = now_ms();
     /* what arrived was read first: a reply the host was too busy to read is not silence */
     if (l->count && t - l->waiting_since > serial_bound(l)) return serial_silent(l, "nothing", t - l->waiting_since);
-    /* the oldest frame's work comes before its acknowledgement */
-    if (l->count && t - l->last_progress > l->rto_ms + l->work_ms[0] && (rc = serial_resend_all(l))) return rc;
+    if (l->count && t - l->last_progress > l->rto_ms + serial_work(l) && (rc = serial_resend_all(l))) return rc;
     if (l->stalled >= SERIAL_STALL_ROUNDS) return serial_rehello(l);
     return RC_OK;
 }
@@ -323,9 +330,9 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
     return serial_send_work(l, type, payload, size, 0);
 }
 
-int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t rows)
+int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t crc_bytes)
 {
-    return serial_send_work(l, LINK_MSG_MASK_DATA, code, size, rows * l->row_ms);
+    return serial_send_work(l, LINK_MSG_MASK_DATA, code, size, crc_bytes * (SERIAL_ROW_BYTE_US / 1000.0));
 }
 
 /* A fresh STATUS: asked again if its reply is lost. */
@@ -419,7 +426,6 @@ int serial_connect(serial_link *l, const char *dev, long baud, double give_up_s)
     l->rto_ms += frame_ms * l->window;
     /* the reply to the last frame of a window comes after the whole window */
     l->silent_ms += frame_ms * (l->window - 1);
-    l->row_ms = (double)(l->id.bits == 8 ? l->id.width : (l->id.width + 7u) / 8u) * SERIAL_ROW_BYTE_US / 1000;
     l->data_max = LINK_PAYLOAD_MAX;
     return RC_OK;
 }

@@ -26,7 +26,6 @@ typedef struct serial_link {
        it (frames in flight) has stopped: the firmware answers every frame
        within a loop pass or a few, bar a mask frame decoded over many. */
     double silent_ms;
-    double row_ms;              /* a display row decoded at SERIAL_ROW_BYTE_US */
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
     double longest_wait;        /* the longest wait for a reply that came, ms */
@@ -62,13 +61,15 @@ typedef struct serial_link {
 #define SERIAL_STALL_ROUNDS 8
 /* A MASK_DATA frame is answered once decoded, a slice a pass, and one frame
    can hold a whole mask (an empty one is two bytes): the host allows the
-   rows a frame completes at this pace, microseconds per row byte, before
-   it resends the frame or takes the printer's silence for a stop.
-   The slowest port, RAMPS (ATmega2560, 16 MHz), puts 24 bytes of rows
-   through the CRC a pass: under simavr (slower than the part) a whole
-   2560 x 1440 mask took up to 5.8 s of the wall, 12.5 us a row byte (make
-   bench). */
-#define SERIAL_ROW_BYTE_US 16
+   bytes of rows' CRC a frame asks (serial_send_mask_data) at this pace,
+   microseconds per byte, before it resends the frame or takes the
+   printer's silence for a stop. The slowest port, RAMPS (ATmega2560,
+   16 MHz), puts 16 bytes of rows through the CRC a pass: under simavr
+   (slower than the part), printing the hand at scale 14 on its 2560 x 1440
+   display with masks decoded while Z moves, a frame's answer came up to
+   0.98 of this allowance after the frame before's (line time included),
+   and no frame was sent again. */
+#define SERIAL_ROW_BYTE_US 30
 /* A gap longer than this, ms, between two looks at the line (serial_pump,
    a write waiting for room) is the host's own absence, not time it waited
    for the printer. */
@@ -96,9 +97,11 @@ int serial_pump(serial_link *l, int wait_ms);
 int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept);
 /* Queues a frame, waiting while the printer's window is full. */
 int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size);
-/* The same for a MASK_DATA frame whose code completes `rows` rows of the
-   mask (the printer answers it once they are decoded). */
-int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t rows);
+/* The same for a MASK_DATA frame whose code asks crc_bytes of rows' CRC
+   of the printer's decoder (adaslice_rle_decode_rows' budget: a row's
+   bytes, a repeated row's ADASLICE_RLE_REPEAT_COST); the printer answers
+   it once they are done. */
+int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t crc_bytes);
 /* A fresh STATUS in l->st: asked again if its reply is lost. */
 int serial_status(serial_link *l);
 /* Asks for STATUS until `done` holds; after timeout_ms, RC_FAIL and "the

@@ -33,9 +33,9 @@
    top of its own 3,000-4,000 (64-bit ticks), and every pass is held under
    the 16,000 of a step at this speed, interrupts included: the worst
    measured is under 15,000 (tests/test_avr.c asserts it, in G-code mode
-   too: a line is checked in one pass and run in the next, a G1's run the
-   longest, about 14,900). At 5 mm/s (8,000 a step) a pass with a ramp step
-   and a frame would not fit. */
+   too: a line is checked in one pass, run in the next and its move started
+   in a third, none over 12,600). At 5 mm/s (8,000 a step) a pass with a
+   ramp step and a frame would not fit. */
 #ifndef BOARD_MAX_SPEED_UM_S
 #define BOARD_MAX_SPEED_UM_S 2500ul
 #endif
@@ -83,14 +83,17 @@
    more than a pass (under 16,000): room for the wake-up and for a pass
    that one day runs long. 16 x 9 bytes of SRAM. The pieces of a pass,
    each a few thousand cycles here (avr-run --profile-passes): 8 mask code
-   bytes and 24 bytes of rows' CRC (about 122 cycles a byte, make bench: a
-   2560-pixel display's 320-byte row is 39,000 cycles, ten passes), 2 profile bins
+   bytes and 16 bytes of rows' CRC (about 122 cycles a byte, make bench: a
+   2560-pixel display's 320-byte row is 39,000 cycles, 20 passes; a
+   repeated row costs 8, one multiplication of about 1,000 cycles; with 24
+   a pass decoding code, a row's start and two repeats took 14,820 while Z
+   moved, 13,496 with 16), 2 profile bins
    (2,860 cycles each), 32 planes of the plan's reversal (150 each). */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 1u
 #define FW_DECODE_BYTES 8u
-#define FW_CRC_BYTES 24u
+#define FW_CRC_BYTES 16u
 #define FW_PLAN_BINS 2u
 #define FW_REVERSE_PLANES 32u
 
