@@ -538,6 +538,14 @@ int main(int argc, char **argv)
         }
     }
     if (R.out_len) (void)!write(R.master, R.out, R.out_len);
+    if (status == 3) {
+        /* closing the master hangs the terminal up and drops what its
+           reader has not read yet (an image's last line before it stopped):
+           wait for the reader's SIGTERM, 2 s at most */
+        double stopped = wall_now();
+        struct timespec ts = {0, 20000000};
+        while (!stop_signal && wall_now() - stopped < 2) nanosleep(&ts, NULL);
+    }
     if (R.log) {
         fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu worst_work=%llu worst_moving_work=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
                 (unsigned long long)R.avr->cycle, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
