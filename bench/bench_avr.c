@@ -25,6 +25,7 @@
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
 #include "../link/tty.h"
+#include "../tests/avr_passes.h"
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -42,19 +43,6 @@ static double now_s(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
-}
-
-/* avr-run's summary line in its log ("# end cycles=... worst_pass=..."). */
-typedef struct passes { unsigned long long worst, moving, work, moving_work, stack, late; } passes;
-static void read_passes(const char *line, passes *p)
-{
-    const char *v;
-    if ((v = strstr(line, "worst_pass="))) p->worst = strtoull(v + 11, NULL, 10);
-    if ((v = strstr(line, "worst_moving_pass="))) p->moving = strtoull(v + 18, NULL, 10);
-    if ((v = strstr(line, "worst_work="))) p->work = strtoull(v + 11, NULL, 10);
-    if ((v = strstr(line, "worst_moving_work="))) p->moving_work = strtoull(v + 18, NULL, 10);
-    if ((v = strstr(line, "stack_peak="))) p->stack = strtoull(v + 11, NULL, 10);
-    if ((v = strstr(line, " late="))) p->late = strtoull(v + 6, NULL, 10);
 }
 
 /* avr-run IMAGE with `log` (or none); its pty name in `pty`; the child's pid. */
@@ -191,7 +179,7 @@ int main(int argc, char **argv)
         int *dir = NULL;
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
         long pos, start_steps = 0;
-        passes ps = {0, 0, 0, 0, 0, 0};
+        avr_passes ps = {0, 0, 0, 0, 0, 0};
         double wall;
         if (print_hand(arg_test, log, "3", "5", NULL, &wall)) return 1;
         if (!(f = fopen(log, "r"))) { printf("bench_avr: FAILED: no log %s\n", log); return 1; }
@@ -201,7 +189,7 @@ int main(int argc, char **argv)
             const char *v;
             if (line[0] == '#') {
                 if ((v = strstr(line, "start_steps="))) start_steps = strtol(v + 12, NULL, 10);
-                read_passes(line, &ps);
+                avr_read_passes(line, &ps);
                 continue;
             }
             if (sscanf(line, "%llu %15s %15s", &c, what, a) == 3 && !strcmp(what, "step")) {
@@ -237,9 +225,9 @@ int main(int argc, char **argv)
             i = j;
         }
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
-               "%llu refused as late\n", steps, late_worst, late_worst / 16.0, ps.late);
-        printf("  worst loop pass %llu cycles, %llu while Z moves (its interrupts in; the loop's own work %llu, %llu), "
-               "a step every %lu cycles at the top speed; stack peak %llu bytes\n",
+               "%lu refused as late\n", steps, late_worst, late_worst / 16.0, ps.late);
+        printf("  worst loop pass %lu cycles, %lu while Z moves (its interrupts in; the loop's own work %lu, %lu), "
+               "a step every %lu cycles at the top speed; stack peak %lu bytes\n",
                ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), ps.stack);
         free(at);
         free(dir);
@@ -247,7 +235,7 @@ int main(int argc, char **argv)
         /* 3. the shipped image, 2560 x 1440 */
         {
             const char *ship_log = "build/bench_avr_ship.log", *report = "build/bench_avr_ship.json";
-            passes sp = {0, 0, 0, 0, 0, 0};
+            avr_passes sp = {0, 0, 0, 0, 0, 0};
             double longest = -1;
             long resent = -1;
             char *j, json[65536];
@@ -255,7 +243,7 @@ int main(int argc, char **argv)
             if (print_hand(arg_ship, ship_log, "1", "2", report, &wall)) return 1;
             if (!(f = fopen(ship_log, "r"))) { printf("bench_avr: FAILED: no log %s\n", ship_log); return 1; }
             while (fgets(line, sizeof line, f))
-                if (line[0] == '#') read_passes(line, &sp);
+                if (line[0] == '#') avr_read_passes(line, &sp);
             fclose(f);
             if ((f = fopen(report, "r"))) {
                 got = fread(json, 1, sizeof json - 1, f);
@@ -265,7 +253,7 @@ int main(int argc, char **argv)
                 if ((j = strstr(json, "\"retransmitted_frames\": "))) resent = strtol(j + 24, NULL, 10);
             }
             printf("the shipped image (2560 x 1440, rows of 320 bytes, FW_CRC_BYTES %u of CRC a pass), 9 layers of the hand at "
-                   "scale 2: worst loop pass %llu cycles, %llu while Z moves (the loop's own work %llu, %llu); %llu steps refused "
+                   "scale 2: worst loop pass %lu cycles, %lu while Z moves (the loop's own work %lu, %lu); %lu steps refused "
                    "as late; the whole print %.1f s of the wall, the longest wait for a reply %.2f s (a whole mask decoding), "
                    "%ld frames sent again\n",
                    (unsigned)FW_CRC_BYTES, sp.worst, sp.moving, sp.work, sp.moving_work, sp.late, wall, longest / 1000, resent);

@@ -27,6 +27,7 @@
 #include "cli_run.h"
 #include "zcheck.h"
 #include "print_report.h"
+#include "avr_passes.h"
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
 #include "../link/tty.h"
@@ -159,8 +160,7 @@ typedef struct avr_log {
     uint64_t reset_at[8];
     size_t resets;
     size_t steps_lit;            /* steps taken with the light on */
-    unsigned long late, worst_pass, worst_moving_pass, stack_peak;
-    unsigned long worst_work, worst_moving_work; /* the same, the interrupts' cycles out */
+    avr_passes pass;             /* the end line */
     long start_steps;
     zevent *ev;                  /* steps, UV, shows: tests/zcheck.h's record, in ticks (cycle / 8) */
     size_t events, events_cap;
@@ -227,12 +227,7 @@ static int read_avr_log(const char *path, avr_log *l)
         const char *v;
         if (line[0] == '#') {
             if ((v = strstr(line, "start_steps="))) l->start_steps = strtol(v + 12, NULL, 10);
-            if ((v = strstr(line, " late="))) l->late = strtoul(v + 6, NULL, 10);
-            if ((v = strstr(line, "worst_pass="))) l->worst_pass = strtoul(v + 11, NULL, 10);
-            if ((v = strstr(line, "worst_moving_pass="))) l->worst_moving_pass = strtoul(v + 18, NULL, 10);
-            if ((v = strstr(line, "worst_work="))) l->worst_work = strtoul(v + 11, NULL, 10);
-            if ((v = strstr(line, "worst_moving_work="))) l->worst_moving_work = strtoul(v + 18, NULL, 10);
-            if ((v = strstr(line, "stack_peak="))) l->stack_peak = strtoul(v + 11, NULL, 10);
+            avr_read_passes(line, &l->pass);
             continue;
         }
         arg[0] = 0;
@@ -390,13 +385,13 @@ static void check_gcode_print(const char *path, const zmove *moves, size_t n, in
                (unsigned long long)want);
         if (check_case_failed()) break;
     }
-    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
-    CHECKF(l.worst_pass < STEP_CYCLES, "a loop pass took %lu cycles (%lu while Z moved), a step comes every %lu at the top speed",
-           l.worst_pass, l.worst_moving_pass, STEP_CYCLES);
+    CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
+    CHECKF(l.pass.worst < STEP_CYCLES, "a loop pass took %lu cycles (%lu while Z moved), a step comes every %lu at the top speed",
+           l.pass.worst, l.pass.moving, STEP_CYCLES);
     printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; light %.4f..%.4f ms for G4 P%d; "
            "worst loop pass %lu cycles (%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
            who, layers, l.steps, worst, (double)shortest / CYCLES_PER_MS, (double)longest / CYCLES_PER_MS, EXPOSE_MS,
-           l.worst_pass, l.worst_moving_pass, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.stack_peak);
+           l.pass.worst, l.pass.moving, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.pass.stack);
     free_avr_log(&l);
 }
 
@@ -572,7 +567,7 @@ static void binary_print_with_masks_streaming(void)
     e.exposure_ms = rep.exposures;
     s = zcheck_record(l.ev, l.events, &e);
     CHECKF(s.shows == rep.layers, "%zu masks shown for %u layers", s.shows, rep.layers);
-    CHECKF(!l.late && !l.resets, "%lu steps refused as late, %zu resets", l.late, l.resets);
+    CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
     {
         /* homing's approach: down from the start to the switch, where the
            first step up (the back-off) comes */
@@ -589,12 +584,12 @@ static void binary_print_with_masks_streaming(void)
        step interval at the top speed, while Z moves (masks streaming) and
        while it is still (planning, the print's start, homing), so the loop
        computes steps faster than they leave whatever else it does. */
-    CHECKF(l.worst_moving_pass < STEP_CYCLES, "a loop pass while Z moved took %lu cycles, a step comes every %lu", l.worst_moving_pass,
+    CHECKF(l.pass.moving < STEP_CYCLES, "a loop pass while Z moved took %lu cycles, a step comes every %lu", l.pass.moving,
            STEP_CYCLES);
-    CHECKF(l.worst_pass < STEP_CYCLES, "a loop pass took %lu cycles, a step comes every %lu at the top speed", l.worst_pass, STEP_CYCLES);
+    CHECKF(l.pass.worst < STEP_CYCLES, "a loop pass took %lu cycles, a step comes every %lu at the top speed", l.pass.worst, STEP_CYCLES);
     printf("    avr: %u layers, %zu steps, worst step %ld cycles from its tick, every exposure exact to the tick; worst loop pass %lu cycles "
            "(%lu while Z moved; the loop's own work %lu, %lu; a step every %lu at the top speed), stack peak %lu bytes\n",
-           rep.layers, l.steps, worst, l.worst_pass, l.worst_moving_pass, l.worst_work, l.worst_moving_work, STEP_CYCLES, l.stack_peak);
+           rep.layers, l.steps, worst, l.pass.worst, l.pass.moving, l.pass.work, l.pass.moving_work, STEP_CYCLES, l.pass.stack);
     free(moves);
     print_report_free(&rep);
     free_avr_log(&l);
