@@ -53,11 +53,11 @@ typedef struct print_job {
     unsigned char *code;
     size_t code_size, code_cap, rendered;
     uint32_t crc;
-    /* the mask being sent, decoded as it goes: the rows each MASK_DATA
-       frame completes, which the printer decodes before it answers */
+    /* the mask being sent, decoded as it goes: the CRC work each MASK_DATA
+       frame asks of the printer, which it does before it answers */
     adaslice_rle_decoder sending;
     unsigned char *sending_row, *sending_prev; /* the row decoded, the one before */
-    uint32_t sending_rows, sending_cost;       /* rows so far; the frame's bytes of CRC */
+    uint32_t sending_cost;                     /* the frame's bytes of rows' CRC */
 } print_job;
 
 /* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
@@ -96,7 +96,6 @@ static int job_send_begin(print_job *pj)
     if (!pj->sending_row && !(pj->sending_row = (unsigned char *)malloc(2 * stride)))
         return complain(RC_FAIL, "out of memory for a mask row");
     pj->sending_prev = pj->sending_row + stride;
-    pj->sending_rows = 0;
     if (adaslice_rle_decoder_init(&pj->sending, pj->width, pj->height, (int)pj->bits, pj->sending_row, stride))
         return complain(RC_FAIL, "a %ux%u display of %u bits cannot take masks", pj->width, pj->height, pj->bits);
     return RC_OK;
@@ -109,14 +108,12 @@ static void count_row(void *ctx, uint32_t y, const unsigned char *row)
 {
     print_job *pj = (print_job *)ctx;
     size_t stride = job_stride(pj);
-    (void)y;
-    if (pj->sending_rows && stride > ADASLICE_RLE_REPEAT_COST && !memcmp(row, pj->sending_prev, stride)) {
+    if (y && stride > ADASLICE_RLE_REPEAT_COST && !memcmp(row, pj->sending_prev, stride)) {
         pj->sending_cost += ADASLICE_RLE_REPEAT_COST;
     } else {
         pj->sending_cost += (uint32_t)stride;
         memcpy(pj->sending_prev, row, stride);
     }
-    pj->sending_rows++;
 }
 
 /* The bytes of rows' CRC that the current mask's next n code bytes ask of
@@ -419,7 +416,8 @@ static void print_usage(FILE *f)
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer that answers nothing this long ends      [3]\n"
           "                        the print (exit 5); longer while a mask frame\n"
-          "                        decodes (16 us a row byte) and on slow lines\n"
+          "                        decodes (30 us a byte of rows' CRC, 8 bytes for\n"
+          "                        a repeated row) and on slow lines\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"
