@@ -788,14 +788,14 @@ static uint32_t adaslice__crc32_mul(uint32_t a, uint32_t b)
     return p;
 }
 
-/* A repeated row's CRC by combination, as zlib's crc32_combine: for rows A
-   then B, crc(AB) = crc(A) * x^(8 |B|) + crc(B) mod the polynomial, one
-   multiplication where the row's bytes are hundreds of table steps (39,000
-   cycles for a 2560-pixel row on an 8-bit core). The budget is in row bytes
-   of CRC: a multiplication costs ADASLICE_RLE_REPEAT_COST of them, about
-   what it takes (1,000 cycles on an ATmega2560, 8 bytes 980). */
 /* The finished row's CRC, then a repeat's rows, as far as *budget (of a
-   call's `whole`) allows. */
+   call's `whole`) allows. The budget is in row bytes of CRC. A repeated
+   row's CRC comes by combination, as zlib's crc32_combine: for rows A then
+   B, crc(AB) = crc(A) * x^(8 |B|) + crc(B) mod the polynomial, one
+   multiplication where the row's bytes are hundreds of table steps (39,000
+   cycles for a 2560-pixel row on an 8-bit core); it costs
+   ADASLICE_RLE_REPEAT_COST bytes, about what it takes (1,000 cycles on an
+   ATmega2560, 8 bytes 980). */
 static void adaslice__rle_flush(adaslice_rle_decoder *dec, uint32_t *budget, uint32_t whole,
                                 void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
 {

@@ -37,10 +37,10 @@
    first of a move shapes it), or one frame received (its reply; the rest
    of the bytes wait for the next pass), or one of G-code's pieces (a
    line's check, its run, a G0/G1's start, a move's or a dwell's end:
-   gcode.h), or a move's
-   start by the print, or one slice of a held frame's work (FW_DECODE_BYTES of a
-   mask's code and FW_CRC_BYTES of its rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES
-   of the plan's reversal). The steps come first; the others wait for a
+   gcode.h), or a move's start by the print, or one slice of a held
+   frame's work (FW_DECODE_BYTES of a mask's code and FW_CRC_BYTES of its
+   rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES of the plan's
+   reversal). The steps come first; the others wait for a
    pass that computed none. The wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H

@@ -471,6 +471,8 @@ static int check(fw_gcode *g)
 static void run(fw_gcode *g, uint64_t now)
 {
     const uint8_t *b = g->line;
+    /* the code word again: check() found it, but keeping it would cost a
+       field (the STM32 image has 4 bytes of RAM to spare) */
     size_t end = g->len, from = g->command, i = from, at = 0, len = 0;
     int letter = 0, k = word(b, &i, end, &letter, &at, &len), code = code_of(b, k, letter, at, len), ok = 1;
     int32_t line = 0;
@@ -561,8 +563,8 @@ static void line_done(fw_gcode *g)
 }
 
 /* One piece of work a call, each a good part of a step interval on an
-   8-bit core: ends what has ended, or checks the held line, or runs it.
-   1: it did one. */
+   8-bit core: ends what has ended, starts the move a G0/G1 asked for, or
+   checks the held line, or runs it. 1: it did one. */
 static int advance(fw_gcode *g, uint64_t now)
 {
     if (g->wait == WAIT_DWELL) {

@@ -146,10 +146,10 @@ size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size);
 /* Call after stepping the axis and at the returned deadline: one piece of
    work (Bounded work above): ends a dwell, sends Z_move_comp and the ok of
    G28, checks or runs the held line, or starts the move a G0/G1 asked for.
-   Returns the tick it next needs a
-   call: `now` after a piece of work, the dwell's end, or the axis's next
-   step while a move (its own or the core's) keeps a command or a held line
-   waiting; FW_NEVER when only a byte from the host can change anything. */
+   Returns the tick it next needs a call: `now` after a piece of work, the
+   dwell's end, or the axis's next step while a move (its own or the
+   core's) keeps a command or a held line waiting; FW_NEVER when only a
+   byte from the host can change anything. */
 uint64_t fw_gcode_run(fw_gcode *g, uint64_t now);
 /* Forgets the held line and a G0/G1's move not yet started: the port was
    taken by a binary host, so those bytes were not G-code. */
