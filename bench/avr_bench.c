@@ -67,10 +67,10 @@ static void board_axis(fw_axis *axis, uint32_t max_speed)
     fw_axis_config c;
     c.steps_per_mm = BOARD_STEPS_PER_MM;
     c.max_speed = max_speed;
-    c.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    c.accel = BOARD_ACCEL_STEPS_S2;
     c.home_speed = BOARD_HOME_STEPS_S;
-    c.max_steps = (int32_t)((uint32_t)BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
-    c.home_travel = (int32_t)((uint32_t)BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    c.max_steps = (int32_t)BOARD_Z_MAX_STEPS;
+    c.home_travel = (int32_t)BOARD_HOME_TRAVEL_STEPS;
     fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
 }
 
@@ -193,7 +193,7 @@ int main(void)
     put_s("AVRBENCH");
     field("cpu_hz", BOARD_CPU_HZ);
     field("max_speed", BOARD_MAX_STEPS_S);
-    field("accel", (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM);
+    field("accel", BOARD_ACCEL_STEPS_S2);
     field("ramp10_steps", ramp10.n);
     field("ramp10_worst", ramp10.worst);
     field("ramp10_mean", ramp10.n ? ramp10.sum / ramp10.n : 0);

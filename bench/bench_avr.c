@@ -100,10 +100,10 @@ static void board_axis(fw_axis *axis)
     fw_axis_config c;
     c.steps_per_mm = BOARD_STEPS_PER_MM;
     c.max_speed = BOARD_MAX_STEPS_S;
-    c.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    c.accel = BOARD_ACCEL_STEPS_S2;
     c.home_speed = BOARD_HOME_STEPS_S;
-    c.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
-    c.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    c.max_steps = (int32_t)BOARD_Z_MAX_STEPS;
+    c.home_travel = (int32_t)BOARD_HOME_TRAVEL_STEPS;
     fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
 }
 

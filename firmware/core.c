@@ -12,6 +12,7 @@ static uint8_t steps_queued(const fw_state *fw) { return (uint8_t)(fw->steps.hea
 /* Z moves until its last step is out, not merely computed. */
 static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_queued(fw); }
 static void fill_steps(fw_state *fw, uint64_t now);
+static void stop_dead(fw_state *fw, uint8_t error, uint64_t now);
 
 /* ------------------------------------------------------------------ replies */
 
@@ -70,6 +71,7 @@ static void send_identify(fw_state *fw)
     m.tick_hz = c->tick_hz;
     m.link_timeout_ms = c->link_timeout_ms;
     m.boot_id = c->boot_id;
+    m.max_exposure_ms = FW_EXPOSURE_MAX_MS;
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 
@@ -402,13 +404,33 @@ static uint32_t um_s_to_steps(const fw_state *fw, uint32_t um_s)
     return s > 0xffffffffu ? 0xffffffffu : (uint32_t)s;
 }
 
+static void abort_all(fw_state *fw, uint64_t now);
+
+/* The print cannot go on safely: it stops with the light off, the plan and
+   `exposed` kept, Z where it is (still homed), and STATUS says why. */
+static void print_fault(fw_state *fw, uint8_t error, uint64_t now)
+{
+    abort_all(fw, now);
+    fail(fw, error, 0);
+}
+
 /* Moves to the top of the current layer (plus `extra_nm`) at `speed` steps/s.
    The move's first step, which shapes its trapezoid, is the next pass's
-   work: this one has had the layer's (its height, the phase's bookkeeping). */
-static void move_layer(fw_state *fw, uint32_t extra_nm, uint32_t speed, uint64_t now)
+   work: this one has had the layer's (its height, the phase's bookkeeping).
+   A move the axis refuses (busy, unhomed, past a limit) would leave the next
+   exposure at the wrong height: a fault. 0 then. */
+static int move_layer(fw_state *fw, uint32_t extra_nm, uint32_t speed, uint64_t now)
 {
-    (void)fw_axis_move_to(&fw->axis, steps_of_plane(fw, fw->top_plane, extra_nm), speed, now);
     fw->steps.budget = 0;
+    if (fw_axis_move_to(&fw->axis, steps_of_plane(fw, fw->top_plane, extra_nm), speed, now) == FW_AXIS_OK) return 1;
+    print_fault(fw, LINK_ERR_MOVE_FAILED, now);
+    return 0;
+}
+
+/* Z stands (every step out) exactly at the current layer's top. */
+static int at_layer_top(const fw_state *fw)
+{
+    return !moving(fw) && fw->axis.homed && fw->axis.position == steps_of_plane(fw, fw->top_plane, 0);
 }
 
 static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t now)
@@ -442,7 +464,7 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
     fw->paused_by_link = 0;
     fw->state = LINK_STATE_PRINTING;
     fw->phase = LINK_PHASE_MOVE;
-    move_layer(fw, 0, fw->return_speed, now);
+    (void)move_layer(fw, 0, fw->return_speed, now);
 }
 
 static uint64_t exposure_ticks(const fw_state *fw)
@@ -471,6 +493,9 @@ static void print_step(fw_state *fw, uint64_t now)
         case LINK_PHASE_SETTLE:
             if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
             if (now < fw->phase_end) return;
+            /* the last word before the light: whatever happened since the
+               move (a pause, a host's command, a bug), never expose elsewhere */
+            if (!at_layer_top(fw)) { print_fault(fw, LINK_ERR_WRONG_HEIGHT, now); return; }
             fw->phase = LINK_PHASE_EXPOSE;
             {
                 uint64_t on = fw->phase_end;
@@ -493,7 +518,7 @@ static void print_step(fw_state *fw, uint64_t now)
             fw->exposed = fw->layer;
             fw->port.show(fw->port.ctx, -1, fw->phase_end);
             fw->phase = LINK_PHASE_PEEL;
-            move_layer(fw, fw->peel_nm, fw->peel_speed, fw->phase_end);
+            if (!move_layer(fw, fw->peel_nm, fw->peel_speed, fw->phase_end)) return;
             break;
         case LINK_PHASE_PEEL:
             if (moving(fw)) return;
@@ -502,7 +527,7 @@ static void print_step(fw_state *fw, uint64_t now)
             fw->layer++;
             fw->top_plane += layer_length(fw, fw->layer);
             fw->phase = LINK_PHASE_MOVE;
-            move_layer(fw, 0, fw->return_speed, now);
+            if (!move_layer(fw, 0, fw->return_speed, now)) return;
             break;
         default:
             return;
@@ -524,16 +549,14 @@ static void resume(fw_state *fw, uint8_t seq, uint64_t now)
     fw->pause_wanted = 0;
     fw->paused_by_link = 0;
     fw->state = LINK_STATE_PRINTING;
-    if (fw->phase == LINK_PHASE_SETTLE) {
-        /* the settle time runs again: the platform may have been moved */
-        fw->phase_end = now + FW_MS(fw, fw->settle_ms);
-        if (fw->axis.position != steps_of_plane(fw, fw->top_plane, 0)) {
-            fw->phase = LINK_PHASE_MOVE;
-            move_layer(fw, 0, fw->return_speed, now);
-        }
-    } else if (fw->phase == LINK_PHASE_WAIT_MASK && fw->axis.position != steps_of_plane(fw, fw->top_plane, 0)) {
+    /* the settle time runs again: the resin was left to itself */
+    if (fw->phase == LINK_PHASE_SETTLE) fw->phase_end = now + FW_MS(fw, fw->settle_ms);
+    /* a layer not yet exposed goes back to its top first, from whichever
+       phase the pause held (a peel's pause goes on to the next layer's
+       move anyway) */
+    if (fw->phase != LINK_PHASE_PEEL && !at_layer_top(fw)) {
         fw->phase = LINK_PHASE_MOVE;
-        move_layer(fw, 0, fw->return_speed, now);
+        if (!move_layer(fw, 0, fw->return_speed, now)) return;
     }
     print_step(fw, now);
 }
@@ -555,9 +578,11 @@ static void abort_all(fw_state *fw, uint64_t now)
 
 /* ------------------------------------------------------------------ frames */
 
+/* MOVE and HOME: never while a print is under way or paused (the paused
+   layer's height is the print's), nor with the light on. */
 static int can_move(const fw_state *fw)
 {
-    return fw->state == LINK_STATE_IDLE || fw->state == LINK_STATE_READY || fw->state == LINK_STATE_DONE || fw->state == LINK_STATE_PAUSED;
+    return (fw->state == LINK_STATE_IDLE || fw->state == LINK_STATE_READY || fw->state == LINK_STATE_DONE) && !fw->uv_on;
 }
 
 /* Kept out of fw_receive: a compiler inlines a function called once, and
@@ -578,9 +603,12 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
             link_expose expose; link_print print; link_exit exit; } m;
     fw->heard = now;
     if (!fw->binary) {
-        /* a binary host: what looked like G-code was not */
+        /* a binary host: what looked like G-code was not, and a light
+           G-code left on is nobody's now */
         fw->gcode_held_len = 0;
         fw_gcode_drop(&fw->gcode);
+        if (fw->uv_on) uv(fw, 0, now, now);
+        fw->urgent = 0;
     }
     fw->binary = 1;
     if (type == LINK_MSG_HELLO) {
@@ -622,7 +650,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         if (!mask_data(fw, p, size, seq)) return;
         break;
     case LINK_MSG_HOME:
-        if (!can_move(fw) || fw->state == LINK_STATE_PAUSED) fail(fw, LINK_ERR_BUSY, seq);
+        if (!can_move(fw)) fail(fw, LINK_ERR_BUSY, seq);
         else if (axis_error(fw, fw_axis_home(&fw->axis, now), seq)) fw->state = LINK_STATE_HOMING;
         break;
     case LINK_MSG_MOVE: {
@@ -632,8 +660,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         if (!can_move(fw)) { fail(fw, LINK_ERR_BUSY, seq); break; }
         if (target < 0) { fail(fw, LINK_ERR_LIMIT, seq); break; }
         if (axis_error(fw, fw_axis_move_to(&fw->axis, fw_axis_steps_of_nm(&fw->axis, (uint64_t)target),
-                                           um_s_to_steps(fw, m.move.speed_um_s), now), seq) &&
-            fw->state != LINK_STATE_PAUSED)
+                                           um_s_to_steps(fw, m.move.speed_um_s), now), seq))
             fw->state = LINK_STATE_MOVING;
         break;
     }
@@ -747,6 +774,61 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
     fw_gcode_init(&fw->gcode, &fw->axis, &io);
 }
 
+/* Marlin's emergency parser: M112 and M410 (after an optional line number,
+   with blanks, a checksum or a comment after them) are acted on when their
+   line ends, as the bytes arrive, not when the lines held before them have
+   run. fw->urgent is where the line's bytes are: */
+enum { URGENT_START, URGENT_N, URGENT_AFTER_N, URGENT_M, URGENT_M1, URGENT_M11, URGENT_M4, URGENT_M41, URGENT_M112,
+       URGENT_M410, URGENT_M112_REST, URGENT_M410_REST, URGENT_OTHER };
+
+/* 112 or 410 at the end of such a line, else 0. */
+static int urgent_byte(fw_state *fw, uint8_t c)
+{
+    uint8_t st = fw->urgent;
+    int blank = c == ' ' || c == '\t';
+    if (c == '\n' || c == '\r') {
+        fw->urgent = URGENT_START;
+        return st == URGENT_M112 || st == URGENT_M112_REST ? 112 : st == URGENT_M410 || st == URGENT_M410_REST ? 410 : 0;
+    }
+    if (c >= 'a' && c <= 'z') c = (uint8_t)(c - 'a' + 'A');
+    switch (st) {
+    case URGENT_START: st = blank ? st : c == 'N' ? URGENT_N : c == 'M' ? URGENT_M : URGENT_OTHER; break;
+    case URGENT_N: st = (c >= '0' && c <= '9') || c == '-' ? st : blank ? URGENT_AFTER_N : URGENT_OTHER; break;
+    case URGENT_AFTER_N: st = blank ? st : c == 'M' ? URGENT_M : URGENT_OTHER; break;
+    case URGENT_M: st = c == '1' ? URGENT_M1 : c == '4' ? URGENT_M4 : URGENT_OTHER; break;
+    case URGENT_M1: st = c == '1' ? URGENT_M11 : URGENT_OTHER; break;
+    case URGENT_M11: st = c == '2' ? URGENT_M112 : URGENT_OTHER; break;
+    case URGENT_M4: st = c == '1' ? URGENT_M41 : URGENT_OTHER; break;
+    case URGENT_M41: st = c == '0' ? URGENT_M410 : URGENT_OTHER; break;
+    case URGENT_M112: case URGENT_M410:
+        if (c == '*' || c == ';') st = st == URGENT_M112 ? URGENT_M112_REST : URGENT_M410_REST;
+        else if (!blank) st = URGENT_OTHER;
+        break;
+    default: break;
+    }
+    fw->urgent = st;
+    return 0;
+}
+
+/* M112: Z stops dead (unhomed) and the light goes out; M410: Z brakes to a
+   stop, still homed. Either drops every line held (they were sent before
+   the stop and are not to run after it) and answers the line itself. */
+static void urgent_stop(fw_state *fw, int code, uint64_t now)
+{
+    fw->gcode_held_len = 0;
+    fw->gcode_overflow = 0;
+    fw_gcode_drop(&fw->gcode);
+    if (code == 112) {
+        stop_dead(fw, 0, now);
+        fw_gcode_say(&fw->gcode, FW_TEXT("echo:Emergency stop (M112): Z stopped dead, UV off; home Z (G28)"));
+    } else {
+        abort_all(fw, now);
+        fw_gcode_dark(&fw->gcode, 0);
+        fw_gcode_say(&fw->gcode, FW_TEXT("echo:Quick stop (M410): Z braking to a stop, UV off"));
+    }
+    fw_gcode_say(&fw->gcode, FW_TEXT("ok"));
+}
+
 size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
 {
     link_deframer *d = &fw->deframer;
@@ -757,11 +839,14 @@ size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
        its pass's share, and the steps (a move it started has its first
        step a step lead on, far beyond a pass) come in the next; a line
        waits for fw_run's passes. */
+    if (gcode && size) fw->heard = now; /* the light's watch (fw_gcode_watch) */
     while (i < size && !n && !line) {
         uint8_t c = data[i++];
         if (gcode) {
-            gcode_byte(fw, c);
+            int urgent = urgent_byte(fw, c);
             line = c == '\n' || c == '\r';
+            if (urgent) urgent_stop(fw, urgent, now);
+            else gcode_byte(fw, c);
         }
         if (link_deframe_push(d, c)) n = link_deframe_next(d);
     }
@@ -780,10 +865,11 @@ static uint64_t earliest(uint64_t a, uint64_t b) { return a < b ? a : b; }
 
 /* ------------------------------------------------------------------ steps */
 
-/* A step that cannot go out on time: everything stops dead (Klipper's "timer
-   too close" shutdown). The steps still queued are dropped, so the position
-   is lost: the axis is left unhomed. */
-static void step_fault(fw_state *fw, uint64_t now)
+/* A step that cannot go out on time, the endstop closing where it cannot,
+   an emergency stop: everything stops dead (Klipper's "timer too close"
+   shutdown). The steps still queued are dropped, so the position is lost:
+   the axis is left unhomed. A G-code host is told in a line of its own. */
+static void stop_dead(fw_state *fw, uint8_t error, uint64_t now)
 {
     fw->port.step_arm(fw->port.ctx, FW_NEVER, 0);
     fw->steps.running = 0;
@@ -792,12 +878,33 @@ static void step_fault(fw_state *fw, uint64_t now)
     fw_axis_stop(&fw->axis);
     if (fw->port.motor) fw->port.motor(fw->port.ctx, 0);
     abort_all(fw, now);
-    fail(fw, LINK_ERR_STEP_LATE, 0);
+    if (error) fail(fw, error, 0);
+    if (!fw->binary) {
+        fw_gcode_dark(&fw->gcode, 1);
+        if (error == LINK_ERR_STEP_LATE) fw_gcode_say(&fw->gcode, FW_TEXT("Error:Z step late: stopped, UV off; home Z (G28)"));
+        if (error == LINK_ERR_ENDSTOP)
+            fw_gcode_say(&fw->gcode, FW_TEXT("Error:Z endstop closed during a move: stopped, UV off; home Z (G28)"));
+    }
 }
 
-/* Tops the queue up from the closed form, at most `budget` steps; 0 when a
-   step cannot go out on time (its tick passed, or the timer could not be
-   armed). Homing's one-step phases queue one step at a time: each reads
+/* The Z-min switch reads closed outside homing. At the switch's point and
+   just above it that is the axis at home (its repeatability); on the way
+   up, as far as homing's back-off may need (the switch's travel); anywhere
+   higher the carriage has hit something or lost steps. The carriage is
+   within a queue's steps of the position computed. */
+#define FW_ENDSTOP_SLACK_NM 100000u
+static int endstop_misplaced(const fw_state *fw)
+{
+    const fw_axis *a = &fw->axis;
+    int32_t lowest = a->position - (int32_t)FW_STEP_QUEUE;
+    int32_t allowed = a->dir < 0 ? fw_axis_steps_of_nm(a, FW_ENDSTOP_SLACK_NM) : (int32_t)a->backoff_limit;
+    return lowest > allowed;
+}
+
+/* Tops the queue up from the closed form, at most `budget` steps; a fault
+   when a step cannot go out on time (its tick passed, or the timer could
+   not be armed: STEP_LATE) or the endstop closes outside homing where it
+   cannot (ENDSTOP), else 0. Homing's one-step phases queue one step at a time: each reads
    the switch after the step before it went out. The approach queues
    ahead like a move: it sees the switch a queue's steps late (16 steps,
    0.04 mm on RAMPS) and brakes from there, and backing off measures from
@@ -807,13 +914,15 @@ static int fill(fw_state *fw, uint64_t now)
     fw_steps *q = &fw->steps;
     uint8_t room = fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE;
     q->short_by = 0;
-    if (q->late) return 0;
+    if (q->late) return LINK_ERR_STEP_LATE;
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
-        int dir;
-        if (!q->budget) { q->short_by = 1; return 1; }
-        if (fw_axis_next(&fw->axis) < now) return 0;
-        dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
+        int dir, closed;
+        if (!q->budget) { q->short_by = 1; return 0; }
+        if (fw_axis_next(&fw->axis) < now) return LINK_ERR_STEP_LATE;
+        closed = fw->port.endstop(fw->port.ctx);
+        if (closed && !fw_axis_homing(&fw->axis) && endstop_misplaced(fw)) return LINK_ERR_ENDSTOP;
+        dir = fw_axis_step(&fw->axis, closed);
         /* no step (homing braking at the switch): the step after it is
            computed in the same pass, so it is never late for a pass */
         if (!dir) continue;
@@ -825,15 +934,16 @@ static int fill(fw_state *fw, uint64_t now)
            that reads 1 here will also take the step just added */
         if (!q->running) {
             q->running = 1;
-            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) return 0;
+            if (!fw->port.step_arm(fw->port.ctx, q->tick[at], dir)) return LINK_ERR_STEP_LATE;
         }
     }
-    return 1;
+    return 0;
 }
 
 static void fill_steps(fw_state *fw, uint64_t now)
 {
-    if (!fill(fw, now)) step_fault(fw, now);
+    int fault = fill(fw, now);
+    if (fault) stop_dead(fw, (uint8_t)fault, now);
 }
 
 void fw_step_interrupt(fw_state *fw)
@@ -899,6 +1009,7 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
         gcode_feed(fw);
         if (fw->steps.budget != FW_STEP_FILL) next = now;
         else if ((next = fw_gcode_run(&fw->gcode, now)) == now) fw->steps.budget = 0;
+        next = earliest(next, fw_gcode_watch(&fw->gcode, fw->heard, fw->link_timeout, now));
     }
     /* what the print or G-code just started */
     fill_steps(fw, now);

@@ -142,9 +142,6 @@ typedef struct fw_config {
 /* Layers of up to 127 bins: the planner's rings have 128 entries of 24
    bytes, plus 1 byte of back-pointer per bin. */
 #define FW_MAX_LAYER_BINS 127u
-/* The longest exposure a mask may ask for: an hour (as the host checks); also
-   the longest the light stays on in G-code mode (M106 without M107). */
-#define FW_EXPOSURE_MAX_MS 3600000u
 #define FW_PLAN_WORKSPACE(max_bins) (128u * 24u + (size_t)(max_bins) + 1u)
 
 /* The work of a long frame goes on over passes of the loop (fw_run), the
@@ -184,9 +181,7 @@ typedef struct fw_state {
     fw_steps steps;
     /* link */
     link_deframer deframer;
-    uint8_t expect;            /* the host's next sequence number */
-    uint8_t binary;            /* a good frame arrived: G-code mode is off */
-    uint64_t heard;            /* tick of the last good frame */
+    uint64_t heard;            /* tick of the last good frame; in G-code mode, of the last byte */
     /* planner: the profile streams through the DP, never stored */
     unsigned char *workspace;
     size_t workspace_size;
@@ -210,6 +205,8 @@ typedef struct fw_state {
     uint16_t masks_refused;
     /* print */
     uint8_t state, phase, error, error_seq, pause_wanted, paused_by_link;
+    uint8_t expect;            /* the host's next sequence number */
+    uint8_t binary;            /* a good frame arrived: G-code mode is off */
     uint32_t layer;            /* the layer being printed (1-based), 0 before */
     uint32_t top_plane;        /* its top, in bins */
     uint32_t peel_nm, settle_ms;
@@ -225,6 +222,7 @@ typedef struct fw_state {
     uint8_t gcode_held[2 * FW_GCODE_LINE_MAX]; /* bytes G-code could not take yet */
     uint16_t gcode_held_len;
     uint8_t gcode_overflow;    /* dropping the rest of a line that did not fit */
+    uint8_t urgent;            /* where the bytes are in an M112 / M410 line (acted on at its end) */
 } fw_state;
 
 /* plan_workspace: FW_PLAN_WORKSPACE(config->max_bins) bytes, 8-byte aligned. */

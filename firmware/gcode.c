@@ -3,6 +3,8 @@
 
 enum { WAIT_NONE, WAIT_START, WAIT_MOVE, WAIT_HOME, WAIT_DWELL };
 enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed check() */
+/* g->len of a line that outgrew g->line: its rest is dropped */
+#define TOO_LONG (FW_GCODE_LINE_MAX + 1)
 
 /* Every number fits in millionths within int64 with room to add two. */
 #define NUMBER_MAX 10000000
@@ -15,10 +17,15 @@ typedef struct reply {
     size_t n;
 } reply;
 
+/* s: FW_TEXT (in flash on an AVR) */
 static void put(reply *r, const char *s)
 {
+    char c;
     /* one byte stays free for the newline */
-    while (*s && r->n < sizeof r->b - 1) r->b[r->n++] = *s++;
+    while ((c = FW_TEXT_BYTE(s)) != 0 && r->n < sizeof r->b - 1) {
+        r->b[r->n++] = c;
+        s++;
+    }
 }
 
 static void put_char(reply *r, char c)
@@ -88,7 +95,7 @@ static void send(fw_gcode *g, reply *r)
     r->n = 0;
 }
 
-static void say(fw_gcode *g, const char *s)
+void fw_gcode_say(fw_gcode *g, const char *s)
 {
     reply r;
     r.n = 0;
@@ -233,7 +240,7 @@ static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
     k = parse_fixed(g->line + w->at[letter - 'A'], w->len[letter - 'A'], v);
     if (k == 1) return 1;
     r.n = 0;
-    put(&r, k < 0 ? "Error:Number out of range for " : "Error:Bad number for ");
+    put(&r, k < 0 ? FW_TEXT("Error:Number out of range for ") : FW_TEXT("Error:Bad number for "));
     put_char(&r, (char)letter);
     send(g, &r);
     return 0;
@@ -243,7 +250,7 @@ static void out_of_range(fw_gcode *g, int letter)
 {
     reply r;
     r.n = 0;
-    put(&r, "Error:Number out of range for ");
+    put(&r, FW_TEXT("Error:Number out of range for "));
     put_char(&r, (char)letter);
     send(g, &r);
 }
@@ -252,17 +259,26 @@ static void line_error(fw_gcode *g, const char *what, int resend)
 {
     reply r;
     r.n = 0;
-    put(&r, "Error:");
+    put(&r, FW_TEXT("Error:"));
     put(&r, what);
-    put(&r, ", Last Line: ");
+    put(&r, FW_TEXT(", Last Line: "));
     put_int(&r, g->last_line);
     send(g, &r);
     if (resend) {
-        put(&r, "Resend: ");
+        put(&r, FW_TEXT("Resend: "));
         put_int(&r, (int64_t)g->last_line + 1);
         send(g, &r);
     }
-    say(g, "ok");
+    fw_gcode_say(g, FW_TEXT("ok"));
+}
+
+/* The light M106 put on goes out now, and the host is told why. */
+static void light_out(fw_gcode *g, uint64_t now, const char *why)
+{
+    g->lit = 0;
+    g->lit_at = now;
+    if (g->io.uv) g->io.uv(g->io.ctx, 0, now);
+    fw_gcode_say(g, why);
 }
 
 static void motor(fw_gcode *g, int on)
@@ -272,7 +288,7 @@ static void motor(fw_gcode *g, int on)
 }
 
 /* G0 / G1; 1: ok now, 0: start() sends it */
-static int move(fw_gcode *g, const words *w)
+static int move(fw_gcode *g, const words *w, uint64_t now)
 {
     fw_axis *a = g->axis;
     int64_t z = 0, f = 0, target, steps;
@@ -288,21 +304,23 @@ static int move(fw_gcode *g, const words *w)
         g->speed = speed ? (uint32_t)speed : 1;
     }
     if (!has_z) return 1;
-    if (!a->homed) { say(g, "Error:Home Z first"); return 1; }
+    if (!a->homed) { fw_gcode_say(g, FW_TEXT("Error:Home Z first")); return 1; }
     target = (g->relative ? z_now(g) : 0) + z;
     steps = target < 0 ? -1 : steps_of_nm(g, target);
     if (steps < 0 || steps > a->config.max_steps) {
         r.n = 0;
-        put(&r, "Error:Z outside soft limits 0.000..");
+        put(&r, FW_TEXT("Error:Z outside soft limits 0.000.."));
         put_milli(&r, mm_of_steps(g, a->config.max_steps, 1000));
         send(g, &r);
         return 1;
     }
+    /* Z never moves under the light: a host that forgot M107 loses the
+       rest of that exposure, not the next layer's height */
+    if (g->lit) light_out(g, now, FW_TEXT("echo:UV off: Z moves only in the dark"));
     /* started by start(), a piece of its own */
     g->z_nm = target;
     g->target = (int32_t)steps;
     g->wait = WAIT_START;
-    g->lit = 0; /* a dwell after a move is not an exposure's */
     return 0;
 }
 
@@ -312,13 +330,13 @@ static void start(fw_gcode *g, uint64_t now)
     /* it waited for the axis to be idle; a fault in between unhomes it */
     int refused = fw_axis_move_to(g->axis, g->target, g->speed, now);
     if (refused) {
-        say(g, refused == FW_AXIS_NOT_HOMED ? "Error:Home Z first" : "Error:Axis busy");
+        fw_gcode_say(g, refused == FW_AXIS_NOT_HOMED ? FW_TEXT("Error:Home Z first") : FW_TEXT("Error:Axis busy"));
         g->wait = WAIT_NONE;
     } else {
         if (!g->motor_on) motor(g, 1);
         g->wait = WAIT_MOVE;
     }
-    say(g, "ok");
+    fw_gcode_say(g, FW_TEXT("ok"));
 }
 
 /* G4; 1: ok now */
@@ -344,9 +362,9 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
             /* the host was slower than the exposure: say by how much */
             reply r;
             r.n = 0;
-            put(&r, "echo:Exposure ran over: G4 came ");
-            put_milli(&r, (int64_t)muldiv(now - end, 1000u * 1000u, g->axis->tick_hz, 0));
-            put(&r, " ms after its end");
+            put(&r, FW_TEXT("echo:Exposure ran over: G4 came "));
+            put_milli(&r, (int64_t)muldiv(now - end, MILLION, g->axis->tick_hz, 0));
+            put(&r, FW_TEXT(" ms after its end"));
             send(g, &r);
             return 1;
         }
@@ -356,13 +374,32 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
     return 0;
 }
 
+/* M115: Marlin's line, then the figures of this image as it runs (a host,
+   and the tests, read the board's travel, speed and light limit here) */
+static void identify(fw_gcode *g)
+{
+    const fw_axis_config *c = &g->axis->config;
+    reply r;
+    r.n = 0;
+    fw_gcode_say(g, FW_TEXT("FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0"));
+    put(&r, FW_TEXT("echo:Z_MAX_MM:"));
+    put_milli(&r, mm_of_steps(g, c->max_steps, 1000));
+    put(&r, FW_TEXT(" STEPS_PER_MM:"));
+    put_uint(&r, c->steps_per_mm);
+    put(&r, FW_TEXT(" Z_MAX_SPEED_MM_S:"));
+    put_milli(&r, mm_of_steps(g, (int32_t)c->max_speed, 1000));
+    put(&r, FW_TEXT(" MAX_EXPOSURE_MS:"));
+    put_uint(&r, FW_EXPOSURE_MAX_MS);
+    send(g, &r);
+}
+
 static void report_position(fw_gcode *g)
 {
     reply r;
     r.n = 0;
-    put(&r, "X:0.00 Y:0.00 Z:");
+    put(&r, FW_TEXT("X:0.00 Y:0.00 Z:"));
     put_milli(&r, mm_of_steps(g, g->axis->position, 1000));
-    put(&r, " E:0.00 Count Z:");
+    put(&r, FW_TEXT(" E:0.00 Count Z:"));
     put_int(&r, g->axis->position);
     send(g, &r);
 }
@@ -372,7 +409,7 @@ static void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
     reply r;
     while (end > from && is_blank(b[end - 1])) end--;
     r.n = 0;
-    put(&r, "echo:Unknown command: \"");
+    put(&r, FW_TEXT("echo:Unknown command: \""));
     for (; from < end; from++)
         put_char(&r, b[from] >= 0x20 && b[from] <= 0x7e ? (char)b[from] : '?');
     put_char(&r, '"');
@@ -428,7 +465,7 @@ static int check(fw_gcode *g)
     size_t n = g->len, end = n, star = n, i, at = 0, len = 0, from;
     int letter = 0, k, paren = 0, numbered, code;
     int32_t line = 0;
-    if (g->too_long) { line_error(g, "Line too long", 0); return 0; }
+    if (g->len == TOO_LONG) { line_error(g, FW_TEXT("Line too long"), 0); return 0; }
     for (i = 0; i < n; i++) {
         if (paren) { paren = b[i] != ')'; continue; }
         if (b[i] == '(') paren = 1;
@@ -439,15 +476,15 @@ static int check(fw_gcode *g)
     if (k == 0 && star == n) return 0; /* blank or only comments: Marlin is silent */
     numbered = k == 1 && letter == 'N';
     if (star < n) {
-        if (!checksum_ok(b, star, n)) { line_error(g, "checksum mismatch", numbered); return 0; }
+        if (!checksum_ok(b, star, n)) { line_error(g, FW_TEXT("checksum mismatch"), numbered); return 0; }
     } else if (numbered) {
-        line_error(g, "No Checksum with line number", 1);
+        line_error(g, FW_TEXT("No Checksum with line number"), 1);
         return 0;
     }
     from = 0;
     if (numbered) {
         if (!parse_int32(b + at, len, &line)) {
-            line_error(g, "Line Number is not Last Line Number+1", 1);
+            line_error(g, FW_TEXT("Line Number is not Last Line Number+1"), 1);
             return 0;
         }
         from = i;
@@ -456,12 +493,12 @@ static int check(fw_gcode *g)
     code = code_of(b, k, letter, at, len);
     if (numbered) {
         if (code != 10110 && (int64_t)line != (int64_t)g->last_line + 1) {
-            line_error(g, "Line Number is not Last Line Number+1", 1);
+            line_error(g, FW_TEXT("Line Number is not Last Line Number+1"), 1);
             return 0;
         }
         g->last_line = line;
     }
-    if (k == 0) { say(g, "ok"); return 0; } /* "N5*cs": a line number alone */
+    if (k == 0) { fw_gcode_say(g, FW_TEXT("ok")); return 0; } /* FW_TEXT("N5*cs"): a line number alone */
     g->command = (uint8_t)from;
     g->len = (uint8_t)end;
     return 1;
@@ -485,20 +522,20 @@ static void run(fw_gcode *g, uint64_t now)
         w.len[letter - 'A'] = (uint8_t)len;
     }
     if (k < 0 && known(code)) {
-        say(g, "Error:Unexpected character in command");
-        say(g, "ok");
+        fw_gcode_say(g, FW_TEXT("Error:Unexpected character in command"));
+        fw_gcode_say(g, FW_TEXT("ok"));
         return;
     }
     switch (code) {
-    case 0: case 1: ok = move(g, &w); break;
+    case 0: case 1: ok = move(g, &w, now); break;
     case 4: ok = dwell(g, &w, now); break;
     case 28:
+        if (g->lit) light_out(g, now, FW_TEXT("echo:UV off: Z moves only in the dark"));
         if (fw_axis_home(g->axis, now) == FW_AXIS_OK) {
             if (!g->motor_on) motor(g, 1);
             g->wait = WAIT_HOME;
-            g->lit = 0;
             ok = 0;
-        } else say(g, "Error:Homing refused");
+        } else fw_gcode_say(g, FW_TEXT("Error:Homing refused"));
         break;
     case 90: g->relative = 0; break;
     case 91: g->relative = 1; break;
@@ -510,6 +547,7 @@ static void run(fw_gcode *g, uint64_t now)
         int has_s = 0;
         if (code == 10106 && !number(g, &w, 'S', &s, &has_s)) break;
         if (s < 0) { out_of_range(g, 'S'); break; }
+        if (code == 10106 && g->halted && (!has_s || s > 0)) { fw_gcode_say(g, FW_TEXT("Error:Stopped: home Z (G28) before UV")); break; }
         g->lit = (uint8_t)(code == 10106 && (!has_s || s > 0));
         g->lit_at = now;
         if (g->io.uv) g->io.uv(g->io.ctx, g->lit, now);
@@ -518,14 +556,14 @@ static void run(fw_gcode *g, uint64_t now)
     case 10110:
         if (seen(&w, 'N')) {
             if (parse_int32(b + w.at['N' - 'A'], w.len['N' - 'A'], &line)) g->last_line = line;
-            else say(g, "Error:Bad line number");
+            else fw_gcode_say(g, FW_TEXT("Error:Bad line number"));
         }
         break;
     case 10114: report_position(g); break;
-    case 10115: say(g, "FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0"); break;
+    case 10115: identify(g); break;
     default: unknown(g, b, from, end); break;
     }
-    if (ok) say(g, "ok");
+    if (ok) fw_gcode_say(g, FW_TEXT("ok"));
 }
 
 /* What a move or homing left to say once the axis stands still. */
@@ -536,14 +574,15 @@ static void finish(fw_gcode *g)
     if (g->wait == WAIT_HOME) {
         if (a->homed && a->error == FW_AXIS_OK) {
             g->z_nm = mm_of_steps(g, a->position, MILLION);
-            say(g, "Z_move_comp");
-        } else say(g, "Error:Homing failed");
-        say(g, "ok");
+            g->halted = 0;
+            fw_gcode_say(g, FW_TEXT("Z_move_comp"));
+        } else fw_gcode_say(g, FW_TEXT("Error:Homing failed"));
+        fw_gcode_say(g, FW_TEXT("ok"));
     } else if (a->position == g->target) {
-        say(g, "Z_move_comp");
+        fw_gcode_say(g, FW_TEXT("Z_move_comp"));
     } else {
         r.n = 0;
-        put(&r, "Error:Z move stopped at ");
+        put(&r, FW_TEXT("Error:Z move stopped at "));
         put_milli(&r, mm_of_steps(g, a->position, 1000));
         send(g, &r);
     }
@@ -559,7 +598,6 @@ static void line_done(fw_gcode *g)
 {
     g->held = 0;
     g->len = 0;
-    g->too_long = 0;
 }
 
 /* One piece of work a call, each a good part of a step interval on an
@@ -570,7 +608,7 @@ static int advance(fw_gcode *g, uint64_t now)
     if (g->wait == WAIT_DWELL) {
         if (now < g->deadline) return 0;
         g->wait = WAIT_NONE;
-        say(g, "ok");
+        fw_gcode_say(g, FW_TEXT("ok"));
         return 1;
     }
     if (g->wait != WAIT_NONE) {
@@ -594,7 +632,7 @@ void fw_gcode_init(fw_gcode *g, fw_axis *axis, const fw_gcode_io *io)
 {
     g->axis = axis;
     g->io = *io;
-    g->len = g->too_long = g->held = g->relative = g->motor_on = 0;
+    g->len = g->held = g->relative = g->motor_on = g->lit = g->halted = 0;
     g->wait = WAIT_NONE;
     g->last_line = 0;
     g->target = 0;
@@ -609,12 +647,12 @@ size_t fw_gcode_receive(fw_gcode *g, const uint8_t *data, size_t size)
     for (i = 0; i < size && !g->held; i++) {
         uint8_t c = data[i];
         if (c == '\n' || c == '\r') {
-            if (!g->len && !g->too_long) continue; /* blank, or the \n of \r\n */
+            if (!g->len) continue; /* blank, or the \n of \r\n */
             g->held = HELD;
         } else if (g->len < FW_GCODE_LINE_MAX) {
             g->line[g->len++] = c;
         } else {
-            g->too_long = 1;
+            g->len = TOO_LONG;
         }
     }
     return i;
@@ -632,4 +670,19 @@ void fw_gcode_drop(fw_gcode *g)
 {
     line_done(g);
     if (g->wait == WAIT_START) g->wait = WAIT_NONE;
+}
+
+void fw_gcode_dark(fw_gcode *g, int halted)
+{
+    g->lit = 0;
+    if (halted) g->halted = 1;
+}
+
+uint64_t fw_gcode_watch(fw_gcode *g, uint64_t heard, uint64_t timeout, uint64_t now)
+{
+    uint64_t from = heard > g->lit_at ? heard : g->lit_at;
+    if (!g->lit) return FW_NEVER;
+    if (now < from + timeout) return from + timeout;
+    light_out(g, now, FW_TEXT("echo:UV off: the host went silent after M106"));
+    return FW_NEVER;
 }

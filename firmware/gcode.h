@@ -38,11 +38,28 @@
                       and says "echo:Exposure ran over: G4 came <ms> ms
                       after its end")
        M17 / M18 M84  stepper driver on / off (a move turns it on)
-       M106 [S] M107  UV on / off; M106 S0 is off
+       M106 [S] M107  UV on / off; M106 S0 is off. The light is never on
+                      while Z moves: G0/G1/G28 put it out first and say
+                      "echo:UV off: Z moves only in the dark". Without a
+                      dwell after it, M106's light goes out when the host
+                      says nothing for the link timeout ("echo:UV off: the
+                      host went silent after M106"), and at the board's
+                      longest exposure in any case
+       M112           emergency stop, acted on as its line's last byte
+                      arrives (lines held before it are dropped
+                      unanswered): Z stops dead and is unhomed, UV off;
+                      "echo:Emergency stop ..." and ok; M106 is refused
+                      until G28 succeeds (so after a STEP_LATE or endstop
+                      fault too)
+       M410           quick stop, acted on the same way: Z brakes to a
+                      stop (it stays homed), UV off
        M105           plain "ok" (no heaters; printcore's handshake)
        M110 [N]       set the line number
        M114           "X:0.00 Y:0.00 Z:12.345 E:0.00 Count Z:4938"
-       M115           "FIRMWARE_NAME:adaslice ..."
+       M115           "FIRMWARE_NAME:adaslice ..." and "echo:Z_MAX_MM:200.000
+                      STEPS_PER_MM:400 Z_MAX_SPEED_MM_S:2.500
+                      MAX_EXPOSURE_MS:300000": the running image's own
+                      figures
        M400           wait for moves
    Anything else: echo:Unknown command: "..." then ok.
 
@@ -97,6 +114,28 @@
 #include <stdint.h>
 #include "motion.h"
 
+/* Text the firmware sends: on an AVR a string literal is copied into SRAM
+   (8 KiB, shared with the stack) unless it is put in flash and read from
+   there, so every reply's text is FW_TEXT("...") and read through
+   FW_TEXT_BYTE; elsewhere both are plain. */
+#if defined(__AVR__)
+#include <avr/pgmspace.h>
+#define FW_TEXT(s) (__extension__({ static const char fw_text_[] PROGMEM = s; &fw_text_[0]; }))
+#define FW_TEXT_BYTE(p) ((char)pgm_read_byte(p))
+#else
+#define FW_TEXT(s) (s)
+#define FW_TEXT_BYTE(p) (*(p))
+#endif
+
+/* The longest the light may stay on at once, a board setting (board.h
+   may set its own): a bottom layer's exposure is 20-60 s, so anything
+   longer is a host's mistake, and a light left on is a vat of cured resin.
+   Masks and EXPOSE asking for more are refused; in G-code mode it is the
+   light's hard limit after M106. IDENTIFY reports it. */
+#ifndef FW_EXPOSURE_MAX_MS
+#define FW_EXPOSURE_MAX_MS 300000ul
+#endif
+
 /* Marlin's MAX_CMD_SIZE: the longest line, without its line end. */
 #define FW_GCODE_LINE_MAX 96
 
@@ -121,14 +160,14 @@ typedef struct fw_gcode { /* fields private to gcode.c */
     fw_axis *axis;
     fw_gcode_io io;
     uint8_t line[FW_GCODE_LINE_MAX];
-    uint8_t len;             /* bytes in line */
-    uint8_t too_long;        /* the line outgrew `line`; its rest was dropped */
+    uint8_t len;             /* bytes in line; FW_GCODE_LINE_MAX + 1: it outgrew `line` */
     uint8_t held;            /* line is complete and waits (1), or passed its check (2) */
     uint8_t command;         /* a checked line: where its command begins (after N) */
     uint8_t relative;        /* G91 */
     uint8_t wait;            /* what the last command still waits for */
     uint8_t motor_on;        /* as last set through io.motor */
     uint8_t lit;             /* M106 put the light on; no dwell has ended it */
+    uint8_t halted;          /* an emergency stop or a fault: no light until G28 */
     int32_t last_line;       /* N of the last numbered line accepted */
     int32_t target;          /* steps: where the move under way ends */
     uint32_t speed;          /* steps/s from the last F; 0: max_speed */
@@ -154,4 +193,18 @@ uint64_t fw_gcode_run(fw_gcode *g, uint64_t now);
 /* Forgets the held line and a G0/G1's move not yet started: the port was
    taken by a binary host, so those bytes were not G-code. */
 void fw_gcode_drop(fw_gcode *g);
+/* One reply line (text: FW_TEXT), its newline added: for the caller's own
+   replies in G-code mode (faults, emergency stops). */
+void fw_gcode_say(fw_gcode *g, const char *text);
+/* The caller put the light out (an emergency stop, a quick stop, a fault);
+   halted: it also stopped Z dead, which lost the position, so M106 is
+   refused until G28 succeeds. What the command under way waits for ends as
+   it would (a move's Error: line, a homing's failure, a dwell's ok). */
+void fw_gcode_dark(fw_gcode *g, int halted);
+/* The light M106 left on with no dwell to end it goes out once the host
+   has said nothing for `timeout` ticks since `heard` (the tick of its
+   last byte) and since M106, as Klipper's max_duration: a host that died
+   mid-exposure leaves a dark vat. Returns the tick it next needs a call,
+   FW_NEVER while the light is not M106's. */
+uint64_t fw_gcode_watch(fw_gcode *g, uint64_t heard, uint64_t timeout, uint64_t now);
 #endif

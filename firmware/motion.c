@@ -431,6 +431,8 @@ void fw_axis_stop(fw_axis *axis)
 
 int fw_axis_busy(const fw_axis *axis) { return axis->next != FW_NEVER; }
 
+int fw_axis_homing(const fw_axis *axis) { return axis->phase != PHASE_NONE; }
+
 int fw_axis_one_step(const fw_axis *axis) { return axis->phase != PHASE_NONE && axis->phase != PHASE_APPROACH; }
 
 uint64_t fw_axis_next(const fw_axis *axis) { return axis->next; }

@@ -117,6 +117,8 @@ void fw_axis_halt(fw_axis *axis, uint64_t now);
    stopped dead from speed may have lost steps, so the position is unknown). */
 void fw_axis_stop(fw_axis *axis);
 int fw_axis_busy(const fw_axis *axis);
+/* 1 while homing (any of its phases). */
+int fw_axis_homing(const fw_axis *axis);
 /* 1 in homing's one-step phases: each step is decided by the switch read
    after the step before it went out, so none may be queued ahead. */
 int fw_axis_one_step(const fw_axis *axis);

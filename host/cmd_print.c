@@ -676,6 +676,17 @@ int cmd_print(int argc, char **argv)
                       pj.bits, l.id.width, l.id.height, l.id.bits);
         goto done;
     }
+    {
+        /* the printer refuses such a mask, so say it before the print starts */
+        uint32_t k, worst = 0;
+        for (k = 1; k < pj.layers; k++)
+            if (pj.exposure_ms[k] > pj.exposure_ms[worst]) worst = k;
+        if (pj.layers && pj.exposure_ms[worst] > l.id.max_exposure_ms) {
+            rc = complain(RC_FAIL, "layer %u's exposure is %.3f s; the printer on %s lights at most %.3f s at once", worst + 1,
+                          pj.exposure_ms[worst] / 1000.0, pa.port, l.id.max_exposure_ms / 1000.0);
+            goto done;
+        }
+    }
     if (pa.resume_from > pj.layers) {
         rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layer%s", pa.resume_from, pj.layers, plural(pj.layers));
         goto done;

@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LINK_PROTOCOL_VERSION 3
+#define LINK_PROTOCOL_VERSION 4
 
 /* ------------------------------------------------------------- the fields */
 
@@ -39,7 +39,7 @@
 #define LINK_FIELDS_IDENTIFY(F)                                                                                     \
     F(u8, version) F(u8, window) F(u32, max_bins) F(u8, max_layer_bins) F(u32, steps_per_mm) F(u16, width)          \
     F(u16, height) F(u8, bits) F(u32, pitch_nm) F(u32, z_max_nm) F(u32, tick_hz) F(u32, link_timeout_ms)        \
-    F(u32, boot_id)
+    F(u32, boot_id) F(u32, max_exposure_ms)
 #define LINK_FIELDS_STATUS(F)                                                                                       \
     F(u8, state) F(u8, phase) F(u8, error) F(u8, error_seq) F(u8, flags) F(u32, layer) F(u32, layers)               \
     F(u32, mask_ready) F(u32, mask_layer) F(u32, mask_got) F(u16, masks_refused) F(i32, z_nm) F(u32, bins_in)       \
@@ -110,8 +110,11 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(HOME_FAILED, "homing failed")                                                                                 \
     S(BUSY, "busy")                             /* not in this state */                                             \
     S(PLAN_SIZE, "more bins than the printer takes")                                                                \
-    S(MASK_EXPOSURE, "bad exposure")            /* a mask's exposure of 0 ms or over an hour */                     \
-    S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */
+    S(MASK_EXPOSURE, "bad exposure")            /* 0 ms, or longer than IDENTIFY's max_exposure_ms */               \
+    S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */                 \
+    S(ENDSTOP, "the Z endstop closed during a move")    /* a crash or lost steps: stopped dead, Z unhomed, UV off */  \
+    S(WRONG_HEIGHT, "Z was not at the layer's height")  /* the light stayed off: print stopped */                     \
+    S(MOVE_FAILED, "the print's move was refused")      /* the light stayed off: print stopped */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,

@@ -15,6 +15,8 @@
        <cycle> show -1               no display on this board, so no CRC: 0)
        <cycle> reset                 the MCU reset (the watchdog): every pin an input
        <cycle> late                  the firmware could not arm a step in time (STEP_LATE)
+       <cycle> rx_eol                a line end from the host entered the UART
+       <cycle> obstacle              SIGUSR1 put the obstacle of --obstacle-at in place
        <cycle> pass <cycles>         a loop pass of at least --log-passes cycles (with
                                      --profile-passes: ": function cycles ..." after it)
        # end cycles=C worst_pass=P worst_moving_pass=M worst_work=W worst_moving_work=V passes=N stack_peak=S resets=R late=L
@@ -80,16 +82,21 @@ static const char USAGE[] =
     "  --log-passes C     log the loop passes of C cycles or more      [none]\n"
     "  --profile-passes C the same with the functions they spent their cycles in [none]\n"
     "  --hang-at-uv N     make the main loop hang when UV goes on the Nth time\n"
-    "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n";
+    "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n"
+    "  --obstacle-at MM   once SIGUSR1 arrives, the endstop also reads pressed\n"
+    "                     while the carriage is at or below MM (a crash)  [none]\n";
 
-static volatile sig_atomic_t stop_signal;
+static volatile sig_atomic_t stop_signal, obstacle_signal;
 static void on_signal(int sig) { stop_signal = sig; }
+static void on_usr1(int sig) { (void)sig; obstacle_signal = 1; }
 
 typedef struct run {
     avr_t *avr;
     FILE *log;
     int master;
     int32_t position;            /* carriage, steps above the switching point */
+    int32_t obstacle;            /* steps: pressed at or below this too, once placed */
+    int obstacle_placed;
     int step, dir, en, uv, endstop;
     avr_irq_t *endstop_irq, *uart_in;
     int xon;
@@ -205,7 +212,7 @@ static void log_event(const char *event)
    (the firmware's pull-up write makes simavr read the pin high). */
 static void drive_endstop(void)
 {
-    int pressed = R.position <= 0;
+    int pressed = R.position <= 0 || (R.obstacle_placed && R.position <= R.obstacle);
     if (pressed != R.endstop || ((R.avr->data[PIND_ADDR] >> 3) & 1) != pressed) {
         R.endstop = pressed;
         avr_raise_irq(R.endstop_irq, (uint32_t)pressed); /* NC switch: high = pressed */
@@ -402,7 +409,10 @@ static void serve_pty(void)
     }
     /* only once the firmware has enabled the receiver (after each reset):
        simavr drops bytes a disabled UART gets */
-    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len) avr_raise_irq(R.uart_in, R.in[R.in_at++]);
+    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len) {
+        if (R.in[R.in_at] == '\n') log_event("rx_eol");
+        avr_raise_irq(R.uart_in, R.in[R.in_at++]);
+    }
 }
 
 static int open_pty(int *master, char *name, size_t size)
@@ -454,6 +464,7 @@ int main(int argc, char **argv)
         else if (!strcmp(o, "--timeout")) timeout = atof(argv[++i]);
         else if (!strcmp(o, "--hang-at-uv")) R.hang_at_uv = strtoul(argv[++i], NULL, 10);
         else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
+        else if (!strcmp(o, "--obstacle-at")) R.obstacle = (int32_t)(atof(argv[++i]) * BOARD_STEPS_PER_MM + 0.5);
         else if (!strcmp(o, "--profile-passes")) P.threshold = strtoull(argv[++i], NULL, 10);
         else { fprintf(stderr, "avr-run: unknown option %s\n%s", o, USAGE); return 2; }
     }
@@ -474,7 +485,7 @@ int main(int argc, char **argv)
     if (R.log)
         fprintf(R.log, "# avr-run tick_hz=%u steps_per_mm=%u max_speed=%u accel=%u start_steps=%ld cpu_hz=%u tick_div=%u image=%s\n",
                 BOARD_CPU_HZ, BOARD_STEPS_PER_MM, (unsigned)BOARD_MAX_STEPS_S,
-                BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
+                BOARD_ACCEL_STEPS_S2, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
 
     avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 3), on_step, NULL);
     avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 1), on_dir, NULL);
@@ -501,6 +512,8 @@ int main(int argc, char **argv)
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
+    sa.sa_handler = on_usr1;
+    sigaction(SIGUSR1, &sa, NULL);
     printf("pty %s\n", name);
     fflush(stdout);
 
@@ -517,6 +530,10 @@ int main(int argc, char **argv)
         last_pc = (uint16_t)R.avr->pc;
         if (R.avr->cycle < next_poll) continue;
         next_poll = R.avr->cycle + POLL_CYCLES;
+        if (obstacle_signal && !R.obstacle_placed) {
+            R.obstacle_placed = 1;
+            log_event("obstacle");
+        }
         drive_endstop();
         serve_pty();
         if (R.avr->cycle >= next_pace) {

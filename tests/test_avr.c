@@ -28,8 +28,11 @@
 #include "zcheck.h"
 #include "print_report.h"
 #include "avr_passes.h"
+#include "../firmware/gcode.h"
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
+#include "../link/frame.h"
+#include "../link/messages.h"
 #include "../link/tty.h"
 #include <errno.h>
 #include <fcntl.h>
@@ -267,10 +270,10 @@ static void board_axis(fw_axis *axis)
     fw_axis_config c;
     c.steps_per_mm = BOARD_STEPS_PER_MM;
     c.max_speed = BOARD_MAX_STEPS_S;
-    c.accel = BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    c.accel = BOARD_ACCEL_STEPS_S2;
     c.home_speed = BOARD_HOME_STEPS_S;
-    c.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
-    c.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    c.max_steps = (int32_t)BOARD_Z_MAX_STEPS;
+    c.home_travel = (int32_t)BOARD_HOME_TRAVEL_STEPS;
     fw_axis_init(axis, &c, BOARD_CLOCK_HZ);
 }
 
@@ -557,7 +560,7 @@ static void binary_print_with_masks_streaming(void)
     e.tick_hz = BOARD_CLOCK_HZ; /* the record in ticks */
     e.steps_per_mm = BOARD_STEPS_PER_MM;
     e.max_speed = BOARD_MAX_STEPS_S;
-    e.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    e.accel = BOARD_ACCEL_STEPS_S2;
     e.start_position = l.start_steps;
     e.layers = rep.layers;
     e.first = rep.first ? rep.first : 1;
@@ -631,6 +634,235 @@ static void watchdog_resets_a_hung_loop(void)
     free_avr_log(&l);
 }
 
+
+/* HELLO until IDENTIFY answers (5 s at most); 1 with its fields. The port
+   is binary from then on, for a few link timeouts. */
+static int avr_identify(avr_child *c, link_identify *id)
+{
+    uint8_t frame[LINK_FRAME_MAX], hello[LINK_SIZE_HELLO];
+    link_deframer rx;
+    link_hello h;
+    size_t n;
+    double t0 = now_s(), sent = 0;
+    link_deframer_init(&rx, link_mcu_to_host_type);
+    h.version = LINK_PROTOCOL_VERSION;
+    n = link_frame_build(frame, 1, LINK_MSG_HELLO, hello, link_put_hello(hello, &h));
+    while (now_s() - t0 < 5) {
+        uint8_t b;
+        size_t m;
+        if (now_s() - sent > 0.5) { if (write(c->tty, frame, n) != (ssize_t)n) return 0; sent = now_s(); }
+        if (read(c->tty, &b, 1) != 1) { struct timespec ts = {0, 2000000}; nanosleep(&ts, NULL); continue; }
+        link_deframe_push(&rx, b);
+        while ((m = link_deframe_next(&rx)) != 0) {
+            int got = rx.buf[2] == LINK_MSG_IDENTIFY && link_get_identify(id, rx.buf + 3, m - LINK_FRAME_MIN);
+            link_deframe_consume(&rx);
+            if (got) return 1;
+        }
+    }
+    return 0;
+}
+
+/* M114's "Count Z:" */
+static long count_z(const char *got)
+{
+    const char *at = strstr(got, "Count Z:");
+    return at ? strtol(at + 8, NULL, 10) : -1;
+}
+
+/* The figures of the image as it runs, against board.h's millimetres worked
+   out here in 64 bits (an ATmega2560's int is 16 bits: 200 mm x 400
+   steps/mm once wrapped to 36.16 mm): M115's, IDENTIFY's, and moves past
+   int16 (81.9 mm) and uint16 (163.8 mm) step counts after homing from
+   190 mm, each landing on its step as M114 and the pins' record say. */
+#define TRAVEL_START_MM 190
+static void running_image_reports_its_figures(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "190", "--max-seconds", "900", "--timeout", "2400", NULL};
+    const uint64_t spmm = BOARD_STEPS_PER_MM;
+    char got[512] = "";
+    double z_max = 0, speed = 0;
+    unsigned steps_per_mm = 0, max_ms = 0;
+    const char *at;
+    link_identify id;
+    avr_log l;
+    long pos, lowest;
+    size_t k;
+    int ok;
+    if (!avr_start(&c, "build/test_avr/travel.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    ok = gline(&c, "M115", "ok", 10, got, sizeof got);
+    at = strstr(got, "echo:Z_MAX_MM:");
+    CHECKF(ok && at && sscanf(at, "echo:Z_MAX_MM:%lf STEPS_PER_MM:%u Z_MAX_SPEED_MM_S:%lf MAX_EXPOSURE_MS:%u", &z_max,
+                              &steps_per_mm, &speed, &max_ms) == 4, "M115: %.300s", got);
+    CHECKF(z_max == (double)BOARD_Z_MAX_MM && steps_per_mm == spmm && speed * 1000 == (double)BOARD_MAX_SPEED_UM_S &&
+           max_ms == FW_EXPOSURE_MAX_MS, "M115 says Z_MAX_MM %.3f, %u steps/mm, %.3f mm/s, %u ms; board.h %u mm, %u, %.3f",
+           z_max, steps_per_mm, speed, max_ms, (unsigned)BOARD_Z_MAX_MM, (unsigned)spmm, BOARD_MAX_SPEED_UM_S / 1000.0);
+    /* homing from 190 mm: 76,000 steps down, past both 16-bit limits */
+    got[0] = 0;
+    ok = ok && gline(&c, "G28", "ok", 2000, got, sizeof got);
+    CHECKF(ok && strstr(got, "Z_move_comp"), "G28 from %d mm: %.300s", TRAVEL_START_MM, got);
+    {
+        static const int heights[] = {100, 190};
+        for (k = 0; ok && k < 2; k++) {
+            char line[32];
+            snprintf(line, sizeof line, "G1 Z%d", heights[k]);
+            got[0] = 0;
+            ok = gline(&c, line, "Z_move_comp", 2000, got, sizeof got) && gline(&c, "M114", "ok", 10, got, sizeof got);
+            CHECKF(ok && count_z(got) == (long)((uint64_t)heights[k] * spmm), "%s: %.300s", line, got);
+        }
+    }
+    ok = ok && avr_identify(&c, &id);
+    CHECKF(ok, "no IDENTIFY");
+    if (ok)
+        CHECKF(id.z_max_nm == (uint64_t)BOARD_Z_MAX_MM * 1000000u && id.steps_per_mm == spmm && id.tick_hz == BOARD_CLOCK_HZ &&
+               id.max_exposure_ms == FW_EXPOSURE_MAX_MS && id.link_timeout_ms == BOARD_LINK_TIMEOUT_MS,
+               "IDENTIFY: z_max_nm %u, %u steps/mm, %u Hz, %u ms of light, link %u ms", (unsigned)id.z_max_nm,
+               (unsigned)id.steps_per_mm, (unsigned)id.tick_hz, (unsigned)id.max_exposure_ms, (unsigned)id.link_timeout_ms);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    CHECK(read_avr_log("build/test_avr/travel.log", &l));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    /* the carriage as the pins moved it: down to the switch, up to 190 mm */
+    pos = lowest = l.start_steps;
+    for (k = 0; k < l.steps; k++) {
+        pos += l.step_dir[k];
+        if (pos < lowest) lowest = pos;
+    }
+    CHECKF(l.start_steps == (long)(TRAVEL_START_MM * spmm) && lowest <= 0 && lowest > -(long)spmm &&
+           pos == (long)(190 * spmm) && !l.pass.late && !l.resets,
+           "from %ld steps down to %ld, ending at %ld; %lu late, %zu resets", l.start_steps, lowest, pos, l.pass.late, l.resets);
+    printf("    avr: homed from %d mm (%ld steps down), moved to 100 and 190 mm; M115 and IDENTIFY: %.0f mm of travel\n",
+           TRAVEL_START_MM, l.start_steps - lowest, z_max);
+    free_avr_log(&l);
+}
+
+/* The cycles of the log's events named `what`, in order. */
+static size_t log_events(const char *path, const char *what, uint64_t *at, size_t cap)
+{
+    FILE *f = fopen(path, "r");
+    char line[256], name[32];
+    unsigned long long c;
+    size_t n = 0;
+    if (!f) return 0;
+    while (fgets(line, sizeof line, f))
+        if (line[0] != '#' && sscanf(line, "%llu %31s", &c, name) == 2 && !strcmp(name, what) && n < cap) at[n++] = c;
+    fclose(f);
+    return n;
+}
+
+/* G-code's light and stops on the image itself: M106 then a move puts the
+   light out first; M106 and a silent host, out after the link timeout; a
+   late G4's overrun figure is the pins' (the AVR's 1000u * 1000u wrapped it
+   to 1.7 % of the truth); M112 mid-move stops the steps and puts the light
+   out within 1 ms of its line end, unhomes Z and refuses M106 until G28;
+   the endstop closing during a move (an obstacle at 5 mm) stops it dead. */
+#define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
+static void gcode_light_and_stops(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "2", "--obstacle-at", "5", "--max-seconds", "600", "--timeout", "1200", NULL};
+    const char *log = "build/test_avr/stops.log";
+    char got[1024] = "";
+    double over = -1;
+    const char *at;
+    uint64_t eol[64];
+    size_t eols;
+    avr_log l;
+    int ok;
+    if (!avr_start(&c, log, opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    ok = gline(&c, "G28", "ok", 600, NULL, 0) && gline(&c, "M106 S255", "ok", 10, NULL, 0);
+    {
+        struct timespec ts = {0, 300000000};
+        nanosleep(&ts, NULL);
+    }
+    /* light 1: a G4 P10 that comes late */
+    ok = ok && gline(&c, "G4 P10", "ok", 10, got, sizeof got);
+    at = strstr(got, "echo:Exposure ran over: G4 came ");
+    CHECKF(ok && at && sscanf(at, "echo:Exposure ran over: G4 came %lf ms", &over) == 1 && over > 0, "G4 after M106: %.300s", got);
+    /* light 2: M106 then a move */
+    got[0] = 0;
+    ok = ok && gline(&c, "M106 S255", "ok", 10, NULL, 0) && gline(&c, "G1 Z20", "Z_move_comp", 600, got, sizeof got);
+    CHECKF(ok && strstr(got, "echo:UV off: Z moves only in the dark"), "M106 then G1: %.300s", got);
+    /* light 3: M106 and silence */
+    got[0] = 0;
+    ok = ok && gline(&c, "M106 S255", "ok", 10, NULL, 0) && gline(&c, NULL, "echo:UV off: the host went silent", 600, got, sizeof got);
+    /* the obstacle: the endstop closes at 5 mm on the way down */
+    kill(c.pid, SIGUSR1);
+    got[0] = 0;
+    ok = ok && gline(&c, "G1 Z1", "Error:Z move stopped", 600, got, sizeof got);
+    CHECKF(ok && strstr(got, "Error:Z endstop closed during a move"), "G1 into the obstacle: %.300s", got);
+    got[0] = 0;
+    ok = ok && gline(&c, "G1 Z10", "ok", 10, got, sizeof got);
+    CHECKF(ok && strstr(got, "Error:Home Z first"), "after the crash: %.300s", got);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    /* M112 mid-move, and M112 with the light on: no step and no light 1 ms
+       after its line end; a fresh board without the obstacle */
+    {
+        const char *opts2[] = {"--z-start", "2", "--max-seconds", "600", "--timeout", "1200", NULL};
+        if (!avr_start(&c, "build/test_avr/m112.log", opts2)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    }
+    got[0] = 0;
+    ok = ok && gline(&c, "G28", "ok", 600, NULL, 0) && gline(&c, "G1 Z30", "ok", 10, NULL, 0);
+    {
+        struct timespec ts = {1, 0};
+        nanosleep(&ts, NULL);
+    }
+    ok = ok && gline(&c, "M112", "Emergency stop", 10, got, sizeof got) && gline(&c, NULL, "Error:Z move stopped", 30, got, sizeof got);
+    ok = ok && gline(&c, "G28", "ok", 600, NULL, 0) && gline(&c, "M106 S255", "ok", 10, NULL, 0);
+    ok = ok && gline(&c, "M112", "Emergency stop", 10, got, sizeof got);
+    ok = ok && gline(&c, "G1 Z5", "ok", 10, got, sizeof got) && gline(&c, "M106", "ok", 10, got, sizeof got);
+    CHECKF(ok && strstr(got, "Error:Home Z first") && strstr(got, "Error:Stopped: home Z (G28) before UV"), "after M112: %.300s", got);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    if (check_case_failed()) return;
+
+    /* the stops log: the light's three times, and the crash */
+    CHECK(read_avr_log(log, &l));
+    if (!check_case_failed()) {
+        long pos = l.start_steps, lowest_after = 1L << 30;
+        size_t k, obstacle = log_events(log, "obstacle", eol, 64);
+        uint64_t obstacle_at = obstacle ? eol[0] : UINT64_MAX;
+        double lit[3];
+        CHECKF(l.uvs == 6 && !l.steps_lit, "%zu UV edges, %zu steps with the light on", l.uvs, l.steps_lit);
+        for (k = 0; k < 3 && 2 * k + 1 < l.uvs; k++) lit[k] = (double)(l.uv_at[2 * k + 1] - l.uv_at[2 * k]) / CYCLES_PER_MS;
+        if (l.uvs == 6) {
+            /* the overrun is the light's time less the dwell (the light's
+               start waits up to 128 us for Timer4) */
+            CHECKF(fabs(lit[0] - 10 - over) < 1, "lit %.3f ms for a G4 P10 that said %.3f ms over", lit[0], over);
+            CHECKF(fabs(lit[2] - BOARD_LINK_TIMEOUT_MS) < 2, "lit %.3f ms with the host silent, the link timeout is %u ms", lit[2],
+                   (unsigned)BOARD_LINK_TIMEOUT_MS);
+        }
+        for (k = 0; k < l.steps; k++) {
+            pos += l.step_dir[k];
+            if (l.step_at[k] > obstacle_at && pos < lowest_after) lowest_after = pos;
+        }
+        /* the switch closes at 5 mm: Z stops within the steps queued (and one pass) */
+        CHECKF(obstacle && lowest_after >= 5 * (long)BOARD_STEPS_PER_MM - 2 * (long)FW_STEP_QUEUE && !l.pass.late,
+               "the carriage went down to %ld steps into an obstacle at %ld", lowest_after, 5 * (long)BOARD_STEPS_PER_MM);
+        printf("    avr: lit %.3f ms for a late G4 P10 (it said %.3f over), %.3f ms with the host silent; "
+               "stopped at %.3f mm by an obstacle at 5 mm\n", lit[0], over, lit[2], (double)lowest_after / BOARD_STEPS_PER_MM);
+    }
+    free_avr_log(&l);
+    /* the M112 log: nothing after its line end + 1 ms */
+    CHECK(read_avr_log("build/test_avr/m112.log", &l));
+    eols = log_events("build/test_avr/m112.log", "rx_eol", eol, 64);
+    /* the lines' ends: G28, G1 Z30, M112, G28, M106, M112, G1 Z5, M106 */
+    CHECKF(eols == 8, "%zu line ends", eols);
+    if (!check_case_failed()) {
+        uint64_t first = eol[2], second = eol[5], last_step = 0;
+        size_t k, after = 0;
+        for (k = 0; k < l.steps; k++) {
+            if (l.step_at[k] > first + CYCLES_PER_MS && l.step_at[k] < eol[3]) after++;
+            if (l.step_at[k] < eol[3]) last_step = l.step_at[k];
+        }
+        CHECKF(!after && last_step > first, "%zu steps more than 1 ms after M112's line end", after);
+        CHECKF(l.uvs == 2 && l.uv_on[0] && l.uv_at[0] < second && !l.uv_on[1] && l.uv_at[1] > second &&
+               l.uv_at[1] < second + CYCLES_PER_MS, "%zu UV edges around the second M112", l.uvs);
+        if (l.uvs == 2)
+            printf("    avr: M112: the last step %.3f ms after its line end; the light out %.3f ms after\n",
+                   ((double)last_step - (double)first) / CYCLES_PER_MS, ((double)l.uv_at[1] - (double)second) / CYCLES_PER_MS);
+    }
+    free_avr_log(&l);
+}
+
 void test_avr(void)
 {
     if (system("mkdir -p build/test_avr") != 0) { CHECK(!"mkdir build/test_avr"); return; }
@@ -639,5 +871,7 @@ void test_avr(void)
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_print_nanodlp_style);
     RUN_NEEDING("simavr, avr-gcc and printcore (Debian printrun): build/avr-run, build/fw-ramps-test.elf", gcode_print_by_printcore);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", running_image_reports_its_figures);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_light_and_stops);
     cli_end();
 }

@@ -514,6 +514,218 @@ static void manual_commands(void)
     fake_free(&p);
 }
 
+
+/* The light a record gave and the steps taken while it was on. */
+static uint64_t lit_ticks(const fake_printer *p, size_t *steps_lit)
+{
+    uint64_t on = 0, total = 0;
+    size_t k;
+    int uv = 0;
+    *steps_lit = 0;
+    for (k = 0; k < p->event_count; k++) {
+        const zevent *e = &p->events[k];
+        if (e->kind == ZEV_STEP && uv) (*steps_lit)++;
+        if (e->kind != ZEV_UV) continue;
+        if (e->value && !uv) on = e->when;
+        if (!e->value && uv) total += e->when - on;
+        uv = e->value;
+    }
+    return total;
+}
+
+/* A one-layer print of 40 bins of 2 um (0.08 mm) up to its settle. */
+static void print_to_settle(fake_printer *p)
+{
+    static uint8_t image[8], code[64];
+    uint8_t lengths[1] = {40};
+    size_t n;
+    fake_init(p, 8, 8, 1);
+    p->keep_events = 1;
+    p->heartbeat = FAKE_TICK_HZ / 5;
+    CHECK(adaslice_rle_encode(image, 1, 8, 8, 1, code, sizeof code, &n) == ADASLICE_OK);
+    send_plan(p, lengths, 1, 2000);
+    home(p);
+    start_print(p, 1);
+    send_mask(p, 1, code, n, adaslice_crc32(0, image, sizeof image), 2000);
+    while (fake_state(p) == LINK_STATE_PRINTING && p->status.phase != LINK_PHASE_SETTLE) fake_run(p, p->now + FAKE_TICK_HZ / 1000);
+    CHECK(p->status.phase == LINK_PHASE_SETTLE && p->true_position == 32);
+}
+
+/* PAUSE, MOVE to 20 mm, RESUME once exposed a layer at 20 mm: MOVE and HOME
+   are refused while a print is paused (and with the light on), the resumed
+   layer is exposed at its own top; the core's last check before the light
+   (Z at the layer's top) and a print move the axis refuses are faults that
+   leave the light off. */
+static void a_pause_never_exposes_elsewhere(void)
+{
+    static fake_printer p;
+    uint8_t mv[LINK_SIZE_MOVE];
+    link_move move = {20000000, 0};
+    size_t lit_steps;
+    print_to_settle(&p);
+    fake_send(&p, LINK_MSG_PAUSE, NULL, 0);
+    CHECK(fake_state(&p) == LINK_STATE_PAUSED);
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    CHECK(fake_state(&p) == LINK_STATE_PAUSED && p.status.error == LINK_ERR_BUSY);
+    fake_send(&p, LINK_MSG_HOME, NULL, 0);
+    CHECK(fake_state(&p) == LINK_STATE_PAUSED && p.status.error == LINK_ERR_BUSY);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(p.true_position == 32);
+    /* had anything moved it while paused, RESUME goes back to the top first */
+    p.fw.axis.position += 800;
+    p.true_position += 800;
+    {
+        size_t k, from = p.event_count, exposures = 0;
+        int32_t pos = p.true_position;
+        fake_send(&p, LINK_MSG_RESUME, NULL, 0);
+        fake_run(&p, p.now + 20ull * FAKE_TICK_HZ);
+        CHECK(fake_state(&p) == LINK_STATE_DONE);
+        CHECK(lit_ticks(&p, &lit_steps) == 2ull * FAKE_TICK_HZ && !lit_steps);
+        /* the light came on at the layer's top: 32 steps (40 x 2 um x 400 / mm) */
+        for (k = from; k < p.event_count; k++) {
+            if (p.events[k].kind == ZEV_STEP) pos += p.events[k].value;
+            if (p.events[k].kind == ZEV_UV && p.events[k].value) {
+                exposures++;
+                CHECKF(pos == 32, "exposed at %d steps", (int)pos);
+            }
+        }
+        CHECK(exposures == 1);
+    }
+    fake_free(&p);
+
+    /* Z moved under the print's feet during the settle: no light, a fault */
+    print_to_settle(&p);
+    p.fw.axis.position += 4;
+    p.true_position += 4;
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    CHECKF(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_WRONG_HEIGHT, "state %d error %d", p.status.state,
+           p.status.error);
+    CHECK(lit_ticks(&p, &lit_steps) == 0 && (p.status.flags & LINK_FLAG_HOMED) && p.status.exposed == 0);
+    fake_free(&p);
+
+    /* the peel refused (the axis lost its home during the exposure): a fault */
+    print_to_settle(&p);
+    while (fake_state(&p) == LINK_STATE_PRINTING && p.status.phase != LINK_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 1000);
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move)); /* MOVE under the light */
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_BUSY && p.true_position == 32);
+    p.fw.axis.homed = 0;
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    CHECKF(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_MOVE_FAILED, "state %d error %d", p.status.state,
+           p.status.error);
+    CHECK(!(p.status.flags & LINK_FLAG_UV) && p.true_position == 32 && p.status.exposed == 1);
+    fake_free(&p);
+}
+
+/* The Z-min switch closing during a move, where the carriage cannot be at
+   it (lost steps, a crash into the vat): stopped dead with the light off,
+   Z unhomed, error ENDSTOP; a move down to the switch's own point and the
+   way up off it are no fault. */
+static void endstop_during_a_move(void)
+{
+    static fake_printer p;
+    uint8_t mv[LINK_SIZE_MOVE];
+    link_move move = {20000000, 0};
+    size_t k, steps_after = 0;
+    uint64_t hit = 0;
+    fake_init(&p, 8, 8, 1);
+    home(&p);
+    p.keep_events = 1;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_NONE && p.true_position == 8000);
+    move.z_nm = 0;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_NONE && p.true_position == 0 &&
+          (p.status.flags & LINK_FLAG_HOMED));
+    move.z_nm = 20000000;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
+    CHECK(p.status.error == LINK_ERR_NONE && p.true_position == 8000);
+    /* down again; half way the carriage finds the switch 10 mm early */
+    move.z_nm = 0;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    while (p.true_position > 4000) fake_run(&p, p.now + FAKE_TICK_HZ / 1000);
+    p.true_position -= 4000;
+    hit = p.now;
+    fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
+    CHECKF(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_ENDSTOP, "state %d error %d", p.status.state,
+           p.status.error);
+    CHECK(!(p.status.flags & (LINK_FLAG_HOMED | LINK_FLAG_MOVING | LINK_FLAG_UV)));
+    for (k = 0; k < p.event_count; k++)
+        if (p.events[k].kind == ZEV_STEP && p.events[k].when > hit) steps_after++;
+    /* the queued steps at most */
+    CHECKF(steps_after <= FW_STEP_QUEUE, "%zu steps after the switch closed", steps_after);
+    fake_free(&p);
+}
+
+/* G-code through the core: the light never on while Z moves, out when the
+   host falls silent after M106, and M112 / M410 acted on when their line
+   ends, ahead of the lines held before them. */
+static void gcode_uv_safety(void)
+{
+    static fake_printer p;
+    size_t lit_steps;
+    uint64_t end;
+    const char *burst = "G1 Z30 F6000\nG1 Z31\nM106\nG4 P1000\n";
+    fake_init(&p, 8, 8, 1);
+    fake_bytes(&p, (const uint8_t *)"G28\n", 4);
+    fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
+    CHECK(p.fw.axis.homed);
+    p.keep_events = 1;
+    /* M106 then a move: the light goes out before the first step */
+    fake_bytes(&p, (const uint8_t *)"M106 S255\n", 10);
+    fake_run(&p, p.now + FAKE_TICK_HZ / 10);
+    fake_bytes(&p, (const uint8_t *)"G1 Z5\n", 6);
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    end = lit_ticks(&p, &lit_steps);
+    CHECKF(end > 0 && !lit_steps && p.true_position == 2000, "lit %llu, %zu steps lit, at %d: %.200s", (unsigned long long)end,
+           lit_steps, (int)p.true_position, p.text);
+    CHECK(strstr(p.text, "echo:UV off: Z moves only in the dark") != NULL);
+    /* M106 and a silent host: out after the link timeout (1 s) */
+    p.event_count = 0;
+    fake_bytes(&p, (const uint8_t *)"M106\n", 5);
+    fake_run(&p, p.now + 3ull * FAKE_TICK_HZ);
+    end = lit_ticks(&p, &lit_steps);
+    CHECKF(end >= FAKE_TICK_HZ - FAKE_TICK_HZ / 1000 && end <= FAKE_TICK_HZ + FAKE_TICK_HZ / 1000,
+           "lit %llu ticks with the host silent", (unsigned long long)end);
+    CHECK(strstr(p.text, "echo:UV off: the host went silent after M106") != NULL);
+    /* M112 mid-move: no step after the line's end, the light out, the
+       lines held behind the move dropped, Z unhomed, M106 refused until G28 */
+    p.event_count = 0;
+    p.text_len = 0;
+    fake_bytes(&p, (const uint8_t *)burst, strlen(burst));
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(p.true_position > 2000 && p.true_position < 12000);
+    fake_bytes(&p, (const uint8_t *)"M112\n", 5);
+    end = p.now;
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    {
+        size_t k, after = 0;
+        for (k = 0; k < p.event_count; k++)
+            if (p.events[k].kind == ZEV_STEP && p.events[k].when > end) after++;
+        CHECKF(!after, "%zu steps after M112", after);
+    }
+    CHECK(!p.fw.axis.homed && lit_ticks(&p, &lit_steps) == 0);
+    CHECKF(strstr(p.text, "echo:Emergency stop (M112)") && strstr(p.text, "Error:Z move stopped at"), "%.300s", p.text);
+    fake_bytes(&p, (const uint8_t *)"M106\nG1 Z5\n", 11);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECKF(strstr(p.text, "Error:Stopped: home Z (G28) before UV") && strstr(p.text, "Error:Home Z first") &&
+           lit_ticks(&p, &lit_steps) == 0, "%.300s", p.text);
+    /* M410: Z brakes to a stop and stays homed */
+    fake_bytes(&p, (const uint8_t *)"G28\n", 4);
+    fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
+    fake_bytes(&p, (const uint8_t *)burst, strlen(burst));
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    p.text_len = 0;
+    fake_bytes(&p, (const uint8_t *)"N7 M410*33\n", 11);
+    fake_run(&p, p.now + 5ull * FAKE_TICK_HZ);
+    CHECKF(p.fw.axis.homed && p.fw.axis.position == p.true_position && !fw_axis_busy(&p.fw.axis) &&
+           strstr(p.text, "echo:Quick stop (M410)") && p.true_position < 12000, "at %d: %.300s", (int)p.true_position, p.text);
+    CHECK(lit_ticks(&p, &lit_steps) == 0);
+    fake_free(&p);
+}
+
 void test_firmware(void)
 {
     RUN(manual_commands);
@@ -527,4 +739,7 @@ void test_firmware(void)
     RUN(a_stalled_loop_stops_the_motion);
     RUN(thousand_layers_without_drift);
     RUN(pause_and_link_loss);
+    RUN(a_pause_never_exposes_elsewhere);
+    RUN(endstop_during_a_move);
+    RUN(gcode_uv_safety);
 }

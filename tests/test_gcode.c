@@ -200,7 +200,8 @@ static void every_command_replies(void)
     machine_init(&m, &c, 8000);
     host(&m, "M105\n"); EXPECT(&m, "ok\n");
     host(&m, "M115\n");
-    EXPECT(&m, "FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0\nok\n");
+    EXPECT(&m, "FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0\n"
+               "echo:Z_MAX_MM:150.000 STEPS_PER_MM:400 Z_MAX_SPEED_MM_S:10.000 MAX_EXPOSURE_MS:300000\nok\n");
     host(&m, "G1 Z5\n"); EXPECT(&m, "Error:Home Z first\nok\n");
     CHECK(m.steps == 0 && m.motor == 0);
     host(&m, "G28\n");
@@ -661,8 +662,12 @@ static void dwell(void)
     settle(&m);
     CHECK(m.uv_calls == 1 && m.uv_when == start + 10000000ull * TICK_HZ);
     EXPECT(&m, "ok\nok\n");
+    /* homing under M106's light: the light goes out first */
+    host(&m, "G28\n");
+    CHECK(m.uv == 0 && m.uv_calls == 2);
+    settle(&m);
+    EXPECT(&m, "echo:UV off: Z moves only in the dark\nZ_move_comp\nok\n");
     /* after a move: the dwell starts when the move has ended */
-    homed(&m);
     host(&m, "G1 Z10 F600\nG4 P100\n");
     start = m.now;
     settle(&m);
@@ -725,6 +730,66 @@ static void lit_dwell_is_the_exposure(void)
 }
 
 /* The core may halt a move; no Z_move_comp then, and Z is where the axis is. */
+/* Z never moves under the light: G0/G1 after M106 (no M107) put it out
+   before the first step and say so; a G1 refused (unhomed, out of limits)
+   moves nothing and leaves it. */
+static void no_move_under_the_light(void)
+{
+    static machine m;
+    fw_axis_config c = test_config();
+    long before;
+    machine_init(&m, &c, 800);
+    homed(&m);
+    before = m.steps;
+    host(&m, "M106 S255\n"); EXPECT(&m, "ok\n"); CHECK(m.uv == 1);
+    host(&m, "G1 Z9999\n");
+    CHECKF(m.uv == 1 && m.steps == before, "uv %d, %ld steps", m.uv, m.steps - before); /* refused: nothing moves */
+    replies(&m);
+    host(&m, "G1 Z5\n");
+    CHECK(m.uv == 0 && m.uv_calls == 2); /* out before any step (on_uv checks the axis idle) */
+    settle(&m);
+    EXPECT(&m, "echo:UV off: Z moves only in the dark\nok\nZ_move_comp\n");
+    CHECKF(m.steps - before == 2000, "%ld steps", m.steps - before);
+    /* a dwell after that move is no exposure's */
+    host(&m, "G4 P10\n"); settle(&m); EXPECT(&m, "ok\n");
+    CHECK(m.uv_end_calls == 0 && m.uv_calls == 2);
+}
+
+/* M106's light with no dwell to end it goes out when the host says nothing
+   for the timeout, counted from M106 or its last byte, whichever is later. */
+static void silent_host_puts_the_light_out(void)
+{
+    static machine m;
+    fw_axis_config c = test_config();
+    const uint64_t timeout = TICK_HZ; /* 1 s */
+    uint64_t heard, lit;
+    machine_init(&m, &c, 800);
+    homed(&m);
+    CHECK(fw_gcode_watch(&m.g, m.now, timeout, m.now) == FW_NEVER); /* dark: nothing to watch */
+    host(&m, "M106\n"); EXPECT(&m, "ok\n");
+    lit = m.now;
+    CHECK(fw_gcode_watch(&m.g, lit, timeout, lit) == lit + timeout);
+    m.now = lit + timeout / 2;
+    host(&m, "M105\n"); EXPECT(&m, "ok\n"); /* a keepalive: heard again */
+    heard = m.now;
+    CHECK(fw_gcode_watch(&m.g, heard, timeout, lit + timeout) == heard + timeout && m.uv == 1);
+    CHECK(fw_gcode_watch(&m.g, heard, timeout, heard + timeout - 1) == heard + timeout && m.uv == 1);
+    CHECK(fw_gcode_watch(&m.g, heard, timeout, heard + timeout) == FW_NEVER);
+    CHECK(m.uv == 0 && m.uv_when == heard + timeout);
+    EXPECT(&m, "echo:UV off: the host went silent after M106\n");
+    /* an exposure's dwell is the light's own end: nothing to watch */
+    host(&m, "M106\nG4 P3000\n");
+    CHECK(fw_gcode_watch(&m.g, m.now, timeout, m.now + 2 * timeout) == FW_NEVER && m.uv == 1);
+    settle(&m);
+    EXPECT(&m, "ok\nok\n");
+    /* after a fault or M112 (fw_gcode_dark halted) M106 waits for G28 */
+    fw_gcode_dark(&m.g, 1);
+    host(&m, "M106\n"); EXPECT(&m, "Error:Stopped: home Z (G28) before UV\nok\n");
+    host(&m, "M106 S0\n"); EXPECT(&m, "ok\n"); /* off is always allowed */
+    homed(&m);
+    host(&m, "M106\n"); EXPECT(&m, "ok\n"); CHECK(m.uv == 1);
+}
+
 static void halted_move(void)
 {
     static machine m;
@@ -802,6 +867,8 @@ void test_gcode(void)
     RUN(binary_noise);
     RUN(dwell);
     RUN(lit_dwell_is_the_exposure);
+    RUN(no_move_under_the_light);
+    RUN(silent_host_puts_the_light_out);
     RUN(halted_move);
     RUN(io_without_callbacks);
 }

@@ -953,6 +953,26 @@ static void bad_ports_are_named(void)
     cli_free(&r);
 }
 
+/* The printer's light limit (IDENTIFY's max_exposure_ms, 300 s here): a job
+   asking for longer is refused before anything moves, naming the layer and
+   both times; the printer's log shows no step and no light. */
+static void too_long_exposure_is_refused_first(void)
+{
+    child sim;
+    cli_result r;
+    char *log;
+    if (!start_sim(&sim, cli_path("long.log"), SIM_SPEED)) return;
+    r = cli_run("print", MODEL, "--scale", "15", "--port", sim.line + 4, "--exposure", "2", "--penetration", "0.1",
+                "--bottom-layers", "2", "--bottom-exposure", "300.5", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "layer 1's exposure is 300.500 s") &&
+           strstr(r.err, "at most 300.000 s"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    log = cli_read(cli_path("long.log"));
+    CHECKF(log && !strstr(log, " step ") && !strstr(log, " uv 1"), "the printer moved or lit: %.200s", log ? log : "");
+    free(log);
+}
+
 /* A silent port: no printer answers within the hello's time. */
 static void silent_port_is_named(void)
 {
@@ -1275,6 +1295,7 @@ void test_print(void)
     RUN(print_a_sliced_job);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);
+    RUN(too_long_exposure_is_refused_first);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", short_print_under_qemu);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_reset_mid_print_under_qemu);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_halted_mid_print_under_qemu);

@@ -42,10 +42,16 @@
 #define BOARD_ACCEL_MM_S2    50u
 #define BOARD_HOME_SPEED_UM_S 2500ul
 /* the same in steps per second (the core's units) */
-#define BOARD_MAX_STEPS_S  (BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
-#define BOARD_HOME_STEPS_S (BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
+#define BOARD_MAX_STEPS_S  ((uint32_t)BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
+#define BOARD_HOME_STEPS_S ((uint32_t)BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
 #define BOARD_Z_MAX_MM       200u
 #define BOARD_HOME_TRAVEL_MM 220u
+/* Products of these figures overflow int, which is 16 bits here: every
+   derived figure is worked out in 32 bits (main.c checks each one in the
+   part's own arithmetic at compile time). */
+#define BOARD_Z_MAX_STEPS       ((uint32_t)BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM)
+#define BOARD_HOME_TRAVEL_STEPS ((uint32_t)BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM)
+#define BOARD_ACCEL_STEPS_S2    ((uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM)
 #define BOARD_LINK_TIMEOUT_MS 1000u
 
 /* The display is driven by another computer (NanoDLP on a Raspberry Pi):

@@ -21,6 +21,21 @@
    cycles, so the loop still drains the ring faster than it fills. */
 #define CHUNK 8u
 
+/* Every figure derived from board.h's, checked at compile time in this
+   part's arithmetic (int is 16 bits): a product that wraps fails the
+   build here rather than shrinking the travel on the printer. Each is
+   checked by undoing it. */
+#define BOARD_CHECK(name, ok) typedef char board_check_##name[(ok) ? 1 : -1]
+BOARD_CHECK(z_max, BOARD_Z_MAX_STEPS / BOARD_STEPS_PER_MM == BOARD_Z_MAX_MM && BOARD_Z_MAX_STEPS <= 0x7FFFFFFFul);
+BOARD_CHECK(home_travel, BOARD_HOME_TRAVEL_STEPS / BOARD_STEPS_PER_MM == BOARD_HOME_TRAVEL_MM &&
+                             BOARD_HOME_TRAVEL_STEPS <= 0x7FFFFFFFul);
+BOARD_CHECK(accel, BOARD_ACCEL_STEPS_S2 / BOARD_STEPS_PER_MM == BOARD_ACCEL_MM_S2);
+BOARD_CHECK(max_speed, BOARD_MAX_STEPS_S == (uint32_t)((uint64_t)BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u));
+BOARD_CHECK(home_speed, BOARD_HOME_STEPS_S == (uint32_t)((uint64_t)BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u));
+BOARD_CHECK(clock, BOARD_CLOCK_HZ * BOARD_TICK_DIV == BOARD_CPU_HZ);
+BOARD_CHECK(step_lead, BOARD_STEP_LEAD * 125u == BOARD_CLOCK_HZ);
+BOARD_CHECK(row, FW_ROW_BYTES * 8u >= BOARD_DISPLAY_W);
+
 static fw_state fw;
 static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 
@@ -52,10 +67,10 @@ int main(void)
     config.tick_hz = BOARD_CLOCK_HZ;
     config.axis.steps_per_mm = BOARD_STEPS_PER_MM;
     config.axis.max_speed = BOARD_MAX_STEPS_S;
-    config.axis.accel = (uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM;
+    config.axis.accel = BOARD_ACCEL_STEPS_S2;
     config.axis.home_speed = BOARD_HOME_STEPS_S;
-    config.axis.max_steps = (int32_t)(BOARD_Z_MAX_MM * BOARD_STEPS_PER_MM);
-    config.axis.home_travel = (int32_t)(BOARD_HOME_TRAVEL_MM * BOARD_STEPS_PER_MM);
+    config.axis.max_steps = (int32_t)BOARD_Z_MAX_STEPS;
+    config.axis.home_travel = (int32_t)BOARD_HOME_TRAVEL_STEPS;
     config.display_width = BOARD_DISPLAY_W;
     config.display_height = BOARD_DISPLAY_H;
     config.display_bits = BOARD_DISPLAY_BITS;
