@@ -19,7 +19,9 @@
    step out and arms the timer for the next one. A step that could not be
    queued before its tick, or a timer that could not be armed in time, is a
    fault (LINK_ERR_STEP_LATE): the motion stops dead, the axis is unhomed, UV
-   off, the motor disabled. A step is never sent late.
+   off, the motor disabled. A step is never sent late. The Z-min switch
+   closing during a move where the carriage cannot be at it is the same
+   stop (LINK_ERR_ENDSTOP), and so is G-code's M112.
 
    The UV light is switched off by the port's own timer at the end the core
    gives with it (uv's `until`), so an exposure ends on time, whatever the

@@ -1,7 +1,9 @@
 /* G-code mode; the dialect and the decisions behind it are in gcode.h. */
 #include "gcode.h"
 
-enum { WAIT_NONE, WAIT_START, WAIT_MOVE, WAIT_HOME, WAIT_DWELL };
+/* what the last command still waits for; the last three are replies to
+   come, each a piece of work of its own */
+enum { WAIT_NONE, WAIT_START, WAIT_MOVE, WAIT_HOME, WAIT_DWELL, WAIT_TRAVEL, WAIT_LIMITS, WAIT_OVERRUN };
 enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed check() */
 /* g->len of a line that outgrew g->line: its rest is dropped */
 #define TOO_LONG (FW_GCODE_LINE_MAX + 1)
@@ -56,7 +58,9 @@ static void put_digits(reply *r, uint32_t u, int width)
     char d[10];
     int k = 0;
     do {
-        uint32_t q = tenth(u);
+        /* the last digits in 16 bits: an 8-bit core divides those in a
+           fraction of the 64-bit product's time */
+        uint32_t q = u >> 16 ? tenth(u) : (uint16_t)u / 10u;
         d[k++] = (char)('0' + (u - q * 10u));
         u = q;
     } while (u || k < width);
@@ -359,14 +363,11 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
         g->lit = 0;
         if (g->io.uv_end) g->io.uv_end(g->io.ctx, end);
         if (end <= now) {
-            /* the host was slower than the exposure: say by how much */
-            reply r;
-            r.n = 0;
-            put(&r, FW_TEXT("echo:Exposure ran over: G4 came "));
-            put_milli(&r, (int64_t)muldiv(now - end, MILLION, g->axis->tick_hz, 0));
-            put(&r, FW_TEXT(" ms after its end"));
-            send(g, &r);
-            return 1;
+            /* the host was slower than the exposure: overrun() says by
+               how much, a piece of its own */
+            g->deadline = now - end;
+            g->wait = WAIT_OVERRUN;
+            return 0;
         }
     }
     g->deadline = end;
@@ -374,23 +375,47 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
     return 0;
 }
 
-/* M115: Marlin's line, then the figures of this image as it runs (a host,
-   and the tests, read the board's travel, speed and light limit here) */
-static void identify(fw_gcode *g)
+/* M115's lines after Marlin's: this image's figures as it runs (a host,
+   and the tests, read the board's travel, speed and light limit here), a
+   line a piece of work, since each is a good part of a step interval's
+   arithmetic on an 8-bit core. */
+static void figures(fw_gcode *g)
 {
     const fw_axis_config *c = &g->axis->config;
     reply r;
     r.n = 0;
-    fw_gcode_say(g, FW_TEXT("FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0"));
-    put(&r, FW_TEXT("echo:Z_MAX_MM:"));
-    put_milli(&r, mm_of_steps(g, c->max_steps, 1000));
-    put(&r, FW_TEXT(" STEPS_PER_MM:"));
-    put_uint(&r, c->steps_per_mm);
-    put(&r, FW_TEXT(" Z_MAX_SPEED_MM_S:"));
+    if (g->wait == WAIT_TRAVEL) {
+        put(&r, FW_TEXT("echo:Z_MAX_MM:"));
+        put_milli(&r, mm_of_steps(g, c->max_steps, 1000));
+        put(&r, FW_TEXT(" STEPS_PER_MM:"));
+        put_uint(&r, c->steps_per_mm);
+        send(g, &r);
+        g->wait = WAIT_LIMITS;
+        return;
+    }
+    put(&r, FW_TEXT("echo:Z_MAX_SPEED_MM_S:"));
     put_milli(&r, mm_of_steps(g, (int32_t)c->max_speed, 1000));
     put(&r, FW_TEXT(" MAX_EXPOSURE_MS:"));
     put_uint(&r, FW_EXPOSURE_MAX_MS);
     send(g, &r);
+    fw_gcode_say(g, FW_TEXT("ok"));
+    g->wait = WAIT_NONE;
+}
+
+/* The G4 that came g->deadline ticks after its exposure's end, and its ok. */
+static void overrun(fw_gcode *g)
+{
+    /* in us, from the clock in kHz (every port's is whole kHz): 32-bit
+       divisions, where 10^6 / tick_hz would take 64 */
+    uint32_t khz = g->axis->tick_hz / 1000u;
+    reply r;
+    r.n = 0;
+    put(&r, FW_TEXT("echo:Exposure ran over: G4 came "));
+    put_milli(&r, khz ? (int64_t)muldiv(g->deadline, 1000u, khz, 0) : 0);
+    put(&r, FW_TEXT(" ms after its end"));
+    send(g, &r);
+    fw_gcode_say(g, FW_TEXT("ok"));
+    g->wait = WAIT_NONE;
 }
 
 static void report_position(fw_gcode *g)
@@ -560,7 +585,11 @@ static void run(fw_gcode *g, uint64_t now)
         }
         break;
     case 10114: report_position(g); break;
-    case 10115: identify(g); break;
+    case 10115:
+        fw_gcode_say(g, FW_TEXT("FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0"));
+        g->wait = WAIT_TRAVEL; /* figures() in the next pieces */
+        ok = 0;
+        break;
     default: unknown(g, b, from, end); break;
     }
     if (ok) fw_gcode_say(g, FW_TEXT("ok"));
@@ -609,6 +638,14 @@ static int advance(fw_gcode *g, uint64_t now)
         if (now < g->deadline) return 0;
         g->wait = WAIT_NONE;
         fw_gcode_say(g, FW_TEXT("ok"));
+        return 1;
+    }
+    if (g->wait == WAIT_TRAVEL || g->wait == WAIT_LIMITS) {
+        figures(g);
+        return 1;
+    }
+    if (g->wait == WAIT_OVERRUN) {
+        overrun(g);
         return 1;
     }
     if (g->wait != WAIT_NONE) {
@@ -669,7 +706,7 @@ uint64_t fw_gcode_run(fw_gcode *g, uint64_t now)
 void fw_gcode_drop(fw_gcode *g)
 {
     line_done(g);
-    if (g->wait == WAIT_START) g->wait = WAIT_NONE;
+    if (g->wait == WAIT_START || g->wait >= WAIT_TRAVEL) g->wait = WAIT_NONE;
 }
 
 void fw_gcode_dark(fw_gcode *g, int halted)

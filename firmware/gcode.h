@@ -56,8 +56,8 @@
        M105           plain "ok" (no heaters; printcore's handshake)
        M110 [N]       set the line number
        M114           "X:0.00 Y:0.00 Z:12.345 E:0.00 Count Z:4938"
-       M115           "FIRMWARE_NAME:adaslice ..." and "echo:Z_MAX_MM:200.000
-                      STEPS_PER_MM:400 Z_MAX_SPEED_MM_S:2.500
+       M115           "FIRMWARE_NAME:adaslice ...", "echo:Z_MAX_MM:200.000
+                      STEPS_PER_MM:400" and "echo:Z_MAX_SPEED_MM_S:2.500
                       MAX_EXPOSURE_MS:300000": the running image's own
                       figures
        M400           wait for moves

@@ -201,7 +201,7 @@ static void every_command_replies(void)
     host(&m, "M105\n"); EXPECT(&m, "ok\n");
     host(&m, "M115\n");
     EXPECT(&m, "FIRMWARE_NAME:adaslice PROTOCOL_VERSION:1.0 MACHINE_TYPE:MSLA EXTRUDER_COUNT:0\n"
-               "echo:Z_MAX_MM:150.000 STEPS_PER_MM:400 Z_MAX_SPEED_MM_S:10.000 MAX_EXPOSURE_MS:300000\nok\n");
+               "echo:Z_MAX_MM:150.000 STEPS_PER_MM:400\necho:Z_MAX_SPEED_MM_S:10.000 MAX_EXPOSURE_MS:300000\nok\n");
     host(&m, "G1 Z5\n"); EXPECT(&m, "Error:Home Z first\nok\n");
     CHECK(m.steps == 0 && m.motor == 0);
     host(&m, "G28\n");
