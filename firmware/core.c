@@ -73,16 +73,18 @@ static void send_identify(fw_state *fw)
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 
-/* A paused exposure's rest, in whole ms rounded up: a host never believes
-   less light is owed than is. */
-static uint32_t exposure_left_ms(const fw_state *fw)
+/* The light a layer still owes, exposing or paused, in whole ms rounded up:
+   a host never believes less light is owed than is, and one that loses the
+   printer mid-exposure (a reset) resumes with what the last STATUS said. */
+static uint32_t exposure_left_ms(const fw_state *fw, uint64_t now)
 {
-    uint64_t hz = fw->config.tick_hz;
-    if (!fw->exposure_left) return 0; /* as a rule: no 64-bit division for it */
-    return (uint32_t)((fw->exposure_left * 1000u + hz - 1u) / hz);
+    uint64_t hz = fw->config.tick_hz, left = fw->exposure_left;
+    if (fw->state == LINK_STATE_PRINTING && fw->phase == LINK_PHASE_EXPOSE && fw->phase_end > now) left = fw->phase_end - now;
+    if (!left) return 0; /* as a rule: no 64-bit division for it */
+    return (uint32_t)((left * 1000u + hz - 1u) / hz);
 }
 
-static void send_status(fw_state *fw)
+static void send_status(fw_state *fw, uint64_t now)
 {
     uint8_t p[LINK_SIZE_STATUS_REPLY];
     link_status m;
@@ -107,7 +109,7 @@ static void send_status(fw_state *fw)
     m.window = fw->config.window;
     m.boot_id = fw->config.boot_id;
     m.exposed = fw->exposed;
-    m.exposure_left_ms = exposure_left_ms(fw);
+    m.exposure_left_ms = exposure_left_ms(fw, now);
     m.job = fw->job;
     send(fw, LINK_MSG_STATUS_REPLY, p, link_put_status(p, &m));
 }
@@ -599,7 +601,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     fw->expect++;
     if (!link_payload_fits(type, size)) { fail(fw, LINK_ERR_MESSAGE, seq); send_ack(fw, 0); return; }
     switch (type) {
-    case LINK_MSG_STATUS: send_status(fw); return;
+    case LINK_MSG_STATUS: send_status(fw, now); return;
     case LINK_MSG_PLAN_GET: (void)link_get_plan_get(&m.plan_get, p, size); plan_get(fw, &m.plan_get, seq); return;
     case LINK_MSG_PROFILE:
         (void)link_get_profile(&m.profile, p, size);
