@@ -257,14 +257,15 @@ static void print_progress(progress *bar, const print_job *pj, const link_status
     progress_show(bar, done, pj->layers - first + 1, "layers", z);
 }
 
-/* While the light may be on (settling, exposing), a STATUS this often, ms,
-   not waited for: a printer that restarts then leaves its layer's light
-   owed known from a STATUS about this old (serial_stopped). */
+/* While the light may be on, a STATUS this often, ms, not waited for: a
+   printer that restarts mid-exposure then leaves the light its layer owes
+   known from a STATUS about this old (serial_stopped). The light comes on
+   only while Z stands, and Z's steps are left alone. */
 #define LIT_POLL_MS 5
 
 static int may_be_lit(const link_status *s)
 {
-    return s->state == LINK_STATE_PRINTING && (s->phase == LINK_PHASE_SETTLE || s->phase == LINK_PHASE_EXPOSE);
+    return s->state == LINK_STATE_PRINTING && !(s->flags & LINK_FLAG_MOVING);
 }
 
 /* What was sent of each layer's mask (0 for layers not sent) */
