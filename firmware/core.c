@@ -73,18 +73,28 @@ static void send_identify(fw_state *fw)
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 
-/* The light a layer still owes, exposing or paused, in whole ms rounded up:
-   a host never believes less light is owed than is, and one that loses the
-   printer mid-exposure (a reset) resumes with what the last STATUS said. */
-static uint32_t exposure_left_ms(const fw_state *fw, uint64_t now)
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+
+/* The light a layer still owes, exposing or paused, in whole ms rounded up,
+   at the tick the frame asking for it came: a host never believes less
+   light is owed than is, and one that loses the printer mid-exposure (a
+   reset) resumes with what the last STATUS said. Kept out of line: its
+   64-bit work would otherwise widen on_frame's frame, which is under
+   send()'s. */
+static FW_NOINLINE uint32_t exposure_left_ms(const fw_state *fw)
 {
     uint64_t hz = fw->config.tick_hz, left = fw->exposure_left;
-    if (fw->state == LINK_STATE_PRINTING && fw->phase == LINK_PHASE_EXPOSE && fw->phase_end > now) left = fw->phase_end - now;
+    if (fw->state == LINK_STATE_PRINTING && fw->phase == LINK_PHASE_EXPOSE && fw->phase_end > fw->heard)
+        left = fw->phase_end - fw->heard;
     if (!left) return 0; /* as a rule: no 64-bit division for it */
     return (uint32_t)((left * 1000u + hz - 1u) / hz);
 }
 
-static void send_status(fw_state *fw, uint64_t now)
+static void send_status(fw_state *fw)
 {
     uint8_t p[LINK_SIZE_STATUS_REPLY];
     link_status m;
@@ -109,7 +119,7 @@ static void send_status(fw_state *fw, uint64_t now)
     m.window = fw->config.window;
     m.boot_id = fw->config.boot_id;
     m.exposed = fw->exposed;
-    m.exposure_left_ms = exposure_left_ms(fw, now);
+    m.exposure_left_ms = exposure_left_ms(fw);
     m.job = fw->job;
     send(fw, LINK_MSG_STATUS_REPLY, p, link_put_status(p, &m));
 }
@@ -566,11 +576,6 @@ static int can_move(const fw_state *fw)
    with it its locals, which would then sit under every G-code byte's call
    into the G-code reader, the deepest the stack goes (on the AVR, 180 of
    its 8 KiB). */
-#if defined(__GNUC__)
-#define FW_NOINLINE __attribute__((noinline))
-#else
-#define FW_NOINLINE
-#endif
 static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 {
     uint8_t seq = f[1], type = (uint8_t)(f[2] & ~LINK_ROUND_BIT), round = f[2] & LINK_ROUND_BIT;
@@ -601,7 +606,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     fw->expect++;
     if (!link_payload_fits(type, size)) { fail(fw, LINK_ERR_MESSAGE, seq); send_ack(fw, 0); return; }
     switch (type) {
-    case LINK_MSG_STATUS: send_status(fw, now); return;
+    case LINK_MSG_STATUS: send_status(fw); return;
     case LINK_MSG_PLAN_GET: (void)link_get_plan_get(&m.plan_get, p, size); plan_get(fw, &m.plan_get, seq); return;
     case LINK_MSG_PROFILE:
         (void)link_get_profile(&m.profile, p, size);
