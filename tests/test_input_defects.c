@@ -281,6 +281,7 @@ static void too_large_counts_say_the_most(void)
         {"plan", "--budget", "4294967295"}, {"plan", "--res", "65536"},     {"slice", "--aa", "16"},
         {"slice", "--threads", "64"},       {"slice", "--bottom-layers", "4294967295"},
         {"orient", "--dirs", "1000000"},    {"print", "--baud", "4000000"}, {"print", "--resume-from", "4294967295"},
+        {"print", "--exposure-left", "4294967295"},
     };
     static const struct { const char *value, *says; } values[] = {
         {"99999999999", "too large, the most is"}, {"99999999999999999999999", "too large, the most is"},
