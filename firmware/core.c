@@ -75,13 +75,25 @@ static void send_identify(fw_state *fw)
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 
-/* A paused exposure's rest, in whole ms rounded up: a host never believes
-   less light is owed than is. */
-static uint32_t exposure_left_ms(const fw_state *fw)
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+
+/* The light a layer still owes, exposing or paused, in whole ms rounded up,
+   at the tick the frame asking for it came: a host never believes less
+   light is owed than is, and one that loses the printer mid-exposure (a
+   reset) resumes with what the last STATUS said. Kept out of line: its
+   64-bit work would otherwise widen on_frame's frame, which is under
+   send()'s. */
+static FW_NOINLINE uint32_t exposure_left_ms(const fw_state *fw)
 {
-    uint64_t hz = fw->config.tick_hz;
-    if (!fw->exposure_left) return 0; /* as a rule: no 64-bit division for it */
-    return (uint32_t)((fw->exposure_left * 1000u + hz - 1u) / hz);
+    uint64_t hz = fw->config.tick_hz, left = fw->exposure_left;
+    if (fw->state == LINK_STATE_PRINTING && fw->phase == LINK_PHASE_EXPOSE && fw->phase_end > fw->heard)
+        left = fw->phase_end - fw->heard;
+    if (!left) return 0; /* as a rule: no 64-bit division for it */
+    return (uint32_t)((left * 1000u + hz - 1u) / hz);
 }
 
 static void send_status(fw_state *fw)
@@ -589,11 +601,6 @@ static int can_move(const fw_state *fw)
    with it its locals, which would then sit under every G-code byte's call
    into the G-code reader, the deepest the stack goes (on the AVR, 180 of
    its 8 KiB). */
-#if defined(__GNUC__)
-#define FW_NOINLINE __attribute__((noinline))
-#else
-#define FW_NOINLINE
-#endif
 static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 {
     uint8_t seq = f[1], type = (uint8_t)(f[2] & ~LINK_ROUND_BIT), round = f[2] & LINK_ROUND_BIT;

@@ -29,6 +29,7 @@ typedef struct print_args {
     const char *port, *report;
     long baud;
     size_t resume_from;
+    size_t exposure_left;   /* --exposure-left: ms layer resume_from still owes, 0 all */
     int plan_on_host;
     int home;               /* --home: a resumed print may home Z */
     int then_exit;          /* emulators: EXIT after the print */
@@ -256,6 +257,17 @@ static void print_progress(progress *bar, const print_job *pj, const link_status
     progress_show(bar, done, pj->layers - first + 1, "layers", z);
 }
 
+/* While the light may be on, a STATUS this often, ms, not waited for: a
+   printer that restarts mid-exposure then leaves the light its layer owes
+   known from a STATUS about this old (serial_stopped). The light comes on
+   only while Z stands, and Z's steps are left alone. */
+#define LIT_POLL_MS 5
+
+static int may_be_lit(const link_status *s)
+{
+    return s->state == LINK_STATE_PRINTING && !(s->flags & LINK_FLAG_MOVING);
+}
+
 /* What was sent of each layer's mask (0 for layers not sent) */
 typedef struct report_layer { uint32_t crc, code_bytes; } report_layer;
 
@@ -267,7 +279,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
 {
     uint8_t buf[LINK_PAYLOAD_MAX];
     uint32_t first = pa->resume_from ? (uint32_t)pa->resume_from : 1, next = first, tries = 0;
-    double polled = 0;
+    double polled = 0, lit_asked = 0;
     progress bar;
     int rc, sending = 0;
     size_t sent = 0;
@@ -286,7 +298,9 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
     } else {
         if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &m))) || (rc = serial_status(l))) return rc;
         if (l->st.state == LINK_STATE_PRINTING) {
-            printf("printing layers %u to %u\n", first, pj->layers);
+            printf("printing layers %u to %u", first, pj->layers);
+            if (pa->exposure_left) printf(" (layer %u: the %zu ms of light it owes)", first, pa->exposure_left);
+            printf("\n");
             fflush(stdout);
         }
     }
@@ -339,7 +353,8 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
             mask.layer = next;
             mask.code_bytes = (uint32_t)pj->code_size;
             mask.crc32 = pj->crc;
-            mask.exposure_ms = pj->exposure_ms[next - 1];
+            mask.exposure_ms = !in_place && next == first && pa->exposure_left ? (uint32_t)pa->exposure_left
+                                                                               : pj->exposure_ms[next - 1];
             if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask))) || (rc = job_send_begin(pj))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
@@ -353,7 +368,11 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
             *mask_bytes += chunk;
             continue;
         }
-        if ((rc = serial_pump(l, 20))) return rc;
+        if (may_be_lit(&l->st) && now_ms() - lit_asked > LIT_POLL_MS) {
+            if ((rc = serial_ask_status(l))) return rc;
+            lit_asked = now_ms();
+        }
+        if ((rc = serial_pump(l, may_be_lit(&l->st) ? LIT_POLL_MS : 20))) return rc;
     }
 }
 
@@ -410,6 +429,9 @@ static void print_usage(FILE *f)
           "                        place, giving only the light the layer still owes;\n"
           "                        a printer that lost the job (restarted) or Z's home\n"
           "                        (a fault) needs --home\n"
+          "  --exposure-left MS    with --resume-from K: the light layer K still owes,\n"
+          "                        as the message after a stop mid-exposure gives it\n"
+          "                        (a print resumed in place gets the printer's own)\n"
           "  --home                home Z before resuming if it is not homed. WARNING:\n"
           "                        homing drives the platform down to the endstop, into\n"
           "                        the vat and the half-built part: clear it first\n"
@@ -444,6 +466,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--report")) rc = file_option(argc, argv, &i, &pa->report);
         else if (!strcmp(o, "--baud")) { if (!(rc = count_option(argc, argv, &i, 4000000, &n))) pa->baud = (long)n; }
         else if (!strcmp(o, "--resume-from")) rc = count_option(argc, argv, &i, UINT32_MAX, &pa->resume_from);
+        else if (!strcmp(o, "--exposure-left")) rc = count_option(argc, argv, &i, UINT32_MAX, &pa->exposure_left);
         else if (!strcmp(o, "--give-up")) rc = number_option(argc, argv, &i, 0, &pa->give_up_s);
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
         else if (!strcmp(o, "--home")) pa->home = 1;
@@ -453,6 +476,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     }
     if (rc) return rc;
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
+    if (pa->exposure_left && !pa->resume_from) return complain(RC_USAGE, "--exposure-left: the light of the layer --resume-from K names");
     return RC_OK;
 }
 
@@ -605,9 +629,11 @@ static int end_emulator(serial_link *l)
     uint8_t code[LINK_SIZE_EXIT];
     link_exit m = {0};
     double asked = now_ms();
-    int rc = serial_send(l, LINK_MSG_EXIT, code, link_put_exit(code, &m));
+    int rc;
+    l->ending = 1;
+    rc = serial_send(l, LINK_MSG_EXIT, code, link_put_exit(code, &m));
     while (!rc && l->count && now_ms() - asked < 1000 && !serial_pump(l, 20)) {}
-    return rc;
+    return l->gone ? RC_OK : rc;
 }
 
 static int is_dir(const char *path)
@@ -689,6 +715,11 @@ int cmd_print(int argc, char **argv)
     }
     if (pa.resume_from > pj.layers) {
         rc = complain(RC_USAGE, "--resume-from %zu: the plan has %u layer%s", pa.resume_from, pj.layers, plural(pj.layers));
+        goto done;
+    }
+    if (pa.exposure_left > (pa.resume_from ? pj.exposure_ms[pa.resume_from - 1] : 0)) {
+        rc = complain(RC_USAGE, "--exposure-left %zu: layer %zu's exposure is %u ms", pa.exposure_left, pa.resume_from,
+                      pj.exposure_ms[pa.resume_from - 1]);
         goto done;
     }
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }

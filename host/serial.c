@@ -60,7 +60,7 @@ static int printing(const link_status *s) { return s->state == LINK_STATE_PRINTI
 int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept)
 {
     const link_status *s = &l->st;
-    char phase[40] = "";
+    char phase[40] = "", owed[96] = "", left[40] = "";
     if (!at_layer)
         return complain(rc, "the printer on %s %s while %s, before this run exposed a layer: Z must be homed before "
                             "printing again: clear the platform and print again (a --resume-from needs --home)",
@@ -69,12 +69,35 @@ int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer,
     if (z_kept)
         return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed; continue with "
                             "--resume-from %u", l->dev, what, s->layer, phase, s->exposed, s->exposed + 1);
+    /* A layer cut short owes the light the last STATUS said was left: never
+       less, and more by at most the light since that STATUS was made, which
+       went out by now (a restart, a printer without power) or the printer
+       holds the rest itself (paused by the lost link: resumed in place).
+       Rounded up to the ms as the printer rounds. */
+    if (printing(s) && s->exposure_left_ms && s->layer == s->exposed + 1) {
+        double since = s->flags & LINK_FLAG_UV ? now_ms() - l->st_after : 0;
+        snprintf(owed, sizeof owed, ", layer %u owes %u ms of its light (or up to %.0f ms less)", s->layer,
+                 s->exposure_left_ms, ceil(since) + 1);
+        snprintf(left, sizeof left, " --exposure-left %u", s->exposure_left_ms);
+    }
     /* a printer that lost only the line pauses itself and keeps Z homed:
        the same command resumes it in place */
-    return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed; Z must be homed before "
-                        "printing again%s: clear the platform, then continue with --resume-from %u --home%s",
-                    l->dev, what, s->layer, phase, s->exposed, rc == RC_LOST ? " (unless the printer kept the print paused)" : "",
-                    s->exposed + 1, rc == RC_LOST ? ", which resumes a paused print in place" : "");
+    return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed%s; Z must be homed before "
+                        "printing again%s: clear the platform, then continue with --resume-from %u --home%s%s",
+                    l->dev, what, s->layer, phase, s->exposed, owed,
+                    rc == RC_LOST ? " (unless the printer kept the print paused)" : "", s->exposed + 1, left,
+                    rc == RC_LOST ? ", which resumes a paused print in place" : "");
+}
+
+/* The port went away (an adapter unplugged, the emulator gone): as a
+   printer that stopped answering, which may still hold the print paused. */
+static int serial_gone(serial_link *l, const char *doing, int err)
+{
+    char what[96];
+    l->gone = 1;
+    if (l->ending) return RC_LOST; /* EXIT sent: the emulator went, and its port with it */
+    snprintf(what, sizeof what, "went away (%s the port: %s)", doing, err ? strerror(err) : "it hung up");
+    return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
 }
 
 /* The printer answered nothing for `ms` while the host waited (`how`). */
@@ -115,8 +138,7 @@ static int serial_write(serial_link *l, const uint8_t *data, size_t size)
             moved = now_ms();
             continue;
         }
-        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
-            return complain(RC_FAIL, "writing %s: %s", l->dev, strerror(errno));
+        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return serial_gone(l, "writing", errno);
         /* the printer's silence, as serial_pump would find it, or the line's;
            waiting here is waiting for the printer, not time away */
         l->last_looked = now_ms();
@@ -147,12 +169,6 @@ static int serial_resend_all(serial_link *l)
         f[n - 2] = (uint8_t)crc;
         if ((rc = serial_write(l, f, n))) return rc;
     }
-    /* a round counts towards giving up only if, since the last one, the
-       printer answered with an acknowledgement outside the frames in flight:
-       a numbering this host did not give (a lossy line or a dead one is the
-       silence timer's: their acknowledgements stay in the window) */
-    if (l->stray) l->stalled++;
-    l->stray = 0;
     l->retransmits += (unsigned long)l->count;
     l->last_progress = now_ms();
     l->clean = 0;
@@ -165,16 +181,20 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
     const uint8_t *p = f + 3;
     size_t size = n - LINK_FRAME_MIN;
     uint8_t ack = f[1], acked = (uint8_t)(ack - l->base);
-    /* every reply acknowledges what came before ack */
-    if (acked > l->count) l->stray = 1;
+    /* every reply acknowledges what came before ack; one outside the frames
+       in flight is of a numbering this host did not give (the line's damage
+       and loss never make one: acknowledgements come in order) */
+    if (l->count && acked > l->count) l->stray = 1;
     if (acked && acked <= l->count) {
         memmove(l->frames[0], l->frames[acked], (size_t)(l->count - acked) * sizeof l->frames[0]);
         memmove(l->lens, l->lens + acked, (size_t)(l->count - acked) * sizeof l->lens[0]);
         memmove(l->work_ms, l->work_ms + acked, (size_t)(l->count - acked) * sizeof l->work_ms[0]);
+        l->acked_sent = l->sent_ms[acked - 1];
+        memmove(l->sent_ms, l->sent_ms + acked, (size_t)(l->count - acked) * sizeof l->sent_ms[0]);
         l->count -= acked;
         l->base = ack;
         l->last_progress = now_ms();
-        l->stalled = l->rehellos = 0;
+        l->rehellos = 0;
         l->clean += acked;
         if (l->clean >= 32 && l->data_max < LINK_PAYLOAD_MAX) {
             l->data_max = l->data_max * 2 > LINK_PAYLOAD_MAX ? LINK_PAYLOAD_MAX : l->data_max * 2;
@@ -197,6 +217,7 @@ static void take_reply(serial_link *l, const uint8_t *f, size_t n)
         if (!link_get_status(&st, p, size)) break;
         if (l->boot_id && st.boot_id != l->boot_id) { l->new_boot_id = st.boot_id; break; }
         l->st = st;
+        l->st_after = l->acked_sent;
         l->status_count++;
         l->status_ack = ack;
         break;
@@ -223,8 +244,9 @@ static int serial_read(serial_link *l, int wait_ms)
     struct pollfd p = {l->fd, POLLIN, 0};
     if (poll(&p, 1, wait_ms) > 0) {
         ssize_t n = read(l->fd, buf, sizeof buf), i;
-        if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO)
-            return complain(RC_FAIL, "reading %s: %s", l->dev, strerror(errno));
+        if (n < 0 && errno != EAGAIN && errno != EINTR) return serial_gone(l, "reading", errno);
+        /* a port hung up reads nothing, at once, for ever */
+        if (n <= 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL))) return serial_gone(l, "reading", 0);
         for (i = 0; i < n; i++) {
             size_t m;
             link_deframe_push(&l->rx, buf[i]);
@@ -249,12 +271,13 @@ static int serial_restarted(const serial_link *l)
     return serial_stopped(l, RC_RESET, what, printing(&l->st), 0);
 }
 
-/* For SERIAL_STALL_ROUNDS rounds nothing advanced the acknowledged number
-   and the printer acknowledged numbers this host never sent: a restarted
-   MCU answers every frame with a NAK or an ACK of its own count, each of
-   which restarts the silence timer. HELLO asks who is there. It carries
-   base - 1, so an MCU that did not restart but lost the numbering expects
-   `base` next, and the frames in flight stay valid. */
+/* The printer acknowledged a number this host never sent: a restarted MCU
+   answers every frame with a NAK or an ACK of its own count (each of which
+   restarts the silence timer), and one that another host said HELLO to
+   counts from that host's numbers. HELLO asks who is there, at once, so
+   that a restart is known within a round trip of the first frame it
+   answered. It carries base - 1, so an MCU that did not restart but lost
+   the numbering expects `base` next, and the frames in flight stay valid. */
 static int serial_rehello(serial_link *l)
 {
     uint8_t payload[LINK_SIZE_HELLO], frame[LINK_FRAME_MAX];
@@ -267,10 +290,8 @@ static int serial_rehello(serial_link *l)
     n = link_frame_build(frame, (uint8_t)(l->base - 1), LINK_MSG_HELLO, payload, link_put_hello(payload, &m));
     while (l->identify_count == seen && !l->new_boot_id) {
         if (now_ms() - start > 2000) {
-            char what[96];
-            snprintf(what, sizeof what, "stopped answering (no IDENTIFY to HELLO in 2 s, after %u resend rounds out of step)",
-                     l->stalled);
-            return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
+            return serial_stopped(l, RC_LOST, "stopped answering (no IDENTIFY to HELLO in 2 s, after acknowledgements out "
+                                              "of step)", printing(&l->st), 0);
         }
         if (now_ms() - sent > 250) {
             if ((rc = serial_write(l, frame, n))) return rc;
@@ -279,12 +300,11 @@ static int serial_rehello(serial_link *l)
         if ((rc = serial_read(l, 20))) return rc;
     }
     if (l->new_boot_id) return serial_restarted(l);
-    if (++l->rehellos > 1) {
-        char what[80];
-        snprintf(what, sizeof what, "takes no frame (%u resend rounds without progress after a HELLO)", SERIAL_STALL_ROUNDS);
-        return serial_stopped(l, RC_LOST, what, printing(&l->st), 0);
-    }
-    l->stalled = 0;
+    if (++l->rehellos > 1)
+        return serial_stopped(l, RC_LOST, "takes no frame (out of step again after a HELLO, without progress)",
+                              printing(&l->st), 0);
+    /* what came out of step before the HELLO's answer is answered by it */
+    l->stray = 0;
     return serial_resend_all(l);
 }
 
@@ -305,7 +325,7 @@ int serial_pump(serial_link *l, int wait_ms)
     /* what arrived was read first: a reply the host was too busy to read is not silence */
     if (l->count && t - l->waiting_since > serial_bound(l)) return serial_silent(l, "nothing", t - l->waiting_since);
     if (l->count && t - l->last_progress > l->rto_ms + serial_work(l) && (rc = serial_resend_all(l))) return rc;
-    if (l->stalled >= SERIAL_STALL_ROUNDS) return serial_rehello(l);
+    if (l->stray) return serial_rehello(l);
     return RC_OK;
 }
 
@@ -318,6 +338,7 @@ static int serial_send_work(serial_link *l, uint8_t type, const uint8_t *payload
         if ((rc = serial_pump(l, 20))) return rc;
     l->lens[l->count] = link_frame_build(l->frames[l->count], l->next_seq, (uint8_t)(type | l->round), payload, size);
     l->work_ms[l->count] = work_ms;
+    l->sent_ms[l->count] = now_ms();
     if (!l->count) l->last_progress = l->waiting_since = now_ms();
     rc = serial_write(l, l->frames[l->count], l->lens[l->count]);
     l->count++;
@@ -363,6 +384,13 @@ int serial_status(serial_link *l)
             return RC_OK;
         }
     }
+}
+
+int serial_ask_status(serial_link *l)
+{
+    if ((uint8_t)(l->asked_seq - l->base) < (uint8_t)l->count) return RC_OK;
+    l->asked_seq = l->next_seq;
+    return serial_send(l, LINK_MSG_STATUS, NULL, 0);
 }
 
 static int serial_hello(serial_link *l)

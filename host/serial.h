@@ -21,6 +21,7 @@ typedef struct serial_link {
     /* what each frame in flight asks of the printer before it answers (a
        mask frame's rows), ms: the resend and silence timers allow it */
     double work_ms[SERIAL_QUEUE];
+    double sent_ms[SERIAL_QUEUE];   /* when each was first sent */
     double rto_ms, last_progress;
     /* A printer that answers nothing for silent_ms while the host waits for
        it (frames in flight) has stopped: the firmware answers every frame
@@ -35,6 +36,12 @@ typedef struct serial_link {
     link_status st;
     unsigned long status_count, identify_count, plan_count;
     uint8_t status_ack;         /* the acknowledgement l->st came with */
+    /* l->st was made after this (ms): the first sending of the newest
+       frame it acknowledges, which the printer had taken before it answered */
+    double st_after, acked_sent;
+    uint8_t asked_seq;          /* serial_ask_status's last request */
+    int ending;                 /* EXIT sent: the port may go with the emulator */
+    int gone;                   /* the port went away (RC_LOST said, unless ending) */
     link_identify id;
     uint8_t plan[LINK_FRAME_MAX];
     size_t plan_size;
@@ -48,17 +55,13 @@ typedef struct serial_link {
     /* resets: IDENTIFY's boot id at connect; a reply from another boot is
        not taken (l->st stays what the old boot said last) */
     uint32_t boot_id, new_boot_id;
-    /* resend rounds in which the acknowledged number did not advance and
-       the printer acknowledged a number outside the frames in flight (as a
-       restarted MCU does); the re-HELLOs that followed them without progress */
-    unsigned stalled, rehellos;
+    /* the printer acknowledged a number outside the frames in flight (as a
+       restarted MCU does); the re-HELLOs that followed such without progress */
     int stray;
+    unsigned rehellos;
     int failed;                 /* a resend in a reply's handling failed (and said so): its code */
 } serial_link;
 
-/* Resend rounds without progress, the printer answering out of step, after
-   which the host says HELLO again to learn whether it restarted. */
-#define SERIAL_STALL_ROUNDS 8
 /* A MASK_DATA frame is answered once decoded, a slice a pass, and one frame
    can hold a whole mask (an empty one is two bytes): the host allows the
    bytes of rows' CRC a frame asks (serial_send_mask_data) at this pace,
@@ -85,15 +88,20 @@ void serial_close(serial_link *l);
 /* Reads what has arrived (waiting up to wait_ms), resends on a timeout. A
    printer that answers nothing for silent_ms (see above) while
    frames wait, or a line that takes no byte that long, ends it with
-   RC_LOST; a reply with another boot id, or SERIAL_STALL_ROUNDS resend
-   rounds without progress and then an IDENTIFY with another boot id, with
-   RC_RESET; no answer to that HELLO with RC_LOST. Each complaint is one
+   RC_LOST; a reply with another boot id, or an acknowledgement out of step
+   and then an IDENTIFY with another boot id, with RC_RESET; no answer to
+   that HELLO with RC_LOST; a port that goes away (an error reading or
+   writing it: EIO, ENODEV, a hangup) with RC_LOST. Each complaint is one
    line made by serial_stopped. */
 int serial_pump(serial_link *l, int wait_ms);
 /* The one line for a print the printer ended or lost (rc returned): `what`
    happened ("restarted (boot id 1 -> 2)"); at_layer: l->st's layer and
    the last fully exposed are where the print stands, and it continues at
-   the layer after that one; z_kept: Z is still homed, so no --home. */
+   the layer after that one; z_kept: Z is still homed, so no --home. A
+   layer cut short mid-exposure (l->st lit, or paused with light owed) is
+   named with the light l->st said it owes (--exposure-left), and how much
+   less it may owe: the time since l->st was made (st_after), had the
+   light stayed on that long. */
 int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept);
 /* Queues a frame, waiting while the printer's window is full. */
 int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t size);
@@ -104,6 +112,9 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
 int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t crc_bytes);
 /* A fresh STATUS in l->st: asked again if its reply is lost. */
 int serial_status(serial_link *l);
+/* A STATUS asked for and not waited for, unless the one asked so before
+   is still unanswered: its reply lands in l->st as it comes. */
+int serial_ask_status(serial_link *l);
 /* Asks for STATUS until `done` holds; after timeout_ms, RC_FAIL and "the
    printer did not <what> in N s". */
 int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms,

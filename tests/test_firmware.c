@@ -380,13 +380,16 @@ static void thousand_layers_without_drift(void)
 }
 
 /* Pause takes the UV off at once and keeps the rest of the exposure; a
-   silent host pauses the print by itself; resume finishes the layer. */
+   silent host pauses the print by itself; resume finishes the layer. STATUS
+   gives the light still owed, rounded up to the ms, while the layer exposes
+   (what a host that loses the printer then resumes with) and once paused. */
 static void pause_and_link_loss(void)
 {
     static fake_printer p;
     static uint8_t image[8], code[64];
     uint8_t lengths[3] = {40, 40, 40};
-    uint64_t on = 0, total = 0;
+    uint64_t on = 0, total = 0, lit_at = 0, owed;
+    const uint64_t tick_ms = FAKE_TICK_HZ / 1000u;
     size_t n, k;
     uint32_t crc;
     int uv = 0;
@@ -400,9 +403,15 @@ static void pause_and_link_loss(void)
     start_print(&p, 1);
     send_mask(&p, 1, code, n, crc, 4000);
     while (fake_state(&p) == LINK_STATE_PRINTING && p.status.phase != LINK_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 100);
-    fake_run(&p, p.now + FAKE_TICK_HZ);
+    fake_run(&p, p.now + FAKE_TICK_HZ + tick_ms / 3); /* a part of a ms: the rounding shows */
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && (p.status.flags & LINK_FLAG_UV));
+    for (k = 0; k < p.event_count; k++) if (p.events[k].kind == ZEV_UV && p.events[k].value) lit_at = p.events[k].when;
+    owed = (lit_at + 4u * FAKE_TICK_HZ - p.now + tick_ms - 1u) / tick_ms;
+    CHECKF(lit_at && p.status.exposure_left_ms == owed, "exposing: %u ms left, the UV edge says %llu",
+           p.status.exposure_left_ms, (unsigned long long)owed);
     fake_send(&p, LINK_MSG_PAUSE, NULL, 0);
     CHECK(fake_state(&p) == LINK_STATE_PAUSED && !(p.status.flags & LINK_FLAG_UV));
+    CHECKF(p.status.exposure_left_ms == owed, "paused: %u ms left of %llu", p.status.exposure_left_ms, (unsigned long long)owed);
     fake_run(&p, p.now + 10ull * FAKE_TICK_HZ);
     fake_send(&p, LINK_MSG_RESUME, NULL, 0);
     send_mask(&p, 2, code, n, crc, 4000);

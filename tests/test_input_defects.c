@@ -281,6 +281,7 @@ static void too_large_counts_say_the_most(void)
         {"plan", "--budget", "4294967295"}, {"plan", "--res", "65536"},     {"slice", "--aa", "16"},
         {"slice", "--threads", "64"},       {"slice", "--bottom-layers", "4294967295"},
         {"orient", "--dirs", "1000000"},    {"print", "--baud", "4000000"}, {"print", "--resume-from", "4294967295"},
+        {"print", "--exposure-left", "4294967295"},
     };
     static const struct { const char *value, *says; } values[] = {
         {"99999999999", "too large, the most is"}, {"99999999999999999999999", "too large, the most is"},
@@ -403,6 +404,7 @@ static void binary_file_content_is_escaped(void)
 static const struct { const char *option, *value; } OPTION_VALUES[] = {
     {"-o", "@out"}, {"--3mf", "@x.3mf"}, {"--aa", "2"}, {"--alpha", "0.5"}, {"--baud", "115200"}, {"--bin", "0.002"},
     {"--bottom-exposure", "25"}, {"--bottom-layers", "3"}, {"--budget", "100"}, {"--dirs", "10"},
+    {"--exposure-left", "500 --resume-from 2"},
     {"--display", "68x120 --pixels 1440x2560"}, {"--eps", "0.065"}, {"--exposure S@T", "2.5@0.05"},
     {"--exposure S1@T1,S2@T2", "2@0.05,6@0.15"}, {"--format", "dir"}, {"--give-up", "30"}, {"--map", "@map.svg"},
     {"--mapping", "exp"}, {"--memory", "4000"}, {"--method", "greedy"}, {"--metric", "area"}, {"--mirror", "x"},

@@ -17,6 +17,7 @@
 #include <signal.h>
 #include <stdint.h>
 #include <time.h>
+#include <termios.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 
@@ -270,16 +271,36 @@ static cli_result run_print(const char *port, const char *report)
                    "0.05", "--report", report, NULL);
 }
 
+/* HUPCL on the terminal `port` (through a descriptor of our own: the
+   simulator holds the pty open, so the setting stays): set it when `set`,
+   and return whether it is set, -1 if the terminal cannot be read. */
+static int port_hupcl(const char *port, int set)
+{
+    struct termios t;
+    int fd = open(port, O_RDWR | O_NOCTTY | O_NONBLOCK), on = -1;
+    if (fd < 0) return -1;
+    if (tcgetattr(fd, &t) == 0) {
+        if (set) { t.c_cflag |= HUPCL; (void)tcsetattr(fd, TCSANOW, &t); (void)tcgetattr(fd, &t); }
+        on = (t.c_cflag & HUPCL) != 0;
+    }
+    close(fd);
+    return on;
+}
+
 /* A whole print of the bundled hand over a pty: the printer plans, the host
-   agrees, every mask reaches the display intact. */
+   agrees, every mask reaches the display intact. The host leaves the port
+   without HUPCL (set before the print), so a later open raises no DTR edge
+   to reset a board whose USB bridge resets on it. */
 static void full_print_on_the_simulator(void)
 {
     child sim;
     cli_result r;
     if (!start_sim(&sim, cli_path("sim.log"), SIM_SPEED)) return;
+    CHECK(port_hupcl(sim.line + 4, 1) == 1);
     r = run_print(sim.line + 4, cli_path("report.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    CHECKF(port_hupcl(sim.line + 4, 0) == 0, "HUPCL is %d on the port after the print", port_hupcl(sim.line + 4, 0));
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0);
     cli_free(&r);
@@ -604,6 +625,152 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     }
     free(l.ev);
     print_report_free(&rep);
+}
+
+/* The MCU resets two fifths into layer 1's exposure of 2 s (fw-sim
+   --reset-in-exposure 1; --speed 1, so the MCU keeps the host's time): the
+   host exits 4 with one line naming the light layer 1 still owes, as its
+   last STATUS said, and how much less it may owe (the time since that
+   STATUS was made), and --resume-from 1 --home --exposure-left N. More than
+   the layer's exposure is refused (exit 2); that command homes and gives
+   layer 1 exactly N ms, so its light in the two pieces of the pins' record
+   is its 2 s, never less, more by at most the bound the host stated, not
+   the whole exposure again; the layers after it print as planned. */
+static void mcu_reset_mid_exposure_owes_only_the_rest(void)
+{
+    child sim;
+    const char *opts[] = {"--reset-in-exposure", "1", "--z-start", "1", NULL};
+    char port[256], left[16], *log, *line, *save = NULL;
+    const char *at;
+    unsigned owed = 0, less = 0, given = 0;
+    unsigned long long on = 0, pre = 0, post = 0, reset = 0, e;
+    cli_result r;
+    sim_log l;
+    print_report rep;
+    if (!start_sim_with(&sim, cli_path("sim15.log"), "1", opts)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+#define OWED_ARGS MODEL, "--scale", "3", "--port", port, "--exposure", "0.1", "--penetration", "0.1", "--bottom-layers", "1", \
+                  "--bottom-exposure", "2", "--peel", "0.5", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05"
+    r = cli_run("print", OWED_ARGS, NULL);
+    at = strstr(r.err, "layer 1 owes ");
+    CHECKF(r.status == 4 && cli_one_message(r.err) && strstr(r.err, "restarted (boot id ") && at &&
+               sscanf(at, "layer 1 owes %u ms of its light (or up to %u ms less)", &owed, &less) == 2 && owed && owed < 2000,
+           "after the reset: exit %d: %s", r.status, r.err);
+    at = strstr(r.err, "--resume-from 1 --home --exposure-left ");
+    CHECKF(at && sscanf(at + 39, "%u", &given) == 1 && given == owed, "the way on: %s", r.err);
+    cli_free(&r);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    r = cli_run("print", OWED_ARGS, "--resume-from", "1", "--home", "--exposure-left", "2001", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "layer 1's exposure is 2000 ms"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(left, sizeof left, "%u", owed);
+    r = cli_run("print", OWED_ARGS, "--resume-from", "1", "--home", "--exposure-left", left, "--report", cli_path("report15.json"),
+                NULL);
+#undef OWED_ARGS
+    CHECKF(r.status == 0 && strstr(r.out, "light it owes"), "the resume: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (check_case_failed()) return;
+    /* layer 1's light: the piece before the reset and the first after it */
+    log = cli_read(cli_path("sim15.log"));
+    for (line = log ? strtok_r(log, "\n", &save) : NULL; line; line = strtok_r(NULL, "\n", &save)) {
+        unsigned long long t;
+        char what[16], arg[16];
+        if (sscanf(line, "%llu %15s %15s", &t, what, arg) != 3) continue;
+        if (!strcmp(what, "reset")) {
+            CHECKF(!strcmp(arg, "pin") && on && !reset, "%s", line);
+            reset = t;
+            pre = t - on; /* the light goes out with the reset */
+            on = 0;
+        } else if (!strcmp(what, "uv") && arg[0] == '1') {
+            on = t;
+        } else if (!strcmp(what, "uv") && on && reset && !post) {
+            post = t - on;
+        }
+    }
+    free(log);
+    CHECK(read_sim_log(cli_path("sim15.log"), &l) && read_print_report(cli_path("report15.json"), &rep));
+    if (check_case_failed()) { free(l.ev); print_report_free(&rep); return; }
+    e = 2ull * l.tick_hz;
+    CHECKF(pre && post == (unsigned long long)owed * l.tick_hz / 1000u && post < e,
+           "layer 1: %llu ticks of light before the reset, %llu after (%u ms owed)", pre, post, owed);
+    CHECKF(pre + post >= e && pre + post <= e + (unsigned long long)less * l.tick_hz / 1000u,
+           "layer 1: %llu + %llu ticks of light for %llu, at most %u ms more", pre, post, e, less);
+    printf("    reset %.1f ms into layer 1's 2 s: %.1f ms more light after it, %.2f ms over (the host's bound %u ms)\n",
+           pre * 1e3 / l.tick_hz, post * 1e3 / l.tick_hz, ((double)pre + (double)post - (double)e) * 1e3 / l.tick_hz, less);
+    /* from the show of layer 2 on, every layer at its exact height with its light */
+    CHECK(rep.first == 1);
+    (void)check_record_from(&l, &rep, nth_show_from_end(&l, rep.layers - 1), 2);
+    free(l.ev);
+    print_report_free(&rep);
+}
+
+/* The port goes away mid-print (the relay between host and printer killed:
+   the host's end of its pty then reads and writes EIO, as an unplugged USB
+   adapter's does): the host ends at once with exit 5, as for a printer that
+   stopped answering, and one line naming the layer, the last fully exposed
+   and --resume-from K. The printer lost only the line: it pauses itself,
+   and that command on its own port resumes the print in place. */
+static void unplugged_port_ends_as_a_lost_printer(void)
+{
+    child sim, relay;
+    const char *faults[] = {NULL}, *extra[] = {CURE, NULL};
+    char port[256], *out, k[16], left[16];
+    const char *left_option = NULL; /* --exposure-left, if the line gives it */
+    const char *at;
+    unsigned layer = 0, exposed = 0, from = 0, lines = 0, n;
+    int status;
+    double gone, took;
+    pid_t pid;
+    cli_result r;
+    if (!start_relayed(&sim, &relay, cli_path("sim16.log"), cli_path("relay16.txt"), faults)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(relay.line + 4, extra, cli_path("print16.out"));
+    CHECK(wait_for_exposures(cli_path("sim16.log"), 4));
+    kill(relay.pid, SIGKILL);
+    gone = seconds_now();
+    status = wait_exit(pid, 30);
+    took = seconds_now() - gone;
+    child_stop(&relay);
+    out = cli_read(cli_path("print16.out"));
+    for (at = out; at && (at = strstr(at, "adaslice: ")) != NULL; at++) lines++;
+    at = out ? strstr(out, " went away (") : NULL;
+    CHECKF(status == 5 && took < 5 && lines == 1 && at, "unplugged: exit %d %.2f s after, %u messages: %s", status, took, lines,
+           out ? out : "");
+    at = at ? strstr(at, ") at layer ") : NULL;
+    CHECKF(at && sscanf(at, ") at layer %u", &layer) == 1 && (at = strstr(at, ": layer ")) &&
+               sscanf(at, ": layer %u was the last fully exposed", &exposed) == 1 && (at = strstr(at, "--resume-from ")) &&
+               sscanf(at, "--resume-from %u --home", &from) == 1 && layer >= 3 && from == exposed + 1 &&
+               (layer == exposed || layer == exposed + 1),
+           "the layers: %s", out ? out : "");
+    if (at && (at = strstr(at, "--exposure-left ")) && sscanf(at, "--exposure-left %u", &n) == 1) {
+        snprintf(left, sizeof left, "%u", n);
+        left_option = "--exposure-left";
+    }
+    printf("    unplugged at layer %u: exit %d %.2f s after\n", layer, status, took);
+    free(out);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    sleep_ms(2000); /* the printer's link timeout, 1 s, twice */
+    /* the printer went on until that timeout, with the mask it had: the
+       resume names the layer it reached, and the command then resumes it */
+    for (n = 0; n < 2; n++) {
+        const char *said;
+        snprintf(k, sizeof k, "%u", from);
+        r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed",
+                    "10", "--settle", "0.05", "--resume-from", k, "--home", "--report", cli_path("report16.json"), left_option,
+                    left, NULL);
+        said = strstr(r.err, ": resume from ");
+        if (n == 0 && r.status == 2 && said && sscanf(said, ": resume from %u", &from) == 1 && from > exposed + 1) {
+            left_option = NULL;
+            cli_free(&r);
+            continue;
+        }
+        CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume from %s: exit %d: %s %s", k, r.status, r.out, r.err);
+        cli_free(&r);
+        break;
+    }
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_resumed_in_place(cli_path("sim16.log"), cli_path("report16.json"), 0, 1);
 }
 
 /* The host's one line when the printer stopped answering: exit 5 within 5 s
@@ -1288,6 +1455,8 @@ void test_print(void)
     RUN(ctrl_c_pauses_and_resume_finishes);
     RUN(host_killed_mid_exposure_resumes_in_place);
     RUN(mcu_reset_mid_print_on_the_simulator);
+    RUN(mcu_reset_mid_exposure_owes_only_the_rest);
+    RUN(unplugged_port_ends_as_a_lost_printer);
     RUN(mcu_halted_mid_exposure_on_the_simulator);
     RUN(mcu_halted_while_homing_or_planning);
     RUN(aborted_print_resumes);

@@ -22,8 +22,9 @@
                                          the process stops itself (SIGSTOP)
        <tick> late                       the step timer could not be armed
                                          (--late-step-after-exposure)
-       <tick> reset watchdog|signal      the MCU restarts: the watchdog was not
-                                         refreshed, or SIGUSR1 (a reset button)
+       <tick> reset watchdog|signal|pin  the MCU restarts: the watchdog was not
+                                         refreshed, SIGUSR1 (a reset button), or
+                                         --reset-in-exposure
 
    Time is virtual: 10 MHz ticks, running --speed times faster than the wall
    clock, so tests can print with real exposure times in a fraction of the
@@ -85,6 +86,7 @@ static const char USAGE[] =
     "  --stop-at-state S     the MCU halts (the process stops itself, SIGSTOP: nothing\n"
     "                        read or sent, no timer) when its print state first becomes S\n"
     "                        (link/messages.h: 1 homing, 3 planning, 5 printing) (tests) [never]\n"
+    "  --reset-in-exposure N the MCU resets two fifths into the Nth exposure (tests) [never]\n"
     "  --late-step-after-exposure N\n"
     "                        the first step after the Nth exposure cannot be armed in\n"
     "                        time: a STEP_LATE fault (tests)                  [never]\n"
@@ -97,7 +99,7 @@ typedef struct sim_options {
     unsigned long width, height, bits;
     double pitch_um, z_start, steps_per_mm, max_speed, accel, home_speed, z_max, home_travel;
     unsigned long max_bins, window, link_timeout_ms, watchdog_ms, boot_id;
-    unsigned long hang_at_exposure, late_after_exposure;
+    unsigned long hang_at_exposure, late_after_exposure, reset_in_exposure;
     long stop_at_state;
 } sim_options;
 
@@ -117,6 +119,8 @@ typedef struct sim {
     int hang;                    /* ... which has begun */
     long stop_at_state;          /* the MCU halts in this state (-1 never) */
     unsigned long late_after;    /* a step arm fails after this exposure (0 never) */
+    unsigned long reset_in;      /* the MCU resets during this exposure (0 never) ... */
+    uint64_t reset_at;           /* ... then, FW_NEVER before it begins */
     int32_t true_position;       /* steps above the endstop's switching point */
     uint8_t *display[2];
     size_t stride;               /* bytes per display row */
@@ -243,6 +247,7 @@ static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
     if (on) {
         s->uv_off_at = until;
         if (++s->exposures == s->hang_at) s->hang = 1;
+        if (s->exposures == s->reset_in) s->reset_at = when + (until - when) * 2u / 5u;
     } else if (s->uv_off_at == FW_NEVER) return; /* its timer put it out already */
     else if (when > s->now) { /* the timer puts it out */
         if (when < s->uv_off_at) s->uv_off_at = when;
@@ -364,7 +369,7 @@ static void restart(sim *s, fw_state *fw, const fw_port *port, uint64_t *workspa
         log_line(s, s->now, "motor 0");
         s->config.boot_id++;
     }
-    s->step_at = s->uv_off_at = FW_NEVER;
+    s->step_at = s->uv_off_at = s->reset_at = FW_NEVER;
     s->watchdog_at = s->watchdog_ticks ? s->now + s->watchdog_ticks : FW_NEVER;
     s->logged_state = s->logged_flags = -1;
     memset(workspace, 0, ws_bytes);
@@ -445,6 +450,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
     o->watchdog_ms = 250;
     o->hang_at_exposure = 0;
     o->late_after_exposure = 0;
+    o->reset_in_exposure = 0;
     o->stop_at_state = -1;
     o->boot_id = 0;
     for (i = 1; i < argc; i++) {
@@ -484,6 +490,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
         else if (!strcmp(opt, "--watchdog-ms")) ok = parse_whole(opt, v, 1, 3600000ul, &o->watchdog_ms);
         else if (!strcmp(opt, "--hang-at-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->hang_at_exposure);
         else if (!strcmp(opt, "--late-step-after-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->late_after_exposure);
+        else if (!strcmp(opt, "--reset-in-exposure")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->reset_in_exposure);
         else if (!strcmp(opt, "--stop-at-state")) {
             unsigned long st;
             ok = parse_whole(opt, v, 0, LINK_STATE_COUNT - 1, &st);
@@ -670,6 +677,7 @@ int main(int argc, char **argv)
     s.config.boot_id = opt.boot_id ? (uint32_t)opt.boot_id : (uint32_t)(time(NULL) ^ (getpid() << 16)) | 1u;
     s.hang_at = opt.hang_at_exposure;
     s.late_after = opt.late_after_exposure;
+    s.reset_in = opt.reset_in_exposure;
     s.stop_at_state = opt.stop_at_state;
     clock_speed = opt.speed;
     clock_gettime(CLOCK_MONOTONIC, &clock_start);
@@ -683,6 +691,7 @@ int main(int argc, char **argv)
         int r, timeout;
         uint64_t due = s.step_at < s.uv_off_at ? s.step_at : s.uv_off_at;
         if (s.watchdog_at < due) due = s.watchdog_at;
+        if (s.reset_at < due) due = s.reset_at;
         if (!hung && deadline < due) due = deadline;
         if (due < s.now) due = s.now; /* overdue: now, never back in time */
         s.now = clock_at_most(due);
@@ -697,8 +706,8 @@ int main(int argc, char **argv)
             fw_step_interrupt(&fw);
             continue;
         }
-        if (s.now >= s.watchdog_at || reset_signal) {
-            restart(&s, &fw, &port, workspace, ws_bytes, reset_signal ? "signal" : "watchdog");
+        if (s.now >= s.watchdog_at || s.now >= s.reset_at || reset_signal) {
+            restart(&s, &fw, &port, workspace, ws_bytes, reset_signal ? "signal" : s.now >= s.reset_at ? "pin" : "watchdog");
             reset_signal = 0;
             hung = s.hang = 0;
             s.hang_at = 0;
