@@ -265,7 +265,10 @@ static void print_progress(progress *bar, const print_job *pj, const link_status
 
 static int may_be_lit(const link_status *s)
 {
-    return s->state == LINK_STATE_PRINTING && !(s->flags & LINK_FLAG_MOVING);
+    /* not while the layer's mask still streams: STATUS requests would take
+       the window's frames from it (two on the RAMPS board) */
+    return s->state == LINK_STATE_PRINTING && !(s->flags & LINK_FLAG_MOVING) &&
+           (s->phase == LINK_PHASE_SETTLE || s->phase == LINK_PHASE_EXPOSE || s->mask_ready >= s->layer);
 }
 
 /* What was sent of each layer's mask (0 for layers not sent) */

@@ -15,7 +15,8 @@
        <cycle> show -1               no display on this board, so no CRC: 0)
        <cycle> reset                 the MCU reset (the watchdog): every pin an input
        <cycle> late                  the firmware could not arm a step in time (STEP_LATE)
-       <cycle> rx_eol                a line end from the host entered the UART
+       <cycle> rx_eol                a line end from the host entered the UART (at most
+                                     RX_AHEAD bytes ahead of the firmware reading them)
        <cycle> obstacle              SIGUSR1 put the obstacle of --obstacle-at in place
        <cycle> pass <cycles>         a loop pass of at least --log-passes cycles (with
                                      --profile-passes: ": function cycles ..." after it)
@@ -70,6 +71,13 @@
 #define UCSR0B_ADDR 0xC1u
 #define UCSR0B_RXEN 0x10u
 #define POLL_CYCLES 1000u /* between looks at the pty: < a byte at 115200 baud (1389 cycles) */
+/* USART0 RX's vector (ATmega2560 datasheet table 14-1: program address
+   $0032, in words): its interrupt taken is a byte the firmware got */
+#define RX_VECTOR 0x64u
+/* bytes handed to simavr's UART ahead of the firmware's reading them: its
+   input FIFO holds 64, which would hold a line end back 5 ms from the
+   part; two keep the line busy, as the real USART's buffer does */
+#define RX_AHEAD 2u
 
 static const char USAGE[] =
     "usage: avr-run [options] IMAGE.elf\n"
@@ -110,6 +118,7 @@ typedef struct run {
     unsigned long resets, late, uv_ons, hang_at_uv;
     int in_pass;
     uint64_t slept;              /* cycles the core spent asleep */
+    unsigned long rx_pushed, rx_taken; /* bytes into simavr's UART, RX interrupts taken */
 } run;
 
 static run R;
@@ -322,6 +331,7 @@ static void on_reset(void)
 {
     R.resets++;
     R.in_isr = 0;
+    R.rx_pushed = R.rx_taken; /* what the UART held is gone with it */
     log_event("reset");
     if (R.uv) { R.uv = 0; log_event("uv 0"); }
     if (R.step) { R.step = 0; log_event("step_end"); }
@@ -379,6 +389,7 @@ static void run_one(avr_t *avr)
         if (reti) R.in_isr = 0;
     }
     if (avr->pc != new_pc) {
+        if (avr->pc == RX_VECTOR) R.rx_taken++;
         R.in_isr = 1;
         R.isr_cycles += avr->cycle - c1;
     }
@@ -409,8 +420,9 @@ static void serve_pty(void)
     }
     /* only once the firmware has enabled the receiver (after each reset):
        simavr drops bytes a disabled UART gets */
-    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len) {
+    if (R.xon && (R.avr->data[UCSR0B_ADDR] & UCSR0B_RXEN) && R.in_at < R.in_len && R.rx_pushed - R.rx_taken < RX_AHEAD) {
         if (R.in[R.in_at] == '\n') log_event("rx_eol");
+        R.rx_pushed++;
         avr_raise_irq(R.uart_in, R.in[R.in_at++]);
     }
 }
