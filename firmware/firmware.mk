@@ -93,29 +93,37 @@ $(B)/bench-plan-mps2.elf: $(BENCH_PLAN_SRC) bench/mcu_profile.h $(FW_MPS2)/board
 	$(ARM_CC) $(FW_ARM_FLAGS) -I$(FW_MPS2) -T $(FW_MPS2)/mps2.ld $(BENCH_PLAN_SRC) -o $@ $(FW_ARM_LIBS)
 
 # The ATmega2560: board.h is force-included so that the core's row buffer
-# (FW_ROW_BYTES) follows the board's display. The stack is not in .bss here:
-# what is left of the 8 KiB is the stack's, and the simavr harness measures
-# its peak (avr-run prints stack_peak at exit).
+# (FW_ROW_BYTES) follows the board's display. The stack grows down from the
+# end of SRAM to the end of .bss; stack.ld has the link fail unless
+# FW_AVR_STACK bytes of it fit above the canary (ramps.c), as the Cortex-M3
+# scripts do with STACK_SIZE. The reserve is the deepest the simavr tests
+# measured (avr-run's stack_peak, from the canary up) and at least 128
+# bytes more: tests/test_avr.c fails when a run goes deeper than the
+# reserve less those 128.
 AVR_CC   ?= avr-gcc
 AVR_SIZE ?= avr-size
+AVR_NM   ?= avr-nm
 FW_RAMPS = firmware/ports/ramps
 FW_RAMPS_SRC = $(FW_RAMPS)/main.c $(FW_RAMPS)/ramps.c $(FW_CORE_SRC)
+FW_AVR_STACK = 600
 FW_AVR_FLAGS = -mmcu=atmega2560 -Os -std=c99 -Wall -Wextra -Wpedantic -Werror -ffunction-sections -fdata-sections \
-               -Wl,--gc-sections -I$(FW_RAMPS) -include $(FW_RAMPS)/board.h
+               -Wl,--gc-sections -I$(FW_RAMPS) -include $(FW_RAMPS)/board.h \
+               -Wl,--defsym=__stack_reserve=$(FW_AVR_STACK) $(FW_RAMPS)/stack.ld
 FW_AVR_RAM = 8192
-FW_RAMPS_TEST = -DBOARD_DISPLAY_W=240u -DBOARD_DISPLAY_H=200u -DBOARD_PITCH_NM=100000u -DRAMPS_TEST_HANG
+FW_RAMPS_TEST = -DBOARD_DISPLAY_W=240u -DBOARD_DISPLAY_H=200u -DBOARD_PITCH_NM=100000u -DRAMPS_TEST_HANG -DRAMPS_TEST_OVERRUN
+FW_RAMPS_DEPS = $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_RAMPS)/stack.ld $(FW_HDRS)
 
-$(B)/fw-ramps.elf: $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_HDRS)
+$(B)/fw-ramps.elf: $(FW_RAMPS_DEPS)
 	@mkdir -p $(B)
 	$(AVR_CC) $(FW_AVR_FLAGS) $(FW_RAMPS_SRC) -o $@
 
-$(B)/fw-ramps-test.elf: $(FW_RAMPS_SRC) $(FW_RAMPS)/board.h $(FW_HDRS)
+$(B)/fw-ramps-test.elf: $(FW_RAMPS_DEPS)
 	@mkdir -p $(B)
 	$(AVR_CC) $(FW_AVR_FLAGS) $(FW_RAMPS_TEST) $(FW_RAMPS_SRC) -o $@
 
 # The RAMPS bench image (make bench: bench/bench_avr.c runs it under avr-run):
 # motion.c's step computation and the planner, timed in cycles on the part.
-$(B)/avr-bench.elf: bench/avr_bench.c bench/mcu_profile.h firmware/motion.c firmware/adaslice_fw.c $(FW_RAMPS)/board.h $(FW_HDRS)
+$(B)/avr-bench.elf: bench/avr_bench.c bench/mcu_profile.h firmware/motion.c firmware/adaslice_fw.c $(FW_RAMPS)/board.h $(FW_RAMPS)/stack.ld $(FW_HDRS)
 	@mkdir -p $(B)
 	$(AVR_CC) $(FW_AVR_FLAGS) bench/avr_bench.c firmware/motion.c firmware/adaslice_fw.c -o $@
 

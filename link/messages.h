@@ -111,7 +111,8 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(BUSY, "busy")                             /* not in this state */                                             \
     S(PLAN_SIZE, "more bins than the printer takes")                                                                \
     S(MASK_EXPOSURE, "bad exposure")            /* a mask's exposure of 0 ms or over an hour */                     \
-    S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */
+    S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */               \
+    S(STACK, "the stack overran: halted until reset")    /* as STEP_LATE, and nothing lights or moves again */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,

@@ -109,6 +109,12 @@
 #ifndef __ASSEMBLER__
 #include <stdint.h>
 #include <stddef.h>
+/* The state a stack overrun must reach last (the tick's extension, the
+   step and UV compare state, the core's fw_state): at the start of .bss,
+   the far end of SRAM from the stack. The default avr6 linker script
+   places the input sections named exactly .bss before the .bss.* that
+   -fdata-sections makes; firmware.mk checks the image. */
+#define BOARD_SAFETY __attribute__((section(".bss")))
 /* ---- ramps.c ---------------------------------------------------------- */
 void board_init(void);
 uint32_t board_boot_count(void);          /* from EEPROM, counted at this boot */
@@ -139,6 +145,9 @@ void board_motor(int on);
    at `when` (on = 0; now if that has passed). */
 void board_uv(int on, uint64_t when, uint64_t until);
 uint8_t board_uv_lit(void);
+/* 0 once the stack has written over its canary (below its room) */
+int board_stack_ok(void);
+void board_test_overrun(void);            /* RAMPS_TEST_OVERRUN builds: the stack down to the canary */
 void board_show(int slot);
 void board_mask_row(void);
 #endif

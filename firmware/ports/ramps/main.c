@@ -21,7 +21,7 @@
    cycles, so the loop still drains the ring faster than it fills. */
 #define CHUNK 8u
 
-static fw_state fw;
+static fw_state fw BOARD_SAFETY; /* with the step queue and the light's state */
 static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 
 static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
@@ -88,6 +88,11 @@ int main(void)
            (which nothing else uses) to make the loop hang */
         if (GPIOR2 == 0xA5u) for (;;) {}
 #endif
+#ifdef RAMPS_TEST_OVERRUN
+        /* and 0x5A to make the stack overrun its room (once) */
+        if (GPIOR2 == 0x5Au) { GPIOR2 = 0; board_test_overrun(); }
+#endif
+        if (!board_stack_ok()) fw_stack_fault(&fw, board_ticks());
         n = board_rx_peek(&data);
         if (n) {
             if (n > CHUNK) n = CHUNK;
