@@ -105,7 +105,7 @@ AVR_SIZE ?= avr-size
 AVR_NM   ?= avr-nm
 FW_RAMPS = firmware/ports/ramps
 FW_RAMPS_SRC = $(FW_RAMPS)/main.c $(FW_RAMPS)/ramps.c $(FW_CORE_SRC)
-FW_AVR_STACK = 600
+FW_AVR_STACK = 640
 FW_AVR_FLAGS = -mmcu=atmega2560 -Os -std=c99 -Wall -Wextra -Wpedantic -Werror -ffunction-sections -fdata-sections \
                -Wl,--gc-sections -I$(FW_RAMPS) -include $(FW_RAMPS)/board.h \
                -Wl,--defsym=__stack_reserve=$(FW_AVR_STACK) $(FW_RAMPS)/stack.ld
@@ -128,16 +128,55 @@ $(B)/avr-bench.elf: bench/avr_bench.c bench/mcu_profile.h firmware/motion.c firm
 	$(AVR_CC) $(FW_AVR_FLAGS) bench/avr_bench.c firmware/motion.c firmware/adaslice_fw.c -o $@
 
 # flash = text + data (.data's image lives in flash), RAM = data + bss
-# (.bss includes the stack on the Cortex-M3 images).
-firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf
+# (.bss includes the stack on the Cortex-M3 images). On the ATmega2560
+# data + bss counts .noinit and the stack's canary (up to stack.ld's
+# __stack_low), the reserve is FW_AVR_STACK (the link refuses an image it
+# does not fit) and what is left is free SRAM beyond it; the state
+# BOARD_SAFETY places (ramps.c's tick, step and UV compare state, main.c's
+# fw_state) must lie below the planner's workspace, the far end of SRAM
+# from the stack.
+FW_AVR_SAFETY = last_ticks step_when step_state uv_state uv_target uv_on_at uv_off_at uv_shift uv_level uv_want fw
+FW_AVR_HEX = function hex(s,  v, i) { v = 0; for (i = 1; i <= length(s); i++) v = v * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1; return v }
+
+firmware: $(B)/fw-sim $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf ramps-3840
 	@for elf in $(B)/fw-mps2.elf $(B)/fw-stm32f103.elf; do \
 	    $(ARM_SIZE) $$elf | awk -v elf=$$elf -v max=$(FW_RAM_MAX) 'NR == 2 { \
 	        printf "%s: %d bytes of flash, %d bytes of RAM (of %d)\n", elf, $$1 + $$2, $$2 + $$3, max; \
 	        if ($$2 + $$3 > max) { print elf ": over the RAM budget"; exit 1 } }' || exit 1; \
 	done
 	@for elf in $(B)/fw-ramps.elf $(B)/fw-ramps-test.elf; do \
-	    $(AVR_SIZE) $$elf | awk -v elf=$$elf -v max=$(FW_AVR_RAM) 'NR == 2 { \
-	        printf "%s: %d bytes of flash, %d bytes of SRAM in data + bss (of %d), %d left for the stack\n", \
-	            elf, $$1 + $$2, $$2 + $$3, max, max - $$2 - $$3; \
-	        if ($$2 + $$3 > max) { print elf ": over the SRAM budget"; exit 1 } }' || exit 1; \
+	    flash=`$(AVR_SIZE) $$elf | awk 'NR == 2 { print $$1 + $$2 }'`; \
+	    $(AVR_NM) -S $$elf | awk -v elf=$$elf -v ram=$(FW_AVR_RAM) -v flash=$$flash -v safety="$(FW_AVR_SAFETY)" \
+	        '$(FW_AVR_HEX) \
+	        { at[$$NF] = hex($$1); if (NF == 4) end[$$NF] = hex($$1) + hex($$2) } \
+	        END { \
+	            used = at["__stack_low"] - at["__data_start"]; reserve = at["__stack_reserve"]; \
+	            if (!("__stack_low" in at) || !reserve) { print elf ": no stack reserve (stack.ld, FW_AVR_STACK)"; exit 1 } \
+	            printf "%s: %d bytes of flash; SRAM: %d in data, bss and the stack canary, %d reserved for the stack, %d left (of %d)\n", \
+	                elf, flash, used, reserve, ram - used - reserve, ram; \
+	            n = split(safety, name, " "); top = 0; \
+	            for (i = 1; i <= n; i++) { \
+	                if (!(name[i] in end)) { print elf ": no symbol " name[i] " (FW_AVR_SAFETY)"; exit 1 } \
+	                if (end[name[i]] > top) top = end[name[i]] } \
+	            if (top > at["plan_workspace"]) { print elf ": the tick, step and UV state is not below the planner workspace"; exit 1 } \
+	            printf "%s: the tick, step and UV state and fw_state end %d bytes below the stack'"'"'s room\n", \
+	                elf, at["__stack_low"] - top }' || exit 1; \
 	done
+
+# The largest display the issue names, 3840 x 2400: its row buffer is 160
+# bytes more than 2560's. The link either keeps the stack's reserve (then
+# `firmware` prints the margin) or refuses, saying why; anything else fails.
+.PHONY: ramps-3840
+ramps-3840: $(FW_RAMPS_DEPS)
+	@mkdir -p $(B)
+	@if $(AVR_CC) $(FW_AVR_FLAGS) -DBOARD_DISPLAY_W=3840u -DBOARD_DISPLAY_H=2400u $(FW_RAMPS_SRC) -o $(B)/fw-ramps-3840.elf \
+	        2> $(B)/fw-ramps-3840.log; then \
+	    $(AVR_NM) $(B)/fw-ramps-3840.elf | awk -v ram=$(FW_AVR_RAM) '$(FW_AVR_HEX) { at[$$3] = hex($$1) } END { \
+	        used = at["__stack_low"] - at["__data_start"]; reserve = at["__stack_reserve"]; \
+	        if (!reserve || used + reserve > ram) { print "a 3840 x 2400 RAMPS image linked without its stack reserve"; exit 1 } \
+	        printf "a 3840 x 2400 RAMPS image links: %d in data, bss and the canary, %d reserved for the stack, %d left\n", used, reserve, ram - used - reserve }'; \
+	elif grep -q "ATmega2560 SRAM: data + bss" $(B)/fw-ramps-3840.log; then \
+	    echo "a 3840 x 2400 RAMPS image is refused at link time:"; grep -o "ATmega2560 SRAM: .*" $(B)/fw-ramps-3840.log; \
+	else \
+	    cat $(B)/fw-ramps-3840.log; echo "a 3840 x 2400 RAMPS image failed to build"; exit 1; \
+	fi

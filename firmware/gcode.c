@@ -9,7 +9,16 @@ enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed ch
 #define MILLION 1000000u
 
 /* One reply line, sent with one write so a port can hand it to DMA whole;
-   the longest is the echo of a whole line. */
+   the longest is the echo of a whole line. A reply lives only in a
+   function that fills and sends it and calls nothing deeper than put_*
+   and send, kept out of line (REPLIES): an inlined one's buffer would stay
+   on the stack under every call its caller makes, and on an 8 KiB MCU
+   two at once are a good part of the stack. */
+#if defined(__GNUC__)
+#define REPLIES __attribute__((noinline))
+#else
+#define REPLIES
+#endif
 typedef struct reply {
     char b[FW_GCODE_LINE_MAX + 32];
     size_t n;
@@ -43,26 +52,44 @@ static uint32_t tenth(uint32_t u)
     return (uint32_t)((uint64_t)u * 0xCCCCCCCDu >> 32) >> 3;
 }
 
-/* u in decimal, at least `width` digits */
-static void put_digits(reply *r, uint32_t u, int width)
+/* Digits are put low first, then turned around in place: no buffer of
+   their own under the reply's. */
+static void turn(reply *r, size_t from)
 {
-    char d[10];
+    size_t to = r->n;
+    while (to > from + 1) {
+        char c = r->b[from];
+        r->b[from++] = r->b[--to];
+        r->b[to] = c;
+    }
+}
+
+/* u's digits low first, at least `width` of them */
+static void put_low_first(reply *r, uint32_t u, int width)
+{
     int k = 0;
     do {
         uint32_t q = tenth(u);
-        d[k++] = (char)('0' + (u - q * 10u));
+        put_char(r, (char)('0' + (u - q * 10u)));
         u = q;
+        k++;
     } while (u || k < width);
-    while (k) put_char(r, d[--k]);
+}
+
+/* u in decimal, at least `width` digits */
+static void put_digits(reply *r, uint32_t u, int width)
+{
+    size_t from = r->n;
+    put_low_first(r, u, width);
+    turn(r, from);
 }
 
 static void put_uint(reply *r, uint64_t u)
 {
-    char low[10];
-    int k = 0;
-    for (; u >> 32; u /= 10) low[k++] = (char)('0' + u % 10);
-    put_digits(r, (uint32_t)u, 1);
-    while (k) put_char(r, low[--k]);
+    size_t from = r->n;
+    for (; u >> 32; u /= 10) put_char(r, (char)('0' + u % 10));
+    put_low_first(r, (uint32_t)u, 1);
+    turn(r, from);
 }
 
 static void put_int(reply *r, int64_t v)
@@ -88,12 +115,12 @@ static void send(fw_gcode *g, reply *r)
     r->n = 0;
 }
 
-static void say(fw_gcode *g, const char *s)
+/* A fixed line: its newline is the literal's, so it goes out in one write
+   with no buffer (s must be a string literal). */
+#define say(g, s) say_line((g), "" s "\n", sizeof("" s))
+static void say_line(fw_gcode *g, const char *s, size_t n)
 {
-    reply r;
-    r.n = 0;
-    put(&r, s);
-    send(g, &r);
+    if (g->io.write) g->io.write(g->io.ctx, (const uint8_t *)s, n);
 }
 
 /* a * b / d, rounded down (round 0), to nearest (1) or up (2), without the
@@ -224,31 +251,30 @@ static int seen(const words *w, int letter)
 
 /* The value of `letter` in millionths; replies the Error: line and returns
    0 when it is malformed or out of range. *has: whether the word is there. */
-static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
+static REPLIES void letter_error(fw_gcode *g, const char *what, int letter)
 {
     reply r;
+    r.n = 0;
+    put(&r, what);
+    put_char(&r, (char)letter);
+    send(g, &r);
+}
+
+static void out_of_range(fw_gcode *g, int letter) { letter_error(g, "Error:Number out of range for ", letter); }
+
+static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
+{
     int k;
     *has = seen(w, letter);
     if (!*has) return 1;
     k = parse_fixed(g->line + w->at[letter - 'A'], w->len[letter - 'A'], v);
     if (k == 1) return 1;
-    r.n = 0;
-    put(&r, k < 0 ? "Error:Number out of range for " : "Error:Bad number for ");
-    put_char(&r, (char)letter);
-    send(g, &r);
+    if (k < 0) out_of_range(g, letter);
+    else letter_error(g, "Error:Bad number for ", letter);
     return 0;
 }
 
-static void out_of_range(fw_gcode *g, int letter)
-{
-    reply r;
-    r.n = 0;
-    put(&r, "Error:Number out of range for ");
-    put_char(&r, (char)letter);
-    send(g, &r);
-}
-
-static void line_error(fw_gcode *g, const char *what, int resend)
+static REPLIES void line_error(fw_gcode *g, const char *what, int resend)
 {
     reply r;
     r.n = 0;
@@ -271,13 +297,21 @@ static void motor(fw_gcode *g, int on)
     g->motor_on = (uint8_t)on;
 }
 
+static REPLIES void outside_limits(fw_gcode *g)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "Error:Z outside soft limits 0.000..");
+    put_milli(&r, mm_of_steps(g, g->axis->config.max_steps, 1000));
+    send(g, &r);
+}
+
 /* G0 / G1; 1: ok now, 0: start() sends it */
 static int move(fw_gcode *g, const words *w)
 {
     fw_axis *a = g->axis;
     int64_t z = 0, f = 0, target, steps;
     int has_z, has_f;
-    reply r;
     if (!number(g, w, 'Z', &z, &has_z) || !number(g, w, 'F', &f, &has_f)) return 1;
     if (has_f) {
         uint64_t speed;
@@ -292,10 +326,7 @@ static int move(fw_gcode *g, const words *w)
     target = (g->relative ? z_now(g) : 0) + z;
     steps = target < 0 ? -1 : steps_of_nm(g, target);
     if (steps < 0 || steps > a->config.max_steps) {
-        r.n = 0;
-        put(&r, "Error:Z outside soft limits 0.000..");
-        put_milli(&r, mm_of_steps(g, a->config.max_steps, 1000));
-        send(g, &r);
+        outside_limits(g);
         return 1;
     }
     /* started by start(), a piece of its own */
@@ -312,13 +343,25 @@ static void start(fw_gcode *g, uint64_t now)
     /* it waited for the axis to be idle; a fault in between unhomes it */
     int refused = fw_axis_move_to(g->axis, g->target, g->speed, now);
     if (refused) {
-        say(g, refused == FW_AXIS_NOT_HOMED ? "Error:Home Z first" : "Error:Axis busy");
+        if (refused == FW_AXIS_NOT_HOMED) say(g, "Error:Home Z first");
+        else say(g, "Error:Axis busy");
         g->wait = WAIT_NONE;
     } else {
         if (!g->motor_on) motor(g, 1);
         g->wait = WAIT_MOVE;
     }
     say(g, "ok");
+}
+
+/* the host was slower than the exposure: say by how much (ticks) */
+static REPLIES void ran_over(fw_gcode *g, uint64_t late)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "echo:Exposure ran over: G4 came ");
+    put_milli(&r, (int64_t)muldiv(late, 1000u * 1000u, g->axis->tick_hz, 0));
+    put(&r, " ms after its end");
+    send(g, &r);
 }
 
 /* G4; 1: ok now */
@@ -341,13 +384,7 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
         g->lit = 0;
         if (g->io.uv_end) g->io.uv_end(g->io.ctx, end);
         if (end <= now) {
-            /* the host was slower than the exposure: say by how much */
-            reply r;
-            r.n = 0;
-            put(&r, "echo:Exposure ran over: G4 came ");
-            put_milli(&r, (int64_t)muldiv(now - end, 1000u * 1000u, g->axis->tick_hz, 0));
-            put(&r, " ms after its end");
-            send(g, &r);
+            ran_over(g, now - end);
             return 1;
         }
     }
@@ -356,7 +393,7 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
     return 0;
 }
 
-static void report_position(fw_gcode *g)
+static REPLIES void report_position(fw_gcode *g)
 {
     reply r;
     r.n = 0;
@@ -367,7 +404,7 @@ static void report_position(fw_gcode *g)
     send(g, &r);
 }
 
-static void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
+static REPLIES void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
 {
     reply r;
     while (end > from && is_blank(b[end - 1])) end--;
@@ -528,11 +565,19 @@ static void run(fw_gcode *g, uint64_t now)
     if (ok) say(g, "ok");
 }
 
+static REPLIES void stopped_at(fw_gcode *g)
+{
+    reply r;
+    r.n = 0;
+    put(&r, "Error:Z move stopped at ");
+    put_milli(&r, mm_of_steps(g, g->axis->position, 1000));
+    send(g, &r);
+}
+
 /* What a move or homing left to say once the axis stands still. */
 static void finish(fw_gcode *g)
 {
     fw_axis *a = g->axis;
-    reply r;
     if (g->wait == WAIT_HOME) {
         if (a->homed && a->error == FW_AXIS_OK) {
             g->z_nm = mm_of_steps(g, a->position, MILLION);
@@ -542,10 +587,7 @@ static void finish(fw_gcode *g)
     } else if (a->position == g->target) {
         say(g, "Z_move_comp");
     } else {
-        r.n = 0;
-        put(&r, "Error:Z move stopped at ");
-        put_milli(&r, mm_of_steps(g, a->position, 1000));
-        send(g, &r);
+        stopped_at(g);
     }
     g->wait = WAIT_NONE;
 }

@@ -63,10 +63,12 @@
 #define BOARD_PITCH_NM 50000u
 #endif
 /* The planner's largest profile: 8 KiB of SRAM hold the core's state, the
-   planner's 3 KiB of rings and a byte per bin, the UART rings and the stack
-   (firmware.mk prints the figures). Larger parts are planned by the host. */
+   planner's 3 KiB of rings and a byte per bin, the UART rings and the
+   stack's reserve (the link refuses an image they do not fit; firmware.mk
+   prints the figures, make bench the largest that fits). Larger parts are
+   planned by the host. */
 #ifndef BOARD_MAX_BINS
-#define BOARD_MAX_BINS 1200u /* the stack peaked at 837 bytes under simavr (a binary print, make bench): 33 to spare */
+#define BOARD_MAX_BINS 1200u
 #endif
 /* A UART cannot hold the line: the receive ring takes the whole window. */
 #define BOARD_RX_SIZE 512u

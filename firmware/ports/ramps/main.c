@@ -43,11 +43,13 @@ static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, u
     board_mask_row();
 }
 
-int main(void)
+/* The board and the core started. Out of main: the config and port it
+   fills are copied by fw_init, and main's own frame stays under every
+   call of the loop. */
+static __attribute__((noinline)) void start(void)
 {
     fw_config config;
     fw_port port;
-    uint64_t deadline = 0;
     board_init();
     config.tick_hz = BOARD_CLOCK_HZ;
     config.axis.steps_per_mm = BOARD_STEPS_PER_MM;
@@ -78,6 +80,12 @@ int main(void)
     port.watchdog = port_watchdog;
     port.exit = NULL; /* a board does not end */
     fw_init(&fw, &config, &port, plan_workspace, sizeof plan_workspace);
+}
+
+int main(void)
+{
+    uint64_t deadline = 0;
+    start();
     for (;;) {
         const uint8_t *data;
         size_t n;
