@@ -423,10 +423,10 @@ static int mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 
 /* -------------------------------------------------------------------- print */
 
-/* On from `when` until `until`: the port's timer ends it, whatever the loop does. */
 static void say_halted(fw_state *fw);
 
-/* A halted core lights nothing, whoever asks (fw_stack_fault). */
+/* On from `when` until `until`: the port's timer ends it, whatever the loop
+   does. A halted core lights nothing, whoever asks (fw_stack_fault). */
 static void uv(fw_state *fw, int on, uint64_t when, uint64_t until)
 {
     if (on && fw->halted) { say_halted(fw); return; }

@@ -43,9 +43,9 @@ static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, u
     board_mask_row();
 }
 
-/* The board and the core started. Out of main: the config and port it
-   fills are copied by fw_init, and main's own frame stays under every
-   call of the loop. */
+/* The board and the core started; out of main, whose frame stays under
+   every call of the loop: the config and port are needed only until
+   fw_init has copied them. */
 static __attribute__((noinline)) void start(void)
 {
     fw_config config;
