@@ -52,44 +52,26 @@ static uint32_t tenth(uint32_t u)
     return (uint32_t)((uint64_t)u * 0xCCCCCCCDu >> 32) >> 3;
 }
 
-/* Digits are put low first, then turned around in place: no buffer of
-   their own under the reply's. */
-static void turn(reply *r, size_t from)
-{
-    size_t to = r->n;
-    while (to > from + 1) {
-        char c = r->b[from];
-        r->b[from++] = r->b[--to];
-        r->b[to] = c;
-    }
-}
-
-/* u's digits low first, at least `width` of them */
-static void put_low_first(reply *r, uint32_t u, int width)
-{
-    int k = 0;
-    do {
-        uint32_t q = tenth(u);
-        put_char(r, (char)('0' + (u - q * 10u)));
-        u = q;
-        k++;
-    } while (u || k < width);
-}
-
 /* u in decimal, at least `width` digits */
 static void put_digits(reply *r, uint32_t u, int width)
 {
-    size_t from = r->n;
-    put_low_first(r, u, width);
-    turn(r, from);
+    char d[10];
+    int k = 0;
+    do {
+        uint32_t q = tenth(u);
+        d[k++] = (char)('0' + (u - q * 10u));
+        u = q;
+    } while (u || k < width);
+    while (k) put_char(r, d[--k]);
 }
 
 static void put_uint(reply *r, uint64_t u)
 {
-    size_t from = r->n;
-    for (; u >> 32; u /= 10) put_char(r, (char)('0' + u % 10));
-    put_low_first(r, (uint32_t)u, 1);
-    turn(r, from);
+    char low[10];
+    int k = 0;
+    for (; u >> 32; u /= 10) low[k++] = (char)('0' + u % 10);
+    put_digits(r, (uint32_t)u, 1);
+    while (k) put_char(r, low[--k]);
 }
 
 static void put_int(reply *r, int64_t v)
@@ -249,8 +231,6 @@ static int seen(const words *w, int letter)
     return (int)(w->seen >> (letter - 'A') & 1u);
 }
 
-/* The value of `letter` in millionths; replies the Error: line and returns
-   0 when it is malformed or out of range. *has: whether the word is there. */
 static REPLIES void letter_error(fw_gcode *g, const char *what, int letter)
 {
     reply r;
@@ -262,6 +242,8 @@ static REPLIES void letter_error(fw_gcode *g, const char *what, int letter)
 
 static void out_of_range(fw_gcode *g, int letter) { letter_error(g, "Error:Number out of range for ", letter); }
 
+/* The value of `letter` in millionths; replies the Error: line and returns
+   0 when it is malformed or out of range. *has: whether the word is there. */
 static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
 {
     int k;
