@@ -35,9 +35,10 @@ FW_ARM_FLAGS = -mcpu=cortex-m3 -mthumb -Os -std=c99 -Wall -Wextra -Wpedantic -We
                -nostdlib -Wl,--gc-sections
 FW_ARM_LIBS  = -lgcc
 # 1536 bytes of stack (the linker scripts' default is 2048): the trace image
-# painted it and a print under QEMU (planned by the printer, masks
-# streaming, steps and replies from interrupts) went 992 bytes deep; the
-# rest of the 20 KiB holds the transmit ring. The canary still guards it.
+# paints it and reports how deep a print under QEMU (planned by the
+# printer, masks streaming, steps and replies from interrupts) went
+# (tests/test_qemu_timing.c prints it); the rest of the 20 KiB holds the
+# transmit ring. The canary still guards it.
 FW_ARM_FLAGS += -Wl,--defsym=STACK_SIZE=1536
 
 .PHONY: firmware
