@@ -424,7 +424,8 @@ static void run_one(avr_t *avr)
         R.isr_cycles += avr->cycle - c1;
     }
     if (P.cycles && R.in_pass) P.cycles[pc / 2 < P.f[P.n].addr ? P.at[pc / 2] : P.n] += avr->cycle - c0;
-    if (R.canary_state == 1 && memcmp(avr->data + R.canary_addr, R.canary, sizeof R.canary)) {
+    /* every instruction: two byte compares, not a call */
+    if (R.canary_state == 1 && (avr->data[R.canary_addr] != R.canary[0] || avr->data[R.canary_addr + 1] != R.canary[1])) {
         R.canary_state = 2;
         log_event("canary");
     }
