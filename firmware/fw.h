@@ -244,7 +244,8 @@ void fw_step_interrupt(fw_state *fw);
    passes): everything stops as after STEP_LATE (UV off, the steps dropped,
    Z unhomed, the motor off), STATUS reports error LINK_ERR_STACK and
    G-code mode says "Error:Printer halted", and the core stays halted
-   until reset: every frame but STATUS is refused with that error, the
+   until reset: every frame but HELLO and STATUS is refused with that
+   error, the
    light and Z stay off whatever G-code asks. */
 void fw_stack_fault(fw_state *fw, uint64_t now);
 #endif
