@@ -245,7 +245,6 @@ void fw_step_interrupt(fw_state *fw);
    Z unhomed, the motor off), STATUS reports error LINK_ERR_STACK and
    G-code mode says "Error:Printer halted", and the core stays halted
    until reset: every frame but HELLO and STATUS is refused with that
-   error, the
-   light and Z stay off whatever G-code asks. */
+   error, the light and Z stay off whatever G-code asks. */
 void fw_stack_fault(fw_state *fw, uint64_t now);
 #endif
