@@ -19,8 +19,8 @@
       and the longest wait for a reply (a whole mask decoding), and the
       frames the host sent again (resends while a mask decodes are waste).
    4. SRAM: the shipped image's data + bss (avr-size), the planner's share,
-      and the largest BOARD_MAX_BINS that still leaves the measured stack
-      peak free. */
+      and the largest BOARD_MAX_BINS that still leaves the stack its
+      reserve (stack.ld: the link refuses more) and the stack's canary. */
 #define _XOPEN_SOURCE 700
 #include "../firmware/motion.h"
 #include "../firmware/ports/ramps/board.h"
@@ -179,7 +179,7 @@ int main(int argc, char **argv)
         int *dir = NULL;
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
         long pos, start_steps = 0;
-        avr_passes ps = {0, 0, 0, 0, 0, 0};
+        avr_passes ps = {0, 0, 0, 0, 0, 0, 0, 0};
         double wall;
         if (print_hand(arg_test, log, "3", "5", NULL, &wall)) return 1;
         if (!(f = fopen(log, "r"))) { printf("bench_avr: FAILED: no log %s\n", log); return 1; }
@@ -235,7 +235,7 @@ int main(int argc, char **argv)
         /* 3. the shipped image, 2560 x 1440 */
         {
             const char *ship_log = "build/bench_avr_ship.log", *report = "build/bench_avr_ship.json";
-            avr_passes sp = {0, 0, 0, 0, 0, 0};
+            avr_passes sp = {0, 0, 0, 0, 0, 0, 0, 0};
             double longest = -1;
             long resent = -1;
             char *j, json[65536];
@@ -269,11 +269,12 @@ int main(int argc, char **argv)
                 pclose(p);
             }
             if (data + bss) {
-                long left = 8192L - (long)(data + bss) - (long)ps.stack;
+                long left = 8192L - (long)(data + bss) - 2L - (long)ps.reserve;
                 printf("SRAM (%s): %lu bytes data + bss of 8192, the planner %lu of them (BOARD_MAX_BINS %u: 3,072 of rings "
-                       "+ a byte a bin), %ld free beyond the measured stack peak: the largest BOARD_MAX_BINS that fits is %ld\n",
-                       arg_ship, data + bss, (unsigned long)(128u * 24u + BOARD_MAX_BINS + 1u), BOARD_MAX_BINS, left,
-                       (long)BOARD_MAX_BINS + left);
+                       "+ a byte a bin), %lu reserved for the stack (its peak measured %lu), %ld free beyond the reserve and "
+                       "the canary: the largest BOARD_MAX_BINS that links is %ld\n",
+                       arg_ship, data + bss, (unsigned long)(128u * 24u + BOARD_MAX_BINS + 1u), BOARD_MAX_BINS, ps.reserve,
+                       ps.stack, left, (long)BOARD_MAX_BINS + left);
             }
         }
     }

@@ -14,21 +14,47 @@ static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_
 static void fill_steps(fw_state *fw, uint64_t now);
 static void stop_dead(fw_state *fw, uint8_t error, uint64_t now);
 
+/* A function called once is inlined, its locals with it: the replies'
+   buffers are kept out of on_frame so that they are on the stack only
+   while one is made, one at a time. */
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+
 /* ------------------------------------------------------------------ replies */
+
+/* A reply goes to the port in pieces as it is made: its head (LEN, SEQ,
+   TYPE), the payload from where it was built, the CRC and sync byte. No
+   frame is assembled, so no frame-sized buffer sits on the stack. */
+static uint16_t reply_put(fw_state *fw, uint16_t crc, const uint8_t *data, size_t size)
+{
+    fw->port.write(fw->port.ctx, data, size);
+    return link_crc16_more(crc, data, size);
+}
+
+static uint16_t reply_begin(fw_state *fw, uint8_t type, size_t size)
+{
+    uint8_t head[3];
+    head[0] = (uint8_t)(size + LINK_FRAME_MIN);
+    head[1] = fw->expect;
+    head[2] = type;
+    return reply_put(fw, 0xffffu, head, sizeof head);
+}
+
+static void reply_end(fw_state *fw, uint16_t crc)
+{
+    uint8_t tail[3];
+    tail[0] = (uint8_t)(crc >> 8);
+    tail[1] = (uint8_t)crc;
+    tail[2] = LINK_SYNC;
+    fw->port.write(fw->port.ctx, tail, sizeof tail);
+}
 
 static void send(fw_state *fw, uint8_t type, const uint8_t *payload, size_t size)
 {
-    uint8_t frame[LINK_FRAME_MAX];
-    size_t n = link_frame_build(frame, fw->expect, type, payload, size);
-    if (n) fw->port.write(fw->port.ctx, frame, n);
-}
-
-/* The same for a payload built at frame + 3 (frame: LINK_FRAME_MAX bytes):
-   a long reply then takes one buffer of the stack, not two. */
-static void send_built(fw_state *fw, uint8_t *frame, uint8_t type, size_t size)
-{
-    size_t n = link_frame_build(frame, fw->expect, type, frame + 3, size);
-    if (n) fw->port.write(fw->port.ctx, frame, n);
+    if (size <= LINK_PAYLOAD_MAX) reply_end(fw, reply_put(fw, reply_begin(fw, type, size), payload, size));
 }
 
 /* nak: LINK_NAK | the round bit of the frame that showed the gap (PROTOCOL.md) */
@@ -53,7 +79,7 @@ static int32_t z_nm(const fw_state *fw)
     return (int32_t)(steps < 0 ? 0u - (uint32_t)nm : (uint32_t)nm);
 }
 
-static void send_identify(fw_state *fw)
+static FW_NOINLINE void send_identify(fw_state *fw)
 {
     uint8_t p[LINK_SIZE_IDENTIFY];
     const fw_config *c = &fw->config;
@@ -96,7 +122,7 @@ static FW_NOINLINE uint32_t exposure_left_ms(const fw_state *fw)
     return (uint32_t)((left * 1000u + hz - 1u) / hz);
 }
 
-static void send_status(fw_state *fw)
+static FW_NOINLINE void send_status(fw_state *fw)
 {
     uint8_t p[LINK_SIZE_STATUS_REPLY];
     link_status m;
@@ -302,19 +328,29 @@ static void plan_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
     if (fw->bins_in == fw->layers) { fw->receiving = 0; fw->plan_kind = 2; fw->state = LINK_STATE_READY; }
 }
 
-static void plan_get(fw_state *fw, const link_plan_get *m, uint8_t seq)
+/* The page's bins go out in pieces of this many as they are read. */
+#define FW_PLAN_PIECE 16u
+
+static FW_NOINLINE void plan_get(fw_state *fw, const link_plan_get *m, uint8_t seq)
 {
-    uint8_t frame[LINK_FRAME_MAX], *out = frame + 3;
-    uint32_t k;
+    uint8_t head[LINK_SIZE_PLAN], piece[FW_PLAN_PIECE];
+    uint32_t k, count = 0;
+    uint16_t crc;
     link_plan page;
-    size_t n;
+    size_t n = 0;
     if (!fw->plan_kind) { fail(fw, LINK_ERR_NO_PLAN, seq); send_ack(fw, 0); return; }
     page.first = m->first;
     page.layers = fw->layers;
     page.bin_nm = fw->bin_nm;
-    n = link_put_plan(out, &page);
-    for (k = m->first; k >= 1 && k <= fw->layers && n < LINK_PAYLOAD_MAX; k++) out[n++] = (uint8_t)layer_length(fw, k);
-    send_built(fw, frame, LINK_MSG_PLAN, n);
+    if (m->first >= 1 && m->first <= fw->layers) count = fw->layers - m->first + 1u;
+    if (count > LINK_PAYLOAD_MAX - LINK_SIZE_PLAN) count = LINK_PAYLOAD_MAX - LINK_SIZE_PLAN;
+    crc = reply_begin(fw, LINK_MSG_PLAN, LINK_SIZE_PLAN + count);
+    crc = reply_put(fw, crc, head, link_put_plan(head, &page));
+    for (k = m->first; k < m->first + count; k++) {
+        piece[n++] = (uint8_t)layer_length(fw, k);
+        if (n == sizeof piece || k + 1u == m->first + count) { crc = reply_put(fw, crc, piece, n); n = 0; }
+    }
+    reply_end(fw, crc);
 }
 
 /* -------------------------------------------------------------------- masks */
@@ -401,9 +437,13 @@ static int mask_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 
 /* -------------------------------------------------------------------- print */
 
-/* On from `when` until `until`: the port's timer ends it, whatever the loop does. */
+static void say_halted(fw_state *fw);
+
+/* On from `when` until `until`: the port's timer ends it, whatever the loop
+   does. A halted core lights nothing, whoever asks (fw_stack_fault). */
 static void uv(fw_state *fw, int on, uint64_t when, uint64_t until)
 {
+    if (on && fw->halted) { say_halted(fw); return; }
     fw->uv_on = (uint8_t)on;
     fw->port.uv(fw->port.ctx, on, when, until);
 }
@@ -599,8 +639,7 @@ static int can_move(const fw_state *fw)
 
 /* Kept out of fw_receive: a compiler inlines a function called once, and
    with it its locals, which would then sit under every G-code byte's call
-   into the G-code reader, the deepest the stack goes (on the AVR, 180 of
-   its 8 KiB). */
+   into the G-code reader. */
 static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint64_t now)
 {
     uint8_t seq = f[1], type = (uint8_t)(f[2] & ~LINK_ROUND_BIT), round = f[2] & LINK_ROUND_BIT;
@@ -632,6 +671,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         return;
     }
     fw->expect++;
+    if (fw->halted && type != LINK_MSG_STATUS) { fail(fw, LINK_ERR_STACK, seq); send_ack(fw, 0); return; }
     if (!link_payload_fits(type, size)) { fail(fw, LINK_ERR_MESSAGE, seq); send_ack(fw, 0); return; }
     switch (type) {
     case LINK_MSG_STATUS: send_status(fw); return;
@@ -922,6 +962,10 @@ static int fill(fw_state *fw, uint64_t now)
     uint8_t room = fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE;
     q->short_by = 0;
     if (q->late) return LINK_ERR_STEP_LATE;
+    if (fw->halted && fw_axis_busy(&fw->axis)) { /* G-code's G28: a halted core moves nothing */
+        fw_axis_stop(&fw->axis);
+        say_halted(fw);
+    }
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir, closed;
@@ -945,6 +989,23 @@ static int fill(fw_state *fw, uint64_t now)
         }
     }
     return 0;
+}
+
+/* G-code mode's word of the halt, at the fault and to each command that
+   would light or move (a binary host reads STATUS's error). */
+static void say_halted(fw_state *fw)
+{
+    if (!fw->binary) fw_gcode_say(&fw->gcode, FW_TEXT("Error:Printer halted: stack overrun"));
+}
+
+void fw_stack_fault(fw_state *fw, uint64_t now)
+{
+    if (fw->halted) return;
+    stop_dead(fw, 0, now);
+    uv(fw, 0, now, now); /* again: the light's own state may be what the stack overwrote */
+    fw->halted = 1;
+    fail(fw, LINK_ERR_STACK, 0);
+    say_halted(fw);
 }
 
 static void fill_steps(fw_state *fw, uint64_t now)

@@ -219,6 +219,7 @@ typedef struct fw_state {
     uint32_t job;              /* the job hash PRINT came with, 0 none */
     uint8_t uv_on;
     uint8_t exposing;          /* an EXPOSE message's light, until phase_end */
+    uint8_t halted;            /* fw_stack_fault: nothing lights or moves until reset */
     /* G-code mode, until a good frame arrives */
     fw_gcode gcode;
     uint8_t gcode_held[2 * FW_GCODE_LINE_MAX]; /* bytes G-code could not take yet */
@@ -239,4 +240,11 @@ uint64_t fw_run(fw_state *fw, uint64_t now);
 /* The step timer's interrupt, at the tick it was armed for: the step out
    (port.step_pulse), the timer armed for the next one or stopped. */
 void fw_step_interrupt(fw_state *fw);
+/* The port found its stack's canary overwritten (from its loop, between
+   passes): everything stops as after STEP_LATE (UV off, the steps dropped,
+   Z unhomed, the motor off), STATUS reports error LINK_ERR_STACK and
+   G-code mode says "Error:Printer halted", and the core stays halted
+   until reset: every frame but HELLO and STATUS is refused with that
+   error, the light and Z stay off whatever G-code asks. */
+void fw_stack_fault(fw_state *fw, uint64_t now);
 #endif

@@ -13,7 +13,18 @@ enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed ch
 #define MILLION 1000000u
 
 /* One reply line, sent with one write so a port can hand it to DMA whole;
-   the longest is the echo of a whole line. */
+   the longest is the echo of a whole line. A reply lives only in a
+   function that fills and sends it and calls nothing deeper than put_*,
+   the arithmetic and send, kept out of line (OUT_OF_LINE): an inlined
+   one's buffer would stay on the stack under every call its caller makes,
+   and on an 8 KiB MCU two at once are a good part of the stack. check()
+   and run() are kept out of line too: inlined into fw_gcode_run, its
+   branches outgrew the AVR's relative jumps (4 KB) and the link failed. */
+#if defined(__GNUC__)
+#define OUT_OF_LINE __attribute__((noinline))
+#else
+#define OUT_OF_LINE
+#endif
 typedef struct reply {
     char b[FW_GCODE_LINE_MAX + 32];
     size_t n;
@@ -99,7 +110,7 @@ static void send(fw_gcode *g, reply *r)
     r->n = 0;
 }
 
-void fw_gcode_say(fw_gcode *g, const char *s)
+OUT_OF_LINE void fw_gcode_say(fw_gcode *g, const char *s)
 {
     reply r;
     r.n = 0;
@@ -235,31 +246,30 @@ static int seen(const words *w, int letter)
 
 /* The value of `letter` in millionths; replies the Error: line and returns
    0 when it is malformed or out of range. *has: whether the word is there. */
-static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
+static OUT_OF_LINE void letter_error(fw_gcode *g, const char *what, int letter)
 {
     reply r;
+    r.n = 0;
+    put(&r, what);
+    put_char(&r, (char)letter);
+    send(g, &r);
+}
+
+static void out_of_range(fw_gcode *g, int letter) { letter_error(g, FW_TEXT("Error:Number out of range for "), letter); }
+
+static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
+{
     int k;
     *has = seen(w, letter);
     if (!*has) return 1;
     k = parse_fixed(g->line + w->at[letter - 'A'], w->len[letter - 'A'], v);
     if (k == 1) return 1;
-    r.n = 0;
-    put(&r, k < 0 ? FW_TEXT("Error:Number out of range for ") : FW_TEXT("Error:Bad number for "));
-    put_char(&r, (char)letter);
-    send(g, &r);
+    if (k < 0) out_of_range(g, letter);
+    else letter_error(g, FW_TEXT("Error:Bad number for "), letter);
     return 0;
 }
 
-static void out_of_range(fw_gcode *g, int letter)
-{
-    reply r;
-    r.n = 0;
-    put(&r, FW_TEXT("Error:Number out of range for "));
-    put_char(&r, (char)letter);
-    send(g, &r);
-}
-
-static void line_error(fw_gcode *g, const char *what, int resend)
+static OUT_OF_LINE void line_error(fw_gcode *g, const char *what, int resend)
 {
     reply r;
     r.n = 0;
@@ -273,7 +283,8 @@ static void line_error(fw_gcode *g, const char *what, int resend)
         put_int(&r, (int64_t)g->last_line + 1);
         send(g, &r);
     }
-    fw_gcode_say(g, FW_TEXT("ok"));
+    put(&r, FW_TEXT("ok"));
+    send(g, &r);
 }
 
 /* The light M106 put on goes out now, and the host is told why. */
@@ -291,13 +302,22 @@ static void motor(fw_gcode *g, int on)
     g->motor_on = (uint8_t)on;
 }
 
+/* `what` and a height in steps as mm: "...12.345" */
+static OUT_OF_LINE void at_mm(fw_gcode *g, const char *what, int32_t steps)
+{
+    reply r;
+    r.n = 0;
+    put(&r, what);
+    put_milli(&r, mm_of_steps(g, steps, 1000));
+    send(g, &r);
+}
+
 /* G0 / G1; 1: ok now, 0: start() sends it */
 static int move(fw_gcode *g, const words *w, uint64_t now)
 {
     fw_axis *a = g->axis;
     int64_t z = 0, f = 0, target, steps;
     int has_z, has_f;
-    reply r;
     if (!number(g, w, 'Z', &z, &has_z) || !number(g, w, 'F', &f, &has_f)) return 1;
     if (has_f) {
         uint64_t speed;
@@ -312,10 +332,7 @@ static int move(fw_gcode *g, const words *w, uint64_t now)
     target = (g->relative ? z_now(g) : 0) + z;
     steps = target < 0 ? -1 : steps_of_nm(g, target);
     if (steps < 0 || steps > a->config.max_steps) {
-        r.n = 0;
-        put(&r, FW_TEXT("Error:Z outside soft limits 0.000.."));
-        put_milli(&r, mm_of_steps(g, a->config.max_steps, 1000));
-        send(g, &r);
+        at_mm(g, FW_TEXT("Error:Z outside soft limits 0.000.."), a->config.max_steps);
         return 1;
     }
     /* Z never moves under the light: a host that forgot M107 loses the
@@ -379,7 +396,7 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
    and the tests, read the board's travel, speed and light limit here), a
    line a piece of work, since each is a good part of a step interval's
    arithmetic on an 8-bit core. */
-static void figures(fw_gcode *g)
+static OUT_OF_LINE void figures(fw_gcode *g)
 {
     const fw_axis_config *c = &g->axis->config;
     reply r;
@@ -398,12 +415,13 @@ static void figures(fw_gcode *g)
     put(&r, FW_TEXT(" MAX_EXPOSURE_MS:"));
     put_uint(&r, FW_EXPOSURE_MAX_MS);
     send(g, &r);
-    fw_gcode_say(g, FW_TEXT("ok"));
+    put(&r, FW_TEXT("ok"));
+    send(g, &r);
     g->wait = WAIT_NONE;
 }
 
 /* The G4 that came g->deadline ticks after its exposure's end, and its ok. */
-static void overrun(fw_gcode *g)
+static OUT_OF_LINE void overrun(fw_gcode *g)
 {
     /* in us, from the clock in kHz (every port's is whole kHz): 32-bit
        divisions, where 10^6 / tick_hz would take 64 */
@@ -414,11 +432,12 @@ static void overrun(fw_gcode *g)
     put_milli(&r, khz ? (int64_t)muldiv(g->deadline, 1000u, khz, 0) : 0);
     put(&r, FW_TEXT(" ms after its end"));
     send(g, &r);
-    fw_gcode_say(g, FW_TEXT("ok"));
+    put(&r, FW_TEXT("ok"));
+    send(g, &r);
     g->wait = WAIT_NONE;
 }
 
-static void report_position(fw_gcode *g)
+static OUT_OF_LINE void report_position(fw_gcode *g)
 {
     reply r;
     r.n = 0;
@@ -429,7 +448,7 @@ static void report_position(fw_gcode *g)
     send(g, &r);
 }
 
-static void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
+static OUT_OF_LINE void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
 {
     reply r;
     while (end > from && is_blank(b[end - 1])) end--;
@@ -484,7 +503,7 @@ static int code_of(const uint8_t *b, int k, int letter, size_t at, size_t len)
 /* The held line's framing: comments, checksum, line number. A line that
    fails gets its replies here; one that passes is cut to its command and
    left for run() with where the command begins. 1: the line is to run. */
-static int check(fw_gcode *g)
+static OUT_OF_LINE int check(fw_gcode *g)
 {
     const uint8_t *b = g->line;
     size_t n = g->len, end = n, star = n, i, at = 0, len = 0, from;
@@ -530,7 +549,7 @@ static int check(fw_gcode *g)
 }
 
 /* Runs the checked line in g->line and sends its replies. */
-static void run(fw_gcode *g, uint64_t now)
+static OUT_OF_LINE void run(fw_gcode *g, uint64_t now)
 {
     const uint8_t *b = g->line;
     /* the code word again: check() found it, but keeping it would cost a
@@ -599,7 +618,6 @@ static void run(fw_gcode *g, uint64_t now)
 static void finish(fw_gcode *g)
 {
     fw_axis *a = g->axis;
-    reply r;
     if (g->wait == WAIT_HOME) {
         if (a->homed && a->error == FW_AXIS_OK) {
             g->z_nm = mm_of_steps(g, a->position, MILLION);
@@ -610,10 +628,7 @@ static void finish(fw_gcode *g)
     } else if (a->position == g->target) {
         fw_gcode_say(g, FW_TEXT("Z_move_comp"));
     } else {
-        r.n = 0;
-        put(&r, FW_TEXT("Error:Z move stopped at "));
-        put_milli(&r, mm_of_steps(g, a->position, 1000));
-        send(g, &r);
+        at_mm(g, FW_TEXT("Error:Z move stopped at "), a->position);
     }
     g->wait = WAIT_NONE;
 }

@@ -340,7 +340,8 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
                 snprintf(what, sizeof what, "stopped printing (%s)",
                          l->st.state != LINK_STATE_READY ? link_state_name(l->st.state)
                          : homed ? "aborted"
-                         : l->st.error == LINK_ERR_STEP_LATE ? link_error_name(l->st.error) : "a fault that left Z unhomed");
+                         : l->st.error == LINK_ERR_STEP_LATE || l->st.error == LINK_ERR_STACK ? link_error_name(l->st.error)
+                                                                                          : "a fault that left Z unhomed");
                 return serial_stopped(l, RC_FAIL, what, 1, homed);
             }
             if (sending && sent == pj->code_size && (l->st.mask_ready >= next || l->st.masks_refused != refused)) {

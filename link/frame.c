@@ -16,12 +16,13 @@ static uint16_t crc16_byte(uint16_t crc, uint8_t byte)
     return (uint16_t)(hi << 8 | lo);
 }
 
-uint16_t link_crc16(const uint8_t *data, size_t size)
+uint16_t link_crc16_more(uint16_t crc, const uint8_t *data, size_t size)
 {
-    uint16_t crc = 0xffffu;
     while (size--) crc = crc16_byte(crc, *data++);
     return crc;
 }
+
+uint16_t link_crc16(const uint8_t *data, size_t size) { return link_crc16_more(0xffffu, data, size); }
 
 size_t link_frame_build(uint8_t *out, uint8_t seq, uint8_t type, const uint8_t *payload, size_t size)
 {

@@ -14,9 +14,11 @@
 #define LINK_SYNC 0x7eu
 
 uint16_t link_crc16(const uint8_t *data, size_t size);
+/* The same carried on over more bytes: link_crc16(a + b) is
+   link_crc16_more(link_crc16(a), b), so a frame can be sent in pieces. */
+uint16_t link_crc16_more(uint16_t crc, const uint8_t *data, size_t size);
 /* Builds a frame into out (LINK_FRAME_MAX bytes); returns its length, 0 if the
-   payload is too long. The payload may be at out + 3 already (a reply built
-   in place, which saves a buffer on a small stack). */
+   payload is too long. The payload may be at out + 3 already. */
 size_t link_frame_build(uint8_t *out, uint8_t seq, uint8_t type, const uint8_t *payload, size_t size);
 
 /* Reassembles frames from a byte stream. After a frame that fails its CRC or

@@ -114,7 +114,8 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(STEP_LATE, "a Z step could not be issued on time") /* motion stopped dead, Z unhomed, UV off */                 \
     S(ENDSTOP, "the Z endstop closed during a move")    /* a crash or lost steps: stopped dead, Z unhomed, UV off */  \
     S(WRONG_HEIGHT, "Z was not at the layer's height")  /* the light stayed off: print stopped */                     \
-    S(MOVE_FAILED, "the print's move was refused")      /* the light stayed off: print stopped */
+    S(MOVE_FAILED, "the print's move was refused")      /* the light stayed off: print stopped */                     \
+    S(STACK, "the stack overran: halted until reset")    /* as STEP_LATE, and nothing lights or moves again */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,

@@ -20,7 +20,9 @@
        <cycle> obstacle              SIGUSR1 put the obstacle of --obstacle-at in place
        <cycle> pass <cycles>         a loop pass of at least --log-passes cycles (with
                                      --profile-passes: ": function cycles ..." after it)
-       # end cycles=C worst_pass=P worst_moving_pass=M worst_work=W worst_moving_work=V passes=N stack_peak=S resets=R late=L
+       <cycle> canary                the stack's canary (stack.ld's __stack_canary) changed
+       # end cycles=C worst_pass=P worst_moving_pass=M worst_work=W worst_moving_work=V passes=N stack_peak=S
+             stack_reserve=Q canary=K resets=R late=L
 
    worst_pass: the longest main-loop pass in cycles, from the firmware's
    GPIOR0 marks (a pass begins, the loop goes to sleep), the interrupts
@@ -28,8 +30,13 @@
    began while Z moved; worst_work and worst_moving_work the same with the
    interrupts' cycles (from a vector's entry to its RETI) taken out: the
    loop's own work. simavr's UART runs at the line's rate, so the first two
-   are what the part would see. stack_peak: bytes of SRAM below RAMEND the
-   stack reached (SRAM is painted before the run).
+   are what the part would see. stack_peak: bytes below the end of SRAM the
+   stack reached, from SRAM painted before the run: the lowest byte no
+   longer paint from the stack's room up (stack.ld's __stack_low, above
+   the canary; a frame's buffer left unwritten is then a hole inside the
+   stack, not its end); stack_reserve the room the link reserved for it
+   (__stack_reserve), canary 1 if the canary changed after the first loop
+   pass (the firmware writes it before).
 
    The UART: simavr's own uart_pty part raced and corrupted bulk data (team
    notes), so bytes from the pty are handed to the UART here, in the
@@ -92,7 +99,9 @@ static const char USAGE[] =
     "  --hang-at-uv N     make the main loop hang when UV goes on the Nth time\n"
     "                     (a RAMPS_TEST_HANG image: the watchdog test)  [never]\n"
     "  --obstacle-at MM   once SIGUSR1 arrives, the endstop also reads pressed\n"
-    "                     while the carriage is at or below MM (a crash)  [none]\n";
+    "                     while the carriage is at or below MM (a crash)  [none]\n"
+    "  --overrun-at-uv N  make the stack overrun its room down to the canary when UV\n"
+    "                     goes on the Nth time (a RAMPS_TEST_OVERRUN image) [never]\n";
 
 static volatile sig_atomic_t stop_signal, obstacle_signal;
 static void on_signal(int sig) { stop_signal = sig; }
@@ -115,7 +124,12 @@ typedef struct run {
     uint64_t pass_begin, worst_pass, worst_moving, passes, log_passes;
     uint64_t isr_cycles, pass_isr, worst_work, worst_moving_work; /* cycles in interrupt handlers */
     int pass_moving, in_isr;
-    unsigned long resets, late, uv_ons, hang_at_uv;
+    unsigned long resets, late, uv_ons, poke_at_uv;
+    uint8_t poke;                /* what GPIOR2 gets at the poke_at_uv'th UV on */
+    unsigned stack_low, canary_addr; /* SRAM addresses from the image's symbols */
+    unsigned long stack_reserve;
+    uint8_t canary[2];
+    int canary_state;            /* 0 not yet written, 1 watched, 2 changed */
     int in_pass;
     uint64_t slept;              /* cycles the core spent asleep */
     unsigned long rx_pushed, rx_taken; /* bytes into simavr's UART, RX interrupts taken */
@@ -192,6 +206,35 @@ static int load_functions(const char *path)
     }
     P.f[P.n].addr = (uint32_t)words; /* the table's end */
     return 1;
+}
+
+/* The values of the named symbols of the image (0 for one it lacks); 0 if
+   the image has no symbol table. */
+static int read_symbols(const char *path, const char *const *names, unsigned long *values, size_t count)
+{
+    int fd = open(path, O_RDONLY), found = 0;
+    Elf *e;
+    Elf_Scn *scn = NULL;
+    size_t i, k;
+    for (k = 0; k < count; k++) values[k] = 0;
+    if (fd < 0) return 0;
+    if (elf_version(EV_CURRENT) == EV_NONE || !(e = elf_begin(fd, ELF_C_READ, NULL))) { close(fd); return 0; }
+    while ((scn = elf_nextscn(e, scn)) != NULL) {
+        GElf_Shdr sh;
+        Elf_Data *d;
+        if (!gelf_getshdr(scn, &sh) || sh.sh_type != SHT_SYMTAB || !(d = elf_getdata(scn, NULL))) continue;
+        found = 1;
+        for (i = 0; i < sh.sh_size / sh.sh_entsize; i++) {
+            GElf_Sym sym;
+            const char *name;
+            if (!gelf_getsym(d, (int)i, &sym) || !(name = elf_strptr(e, sh.sh_link, sym.st_name))) continue;
+            for (k = 0; k < count; k++)
+                if (!strcmp(name, names[k])) values[k] = (unsigned long)sym.st_value;
+        }
+    }
+    elf_end(e);
+    close(fd);
+    return found;
 }
 
 static void profile_pass(uint64_t begin, uint64_t took)
@@ -272,7 +315,7 @@ static void on_uv(struct avr_irq_t *irq, uint32_t value, void *param)
     if (v == R.uv) return;
     R.uv = v;
     log_event(v ? "uv 1" : "uv 0");
-    if (v && ++R.uv_ons == R.hang_at_uv) R.avr->data[GPIOR2_ADDR] = 0xA5; /* the RAMPS_TEST_HANG hook */
+    if (v && ++R.uv_ons == R.poke_at_uv) R.avr->data[GPIOR2_ADDR] = R.poke; /* the RAMPS_TEST_ hooks */
 }
 
 /* A loop pass from R.pass_begin to `end`: the worst, with and without its
@@ -295,6 +338,10 @@ static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *pa
     (void)param;
     avr->data[addr] = v;
     if (v == BOARD_MARK_LOOP || v == BOARD_MARK_MOVING) {
+        if (!R.canary_state && R.canary_addr) { /* written by the firmware's start */
+            memcpy(R.canary, avr->data + R.canary_addr, sizeof R.canary);
+            R.canary_state = 1;
+        }
         if (R.in_pass) end_pass(avr->cycle);
         R.in_pass = 1;
         R.pass_moving = v == BOARD_MARK_MOVING;
@@ -309,6 +356,7 @@ static void on_gpior0(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *pa
         log_event("late");
     } else if (v == BOARD_MARK_BOOT) {
         R.in_pass = 0;
+        if (R.canary_state == 1) R.canary_state = 0; /* written again before the loop */
     }
 }
 
@@ -394,6 +442,11 @@ static void run_one(avr_t *avr)
         R.isr_cycles += avr->cycle - c1;
     }
     if (P.cycles && R.in_pass) P.cycles[pc / 2 < P.f[P.n].addr ? P.at[pc / 2] : P.n] += avr->cycle - c0;
+    /* every instruction: two byte compares, not a call */
+    if (R.canary_state == 1 && (avr->data[R.canary_addr] != R.canary[0] || avr->data[R.canary_addr + 1] != R.canary[1])) {
+        R.canary_state = 2;
+        log_event("canary");
+    }
 }
 
 static double wall_now(void)
@@ -443,13 +496,9 @@ static int open_pty(int *master, char *name, size_t size)
 
 static unsigned long stack_peak(void)
 {
-    /* the longest painted run is the gap between .bss and the stack */
-    unsigned a, best_end = RAMEND, best_len = 0, len = 0;
-    for (a = RAMSTART; a <= RAMEND; a++) {
-        len = R.avr->data[a] == PAINT ? len + 1 : 0;
-        if (len > best_len) { best_len = len; best_end = a; }
-    }
-    return RAMEND - best_end;
+    unsigned a = R.stack_low;
+    while (a <= RAMEND && R.avr->data[a] == PAINT) a++;
+    return RAMEND + 1u - a;
 }
 
 int main(int argc, char **argv)
@@ -474,7 +523,8 @@ int main(int argc, char **argv)
         else if (!strcmp(o, "--speed")) speed = atof(argv[++i]);
         else if (!strcmp(o, "--max-seconds")) max_seconds = atof(argv[++i]);
         else if (!strcmp(o, "--timeout")) timeout = atof(argv[++i]);
-        else if (!strcmp(o, "--hang-at-uv")) R.hang_at_uv = strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(o, "--hang-at-uv")) { R.poke_at_uv = strtoul(argv[++i], NULL, 10); R.poke = 0xA5; }
+        else if (!strcmp(o, "--overrun-at-uv")) { R.poke_at_uv = strtoul(argv[++i], NULL, 10); R.poke = 0x5A; }
         else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
         else if (!strcmp(o, "--obstacle-at")) R.obstacle = (int32_t)(atof(argv[++i]) * BOARD_STEPS_PER_MM + 0.5);
         else if (!strcmp(o, "--profile-passes")) P.threshold = strtoull(argv[++i], NULL, 10);
@@ -484,6 +534,20 @@ int main(int argc, char **argv)
     memset(&fw, 0, sizeof fw);
     if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "avr-run: cannot read %s\n", elf); return 2; }
     if (P.threshold && !load_functions(elf)) { fprintf(stderr, "avr-run: no function symbols in %s\n", elf); return 2; }
+    {
+        /* the stack's room: stack.ld's symbols, or from the end of the data
+           (in the linker's data space, SRAM addresses + 0x800000) */
+        static const char *const names[] = {"__stack_low", "__stack_canary", "__stack_reserve", "__heap_start"};
+        unsigned long v[4];
+        if (!read_symbols(elf, names, v, 4) || !(v[0] | v[3])) { fprintf(stderr, "avr-run: no __heap_start symbol in %s\n", elf); return 2; }
+        R.stack_low = (unsigned)((v[0] ? v[0] : v[3]) & 0xFFFFu);
+        R.canary_addr = (unsigned)(v[1] & 0xFFFFu);
+        R.stack_reserve = v[2];
+        if (R.stack_low < RAMSTART || R.stack_low > RAMEND + 1u || (R.canary_addr && R.canary_addr + 2u > R.stack_low)) {
+            fprintf(stderr, "avr-run: %s: the stack's room starts at 0x%x, outside SRAM\n", elf, R.stack_low);
+            return 2;
+        }
+    }
     R.avr = avr_make_mcu_by_name("atmega2560");
     if (!R.avr || avr_init(R.avr) != 0) { fprintf(stderr, "avr-run: simavr has no atmega2560\n"); return 2; }
     fw.frequency = BOARD_CPU_HZ;
@@ -576,16 +640,17 @@ int main(int argc, char **argv)
         while (!stop_signal && wall_now() - stopped < 2) nanosleep(&ts, NULL);
     }
     if (R.log) {
-        fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu worst_work=%llu worst_moving_work=%llu passes=%llu stack_peak=%lu resets=%lu late=%lu busy=%.4f\n",
+        fprintf(R.log, "# end cycles=%llu worst_pass=%llu worst_moving_pass=%llu worst_work=%llu worst_moving_work=%llu passes=%llu stack_peak=%lu stack_reserve=%lu canary=%d resets=%lu late=%lu busy=%.4f\n",
                 (unsigned long long)R.avr->cycle, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
                 (unsigned long long)R.worst_work, (unsigned long long)R.worst_moving_work, (unsigned long long)R.passes,
-                stack_peak(), R.resets, R.late, R.avr->cycle ? 1.0 - (double)R.slept / (double)R.avr->cycle : 0.0);
+                stack_peak(), R.stack_reserve, R.canary_state == 2, R.resets, R.late,
+                R.avr->cycle ? 1.0 - (double)R.slept / (double)R.avr->cycle : 0.0);
         fclose(R.log);
     }
-    fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles, %llu while Z moves (the loop's own work: %llu, %llu) over %llu passes; stack peak %lu bytes; %lu resets; %lu late steps\n",
+    fprintf(stderr, "avr-run: %.3f s virtual; worst loop pass %llu cycles, %llu while Z moves (the loop's own work: %llu, %llu) over %llu passes; stack peak %lu bytes (%lu reserved%s); %lu resets; %lu late steps\n",
             (double)R.avr->cycle / BOARD_CPU_HZ, (unsigned long long)R.worst_pass, (unsigned long long)R.worst_moving,
             (unsigned long long)R.worst_work, (unsigned long long)R.worst_moving_work, (unsigned long long)R.passes, stack_peak(),
-            R.resets, R.late);
+            R.stack_reserve, R.canary_state == 2 ? ", the canary overwritten" : "", R.resets, R.late);
     close(slave);
     close(R.master);
     return status;

@@ -21,7 +21,12 @@
        the top speed (16,000 cycles), while Z moves and while it is still;
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
-       and it answers again afterwards. */
+       and it answers again afterwards;
+     - the stack: every run's peak (avr-run's, from the stack's room up)
+       at least 128 bytes inside the reserve the link made, its canary
+       untouched; and a stack made to overrun its room while the light is
+       on: the light out within a pass, the halt said, nothing lit or
+       moved afterwards. */
 #define _XOPEN_SOURCE 700
 #include "check.h"
 #include "cli_run.h"
@@ -164,6 +169,7 @@ typedef struct avr_log {
     uint64_t reset_at[8];
     size_t resets;
     size_t steps_lit;            /* steps taken with the light on */
+    uint64_t canary_at;          /* the cycle the stack's canary changed, 0 never */
     avr_passes pass;             /* the end line */
     long start_steps;
     zevent *ev;                  /* steps, UV, shows: tests/zcheck.h's record, in ticks (cycle / 8) */
@@ -256,6 +262,8 @@ static int read_avr_log(const char *path, avr_log *l)
             add_event(l, at, ZEV_SHOW, atoi(arg));
         } else if (!strcmp(what, "reset") && l->resets < 8) {
             l->reset_at[l->resets++] = at;
+        } else if (!strcmp(what, "canary") && !l->canary_at) {
+            l->canary_at = at;
         }
     }
     fclose(f);
@@ -264,6 +272,20 @@ static int read_avr_log(const char *path, avr_log *l)
 }
 
 static void free_avr_log(avr_log *l) { free(l->step_at); free(l->step_dir); free(l->ev); }
+
+/* The stack's margin the link reserved (firmware.mk's FW_AVR_STACK) over
+   the deepest a run went. */
+#define STACK_MARGIN 128u
+
+/* A run's stack: its canary untouched, and its peak (avr-run's, from the
+   stack's room up) at least STACK_MARGIN inside the reserve. */
+static void check_stack(const avr_log *l, const char *who)
+{
+    CHECKF(!l->pass.canary && !l->canary_at, "%s: the stack's canary was overwritten", who);
+    CHECKF(l->pass.reserve && l->pass.stack + STACK_MARGIN <= l->pass.reserve,
+           "%s: the stack went %lu bytes deep, the image reserves %lu (%u of them the margin)", who, l->pass.stack, l->pass.reserve,
+           STACK_MARGIN);
+}
 
 /* The board's Z axis as the firmware configures it (ports/ramps/main.c). */
 static void board_axis(fw_axis *axis)
@@ -392,10 +414,11 @@ static void check_gcode_print(const char *path, const zmove *moves, size_t n, in
     CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
     CHECKF(l.pass.worst < STEP_CYCLES, "a loop pass took %lu cycles (%lu while Z moved), a step comes every %lu at the top speed",
            l.pass.worst, l.pass.moving, STEP_CYCLES);
+    check_stack(&l, who);
     printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; light %.4f..%.4f ms for G4 P%d; "
-           "worst loop pass %lu cycles (%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
+           "worst loop pass %lu cycles (%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes of %lu reserved\n",
            who, layers, l.steps, worst, (double)shortest / CYCLES_PER_MS, (double)longest / CYCLES_PER_MS, EXPOSE_MS,
-           l.pass.worst, l.pass.moving, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.pass.stack);
+           l.pass.worst, l.pass.moving, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.pass.stack, l.pass.reserve);
     free_avr_log(&l);
 }
 
@@ -591,9 +614,11 @@ static void binary_print_with_masks_streaming(void)
     CHECKF(l.pass.moving < STEP_CYCLES, "a loop pass while Z moved took %lu cycles, a step comes every %lu", l.pass.moving,
            STEP_CYCLES);
     CHECKF(l.pass.worst < STEP_CYCLES, "a loop pass took %lu cycles, a step comes every %lu at the top speed", l.pass.worst, STEP_CYCLES);
+    check_stack(&l, "binary print");
     printf("    avr: %u layers, %zu steps, worst step %ld cycles from its tick, every exposure exact to the tick; worst loop pass %lu cycles "
-           "(%lu while Z moved; the loop's own work %lu, %lu; a step every %lu at the top speed), stack peak %lu bytes\n",
-           rep.layers, l.steps, worst, l.pass.worst, l.pass.moving, l.pass.work, l.pass.moving_work, STEP_CYCLES, l.pass.stack);
+           "(%lu while Z moved; the loop's own work %lu, %lu; a step every %lu at the top speed), stack peak %lu bytes of %lu reserved\n",
+           rep.layers, l.steps, worst, l.pass.worst, l.pass.moving, l.pass.work, l.pass.moving_work, STEP_CYCLES, l.pass.stack,
+           l.pass.reserve);
     free(moves);
     print_report_free(&rep);
     free_avr_log(&l);
@@ -626,6 +651,7 @@ static void watchdog_resets_a_hung_loop(void)
     CHECK(read_avr_log("build/test_avr/wdt.log", &l));
     CHECKF(l.uvs >= 2 && l.uv_on[0] && !l.uv_on[1], "%zu UV edges", l.uvs);
     CHECKF(l.resets == 1, "%zu resets", l.resets);
+    check_stack(&l, "watchdog");
     if (l.uvs >= 2 && l.resets == 1) {
         double ms = (double)(l.uv_at[1] - l.uv_at[0]) * 1000.0 / BOARD_CPU_HZ;
         /* the watchdog's nominal period; its oscillator is +-10 % */
@@ -906,11 +932,58 @@ static void gcode_light_and_stops(void)
     free_avr_log(&l);
 }
 
+/* The stack overruns its room while the light is on (RAMPS_TEST_OVERRUN:
+   every byte from the stack pointer down to the canary written, as frames
+   that deep would): the loop's next check puts the light out within a
+   pass, the printer says it is halted, and afterwards nothing lights or
+   moves whatever G-code asks, until reset. */
+static void a_stack_overrun_halts_the_printer(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "2", "--overrun-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "60", NULL};
+    char got[512] = "";
+    avr_log l;
+    size_t k, steps_after = 0;
+    int ok = 1;
+    if (!avr_start(&c, "build/test_avr/overrun.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    ok &= gline(&c, "G28", "ok", 30, NULL, 0);
+    ok &= gline(&c, "M106", "ok", 5, got, sizeof got);
+    /* the halt comes as the light goes on, after M106's ok */
+    ok &= strstr(got, "Error:Printer halted") || gline(&c, NULL, "Error:Printer halted", 5, got, sizeof got);
+    CHECKF(ok, "no word of the halt: %.200s", got);
+    got[0] = 0;
+    CHECKF(gline(&c, "M106 S255", "ok", 5, got, sizeof got) && strstr(got, "Error:Printer halted"), "M106 after the halt: %.200s", got);
+    got[0] = 0;
+    CHECKF(gline(&c, "G28", "ok", 10, got, sizeof got) && strstr(got, "Error:Printer halted"), "G28 after the halt: %.200s", got);
+    got[0] = 0;
+    CHECKF(gline(&c, "G1 Z5", "ok", 5, got, sizeof got) && strstr(got, "Error:"), "G1 after the halt: %.200s", got);
+    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    CHECK(read_avr_log("build/test_avr/overrun.log", &l));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    CHECKF(l.canary_at && l.pass.canary, "avr-run saw no change of the canary");
+    CHECKF(l.uvs == 2 && l.uv_on[0] && !l.uv_on[1], "%zu UV edges (one exposure, put out by the halt)", l.uvs);
+    if (l.uvs == 2 && l.canary_at) {
+        /* within a pass: every pass is shorter than a step interval at the
+           top speed (the print tests assert it) */
+        CHECKF(l.uv_at[1] >= l.canary_at && l.uv_at[1] - l.canary_at < STEP_CYCLES,
+               "UV off %lld cycles after the canary changed (a pass is under %lu)", (long long)(l.uv_at[1] - l.canary_at), STEP_CYCLES);
+        printf("    avr: the light out %llu cycles after the stack reached the canary\n",
+               (unsigned long long)(l.uv_at[1] - l.canary_at));
+    }
+    for (k = 0; k < l.steps; k++) steps_after += l.step_at[k] > l.canary_at;
+    CHECKF(!steps_after && !l.resets, "%zu steps after the halt, %zu resets", steps_after, l.resets);
+    /* avr-run measures from the stack's room up: the overrun filled it */
+    CHECKF(l.pass.stack >= l.pass.reserve && l.pass.reserve, "stack peak %lu bytes after an overrun of the whole room (%lu reserved)",
+           l.pass.stack, l.pass.reserve);
+    free_avr_log(&l);
+}
+
 void test_avr(void)
 {
     if (system("mkdir -p build/test_avr") != 0) { CHECK(!"mkdir build/test_avr"); return; }
     if (!cli_begin("adaslice-avr")) { CHECK(!"no temporary directory"); return; }
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", watchdog_resets_a_hung_loop);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", a_stack_overrun_halts_the_printer);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_print_nanodlp_style);
     RUN_NEEDING("simavr, avr-gcc and printcore (Debian printrun): build/avr-run, build/fw-ramps-test.elf", gcode_print_by_printcore);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);

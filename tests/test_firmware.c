@@ -260,6 +260,74 @@ static void a_stalled_loop_stops_the_motion(void)
     CHECK(last < stall);
 }
 
+/* The port finds its stack's canary overwritten (fw_stack_fault) in the
+   middle of a move, then of a G-code exposure: the motion stops dead and
+   the light goes out at once, STATUS says STACK, and the core stays
+   halted: a binary host's commands are refused with that error, G-code's
+   M106 and G28 are told so, and nothing lights or steps again. */
+static size_t events_after(const fake_printer *p, uint64_t t, int kind, int value)
+{
+    size_t k, n = 0;
+    for (k = 0; k < p->event_count; k++)
+        n += p->events[k].when > t && p->events[k].kind == kind && (value < 0 || p->events[k].value == value);
+    return n;
+}
+
+static void a_stack_fault_halts_the_core(void)
+{
+    static fake_printer p;
+    uint8_t mv[LINK_SIZE_MOVE], ex[LINK_SIZE_EXPOSE];
+    link_move move;
+    link_expose expose;
+    uint64_t at;
+    fake_init(&p, 8, 8, 1);
+    home(&p);
+    p.keep_events = 1;
+    move.z_nm = 10000000;
+    move.speed_um_s = 0;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + FAKE_TICK_HZ / 2);
+    CHECK(fake_state(&p) == LINK_STATE_MOVING);
+    at = p.now;
+    fw_stack_fault(&p.fw, at);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(fake_state(&p) != LINK_STATE_MOVING && p.status.error == LINK_ERR_STACK);
+    CHECK(!(p.status.flags & (LINK_FLAG_HOMED | LINK_FLAG_MOVING | LINK_FLAG_UV)));
+    fake_send(&p, LINK_MSG_HOME, NULL, 0);
+    fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_STACK && p.status.error_seq == (uint8_t)(p.seq - 2));
+    expose.ms = 100;
+    fake_send(&p, LINK_MSG_EXPOSE, ex, link_put_expose(ex, &expose));
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_IDLE && p.status.error == LINK_ERR_STACK && !(p.status.flags & LINK_FLAG_HOMED));
+    CHECKF(!events_after(&p, at, ZEV_STEP, -1) && !events_after(&p, at, ZEV_UV, 1), "%zu steps, %zu lights after the fault",
+           events_after(&p, at, ZEV_STEP, -1), events_after(&p, at, ZEV_UV, 1));
+    fake_free(&p);
+
+    /* G-code: the light M106 put on goes out at the fault */
+    fake_init(&p, 8, 8, 1);
+    fake_bytes(&p, (const uint8_t *)"G28\n", 4);
+    fake_run(&p, p.now + 60ull * FAKE_TICK_HZ);
+    p.keep_events = 1;
+    fake_bytes(&p, (const uint8_t *)"M106\n", 5);
+    fake_run(&p, p.now + FAKE_TICK_HZ / 10);
+    CHECK(p.uv_off_at != FW_NEVER);
+    at = p.now;
+    fw_stack_fault(&p.fw, at);
+    CHECK(p.uv_off_at == FW_NEVER && events_after(&p, at - 1, ZEV_UV, 0) == 1);
+    CHECK(strstr(p.text, "Error:Printer halted") != NULL);
+    p.text_len = 0;
+    p.text[0] = 0;
+    fake_bytes(&p, (const uint8_t *)"M106 S255\nG28\n", 15);
+    fake_run(&p, p.now + 30ull * FAKE_TICK_HZ);
+    /* M106 is G-code's own refusal after a stop (home first), G28 the halted core's */
+    CHECKF(strstr(p.text, "Error:Stopped: home Z (G28) before UV") && strstr(p.text, "Error:Printer halted"),
+           "M106 and G28 after the halt: %.200s", p.text);
+    CHECKF(!events_after(&p, at, ZEV_STEP, -1) && !events_after(&p, at, ZEV_UV, 1), "%zu steps, %zu lights after the fault",
+           events_after(&p, at, ZEV_STEP, -1), events_after(&p, at, ZEV_UV, 1));
+    fake_free(&p);
+}
+
 /* A mask whose decoded CRC-32 differs is refused, never shown, and the layer
    waits with UV off until a good copy arrives. */
 static void bad_masks_are_never_shown(void)
@@ -746,6 +814,7 @@ void test_firmware(void)
     RUN(bad_masks_are_never_shown);
     RUN(mask_decoding_takes_bounded_slices);
     RUN(a_stalled_loop_stops_the_motion);
+    RUN(a_stack_fault_halts_the_core);
     RUN(thousand_layers_without_drift);
     RUN(pause_and_link_loss);
     RUN(a_pause_never_exposes_elsewhere);

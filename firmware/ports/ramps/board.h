@@ -69,10 +69,12 @@
 #define BOARD_PITCH_NM 50000u
 #endif
 /* The planner's largest profile: 8 KiB of SRAM hold the core's state, the
-   planner's 3 KiB of rings and a byte per bin, the UART rings and the stack
-   (firmware.mk prints the figures). Larger parts are planned by the host. */
+   planner's 3 KiB of rings and a byte per bin, the UART rings and the
+   stack's reserve (the link refuses an image they do not fit; firmware.mk
+   prints the figures, make bench the largest that fits). Larger parts are
+   planned by the host. */
 #ifndef BOARD_MAX_BINS
-#define BOARD_MAX_BINS 1200u /* the stack peaked at 837 bytes under simavr (a binary print, make bench): 33 to spare */
+#define BOARD_MAX_BINS 1200u
 #endif
 /* A UART cannot hold the line: the receive ring takes the whole window. */
 #define BOARD_RX_SIZE 512u
@@ -115,6 +117,12 @@
 #ifndef __ASSEMBLER__
 #include <stdint.h>
 #include <stddef.h>
+/* The state a stack overrun must reach last (the tick's extension, the
+   step and UV compare state, the core's fw_state): at the start of .bss,
+   the far end of SRAM from the stack. The default avr6 linker script
+   places the input sections named exactly .bss before the .bss.* that
+   -fdata-sections makes; firmware.mk checks the image. */
+#define BOARD_SAFETY __attribute__((section(".bss")))
 /* ---- ramps.c ---------------------------------------------------------- */
 void board_init(void);
 uint32_t board_boot_count(void);          /* from EEPROM, counted at this boot */
@@ -145,6 +153,9 @@ void board_motor(int on);
    at `when` (on = 0; now if that has passed). */
 void board_uv(int on, uint64_t when, uint64_t until);
 uint8_t board_uv_lit(void);
+/* 0 once the stack has written over its canary (below its room) */
+int board_stack_ok(void);
+void board_test_overrun(void);            /* RAMPS_TEST_OVERRUN builds: the stack down to the canary */
 void board_show(int slot);
 void board_mask_row(void);
 #endif

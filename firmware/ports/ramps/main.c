@@ -36,7 +36,7 @@ BOARD_CHECK(clock, BOARD_CLOCK_HZ * BOARD_TICK_DIV == BOARD_CPU_HZ);
 BOARD_CHECK(step_lead, BOARD_STEP_LEAD * 125u == BOARD_CLOCK_HZ);
 BOARD_CHECK(row, FW_ROW_BYTES * 8u >= BOARD_DISPLAY_W);
 
-static fw_state fw;
+static fw_state fw BOARD_SAFETY; /* with the step queue and the light's state */
 static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 
 static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
@@ -58,11 +58,13 @@ static void port_mask_row(void *ctx, int slot, uint32_t y, const uint8_t *row, u
     board_mask_row();
 }
 
-int main(void)
+/* The board and the core started; out of main, whose frame stays under
+   every call of the loop: the config and port are needed only until
+   fw_init has copied them. */
+static __attribute__((noinline)) void start(void)
 {
     fw_config config;
     fw_port port;
-    uint64_t deadline = 0;
     board_init();
     config.tick_hz = BOARD_CLOCK_HZ;
     config.axis.steps_per_mm = BOARD_STEPS_PER_MM;
@@ -93,6 +95,12 @@ int main(void)
     port.watchdog = port_watchdog;
     port.exit = NULL; /* a board does not end */
     fw_init(&fw, &config, &port, plan_workspace, sizeof plan_workspace);
+}
+
+int main(void)
+{
+    uint64_t deadline = 0;
+    start();
     for (;;) {
         const uint8_t *data;
         size_t n;
@@ -103,6 +111,11 @@ int main(void)
            (which nothing else uses) to make the loop hang */
         if (GPIOR2 == 0xA5u) for (;;) {}
 #endif
+#ifdef RAMPS_TEST_OVERRUN
+        /* and 0x5A to make the stack overrun its room (once) */
+        if (GPIOR2 == 0x5Au) { GPIOR2 = 0; board_test_overrun(); }
+#endif
+        if (!board_stack_ok()) fw_stack_fault(&fw, board_ticks());
         n = board_rx_peek(&data);
         if (n) {
             if (n > CHUNK) n = CHUNK;

@@ -55,7 +55,7 @@ uint8_t board_reset_cause(void) { return reset_cause; }
    not lean on TOV5 being visible the moment the counter wraps: under
    simavr 1.6 the flag came late now and then, a reading just past the wrap
    came out a turn early, and a step armed from it waited a turn (32 ms). */
-static uint64_t last_ticks;
+static uint64_t last_ticks BOARD_SAFETY;
 
 ISR(TIMER5_OVF_vect) { (void)board_ticks(); }
 
@@ -85,9 +85,9 @@ uint64_t board_ticks(void)
 #define COM4C_BITS (_BV(COM4C1) | _BV(COM4C0))
 enum { IDLE, WAIT, ARMED };
 
-static uint64_t step_when;
-static volatile uint8_t step_state;
-static volatile uint8_t uv_state, uv_target;
+static uint64_t step_when BOARD_SAFETY;
+static volatile uint8_t step_state BOARD_SAFETY;
+static volatile uint8_t uv_state BOARD_SAFETY, uv_target BOARD_SAFETY;
 static void uv_compare(void);
 
 /* Interrupts off. The pin low through its PORT bit (COM5A disconnected:
@@ -200,8 +200,8 @@ void board_motor(int on)
    closer, by 39 ticks; the part itself needs a few cycles). An exposure
    is at least 1 ms. */
 #define UV_SETTLE 256u
-static uint64_t uv_on_at, uv_off_at, uv_shift;
-static volatile uint8_t uv_level, uv_want;
+static uint64_t uv_on_at BOARD_SAFETY, uv_off_at BOARD_SAFETY, uv_shift BOARD_SAFETY;
+static volatile uint8_t uv_level BOARD_SAFETY, uv_want BOARD_SAFETY;
 
 /* The port bit first: while COM4C is connected it does not drive the pin,
    and the moment COM4C lets go the pin takes the port bit, which must
@@ -356,6 +356,28 @@ void board_write(const uint8_t *data, size_t size)
 uint16_t board_rx_lost(void) { uint16_t n; cli(); n = rx_lost; sei(); return n; }
 uint16_t board_tx_lost(void) { uint16_t n; cli(); n = tx_lost; sei(); return n; }
 
+/* ---- the stack's canary ----------------------------------------------------------------
+   The stack grows down from RAMEND towards the end of .bss and .noinit;
+   stack.ld puts the canary at the first byte past them (__stack_canary)
+   and has the link fail unless __stack_reserve bytes fit above it. A stack
+   that outgrows all the room there is writes over the canary before any
+   variable; the loop checks it every pass (fw_stack_fault). */
+extern uint16_t __stack_canary;
+#define CANARY 0xC0DEu /* not the paint avr-run fills SRAM with, nor zeros */
+
+int board_stack_ok(void) { return *(volatile uint16_t *)&__stack_canary == CANARY; }
+
+#ifdef RAMPS_TEST_OVERRUN
+/* Test builds only: every byte from the stack pointer down to the canary
+   written, as frames that went that deep would (SP is the next free byte,
+   so nothing in use is touched; no variable lies above the canary). */
+void board_test_overrun(void)
+{
+    volatile uint8_t *p = (volatile uint8_t *)SP;
+    while (p >= (volatile uint8_t *)&__stack_canary) *p-- = 0;
+}
+#endif
+
 /* ---- idle, watchdog, EEPROM ------------------------------------------------------------------ */
 /* The wake-up alarm is Timer3's compare A (Timer3 runs with 4 and 5): an
    OCR write on Timer5 itself made simavr miss the step compare's match. */
@@ -407,6 +429,7 @@ void board_init(void)
 {
     uint32_t *const counter = (uint32_t *)0;
     uint32_t was;
+    *(volatile uint16_t *)&__stack_canary = CANARY;
     /* pins: STEP and DIR low, the driver off, UV off, the endstop pulled up */
     PORTL &= (uint8_t)~(_BV(PL3) | _BV(PL1));
     DDRL |= _BV(PL3) | _BV(PL1);
