@@ -230,9 +230,10 @@ typedef struct fw_state {
 /* plan_workspace: FW_PLAN_WORKSPACE(config->max_bins) bytes, 8-byte aligned. */
 void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *plan_workspace, size_t workspace_size);
 /* Bytes from the host, in order, from the main loop (not an interrupt).
-   Returns how many it took: it stops after a frame whose work goes on in
-   the next passes of fw_run (a mask or profile frame); offer the rest
-   again. */
+   Returns how many it took: none while the step queue is to be refilled
+   (the steps come first: fw_run refills it), and it stops after a frame
+   whose work goes on in the next passes of fw_run (a mask or profile
+   frame); offer the rest again after fw_run. */
 size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
 /* Does what is due at tick `now`; returns the tick of the next deadline. */
 uint64_t fw_run(fw_state *fw, uint64_t now);

@@ -216,7 +216,9 @@ static uint32_t ramp_of(const fw_axis *axis, uint64_t interval)
     return (uint32_t)div64(div64(axis->half_k, interval), interval);
 }
 
-static void shape(fw_axis *axis, uint64_t interval)
+/* Not inlined into take_step: its divisions' registers would be saved
+   and restored on every step. */
+static FW_NOINLINE void shape(fw_axis *axis, uint64_t interval)
 {
     uint32_t distance = axis->steps - 1, ramp = ramp_of(axis, interval);
     if (distance > 0) {

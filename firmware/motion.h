@@ -19,6 +19,15 @@
 
 #define FW_NEVER UINT64_MAX
 
+/* A function a compiler must not inline (where it would otherwise inline
+   one called once): its locals, or its registers saved, would weigh on
+   every call of the function around it. */
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+
 typedef struct fw_axis_config {
     uint32_t steps_per_mm;   /* steps per millimetre of Z */
     uint32_t max_speed;      /* steps per second, every move */

@@ -37,10 +37,10 @@
    in a third, none over 12,600). At 5 mm/s (8,000 a step) a pass with a
    ramp step and a frame would not fit. */
 #ifndef BOARD_MAX_SPEED_UM_S
-#define BOARD_MAX_SPEED_UM_S 2500ul
+#define BOARD_MAX_SPEED_UM_S 10000ul
 #endif
 #define BOARD_ACCEL_MM_S2    50u
-#define BOARD_HOME_SPEED_UM_S 2500ul
+#define BOARD_HOME_SPEED_UM_S 5000ul
 /* the same in steps per second (the core's units) */
 #define BOARD_MAX_STEPS_S  (BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
 #define BOARD_HOME_STEPS_S (BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
@@ -91,7 +91,7 @@
    (2,860 cycles each), 32 planes of the plan's reversal (150 each). */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
-#define FW_STEP_FILL 1u
+#define FW_STEP_FILL 4u
 #define FW_DECODE_BYTES 8u
 #define FW_CRC_BYTES 16u
 #define FW_PLAN_BINS 2u
@@ -128,10 +128,11 @@ uint16_t board_tx_lost(void);
 /* Z: arms Timer5's compare unit A to raise STEP at tick `when` with DIR set
    to `dir` (+1 up) now; 0 (nothing armed, a BOARD_MARK_LATE) when `when` is
    too close or past; UINT64_MAX disarms. board_step_pulse ends the pulse
-   (in the compare interrupt, which calls ramps_step_due: main.c's). */
+   (in the compare interrupt, which calls ramps_step_due: main.c's, 1 when
+   the queue ran out and the loop must wake). */
 int board_step_arm(uint64_t when, int dir);
 void board_step_pulse(void);
-void ramps_step_due(void);
+int ramps_step_due(void);
 int board_endstop(void);
 void board_motor(int on);
 /* UV on from tick `when` to `until` (on = 1), switched by Timer4's compare

@@ -27,7 +27,8 @@ static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
 static int port_step_arm(void *ctx, uint64_t when, int dir) { (void)ctx; return board_step_arm(when, dir); }
 static void port_step_pulse(void *ctx, int dir) { (void)ctx; (void)dir; board_step_pulse(); }
-void ramps_step_due(void) { fw_step_interrupt(&fw); }
+/* 1 when the loop must wake: the queue ran out (or the next step could not be armed) */
+int ramps_step_due(void) { fw_step_interrupt(&fw); return !fw.steps.running; }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until) { (void)ctx; board_uv(on, when, until); }
 static void port_motor(void *ctx, int on) { (void)ctx; board_motor(on); }
