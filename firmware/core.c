@@ -812,9 +812,9 @@ static void step_fault(fw_state *fw, uint64_t now)
    step cannot go out on time (its tick passed, or the timer could not be
    armed). Homing's one-step phases queue one step at a time: each reads
    the switch after the step before it went out. The approach queues
-   ahead like a move: it sees the switch a queue's steps late (16 steps,
-   0.04 mm on RAMPS) and brakes from there, and backing off measures from
-   where it stopped, so the zero is the same. */
+   ahead like a move: it sees the switch up to a queue and a half of steps
+   late (refilled at half) and brakes from there, and backing off measures
+   from where it stopped, so the zero is the same. */
 static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;

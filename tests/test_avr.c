@@ -12,7 +12,7 @@
        the tick (the dwell after M106 counts from M106 and Timer4 ends it,
        so the host's round trips between the lines add nothing), and every
        loop pass shorter than PASS_MAX (below: the time the step queue
-       covers at the top speed, less its margin), with every tenth layer's
+       covers at the top speed, less its margin), with every 25th layer's
        peel at the top speed;
      - a binary-protocol print by the host tool (adaslice print), masks
        streaming while Z moves: the same step checks, and tests/zcheck.h's
@@ -337,7 +337,7 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 
 #define LAYER_UM 50
 #define PEEL_UM 100
-/* every tenth layer's peel: long enough to cruise at the top speed (its
+/* every 25th layer's peel: long enough to cruise at the top speed (its
    ramps are 1 mm at 10 mm/s and 50 mm/s^2) */
 #define LONG_PEEL_UM 3000
 #define TOP_F (BOARD_MAX_SPEED_UM_S * 60u / 1000u) /* the top speed in mm/min */
@@ -349,14 +349,14 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 /* Layer `layer` of a G-code print as resin hosts send it: the lift above
    the last layer (from layer 2 on) and the way down to this one's top,
    then the light on for a dwell and off. The moves go into `moves` (F300
-   and F180, under the board's top speed; every tenth layer a long peel at
+   and F180, under the board's top speed; every 25th layer a long peel at
    the top speed, both ways). Returns the number of lines in `lines`: the
    moves first, then M106, G4, M107. */
 static int gcode_layer(int layer, char lines[5][48], zmove *moves, size_t *n)
 {
     const int32_t spmm = (int32_t)BOARD_STEPS_PER_MM;
     int32_t top = layer * LAYER_UM * spmm / 1000;
-    int k = 0, fast = layer % 10 == 0;
+    int k = 0, fast = layer % 25 == 0;
     unsigned up_f = fast ? TOP_F : 300u, down_f = fast ? TOP_F : 180u;
     if (layer > 1) {
         int32_t lift = (layer - 1) * LAYER_UM * spmm / 1000 + (fast ? LONG_PEEL_UM : PEEL_UM) * spmm / 1000;

@@ -6,19 +6,19 @@
    arms each; the compare interrupt calls fw_step_interrupt), and the UV
    light is switched by Timer4's compare unit at an exposure's two ticks,
    so neither waits for the loop. The loop only has to refill the step
-   queue before it runs dry; each of its passes is held under a step
-   interval at the top speed (board.h, FW_STEP_FILL and the pieces of a
-   pass; measured under simavr by tests/test_avr.c). */
+   queue before it runs dry: it does once half has gone out, and each of
+   its passes is held well under the time the other half covers at the top
+   speed (board.h, FW_STEP_FILL and the pieces of a pass; measured under
+   simavr by tests/test_avr.c). */
 #include "../../fw.h"
 #include "board.h"
 #include <avr/io.h>
 
 /* Bytes handed to the core per pass; between passes the loop runs the
    core's timed work (and fw_run refreshes the watchdog). Each costs the
-   deframer and its CRC about 250 cycles (make bench: avr-run
-   --profile-passes), so 8 keep a pass's share near 2,000 of the 16,000 a
-   step may take at the top speed; the line brings a byte every 1,389
-   cycles, so the loop still drains the ring faster than it fills. */
+   deframer and its CRC a few hundred cycles (avr-run --profile-passes), so
+   8 keep a pass's share small; the line brings a byte every 1,389 cycles,
+   so the loop still drains the ring faster than it fills. */
 #define CHUNK 8u
 
 static fw_state fw;
