@@ -119,7 +119,7 @@ static int print_hand(const char *image, const char *log, const char *z, const c
     if (pid <= 0 || !pty[0]) { printf("bench_avr: FAILED: avr-run did not start %s\n", image); stop(pid); return 1; }
     snprintf(cmd, sizeof cmd,
              "%s print examples/models/hand_closed.obj --scale %s --port %s --exposure 0.05 --penetration 0.1 --bottom-layers 1 "
-             "--bottom-exposure 0.1 --peel 0.3 --peel-speed 5 --return-speed 5 --settle 0.02%s%s > /dev/null 2>&1",
+             "--bottom-exposure 0.1 --peel 3 --peel-speed 10 --return-speed 10 --settle 0.02%s%s > /dev/null 2>&1",
              arg_tool, scale, pty, report ? " --report " : "", report ? report : "");
     t0 = now_s();
     status = system(cmd);
@@ -178,6 +178,7 @@ int main(int argc, char **argv)
         uint64_t *at = NULL;
         int *dir = NULL;
         size_t steps = 0, cap = 0, i, from, late_worst = 0;
+        uint64_t shortest = UINT64_MAX;
         long pos, start_steps = 0;
         avr_passes ps = {0, 0, 0, 0, 0, 0, 0, 0};
         double wall;
@@ -221,14 +222,25 @@ int main(int argc, char **argv)
                 (void)fw_axis_step(&axis, 0);
                 if (off > late_worst) late_worst = off;
             }
+            for (k = i + 1; k < j; k++)
+                if (at[k] - at[k - 1] < shortest) shortest = at[k] - at[k - 1];
             pos += dir[i] * (long)(j - i);
             i = j;
         }
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
                "%lu refused as late\n", steps, late_worst, late_worst / 16.0, ps.late);
-        printf("  worst loop pass %lu cycles, %lu while Z moves (its interrupts in; the loop's own work %lu, %lu), "
-               "a step every %lu cycles at the top speed; stack peak %lu bytes\n",
-               ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), ps.stack);
+        {
+            /* the step queue's half at the top speed: what a pass begins with */
+            unsigned long cover = (unsigned long)(FW_STEP_QUEUE / 2u) * (BOARD_CPU_HZ / BOARD_MAX_STEPS_S);
+            printf("  Z's top speed from the pin edges: %.2f mm/s (the shortest interval %llu cycles; BOARD_MAX_SPEED_UM_S %lu), "
+                   "peels of 3 mm at 10 mm/s\n",
+                   shortest < UINT64_MAX ? (double)BOARD_CPU_HZ / (double)shortest / BOARD_STEPS_PER_MM : 0.0,
+                   (unsigned long long)(shortest < UINT64_MAX ? shortest : 0), (unsigned long)BOARD_MAX_SPEED_UM_S);
+            printf("  worst loop pass %lu cycles, %lu while Z moves (its interrupts in; the loop's own work %lu, %lu); half the "
+                   "step queue (%u steps) covers %lu cycles at the top speed: %.0f %% of it to spare; stack peak %lu bytes\n",
+                   ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned)(FW_STEP_QUEUE / 2u), cover,
+                   100.0 * (1.0 - (double)ps.worst / (double)cover), ps.stack);
+        }
         free(at);
         free(dir);
 

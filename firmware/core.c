@@ -11,6 +11,21 @@ static uint8_t steps_queued(const fw_state *fw) { return (uint8_t)(fw->steps.hea
 
 /* Z moves until its last step is out, not merely computed. */
 static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_queued(fw); }
+/* The steps the queue may hold: homing's one-step phases queue one at a
+   time (each reads the switch after the step before it went out). */
+static uint8_t steps_room(const fw_state *fw) { return fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE; }
+/* Steps to compute: the queue is refilled once half of it has gone out
+   (homing's one step, once it has), and then to the full (short_by: a
+   refill the budget cut), so that a pass computes several steps (its own
+   work is a good part of a step interval on an 8-bit core) while the
+   other half covers the wait, and a pass that computes none (a frame, a
+   piece of G-code or of the print, a slice of a held frame) begins with
+   more than half the queue. */
+static int steps_wanted(const fw_state *fw)
+{
+    uint8_t queued = steps_queued(fw), room = steps_room(fw);
+    return fw_axis_busy(&fw->axis) && queued < room && (queued <= room / 2u || fw->steps.short_by);
+}
 static void fill_steps(fw_state *fw, uint64_t now);
 static void stop_dead(fw_state *fw, uint8_t error, uint64_t now);
 
@@ -882,6 +897,9 @@ size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
     size_t i = 0, n = 0;
     int gcode = !fw->binary, line = 0; /* only a frame (below) changes `binary` */
     if (fw->decoding) return 0;
+    /* the steps come first: the bytes wait (in the port's ring) while the
+       queue is to be refilled */
+    if (steps_wanted(fw)) return 0;
     /* Up to the byte that ends a frame or a G-code line. A frame's work is
        its pass's share, and the steps (a move it started has its first
        step a step lead on, far beyond a pass) come in the next; a line
@@ -953,19 +971,20 @@ static int endstop_misplaced(const fw_state *fw)
    not be armed: STEP_LATE) or the endstop closes outside homing where it
    cannot (ENDSTOP), else 0. Homing's one-step phases queue one step at a time: each reads
    the switch after the step before it went out. The approach queues
-   ahead like a move: it sees the switch a queue's steps late (16 steps,
-   0.04 mm on RAMPS) and brakes from there, and backing off measures from
-   where it stopped, so the zero is the same. */
+   ahead like a move: it sees the switch up to a queue and a half of steps
+   late (refilled at half) and brakes from there, and backing off measures
+   from where it stopped, so the zero is the same. */
 static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
-    uint8_t room = fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE;
+    uint8_t room = steps_room(fw);
     q->short_by = 0;
     if (q->late) return LINK_ERR_STEP_LATE;
     if (fw->halted && fw_axis_busy(&fw->axis)) { /* G-code's G28: a halted core moves nothing */
         fw_axis_stop(&fw->axis);
         say_halted(fw);
     }
+    if (!steps_wanted(fw)) return 0;
     while (fw_axis_busy(&fw->axis) && steps_queued(fw) < room) {
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir, closed;
@@ -1082,13 +1101,24 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     /* what the print or G-code just started */
     fill_steps(fw, now);
 
-    /* refilled as each step leaves; homing reads the switch after each */
-    if (fw->steps.short_by) next = now; /* the rest of the queue on the next pass */
-    else if (steps_queued(fw)) next = earliest(next, fw->steps.tick[fw->steps.tail % FW_STEP_QUEUE]);
-    /* moving with nothing queued: the interrupt took the last queued step
-       after fill_steps ran (homing queues one), so refill at once; waiting
-       for the next step's own tick would find it past (STEP_LATE) */
-    else if (fw_axis_busy(&fw->axis)) next = now;
+    /* the next refill (steps_wanted), and once the last step has gone
+       out, the move's end */
+    if (fw->steps.short_by) {
+        next = now; /* the rest of the queue on the next pass */
+    } else {
+        uint8_t tail = fw->steps.tail, last = (uint8_t)(fw->steps.head - tail - 1u);
+        uint8_t half = (uint8_t)((steps_room(fw) + 1u) / 2u - 1u);
+        if (last != 0xFFu) { /* queued: the tail's index is read once, as the interrupt moves it */
+            if (fw_axis_busy(&fw->axis) && half < last) last = half;
+            next = earliest(next, fw->steps.tick[(uint8_t)(tail + last) % FW_STEP_QUEUE]);
+        } else if (fw_axis_busy(&fw->axis)) {
+            /* moving with nothing queued: the interrupt took the last
+               queued step after fill_steps ran (homing queues one), so
+               refill at once; waiting for the next step's own tick would
+               find it past */
+            next = now;
+        }
+    }
     if (fw->watchdog_half) next = earliest(next, now + fw->watchdog_half);
     if (fw->decoding) next = now; /* the frame's next slice, in the next pass */
     if (fw->state == LINK_STATE_PRINTING) {

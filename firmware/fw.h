@@ -34,16 +34,18 @@
 
    Bounded work a pass: a pass of the loop (fw_receive, then fw_run) does
    one piece of work beyond its bookkeeping, so that it stays shorter than
-   a step interval at the top speed and the loop computes steps faster
-   than they leave, whatever else it does: up to FW_STEP_FILL steps (the
-   first of a move shapes it), or one frame received (its reply; the rest
+   the time half the step queue covers at the top speed, whatever else it
+   does: up to FW_STEP_FILL steps (the first of a move shapes it), or one
+   frame received (its reply; the rest
    of the bytes wait for the next pass), or one of G-code's pieces (a
    line's check, its run, a G0/G1's start, a move's or a dwell's end:
    gcode.h), or a move's start by the print, or one slice of a held
    frame's work (FW_DECODE_BYTES of a mask's code and FW_CRC_BYTES of its
    rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES of the plan's
-   reversal). The steps come first; the others wait for a
-   pass that computed none. The wire protocol is in link/PROTOCOL.md. */
+   reversal). The steps come first: the queue is refilled once half of it
+   has gone out (bytes wait in the port's ring meanwhile), and the others
+   wait for a pass that computed none, which so begins with more than
+   half the queue. The wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>
@@ -57,19 +59,19 @@
 
 /* The steps queued for the step timer: written by the loop (head), read by
    the interrupt (tail). Single producer, single consumer, indices of one
-   byte so that each side's update is one store on any MCU. The queue must
-   cover the steps due while the loop is away: more than the loop's worst
-   pass (plus its wake-up) divided by the shortest step interval. A port
+   byte so that each side's update is one store on any MCU. Half the queue
+   must cover the steps due while the loop is away: more than the loop's
+   worst pass (plus its wake-up) divided by the shortest step interval. A port
    whose passes are long against its steps sets its own (a power of two up
    to 128; each entry costs 9 bytes of RAM). */
 #ifndef FW_STEP_QUEUE
 #define FW_STEP_QUEUE 8u
 #endif
-/* At most this many steps are computed in one pass of the loop (the fills
-   of its fw_receive and of the fw_run that ends it share them), so that a
-   pass does a bounded amount of motion arithmetic; fw_run asks to be called
-   again at once (its deadline `now`) while the queue is short for want of
-   it. The default is the queue's length. */
+/* At most this many steps are computed in one pass of the loop (fw_run's
+   two fills share them), so that a pass does a bounded amount of motion
+   arithmetic; fw_run asks to be called again at once (its deadline `now`)
+   while a refill is short for want of it. The default is the queue's
+   length. */
 #ifndef FW_STEP_FILL
 #define FW_STEP_FILL FW_STEP_QUEUE
 #endif
@@ -231,9 +233,10 @@ typedef struct fw_state {
 /* plan_workspace: FW_PLAN_WORKSPACE(config->max_bins) bytes, 8-byte aligned. */
 void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *plan_workspace, size_t workspace_size);
 /* Bytes from the host, in order, from the main loop (not an interrupt).
-   Returns how many it took: it stops after a frame whose work goes on in
-   the next passes of fw_run (a mask or profile frame); offer the rest
-   again. */
+   Returns how many it took: none while the step queue is to be refilled
+   (the steps come first: fw_run refills it), and it stops after a frame
+   whose work goes on in the next passes of fw_run (a mask or profile
+   frame); offer the rest again after fw_run. */
 size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now);
 /* Does what is due at tick `now`; returns the tick of the next deadline. */
 uint64_t fw_run(fw_state *fw, uint64_t now);

@@ -102,89 +102,112 @@ static uint64_t ceil_div(uint64_t x, uint64_t y)
     return x / y + (x % y != 0);
 }
 
-/* The same, searched from `guess`: the result is still the least t with
-   t * t >= x, whatever the guess. A step's tick is its extrapolation from
-   the three before give or take a few ticks past a ramp's first few dozen
-   steps; short ramps (an 8-bit core's, two dozen steps at its top speed)
-   miss by tens to hundreds. One Newton step from the guess, t - g being
-   about (x - g^2) / 2g, brings a miss within a tick or two, and the search
-   walks the squares by adding 2g + 1: one multiplication and at most one
-   32-bit division where the root costs 30 rounds. */
+/* The same, searched from `guess` (0: none): the result is still the
+   least t with t * t >= x, whatever the guess. The ramps' guesses
+   (ramp_ticks) are a tick or two off past their first few dozen steps, and
+   tens to hundreds before: one Newton step, t - g being about
+   (x - g^2) / 2g, brings a miss within a tick or two. Then the search walks
+   the squares by 2g + 1 in 32 bits (an 8-bit core does 32 bits several
+   times faster than 64), for roots under 2^26 (a ramp of 0.9 s at 72 MHz,
+   33 s at 2 MHz; longer ones take the full root): one multiplication, at
+   most one 32-bit division where the root costs 30 rounds. */
 static uint64_t ceil_sqrt_near(uint64_t x, uint64_t guess)
 {
     int tries;
     uint32_t g;
+    int32_t d; /* g^2 - x */
     uint64_t sq, off;
-    if (guess == 0 || guess >= 0xFFFFFFFFu) return ceil_sqrt(x);
+    if (guess == 0 || guess >= (uint32_t)1 << 26) return ceil_sqrt(x);
     g = (uint32_t)guess;
     sq = mul32(g, g);
     off = sq < x ? x - sq : sq - x;
     if (off > 8u * (uint64_t)g) { /* more than about 4 off */
-        uint64_t step;
-        if (off >> 32) return ceil_sqrt(x);
-        step = div64(off, 2u * (uint64_t)g); /* from above: < g / 2 */
-        if (sq < x && step >= 0xFFFFFFFFu - g) return ceil_sqrt(x);
-        g = sq < x ? g + (uint32_t)step : g - (uint32_t)step;
+        uint32_t step;
+        if (off > 0xFFFFFFFFu) return ceil_sqrt(x);
+        step = (uint32_t)off / (2u * g); /* from above: < g / 2 */
+        if (sq < x && step >= ((uint32_t)1 << 26) - g) return ceil_sqrt(x);
+        g = sq < x ? g + step : g - step;
         sq = mul32(g, g);
+        off = sq < x ? x - sq : sq - x;
+        if (off > 8u * (uint64_t)g) return ceil_sqrt(x);
     }
-    for (tries = 0; tries < 4; tries++) {
-        if (sq < x) { /* (g + 1)^2 */
-            sq += 2u * (uint64_t)g + 1u;
+    /* |d| <= 8g < 2^29, and each move below adds less than 2^27 */
+    d = sq < x ? -(int32_t)off : (int32_t)off;
+    for (tries = 0; tries < 6; tries++) {
+        if (d < 0) { /* (g + 1)^2 */
+            d += (int32_t)(2u * g + 1u);
             g++;
-        } else if (sq - 2u * (uint64_t)g + 1u >= x) { /* (g - 1)^2 >= x; g >= 1 here */
-            sq -= 2u * (uint64_t)g - 1u;
+        } else if ((uint32_t)d >= 2u * g - 1u) { /* (g - 1)^2 >= x; g >= 1 as x > 0 or d > 0 */
+            d -= (int32_t)(2u * g - 1u);
             g--;
         } else {
             return g;
         }
-        if (g == 0 || g == 0xFFFFFFFFu) break;
     }
     return ceil_sqrt(x);
 }
 
-/* Ticks from the start to accelerating step j: the least t with
-   t^2 >= 2 j T^2 / a. T^2 is split as k_quot a + k_rem so that the
-   ceiling of 2 j T^2 / a is exact without a 128-bit product; 2 j k_rem
-   < T^2 / c^2 fits as j <= ramp (or j = 1). `guess` only saves time (0:
-   none). */
-static uint64_t accel_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+/* X_i = ceil(2 i T^2 / a), the accelerating form's square at step i. T^2
+   is split as k_quot a + k_rem so that the ceiling is exact without a
+   128-bit product; 2 i k_rem < T^2 / c^2 fits as i <= ramp (or i = 1). */
+static uint64_t ramp_square(const fw_axis *axis, uint32_t i)
 {
-    uint64_t twice = 2u * (uint64_t)j, quot, rem;
-    if (((twice | axis->k_quot | axis->k_rem) >> 32) == 0) {
-        quot = mul32((uint32_t)twice, (uint32_t)axis->k_quot);
-        rem = axis->k_rem ? mul32((uint32_t)twice, (uint32_t)axis->k_rem) : 0; /* 0 when a divides T^2 */
+    uint64_t twice = 2u * (uint64_t)i;
+    if (axis->square_step) return mul32(i, axis->square_step); /* a divides T^2, as it often does */
+    if (twice <= 0xFFFFFFFFu && axis->k_quot <= 0xFFFFFFFFu)
+        return mul32((uint32_t)twice, (uint32_t)axis->k_quot) + ceil_div(mul32((uint32_t)twice, axis->k_rem), axis->config.accel);
+    return twice * axis->k_quot + ceil_div(twice * axis->k_rem, axis->config.accel);
+}
+
+/* A(i) = ceil(sqrt(X_i)): ticks from a move's start to its accelerating
+   step i, and from decelerating step n - 1 - i to its end. A depends on i
+   alone, and the ramps ask for the i next to the last ones (up the
+   accelerating ramp, down the decelerating one, back down after a brake,
+   from 1 again at the next move), so the last three values are kept
+   (root_lo .. root_lo + roots - 1) and the root is searched from their
+   extrapolation by the second difference, which changes slowly: a tick
+   or two off past a ramp's first few dozen steps. A ramp lasts under 2^32
+   ticks (init), so the values are 32 bits. */
+static uint32_t ramp_ticks(fw_axis *axis, uint32_t i)
+{
+    uint32_t lo = axis->root_lo, n = axis->roots, *v = axis->root, t, guess = 0;
+    if (i >= lo && i - lo < n) return v[i - lo];
+    /* the guesses in 32 bits: ceil_sqrt_near searches from roots under 2^26 */
+    if (i == lo + n) { /* up: v[n - 1] + d1 + (d1 - d0), the differences below it */
+        if (v[n - 1] < (uint32_t)1 << 26) guess = n == 3 ? v[2] + 2u * (v[2] - v[1]) - (v[1] - v[0]) : n == 2 ? 2u * v[1] - v[0] : 0;
+        t = (uint32_t)ceil_sqrt_near(ramp_square(axis, i), guess);
+        if (n == 3) { v[0] = v[1]; v[1] = v[2]; v[2] = t; axis->root_lo = lo + 1u; }
+        else { v[n] = t; axis->roots = (uint8_t)(n + 1u); }
+    } else if (i + 1u == lo) { /* down: v[0] - d0 - (d0 - d1), the differences above it */
+        uint32_t below = n == 3 ? 2u * (v[1] - v[0]) - (v[2] - v[1]) : n == 2 ? v[1] - v[0] : 0;
+        if (v[n - 1] < (uint32_t)1 << 26 && below < v[0]) guess = v[0] - below;
+        t = (uint32_t)ceil_sqrt_near(ramp_square(axis, i), guess);
+        v[2] = v[1];
+        v[1] = v[0];
+        v[0] = t;
+        axis->root_lo = i;
+        if (n < 3) axis->roots = (uint8_t)(n + 1u);
     } else {
-        quot = twice * axis->k_quot;
-        rem = twice * axis->k_rem;
+        t = (uint32_t)ceil_sqrt(ramp_square(axis, i));
+        v[0] = t;
+        axis->root_lo = i;
+        axis->roots = 1;
     }
-    return ceil_sqrt_near(quot + ceil_div(rem, axis->config.accel), guess);
+    return t;
 }
 
 /* The first half's form: accelerating, then cruising. */
-static uint64_t rising_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+static uint64_t rising_ticks(fw_axis *axis, uint32_t j)
 {
-    if (j <= axis->ramp) return accel_ticks(axis, j, guess);
+    if (j <= axis->ramp) return ramp_ticks(axis, j);
     return mul32(j, axis->interval) + axis->offset;
 }
 
-/* `guess`: roughly step j's ticks, or 0. */
-static uint64_t step_ticks(const fw_axis *axis, uint32_t j, uint64_t guess)
+static uint64_t step_ticks(fw_axis *axis, uint32_t j)
 {
     uint32_t last = axis->steps - 1;
-    if (2u * (uint64_t)j <= last) return rising_ticks(axis, j, guess);
-    return axis->end - rising_ticks(axis, last - j, guess && guess < axis->end ? axis->end - guess : 0);
-}
-
-/* Step `done`'s ticks, guessed from the three steps before it (the last
-   at `latest`) by their second difference, which changes slowly. */
-static uint64_t next_ticks(const fw_axis *axis, uint64_t latest)
-{
-    uint64_t guess = 0;
-    if (axis->done >= 3) {
-        uint64_t up = latest + 2 * (latest - axis->latest), down = axis->latest - axis->earlier;
-        if (up > down) guess = up - down;
-    }
-    return step_ticks(axis, axis->done, guess);
+    if (j <= last / 2u) return rising_ticks(axis, j);
+    return axis->end - rising_ticks(axis, last - j);
 }
 
 /* The trapezoid's constants for cruising at `interval` ticks per step. */
@@ -193,7 +216,9 @@ static uint32_t ramp_of(const fw_axis *axis, uint64_t interval)
     return (uint32_t)div64(div64(axis->half_k, interval), interval);
 }
 
-static void shape(fw_axis *axis, uint64_t interval)
+/* Not inlined into take_step: its divisions' registers would be saved
+   and restored on every step. */
+static FW_NOINLINE void shape(fw_axis *axis, uint64_t interval)
 {
     uint32_t distance = axis->steps - 1, ramp = ramp_of(axis, interval);
     if (distance > 0) {
@@ -283,10 +308,11 @@ static int take_step(fw_axis *axis)
     if (axis->done >= axis->steps) {
         move_over(axis);
     } else {
-        uint64_t latest = axis->next - axis->start;
-        axis->next = axis->start + next_ticks(axis, latest);
-        axis->earlier = axis->latest;
-        axis->latest = latest;
+        uint32_t j = axis->done;
+        /* cruising, j - 1 and j both: t(j) = j c + offset on either half
+           (the mirror of the cruise is the same line), so t(j - 1) + c */
+        if (j - 1u > axis->ramp && j + axis->ramp < axis->steps - 1u) axis->next += axis->interval;
+        else axis->next = axis->start + step_ticks(axis, j);
     }
     return dir;
 }
@@ -309,7 +335,7 @@ static void brake(fw_axis *axis)
         /* accelerating: the way down mirrors the way up about step p, which
            is exactly the braking distance from the speed reached at p */
         axis->steps = 2 * p + 1;
-        axis->end = 2 * accel_ticks(axis, p, axis->latest);
+        axis->end = 2u * (uint64_t)ramp_ticks(axis, p);
     } else {
         /* cruising: the deceleration's first step follows step p */
         uint32_t stop = p + axis->ramp + 1;
@@ -317,10 +343,8 @@ static void brake(fw_axis *axis)
         axis->steps = stop + 1;
         axis->end = (uint64_t)stop * axis->interval + 2u * axis->offset;
     }
-    /* the guess (one more interval like the last) only saves time: the
-       step after the peak mirrors the one before it */
     if (axis->done >= axis->steps) move_over(axis);
-    else axis->next = axis->start + step_ticks(axis, axis->done, 2u * axis->latest - axis->earlier);
+    else axis->next = axis->start + step_ticks(axis, axis->done);
 }
 
 void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
@@ -338,7 +362,8 @@ void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
     if (c->home_travel > FW_AXIS_MAX_TRAVEL) c->home_travel = FW_AXIS_MAX_TRAVEL;
     t2 = (uint64_t)axis->tick_hz * axis->tick_hz;
     axis->k_quot = t2 / c->accel;
-    axis->k_rem = t2 % c->accel;
+    axis->k_rem = (uint32_t)(t2 % c->accel);
+    axis->square_step = !axis->k_rem && axis->k_quot <= 0x7FFFFFFFu ? 2u * (uint32_t)axis->k_quot : 0;
     axis->half_k = t2 / (2u * (uint64_t)c->accel);
     axis->half_k_up = ceil_div(t2, 2u * (uint64_t)c->accel);
     /* T^2 / (a c) <= 2^32 - 1 keeps the accelerating form in 64 bits */
@@ -353,7 +378,10 @@ void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
     axis->home_interval = (uint32_t)interval_of(axis, c->home_speed);
     /* a step from rest, then one after t: the mean speed 1/t over the
        interval is reached at t/2, which needs 2/t^2 <= a */
-    axis->rest_interval = (uint32_t)accel_ticks(axis, 1, 0);
+    axis->root_lo = 0; /* A(0) = 0 */
+    axis->root[0] = 0;
+    axis->roots = 1;
+    axis->rest_interval = ramp_ticks(axis, 1);
     if (axis->rest_interval < min_c) axis->rest_interval = (uint32_t)min_c;
     {
         /* the approach brakes over about its ramp, then the switch may
@@ -372,7 +400,7 @@ void fw_axis_init(fw_axis *axis, const fw_axis_config *config, uint32_t tick_hz)
     axis->count = 0;
     axis->interval = (uint32_t)min_c;
     axis->start_lead = 0;
-    axis->offset = axis->end = axis->latest = axis->earlier = 0;
+    axis->offset = axis->end = 0;
     go_idle(axis);
 }
 

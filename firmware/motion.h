@@ -19,6 +19,15 @@
 
 #define FW_NEVER UINT64_MAX
 
+/* A function a compiler must not inline (where it would otherwise inline
+   one called once): its locals, or its registers saved, would weigh on
+   every call of the function around it. */
+#if defined(__GNUC__)
+#define FW_NOINLINE __attribute__((noinline))
+#else
+#define FW_NOINLINE
+#endif
+
 typedef struct fw_axis_config {
     uint32_t steps_per_mm;   /* steps per millimetre of Z */
     uint32_t max_speed;      /* steps per second, every move */
@@ -60,7 +69,9 @@ typedef struct fw_axis { /* fields private to motion.c; position, homed,
     int homed;
     int error;               /* FW_AXIS_HOME_FAILED after a failed homing */
     /* from the config */
-    uint64_t k_quot, k_rem;  /* tick_hz^2 = k_quot * accel + k_rem */
+    uint64_t k_quot;         /* tick_hz^2 = k_quot * accel + k_rem */
+    uint32_t k_rem;
+    uint32_t square_step;    /* 2 k_quot if k_rem is 0 and it fits 32 bits, else 0 */
     uint64_t half_k;         /* floor(tick_hz^2 / (2 accel)) */
     uint64_t half_k_up;      /* the same rounded up */
     uint32_t min_interval;   /* the shortest interval any step may follow */
@@ -79,14 +90,16 @@ typedef struct fw_axis { /* fields private to motion.c; position, homed,
     uint64_t offset;         /* cruising step j at j * interval + offset */
     uint64_t end;            /* the mirror: t(j) = end - t(steps - 1 - j) */
     uint64_t start;          /* tick of the move's first step */
-    uint64_t latest;         /* ticks from start to the latest step taken */
-    uint64_t earlier;        /* the same for the step before it */
     uint64_t next;           /* tick of the next step, FW_NEVER when idle */
     uint64_t last;           /* tick of the latest step, if `stepped` */
-    int stepped;
+    /* the accelerating form's last values (motion.c's ramp_ticks): A(i) for
+       i = root_lo .. root_lo + roots - 1 */
+    uint32_t root_lo, root[3];
+    uint8_t roots;
+    uint8_t stepped;
     /* homing */
-    int phase;               /* homing's phase, 0 outside homing */
-    int seen;                /* the switch has been seen closed */
+    uint8_t phase;           /* homing's phase, 0 outside homing */
+    uint8_t seen;            /* the switch has been seen closed */
     uint32_t count;          /* slow steps of the phase */
 } fw_axis;
 

@@ -189,7 +189,8 @@ static inline void fake_init(fake_printer *p, uint16_t w, uint16_t h, uint8_t bi
 static inline void fake_free(fake_printer *p) { free(p->events); p->events = NULL; }
 
 /* Bytes to the core, which may take them over several passes (a long mask
-   frame): the passes run at once, at p->now. */
+   frame, or none while its step queue is to be refilled first): the
+   passes run at once, at p->now. */
 static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size)
 {
     while (size) {
@@ -197,6 +198,7 @@ static inline void fake_bytes(fake_printer *p, const uint8_t *data, size_t size)
         data += n;
         size -= n;
         while (p->fw.decoding) (void)fw_run(&p->fw, p->now);
+        if (!n) (void)fw_run(&p->fw, p->now);
     }
 }
 

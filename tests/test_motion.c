@@ -315,10 +315,11 @@ static void ticks_are_exact(void)
            would move steps 2 and 13 by a tick (found by search) */
         {1000000u, 400u, 2000u, 19325u, 0u, 200 * 400, 220 * 400},
         {1000000u, 400u, 2000u, 9096u, 0u, 200 * 400, 220 * 400},
-        /* the RAMPS's axis (2 MHz, 2.5 mm/s, 50 mm/s^2): a ramp of 25
+        /* the RAMPS's axis (2 MHz, 50 mm/s^2) at 2.5 mm/s: a ramp of 25
            steps, where the guess from the steps before misses by hundreds
-           of ticks and the Newton step lands it */
+           of ticks and the Newton step lands it; at 10 mm/s, 400 */
         {2000000u, 400u, 1000u, 20000u, 0u, 200 * 400, 220 * 400},
+        {2000000u, 400u, 4000u, 20000u, 0u, 200 * 400, 220 * 400},
     };
     size_t k;
     for (k = 0; k < sizeof exact_rigs / sizeof exact_rigs[0]; k++) {

@@ -23,24 +23,19 @@
 #ifndef BOARD_STEPS_PER_MM
 #define BOARD_STEPS_PER_MM 400u            /* T8x8 lead screw, 1/16 microsteps */
 #endif
-/* Z's top speed on this MCU: 2.5 mm/s, at 400 steps/mm 1,000 steps/s, one
-   step per 16,000 cycles. An 8-bit core computes motion.c's closed form in
-   64-bit integers: measured under simavr (make bench, bench/avr_bench.c),
-   about 1,600 cycles a cruising step, 3,600-4,700 on average and up to
-   6,800 on a ramp (the first step shapes the move), 7,700 for a halt and
-   the step after it. A loop pass does one piece of work (fw_run: a step,
-   a frame or a G-code line, a move's start, a slice of a held frame) on
-   top of its own 3,000-4,000 (64-bit ticks), and every pass is held under
-   the 16,000 of a step at this speed, interrupts included: the worst
-   measured is under 15,000 (tests/test_avr.c asserts it, in G-code mode
-   too: a line is checked in one pass, run in the next and its move started
-   in a third, none over 12,600). At 5 mm/s (8,000 a step) a pass with a
-   ramp step and a frame would not fit. */
+/* Z's top speed on this MCU. An 8-bit core computes motion.c's closed form
+   in 64-bit integers (make bench, bench/avr_bench.c, times each step); the
+   loop refills the step queue FW_STEP_FILL steps a pass once half of it
+   has gone out, and every pass, interrupts included, ends within three
+   quarters of the time half the queue covers at this speed
+   (tests/test_avr.c asserts it from simavr's pin edges and the loop's
+   marks, in G-code mode and with masks streaming while Z moves). */
 #ifndef BOARD_MAX_SPEED_UM_S
-#define BOARD_MAX_SPEED_UM_S 2500ul
+#define BOARD_MAX_SPEED_UM_S 10000ul
 #endif
 #define BOARD_ACCEL_MM_S2    50u
-#define BOARD_HOME_SPEED_UM_S 2500ul
+/* homing's approach, slower: braking at the switch overshoots it by v^2 / 2a */
+#define BOARD_HOME_SPEED_UM_S 5000ul
 /* the same in steps per second (the core's units) */
 #define BOARD_MAX_STEPS_S  ((uint32_t)BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
 #define BOARD_HOME_STEPS_S ((uint32_t)BOARD_HOME_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u)
@@ -85,21 +80,18 @@
 #define BOARD_WDT_MS 120u
 
 /* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
-   computed in the pass after the one that started it. The loop computes one step a pass
-   (FW_STEP_FILL) and runs again at once while the queue is short; the
-   queue holds FW_STEP_QUEUE steps, 256,000 cycles at the top speed, far
-   more than a pass (under 16,000): room for the wake-up and for a pass
-   that one day runs long. 16 x 9 bytes of SRAM. The pieces of a pass,
-   each a few thousand cycles here (avr-run --profile-passes): 8 mask code
-   bytes and 16 bytes of rows' CRC (about 122 cycles a byte, make bench: a
-   2560-pixel display's 320-byte row is 39,000 cycles, 20 passes; a
-   repeated row costs 8, one multiplication of about 1,000 cycles; with 24
-   a pass decoding code, a row's start and two repeats took 14,820 while Z
-   moved, 13,496 with 16), 2 profile bins
-   (2,860 cycles each), 32 planes of the plan's reversal (150 each). */
+   computed in the pass after the one that started it. The queue holds
+   FW_STEP_QUEUE steps (9 bytes of SRAM each); the loop refills it once
+   half has gone out, FW_STEP_FILL steps a pass (a move's first shapes
+   it: several divisions), so a pass computing steps stays short and the
+   queue's other half covers the wait. The other pieces of a pass, each a
+   few thousand cycles here (avr-run --profile-passes): 8 mask code bytes
+   and 16 bytes of rows' CRC (a 2560-pixel display's 320-byte row takes 20
+   passes; a repeated row costs one multiplication), 2 profile bins, 32
+   planes of the plan's reversal. */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
 #define FW_STEP_QUEUE 16u
-#define FW_STEP_FILL 1u
+#define FW_STEP_FILL 4u
 #define FW_DECODE_BYTES 8u
 #define FW_CRC_BYTES 16u
 #define FW_PLAN_BINS 2u
@@ -142,10 +134,11 @@ uint16_t board_tx_lost(void);
 /* Z: arms Timer5's compare unit A to raise STEP at tick `when` with DIR set
    to `dir` (+1 up) now; 0 (nothing armed, a BOARD_MARK_LATE) when `when` is
    too close or past; UINT64_MAX disarms. board_step_pulse ends the pulse
-   (in the compare interrupt, which calls ramps_step_due: main.c's). */
+   (in the compare interrupt, which calls ramps_step_due: main.c's, 1 when
+   the queue ran out and the loop must wake). */
 int board_step_arm(uint64_t when, int dir);
 void board_step_pulse(void);
-void ramps_step_due(void);
+int ramps_step_due(void);
 int board_endstop(void);
 void board_motor(int on);
 /* UV on from tick `when` to `until` (on = 1), switched by Timer4's compare

@@ -6,19 +6,19 @@
    arms each; the compare interrupt calls fw_step_interrupt), and the UV
    light is switched by Timer4's compare unit at an exposure's two ticks,
    so neither waits for the loop. The loop only has to refill the step
-   queue before it runs dry; each of its passes is held under a step
-   interval at the top speed (board.h, FW_STEP_FILL and the pieces of a
-   pass; measured under simavr by tests/test_avr.c). */
+   queue before it runs dry: it does once half has gone out, and each of
+   its passes is held well under the time the other half covers at the top
+   speed (board.h, FW_STEP_FILL and the pieces of a pass; measured under
+   simavr by tests/test_avr.c). */
 #include "../../fw.h"
 #include "board.h"
 #include <avr/io.h>
 
 /* Bytes handed to the core per pass; between passes the loop runs the
    core's timed work (and fw_run refreshes the watchdog). Each costs the
-   deframer and its CRC about 250 cycles (make bench: avr-run
-   --profile-passes), so 8 keep a pass's share near 2,000 of the 16,000 a
-   step may take at the top speed; the line brings a byte every 1,389
-   cycles, so the loop still drains the ring faster than it fills. */
+   deframer and its CRC a few hundred cycles (avr-run --profile-passes), so
+   8 keep a pass's share small; the line brings a byte every 1,389 cycles,
+   so the loop still drains the ring faster than it fills. */
 #define CHUNK 8u
 
 /* Every figure derived from board.h's, checked at compile time in this
@@ -42,7 +42,8 @@ static uint64_t plan_workspace[(FW_PLAN_WORKSPACE(BOARD_MAX_BINS) + 7u) / 8u];
 static void port_write(void *ctx, const uint8_t *data, size_t size) { (void)ctx; board_write(data, size); }
 static int port_step_arm(void *ctx, uint64_t when, int dir) { (void)ctx; return board_step_arm(when, dir); }
 static void port_step_pulse(void *ctx, int dir) { (void)ctx; (void)dir; board_step_pulse(); }
-void ramps_step_due(void) { fw_step_interrupt(&fw); }
+/* 1 when the loop must wake: the queue ran out (or the next step could not be armed) */
+int ramps_step_due(void) { fw_step_interrupt(&fw); return !fw.steps.running; }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until) { (void)ctx; board_uv(on, when, until); }
 static void port_motor(void *ctx, int on) { (void)ctx; board_motor(on); }

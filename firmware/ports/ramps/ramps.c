@@ -57,15 +57,23 @@ uint8_t board_reset_cause(void) { return reset_cause; }
    came out a turn early, and a step armed from it waited a turn (32 ms). */
 static uint64_t last_ticks BOARD_SAFETY;
 
-ISR(TIMER5_OVF_vect) { (void)board_ticks(); }
+/* Set by the interrupts that end the loop's sleep (board_idle): its alarm,
+   Timer5's overflow (a deadline past the alarm's reach is looked at again
+   each turn), and a step that left the queue empty or could not arm the
+   next (the loop refills it, or stops). A step taken from a queue that
+   holds more does not: the loop sleeps on, and steps cost it no pass. */
+static volatile uint8_t wake;
 
+ISR(TIMER5_OVF_vect) { (void)board_ticks(); wake = 1; }
+
+/* the ticks since the last reading, as 16 bits: a reading below the one
+   before wraps */
 uint64_t board_ticks(void)
 {
     uint8_t sreg = SREG;
     uint64_t now;
     cli();
-    now = (last_ticks & ~(uint64_t)0xFFFFu) | TCNT5;
-    if (now < last_ticks) now += 0x10000u;
+    now = last_ticks + (uint16_t)(TCNT5 - (uint16_t)last_ticks);
     last_ticks = now;
     SREG = sreg;
     return now;
@@ -169,7 +177,7 @@ ISR(TIMER5_COMPA_vect)
     }
     if (step_state != ARMED) return;
     TIMSK5 &= (uint8_t)~_BV(OCIE5A); /* the core arms the next */
-    ramps_step_due();
+    if (ramps_step_due()) wake = 1;
 }
 
 int board_endstop(void) { return (PIND & _BV(PD3)) != 0; }
@@ -381,7 +389,7 @@ void board_test_overrun(void)
 /* ---- idle, watchdog, EEPROM ------------------------------------------------------------------ */
 /* The wake-up alarm is Timer3's compare A (Timer3 runs with 4 and 5): an
    OCR write on Timer5 itself made simavr miss the step compare's match. */
-ISR(TIMER3_COMPA_vect) { TIMSK3 &= (uint8_t)~_BV(OCIE3A); }
+ISR(TIMER3_COMPA_vect) { TIMSK3 &= (uint8_t)~_BV(OCIE3A); wake = 1; }
 
 void board_idle(uint64_t deadline)
 {
@@ -396,10 +404,19 @@ void board_idle(uint64_t deadline)
     }
     GPIOR0 = BOARD_MARK_IDLE;
     /* sei's next instruction runs before any interrupt: none is missed
-       between the checks and sleep; the overflow wakes it within 33 ms */
+       between the checks and sleep; the overflow wakes it within 33 ms.
+       An interrupt that does not end the wait (a step, a byte sent) sleeps
+       again. */
+    wake = 0;
     sleep_enable();
+    while (!wake && rx_head == rx_tail) {
+        sei();
+        sleep_cpu();
+        __asm__ __volatile__("nop");
+        __asm__ __volatile__("nop");
+        cli();
+    }
     sei();
-    sleep_cpu();
     sleep_disable();
 }
 
