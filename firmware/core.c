@@ -14,17 +14,19 @@ static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_
 /* The steps the queue may hold: homing's one-step phases queue one at a
    time (each reads the switch after the step before it went out). */
 static uint8_t steps_room(const fw_state *fw) { return fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE; }
-/* Steps to compute: the queue is refilled once half of it has gone out
-   (homing's one step, once it has), and then to the full (short_by: a
+/* Steps to compute: the queue is refilled once a quarter of it has gone
+   out (homing's one step, once it has), and then to the full (short_by: a
    refill the budget cut), so that a pass computes several steps (its own
-   work is a good part of a step interval on an 8-bit core) while the
-   other half covers the wait, and a pass that computes none (a frame, a
-   piece of G-code or of the print, a slice of a held frame) begins with
-   more than half the queue. */
+   work is a good part of a step interval on an 8-bit core) while the rest
+   covers the wait, and a pass that computes none (a frame, a piece of
+   G-code or of the print, a slice of a held frame) begins with more than
+   three quarters of the queue. From half, a refill on a ramp (two passes
+   of FW_STEP_FILL steps) took longer than the half it had to cover: the
+   RAMPS board's queue ran dry at a deceleration's end. */
 static int steps_wanted(const fw_state *fw)
 {
     uint8_t queued = steps_queued(fw), room = steps_room(fw);
-    return fw_axis_busy(&fw->axis) && queued < room && (queued <= room / 2u || fw->steps.short_by);
+    return fw_axis_busy(&fw->axis) && queued < room && (queued <= room - room / 4u || fw->steps.short_by);
 }
 static void fill_steps(fw_state *fw, uint64_t now);
 static void stop_dead(fw_state *fw, uint8_t error, uint64_t now);
@@ -953,16 +955,17 @@ static void stop_dead(fw_state *fw, uint8_t error, uint64_t now)
 }
 
 /* The Z-min switch reads closed outside homing. At the switch's point and
-   just above it that is the axis at home (its repeatability); on the way
+   just above it that is the axis at home (its repeatability: an eighth of
+   a millimetre, a shift where a division would cost a good part of a pass
+   on an 8-bit core for every step the switch stays closed); on the way
    up, as far as homing's back-off may need (the switch's travel); anywhere
    higher the carriage has hit something or lost steps. The carriage is
    within a queue's steps of the position computed. */
-#define FW_ENDSTOP_SLACK_NM 100000u
 static int endstop_misplaced(const fw_state *fw)
 {
     const fw_axis *a = &fw->axis;
     int32_t lowest = a->position - (int32_t)FW_STEP_QUEUE;
-    int32_t allowed = a->dir < 0 ? fw_axis_steps_of_nm(a, FW_ENDSTOP_SLACK_NM) : (int32_t)a->backoff_limit;
+    int32_t allowed = a->dir < 0 ? (int32_t)(a->config.steps_per_mm >> 3) : (int32_t)a->backoff_limit;
     return lowest > allowed;
 }
 
@@ -972,7 +975,7 @@ static int endstop_misplaced(const fw_state *fw)
    cannot (ENDSTOP), else 0. Homing's one-step phases queue one step at a time: each reads
    the switch after the step before it went out. The approach queues
    ahead like a move: it sees the switch up to a queue and a half of steps
-   late (refilled at half) and brakes from there, and backing off measures
+   late (refilled at three quarters) and brakes from there, and backing off measures
    from where it stopped, so the zero is the same. */
 static int fill(fw_state *fw, uint64_t now)
 {

@@ -42,10 +42,10 @@
    gcode.h), or a move's start by the print, or one slice of a held
    frame's work (FW_DECODE_BYTES of a mask's code and FW_CRC_BYTES of its
    rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES of the plan's
-   reversal). The steps come first: the queue is refilled once half of it
-   has gone out (bytes wait in the port's ring meanwhile), and the others
-   wait for a pass that computed none, which so begins with more than
-   half the queue. The wire protocol is in link/PROTOCOL.md. */
+   reversal). The steps come first: the queue is refilled once a quarter of
+   it has gone out (bytes wait in the port's ring meanwhile), and the
+   others wait for a pass that computed none, which so begins with more
+   than three quarters of the queue. The wire protocol is in link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>

@@ -56,9 +56,9 @@
 #define CYCLES_PER_TICK BOARD_TICK_DIV
 #define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
 #define STEP_CYCLES ((unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S)) /* the shortest step interval */
-/* The step queue never runs dry: the loop refills it once half of it has
-   gone out, and a pass that computes no steps (a frame, a piece of G-code
-   or of the print, a slice of a mask) begins with more than half of it
+/* The step queue never runs dry: the loop refills it once a quarter of it
+   has gone out, and a pass that computes no steps (a frame, a piece of
+   G-code or of the print, a slice of a mask) begins with more than half of it
    (fw.h, Bounded work a pass), so the steps queued when a pass begins are
    due over at least FW_STEP_QUEUE / 2 intervals at the top speed. Every
    pass, its interrupts included, must end within three quarters of that:
@@ -984,8 +984,9 @@ static void a_stack_overrun_halts_the_printer(void)
     if (l.uvs == 2 && l.canary_at) {
         /* within a pass: every pass is shorter than a step interval at the
            top speed (the print tests assert it) */
-        CHECKF(l.uv_at[1] >= l.canary_at && l.uv_at[1] - l.canary_at < STEP_CYCLES,
-               "UV off %lld cycles after the canary changed (a pass is under %lu)", (long long)(l.uv_at[1] - l.canary_at), STEP_CYCLES);
+        CHECKF(l.uv_at[1] >= l.canary_at && l.uv_at[1] - l.canary_at < PASS_MAX,
+               "UV off %lld cycles after the canary changed (a pass is under %lu)", (long long)(l.uv_at[1] - l.canary_at),
+               (unsigned long)PASS_MAX);
         printf("    avr: the light out %llu cycles after the stack reached the canary\n",
                (unsigned long long)(l.uv_at[1] - l.canary_at));
     }

@@ -97,9 +97,9 @@ int main(void)
     config.window = BOARD_WINDOW;
     config.watchdog_ms = BOARD_WATCHDOG_MS;
     /* 5 ms: a move's first step is computed in a pass after the one that
-       started it (passes are held under a step interval at the top speed,
-       6,250 cycles: 4,100 measured under QEMU, tests/test_qemu_timing.c);
-       1 ms was too little when a pass could take 4 ms. */
+       started it, and passes are held under a step interval at the top
+       speed (tests/test_qemu_timing.c asserts it); 1 ms was too little when
+       a pass could take 4 ms. */
     config.step_lead = BOARD_CLOCK_HZ / 200u;
     config.boot_id = next_boot_id();
     port.ctx = NULL;
