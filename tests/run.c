@@ -1,7 +1,8 @@
 /* The test runner: every group of cases, then "N passed, N failed".
 
-   run_tests [--without-tools] [GROUP ...]
-   GROUPs (the NAME of tests/test_NAME.c) select what runs; --without-tools
+   run_tests [--without-tools] [--case NAME] [GROUP ...]
+   GROUPs (the NAME of tests/test_NAME.c) select what runs; --case runs only
+   the cases of that name (tests/under_load.sh repeats one); --without-tools
    leaves out the cases that need programs besides the C compiler and lists
    them. */
 #include "../adaslice.h"
@@ -10,6 +11,7 @@
 #include <string.h>
 
 static int passed, failed, left, case_failures, without_tools;
+static const char *only_case;
 
 void check_fail(const char *file, int line, const char *what)
 {
@@ -21,6 +23,7 @@ int check_case_failed(void) { return case_failures > 0; }
 
 void check_run(const char *name, check_case_fn fn)
 {
+    if (only_case && strcmp(name, only_case)) return;
     case_failures = 0;
     fn();
     if (case_failures) { failed++; printf("FAIL %s (%d checks failed)\n", name, case_failures); }
@@ -50,6 +53,7 @@ int main(int argc, char **argv)
     int i, j, chosen = 0;
     for (j = 1; j < argc; j++) {
         if (!strcmp(argv[j], "--without-tools")) { without_tools = 1; continue; }
+        if (!strcmp(argv[j], "--case") && j + 1 < argc) { only_case = argv[++j]; continue; }
         for (i = 0; i < (int)(sizeof groups / sizeof groups[0]) && strcmp(argv[j], groups[i].name); i++) {}
         if (i == (int)(sizeof groups / sizeof groups[0])) { printf("no test group %s\n", argv[j]); return 2; }
         chosen++;

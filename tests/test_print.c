@@ -178,18 +178,27 @@ static void check_exposures(const print_report *r)
     }
 }
 
-/* The record from event `from` on against layers first .. of the report. */
-static zsummary check_record_from(const sim_log *l, const print_report *rep, size_t from, uint32_t first)
+/* The record from event `from` on against layers first .. of the report;
+   with `peel_um`, a whole print's, whose Z visits each layer's top and
+   then the peel above it. */
+static zsummary check_record_from(const sim_log *l, const print_report *rep, size_t from, uint32_t first, uint32_t peel_um)
 {
     size_t k;
     long pos = l->start_steps;
     zexpect e;
+    zsummary s;
+    uint64_t *path = peel_um ? (uint64_t *)calloc(2u * rep->layers + 1u, sizeof *path) : NULL;
     for (k = 0; k < from; k++) if (l->ev[k].kind == ZEV_STEP) pos += l->ev[k].value;
+    for (k = 0; path && k < rep->layers; k++) {
+        path[2 * k] = (uint64_t)rep->tops[k] * rep->bin_nm;
+        path[2 * k + 1] = path[2 * k] + peel_um * 1000u;
+    }
     memset(&e, 0, sizeof e);
     e.tick_hz = l->tick_hz;
     e.steps_per_mm = (uint32_t)l->steps_per_mm;
     e.max_speed = (uint32_t)l->max_speed;
     e.accel = (uint32_t)l->accel;
+    e.jitter = 0; /* the sim's clock puts each step out at its tick */
     e.start_position = pos;
     e.layers = rep->layers;
     e.first = first;
@@ -197,12 +206,19 @@ static zsummary check_record_from(const sim_log *l, const print_report *rep, siz
     e.bin_nm = rep->bin_nm;
     e.crcs = rep->crcs;
     e.exposure_ms = rep->exposures;
-    return zcheck_record(l->ev + from, l->count - from, &e);
+    e.path_nm = path;
+    e.path_len = path ? 2u * rep->layers : 0;
+    s = zcheck_record(l->ev + from, l->count - from, &e);
+    CHECKF(!peel_um || (s.moves >= 2u * rep->layers && s.ramp_windows), "%zu moves from rest and %zu ramp windows checked for %u layers",
+           s.moves, s.ramp_windows, rep->layers);
+    free(path);
+    return s;
 }
 
 /* The record against the report: every layer shown once with the host's
-   mask, at its exact height, the motion within limits. */
-static void check_print(const char *log_path, const char *report_path, int expect_link_pause)
+   mask, at its exact height, the motion within limits, Z's steps the
+   heights moved with a peel of `peel_um` after each layer. */
+static void check_print(const char *log_path, const char *report_path, int expect_link_pause, uint32_t peel_um)
 {
     sim_log l;
     print_report r;
@@ -211,7 +227,7 @@ static void check_print(const char *log_path, const char *report_path, int expec
     CHECKF(read_print_report(report_path, &r), "cannot read the report %s", report_path);
     if (check_case_failed()) { free(l.ev); print_report_free(&r); return; }
     check_exposures(&r);
-    s = check_record_from(&l, &r, 0, r.first);
+    s = check_record_from(&l, &r, 0, r.first, peel_um);
     CHECKF(s.shows == r.layers, "%zu masks shown for %u layers", s.shows, r.layers);
     /* each step left at its tick: 10 us is 100 ticks of the sim's clock */
     CHECKF(!l.unscheduled && l.worst_step_offset * 100000u <= l.tick_hz,
@@ -281,7 +297,7 @@ static void full_print_on_the_simulator(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0);
+    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0, 2000);
     cli_free(&r);
 }
 
@@ -305,7 +321,7 @@ static void print_through_a_faulty_line(void)
         CHECKF(up_drop + up_bad > up / 200 && down_drop + down_bad > down / 200, "faults up %lu+%lu of %lu, down %lu+%lu of %lu",
                up_drop, up_bad, up, down_drop, down_bad, down);
         free(stats);
-        check_print(cli_path("sim2.log"), cli_path("report2.json"), 0);
+        check_print(cli_path("sim2.log"), cli_path("report2.json"), 0, 2000);
     }
     cli_free(&r);
 }
@@ -324,7 +340,7 @@ static void print_survives_a_lost_link(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     child_stop(&relay);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1);
+    if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1, 2000);
     cli_free(&r);
 }
 
@@ -426,7 +442,7 @@ static void check_resumed_in_place(const char *log_path, const char *report_path
     size_t k, on = 0;
     CHECK(read_sim_log(log_path, &l) && read_print_report(report_path, &rep));
     if (check_case_failed()) { free(l.ev); print_report_free(&rep); return; }
-    (void)check_record_from(&l, &rep, 0, 1);
+    (void)check_record_from(&l, &rep, 0, 1, 0);
     for (k = 0; k < l.count; k++) on += l.ev[k].kind == ZEV_UV && l.ev[k].value;
     CHECKF(on >= rep.layers + split_min && on <= rep.layers + split_max, "%zu UV-on periods for %u layers, %zu to %zu split",
            on, rep.layers, split_min, split_max);
@@ -600,7 +616,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
         CHECK(log && strstr(log, " reset signal"));
         free(log);
         CHECK(rep.first == layer);
-        check_record_from(&l, &rep, from, layer);
+        check_record_from(&l, &rep, from, layer, 0);
     }
     free(l.ev);
     print_report_free(&rep);
@@ -817,7 +833,7 @@ static void resume_a_stopped_print(child *sim, const char *log, unsigned k, int 
         size_t from = nth_show_from_end(&l, rep.layers - k + 1);
         zsummary s;
         CHECK(rep.first == k);
-        s = check_record_from(&l, &rep, from, k);
+        s = check_record_from(&l, &rep, from, k, 0);
         CHECKF(s.shows == rep.layers - k + 1, "%zu layers shown from layer %u of %u", s.shows, k, rep.layers);
     }
     free(l.ev);
@@ -904,7 +920,7 @@ static void print_a_sliced_job(void)
     CHECK(strstr(r.out, "the host's plan") != NULL);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0);
+    if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0, 2000);
     /* a damaged job: the message names the file and the byte. masks.rle:
        44 bytes of header, then layer 1: bins at 44, exposure at 48, CRC at
        52, code bytes at 56 */
@@ -986,7 +1002,7 @@ static void thousand_layers_on_the_simulator(void)
     CHECK(strstr(r.out, "1000 layers, the host's plan") != NULL);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (!check_case_failed()) check_print(cli_path("sim7.log"), cli_path("report7.json"), 0);
+    if (!check_case_failed()) check_print(cli_path("sim7.log"), cli_path("report7.json"), 0, 500);
 }
 
 /* The Cortex-M3 image (20 KiB of RAM) under qemu-system-arm prints a short
@@ -1196,6 +1212,69 @@ static void printcore_drives_gcode_mode(void)
     free(l.ev);
 }
 
+/* One G-code line to the port `fd` and its replies up to "ok" (10 s at
+   most), appended to `got`; 1 when the ok came. */
+static int gcode_exchange(int fd, const char *line, char *got, size_t size)
+{
+    size_t len = strlen(got);
+    double t0 = seconds_now();
+    if (write(fd, line, strlen(line)) != (ssize_t)strlen(line)) return 0;
+    while (seconds_now() - t0 < 10) {
+        struct pollfd p = {fd, POLLIN, 0};
+        ssize_t n;
+        if (poll(&p, 1, 100) <= 0) continue;
+        n = read(fd, got + len, size - 1 - len);
+        if (n <= 0) continue;
+        len += (size_t)n;
+        got[len] = 0;
+        if (strstr(got, "ok\n") || len + 1 >= size) return strstr(got, "ok\n") != NULL;
+    }
+    return 0;
+}
+
+/* G-code mode's over-exposure, as the pins show it: M106 S255, then a G4
+   P100 that comes 400 ms (wall clock, the sim at --speed 1) after M106,
+   later than its dwell's end. The light stays on until the G4 puts it out,
+   the firmware says by how much it ran over, and the log shows the light
+   on for the dwell and that much more, to the tick the off was processed
+   (not the dwell's end the core asked for). */
+static void late_g4_shows_in_the_log(void)
+{
+    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)cli_path("late_g4.log"), (char *)"--speed", (char *)"1",
+                    (char *)"--z-start", (char *)"1", NULL};
+    char got[512] = "";
+    const char *over;
+    child sim;
+    sim_log l;
+    size_t k, exposures = 0;
+    uint64_t on = 0, lit = 0;
+    double ran_over_ms = -1;
+    int fd, ok;
+    if (!child_start(&sim, argv, "pty ", 10)) { CHECK(!"the simulator did not start"); child_stop(&sim); return; }
+    fd = open(sim.line + 4, O_RDWR | O_NOCTTY | O_NONBLOCK);
+    ok = fd >= 0 && tty_raw(fd, 115200) == 0;
+    ok = ok && gcode_exchange(fd, "G28\n", got, sizeof got) && gcode_exchange(fd, "M106 S255\n", got, sizeof got);
+    CHECKF(ok, "G28 and M106 on the simulator: %.200s", got);
+    got[0] = 0;
+    sleep_ms(400);
+    ok = ok && gcode_exchange(fd, "G4 P100\n", got, sizeof got);
+    if ((over = strstr(got, "Exposure ran over: G4 came "))) ran_over_ms = strtod(over + 27, NULL);
+    CHECKF(ok && ran_over_ms >= 250, "G4 P100 400 ms after M106: %.200s", got);
+    got[0] = 0;
+    CHECK(gcode_exchange(fd, "M107\n", got, sizeof got));
+    if (fd >= 0) close(fd);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    CHECK(read_sim_log(cli_path("late_g4.log"), &l));
+    for (k = 0; k < l.count; k++)
+        if (l.ev[k].kind == ZEV_UV && l.ev[k].value) on = l.ev[k].when;
+        else if (l.ev[k].kind == ZEV_UV) { lit = l.ev[k].when - on; exposures++; }
+    /* the message's figure is the same tick's, to its microsecond */
+    CHECKF(exposures == 1 && ran_over_ms >= 0 && fabs((double)lit / l.tick_hz * 1e3 - (100 + ran_over_ms)) < 0.002,
+           "%zu exposures; the log has the light on %.4f ms, the firmware says 100 ms and %.3f ms over",
+           exposures, (double)lit / (l.tick_hz ? l.tick_hz : 1) * 1e3, ran_over_ms);
+    free(l.ev);
+}
+
 /* The loop hangs as an exposure begins (fw-sim --hang-at-exposure N): the UV
    timer still ends the exposure at its tick, and the watchdog restarts the
    MCU within its period with the light off and Z still. Exposure 1 (a bottom
@@ -1279,6 +1358,7 @@ void test_print(void)
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_reset_mid_print_under_qemu);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_halted_mid_print_under_qemu);
     RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
+    RUN(late_g4_shows_in_the_log);
     RUN(hung_loop_keeps_light_and_watchdog);
     cli_end();
 }
