@@ -208,7 +208,6 @@ static inline zsummary zcheck_record(const zevent *ev, size_t count, const zexpe
                "%zu steps after homing (step %zu), the heights moved come to %lld; Z ends at %lld steps, the path at %lld",
                steps_after_home, homed_at, (long long)want, (long long)home_pos, (long long)at);
     }
-    if (getenv("ZDEBUG")) fprintf(stderr, "ZDEBUG steps %zu moves %zu ramps %zu lowest %.5f worst accel %.5f first %.2f speed %.4f rest %.1f\n", s.steps, s.moves, s.ramp_windows, s.lowest_ramp_ratio, s.worst_accel_ratio, s.worst_first_ticks, s.worst_speed_ratio, from_rest);
     return s;
 }
 #endif
