@@ -1,24 +1,26 @@
 /* The RAMPS 1.4 / ATmega2560 image (build/fw-ramps-test.elf) under simavr
    through tests/avr_run.c (build/avr-run), checked from its pin edges, which
-   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick):
+   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick). Every
+   print's log passes tests/zcheck.h's check, which uses no firmware code
+   and takes the board's limits from the log's header (each exposure at its
+   layer's top for exactly its time, no light while Z moves, speed and
+   acceleration within the limits, each move's first interval the one from
+   rest, the steps the heights moved); besides, each step is compared with
+   the tick motion.c's closed form gives it (a host fw_axis on the board's
+   config replays each move from its first step: within 10 us).
      - G-code mode: a 100-layer print as NanoDLP drives one (each move
        waited for with Z_move_comp, the light on for a G4 dwell) and a
-       200-layer file printed by printrun's printcore: every step within
-       10 us of the tick motion.c's closed form gives it (a host fw_axis on
-       the board's config, the real firmware/motion.c, replays each move
-       from its first step), no interval under the speed limit, the step
-       count the moves' heights x steps/mm, the light never on while Z
-       moves, no step refused as late, every exposure its G4 dwell to
-       the tick (the dwell after M106 counts from M106 and Timer4 ends it,
-       so the host's round trips between the lines add nothing), and every
-       loop pass while Z moves shorter than a step interval at the top
-       speed (with Z still a G1 line's parse, in gcode.c, takes longer);
+       100-layer file printed by printrun's printcore: every exposure its G4
+       dwell to the tick (the dwell after M106 counts from M106 and Timer4
+       ends it, so the host's round trips between the lines add nothing
+       while the G4 comes within the dwell: EXPOSE_MS), no step refused as
+       late, and every loop pass while Z moves shorter than a step interval
+       at the top speed (with Z still a G1 line's parse, in gcode.c, takes
+       longer);
      - a binary-protocol print by the host tool (adaslice print), masks
-       streaming while Z moves: the same step checks, and tests/zcheck.h's
-       (each exposure at its layer's height, exactly its exposure in ticks,
-       no light while Z moves, acceleration and speed within limits); every
-       loop pass, its interrupts included, shorter than a step interval at
-       the top speed (16,000 cycles), while Z moves and while it is still;
+       streaming while Z moves; every loop pass, its interrupts included,
+       shorter than a step interval at the top speed, while Z moves and
+       while it is still;
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
        and it answers again afterwards. */

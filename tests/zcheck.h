@@ -7,7 +7,7 @@
        bin_nm x steps/mm / 1e6) steps above the endstop (no drift);
      - the UV light is never on while a step is taken;
      - no step interval is shorter than the maximum speed allows,
-       ceil(tick_hz / max_speed) ticks, less the edges' stated jitter;
+       ceil(tick_hz / max_speed) ticks, less twice the edges' stated jitter;
      - acceleration, measured between the mean speeds of consecutive
        windows of 8 steps (for constant acceleration that estimate is
        exact), is nowhere above the limit by more than 2 %, and within 2 %
@@ -19,7 +19,8 @@
        move that gets as fast as one step of acceleration leaves it,
        sqrt(2 accel) steps/s (a slower move never reaches that interval);
        moves are told apart at rests, gaps longer than that interval, and
-       at reversals;
+       at reversals (so a first step late on its move shows; a whole move
+       late, every step by as much, leaves the pins' shape as it was);
      - each layer shows the expected mask once and gets exactly its light
        (in pieces if a pause came in between; an emulator's UV edges may
        come late by a stated jitter); a record without masks (a G-code
@@ -147,7 +148,7 @@ static inline zsummary zcheck_record(const zevent *ev, size_t count, const zexpe
         }
         if (!v) break;
         if (v->kind == ZEV_STEP) {
-            if (s.steps && v->when - last_step + e->jitter < min_interval) bad_interval++;
+            if (s.steps && v->when - last_step + 2u * e->jitter < min_interval) bad_interval++;
             if (s.steps && v->when > last_step) {
                 double ratio = (double)e->tick_hz / (double)(v->when - last_step) / e->max_speed;
                 if (ratio > s.worst_speed_ratio) s.worst_speed_ratio = ratio;
@@ -188,7 +189,7 @@ static inline zsummary zcheck_record(const zevent *ev, size_t count, const zexpe
     if (s.shows || (!shows_in_record && starts)) zcheck_exposure(e, layer, lit, &bad_time, &s);
     free(seg);
     CHECKF(s.exposures == e->layers - e->first + 1, "%zu exposures for layers %u..%u", s.exposures, e->first, e->layers);
-    CHECKF(!bad_interval, "%zu step intervals shorter than %llu ticks less %u of jitter", bad_interval,
+    CHECKF(!bad_interval, "%zu step intervals shorter than %llu ticks less twice %u of jitter", bad_interval,
            (unsigned long long)min_interval, (unsigned)e->jitter);
     CHECKF(!m.bad_accel, "%zu windows accelerate beyond the limit (worst %.3f of it)", m.bad_accel, s.worst_accel_ratio);
     CHECKF(!m.bad_ramp && !m.bad_first, "%zu ramp windows under 0.98 of the limit (lowest %.4f), %zu moves off from rest",
