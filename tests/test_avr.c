@@ -10,10 +10,10 @@
    config replays each move from its first step: within 10 us).
      - G-code mode: a 100-layer print as NanoDLP drives one (each move
        waited for with Z_move_comp, the light on for a G4 dwell) and a
-       100-layer file printed by printrun's printcore: every exposure its G4
+       40-layer file printed by printrun's printcore: every exposure its G4
        dwell to the tick (the dwell after M106 counts from M106 and Timer4
        ends it, so the host's round trips between the lines add nothing
-       while the G4 comes within the dwell: EXPOSE_MS), no step refused as
+       while the G4 comes within the dwell), no step refused as
        late, and every loop pass while Z moves shorter than a step interval
        at the top speed (with Z still a G1 line's parse, in gcode.c, takes
        longer);
@@ -373,12 +373,11 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 
 #define LAYER_UM 50
 #define PEEL_UM 100
-/* The dwell a host's round trip must beat: M106's ok, then its G4 line,
-   before the dwell from M106 is over (a later G4 leaves the light on until
-   it comes, an over-exposure the firmware reports). avr-run runs these
-   prints at --speed 1, so virtual time never runs ahead of the wall clock
-   and a host has this long in wall time however loaded the machine. */
-#define EXPOSE_MS 300
+/* A G4's dwell is a host's round trip's budget: M106's ok, then its G4
+   line, before the dwell from M106 is over (a later G4 leaves the light on
+   until it comes, an over-exposure the firmware reports). avr-run runs
+   these prints at --speed 1, so virtual time never runs ahead of the wall
+   clock and a host has the dwell in wall time however loaded the machine. */
 #define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
 #define GCODE_MAX_LAYERS 100
 
@@ -391,6 +390,7 @@ typedef struct gcode_job {
     uint32_t top_um[GCODE_MAX_LAYERS], exposure_ms[GCODE_MAX_LAYERS];
     size_t n;
     int layers;
+    int dwell_ms;                 /* each layer's G4 */
 } gcode_job;
 
 /* A G1's Z in nanometres, from its text. */
@@ -422,10 +422,10 @@ static int gcode_layer(int layer, char lines[5][48], gcode_job *job)
     job->moves[job->n].target = top;
     job->moves[job->n++].speed = 3 * BOARD_STEPS_PER_MM;
     job->top_um[layer - 1] = (uint32_t)(job->path_nm[job->n - 1] / 1000u);
-    job->exposure_ms[layer - 1] = EXPOSE_MS;
+    job->exposure_ms[layer - 1] = (uint32_t)job->dwell_ms;
     job->layers = layer;
     snprintf(lines[k++], 48, "M106 S255");
-    snprintf(lines[k++], 48, "G4 P%d", EXPOSE_MS);
+    snprintf(lines[k++], 48, "G4 P%d", job->dwell_ms);
     snprintf(lines[k++], 48, "M107");
     return k;
 }
@@ -463,14 +463,15 @@ static void check_gcode_print(const char *path, const gcode_job *job, const char
     printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; every exposure its G4 P%d to the tick; "
            "%zu moves, first intervals within %.1f ticks of sqrt(2/a), %zu ramp windows at %.4f..%.4f of the acceleration; "
            "worst loop pass %lu cycles (%lu while Z moved, a step every %lu at the top speed), stack peak %lu bytes\n",
-           who, job->layers, l.steps, worst, EXPOSE_MS, s.moves, s.worst_first_ticks, s.ramp_windows, s.lowest_ramp_ratio,
+           who, job->layers, l.steps, worst, job->dwell_ms, s.moves, s.worst_first_ticks, s.ramp_windows, s.lowest_ramp_ratio,
            s.worst_accel_ratio, l.pass.worst, l.pass.moving, (unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S), l.pass.stack);
     free_avr_log(&l);
 }
 
 /* NanoDLP's way: each move waited for with Z_move_comp, then the light on
-   for a dwell, off. At --speed 1 (EXPOSE_MS); a wall-clock budget only
-   against a hang, far above what the print needs. */
+   for a dwell, off: this test is the host, C code that answers at once.
+   At --speed 1; a wall-clock budget only against a hang, far above what
+   the print needs. */
 #define NANODLP_LAYERS 100
 static void gcode_print_nanodlp_style(void)
 {
@@ -480,6 +481,7 @@ static void gcode_print_nanodlp_style(void)
     char got[256];
     int layer, ok = 1;
     memset(&job, 0, sizeof job);
+    job.dwell_ms = 300;
     if (!avr_start(&c, "build/test_avr/print.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf (make check builds both)"); avr_stop(&c); return; }
     got[0] = 0;
     ok &= gline(&c, "M115", "ok", 10, got, sizeof got);
@@ -507,16 +509,17 @@ static void gcode_print_nanodlp_style(void)
     check_gcode_print("build/test_avr/print.log", &job, "NanoDLP-style");
 }
 
-/* printrun's printcore (Debian's printrun) prints a 100-layer G-code file
+/* printrun's printcore (Debian's printrun) prints a 40-layer G-code file
    over avr-run's pty: numbered, checksummed lines, one in flight, each sent
    on the last one's ok (a move's comes as it starts; the firmware holds the
-   next line until Z has stopped). At --speed 1, so that printcore has
-   EXPOSE_MS of wall time to send a G4 after M106's ok however loaded the
-   machine; the budgets are against hangs only, far above what the print
-   needs. A failure says whose it is: the harness's (printcore missing or
+   next line until Z has stopped). At --speed 1, so that printcore has the
+   dwell in wall time to send a G4 after M106's ok, a long one: on a machine
+   loaded many times over its cores a Python host answers slowly; the
+   budgets are against hangs only, far above what the print needs. A failure says whose it is: the harness's (printcore missing or
    crashing, the wall-clock budget, a G4 later than the dwell) or the
    firmware's (an error reply, the virtual-time budget, the pins). */
-#define PRINTCORE_LAYERS 100
+#define PRINTCORE_LAYERS 40
+#define PRINTCORE_DWELL_MS 1500
 #define PRINTCORE_WALL_S 1800
 static void gcode_print_by_printcore(void)
 {
@@ -524,12 +527,13 @@ static void gcode_print_by_printcore(void)
     const char *opts[] = {"--z-start", "1", "--speed", "1", "--max-seconds", "900", "--timeout", "1800", NULL};
     static gcode_job job;
     char job_path[256], out[256], *text;
-    int layer, st = -1, sig = 0, sent = 0, oks = 0, late = 0;
+    int layer, st = -1, sig = 0, sent = 0, oks = 0, late = 0, errors = 0;
     const char *line;
     FILE *f;
     pid_t pc;
     double t0;
     memset(&job, 0, sizeof job);
+    job.dwell_ms = PRINTCORE_DWELL_MS;
     snprintf(job_path, sizeof job_path, "%s", cli_path("printcore.gcode"));
     snprintf(out, sizeof out, "%s", cli_path("printcore.out"));
     f = fopen(job_path, "w");
@@ -577,9 +581,8 @@ static void gcode_print_by_printcore(void)
         if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
         if (!strncmp(line, "RECV: ok", 8)) oks++;
         if (!strncmp(line, "RECV: echo:Exposure ran over", 28) && late++ < 3)
-            CHECKF(0, "harness failure, not the firmware's: printcore's G4 came after the %d ms dwell (%.70s)", EXPOSE_MS, line);
-        CHECKF(strncmp(line, "RECV: Error", 11), "firmware failure: printcore was told %.70s", line);
-        if (check_case_failed()) break;
+            CHECKF(0, "harness failure, not the firmware's: printcore's G4 came after the %d ms dwell (%.70s)", job.dwell_ms, line);
+        if (!strncmp(line, "RECV: Error", 11) && errors++ < 3) CHECKF(0, "firmware failure: printcore was told %.70s", line);
     }
     if (st == 127 || sig || (text && strstr(text, "Traceback")))
         CHECKF(0, "harness failure: printcore (Debian printrun) %s after %.0f s: %.300s",

@@ -17,7 +17,8 @@ else
     sh -c 'while :; do :; done' & busy="$!"
     sh -c 'while :; do :; done' & busy="$busy $!"
 fi
-trap 'kill $busy 2>/dev/null' EXIT INT TERM
+trap 'kill $busy 2>/dev/null' EXIT
+trap 'exit 1' INT TERM
 passed=0
 i=1
 while [ "$i" -le "$runs" ]; do
