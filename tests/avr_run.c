@@ -540,6 +540,7 @@ int main(int argc, char **argv)
         }
     }
     if (R.out_len) (void)!write(R.master, R.out, R.out_len);
+    if (stop_signal) fprintf(stderr, "avr-run: signal %d: stopped\n", (int)stop_signal);
     if (status == 3) {
         /* closing the master hangs the terminal up and drops what its
            reader has not read yet (an image's last line before it stopped):

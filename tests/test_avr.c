@@ -50,7 +50,8 @@
 #define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
 #define STEP_CYCLES ((unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S)) /* the shortest step interval: 16,000 */
 
-typedef struct avr_child { pid_t pid; int out, tty; char pty[256]; } avr_child;
+/* early: avr-run ended before the test stopped it, with `status` */
+typedef struct avr_child { pid_t pid; int out, tty, early, status; char pty[256]; } avr_child;
 
 static double now_s(void)
 {
@@ -104,34 +105,54 @@ static int avr_start(avr_child *c, const char *log, const char *const *extra)
     return 0;
 }
 
+/* 1 once avr-run has ended by itself (its status kept). */
+static int avr_ended(avr_child *c)
+{
+    int st;
+    if (c->pid > 0 && waitpid(c->pid, &st, WNOHANG) == c->pid) {
+        c->status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+        c->early = 1;
+        c->pid = 0;
+        close(c->out);
+    }
+    return c->early;
+}
+
 /* SIGTERM; avr-run's exit status (-1 if it did not exit). */
 static int avr_stop(avr_child *c)
 {
     int st, i;
     if (c->tty > 0) close(c->tty);
+    c->tty = 0;
+    if (avr_ended(c)) return c->status;
     if (c->pid <= 0) return -1;
     kill(c->pid, SIGTERM);
     for (i = 0; i < 250; i++) {
         struct timespec ts = {0, 20000000};
-        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
+        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); c->pid = 0; return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
         nanosleep(&ts, NULL);
     }
     kill(c->pid, SIGKILL);
     waitpid(c->pid, &st, 0);
     close(c->out);
+    c->pid = 0;
     return -1;
 }
 
-/* avr-run's end told apart (its stderr is at LOG.err): a clean stop, the
+/* avr-run stopped and its end told apart (its stderr is at LOG.err): a
+   clean stop, a signal from elsewhere (the harness's failure), the
    image crashed (the firmware's failure), the print outlasting its budget
    of virtual time (the firmware's), or of wall time (the machine's: the
    harness could not run the simulation fast enough). */
-static void check_avr_exit(int status, const char *log)
+static void check_avr_exit(avr_child *c, const char *log)
 {
     char path[300], *err;
+    int status = avr_stop(c);
     snprintf(path, sizeof path, "%s.err", log);
     err = cli_read(path);
-    if (status == 4 && err && strstr(err, "--timeout budget"))
+    if (c->early && status == 0)
+        CHECKF(0, "harness failure, not the firmware's: avr-run was stopped by a signal from outside the test: %.200s", err ? err : "");
+    else if (status == 4 && err && strstr(err, "--timeout budget"))
         CHECKF(0, "harness failure, not the firmware's: avr-run's wall-clock budget ran out (a slow or loaded machine): %.200s", err);
     else if (status == 4)
         CHECKF(0, "firmware failure: the print outlasted avr-run's virtual-time budget: %.200s", err ? err : "");
@@ -504,7 +525,7 @@ static void gcode_print_nanodlp_style(void)
         struct timespec ts = {0, 200000000};
         nanosleep(&ts, NULL);
     }
-    check_avr_exit(avr_stop(&c), "build/test_avr/print.log");
+    check_avr_exit(&c, "build/test_avr/print.log");
     if (check_case_failed()) return;
     check_gcode_print("build/test_avr/print.log", &job, "NanoDLP-style");
 }
@@ -559,7 +580,7 @@ static void gcode_print_by_printcore(void)
         _exit(127);
     }
     t0 = now_s();
-    while (pc > 0 && now_s() - t0 < PRINTCORE_WALL_S) {
+    while (pc > 0 && now_s() - t0 < PRINTCORE_WALL_S && !avr_ended(&c)) {
         struct timespec ts = {0, 50000000};
         int s;
         if (waitpid(pc, &s, WNOHANG) == pc) {
@@ -575,7 +596,7 @@ static void gcode_print_by_printcore(void)
         struct timespec ts = {0, 200000000}; /* past the last exposure's end */
         nanosleep(&ts, NULL);
     }
-    check_avr_exit(avr_stop(&c), "build/test_avr/printcore.log");
+    check_avr_exit(&c, "build/test_avr/printcore.log");
     text = cli_read(out);
     for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
         if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
@@ -587,6 +608,8 @@ static void gcode_print_by_printcore(void)
     if (st == 127 || sig || (text && strstr(text, "Traceback")))
         CHECKF(0, "harness failure: printcore (Debian printrun) %s after %.0f s: %.300s",
                st == 127 ? "could not be started" : sig ? "was killed by a signal" : "crashed", now_s() - t0, text ? text : "");
+    else if (pc > 0 && c.early)
+        CHECKF(0, "printcore still printing when avr-run ended, after %.0f s", now_s() - t0);
     else if (pc > 0)
         CHECKF(0, "harness failure: printcore still running after %d s (wall clock)", PRINTCORE_WALL_S);
     else
@@ -610,7 +633,7 @@ static void gcode_print_by_printcore(void)
 static void binary_print_with_masks_streaming(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "1800", NULL};
     cli_result r;
     avr_log l;
     print_report rep;
@@ -634,7 +657,7 @@ static void binary_print_with_masks_streaming(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
     cli_free(&r);
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/bprint.log");
     if (check_case_failed()) return;
     CHECK(read_avr_log("build/test_avr/bprint.log", &l));
     CHECK(read_print_report(report, &rep));
@@ -708,7 +731,7 @@ static void binary_print_with_masks_streaming(void)
 static void watchdog_resets_a_hung_loop(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "2", "--hang-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", "2", "--hang-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "1800", NULL};
     char got[256] = "";
     avr_log l;
     int ok = 1;
@@ -726,7 +749,7 @@ static void watchdog_resets_a_hung_loop(void)
     got[0] = 0;
     ok = gline(&c, "M115", "FIRMWARE_NAME", 5, got, sizeof got);
     CHECKF(ok, "no answer after the reset: %s", got);
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/wdt.log");
     CHECK(read_avr_log("build/test_avr/wdt.log", &l));
     CHECKF(l.uvs >= 2 && l.uv_on[0] && !l.uv_on[1], "%zu UV edges", l.uvs);
     CHECKF(l.resets == 1, "%zu resets", l.resets);
