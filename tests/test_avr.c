@@ -701,13 +701,15 @@ static void binary_print_with_masks_streaming(void)
     CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
     {
         /* homing's approach: down from the start to the switch, where the
-           first step up (the back-off) comes */
+           first step up (the back-off) comes; longer than the host's
+           give-up, so the print's success shows the printer answered the
+           status polls meanwhile (how fast, in wall time, is the
+           machine's: printed, not asserted) */
         size_t up = 0;
         double homing_s;
         while (up < l.steps && l.step_dir[up] < 0) up++;
         homing_s = up < l.steps ? (double)(l.step_at[up] - l.step_at[0]) / BOARD_CPU_HZ : 0;
-        CHECKF(homing_s > 3.5 && rep.longest_wait_ms < 500, "homing's approach %.2f s; the longest wait for a reply %.1f ms",
-               homing_s, rep.longest_wait_ms);
+        CHECKF(homing_s > 3.5, "homing's approach %.2f s", homing_s);
         printf("    avr: homing's approach took %.2f s; the longest wait for a reply %.1f ms\n", homing_s, rep.longest_wait_ms);
     }
     /* Bounded work a pass (fw.h): every pass of the loop, its interrupts
