@@ -845,13 +845,12 @@ void fw_init(fw_state *fw, const fw_config *config, const fw_port *port, void *w
 enum { URGENT_START, URGENT_N, URGENT_AFTER_N, URGENT_M, URGENT_M1, URGENT_M11, URGENT_M4, URGENT_M41, URGENT_M112,
        URGENT_M410, URGENT_M112_REST, URGENT_M410_REST, URGENT_OTHER };
 
-/* 112 or 410 at the end of such a line, else 0. */
-static int urgent_byte(fw_state *fw, uint8_t c)
+int fw_urgent_byte(uint8_t *state, uint8_t c)
 {
-    uint8_t st = fw->urgent;
+    uint8_t st = *state;
     int blank = c == ' ' || c == '\t';
     if (c == '\n' || c == '\r') {
-        fw->urgent = URGENT_START;
+        *state = URGENT_START;
         return st == URGENT_M112 || st == URGENT_M112_REST ? 112 : st == URGENT_M410 || st == URGENT_M410_REST ? 410 : 0;
     }
     if (c >= 'a' && c <= 'z') c = (uint8_t)(c - 'a' + 'A');
@@ -870,7 +869,7 @@ static int urgent_byte(fw_state *fw, uint8_t c)
         break;
     default: break;
     }
-    fw->urgent = st;
+    *state = st;
     return 0;
 }
 
@@ -910,7 +909,7 @@ size_t fw_receive(fw_state *fw, const uint8_t *data, size_t size, uint64_t now)
     while (i < size && !n && !line) {
         uint8_t c = data[i++];
         if (gcode) {
-            int urgent = urgent_byte(fw, c);
+            int urgent = fw_urgent_byte(&fw->urgent, c);
             line = c == '\n' || c == '\r';
             if (urgent) urgent_stop(fw, urgent, now);
             else gcode_byte(fw, c);

@@ -243,6 +243,15 @@ uint64_t fw_run(fw_state *fw, uint64_t now);
 /* The step timer's interrupt, at the tick it was armed for: the step out
    (port.step_pulse), the timer armed for the next one or stopped. */
 void fw_step_interrupt(fw_state *fw);
+/* G-code's urgent lines, byte by byte: *state (0 to begin) follows a line
+   and 112 or 410 comes back at the end of an M112 or M410 line, else 0.
+   The core runs it on the bytes it reads; a port may run it on its own
+   copy of the state in its receive interrupt too (while fw_gcode_mode),
+   to stop Z and put the light out at M112's last byte, before the loop
+   has read the line (the core then does the rest). */
+int fw_urgent_byte(uint8_t *state, uint8_t c);
+/* 1 while the port is read as G-code (no good frame lately). */
+#define fw_gcode_mode(fw) (!(fw)->binary)
 /* The port found its stack's canary overwritten (from its loop, between
    passes): everything stops as after STEP_LATE (UV off, the steps dropped,
    Z unhomed, the motor off), STATUS reports error LINK_ERR_STACK and

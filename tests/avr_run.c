@@ -559,9 +559,11 @@ int main(int argc, char **argv)
     if (log_path && !(R.log = fopen(log_path, "w"))) { fprintf(stderr, "avr-run: --log %s: %s\n", log_path, strerror(errno)); return 2; }
     R.position = (int32_t)(z_start * BOARD_STEPS_PER_MM + 0.5);
     if (R.log)
-        fprintf(R.log, "# avr-run tick_hz=%u steps_per_mm=%u max_speed=%u accel=%u start_steps=%ld cpu_hz=%u tick_div=%u image=%s\n",
-                BOARD_CPU_HZ, BOARD_STEPS_PER_MM, (unsigned)BOARD_MAX_STEPS_S,
-                BOARD_ACCEL_STEPS_S2, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
+        /* board.h's millimetres as steps, in 64 bits here (the tests'
+           limits: not the image's own arithmetic) */
+        fprintf(R.log, "# avr-run tick_hz=%u steps_per_mm=%u max_speed=%llu accel=%llu start_steps=%ld cpu_hz=%u tick_div=%u image=%s\n",
+                BOARD_CPU_HZ, BOARD_STEPS_PER_MM, (unsigned long long)BOARD_MAX_SPEED_UM_S * BOARD_STEPS_PER_MM / 1000u,
+                (unsigned long long)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM, (long)R.position, BOARD_CPU_HZ, BOARD_TICK_DIV, elf);
 
     avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 3), on_step, NULL);
     avr_irq_register_notify(avr_io_getirq(R.avr, AVR_IOCTL_IOPORT_GETIRQ('L'), 1), on_dir, NULL);
@@ -631,6 +633,7 @@ int main(int argc, char **argv)
         }
     }
     if (R.out_len) (void)!write(R.master, R.out, R.out_len);
+    if (stop_signal) fprintf(stderr, "avr-run: signal %d: stopped\n", (int)stop_signal);
     if (status == 3) {
         /* closing the master hangs the terminal up and drops what its
            reader has not read yet (an image's last line before it stopped):

@@ -1,25 +1,26 @@
 /* The RAMPS 1.4 / ATmega2560 image (build/fw-ramps-test.elf) under simavr
    through tests/avr_run.c (build/avr-run), checked from its pin edges, which
-   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick):
+   are cycle-exact (the log's cycle / 8 is the firmware's 2 MHz tick). Every
+   print's log passes tests/zcheck.h's check, which uses no firmware code
+   and takes the board's limits from the log's header (each exposure at its
+   layer's top for exactly its time, no light while Z moves, speed and
+   acceleration within the limits, each move's first interval the one from
+   rest, the steps the heights moved); besides, each step is compared with
+   the tick motion.c's closed form gives it (a host fw_axis on the board's
+   config replays each move from its first step: within 10 us).
      - G-code mode: a 100-layer print as NanoDLP drives one (each move
        waited for with Z_move_comp, the light on for a G4 dwell) and a
-       200-layer file printed by printrun's printcore: every step within
-       10 us of the tick motion.c's closed form gives it (a host fw_axis on
-       the board's config, the real firmware/motion.c, replays each move
-       from its first step), no interval under the speed limit, the step
-       count the moves' heights x steps/mm, the light never on while Z
-       moves, no step refused as late, every exposure its G4 dwell to
-       the tick (the dwell after M106 counts from M106 and Timer4 ends it,
-       so the host's round trips between the lines add nothing), and every
-       loop pass shorter than PASS_MAX (below: the time the step queue
+       40-layer file printed by printrun's printcore: every exposure its G4
+       dwell to the tick (the dwell after M106 counts from M106 and Timer4
+       ends it, so the host's round trips between the lines add nothing
+       while the G4 comes within the dwell), no step refused as late, and
+       every loop pass shorter than PASS_MAX (below: the time the step queue
        covers at the top speed, less its margin), with every 25th layer's
        peel at the top speed;
      - a binary-protocol print by the host tool (adaslice print), masks
-       streaming while Z moves: the same step checks, and tests/zcheck.h's
-       (each exposure at its layer's height, exactly its exposure in ticks,
-       no light while Z moves, acceleration and speed within limits), the
-       peels at the top speed; every loop pass, its interrupts included,
-       shorter than PASS_MAX, while Z moves and while it is still;
+       streaming while Z moves, the peels at the top speed; every loop
+       pass, its interrupts included, shorter than PASS_MAX, while Z moves
+       and while it is still;
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
        and it answers again afterwards;
@@ -67,7 +68,8 @@
 #define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE / 2u) * STEP_CYCLES)
 #define PASS_MAX (COVER_CYCLES * 3u / 4u)
 
-typedef struct avr_child { pid_t pid; int out, tty; char pty[256]; } avr_child;
+/* early: avr-run ended before the test stopped it, with `status` */
+typedef struct avr_child { pid_t pid; int out, tty, early, status; char pty[256]; } avr_child;
 
 static double now_s(void)
 {
@@ -79,7 +81,7 @@ static double now_s(void)
 /* avr-run with `extra` options, its log at `log`; the pty opened raw. */
 static int avr_start(avr_child *c, const char *log, const char *const *extra)
 {
-    char *argv[24], line[256];
+    char *argv[24], line[256], err[300];
     int fds[2], n = 0;
     size_t len = 0;
     double t0 = now_s();
@@ -92,8 +94,11 @@ static int avr_start(avr_child *c, const char *log, const char *const *extra)
     argv[n] = NULL;
     if (pipe(fds) != 0) return 0;
     fflush(NULL);
+    snprintf(err, sizeof err, "%s.err", log);
     c->pid = fork();
     if (c->pid == 0) {
+        int fd = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) dup2(fd, 2);
         dup2(fds[1], 1);
         close(fds[0]);
         execv(argv[0], argv);
@@ -118,22 +123,62 @@ static int avr_start(avr_child *c, const char *log, const char *const *extra)
     return 0;
 }
 
+/* 1 once avr-run has ended by itself (its status kept). */
+static int avr_ended(avr_child *c)
+{
+    int st;
+    if (c->pid > 0 && waitpid(c->pid, &st, WNOHANG) == c->pid) {
+        c->status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+        c->early = 1;
+        c->pid = 0;
+        close(c->out);
+    }
+    return c->early;
+}
+
 /* SIGTERM; avr-run's exit status (-1 if it did not exit). */
 static int avr_stop(avr_child *c)
 {
     int st, i;
     if (c->tty > 0) close(c->tty);
+    c->tty = 0;
+    if (avr_ended(c)) return c->status;
     if (c->pid <= 0) return -1;
     kill(c->pid, SIGTERM);
     for (i = 0; i < 250; i++) {
         struct timespec ts = {0, 20000000};
-        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
+        if (waitpid(c->pid, &st, WNOHANG) == c->pid) { close(c->out); c->pid = 0; return WIFEXITED(st) ? WEXITSTATUS(st) : -1; }
         nanosleep(&ts, NULL);
     }
     kill(c->pid, SIGKILL);
     waitpid(c->pid, &st, 0);
     close(c->out);
+    c->pid = 0;
     return -1;
+}
+
+/* avr-run stopped and its end told apart (its stderr is at LOG.err): a
+   clean stop, a signal from elsewhere (the harness's failure), the
+   image crashed (the firmware's failure), the print outlasting its budget
+   of virtual time (the firmware's), or of wall time (the machine's: the
+   harness could not run the simulation fast enough). */
+static void check_avr_exit(avr_child *c, const char *log)
+{
+    char path[300], *err;
+    int status = avr_stop(c);
+    snprintf(path, sizeof path, "%s.err", log);
+    err = cli_read(path);
+    if (c->early && status == 0)
+        CHECKF(0, "harness failure, not the firmware's: avr-run was stopped by a signal from outside the test: %.200s", err ? err : "");
+    else if (status == 4 && err && strstr(err, "--timeout budget"))
+        CHECKF(0, "harness failure, not the firmware's: avr-run's wall-clock budget ran out (a slow or loaded machine): %.200s", err);
+    else if (status == 4)
+        CHECKF(0, "firmware failure: the print outlasted avr-run's virtual-time budget: %.200s", err ? err : "");
+    else if (status == 3)
+        CHECKF(0, "firmware failure: the image stopped: %.200s", err ? err : "");
+    else
+        CHECKF(status == 0, "harness failure: avr-run ended with %d: %.200s", status, err ? err : "");
+    free(err);
 }
 
 /* Sends a G-code line and reads replies until `until` is seen (or
@@ -183,6 +228,7 @@ typedef struct avr_log {
     uint64_t canary_at;          /* the cycle the stack's canary changed, 0 never */
     avr_passes pass;             /* the end line */
     long start_steps;
+    unsigned long cpu_hz, tick_div, steps_per_mm, max_speed, accel; /* the header: board.h's figures */
     zevent *ev;                  /* steps, UV, shows: tests/zcheck.h's record, in ticks (cycle / 8) */
     size_t events, events_cap;
 } avr_log;
@@ -248,6 +294,11 @@ static int read_avr_log(const char *path, avr_log *l)
         const char *v;
         if (line[0] == '#') {
             if ((v = strstr(line, "start_steps="))) l->start_steps = strtol(v + 12, NULL, 10);
+            if ((v = strstr(line, "cpu_hz="))) l->cpu_hz = strtoul(v + 7, NULL, 10);
+            if ((v = strstr(line, "tick_div="))) l->tick_div = strtoul(v + 9, NULL, 10);
+            if ((v = strstr(line, "steps_per_mm="))) l->steps_per_mm = strtoul(v + 13, NULL, 10);
+            if ((v = strstr(line, "max_speed="))) l->max_speed = strtoul(v + 10, NULL, 10);
+            if ((v = strstr(line, "accel="))) l->accel = strtoul(v + 6, NULL, 10);
             avr_read_passes(line, &l->pass);
             continue;
         }
@@ -279,7 +330,23 @@ static int read_avr_log(const char *path, avr_log *l)
     }
     fclose(f);
     events_to_ticks(l);
-    return 1;
+    return l->cpu_hz && l->tick_div && l->steps_per_mm && l->max_speed && l->accel;
+}
+
+/* tests/zcheck.h's expectations from the log's header (avr-run writes
+   board.h's millimetre figures as steps, computed on the host): the record
+   in ticks, each edge read against its timer's phase, so exact to the tick
+   (no jitter). */
+static void avr_expect(const avr_log *l, zexpect *e)
+{
+    memset(e, 0, sizeof *e);
+    e->tick_hz = l->cpu_hz / l->tick_div;
+    e->steps_per_mm = (uint32_t)l->steps_per_mm;
+    e->max_speed = (uint32_t)l->max_speed;
+    e->accel = (uint32_t)l->accel;
+    e->jitter = 0;
+    e->start_position = l->start_steps;
+    e->first = 1;
 }
 
 static void free_avr_log(avr_log *l) { free(l->step_at); free(l->step_dir); free(l->ev); }
@@ -367,18 +434,40 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
    ramps are 1 mm at 10 mm/s and 50 mm/s^2) */
 #define LONG_PEEL_UM 3000
 #define TOP_F (BOARD_MAX_SPEED_UM_S * 60u / 1000u) /* the top speed in mm/min */
-/* a dwell well above a host's round trip, even a loaded machine's (the
-   light is on longer when the G4 comes after its end) */
-#define EXPOSE_MS 100
+/* A G4's dwell is a host's round trip's budget: M106's ok, then its G4
+   line, before the dwell from M106 is over (a later G4 leaves the light on
+   until it comes, an over-exposure the firmware reports). avr-run runs
+   these prints at --speed 1, so virtual time never runs ahead of the wall
+   clock and a host has the dwell in wall time however loaded the machine. */
 #define CYCLES_PER_MS (BOARD_CPU_HZ / 1000u)
+#define GCODE_MAX_LAYERS 100
+
+/* A G-code print: the moves its lines ask for (for the closed form), and
+   what tests/zcheck.h checks the pins against: the heights Z visits (the
+   lines' Z values), each layer's top and its exposure. */
+typedef struct gcode_job {
+    zmove moves[2 * GCODE_MAX_LAYERS];
+    uint64_t path_nm[2 * GCODE_MAX_LAYERS];
+    uint32_t top_um[GCODE_MAX_LAYERS], exposure_ms[GCODE_MAX_LAYERS];
+    size_t n;
+    int layers;
+    int dwell_ms;                 /* each layer's G4 */
+} gcode_job;
+
+/* A G1's Z in nanometres, from its text. */
+static uint64_t z_nm_of(const char *line)
+{
+    const char *z = strchr(line, 'Z');
+    return z ? (uint64_t)llround(strtod(z + 1, NULL) * 1e6) : 0;
+}
 
 /* Layer `layer` of a G-code print as resin hosts send it: the lift above
    the last layer (from layer 2 on) and the way down to this one's top,
-   then the light on for a dwell and off. The moves go into `moves` (F300
+   then the light on for a dwell and off. The moves go into `job` (F300
    and F180, under the board's top speed; every 25th layer a long peel at
    the top speed, both ways). Returns the number of lines in `lines`: the
    moves first, then M106, G4, M107. */
-static int gcode_layer(int layer, char lines[5][48], zmove *moves, size_t *n)
+static int gcode_layer(int layer, char lines[5][48], gcode_job *job)
 {
     const int32_t spmm = (int32_t)BOARD_STEPS_PER_MM;
     int32_t top = layer * LAYER_UM * spmm / 1000;
@@ -386,81 +475,90 @@ static int gcode_layer(int layer, char lines[5][48], zmove *moves, size_t *n)
     unsigned up_f = fast ? TOP_F : 300u, down_f = fast ? TOP_F : 180u;
     if (layer > 1) {
         int32_t lift = (layer - 1) * LAYER_UM * spmm / 1000 + (fast ? LONG_PEEL_UM : PEEL_UM) * spmm / 1000;
-        snprintf(lines[k++], 48, "G1 Z%.3f F%u", lift / (double)spmm, up_f);
-        moves[*n].target = lift;
-        moves[(*n)++].speed = (uint32_t)(up_f * BOARD_STEPS_PER_MM / 60u);
+        snprintf(lines[k], 48, "G1 Z%.3f F%u", lift / (double)spmm, up_f);
+        job->path_nm[job->n] = z_nm_of(lines[k++]);
+        job->moves[job->n].target = lift;
+        job->moves[job->n++].speed = (uint32_t)(up_f * BOARD_STEPS_PER_MM / 60u);
     }
-    snprintf(lines[k++], 48, "G1 Z%.3f F%u", top / (double)spmm, down_f);
-    moves[*n].target = top;
-    moves[(*n)++].speed = (uint32_t)(down_f * BOARD_STEPS_PER_MM / 60u);
+    snprintf(lines[k], 48, "G1 Z%.3f F%u", top / (double)spmm, down_f);
+    job->path_nm[job->n] = z_nm_of(lines[k++]);
+    job->moves[job->n].target = top;
+    job->moves[job->n++].speed = (uint32_t)(down_f * BOARD_STEPS_PER_MM / 60u);
+    job->top_um[layer - 1] = (uint32_t)(job->path_nm[job->n - 1] / 1000u);
+    job->exposure_ms[layer - 1] = (uint32_t)job->dwell_ms;
+    job->layers = layer;
     snprintf(lines[k++], 48, "M106 S255");
-    snprintf(lines[k++], 48, "G4 P%d", EXPOSE_MS);
+    snprintf(lines[k++], 48, "G4 P%d", job->dwell_ms);
     snprintf(lines[k++], 48, "M107");
     return k;
 }
 
 /* A G-code print of `layers` from avr-run's log at `path`: every step
-   against the closed form, the light never on while Z moves, each exposure
-   its dwell to the tick, no step late, every loop pass shorter than
-   PASS_MAX (Bounded work in gcode.h: a line is checked in one pass and run
-   in another). */
-static void check_gcode_print(const char *path, const zmove *moves, size_t n, int layers, const char *who)
+   against the closed form, and tests/zcheck.h's check, which uses no
+   firmware code (each exposure at its line's Z and its dwell to the tick,
+   the light never on while Z moves, speed, acceleration and each move's
+   start from rest within the board's limits, the steps the heights moved);
+   no step late, every loop pass shorter than PASS_MAX (Bounded work in
+   gcode.h: a line is checked in one pass and run in another). */
+static void check_gcode_print(const char *path, const gcode_job *job, const char *who)
 {
     avr_log l;
     long worst;
-    uint64_t longest = 0, shortest = UINT64_MAX;
-    const uint64_t want = (uint64_t)EXPOSE_MS * CYCLES_PER_MS;
-    size_t k;
-    CHECK(read_avr_log(path, &l));
+    zexpect e;
+    zsummary s;
+    CHECKF(read_avr_log(path, &l), "cannot read avr-run's log %s (or its header)", path);
     if (check_case_failed()) { free_avr_log(&l); return; }
-    worst = check_moves(&l, moves, n);
-    CHECKF(l.uvs == 2u * (size_t)layers, "%zu UV edges for %d layers", l.uvs, layers);
-    CHECKF(!l.steps_lit, "%zu steps with the light on", l.steps_lit);
-    for (k = 0; k + 1 < l.uvs; k += 2) {
-        /* M106's dwell is the exposure, to the tick: Timer4's compare unit
-           switches at both ends, whatever the host's round trips (simavr
-           puts a compare's pin edge out 0 or 1 cycle after the match) */
-        uint64_t lit = l.uv_at[k + 1] - l.uv_at[k];
-        if (lit > longest) longest = lit;
-        if (lit < shortest) shortest = lit;
-        CHECKF(l.uv_on[k] && !l.uv_on[k + 1] && lit + CYCLES_PER_TICK > want && lit < want + CYCLES_PER_TICK,
-               "exposure %zu: %llu cycles for a G4 P%d (%llu)", k / 2, (unsigned long long)lit, EXPOSE_MS,
-               (unsigned long long)want);
-        if (check_case_failed()) break;
-    }
+    worst = check_moves(&l, job->moves, job->n);
+    avr_expect(&l, &e);
+    e.layers = (uint32_t)job->layers;
+    e.top_bins = job->top_um;
+    e.bin_nm = 1000;
+    e.exposure_ms = job->exposure_ms;
+    e.path_nm = job->path_nm;
+    e.path_len = job->n;
+    s = zcheck_record(l.ev, l.events, &e);
+    CHECKF(s.moves >= job->n && s.ramp_windows, "%zu moves from rest and %zu ramp windows checked for %zu moves", s.moves,
+           s.ramp_windows, job->n);
     CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
     CHECKF(l.pass.worst < PASS_MAX, "a loop pass took %lu cycles (%lu while Z moved), over %lu: the queue covers %lu at the top speed",
            l.pass.worst, l.pass.moving, PASS_MAX, COVER_CYCLES);
     check_stack(&l, who);
-    printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; light %.4f..%.4f ms for G4 P%d; "
-           "worst loop pass %lu cycles (%lu while Z moved; the queue covers %lu at the top speed, a step every %lu), "
-           "stack peak %lu bytes of %lu reserved\n",
-           who, layers, l.steps, worst, (double)shortest / CYCLES_PER_MS, (double)longest / CYCLES_PER_MS, EXPOSE_MS,
-           l.pass.worst, l.pass.moving, COVER_CYCLES, STEP_CYCLES, l.pass.stack, l.pass.reserve);
+    printf("    avr, %s: %d layers, %zu steps, worst step %ld cycles from its tick; every exposure its G4 P%d to the tick; "
+           "%zu moves, first intervals within %.1f ticks of sqrt(2/a), %zu ramp windows at %.4f..%.4f of the acceleration; "
+           "worst loop pass %lu cycles (%lu while Z moved; the queue covers %lu at the top speed), stack peak %lu bytes of %lu reserved\n",
+           who, job->layers, l.steps, worst, job->dwell_ms, s.moves, s.worst_first_ticks, s.ramp_windows, s.lowest_ramp_ratio,
+           s.worst_accel_ratio, l.pass.worst, l.pass.moving, COVER_CYCLES, l.pass.stack, l.pass.reserve);
     free_avr_log(&l);
 }
 
 /* NanoDLP's way: each move waited for with Z_move_comp, then the light on
-   for a dwell, off. */
+   for a dwell, off: this test is the host, C code that answers at once.
+   At --speed 1; a wall-clock budget only against a hang, far above what
+   the print needs. */
 #define NANODLP_LAYERS 100
 static void gcode_print_nanodlp_style(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "60", NULL};
-    static zmove moves[2 * NANODLP_LAYERS + 1];
+    const char *opts[] = {"--z-start", "1", "--speed", "1", "--max-seconds", "600", "--timeout", "1800", NULL};
+    static gcode_job job;
     char got[256];
-    size_t n = 0;
     int layer, ok = 1;
+    memset(&job, 0, sizeof job);
+    job.dwell_ms = 300;
     if (!avr_start(&c, "build/test_avr/print.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf (make check builds both)"); avr_stop(&c); return; }
     got[0] = 0;
     ok &= gline(&c, "M115", "ok", 10, got, sizeof got);
     CHECKF(ok && strstr(got, "FIRMWARE_NAME:adaslice"), "M115: %s", got);
-    ok &= gline(&c, "G28", "ok", 30, NULL, 0);
-    ok &= gline(&c, "G90", "ok", 5, NULL, 0);
+    ok &= gline(&c, "G28", "ok", 60, NULL, 0);
+    ok &= gline(&c, "G90", "ok", 10, NULL, 0);
     for (layer = 1; ok && layer <= NANODLP_LAYERS; layer++) {
         char lines[5][48];
-        int k, count = gcode_layer(layer, lines, moves, &n);
-        for (k = 0; ok && k < count; k++) ok &= gline(&c, lines[k], lines[k][0] == 'G' && lines[k][1] == '1' ? "Z_move_comp" : "ok", 10, NULL, 0);
+        int k, count = gcode_layer(layer, lines, &job);
+        for (k = 0; ok && k < count; k++) {
+            ok &= gline(&c, lines[k], lines[k][0] == 'G' && lines[k][1] == '1' ? "Z_move_comp" : "ok", 60, got, sizeof got);
+            CHECKF(!strstr(got, "Exposure ran over"), "harness failure, not the firmware's: this test's G4 came after the dwell's end: %s", got);
+            got[0] = 0;
+        }
     }
     CHECKF(ok, "the G-code stream stopped at layer %d", layer - 1);
     {
@@ -469,41 +567,50 @@ static void gcode_print_nanodlp_style(void)
         struct timespec ts = {0, 200000000};
         nanosleep(&ts, NULL);
     }
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/print.log");
     if (check_case_failed()) return;
-    check_gcode_print("build/test_avr/print.log", moves, n, NANODLP_LAYERS, "NanoDLP-style");
+    check_gcode_print("build/test_avr/print.log", &job, "NanoDLP-style");
 }
 
-/* printrun's printcore (Debian's printrun) prints a 200-layer G-code file
+/* printrun's printcore (Debian's printrun) prints a 40-layer G-code file
    over avr-run's pty: numbered, checksummed lines, one in flight, each sent
    on the last one's ok (a move's comes as it starts; the firmware holds the
-   next line until Z has stopped). */
-#define PRINTCORE_LAYERS 200
+   next line until Z has stopped). At --speed 1, so that printcore has the
+   dwell in wall time to send a G4 after M106's ok, a long one: on a machine
+   loaded many times over its cores a Python host answers slowly; the
+   budgets are against hangs only, far above what the print needs. A failure says whose it is: the harness's (printcore missing or
+   crashing, the wall-clock budget, a G4 later than the dwell) or the
+   firmware's (an error reply, the virtual-time budget, the pins). */
+#define PRINTCORE_LAYERS 40
+#define PRINTCORE_DWELL_MS 1500
+#define PRINTCORE_WALL_S 1800
 static void gcode_print_by_printcore(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "900", "--timeout", "120", NULL};
-    static zmove moves[2 * PRINTCORE_LAYERS + 1];
-    char job[256], out[256], *text;
-    size_t n = 0;
-    int layer, st = -1, sent = 0, oks = 0;
+    const char *opts[] = {"--z-start", "1", "--speed", "1", "--max-seconds", "900", "--timeout", "1800", NULL};
+    static gcode_job job;
+    char job_path[256], out[256], *text;
+    int layer, st = -1, sig = 0, sent = 0, oks = 0, late = 0, errors = 0;
     const char *line;
     FILE *f;
     pid_t pc;
     double t0;
-    snprintf(job, sizeof job, "%s", cli_path("printcore200.gcode"));
-    snprintf(out, sizeof out, "%s", cli_path("printcore200.out"));
-    f = fopen(job, "w");
+    memset(&job, 0, sizeof job);
+    job.dwell_ms = PRINTCORE_DWELL_MS;
+    snprintf(job_path, sizeof job_path, "%s", cli_path("printcore.gcode"));
+    snprintf(out, sizeof out, "%s", cli_path("printcore.out"));
+    f = fopen(job_path, "w");
     if (!f) { CHECK(!"cannot write the G-code file"); return; }
-    fputs("; 200 layers of 50 um, NanoDLP's layer (lift, down, M106, G4, M107)\nG28\nG90\n", f);
+    fputs("; 50 um layers, NanoDLP's layer (lift, down, M106, G4, M107)\nG28\nG90\n", f);
     for (layer = 1; layer <= PRINTCORE_LAYERS; layer++) {
         char lines[5][48];
-        int k, count = gcode_layer(layer, lines, moves, &n);
+        int k, count = gcode_layer(layer, lines, &job);
         for (k = 0; k < count; k++) fprintf(f, "%s\n", lines[k]);
     }
     fputs("M18\n", f);
     CHECK(fclose(f) == 0);
-    if (!avr_start(&c, "build/test_avr/printcore.log", opts)) { CHECK(!"build/avr-run did not start build/fw-ramps-test.elf"); avr_stop(&c); return; }
+    if (access("/usr/bin/printcore", R_OK) != 0) { CHECK(!"harness failure: no /usr/bin/printcore (Debian's printrun)"); return; }
+    if (!avr_start(&c, "build/test_avr/printcore.log", opts)) { CHECK(!"harness failure: build/avr-run did not start build/fw-ramps-test.elf"); avr_stop(&c); return; }
     close(c.tty); /* printcore opens the pty itself */
     c.tty = 0;
     fflush(NULL);
@@ -511,14 +618,19 @@ static void gcode_print_by_printcore(void)
     if (pc == 0) {
         int fd = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); }
-        execl("/usr/bin/python3", "python3", "/usr/bin/printcore", "-v", c.pty, job, (char *)NULL);
+        execl("/usr/bin/python3", "python3", "/usr/bin/printcore", "-v", c.pty, job_path, (char *)NULL);
         _exit(127);
     }
     t0 = now_s();
-    while (pc > 0 && now_s() - t0 < 300) {
+    while (pc > 0 && now_s() - t0 < PRINTCORE_WALL_S && !avr_ended(&c)) {
         struct timespec ts = {0, 50000000};
         int s;
-        if (waitpid(pc, &s, WNOHANG) == pc) { st = WIFEXITED(s) ? WEXITSTATUS(s) : -1; pc = 0; break; }
+        if (waitpid(pc, &s, WNOHANG) == pc) {
+            st = WIFEXITED(s) ? WEXITSTATUS(s) : -1;
+            sig = WIFSIGNALED(s) ? WTERMSIG(s) : 0;
+            pc = 0;
+            break;
+        }
         nanosleep(&ts, NULL);
     }
     if (pc > 0) { kill(pc, SIGKILL); waitpid(pc, NULL, 0); }
@@ -526,20 +638,29 @@ static void gcode_print_by_printcore(void)
         struct timespec ts = {0, 200000000}; /* past the last exposure's end */
         nanosleep(&ts, NULL);
     }
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/printcore.log");
     text = cli_read(out);
-    CHECKF(st == 0, "printcore (Debian printrun) exited %d after %.0f s: %.300s", st, now_s() - t0, text ? text : "");
     for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
         if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
         if (!strncmp(line, "RECV: ok", 8)) oks++;
-        CHECKF(strncmp(line, "RECV: Error", 11) && strncmp(line, "RECV: echo:Exposure", 19), "printcore was told %.70s", line);
-        if (check_case_failed()) break;
+        if (!strncmp(line, "RECV: echo:Exposure ran over", 28) && late++ < 3)
+            CHECKF(0, "harness failure, not the firmware's: printcore's G4 came after the %d ms dwell (%.70s)", job.dwell_ms, line);
+        if (!strncmp(line, "RECV: Error", 11) && errors++ < 3) CHECKF(0, "firmware failure: printcore was told %.70s", line);
     }
+    if (st == 127 || sig || (text && strstr(text, "Traceback")))
+        CHECKF(0, "harness failure: printcore (Debian printrun) %s after %.0f s: %.300s",
+               st == 127 ? "could not be started" : sig ? "was killed by a signal" : "crashed", now_s() - t0, text ? text : "");
+    else if (pc > 0 && c.early)
+        CHECKF(0, "printcore still printing when avr-run ended, after %.0f s", now_s() - t0);
+    else if (pc > 0)
+        CHECKF(0, "harness failure: printcore still running after %d s (wall clock)", PRINTCORE_WALL_S);
+    else
+        CHECKF(st == 0, "printcore exited %d after %.0f s: %.300s", st, now_s() - t0, text ? text : "");
     free(text);
     /* G28, G90, M18 and per layer its moves and three lines */
     CHECKF(sent == 3 + 5 * PRINTCORE_LAYERS - 1 && oks >= sent, "printcore sent %d lines, %d acknowledged", sent, oks);
     if (check_case_failed()) return;
-    check_gcode_print("build/test_avr/printcore.log", moves, n, PRINTCORE_LAYERS, "printcore");
+    check_gcode_print("build/test_avr/printcore.log", &job, "printcore");
 }
 
 #define BPRINT_PEEL_UM 3000 /* at the top speed: 1 mm ramps, 1 mm of cruise */
@@ -554,13 +675,14 @@ static void gcode_print_by_printcore(void)
 static void binary_print_with_masks_streaming(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "1800", NULL};
     cli_result r;
     avr_log l;
     print_report rep;
     zexpect e;
     zsummary s;
     zmove *moves;
+    uint64_t *path;
     size_t n = 0;
     uint32_t k;
     long worst, final_pos;
@@ -577,7 +699,7 @@ static void binary_print_with_masks_streaming(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
     cli_free(&r);
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/bprint.log");
     if (check_case_failed()) return;
     CHECK(read_avr_log("build/test_avr/bprint.log", &l));
     CHECK(read_print_report(report, &rep));
@@ -598,30 +720,38 @@ static void binary_print_with_masks_streaming(void)
     for (k = 0; k < l.steps; k++) final_pos += l.step_dir[k];
     CHECKF(moves && n && final_pos == moves[n - 1].target, "Z ends at %ld steps, the last peel at %ld", final_pos, moves && n ? (long)moves[n - 1].target : -1L);
     worst = moves ? check_moves(&l, moves, n) : -1;
-    memset(&e, 0, sizeof e);
-    e.tick_hz = BOARD_CLOCK_HZ; /* the record in ticks */
-    e.steps_per_mm = BOARD_STEPS_PER_MM;
-    e.max_speed = BOARD_MAX_STEPS_S;
-    e.accel = BOARD_ACCEL_STEPS_S2;
-    e.start_position = l.start_steps;
+    /* the heights: each layer's top, then the peel above it */
+    path = (uint64_t *)calloc(2u * rep.layers + 1u, sizeof *path);
+    for (k = 0; path && k < rep.layers; k++) {
+        path[2 * k] = (uint64_t)rep.tops[k] * rep.bin_nm;
+        path[2 * k + 1] = path[2 * k] + BPRINT_PEEL_UM * 1000u;
+    }
+    avr_expect(&l, &e);
     e.layers = rep.layers;
     e.first = rep.first ? rep.first : 1;
     e.top_bins = rep.tops;
     e.bin_nm = rep.bin_nm;
     e.crcs = NULL; /* no display on this board: the core checks the CRCs */
     e.exposure_ms = rep.exposures;
+    e.path_nm = path;
+    e.path_len = path ? 2u * rep.layers : 0;
     s = zcheck_record(l.ev, l.events, &e);
     CHECKF(s.shows == rep.layers, "%zu masks shown for %u layers", s.shows, rep.layers);
+    CHECKF(path && s.moves >= 2u * rep.layers && s.ramp_windows, "%zu moves from rest and %zu ramp windows checked for %u layers",
+           s.moves, s.ramp_windows, rep.layers);
+    free(path);
     CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
     {
         /* homing's approach: down from the start to the switch, where the
-           first step up (the back-off) comes */
+           first step up (the back-off) comes; longer than the host's
+           give-up, so the print's success shows the printer answered the
+           status polls meanwhile (how fast, in wall time, is the
+           machine's: printed, not asserted) */
         size_t up = 0;
         double homing_s;
         while (up < l.steps && l.step_dir[up] < 0) up++;
         homing_s = up < l.steps ? (double)(l.step_at[up] - l.step_at[0]) / BOARD_CPU_HZ : 0;
-        CHECKF(homing_s > 3.5 && rep.longest_wait_ms < 500, "homing's approach %.2f s; the longest wait for a reply %.1f ms",
-               homing_s, rep.longest_wait_ms);
+        CHECKF(homing_s > 3.5, "homing's approach %.2f s", homing_s);
         printf("    avr: homing's approach took %.2f s; the longest wait for a reply %.1f ms\n", homing_s, rep.longest_wait_ms);
     }
     /* Bounded work a pass (fw.h): every pass of the loop, its interrupts
@@ -646,7 +776,7 @@ static void binary_print_with_masks_streaming(void)
 static void watchdog_resets_a_hung_loop(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "2", "--hang-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", "2", "--hang-at-uv", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "1800", NULL};
     char got[256] = "";
     avr_log l;
     int ok = 1;
@@ -664,7 +794,7 @@ static void watchdog_resets_a_hung_loop(void)
     got[0] = 0;
     ok = gline(&c, "M115", "FIRMWARE_NAME", 5, got, sizeof got);
     CHECKF(ok, "no answer after the reset: %s", got);
-    CHECKF(avr_stop(&c) == 0, "avr-run failed");
+    check_avr_exit(&c, "build/test_avr/wdt.log");
     CHECK(read_avr_log("build/test_avr/wdt.log", &l));
     CHECKF(l.uvs >= 2 && l.uv_on[0] && !l.uv_on[1], "%zu UV edges", l.uvs);
     CHECKF(l.resets == 1, "%zu resets", l.resets);

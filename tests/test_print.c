@@ -179,18 +179,27 @@ static void check_exposures(const print_report *r)
     }
 }
 
-/* The record from event `from` on against layers first .. of the report. */
-static zsummary check_record_from(const sim_log *l, const print_report *rep, size_t from, uint32_t first)
+/* The record from event `from` on against layers first .. of the report;
+   with `peel_um`, a whole print's, whose Z visits each layer's top and
+   then the peel above it. */
+static zsummary check_record_from(const sim_log *l, const print_report *rep, size_t from, uint32_t first, uint32_t peel_um)
 {
     size_t k;
     long pos = l->start_steps;
     zexpect e;
+    zsummary s;
+    uint64_t *path = peel_um ? (uint64_t *)calloc(2u * rep->layers + 1u, sizeof *path) : NULL;
     for (k = 0; k < from; k++) if (l->ev[k].kind == ZEV_STEP) pos += l->ev[k].value;
+    for (k = 0; path && k < rep->layers; k++) {
+        path[2 * k] = (uint64_t)rep->tops[k] * rep->bin_nm;
+        path[2 * k + 1] = path[2 * k] + peel_um * 1000u;
+    }
     memset(&e, 0, sizeof e);
     e.tick_hz = l->tick_hz;
     e.steps_per_mm = (uint32_t)l->steps_per_mm;
     e.max_speed = (uint32_t)l->max_speed;
     e.accel = (uint32_t)l->accel;
+    e.jitter = 0; /* the sim's clock puts each step out at its tick */
     e.start_position = pos;
     e.layers = rep->layers;
     e.first = first;
@@ -198,12 +207,19 @@ static zsummary check_record_from(const sim_log *l, const print_report *rep, siz
     e.bin_nm = rep->bin_nm;
     e.crcs = rep->crcs;
     e.exposure_ms = rep->exposures;
-    return zcheck_record(l->ev + from, l->count - from, &e);
+    e.path_nm = path;
+    e.path_len = path ? 2u * rep->layers : 0;
+    s = zcheck_record(l->ev + from, l->count - from, &e);
+    CHECKF(!peel_um || (s.moves >= 2u * rep->layers && s.ramp_windows), "%zu moves from rest and %zu ramp windows checked for %u layers",
+           s.moves, s.ramp_windows, rep->layers);
+    free(path);
+    return s;
 }
 
 /* The record against the report: every layer shown once with the host's
-   mask, at its exact height, the motion within limits. */
-static void check_print(const char *log_path, const char *report_path, int expect_link_pause)
+   mask, at its exact height, the motion within limits, Z's steps the
+   heights moved with a peel of `peel_um` after each layer. */
+static void check_print(const char *log_path, const char *report_path, int expect_link_pause, uint32_t peel_um)
 {
     sim_log l;
     print_report r;
@@ -212,7 +228,7 @@ static void check_print(const char *log_path, const char *report_path, int expec
     CHECKF(read_print_report(report_path, &r), "cannot read the report %s", report_path);
     if (check_case_failed()) { free(l.ev); print_report_free(&r); return; }
     check_exposures(&r);
-    s = check_record_from(&l, &r, 0, r.first);
+    s = check_record_from(&l, &r, 0, r.first, peel_um);
     CHECKF(s.shows == r.layers, "%zu masks shown for %u layers", s.shows, r.layers);
     /* each step left at its tick: 10 us is 100 ticks of the sim's clock */
     CHECKF(!l.unscheduled && l.worst_step_offset * 100000u <= l.tick_hz,
@@ -302,7 +318,7 @@ static void full_print_on_the_simulator(void)
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
     CHECKF(port_hupcl(sim.line + 4, 0) == 0, "HUPCL is %d on the port after the print", port_hupcl(sim.line + 4, 0));
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0);
+    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0, 2000);
     cli_free(&r);
 }
 
@@ -326,7 +342,7 @@ static void print_through_a_faulty_line(void)
         CHECKF(up_drop + up_bad > up / 200 && down_drop + down_bad > down / 200, "faults up %lu+%lu of %lu, down %lu+%lu of %lu",
                up_drop, up_bad, up, down_drop, down_bad, down);
         free(stats);
-        check_print(cli_path("sim2.log"), cli_path("report2.json"), 0);
+        check_print(cli_path("sim2.log"), cli_path("report2.json"), 0, 2000);
     }
     cli_free(&r);
 }
@@ -345,7 +361,7 @@ static void print_survives_a_lost_link(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     child_stop(&relay);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1);
+    if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1, 2000);
     cli_free(&r);
 }
 
@@ -447,7 +463,7 @@ static void check_resumed_in_place(const char *log_path, const char *report_path
     size_t k, on = 0;
     CHECK(read_sim_log(log_path, &l) && read_print_report(report_path, &rep));
     if (check_case_failed()) { free(l.ev); print_report_free(&rep); return; }
-    (void)check_record_from(&l, &rep, 0, 1);
+    (void)check_record_from(&l, &rep, 0, 1, 0);
     for (k = 0; k < l.count; k++) on += l.ev[k].kind == ZEV_UV && l.ev[k].value;
     CHECKF(on >= rep.layers + split_min && on <= rep.layers + split_max, "%zu UV-on periods for %u layers, %zu to %zu split",
            on, rep.layers, split_min, split_max);
@@ -621,7 +637,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
         CHECK(log && strstr(log, " reset signal"));
         free(log);
         CHECK(rep.first == layer);
-        check_record_from(&l, &rep, from, layer);
+        check_record_from(&l, &rep, from, layer, 0);
     }
     free(l.ev);
     print_report_free(&rep);
@@ -700,7 +716,7 @@ static void mcu_reset_mid_exposure_owes_only_the_rest(void)
            pre * 1e3 / l.tick_hz, post * 1e3 / l.tick_hz, ((double)pre + (double)post - (double)e) * 1e3 / l.tick_hz, less);
     /* from the show of layer 2 on, every layer at its exact height with its light */
     CHECK(rep.first == 1);
-    (void)check_record_from(&l, &rep, nth_show_from_end(&l, rep.layers - 1), 2);
+    (void)check_record_from(&l, &rep, nth_show_from_end(&l, rep.layers - 1), 2, 0);
     free(l.ev);
     print_report_free(&rep);
 }
@@ -984,7 +1000,7 @@ static void resume_a_stopped_print(child *sim, const char *log, unsigned k, int 
         size_t from = nth_show_from_end(&l, rep.layers - k + 1);
         zsummary s;
         CHECK(rep.first == k);
-        s = check_record_from(&l, &rep, from, k);
+        s = check_record_from(&l, &rep, from, k, 0);
         CHECKF(s.shows == rep.layers - k + 1, "%zu layers shown from layer %u of %u", s.shows, k, rep.layers);
     }
     free(l.ev);
@@ -1071,7 +1087,7 @@ static void print_a_sliced_job(void)
     CHECK(strstr(r.out, "the host's plan") != NULL);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0);
+    if (!check_case_failed()) check_print(cli_path("sim6.log"), cli_path("report6.json"), 0, 2000);
     /* a damaged job: the message names the file and the byte. masks.rle:
        44 bytes of header, then layer 1: bins at 44, exposure at 48, CRC at
        52, code bytes at 56 */
@@ -1173,7 +1189,7 @@ static void thousand_layers_on_the_simulator(void)
     CHECK(strstr(r.out, "1000 layers, the host's plan") != NULL);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (!check_case_failed()) check_print(cli_path("sim7.log"), cli_path("report7.json"), 0);
+    if (!check_case_failed()) check_print(cli_path("sim7.log"), cli_path("report7.json"), 0, 500);
 }
 
 /* The Cortex-M3 image (20 KiB of RAM) under qemu-system-arm prints a short
@@ -1315,8 +1331,11 @@ static void mcu_halted_mid_print_under_qemu(void)
 }
 
 /* printrun's printcore sends a G-code file to the simulator in G-code mode:
-   every line is acknowledged, Z lands where the file says, the light is on
-   only while Z stands still. */
+   every line is acknowledged, and the log passes tests/zcheck.h's check:
+   the one exposure at its line's Z for its G4 to the tick, the light on
+   only while Z stands still, the steps the heights the lines move. At
+   --speed 1, so that printcore has the dwell's 300 ms of wall time to send
+   the G4 after M106's ok however loaded the machine. */
 static void printcore_drives_gcode_mode(void)
 {
     child sim, pc;
@@ -1324,14 +1343,15 @@ static void printcore_drives_gcode_mode(void)
     int sent = 0, oks = 0, status;
     const char *line;
     sim_log l;
-    size_t k;
-    int uv = 0, moving_lit = 0, exposures = 0;
-    long pos;
-    uint64_t lit_at = 0, lit = 0;
+    zexpect e;
+    zsummary s;
+    static const uint32_t top_um[1] = {5000}, exposure_ms[1] = {300};
+    static const uint64_t path_nm[3] = {5000000, 6500000, 10000000};
     cli_write(cli_path("job.gcode"), "; a layer by hand\nG28\nG90\nG1 Z5 F300\nG4 P100\nM106 S255\nG4 P300\nM107\n"
                                      "G91\nG1 Z1.5 F600 ; relative\nG90\nM114\nG1 Z10\nM400\nM18\n");
     {
-        char *sargv[] = {(char *)SIM_BIN, (char *)"--log", (char *)cli_path("sim4.log"), (char *)"--speed", (char *)"20", NULL};
+        char *sargv[] = {(char *)SIM_BIN, (char *)"--log", (char *)cli_path("sim4.log"), (char *)"--speed", (char *)"1",
+                         (char *)"--z-start", (char *)"6", NULL};
         if (!child_start(&sim, sargv, "pty ", 10)) { CHECK(!"the simulator did not start"); return; }
     }
     argv[0] = (char *)"/usr/bin/python3";
@@ -1360,26 +1380,91 @@ static void printcore_drives_gcode_mode(void)
         if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
         if (!strncmp(line, "RECV: ok", 8)) oks++;
         CHECKF(strncmp(line, "RECV: Error", 11), "printcore was told %.60s", line);
+        CHECKF(strncmp(line, "RECV: echo:Exposure ran over", 28), "harness failure, not the firmware's: printcore's G4 came after "
+               "the dwell: %.60s", line);
     }
     CHECKF(sent == 14 && oks >= sent, "%d lines sent, %d acknowledged", sent, oks);
     CHECK(text && strstr(text, "Z:6.500") && strstr(text, "Z_move_comp"));
     free(text);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     CHECK(read_sim_log(cli_path("sim4.log"), &l));
-    pos = l.start_steps;
-    for (k = 0; k < l.count; k++) {
-        if (l.ev[k].kind == ZEV_STEP) { pos += l.ev[k].value; moving_lit += uv; }
-        if (l.ev[k].kind == ZEV_UV) {
-            uv = l.ev[k].value;
-            if (uv) lit_at = l.ev[k].when;
-            else { lit = l.ev[k].when - lit_at; exposures++; }
-        }
+    memset(&e, 0, sizeof e);
+    e.tick_hz = l.tick_hz;
+    e.steps_per_mm = (uint32_t)l.steps_per_mm;
+    e.max_speed = (uint32_t)l.max_speed;
+    e.accel = (uint32_t)l.accel;
+    e.start_position = l.start_steps;
+    e.layers = e.first = 1;
+    e.top_bins = top_um;
+    e.bin_nm = 1000;
+    e.exposure_ms = exposure_ms;
+    e.path_nm = path_nm;
+    e.path_len = 3;
+    s = zcheck_record(l.ev, l.count, &e);
+    CHECKF(s.moves >= 3 && s.ramp_windows, "%zu moves from rest and %zu ramp windows checked", s.moves, s.ramp_windows);
+    free(l.ev);
+}
+
+/* One G-code line to the port `fd` and its replies up to "ok" (10 s at
+   most), appended to `got`; 1 when the ok came. */
+static int gcode_exchange(int fd, const char *line, char *got, size_t size)
+{
+    size_t len = strlen(got);
+    double t0 = seconds_now();
+    if (write(fd, line, strlen(line)) != (ssize_t)strlen(line)) return 0;
+    while (seconds_now() - t0 < 10) {
+        struct pollfd p = {fd, POLLIN, 0};
+        ssize_t n;
+        if (poll(&p, 1, 100) <= 0) continue;
+        n = read(fd, got + len, size - 1 - len);
+        if (n <= 0) continue;
+        len += (size_t)n;
+        got[len] = 0;
+        if (strstr(got, "ok\n") || len + 1 >= size) return strstr(got, "ok\n") != NULL;
     }
-    CHECKF(pos == 10 * (long)l.steps_per_mm && !moving_lit && !uv, "ends at %ld steps; %d steps lit", pos, moving_lit);
-    /* M106's G4 P300 is the exposure to the tick, printcore's round trips
-       between the three lines not in it */
-    CHECKF(exposures == 1 && lit == 3 * l.tick_hz / 10, "%d exposures, the light on for %llu ticks for G4 P300", exposures,
-           (unsigned long long)lit);
+    return 0;
+}
+
+/* G-code mode's over-exposure, as the pins show it: M106 S255, then a G4
+   P100 that comes 400 ms (wall clock, the sim at --speed 1) after M106,
+   later than its dwell's end. The light stays on until the G4 puts it out,
+   the firmware says by how much it ran over, and the log shows the light
+   on for the dwell and that much more, to the tick the off was processed
+   (not the dwell's end the core asked for). */
+static void late_g4_shows_in_the_log(void)
+{
+    char *argv[] = {(char *)SIM_BIN, (char *)"--log", (char *)cli_path("late_g4.log"), (char *)"--speed", (char *)"1",
+                    (char *)"--z-start", (char *)"1", NULL};
+    char got[512] = "";
+    const char *over;
+    child sim;
+    sim_log l;
+    size_t k, exposures = 0;
+    uint64_t on = 0, lit = 0;
+    double ran_over_ms = -1;
+    int fd, ok;
+    if (!child_start(&sim, argv, "pty ", 10)) { CHECK(!"the simulator did not start"); child_stop(&sim); return; }
+    fd = open(sim.line + 4, O_RDWR | O_NOCTTY | O_NONBLOCK);
+    ok = fd >= 0 && tty_raw(fd, 115200) == 0;
+    ok = ok && gcode_exchange(fd, "G28\n", got, sizeof got) && gcode_exchange(fd, "M106 S255\n", got, sizeof got);
+    CHECKF(ok, "G28 and M106 on the simulator: %.200s", got);
+    got[0] = 0;
+    sleep_ms(400);
+    ok = ok && gcode_exchange(fd, "G4 P100\n", got, sizeof got);
+    if ((over = strstr(got, "Exposure ran over: G4 came "))) ran_over_ms = strtod(over + 27, NULL);
+    CHECKF(ok && ran_over_ms >= 250, "G4 P100 400 ms after M106: %.200s", got);
+    got[0] = 0;
+    CHECK(gcode_exchange(fd, "M107\n", got, sizeof got));
+    if (fd >= 0) close(fd);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    CHECK(read_sim_log(cli_path("late_g4.log"), &l));
+    for (k = 0; k < l.count; k++)
+        if (l.ev[k].kind == ZEV_UV && l.ev[k].value) on = l.ev[k].when;
+        else if (l.ev[k].kind == ZEV_UV) { lit = l.ev[k].when - on; exposures++; }
+    /* the message's figure is the same tick's, to its microsecond */
+    CHECKF(exposures == 1 && ran_over_ms >= 0 && fabs((double)lit / l.tick_hz * 1e3 - (100 + ran_over_ms)) < 0.002,
+           "%zu exposures; the log has the light on %.4f ms, the firmware says 100 ms and %.3f ms over",
+           exposures, (double)lit / (l.tick_hz ? l.tick_hz : 1) * 1e3, ran_over_ms);
     free(l.ev);
 }
 
@@ -1469,6 +1554,7 @@ void test_print(void)
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_reset_mid_print_under_qemu);
     RUN_NEEDING("qemu-system-arm and build/fw-mps2-busy.elf (arm-none-eabi-gcc)", mcu_halted_mid_print_under_qemu);
     RUN_NEEDING("printcore (Debian printrun)", printcore_drives_gcode_mode);
+    RUN(late_g4_shows_in_the_log);
     RUN(hung_loop_keeps_light_and_watchdog);
     cli_end();
 }

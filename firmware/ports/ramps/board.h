@@ -141,6 +141,8 @@ uint16_t board_tx_lost(void);
 int board_step_arm(uint64_t when, int dir);
 void board_step_pulse(void);
 int ramps_step_due(void);
+int ramps_gcode_mode(void);               /* main.c's: the core reads G-code now */
+int fw_urgent_byte(uint8_t *state, uint8_t c); /* the core's (fw.h) */
 int board_endstop(void);
 void board_motor(int on);
 /* UV on from tick `when` to `until` (on = 1), switched by Timer4's compare

@@ -44,6 +44,7 @@ static int port_step_arm(void *ctx, uint64_t when, int dir) { (void)ctx; return 
 static void port_step_pulse(void *ctx, int dir) { (void)ctx; (void)dir; board_step_pulse(); }
 /* 1 when the loop must wake: the queue ran out (or the next step could not be armed) */
 int ramps_step_due(void) { fw_step_interrupt(&fw); return !fw.steps.running; }
+int ramps_gcode_mode(void) { return fw_gcode_mode(&fw); }
 static int port_endstop(void *ctx) { (void)ctx; return board_endstop(); }
 static void port_uv(void *ctx, int on, uint64_t when, uint64_t until) { (void)ctx; board_uv(on, when, until); }
 static void port_motor(void *ctx, int on) { (void)ctx; board_motor(on); }

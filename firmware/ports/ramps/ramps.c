@@ -129,6 +129,12 @@ static int step_compare(void)
     return 1;
 }
 
+/* Set by M112's last byte (emergency(), below) until the core has read
+   that line and stopped everything itself (its disarm, UINT64_MAX): the
+   lines the loop has still to run before it move nothing and light
+   nothing meanwhile. */
+static volatile uint8_t killed BOARD_SAFETY;
+
 int board_step_arm(uint64_t when, int dir)
 {
     uint8_t sreg = SREG;
@@ -138,6 +144,9 @@ int board_step_arm(uint64_t when, int dir)
         TIMSK5 &= (uint8_t)~_BV(OCIE5A);
         step_state = IDLE;
         step_pin_low();
+        killed = 0;
+    } else if (killed) {
+        /* taken, not armed: no step until the core has stopped */
     } else {
         /* DIR now: the pin is low, the step at least ARM_LEAD away (the
            drivers need 200 ns / 650 ns of DIR before STEP) */
@@ -283,7 +292,9 @@ void board_uv(int on, uint64_t when, uint64_t until)
 {
     uint8_t sreg = SREG;
     cli();
-    if (on) {
+    if (on && killed) {
+        /* dark until the core has stopped */
+    } else if (on) {
         uint64_t earliest = board_ticks() + UV_SETTLE;
         uint16_t in_period;
         uv_shift = when < earliest ? earliest - when : 0;
@@ -307,10 +318,28 @@ uint8_t board_uv_lit(void) { return uv_level; }
 static uint8_t rx_buf[BOARD_RX_SIZE], tx_buf[BOARD_TX_SIZE];
 static volatile uint16_t rx_head, rx_tail, tx_head, tx_tail, rx_lost, tx_lost;
 
+/* M112 from G-code stops Z and puts the light out here, as its last byte
+   arrives, not a loop pass later (a pass computing ramp steps at the top
+   speed is a good part of a millisecond): the compare units let go, the
+   pins low. The core does the rest when the loop reads the line. */
+static uint8_t rx_urgent;
+static void emergency(void)
+{
+    killed = 1;
+    TIMSK5 &= (uint8_t)~_BV(OCIE5A);
+    step_state = IDLE;
+    step_pin_low();
+    TIMSK4 &= (uint8_t)~_BV(OCIE4C);
+    uv_state = IDLE;
+    uv_want = uv_level = 0;
+    uv_hold();
+}
+
 ISR(USART0_RX_vect)
 {
     uint8_t b = UDR0;
     uint16_t head = rx_head;
+    if (ramps_gcode_mode() && fw_urgent_byte(&rx_urgent, b) == 112) emergency();
     if ((uint16_t)(head - rx_tail) == BOARD_RX_SIZE) { rx_lost++; return; }
     rx_buf[head % BOARD_RX_SIZE] = b;
     rx_head = (uint16_t)(head + 1u);

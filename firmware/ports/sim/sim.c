@@ -253,7 +253,10 @@ static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
         if (when < s->uv_off_at) s->uv_off_at = when;
         return;
     } else s->uv_off_at = FW_NEVER;
-    log_line(s, when, on ? "uv 1" : "uv 0");
+    /* the tick the light really changes: an end already past (a G4 that
+       came after its dwell) puts it out now, and the log must show it on
+       until then */
+    log_line(s, when > s->now ? when : s->now, on ? "uv 1" : "uv 0");
 }
 
 static void hw_watchdog(void *ctx)
