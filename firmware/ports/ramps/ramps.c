@@ -425,7 +425,10 @@ void board_idle(uint64_t deadline)
     uint64_t now;
     cli();
     now = board_ticks();
-    if (rx_head != rx_tail || now >= deadline) { sei(); return; }
+    /* a deadline closer than the alarm can be armed for would pass
+       unmatched and leave the loop asleep until the overflow, 33 ms on
+       (the light of a layer handed over that late): the loop runs on */
+    if (rx_head != rx_tail || now >= deadline || deadline - now < ARM_LEAD) { sei(); return; }
     if (deadline - now < FAR) {
         OCR3A = (uint16_t)deadline;
         TIFR3 = _BV(OCF3A);
