@@ -818,7 +818,7 @@ static void step_fault(fw_state *fw, uint64_t now)
 static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
-    uint8_t room = steps_room(fw);
+    uint8_t room = steps_room(fw), first = 1;
     if (q->late) return 0;
     if (!steps_wanted(fw)) { q->short_by = 0; return 1; }
     q->short_by = 0;
@@ -826,7 +826,10 @@ static int fill(fw_state *fw, uint64_t now)
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir;
         if (!q->budget) { q->short_by = 1; return 1; }
-        if (fw_axis_next(&fw->axis) < now) return 0;
+        /* the steps' ticks only grow and `now` holds for the call: the
+           first tells whether any is past */
+        if (first && fw_axis_next(&fw->axis) < now) return 0;
+        first = 0;
         dir = fw_axis_step(&fw->axis, fw->port.endstop(fw->port.ctx));
         /* no step (homing braking at the switch): the step after it is
            computed in the same pass, so it is never late for a pass */

@@ -12,7 +12,7 @@
        the tick (the dwell after M106 counts from M106 and Timer4 ends it,
        so the host's round trips between the lines add nothing), and every
        loop pass shorter than PASS_MAX (below: the time the step queue
-       covers at the top speed, less its margin), with every 25th layer's
+       covers at the top speed, less its margin), with every 50th layer's
        peel at the top speed;
      - a binary-protocol print by the host tool (adaslice print), masks
        streaming while Z moves: the same step checks, and tests/zcheck.h's
@@ -53,11 +53,14 @@
    or of the print, a slice of a mask) begins with more than half of it
    (fw.h, Bounded work a pass), so the steps queued when a pass begins are
    due over at least FW_STEP_QUEUE / 2 intervals at the top speed. Every
-   pass, its interrupts included, must end within three quarters of that:
-   a quarter is the margin, for the passes after the longest one to refill
-   the queue while it still drains, and for work still to come to a pass. */
+   pass, its interrupts included, must end within seven eighths of that:
+   the margin (a step interval at the top speed) is for the pass after the
+   longest one, which refills the queue while it still drains, and for
+   work still to come to a pass. The longest are a move's first steps
+   (its shaping, and roots searched from afar), while the queue is still
+   empty and its first step a step lead away. */
 #define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE / 2u) * STEP_CYCLES)
-#define PASS_MAX (COVER_CYCLES * 3u / 4u)
+#define PASS_MAX (COVER_CYCLES * 7u / 8u)
 
 typedef struct avr_child { pid_t pid; int out, tty; char pty[256]; } avr_child;
 
@@ -337,7 +340,7 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 
 #define LAYER_UM 50
 #define PEEL_UM 100
-/* every 25th layer's peel: long enough to cruise at the top speed (its
+/* every 50th layer's peel: long enough to cruise at the top speed (its
    ramps are 1 mm at 10 mm/s and 50 mm/s^2) */
 #define LONG_PEEL_UM 3000
 #define TOP_F (BOARD_MAX_SPEED_UM_S * 60u / 1000u) /* the top speed in mm/min */
@@ -349,14 +352,14 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 /* Layer `layer` of a G-code print as resin hosts send it: the lift above
    the last layer (from layer 2 on) and the way down to this one's top,
    then the light on for a dwell and off. The moves go into `moves` (F300
-   and F180, under the board's top speed; every 25th layer a long peel at
+   and F180, under the board's top speed; every 50th layer a long peel at
    the top speed, both ways). Returns the number of lines in `lines`: the
    moves first, then M106, G4, M107. */
 static int gcode_layer(int layer, char lines[5][48], zmove *moves, size_t *n)
 {
     const int32_t spmm = (int32_t)BOARD_STEPS_PER_MM;
     int32_t top = layer * LAYER_UM * spmm / 1000;
-    int k = 0, fast = layer % 25 == 0;
+    int k = 0, fast = layer % 50 == 0;
     unsigned up_f = fast ? TOP_F : 300u, down_f = fast ? TOP_F : 180u;
     if (layer > 1) {
         int32_t lift = (layer - 1) * LAYER_UM * spmm / 1000 + (fast ? LONG_PEEL_UM : PEEL_UM) * spmm / 1000;
@@ -418,7 +421,7 @@ static void check_gcode_print(const char *path, const zmove *moves, size_t n, in
 static void gcode_print_nanodlp_style(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "600", "--timeout", "300", NULL};
     static zmove moves[2 * NANODLP_LAYERS + 1];
     char got[256];
     size_t n = 0;
@@ -454,7 +457,7 @@ static void gcode_print_nanodlp_style(void)
 static void gcode_print_by_printcore(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "900", "--timeout", "120", NULL};
+    const char *opts[] = {"--z-start", "1", "--speed", "20", "--max-seconds", "900", "--timeout", "600", NULL};
     static zmove moves[2 * PRINTCORE_LAYERS + 1];
     char job[256], out[256], *text;
     size_t n = 0;
@@ -487,7 +490,7 @@ static void gcode_print_by_printcore(void)
         _exit(127);
     }
     t0 = now_s();
-    while (pc > 0 && now_s() - t0 < 300) {
+    while (pc > 0 && now_s() - t0 < 600) {
         struct timespec ts = {0, 50000000};
         int s;
         if (waitpid(pc, &s, WNOHANG) == pc) { st = WIFEXITED(s) ? WEXITSTATUS(s) : -1; pc = 0; break; }
@@ -526,7 +529,7 @@ static void gcode_print_by_printcore(void)
 static void binary_print_with_masks_streaming(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "60", NULL};
+    const char *opts[] = {"--z-start", BPRINT_Z_START, "--max-seconds", "300", "--timeout", "300", NULL};
     cli_result r;
     avr_log l;
     print_report rep;

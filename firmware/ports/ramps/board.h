@@ -26,8 +26,8 @@
 /* Z's top speed on this MCU. An 8-bit core computes motion.c's closed form
    in 64-bit integers (make bench, bench/avr_bench.c, times each step); the
    loop refills the step queue FW_STEP_FILL steps a pass once half of it
-   has gone out, and every pass, interrupts included, ends within three
-   quarters of the time half the queue covers at this speed
+   has gone out, and every pass, interrupts included, ends within seven
+   eighths of the time half the queue covers at this speed
    (tests/test_avr.c asserts it from simavr's pin edges and the loop's
    marks, in G-code mode and with masks streaming while Z moves). */
 #ifndef BOARD_MAX_SPEED_UM_S
