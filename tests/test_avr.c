@@ -48,18 +48,20 @@
 #define CYCLES_PER_TICK BOARD_TICK_DIV
 #define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
 #define STEP_CYCLES ((unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S)) /* the shortest step interval */
-/* The step queue never runs dry: the loop refills it once half of it has
-   gone out, and a pass that computes no steps (a frame, a piece of G-code
-   or of the print, a slice of a mask) begins with more than half of it
+/* The step queue never runs dry: the loop refills it once REFILL_GAP steps
+   have gone out (FW_STEP_FILL, at most half the queue), and a pass that
+   computes no steps (a frame, a piece of G-code or of the print, a slice
+   of a mask) begins with more than FW_STEP_QUEUE - REFILL_GAP of them
    (fw.h, Bounded work a pass), so the steps queued when a pass begins are
-   due over at least FW_STEP_QUEUE / 2 intervals at the top speed. Every
+   due over at least that many intervals at the top speed. Every
    pass, its interrupts included, must end within seven eighths of that:
    the margin (a step interval at the top speed) is for the pass after the
    longest one, which refills the queue while it still drains, and for
    work still to come to a pass. The longest are a move's first steps
    (its shaping, and roots searched from afar), while the queue is still
    empty and its first step a step lead away. */
-#define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE / 2u) * STEP_CYCLES)
+#define REFILL_GAP (FW_STEP_FILL < FW_STEP_QUEUE / 2u ? FW_STEP_FILL : FW_STEP_QUEUE / 2u)
+#define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE - REFILL_GAP) * STEP_CYCLES)
 #define PASS_MAX (COVER_CYCLES * 7u / 8u)
 
 typedef struct avr_child { pid_t pid; int out, tty; char pty[256]; } avr_child;
