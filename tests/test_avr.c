@@ -597,11 +597,7 @@ static void binary_print_with_masks_streaming(void)
         double homing_s;
         while (up < l.steps && l.step_dir[up] < 0) up++;
         homing_s = up < l.steps ? (double)(l.step_at[up] - l.step_at[0]) / BOARD_CPU_HZ : 0;
-        /* the longest wait (the host's clock) is a mask frame's, which is
-           acknowledged once decoded, its decoding getting what the steps
-           leave of the CPU while Z moves at the top speed: within half the
-           host's 3 s give-up */
-        CHECKF(homing_s > 3.5 && rep.longest_wait_ms < 1500, "homing's approach %.2f s; the longest wait for a reply %.1f ms",
+        CHECKF(homing_s > 3.5 && rep.longest_wait_ms < 500, "homing's approach %.2f s; the longest wait for a reply %.1f ms",
                homing_s, rep.longest_wait_ms);
         printf("    avr: homing's approach took %.2f s; the longest wait for a reply %.1f ms\n", homing_s, rep.longest_wait_ms);
     }
