@@ -14,11 +14,12 @@ static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_
 /* The steps the queue may hold: homing's one-step phases queue one at a
    time (each reads the switch after the step before it went out). */
 static uint8_t steps_room(const fw_state *fw) { return fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE; }
-/* The steps a refill waits for: half the queue (homing's one step). */
+/* The steps a refill leaves room for: FW_STEP_FILL (one pass's), at most
+   half the queue, at least one (homing's one step). */
 static uint8_t refill_gap(const fw_state *fw)
 {
     uint8_t half = (uint8_t)(steps_room(fw) / 2u);
-    return half < 1u ? 1u : half;
+    return half < 1u ? 1u : half < FW_STEP_FILL ? half : (uint8_t)FW_STEP_FILL;
 }
 /* Steps to compute: the queue is refilled once refill_gap steps have gone
    out, and then to the full (short_by: a refill the budget cut), so that a

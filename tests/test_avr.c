@@ -49,7 +49,7 @@
 #define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
 #define STEP_CYCLES ((unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S)) /* the shortest step interval */
 /* The step queue never runs dry: the loop refills it once REFILL_GAP steps
-   (half the queue) have gone out, and a pass that
+   have gone out (FW_STEP_FILL, at most half the queue), and a pass that
    computes no steps (a frame, a piece of G-code or of the print, a slice
    of a mask) begins with more than FW_STEP_QUEUE - REFILL_GAP of them
    (fw.h, Bounded work a pass), so the steps queued when a pass begins are
@@ -60,7 +60,7 @@
    work still to come to a pass. The longest are a move's first steps
    (its shaping, and roots searched from afar), while the queue is still
    empty and its first step a step lead away. */
-#define REFILL_GAP (FW_STEP_QUEUE / 2u)
+#define REFILL_GAP (FW_STEP_FILL < FW_STEP_QUEUE / 2u ? FW_STEP_FILL : FW_STEP_QUEUE / 2u)
 #define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE - REFILL_GAP) * STEP_CYCLES)
 #define PASS_MAX (COVER_CYCLES * 7u / 8u)
 
