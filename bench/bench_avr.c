@@ -230,15 +230,16 @@ int main(int argc, char **argv)
         printf("a binary print with masks streaming (%zu steps): worst step %zu cycles (%.2f us) from its closed-form tick, "
                "%lu refused as late\n", steps, late_worst, late_worst / 16.0, ps.late);
         {
-            /* the step queue's half at the top speed: what a pass begins with */
-            unsigned long cover = (unsigned long)(FW_STEP_QUEUE / 2u) * (BOARD_CPU_HZ / BOARD_MAX_STEPS_S);
+            /* the step queue less a refill at the top speed: what a pass begins with */
+            unsigned gap = FW_STEP_FILL < FW_STEP_QUEUE / 2u ? FW_STEP_FILL : FW_STEP_QUEUE / 2u;
+            unsigned long cover = (unsigned long)(FW_STEP_QUEUE - gap) * (BOARD_CPU_HZ / BOARD_MAX_STEPS_S);
             printf("  Z's top speed from the pin edges: %.2f mm/s (the shortest interval %llu cycles; BOARD_MAX_SPEED_UM_S %lu), "
                    "peels of 3 mm at 10 mm/s\n",
                    shortest < UINT64_MAX ? (double)BOARD_CPU_HZ / (double)shortest / BOARD_STEPS_PER_MM : 0.0,
                    (unsigned long long)(shortest < UINT64_MAX ? shortest : 0), (unsigned long)BOARD_MAX_SPEED_UM_S);
-            printf("  worst loop pass %lu cycles, %lu while Z moves (its interrupts in; the loop's own work %lu, %lu); half the "
-                   "step queue (%u steps) covers %lu cycles at the top speed: %.0f %% of it to spare; stack peak %lu bytes\n",
-                   ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned)(FW_STEP_QUEUE / 2u), cover,
+            printf("  worst loop pass %lu cycles, %lu while Z moves (its interrupts in; the loop's own work %lu, %lu); the "
+                   "step queue less a refill (%u steps) covers %lu cycles at the top speed: %.0f %% of it to spare; stack peak %lu bytes\n",
+                   ps.worst, ps.moving, ps.work, ps.moving_work, (unsigned)(FW_STEP_QUEUE - gap), cover,
                    100.0 * (1.0 - (double)ps.worst / (double)cover), ps.stack);
         }
         free(at);

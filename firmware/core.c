@@ -14,31 +14,26 @@ static int moving(const fw_state *fw) { return fw_axis_busy(&fw->axis) || steps_
 /* The steps the queue may hold: homing's one-step phases queue one at a
    time (each reads the switch after the step before it went out). */
 static uint8_t steps_room(const fw_state *fw) { return fw_axis_one_step(&fw->axis) ? 1u : FW_STEP_QUEUE; }
-/* Steps to compute: the queue is refilled once a quarter of it has gone
-   out (homing's one step, once it has), and then to the full (short_by: a
-   refill the budget cut), so that a pass computes several steps (its own
-   work is a good part of a step interval on an 8-bit core) while the rest
-   covers the wait, and a pass that computes none (a frame, a piece of
-   G-code or of the print, a slice of a held frame) begins with more than
-   three quarters of the queue. From half, a refill on a ramp (two passes
-   of FW_STEP_FILL steps) took longer than the half it had to cover: the
-   RAMPS board's queue ran dry at a deceleration's end. */
+/* The steps a refill leaves room for: FW_STEP_FILL (one pass's), at most
+   half the queue, at least one (homing's one step). */
+static uint8_t refill_gap(const fw_state *fw)
+{
+    uint8_t half = (uint8_t)(steps_room(fw) / 2u);
+    return half < 1u ? 1u : half < FW_STEP_FILL ? half : (uint8_t)FW_STEP_FILL;
+}
+/* Steps to compute: the queue is refilled once refill_gap steps have gone
+   out, and then to the full (short_by: a refill the budget cut), so that a
+   pass computes several steps (its own work is a good part of a step
+   interval on an 8-bit core) while the rest covers the wait, and a pass
+   that computes none (a frame, a piece of G-code or of the print, a slice
+   of a held frame) begins with more than room - refill_gap steps queued. */
 static int steps_wanted(const fw_state *fw)
 {
     uint8_t queued = steps_queued(fw), room = steps_room(fw);
-    return fw_axis_busy(&fw->axis) && queued < room && (queued <= room - room / 4u || fw->steps.short_by);
+    return fw_axis_busy(&fw->axis) && queued < room && (queued <= room - refill_gap(fw) || fw->steps.short_by);
 }
 static void fill_steps(fw_state *fw, uint64_t now);
 static void stop_dead(fw_state *fw, uint8_t error, uint64_t now);
-
-/* A function called once is inlined, its locals with it: the replies'
-   buffers are kept out of on_frame so that they are on the stack only
-   while one is made, one at a time. */
-#if defined(__GNUC__)
-#define FW_NOINLINE __attribute__((noinline))
-#else
-#define FW_NOINLINE
-#endif
 
 /* ------------------------------------------------------------------ replies */
 
@@ -973,13 +968,13 @@ static int endstop_misplaced(const fw_state *fw)
    not be armed: STEP_LATE) or the endstop closes outside homing where it
    cannot (ENDSTOP), else 0. Homing's one-step phases queue one step at a time: each reads
    the switch after the step before it went out. The approach queues
-   ahead like a move: it sees the switch up to a queue and a half of steps
-   late (refilled at three quarters) and brakes from there, and backing off measures
+   ahead like a move: it sees the switch up to a queue and a refill of
+   steps late and brakes from there, and backing off measures
    from where it stopped, so the zero is the same. */
 static int fill(fw_state *fw, uint64_t now)
 {
     fw_steps *q = &fw->steps;
-    uint8_t room = steps_room(fw);
+    uint8_t room = steps_room(fw), first = 1;
     q->short_by = 0;
     if (q->late) return LINK_ERR_STEP_LATE;
     if (fw->halted && fw_axis_busy(&fw->axis)) { /* G-code's G28: a halted core moves nothing */
@@ -991,7 +986,10 @@ static int fill(fw_state *fw, uint64_t now)
         uint8_t at = (uint8_t)(q->head % FW_STEP_QUEUE);
         int dir, closed;
         if (!q->budget) { q->short_by = 1; return 0; }
-        if (fw_axis_next(&fw->axis) < now) return LINK_ERR_STEP_LATE;
+        /* the steps' ticks only grow and `now` holds for the call: the
+           first tells whether any is past */
+        if (first && fw_axis_next(&fw->axis) < now) return LINK_ERR_STEP_LATE;
+        first = 0;
         closed = fw->port.endstop(fw->port.ctx);
         if (closed && !fw_axis_homing(&fw->axis) && endstop_misplaced(fw)) return LINK_ERR_ENDSTOP;
         dir = fw_axis_step(&fw->axis, closed);
@@ -1108,10 +1106,9 @@ uint64_t fw_run(fw_state *fw, uint64_t now)
     if (fw->steps.short_by) {
         next = now; /* the rest of the queue on the next pass */
     } else {
-        uint8_t tail = fw->steps.tail, last = (uint8_t)(fw->steps.head - tail - 1u);
-        uint8_t half = (uint8_t)((steps_room(fw) + 1u) / 2u - 1u);
+        uint8_t tail = fw->steps.tail, last = (uint8_t)(fw->steps.head - tail - 1u), gap = (uint8_t)(refill_gap(fw) - 1u);
         if (last != 0xFFu) { /* queued: the tail's index is read once, as the interrupt moves it */
-            if (fw_axis_busy(&fw->axis) && half < last) last = half;
+            if (fw_axis_busy(&fw->axis) && gap < last) last = gap;
             next = earliest(next, fw->steps.tick[(uint8_t)(tail + last) % FW_STEP_QUEUE]);
         } else if (fw_axis_busy(&fw->axis)) {
             /* moving with nothing queued: the interrupt took the last

@@ -34,7 +34,7 @@
 
    Bounded work a pass: a pass of the loop (fw_receive, then fw_run) does
    one piece of work beyond its bookkeeping, so that it stays shorter than
-   the time half the step queue covers at the top speed, whatever else it
+   the time the step queue, less a refill, covers at the top speed, whatever else it
    does: up to FW_STEP_FILL steps (the first of a move shapes it), or one
    frame received (its reply; the rest
    of the bytes wait for the next pass), or one of G-code's pieces (a
@@ -42,10 +42,11 @@
    gcode.h), or a move's start by the print, or one slice of a held
    frame's work (FW_DECODE_BYTES of a mask's code and FW_CRC_BYTES of its
    rows, FW_PLAN_BINS of a profile, FW_REVERSE_PLANES of the plan's
-   reversal). The steps come first: the queue is refilled once a quarter of
-   it has gone out (bytes wait in the port's ring meanwhile), and the
-   others wait for a pass that computed none, which so begins with more
-   than three quarters of the queue. The wire protocol is in link/PROTOCOL.md. */
+   reversal). The steps come first: the queue is refilled once FW_STEP_FILL
+   steps (at most half of it) have gone out (bytes wait in the port's ring
+   meanwhile), and the others wait for a pass that computed none, which so
+   begins with the queue less a refill. The wire protocol is in
+   link/PROTOCOL.md. */
 #ifndef FW_H
 #define FW_H
 #include <stddef.h>
@@ -59,8 +60,8 @@
 
 /* The steps queued for the step timer: written by the loop (head), read by
    the interrupt (tail). Single producer, single consumer, indices of one
-   byte so that each side's update is one store on any MCU. Half the queue
-   must cover the steps due while the loop is away: more than the loop's
+   byte so that each side's update is one store on any MCU. The queue, less
+   a refill, must cover the steps due while the loop is away: more than the loop's
    worst pass (plus its wake-up) divided by the shortest step interval. A port
    whose passes are long against its steps sets its own (a power of two up
    to 128; each entry costs 9 bytes of RAM). */

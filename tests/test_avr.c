@@ -15,7 +15,7 @@
        ends it, so the host's round trips between the lines add nothing
        while the G4 comes within the dwell), no step refused as late, and
        every loop pass shorter than PASS_MAX (below: the time the step queue
-       covers at the top speed, less its margin), with every 25th layer's
+       covers at the top speed, less its margin), with every 50th layer's
        peel at the top speed;
      - a binary-protocol print by the host tool (adaslice print), masks
        streaming while Z moves, the peels at the top speed; every loop
@@ -57,16 +57,21 @@
 #define CYCLES_PER_TICK BOARD_TICK_DIV
 #define LATE_MAX_CYCLES (BOARD_CPU_HZ / 100000u) /* 10 us */
 #define STEP_CYCLES ((unsigned long)(BOARD_CPU_HZ / BOARD_MAX_STEPS_S)) /* the shortest step interval */
-/* The step queue never runs dry: the loop refills it once a quarter of it
-   has gone out, and a pass that computes no steps (a frame, a piece of
-   G-code or of the print, a slice of a mask) begins with more than half of it
+/* The step queue never runs dry: the loop refills it once REFILL_GAP steps
+   have gone out (FW_STEP_FILL, at most half the queue), and a pass that
+   computes no steps (a frame, a piece of G-code or of the print, a slice
+   of a mask) begins with more than FW_STEP_QUEUE - REFILL_GAP of them
    (fw.h, Bounded work a pass), so the steps queued when a pass begins are
-   due over at least FW_STEP_QUEUE / 2 intervals at the top speed. Every
-   pass, its interrupts included, must end within three quarters of that:
-   a quarter is the margin, for the passes after the longest one to refill
-   the queue while it still drains, and for work still to come to a pass. */
-#define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE / 2u) * STEP_CYCLES)
-#define PASS_MAX (COVER_CYCLES * 3u / 4u)
+   due over at least that many intervals at the top speed. Every
+   pass, its interrupts included, must end within seven eighths of that:
+   the margin (a step interval at the top speed) is for the pass after the
+   longest one, which refills the queue while it still drains, and for
+   work still to come to a pass. The longest are a move's first steps
+   (its shaping, and roots searched from afar), while the queue is still
+   empty and its first step a step lead away. */
+#define REFILL_GAP (FW_STEP_FILL < FW_STEP_QUEUE / 2u ? FW_STEP_FILL : FW_STEP_QUEUE / 2u)
+#define COVER_CYCLES ((unsigned long)(FW_STEP_QUEUE - REFILL_GAP) * STEP_CYCLES)
+#define PASS_MAX (COVER_CYCLES * 7u / 8u)
 
 /* early: avr-run ended before the test stopped it, with `status` */
 typedef struct avr_child { pid_t pid; int out, tty, early, status; char pty[256]; } avr_child;
@@ -430,7 +435,7 @@ static long check_moves(const avr_log *l, const zmove *moves, size_t count)
 
 #define LAYER_UM 50
 #define PEEL_UM 100
-/* every 25th layer's peel: long enough to cruise at the top speed (its
+/* every 50th layer's peel: long enough to cruise at the top speed (its
    ramps are 1 mm at 10 mm/s and 50 mm/s^2) */
 #define LONG_PEEL_UM 3000
 #define TOP_F (BOARD_MAX_SPEED_UM_S * 60u / 1000u) /* the top speed in mm/min */
@@ -464,14 +469,14 @@ static uint64_t z_nm_of(const char *line)
 /* Layer `layer` of a G-code print as resin hosts send it: the lift above
    the last layer (from layer 2 on) and the way down to this one's top,
    then the light on for a dwell and off. The moves go into `job` (F300
-   and F180, under the board's top speed; every 25th layer a long peel at
+   and F180, under the board's top speed; every 50th layer a long peel at
    the top speed, both ways). Returns the number of lines in `lines`: the
    moves first, then M106, G4, M107. */
 static int gcode_layer(int layer, char lines[5][48], gcode_job *job)
 {
     const int32_t spmm = (int32_t)BOARD_STEPS_PER_MM;
     int32_t top = layer * LAYER_UM * spmm / 1000;
-    int k = 0, fast = layer % 25 == 0;
+    int k = 0, fast = layer % 50 == 0;
     unsigned up_f = fast ? TOP_F : 300u, down_f = fast ? TOP_F : 180u;
     if (layer > 1) {
         int32_t lift = (layer - 1) * LAYER_UM * spmm / 1000 + (fast ? LONG_PEEL_UM : PEEL_UM) * spmm / 1000;

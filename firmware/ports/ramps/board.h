@@ -25,9 +25,9 @@
 #endif
 /* Z's top speed on this MCU. An 8-bit core computes motion.c's closed form
    in 64-bit integers (make bench, bench/avr_bench.c, times each step); the
-   loop refills the step queue FW_STEP_FILL steps a pass once a quarter of
-   it has gone out, and every pass, interrupts included, ends within three
-   quarters of the time half the queue covers at this speed
+   loop refills the step queue once FW_STEP_FILL steps have gone out, and
+   every pass, interrupts included, ends within seven eighths of the time
+   the rest of the queue covers at this speed
    (tests/test_avr.c asserts it from simavr's pin edges and the loop's
    marks, in G-code mode and with masks streaming while Z moves). */
 #ifndef BOARD_MAX_SPEED_UM_S
@@ -81,18 +81,16 @@
 
 /* Steps: a move's first step comes BOARD_STEP_LEAD ticks after it starts,
    computed in the pass after the one that started it. The queue holds
-   FW_STEP_QUEUE steps (9 bytes of SRAM each); the loop refills it once a
-   quarter has gone out, FW_STEP_FILL steps a pass (a move's first shapes
-   it: several divisions), so a pass computing steps stays short and the
-   rest of the queue covers the wait. Near the top speed a ramp's step
-   costs about its interval here, so the queue drains over a ramp's last
-   part and is deep enough to last it (with 16 it ran dry at times). The other pieces of a pass, each a
+   FW_STEP_QUEUE steps (9 bytes of SRAM each); the loop refills it once
+   FW_STEP_FILL steps have gone out, in one pass (a move's first step
+   shapes it: several divisions), so a pass computing steps stays short and
+   the rest of the queue covers the wait. The other pieces of a pass, each a
    few thousand cycles here (avr-run --profile-passes): 8 mask code bytes
    and 16 bytes of rows' CRC (a 2560-pixel display's 320-byte row takes 20
    passes; a repeated row costs one multiplication), 2 profile bins, 32
    planes of the plan's reversal. */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
-#define FW_STEP_QUEUE 32u
+#define FW_STEP_QUEUE 16u
 #define FW_STEP_FILL 4u
 #define FW_DECODE_BYTES 8u
 #define FW_CRC_BYTES 16u

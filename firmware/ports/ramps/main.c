@@ -6,9 +6,9 @@
    arms each; the compare interrupt calls fw_step_interrupt), and the UV
    light is switched by Timer4's compare unit at an exposure's two ticks,
    so neither waits for the loop. The loop only has to refill the step
-   queue before it runs dry: it does once a quarter has gone out, and
-   each of its passes is held well under the time half the queue covers at
-   the top speed (board.h, FW_STEP_FILL and the pieces of a pass; measured under
+   queue before it runs dry: it does once FW_STEP_FILL steps have gone
+   out, and each of its passes is held well under the time the rest covers
+   at the top speed (board.h, FW_STEP_FILL and the pieces of a pass; measured under
    simavr by tests/test_avr.c). */
 #include "../../fw.h"
 #include "board.h"

@@ -425,10 +425,10 @@ void board_idle(uint64_t deadline)
     uint64_t now;
     cli();
     now = board_ticks();
-    /* a deadline closer than the alarm can be armed for would pass
-       unmatched and leave the loop asleep until the overflow, 33 ms on
-       (the light of a layer handed over that late): the loop runs on */
-    if (rx_head != rx_tail || now >= deadline || deadline - now < ARM_LEAD) { sei(); return; }
+    /* a deadline closer than ARM_LEAD is not slept for: the alarm's compare
+       could be written after the counter passed it, and the loop would
+       sleep on to the overflow while a step's interrupt does not wake it */
+    if (rx_head != rx_tail || now + ARM_LEAD >= deadline) { sei(); return; }
     if (deadline - now < FAR) {
         OCR3A = (uint16_t)deadline;
         TIFR3 = _BV(OCF3A);
