@@ -341,26 +341,26 @@ static void plan_data(fw_state *fw, const uint8_t *p, size_t size, uint8_t seq)
 }
 
 /* The page's bins go out in pieces of this many as they are read. */
-#define FW_PLAN_PIECE 16u
+#define FW_PLAN_PIECE 32u
 
 static FW_NOINLINE void plan_get(fw_state *fw, const link_plan_get *m, uint8_t seq)
 {
-    uint8_t head[LINK_SIZE_PLAN], piece[FW_PLAN_PIECE];
-    uint32_t k, count = 0;
+    uint8_t head[LINK_SIZE_PLAN], piece[FW_PLAN_PIECE], n, i, left = 0;
+    uint32_t k = m->first;
     uint16_t crc;
     link_plan page;
-    size_t n = 0;
     if (!fw->plan_kind) { fail(fw, LINK_ERR_NO_PLAN, seq); send_ack(fw, 0); return; }
     page.first = m->first;
     page.layers = fw->layers;
     page.bin_nm = fw->bin_nm;
-    if (m->first >= 1 && m->first <= fw->layers) count = fw->layers - m->first + 1u;
-    if (count > LINK_PAYLOAD_MAX - LINK_SIZE_PLAN) count = LINK_PAYLOAD_MAX - LINK_SIZE_PLAN;
-    crc = reply_begin(fw, LINK_MSG_PLAN, LINK_SIZE_PLAN + count);
+    if (k >= 1 && k <= fw->layers)
+        left = (uint8_t)(fw->layers - k < LINK_PAYLOAD_MAX - LINK_SIZE_PLAN ? fw->layers - k + 1u : LINK_PAYLOAD_MAX - LINK_SIZE_PLAN);
+    crc = reply_begin(fw, LINK_MSG_PLAN, LINK_SIZE_PLAN + left);
     crc = reply_put(fw, crc, head, link_put_plan(head, &page));
-    for (k = m->first; k < m->first + count; k++) {
-        piece[n++] = (uint8_t)layer_length(fw, k);
-        if (n == sizeof piece || k + 1u == m->first + count) { crc = reply_put(fw, crc, piece, n); n = 0; }
+    for (; left; left = (uint8_t)(left - n)) {
+        n = left < sizeof piece ? left : (uint8_t)sizeof piece;
+        for (i = 0; i < n; i++) piece[i] = (uint8_t)layer_length(fw, k++);
+        crc = reply_put(fw, crc, piece, n);
     }
     reply_end(fw, crc);
 }
