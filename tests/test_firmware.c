@@ -221,6 +221,21 @@ static void mask_decoding_takes_bounded_slices(void)
     mask_rows_of_width(FW_ROW_BYTES * 8u); /* the widest row a display may have */
 }
 
+/* Homed, recording, half a second into a MOVE to 10 mm. */
+static void start_a_move(fake_printer *p)
+{
+    uint8_t mv[LINK_SIZE_MOVE];
+    link_move move;
+    fake_init(p, 8, 8, 1);
+    home(p);
+    p->keep_events = 1;
+    move.z_nm = 10000000;
+    move.speed_um_s = 0;
+    fake_send(p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(p, p->now + FAKE_TICK_HZ / 2);
+    CHECK(fake_state(p) == LINK_STATE_MOVING);
+}
+
 /* The loop stalls 20 ms in the middle of a move while the step interrupt
    goes on: the queued steps leave on time, then the core finds the next step
    past due and stops dead (STEP_LATE, UV and motor off, Z unhomed) instead of
@@ -228,19 +243,10 @@ static void mask_decoding_takes_bounded_slices(void)
 static void a_stalled_loop_stops_the_motion(void)
 {
     static fake_printer p;
-    uint8_t mv[LINK_SIZE_MOVE];
-    link_move move;
     uint64_t stall;
     size_t k, steps = 0;
     uint64_t last = 0, shortest = UINT64_MAX;
-    fake_init(&p, 8, 8, 1);
-    home(&p);
-    p.keep_events = 1;
-    move.z_nm = 10000000;
-    move.speed_um_s = 0;
-    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
-    fake_run(&p, p.now + FAKE_TICK_HZ / 2);
-    CHECK(fake_state(&p) == LINK_STATE_MOVING);
+    start_a_move(&p);
     /* only the interrupts run for 20 ms */
     stall = p.now + FAKE_TICK_HZ / 50;
     while (p.step_at <= stall) { p.now = p.step_at; fake_interrupts(&p); }
@@ -276,18 +282,10 @@ static size_t events_after(const fake_printer *p, uint64_t t, int kind, int valu
 static void a_stack_fault_halts_the_core(void)
 {
     static fake_printer p;
-    uint8_t mv[LINK_SIZE_MOVE], ex[LINK_SIZE_EXPOSE];
-    link_move move;
+    uint8_t ex[LINK_SIZE_EXPOSE];
     link_expose expose;
     uint64_t at;
-    fake_init(&p, 8, 8, 1);
-    home(&p);
-    p.keep_events = 1;
-    move.z_nm = 10000000;
-    move.speed_um_s = 0;
-    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
-    fake_run(&p, p.now + FAKE_TICK_HZ / 2);
-    CHECK(fake_state(&p) == LINK_STATE_MOVING);
+    start_a_move(&p);
     at = p.now;
     fw_stack_fault(&p.fw, at);
     fake_run(&p, p.now + FAKE_TICK_HZ);
