@@ -129,10 +129,8 @@ static int step_compare(void)
     return 1;
 }
 
-/* Set by M112's last byte (emergency(), below) until the core has read
-   that line and stopped everything itself (its disarm, UINT64_MAX): the
-   lines the loop has still to run before it move nothing and light
-   nothing meanwhile. */
+/* M112's latch (emergency(), below): the light stays off until the core
+   has read the line and stopped (its disarm here, or its light-off). */
 static volatile uint8_t killed BOARD_SAFETY;
 
 int board_step_arm(uint64_t when, int dir)
@@ -144,9 +142,7 @@ int board_step_arm(uint64_t when, int dir)
         TIMSK5 &= (uint8_t)~_BV(OCIE5A);
         step_state = IDLE;
         step_pin_low();
-        killed = 0;
-    } else if (killed) {
-        /* taken, not armed: no step until the core has stopped */
+        killed = 0; /* the core's stop (M112's, a fault's): the light is its own again */
     } else {
         /* DIR now: the pin is low, the step at least ARM_LEAD away (the
            drivers need 200 ns / 650 ns of DIR before STEP) */
@@ -293,7 +289,7 @@ void board_uv(int on, uint64_t when, uint64_t until)
     uint8_t sreg = SREG;
     cli();
     if (on && killed) {
-        /* dark until the core has stopped */
+        /* dark until the core has read the M112 and put the light out itself */
     } else if (on) {
         uint64_t earliest = board_ticks() + UV_SETTLE;
         uint16_t in_period;
@@ -303,6 +299,8 @@ void board_uv(int on, uint64_t when, uint64_t until)
         uv_on_at = when + uv_shift;
         uv_off_at = until + uv_shift;
         uv_want = 1;
+    } else if (!on && killed) {
+        killed = 0;
     } else if (uv_want) {
         uint64_t off = when + uv_shift;
         if (!uv_level) uv_want = 0; /* not on yet: it never goes on */
@@ -318,17 +316,14 @@ uint8_t board_uv_lit(void) { return uv_level; }
 static uint8_t rx_buf[BOARD_RX_SIZE], tx_buf[BOARD_TX_SIZE];
 static volatile uint16_t rx_head, rx_tail, tx_head, tx_tail, rx_lost, tx_lost;
 
-/* M112 from G-code stops Z and puts the light out here, as its last byte
-   arrives, not a loop pass later (a pass computing ramp steps at the top
-   speed is a good part of a millisecond): the compare units let go, the
-   pins low. The core does the rest when the loop reads the line. */
+/* M112 from G-code puts the light out here, as its last byte arrives, not
+   a loop pass later (a pass computing ramp steps at the top speed is about
+   a millisecond), and nothing lights until the core has read the line and
+   stopped Z itself (its own light-off ends the latch). */
 static uint8_t rx_urgent;
 static void emergency(void)
 {
     killed = 1;
-    TIMSK5 &= (uint8_t)~_BV(OCIE5A);
-    step_state = IDLE;
-    step_pin_low();
     TIMSK4 &= (uint8_t)~_BV(OCIE4C);
     uv_state = IDLE;
     uv_want = uv_level = 0;
