@@ -84,13 +84,16 @@
    FW_STEP_QUEUE steps (9 bytes of SRAM each); the loop refills it once
    FW_STEP_FILL steps have gone out, in one pass (a move's first step
    shapes it: several divisions), so a pass computing steps stays short and
-   the rest of the queue covers the wait. The other pieces of a pass, each a
+   the rest of the queue covers the wait. 32 deep: near the top speed a
+   ramp's step costs about its interval, and bytes streaming in meanwhile
+   (a G-code host's burst of lines, each byte an interrupt) take the rest;
+   16 ran dry under such a burst at a ramp's top. The other pieces of a pass, each a
    few thousand cycles here (avr-run --profile-passes): 8 mask code bytes
    and 16 bytes of rows' CRC (a 2560-pixel display's 320-byte row takes 20
    passes; a repeated row costs one multiplication), 2 profile bins, 32
    planes of the plan's reversal. */
 #define BOARD_STEP_LEAD (BOARD_CLOCK_HZ / 125u) /* 8 ms */
-#define FW_STEP_QUEUE 16u
+#define FW_STEP_QUEUE 32u
 #define FW_STEP_FILL 4u
 #define FW_DECODE_BYTES 8u
 #define FW_CRC_BYTES 16u
