@@ -113,12 +113,6 @@ static FW_NOINLINE void send_identify(fw_state *fw)
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 
-#if defined(__GNUC__)
-#define FW_NOINLINE __attribute__((noinline))
-#else
-#define FW_NOINLINE
-#endif
-
 /* The light a layer still owes, exposing or paused, in whole ms rounded up,
    at the tick the frame asking for it came: a host never believes less
    light is owed than is, and one that loses the printer mid-exposure (a

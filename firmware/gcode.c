@@ -15,16 +15,12 @@ enum { HELD = 1, CHECKED }; /* g->held: a complete line, then one that passed ch
 /* One reply line, sent with one write so a port can hand it to DMA whole;
    the longest is the echo of a whole line. A reply lives only in a
    function that fills and sends it and calls nothing deeper than put_*,
-   the arithmetic and send, kept out of line (OUT_OF_LINE): an inlined
-   one's buffer would stay on the stack under every call its caller makes,
-   and on an 8 KiB MCU two at once are a good part of the stack. check()
-   and run() are kept out of line too: inlined into fw_gcode_run, its
-   branches outgrew the AVR's relative jumps (4 KB) and the link failed. */
-#if defined(__GNUC__)
-#define OUT_OF_LINE __attribute__((noinline))
-#else
-#define OUT_OF_LINE
-#endif
+   the arithmetic and send, kept out of line (FW_NOINLINE, motion.h): an
+   inlined one's buffer would stay on the stack under every call its caller
+   makes, and on an 8 KiB MCU two at once are a good part of the stack.
+   check() and run() are kept out of line too: inlined into fw_gcode_run,
+   its branches outgrew the AVR's relative jumps (4 KB) and the link
+   failed. */
 typedef struct reply {
     char b[FW_GCODE_LINE_MAX + 32];
     size_t n;
@@ -110,7 +106,7 @@ static void send(fw_gcode *g, reply *r)
     r->n = 0;
 }
 
-OUT_OF_LINE void fw_gcode_say(fw_gcode *g, const char *s)
+FW_NOINLINE void fw_gcode_say(fw_gcode *g, const char *s)
 {
     reply r;
     r.n = 0;
@@ -246,7 +242,7 @@ static int seen(const words *w, int letter)
 
 /* The value of `letter` in millionths; replies the Error: line and returns
    0 when it is malformed or out of range. *has: whether the word is there. */
-static OUT_OF_LINE void letter_error(fw_gcode *g, const char *what, int letter)
+static FW_NOINLINE void letter_error(fw_gcode *g, const char *what, int letter)
 {
     reply r;
     r.n = 0;
@@ -269,7 +265,7 @@ static int number(fw_gcode *g, const words *w, int letter, int64_t *v, int *has)
     return 0;
 }
 
-static OUT_OF_LINE void line_error(fw_gcode *g, const char *what, int resend)
+static FW_NOINLINE void line_error(fw_gcode *g, const char *what, int resend)
 {
     reply r;
     r.n = 0;
@@ -303,7 +299,7 @@ static void motor(fw_gcode *g, int on)
 }
 
 /* `what` and a height in steps as mm: "...12.345" */
-static OUT_OF_LINE void at_mm(fw_gcode *g, const char *what, int32_t steps)
+static FW_NOINLINE void at_mm(fw_gcode *g, const char *what, int32_t steps)
 {
     reply r;
     r.n = 0;
@@ -396,7 +392,7 @@ static int dwell(fw_gcode *g, const words *w, uint64_t now)
    and the tests, read the board's travel, speed and light limit here), a
    line a piece of work, since each is a good part of a step interval's
    arithmetic on an 8-bit core. */
-static OUT_OF_LINE void figures(fw_gcode *g)
+static FW_NOINLINE void figures(fw_gcode *g)
 {
     const fw_axis_config *c = &g->axis->config;
     reply r;
@@ -421,7 +417,7 @@ static OUT_OF_LINE void figures(fw_gcode *g)
 }
 
 /* The G4 that came g->deadline ticks after its exposure's end, and its ok. */
-static OUT_OF_LINE void overrun(fw_gcode *g)
+static FW_NOINLINE void overrun(fw_gcode *g)
 {
     /* in us, from the clock in kHz (every port's is whole kHz): 32-bit
        divisions, where 10^6 / tick_hz would take 64 */
@@ -437,7 +433,7 @@ static OUT_OF_LINE void overrun(fw_gcode *g)
     g->wait = WAIT_NONE;
 }
 
-static OUT_OF_LINE void report_position(fw_gcode *g)
+static FW_NOINLINE void report_position(fw_gcode *g)
 {
     reply r;
     r.n = 0;
@@ -448,7 +444,7 @@ static OUT_OF_LINE void report_position(fw_gcode *g)
     send(g, &r);
 }
 
-static OUT_OF_LINE void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
+static FW_NOINLINE void unknown(fw_gcode *g, const uint8_t *b, size_t from, size_t end)
 {
     reply r;
     while (end > from && is_blank(b[end - 1])) end--;
@@ -503,7 +499,7 @@ static int code_of(const uint8_t *b, int k, int letter, size_t at, size_t len)
 /* The held line's framing: comments, checksum, line number. A line that
    fails gets its replies here; one that passes is cut to its command and
    left for run() with where the command begins. 1: the line is to run. */
-static OUT_OF_LINE int check(fw_gcode *g)
+static FW_NOINLINE int check(fw_gcode *g)
 {
     const uint8_t *b = g->line;
     size_t n = g->len, end = n, star = n, i, at = 0, len = 0, from;
@@ -549,7 +545,7 @@ static OUT_OF_LINE int check(fw_gcode *g)
 }
 
 /* Runs the checked line in g->line and sends its replies. */
-static OUT_OF_LINE void run(fw_gcode *g, uint64_t now)
+static FW_NOINLINE void run(fw_gcode *g, uint64_t now)
 {
     const uint8_t *b = g->line;
     /* the code word again: check() found it, but keeping it would cost a
