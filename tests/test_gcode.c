@@ -729,7 +729,6 @@ static void lit_dwell_is_the_exposure(void)
     EXPECT(&m, "ok\nok\n");
 }
 
-/* The core may halt a move; no Z_move_comp then, and Z is where the axis is. */
 /* Z never moves under the light: G0/G1 after M106 (no M107) put it out
    before the first step and say so; a G1 refused (unhomed, out of limits)
    moves nothing and leaves it. */
@@ -790,6 +789,7 @@ static void silent_host_puts_the_light_out(void)
     host(&m, "M106\n"); EXPECT(&m, "ok\n"); CHECK(m.uv == 1);
 }
 
+/* The core may halt a move; no Z_move_comp then, and Z is where the axis is. */
 static void halted_move(void)
 {
     static machine m;

@@ -324,10 +324,8 @@ static uint8_t rx_urgent;
 static void emergency(void)
 {
     killed = 1;
-    TIMSK4 &= (uint8_t)~_BV(OCIE4C);
-    uv_state = IDLE;
     uv_want = uv_level = 0;
-    uv_hold();
+    uv_arm(); /* nothing wanted: the compare let go, the pin held low */
 }
 
 ISR(USART0_RX_vect)
