@@ -5,6 +5,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "json.h"
 #include "commands.h"
 #include "model.h"
 #include "options.h"
@@ -247,11 +248,11 @@ int cmd_orient(int argc, char **argv)
     }
     if (!rc && a.json) {
         printf("{\n  \"model\": ");
-        json_string(stdout, a.model);
+        json_quote(stdout, a.model);
         printf(",\n  \"repair\": ");
         model_report_json(stdout, &repair);
         printf(",\n  \"directions\": %zu,\n  \"alpha\": ", o.dirs);
-        json_number(stdout, o.alpha);
+        json_write_number(stdout, o.alpha);
         printf(",\n  \"metric\": \"%s\",\n  \"seconds\": %.3f,\n  \"best\": [", METRIC_NAMES[a.metric], (now_ms() - t0) / 1000);
         for (i = 0; i < count; i++) {
             const adaslice_direction_score *s = &scores[minima[i]];
@@ -261,20 +262,20 @@ int cmd_orient(int argc, char **argv)
             axis_angle(s->direction, axis, &deg);
             printf("%s\n    {\"direction\": [%.9g, %.9g, %.9g], \"layers\": %zu, \"mean_error\": ", i ? "," : "",
                    s->direction[0], s->direction[1], s->direction[2], s->layers);
-            json_number(stdout, s->mean_error);
+            json_write_number(stdout, s->mean_error);
             printf(", \"worst_error\": ");
-            json_number(stdout, s->worst_error);
+            json_write_number(stdout, s->worst_error);
             printf(", \"F\": ");
-            json_number(stdout, s->score);
+            json_write_number(stdout, s->score);
             printf(", \"rotation\": [");
             for (k = 0; k < 9; k++) printf("%s%.9g", k ? ", " : "", r[k]);
             printf("], \"axis\": [%.9g, %.9g, %.9g], \"angle_deg\": %.9g}", axis[0], axis[1], axis[2], deg);
         }
         printf("\n  ],\n  \"as_loaded\": {\"feasible\": %s, \"layers\": %zu, \"worst_error\": ",
                scores[o.dirs].feasible ? "true" : "false", scores[o.dirs].layers);
-        json_number(stdout, scores[o.dirs].worst_error);
+        json_write_number(stdout, scores[o.dirs].worst_error);
         printf(", \"F\": ");
-        json_number(stdout, scores[o.dirs].score);
+        json_write_number(stdout, scores[o.dirs].score);
         printf("}\n}\n");
     } else if (!rc) {
         size_t feasible = 0;

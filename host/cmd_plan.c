@@ -1,5 +1,6 @@
 /* adaslice plan: the fewest layers within eps for a mesh or a metric profile,
    printed as a summary (with the paper's Table 3 on request) or as JSON. */
+#include "json.h"
 #include "commands.h"
 #include "cure.h"
 #include "model.h"
@@ -141,9 +142,9 @@ static void print_summary(const plan_args *a, const plan_job *j)
 static void print_json_plan_fields(FILE *f, const adaslice_plan *p)
 {
     fprintf(f, "\"layers\": %zu, \"worst_error\": ", p->layer_count);
-    json_number(f, p->worst_error);
+    json_write_number(f, p->worst_error);
     fputs(", \"total_error\": ", f);
-    json_number(f, p->total_error);
+    json_write_number(f, p->total_error);
     fprintf(f, ", \"over_eps\": %zu", p->over_eps);
 }
 
@@ -156,9 +157,9 @@ static void print_json(const plan_args *a, const plan_job *j)
     cure_args c;
     compare_cure(a, &c);
     printf("{\n  \"model\": ");
-    json_string(stdout, a->model ? a->model : a->profile);
+    json_quote(stdout, a->model ? a->model : a->profile);
     printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
-    if (a->model) json_string(stdout, format_name(j->format));
+    if (a->model) json_quote(stdout, format_name(j->format));
     else printf("null");
     if (a->model) {
         printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu,\n  \"repair\": ", j->triangles, j->degenerate);
@@ -168,19 +169,19 @@ static void print_json(const plan_args *a, const plan_job *j)
     }
     printf(",\n  \"metric\": \"%s\",\n  \"sampler\": \"%s\",\n  \"unsampled_bins\": %zu,\n  \"method\": \"%s\",\n  \"eps\": ",
            METRIC_NAMES[a->metric], SAMPLER_NAMES[a->sampler], j->profile.unsampled_bins, METHOD_NAMES[a->method]);
-    json_number(stdout, p->eps);
+    json_write_number(stdout, p->eps);
     printf(",\n  \"tmin\": ");
-    json_number(stdout, a->tmin);
+    json_write_number(stdout, a->tmin);
     printf(",\n  \"tmax\": ");
-    json_number(stdout, a->tmax);
+    json_write_number(stdout, a->tmax);
     printf(",\n  \"bin\": ");
-    json_number(stdout, pr->bin);
+    json_write_number(stdout, pr->bin);
     printf(",\n  \"bins\": %zu,\n  \"bins_min\": %u,\n  \"bins_max\": %u,\n  \"height_mm\": ",
            pr->bin_count, p->bins_min, p->bins_max);
-    json_number(stdout, pr->height);
+    json_write_number(stdout, pr->height);
     if (a->budget) printf(",\n  \"budget\": %zu", a->budget);
     printf(",\n  \"sharp\": ");
-    if (a->sharp > 0) json_number(stdout, a->sharp);
+    if (a->sharp > 0) json_write_number(stdout, a->sharp);
     else printf("null");
     printf(",\n  ");
     print_json_plan_fields(stdout, p);
@@ -190,13 +191,13 @@ static void print_json(const plan_args *a, const plan_job *j)
     for (k = 0; k < p->layer_count; k++) {
         const adaslice_layer *l = &p->layers[k];
         printf("%s\n    {\"z_bottom\": ", k ? "," : "");
-        json_number(stdout, l->z_bottom);
+        json_write_number(stdout, l->z_bottom);
         printf(", \"z_top\": ");
-        json_number(stdout, l->z_top);
+        json_write_number(stdout, l->z_top);
         printf(", \"thickness\": ");
-        json_number(stdout, l->thickness);
+        json_write_number(stdout, l->thickness);
         printf(", \"error\": ");
-        json_number(stdout, l->error);
+        json_write_number(stdout, l->error);
         printf("}");
     }
     printf("\n  ]");
@@ -209,10 +210,10 @@ static void print_json(const plan_args *a, const plan_job *j)
             if (e->result == ADASLICE_OK) {
                 print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
                 printf(", \"print_time_s\": ");
-                json_number(stdout, cure_plan_seconds(&c, &j->plan[TABLE3[r]]));
+                json_write_number(stdout, cure_plan_seconds(&c, &j->plan[TABLE3[r]]));
             } else {
                 printf("\"layers\": null, \"min_eps\": ");
-                json_number(stdout, e->min_eps);
+                json_write_number(stdout, e->min_eps);
             }
             printf("}");
         }
@@ -221,15 +222,15 @@ static void print_json(const plan_args *a, const plan_job *j)
             const adaslice_plan *best = &j->plan[ADASLICE_METHOD_OPTIMAL];
             double t_best = cure_plan_seconds(&c, best), t_uni = cure_plan_seconds(&c, &j->uniform);
             printf("{\"thickness\": ");
-            json_number(stdout, j->uniform.layers[0].thickness);
+            json_write_number(stdout, j->uniform.layers[0].thickness);
             printf(", \"uniform_layers\": %zu, \"uniform_worst_error\": ", j->uniform.layer_count);
-            json_number(stdout, j->uniform.worst_error);
+            json_write_number(stdout, j->uniform.worst_error);
             printf(", \"uniform_print_time_s\": ");
-            json_number(stdout, t_uni);
+            json_write_number(stdout, t_uni);
             printf(", \"optimal_layers\": %zu, \"optimal_print_time_s\": ", best->layer_count);
-            json_number(stdout, t_best);
+            json_write_number(stdout, t_best);
             printf(", \"print_time_saved_percent\": ");
-            json_number(stdout, 100 * (1 - t_best / t_uni));
+            json_write_number(stdout, 100 * (1 - t_best / t_uni));
             printf("}");
         } else {
             printf("null");

@@ -2,6 +2,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "json.h"
 #include "jobdir.h"
 #include "jobfile.h"
 #include "maskrows.h"
@@ -67,46 +68,46 @@ static void write_manifest(FILE *f, const void *ctx)
     int digits = ((const dir_writer *)ctx)->digits;
     size_t k;
     fputs("{\n  \"format\": \"adaslice-job\",\n  \"version\": ", f);
-    json_string(f, ADASLICE_VERSION);
+    json_quote(f, ADASLICE_VERSION);
     fputs(",\n  \"complete\": true,\n  \"model\": ", f);
-    json_string(f, d->model);
+    json_quote(f, d->model);
     fputs(",\n  \"printer\": {\"name\": ", f);
-    if (d->preset) json_string(f, d->preset->name); else fputs("null", f);
+    if (d->preset) json_quote(f, d->preset->name); else fputs("null", f);
     fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": [", d->width, d->height);
-    json_number(f, d->pitch[0]);
+    json_write_number(f, d->pitch[0]);
     fputs(", ", f);
-    json_number(f, d->pitch[1]);
+    json_write_number(f, d->pitch[1]);
     fprintf(f, "], \"mirror\": \"%s\", \"rotate\": %s},\n", MIRRORS[d->mirror_x | (d->mirror_y << 1)], ROTATIONS[d->rotate]);
     fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n", d->bits, d->supersample,
             d->slice_at);
     fputs("  \"part_mm\": [", f);
-    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_number(f, d->part_mm[k]); }
+    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_write_number(f, d->part_mm[k]); }
     fputs("],\n  \"place_mm\": [", f);
-    json_number(f, d->place_mm[0]);
+    json_write_number(f, d->place_mm[0]);
     fputs(", ", f);
-    json_number(f, d->place_mm[1]);
+    json_write_number(f, d->place_mm[1]);
     fprintf(f, "],\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", d->metric, d->method);
-    json_number(f, d->eps);
+    json_write_number(f, d->eps);
     fputs(",\n  \"working_curve\": {\"seconds\": ", f);
-    json_number(f, d->cure[0]);
+    json_write_number(f, d->cure[0]);
     fputs(", \"thickness_mm\": ", f);
-    json_number(f, d->cure[1]);
+    json_write_number(f, d->cure[1]);
     fputs(", \"penetration_mm\": ", f);
-    if (d->cure[2] > 0) json_number(f, d->cure[2]); else fputs("null", f);
+    if (d->cure[2] > 0) json_write_number(f, d->cure[2]); else fputs("null", f);
     fprintf(f, "},\n  \"bottom_layers\": %u,\n  \"bottom_exposure_s\": ", d->bottom_layers);
-    json_number(f, d->bottom_exposure_s);
+    json_write_number(f, d->bottom_exposure_s);
     fputs(",\n  \"motion\": {\"peel_mm\": ", f);
-    json_number(f, d->motion.lift_mm);
+    json_write_number(f, d->motion.lift_mm);
     fputs(", \"peel_speed_mm_s\": ", f);
-    json_number(f, d->motion.lift_speed);
+    json_write_number(f, d->motion.lift_speed);
     fputs(", \"return_speed_mm_s\": ", f);
-    json_number(f, d->motion.retract_speed);
+    json_write_number(f, d->motion.retract_speed);
     fputs(", \"settle_s\": ", f);
-    json_number(f, d->motion.wait_before_cure_s);
+    json_write_number(f, d->motion.wait_before_cure_s);
     fputs("},\n  \"print_time_s\": ", f);
-    json_number(f, d->print_time_s);
+    json_write_number(f, d->print_time_s);
     fputs(",\n  \"volume_mm3\": ", f);
-    json_number(f, d->volume_mm3);
+    json_write_number(f, d->volume_mm3);
     fputs(",\n  \"masks_rle_crc32\": ", f);
     if (((const dir_writer *)ctx)->has_masks) fprintf(f, "\"%08x\"", (unsigned)((const dir_writer *)ctx)->masks_crc);
     else fputs("null", f);
@@ -116,15 +117,15 @@ static void write_manifest(FILE *f, const void *ctx)
         char name[40];
         layer_name(name, k, digits, "png");
         fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"%s\", \"z_bottom\": ", k ? "," : "", k + 1, name);
-        json_number(f, l->z_bottom);
+        json_write_number(f, l->z_bottom);
         fputs(", \"z_top\": ", f);
-        json_number(f, l->z_top);
+        json_write_number(f, l->z_top);
         fputs(", \"thickness\": ", f);
-        json_number(f, l->thickness);
+        json_write_number(f, l->thickness);
         fputs(", \"exposure_s\": ", f);
-        json_number(f, l->exposure_s);
+        json_write_number(f, l->exposure_s);
         fputs(", \"lit_area_mm2\": ", f);
-        json_number(f, l->lit_mm2);
+        json_write_number(f, l->lit_mm2);
         fputc('}', f);
     }
     fputs("\n  ]\n}\n", f);

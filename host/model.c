@@ -1,5 +1,6 @@
 /* Loading and repairing a model file: what plan, slice, print, orient and
    saliency share. */
+#include "json.h"
 #include "model.h"
 #include "output.h"
 #include "report.h"
@@ -56,6 +57,6 @@ void model_report_json(FILE *f, const adaslice_mesh_report *r)
                "\"flipped_shells\": %zu, \"volume_mm3\": ",
             r->shells, r->closed_shells, r->open_edges, r->nonmanifold_edges, r->inconsistent_edges, r->welded_nearby,
             r->degenerate_dropped, r->flipped_facets, r->flipped_shells);
-    json_number(f, r->volume);
+    json_write_number(f, r->volume);
     fputc('}', f);
 }

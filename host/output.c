@@ -1,4 +1,4 @@
-/* Atomic files and JSON: see output.h. */
+/* Atomic files: see output.h. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
@@ -6,7 +6,6 @@
 #include "report.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -33,24 +32,6 @@ int write_atomic(const char *path, write_fn fill, const void *ctx)
     }
     free(tmp);
     return err ? complain(RC_FAIL, "cannot write %s: %s", path, strerror(err)) : RC_OK;
-}
-
-void json_string(FILE *f, const char *s)
-{
-    fputc('"', f);
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
-        else if (c < 0x20) fprintf(f, "\\u%04x", c);
-        else fputc(c, f);
-    }
-    fputc('"', f);
-}
-
-void json_number(FILE *f, double v)
-{
-    if (isfinite(v)) fprintf(f, "%.17g", v);
-    else fputs("null", f);
 }
 
 const char *base_name(const char *path)

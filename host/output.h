@@ -1,5 +1,5 @@
 /* Files the tool writes: atomically (a failed run leaves no file that looks
-   complete), and the JSON and names it writes in them. */
+   complete), and the names it writes in them. */
 #ifndef ADASLICE_HOST_OUTPUT_H
 #define ADASLICE_HOST_OUTPUT_H
 #include <stdio.h>
@@ -8,9 +8,6 @@ typedef void (*write_fn)(FILE *f, const void *ctx);
 /* Writes PATH through "PATH.tmp.PID" and renames it into place; RC_OK or a
    complaint made. */
 int write_atomic(const char *path, write_fn fill, const void *ctx);
-/* A JSON string (escaped) and a JSON number (null if not finite). */
-void json_string(FILE *f, const char *s);
-void json_number(FILE *f, double v);
 /* The part of path after its last '/'. */
 const char *base_name(const char *path);
 #endif

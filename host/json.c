@@ -1,0 +1,114 @@
+/* The JSON writer: see json.h. */
+#include "json.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void json_init(json_writer *w, FILE *f)
+{
+    memset(w, 0, sizeof *w);
+    w->f = f;
+}
+
+void json_quote(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
+        else if (c < 0x20) fprintf(f, "\\u%04x", c);
+        else fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+/* The comma, the line break and the key before a value at the current depth. */
+static void json_member(json_writer *w, const char *key)
+{
+    int d = w->depth;
+    if (d > 0) {
+        if (w->members[d]) fputc(',', w->f);
+        if (w->oneline[d]) {
+            if (w->members[d]) fputc(' ', w->f);
+        } else {
+            fprintf(w->f, "\n%*s", 2 * d, "");
+        }
+        w->members[d] = 1;
+    }
+    if (key) {
+        json_quote(w->f, key);
+        fputs(": ", w->f);
+    }
+}
+
+static void json_begin(json_writer *w, const char *key, int oneline, char open)
+{
+    json_member(w, key);
+    fputc(open, w->f);
+    if (w->depth + 1 >= JSON_MAX_DEPTH) abort();   /* a writer's bug, not the data's */
+    w->depth++;
+    w->members[w->depth] = 0;
+    w->oneline[w->depth] = (unsigned char)(oneline || w->oneline[w->depth - 1]);
+    w->close[w->depth] = open == '{' ? '}' : ']';
+}
+
+void json_begin_object(json_writer *w, const char *key, int oneline) { json_begin(w, key, oneline, '{'); }
+void json_begin_array(json_writer *w, const char *key, int oneline) { json_begin(w, key, oneline, '['); }
+
+void json_end(json_writer *w)
+{
+    int d = w->depth;
+    if (d <= 0) abort();
+    if (w->members[d] && !w->oneline[d]) fprintf(w->f, "\n%*s", 2 * (d - 1), "");
+    fputc(w->close[d], w->f);
+    w->depth--;
+    if (w->depth == 0) fputc('\n', w->f);
+}
+
+void json_string(json_writer *w, const char *key, const char *v)
+{
+    json_member(w, key);
+    if (v) json_quote(w->f, v);
+    else fputs("null", w->f);
+}
+
+void json_number(json_writer *w, const char *key, double v)
+{
+    json_member(w, key);
+    json_write_number(w->f, v);
+}
+
+void json_write_number(FILE *f, double v)
+{
+    char text[32];
+    int digits;
+    if (!isfinite(v)) {
+        fputs("null", f);
+        return;
+    }
+    /* the shortest of %.15g .. %.17g that reads back as v */
+    for (digits = 15; digits < 17; digits++) {
+        snprintf(text, sizeof text, "%.*g", digits, v);
+        if (strtod(text, NULL) == v) break;
+    }
+    if (digits == 17) snprintf(text, sizeof text, "%.17g", v);
+    fputs(text, f);
+}
+
+void json_int(json_writer *w, const char *key, long long v)
+{
+    json_member(w, key);
+    fprintf(w->f, "%lld", v);
+}
+
+void json_bool(json_writer *w, const char *key, int v)
+{
+    json_member(w, key);
+    fputs(v ? "true" : "false", w->f);
+}
+
+void json_null(json_writer *w, const char *key)
+{
+    json_member(w, key);
+    fputs("null", w->f);
+}
