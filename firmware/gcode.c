@@ -549,7 +549,7 @@ static FW_NOINLINE void run(fw_gcode *g, uint64_t now)
 {
     const uint8_t *b = g->line;
     /* the code word again: check() found it, but keeping it would cost a
-       field (the STM32 image has 4 bytes of RAM to spare) */
+       field of RAM, which the smallest board (STM32F103) has almost none of */
     size_t end = g->len, from = g->command, i = from, at = 0, len = 0;
     int letter = 0, k = word(b, &i, end, &letter, &at, &len), code = code_of(b, k, letter, at, len), ok = 1;
     int32_t line = 0;

@@ -98,8 +98,8 @@ int main(void)
     config.watchdog_ms = BOARD_WATCHDOG_MS;
     /* 5 ms: a move's first step is computed in a pass after the one that
        started it, and passes are held under a step interval at the top
-       speed (tests/test_qemu_timing.c asserts it); 1 ms was too little when
-       a pass could take 4 ms. */
+       speed (tests/test_qemu_timing.c asserts it), so the lead covers two
+       passes with room to spare. */
     config.step_lead = BOARD_CLOCK_HZ / 200u;
     config.boot_id = next_boot_id();
     port.ctx = NULL;

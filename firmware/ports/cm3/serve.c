@@ -4,8 +4,8 @@
 
 /* Bytes handed to the core at a time: between chunks the loop looks at the
    clock, so a long burst from the host delays a due step by at most the
-   core's work on this many bytes (about 55 cycles each: 32 are 1,800 of
-   the 6,250 a step takes at 10 mm/s). */
+   core's work on this many bytes, a small share of a step interval at the
+   top speed (tests/test_qemu_timing.c holds every pass under one). */
 #define CHUNK 32u
 
 #ifdef CM3_TRACE

@@ -230,8 +230,8 @@ void board_rx_resume(void)
 /* Bytes while the UART takes them: the TX interrupt comes when TX-full
    goes from set to clear, so a UART whose one-byte buffer is still full
    takes one an interrupt; QEMU's empties at once while the pty takes bytes,
-   so one interrupt sends a whole reply (an interrupt a byte made a
-   STATUS reply cost most of a step interval at 10 mm/s). Its priority is
+   so one interrupt sends a whole reply (an interrupt a byte would make a
+   STATUS reply cost a large share of a step interval). Its priority is
    below the alarms', so steps go out meanwhile. */
 void uart0_tx_handler(void);
 void uart0_tx_handler(void)
