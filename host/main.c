@@ -3,10 +3,11 @@
    adaslice COMMAND [options]; adaslice COMMAND --help (or adaslice help COMMAND)
    lists a command's options.
 
-   Exit status: 0 done; 1 the work failed (a file that cannot be read or written,
-   a malformed mesh, constraints that no plan meets); 2 the command line is wrong;
-   3 a print paused. Every message is one line on stderr that starts with
-   "adaslice: ". */
+   Exit status (report.h's RC_*): 0 done; 1 the work failed (a file that cannot
+   be read or written, a malformed mesh, constraints that no plan meets, a print
+   the printer stopped); 2 the command line is wrong; 3 a print paused; 4 the
+   printer restarted mid-print (Z must be homed again); 5 the printer stopped
+   answering. Every message is one line on stderr that starts with "adaslice: ". */
 #include "../adaslice.h"
 #include "commands.h"
 #include "report.h"
