@@ -371,9 +371,9 @@ int ctb_rle_encode(const job_desc *d, const unsigned char *image, size_t stride,
     return c.failed ? -1 : 0;
 }
 
-/* The key stream UVtools' ChituboxFile.LayerRleCryptBuffer applies (and
-   undoes: it is its own inverse); mslicer's ctb_format layer.rs xor_cypher is
-   the same. Each 32-bit key word is used low byte first. */
+/* The key stream UVtools' ChituboxFile.LayerRleCryptBuffer (@5f33a73e)
+   applies and undoes (it is its own inverse); mslicer's ctb_format layer.rs
+   xor_cypher (@ec4374ad) is the same. Each key word is used low byte first. */
 void ctb_layer_xor(uint32_t seed, uint32_t layer, unsigned char *data, size_t n)
 {
     uint32_t init = seed * 0x2D83CDACu + 0xD8A83423u, key = (layer * 0x1E1530CDu + 0xEC3D47CDu) * init;

@@ -1,4 +1,4 @@
-/* Independent, strict readers for two resin printer job formats, used by the
+/* Independent, strict readers for three resin printer job formats, used by the
    tests to check the jobs adaslice writes:
      - ChiTuBox .ctb, versions 2-5 unencrypted layout (magic 0x12FD0086 for
        v2/v3, 0x12FD0106 or 0xFF220810 for v4/v5), little-endian;
