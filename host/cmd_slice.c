@@ -30,7 +30,7 @@ static void slice_usage(FILE *f)
           "Plans MODEL (as adaslice plan does) and writes the job the printer reads, by the\n"
           "extension of -o or --format NAME:\n", f);
     for (i = 0; JOB_FORMATS[i]; i++)
-        fprintf(f, "  %-6s %-10s %s\n", JOB_FORMATS[i]->extension ? JOB_FORMATS[i]->extension : "(none)",
+        fprintf(f, "  %-6s %-13s %s\n", JOB_FORMATS[i]->extension ? JOB_FORMATS[i]->extension : "(none)",
                 JOB_FORMATS[i]->name, JOB_FORMATS[i]->what);
     fputs("Without an extension a preset's printer gets its own format (-o job writes job.ctb\n"
           "for a printer that reads .ctb); --format dir keeps a directory. A directory job\n"
@@ -117,6 +117,11 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
                                   "directory)", s->dir, strrchr(s->dir, '.'));
     if (!s->format && *fmt == &JOB_FORMAT_DIR && preset && !(*fmt = job_format_named(preset->format)))
         return complain(RC_FAIL, "--printer %s: its format %s is not built in", preset->name, preset->format);
+    if (!s->format && preset && (*fmt)->extension) {
+        /* .ctb is two formats: the printer's is the one it reads */
+        const job_format *own = job_format_named(preset->format);
+        if (own && own->extension && !strcmp(own->extension, (*fmt)->extension)) *fmt = own;
+    }
     if (*fmt != &JOB_FORMAT_DIR && !s->geometry_given)
         return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice slice --help lists them) or "
                                   "--pixels WxH with --pitch MM", s->dir);

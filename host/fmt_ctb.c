@@ -18,7 +18,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
 #endif
-#include "jobfile.h"
+#include "fmt_ctb.h"
 #include "report.h"
 
 #include <errno.h>
@@ -42,12 +42,11 @@
 
 /* The v4 header text, exactly as ChiTuBox writes it (320 bytes, no NUL; the
    double full stop is in the original). */
-static const char ctb_disclaimer[] =
+const char ctb_disclaimer[] =
     "Layout and record format for the ctb and cbddlp file types are the copyrighted programs or codes of "
     "CBD Technology (China) Inc..The Customer or User shall not in any manner reproduce, distribute, modify, "
     "decompile, disassemble, decrypt, extract, reverse engineer, lease, assign, or sublicense the said "
     "programs or codes.";
-#define CTB_DISCLAIMER_LEN 320
 
 typedef struct ctb_writer {
     job_file file;
@@ -137,7 +136,7 @@ static double rest_before_cure_s(const ctb_writer *w) { return w->version >= 4 ?
 
 /* RGB15 with bit 5 as the run flag: a flagged word is followed by a count
    word (n - 1) | 0x3000; runs of one or two are plain words. */
-static size_t preview_encode(const unsigned char *rgb, size_t pixels, unsigned char *out)
+size_t ctb_preview_encode(const unsigned char *rgb, size_t pixels, unsigned char *out)
 {
     size_t i = 0, n = 0;
     while (i < pixels) {
@@ -172,7 +171,7 @@ static int write_preview(ctb_writer *w, uint32_t at, int width, int height, uint
         free(code);
         return complain(RC_FAIL, "cannot write %s: out of memory for the %dx%d preview", w->file.path, width, height);
     }
-    len = preview_encode(rgb, pixels, code);
+    len = ctb_preview_encode(rgb, pixels, code);
     put_u32(head, (uint32_t)width);
     put_u32(head + 4, (uint32_t)height);
     put_u32(head + 8, at + CTB_PREVIEW_HEADER);
@@ -361,17 +360,36 @@ static void take_run(void *coder, unsigned grey, uint64_t n)
     c->run_length += n;
 }
 
-static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+int ctb_rle_encode(const job_desc *d, const unsigned char *image, size_t stride, job_blob *blob)
 {
-    const ctb_writer *w = (const ctb_writer *)writer;
-    const job_desc *d = w->d;
     ctb_coder c;
     int y;
     memset(&c, 0, sizeof c);
     c.out = blob;
     for (y = 0; y < d->height; y++) mask_row_runs(image + (size_t)y * stride, d->bits, d->width, take_run, &c);
     emit_run(&c);
-    if (c.failed) return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    return c.failed ? -1 : 0;
+}
+
+/* The key stream UVtools' ChituboxFile.LayerRleCryptBuffer (@5f33a73e)
+   applies and undoes (it is its own inverse); mslicer's ctb_format layer.rs
+   xor_cypher (@ec4374ad) is the same. Each key word is used low byte first. */
+void ctb_layer_xor(uint32_t seed, uint32_t layer, unsigned char *data, size_t n)
+{
+    uint32_t init = seed * 0x2D83CDACu + 0xD8A83423u, key = (layer * 0x1E1530CDu + 0xEC3D47CDu) * init;
+    size_t i;
+    if (!seed) return;
+    for (i = 0; i < n; i++) {
+        data[i] ^= (unsigned char)(key >> 8 * (i % 4));
+        if (i % 4 == 3) key += init;
+    }
+}
+
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    const ctb_writer *w = (const ctb_writer *)writer;
+    if (ctb_rle_encode(w->d, image, stride, blob))
+        return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
     if (blob->size > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a ctb layer can hold", w->file.path,
                         k + 1, blob->size);

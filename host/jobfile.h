@@ -114,13 +114,15 @@ typedef struct job_format {
 /* encode and put one after the other: a layer on one thread. */
 int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride);
 
-/* The formats: jobdir.c, fmt_ctb.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
-extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP, JOB_FORMAT_SL1;
+/* The formats: jobdir.c, fmt_ctb.c, fmt_ctb_encrypted.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
+extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_CTB_ENCRYPTED, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP,
+    JOB_FORMAT_SL1;
 extern const job_format *const JOB_FORMATS[];  /* NULL-terminated */
 /* The format called `name`, or NULL. */
 const job_format *job_format_named(const char *name);
-/* The format -o path's extension picks (case-insensitive); NULL for an
-   extension no format has, the directory format for a path without one. */
+/* The format -o path's extension picks (case-insensitive): the first of
+   JOB_FORMATS with it (.ctb: the unencrypted one); NULL for an extension no
+   format has, the directory format for a path without one. */
 const job_format *job_format_for_path(const char *path);
 
 /* ---- helpers the formats share (and maskrows.h) ---------------------- */

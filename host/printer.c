@@ -24,6 +24,20 @@ const printer PRINTERS[] = {
     {"phrozen-sonic-mini-4k", "Phrozen Sonic Mini 4K", 3840, 2160, {0.035, 0.035}, 130, 1, 0, 0, "ctb", 3,
      "Phrozen Sonic Mini 4K: 3840 x 2160 pixels, 134.4 x 75.6 mm, Z 130 mm; CTB v3 "
      "(UVtools ini \"Phrozen Sonic Mini 4K\" @097bbb86; the version: UVtools @7b510f0d)"},
+    /* The encrypted CTB's printers: version 0 is the writer's 5, which UVtools
+       writes for them (CTBEncryptedFile.cs DEFAULT_VERSION @5f33a73e; the
+       inis name no FILEVERSION). */
+    {"elegoo-mars-3", "ELEGOO MARS 3", 4098, 2560, {0.035, 0.035}, 175, 1, 0, 0, "ctb-encrypted", 0,
+     "Elegoo Mars 3: 4098 x 2560 pixels, 143.43 x 89.6 mm, Z 175 mm; encrypted CTB "
+     "(UVtools ini \"Elegoo Mars 3\" @1386476b)"},
+    {"elegoo-saturn-4-ultra", "ELEGOO SATURN 4 ULTRA", 11520, 5120, {0.019, 0.024}, 220, 1, 0, 0, "ctb-encrypted", 0,
+     "Elegoo Saturn 4 Ultra (12K): 11520 x 5120 pixels, 218.88 x 122.88 mm, pixels of 19 x 24 um, Z 220 mm; "
+     "encrypted CTB (UVtools ini \"Elegoo Saturn 4 Ultra 12K\" @702d5b13). It tilts its vat: UVtools writes "
+     "every lift height and speed as 0.05 for it (CTBEncryptedFile.cs HaveTiltingVat @5f33a73e); the job holds "
+     "the --peel motion as given"},
+    {"phrozen-sonic-mini-8k", "Phrozen Sonic Mini 8K", 7500, 3240, {0.022, 0.022}, 180, 1, 0, 0, "ctb-encrypted", 0,
+     "Phrozen Sonic Mini 8K: 7500 x 3240 pixels, 165 x 71.28 mm, Z 180 mm; encrypted CTB "
+     "(UVtools ini \"Phrozen Sonic Mini 8K\" @1386476b)"},
     {"elegoo-mars-4-ultra", "ELEGOO MARS 4 ULTRA", 8520, 4320, {0.018, 0.018}, 165, 1, 0, 0, "goo", 0,
      "Elegoo Mars 4 Ultra: 8520 x 4320 pixels, 153.36 x 77.76 mm, Z 165 mm; GOO "
      "(UVtools ini \"Elegoo Mars 4 Ultra\" @92fb2bc7)"},

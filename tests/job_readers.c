@@ -1,7 +1,10 @@
-/* Strict readers for ChiTuBox .ctb (v2-v5, unencrypted layout) and Elegoo
-   .goo V3.0 job files; see job_readers.h.  Written from the byte layouts:
-   every access goes through a bounds check, every error names a file offset. */
+/* Strict readers for ChiTuBox .ctb (v2-v5, unencrypted layout, and the
+   encrypted one) and Elegoo .goo V3.0 job files; see job_readers.h.  Written
+   from the byte layouts: every access goes through a bounds check, every
+   error names a file offset. */
 #include "job_readers.h"
+#include "../host/aes256.h"
+#include "../host/sha256.h"
 
 #include <stdarg.h>
 #include <stdint.h>
@@ -314,7 +317,7 @@ int jr_read_ctb_ex(const unsigned char *d, size_t n, jr_job *job, unsigned flags
     job->magic = magic;
     job->version = version;
     if (magic == CTB_MAGIC_CBDDLP) return fail(job, "ctb: magic 0x%08X at offset 0 is cbddlp/photon, not ctb", (unsigned)magic);
-    if (magic == CTB_MAGIC_ENCRYPTED) return fail(job, "ctb: magic 0x%08X at offset 0 is encrypted ctb (not supported)", (unsigned)magic);
+    if (magic == CTB_MAGIC_ENCRYPTED) return fail(job, "ctb: magic 0x%08X at offset 0 is encrypted ctb (jr_read_ctb_encrypted)", (unsigned)magic);
     if (magic != CTB_MAGIC_V3 && magic != CTB_MAGIC_V4 && magic != CTB_MAGIC_GKTWO)
         return fail(job, "ctb: unknown magic 0x%08X at offset 0", (unsigned)magic);
     if (version < 2 || version > 5)
@@ -487,6 +490,231 @@ int jr_read_ctb_ex(const unsigned char *d, size_t n, jr_job *job, unsigned flags
 int jr_read_ctb(const unsigned char *data, size_t size, jr_job *job)
 {
     return jr_read_ctb_ex(data, size, job, 0);
+}
+
+/* ------------------------------------------------------- encrypted CTB */
+
+/* Layout: UVtools CTBEncryptedFile.cs @5f33a73e (FileHeader, SlicerSettings,
+   ResinParameters, LayerPointer, LayerDef; DecodeInternally), mslicer
+   format/ctb_format @ec4374ad. */
+#define CTBE_HEADER 48u
+#define CTBE_SETTINGS 288u
+#define CTBE_POINTER 16u
+#define CTBE_LAYER_DEF 88u
+#define CTBE_SIGNATURE 32u
+#define CTBE_RESIN 40u
+
+/* The key and IV as UVtools publishes them: base64, XORed with "UVtools"
+   (CTBEncryptedFile.cs Secret1, Secret2; CryptExtensions.XORCipher). Decoded
+   here rather than copied from the writer, so a slip in either shows. */
+static size_t ctbe_unveil(const char *b64, unsigned char *out)
+{
+    static const char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    static const char veil[] = "UVtools";
+    uint32_t acc = 0;
+    int bits = 0;
+    size_t n = 0;
+    for (; *b64 && *b64 != '='; b64++) {
+        acc = acc << 6 | (uint32_t)(strchr(digits, *b64) - digits);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            out[n] = (unsigned char)((acc >> bits) ^ (unsigned char)veil[n % 7]);
+            n++;
+        }
+    }
+    return n;
+}
+
+static void ctbe_cipher(unsigned char *data, size_t n, int decrypt)
+{
+    unsigned char key[33], iv[17];
+    aes256 a;
+    ctbe_unveil("hQ36XB6yTk+zO02ysyiowt8yC1buK+nbLWyfY40EXoU=", key);
+    ctbe_unveil("Wld+ampndVJecmVjYH5cWQ==", iv);
+    aes256_init(&a, key);
+    if (decrypt) aes256_cbc_decrypt(&a, iv, data, n);
+    else aes256_cbc_encrypt(&a, iv, data, n);
+}
+
+int jr_ctb_encrypted_settings(const unsigned char *d, size_t n, unsigned char out[CTBE_SETTINGS])
+{
+    if (!d || n < CTBE_HEADER || le32(d + 4) != CTBE_SETTINGS || !inside(n, le32(d + 8), CTBE_SETTINGS)) return -1;
+    memcpy(out, d + le32(d + 8), CTBE_SETTINGS);
+    ctbe_cipher(out, CTBE_SETTINGS, 1);
+    return 0;
+}
+
+int jr_read_ctb_encrypted_ex(const unsigned char *d, size_t n, jr_job *job, unsigned flags)
+{
+    static const char disclaimer_begins[] = "Layout and record format for the ctb and cbddlp file types";
+    unsigned char s[CTBE_SETTINGS], want_sig[CTBE_SIGNATURE], checksum[8];
+    uint32_t set_size, set_at, sig_size, sig_at, w, h, count, pointers, name_at, name_len, dis_at, dis_len, key;
+    u64 npix;
+    unsigned i;
+
+    memset(job, 0, sizeof *job);
+    job->format = JR_CTB_ENCRYPTED;
+    if (!d) return fail(job, "ctb-encrypted: no data");
+    if (n < CTBE_HEADER)
+        return fail(job, "ctb-encrypted: file is %zu bytes, shorter than the %u-byte header", n, CTBE_HEADER);
+    job->magic = le32(d);
+    job->version = le32(d + 16);
+    if (job->magic != CTB_MAGIC_ENCRYPTED)
+        return fail(job, "ctb-encrypted: magic 0x%08X at offset 0, expected 0x%08X", job->magic, CTB_MAGIC_ENCRYPTED);
+    if (job->version != 4 && job->version != 5)
+        return fail(job, "ctb-encrypted: version %u at offset 16 not supported (4, 5)", job->version);
+    set_size = le32(d + 4);
+    set_at = le32(d + 8);
+    sig_size = le32(d + 20);
+    sig_at = le32(d + 24);
+    if (le32(d + 12) || le32(d + 28) || le16(d + 32) != 1 || le16(d + 34) != 1 || le32(d + 36) || le32(d + 40) != 42)
+        return fail(job, "ctb-encrypted: header bytes 12-43 are not the constants 0, 0, 1, 1, 0, 42 UVtools writes");
+    if (jr_ctb_encrypted_settings(d, n, s))
+        return fail(job, "ctb-encrypted: settings [%u, +%u) (header offsets 8/4): expected %u bytes inside the file (%zu bytes)",
+                    (unsigned)set_at, (unsigned)set_size, CTBE_SETTINGS, n);
+
+    /* The signature: SHA-256 of the settings' first 8 bytes, enciphered. */
+    if (sig_size != CTBE_SIGNATURE || !inside(n, sig_at, sig_size))
+        return fail(job, "ctb-encrypted: signature [%u, +%u) (header offsets 24/20): expected %u bytes inside the file (%zu bytes)",
+                    (unsigned)sig_at, (unsigned)sig_size, CTBE_SIGNATURE, n);
+    memcpy(checksum, s, 8);
+    sha256_digest(checksum, 8, want_sig);
+    ctbe_cipher(want_sig, CTBE_SIGNATURE, 0);
+    if (memcmp(want_sig, d + sig_at, CTBE_SIGNATURE) != 0)
+        return fail(job, "ctb-encrypted: the signature at offset %u is not the enciphered SHA-256 of the checksum "
+                         "0x%08X%08X (a damaged file or a wrong key)", (unsigned)sig_at, le32(s + 4), le32(s));
+
+    pointers = le32(s + 8);
+    job->bed_mm[0] = lef(s + 12);
+    job->bed_mm[1] = lef(s + 16);
+    job->bed_mm[2] = lef(s + 20);
+    job->total_height_mm = lef(s + 32);
+    job->layer_height_mm = lef(s + 36);
+    job->exposure_s = lef(s + 40);
+    job->bottom_exposure_s = lef(s + 44);
+    job->light_off_s = lef(s + 48);
+    job->bottom_layers = le32(s + 52);
+    w = le32(s + 56);
+    h = le32(s + 60);
+    count = le32(s + 64);
+    job->print_time = le32(s + 76);
+    job->mirror = (int)le32(s + 80);
+    key = le32(s + 128);
+    job->ctb_encryption_key = key;
+    name_at = le32(s + 160);
+    name_len = le32(s + 164);
+    job->ctb_aa_flag = s[168];
+    job->per_layer_raw = s[171];
+    job->per_layer_settings = s[171] != 0;
+    job->anti_alias = (int)le32(s + 176);
+    job->ctb_transition_layers = le32(s + 188);
+    job->ctb_v4_last_layer_index = le32(s + 244);
+    dis_at = le32(s + 264);
+    dis_len = le32(s + 268);
+    job->ctb_v4_disclaimer_length = dis_len;
+    if (count == 0) return fail(job, "ctb-encrypted: LayerCount (settings+64) is 0");
+    if (!inside(n, pointers, (u64)count * CTBE_POINTER))
+        return fail(job, "ctb-encrypted: layer pointers at offset %u (%u of %u bytes, settings+8/+64) run past the end of the file (%zu bytes)",
+                    (unsigned)pointers, (unsigned)count, CTBE_POINTER, n);
+    if (check_dims(job, "ctb-encrypted", w, h, count, flags, set_at + 56)) return -1;
+    job->width = (int)w;
+    job->height = (int)h;
+    npix = (u64)w * h;
+    if (!inside(n, name_at, name_len))
+        return fail(job, "ctb-encrypted: machine name [%u, +%u) (settings+160) runs past the end of the file",
+                    (unsigned)name_at, (unsigned)name_len);
+    copy_name(job->machine_name, sizeof job->machine_name, d + name_at, name_len);
+    if (dis_len != 320 || !inside(n, dis_at, dis_len) ||
+        memcmp(d + dis_at, disclaimer_begins, sizeof disclaimer_begins - 1) != 0)
+        return fail(job, "ctb-encrypted: no 320-byte disclaimer at offset %u (settings+264/+268 say %u bytes)",
+                    (unsigned)dis_at, (unsigned)dis_len);
+    if (job->version >= 5) {
+        uint32_t resin = le32(s + 276), m_at, m_len;
+        if (!inside(n, resin, CTBE_RESIN))
+            return fail(job, "ctb-encrypted: v5 resin parameters at offset %u (settings+276) run past the end of the file",
+                        (unsigned)resin);
+        m_at = le32(d + resin + 8);
+        m_len = le32(d + resin + 28);
+        if (!inside(n, le32(d + resin + 16), le32(d + resin + 12)) || !inside(n, le32(d + resin + 24), le32(d + resin + 20)) ||
+            !inside(n, m_at, m_len) || m_len != name_len || memcmp(d + m_at, d + name_at, m_len) != 0)
+            return fail(job, "ctb-encrypted: the resin parameters at offset %u: a string outside the file, or a machine name "
+                             "other than the settings'", (unsigned)resin);
+    }
+
+    if (!(flags & JR_SKIP_PREVIEWS)) {
+        if (ctb_preview(job, d, n, le32(s + 72), 0, "small")) { free_all(job); return -1; }
+        if (ctb_preview(job, d, n, le32(s + 68), 1, "large")) { free_all(job); return -1; }
+    }
+
+    job->layers = (jr_layer *)calloc(count, sizeof *job->layers);
+    if (!job->layers) { free_all(job); return fail(job, "ctb-encrypted: out of memory for %u layers", (unsigned)count); }
+    job->layer_count = count;
+    for (i = 0; i < count; i++) {
+        const unsigned char *p = d + pointers + (u64)i * CTBE_POINTER, *x;
+        u64 p_off = pointers + (u64)i * CTBE_POINTER, at = (u64)le32(p + 4) << 32 | le32(p), data_at;
+        jr_layer *L = &job->layers[i];
+        uint32_t size, secret_at, secret_len;
+        unsigned char *clear = NULL;
+        int bad;
+        if (le32(p + 8) != CTBE_LAYER_DEF || le32(p + 12) != 0)
+            return free_all(job), fail(job, "ctb-encrypted: layer %u: pointer at offset %llu has table size %u (expected 88) and padding %u",
+                                        i, p_off, (unsigned)le32(p + 8), (unsigned)le32(p + 12));
+        if (!inside(n, at, CTBE_LAYER_DEF))
+            return free_all(job), fail(job, "ctb-encrypted: layer %u: LayerDef at %llu (pointer at offset %llu) runs past the end of the file",
+                                        i, at, p_off);
+        x = d + at;
+        data_at = (u64)le32(x + 20) << 32 | le32(x + 16);
+        size = le32(x + 24);
+        secret_at = le32(x + 32);
+        secret_len = le32(x + 36);
+        /* UVtools reads the data right after the LayerDef, mslicer at its offset: they must agree */
+        if (le32(x) != CTBE_LAYER_DEF || data_at != at + CTBE_LAYER_DEF)
+            return free_all(job), fail(job, "ctb-encrypted: layer %u: LayerDef at offset %llu has TableSize %u and data at %llu, "
+                                             "expected 88 and %llu", i, at, (unsigned)le32(x), data_at, at + CTBE_LAYER_DEF);
+        if (size == 0 || !inside(n, data_at, size))
+            return free_all(job), fail(job, "ctb-encrypted: layer %u: data [%llu, +%u) (LayerDef at offset %llu) is empty or runs past the end of the file",
+                                        i, data_at, (unsigned)size, at);
+        L->z_mm = lef(x + 4);
+        L->exposure_s = lef(x + 8);
+        L->light_off_s = lef(x + 12);
+        L->lift_mm = lef(x + 40);
+        L->lift_speed = lef(x + 44);
+        L->lift2_mm = lef(x + 48);
+        L->lift2_speed = lef(x + 52);
+        L->retract_speed = lef(x + 56);
+        L->retract2_mm = lef(x + 60);
+        L->retract2_speed = lef(x + 64);
+        L->wait_after_cure_s = lef(x + 68);
+        L->wait_after_lift_s = lef(x + 72);
+        L->wait_before_cure_s = lef(x + 76);
+        L->pwm = lef(x + 80);
+        L->data_offset = data_at;
+        L->data_size = size;
+        /* ChiTuBox may AES-encipher a span of the code; UVtools deciphers it before the key stream */
+        if (secret_len) {
+            if (secret_len % 16 || !inside(size, secret_at, secret_len))
+                return free_all(job), fail(job, "ctb-encrypted: layer %u: enciphered span [%u, +%u) (LayerDef+32 at offset %llu) "
+                                                 "is not whole blocks inside its %u bytes", i, (unsigned)secret_at,
+                                            (unsigned)secret_len, at + 32, (unsigned)size);
+            if (!(clear = (unsigned char *)malloc(size))) return free_all(job), fail(job, "ctb-encrypted: out of memory");
+            memcpy(clear, d + data_at, size);
+            ctbe_cipher(clear + secret_at, secret_len, 1);
+        }
+        if (!(flags & JR_SKIP_IMAGES) && !(L->image = (unsigned char *)malloc((size_t)npix))) {
+            free(clear);
+            return free_all(job), fail(job, "ctb-encrypted: out of memory for layer %u", i);
+        }
+        bad = ctb_decode(job, i, clear ? clear : d + data_at, size, data_at, key, L->image, npix);
+        free(clear);
+        if (bad) { free_all(job); return -1; }
+    }
+    return 0;
+}
+
+int jr_read_ctb_encrypted(const unsigned char *data, size_t size, jr_job *job)
+{
+    return jr_read_ctb_encrypted_ex(data, size, job, 0);
 }
 
 /* ------------------------------------------------------------------ GOO */

@@ -1,10 +1,14 @@
-/* Independent, strict readers for two resin printer job formats, used by the
+/* Independent, strict readers for three resin printer job formats, used by the
    tests to check the jobs adaslice writes:
      - ChiTuBox .ctb, versions 2-5 unencrypted layout (magic 0x12FD0086 for
        v2/v3, 0x12FD0106 or 0xFF220810 for v4/v5), little-endian;
+     - the encrypted ChiTuBox .ctb (magic 0x12FD0107, v4/v5): the settings
+       deciphered, the signature checked;
      - Elegoo .goo "V3.0", big-endian.
    Written from the byte layouts alone (see the notes on resin formats); no
-   code from any slicer.  Only libc.
+   code from any slicer.  libc, and the encrypted CTB's AES-256 and SHA-256
+   from host/aes256.h and host/sha256.h, which test_crypto holds against
+   the FIPS and NIST vectors.
 
    Every offset and size is checked against the buffer; every layer image must
    decode to exactly width*height pixels; on any problem the reader returns -1
@@ -17,7 +21,7 @@
 extern "C" {
 #endif
 
-enum { JR_CTB = 1, JR_GOO = 2 };
+enum { JR_CTB = 1, JR_GOO = 2, JR_CTB_ENCRYPTED = 3 };
 
 /* Flags for the _ex readers. */
 enum {
@@ -81,6 +85,16 @@ int jr_read_ctb(const unsigned char *data, size_t size, jr_job *job);
 /* GOO: verifies each layer's checksum, the 0x55 magic, the 0D 0A delimiters,
    the ending string. */
 int jr_read_goo(const unsigned char *data, size_t size, jr_job *job);
+/* The encrypted CTB: the settings (deciphered) fill the header fields as
+   for jr_read_ctb (ctb_encryption_key: the LayerXorKey; ctb_v4_*: the
+   settings' LastLayerIndex and DisclaimerSize), each 88-byte LayerDef the
+   layer's; fails unless the signature is the enciphered SHA-256 of the
+   settings' checksum. */
+int jr_read_ctb_encrypted(const unsigned char *data, size_t size, jr_job *job);
+int jr_read_ctb_encrypted_ex(const unsigned char *data, size_t size, jr_job *job, unsigned flags);
+/* The encrypted CTB's 288-byte settings block deciphered into out; 0, or -1
+   when the header does not place 288 bytes inside the file. */
+int jr_ctb_encrypted_settings(const unsigned char *data, size_t size, unsigned char out[288]);
 /* Same with JR_* flags. */
 int jr_read_ctb_ex(const unsigned char *data, size_t size, jr_job *job, unsigned flags);
 int jr_read_goo_ex(const unsigned char *data, size_t size, jr_job *job, unsigned flags);

@@ -1,4 +1,5 @@
-/* Tests of the resin job writers (host/fmt_ctb.c, host/fmt_goo.c): every file
+/* Tests of the resin job writers (host/fmt_ctb.c, host/fmt_ctb_encrypted.c,
+   host/fmt_goo.c): every file
    is read back by the independent readers of tests/job_readers.c (written
    from the byte layouts, not from the writers), header, layer table and
    every pixel of every layer compared with what was handed in. */
@@ -8,6 +9,7 @@
 #include "check.h"
 #include "job_readers.h"
 #include "../host/jobfile.h"
+#include "../host/printer.h"
 #include "../host/report.h"
 
 #include <dirent.h>
@@ -266,9 +268,19 @@ static int job_write(test_job *j, const job_format *f, const char *path)
     return f->close(w, 1);
 }
 
-enum { AS_CTB3, AS_CTB4, AS_GOO };
+enum { AS_CTB3, AS_CTB4, AS_GOO, AS_CTBE };
 
-static const job_format *format_of(int as) { return as == AS_GOO ? &JOB_FORMAT_GOO : &JOB_FORMAT_CTB; }
+static const job_format *format_of(int as)
+{
+    return as == AS_GOO ? &JOB_FORMAT_GOO : as == AS_CTBE ? &JOB_FORMAT_CTB_ENCRYPTED : &JOB_FORMAT_CTB;
+}
+
+static int read_as(int as, const unsigned char *file, size_t size, jr_job *r, unsigned flags)
+{
+    return as == AS_GOO ? jr_read_goo_ex(file, size, r, flags)
+           : as == AS_CTBE ? jr_read_ctb_encrypted_ex(file, size, r, flags)
+                           : jr_read_ctb_ex(file, size, r, flags);
+}
 
 /* Writes the job as `as` to `name` and reads it back; 0 if either failed. */
 static int write_and_read(test_job *j, int as, const char *name, jr_job *out, unsigned char **file, size_t *size)
@@ -276,14 +288,14 @@ static int write_and_read(test_job *j, int as, const char *name, jr_job *out, un
     const char *path = in_dir(name);
     int rc, read_rc;
     j->preset.version = as == AS_CTB3 ? 3 : as == AS_CTB4 ? 4 : 0;
-    j->preset.format = as == AS_GOO ? "goo" : "ctb";
+    j->preset.format = format_of(as)->name;
     rc = job_write(j, format_of(as), path);
     CHECKF(rc == RC_OK, "%s: writer returned %d", name, rc);
     if (rc != RC_OK) return 0;
     *file = slurp(path, size);
     CHECKF(*file != NULL, "%s: not there after a good close", name);
     if (!*file) return 0;
-    read_rc = as == AS_GOO ? jr_read_goo(*file, *size, out) : jr_read_ctb(*file, *size, out);
+    read_rc = read_as(as, *file, *size, out, 0);
     CHECKF(read_rc == 0, "%s: the reader refuses it: %s", name, out->error);
     if (read_rc != 0) {
         free(*file);
@@ -378,7 +390,23 @@ static void check_sphere(int as, int bits, const char *name)
     CHECKF(!strcmp(r.machine_name, "Test Printer 12K"), "%s: machine \"%s\"", name, r.machine_name);
     CHECK(r.print_time == 3600);
     CHECKF(r.per_layer_settings, "%s: per-layer settings off", name);
-    if (ctb) {
+    if (as == AS_CTBE) {
+        unsigned char s[288];
+        CHECKF(r.version == 5 && r.magic == 0x12FD0107u, "%s: version %u magic 0x%08X", name, r.version, r.magic);
+        CHECKF(r.per_layer_raw == 0x40, "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
+        CHECKF(r.anti_alias == (bits == 8 ? 4 : 1), "%s: AntiAliasLevel %d", name, r.anti_alias);
+        CHECK(r.ctb_aa_flag == 0x0F && r.ctb_encryption_key == 0xEFBEADDEu);
+        CHECK(same_f32(r.total_height_mm, j->layers[19].z_top));
+        CHECK(r.mirror == (bits == 8));
+        CHECK(same_f32(r.light_off_s, 0));
+        CHECK(r.ctb_v4_last_layer_index == 19 && r.ctb_v4_disclaimer_length == 320);
+        /* The volume is written at close: settings+104, in ml; the settings
+           are ciphertext, so no plain float of theirs shows in the file */
+        CHECK(jr_ctb_encrypted_settings(file, size, s) == 0 && same_f32(le_f32(s + 104), 1.2345));
+        CHECK(memcmp(file + 48 + 52, s + 52, 4) != 0);
+        CHECKF(r.preview_w[1] == 400 && r.preview_h[1] == 300 && r.preview_w[0] == 200 && r.preview_h[0] == 125,
+               "%s: previews %dx%d and %dx%d", name, r.preview_w[1], r.preview_h[1], r.preview_w[0], r.preview_h[0]);
+    } else if (ctb) {
         unsigned v = as == AS_CTB3 ? 3 : 4;
         CHECKF(r.version == v && r.magic == (v == 3 ? 0x12FD0086u : 0x12FD0106u), "%s: version %u magic 0x%08X", name,
                r.version, r.magic);
@@ -423,7 +451,7 @@ static void check_sphere(int as, int bits, const char *name)
         CHECK(same_f32(L->pwm, 255));
         if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, 1.25) && same_f32(L->wait_before_cure_s, 0));
         else CHECK(same_f32(L->light_off_s, 0) && same_f32(L->wait_before_cure_s, 1.25));
-        if (as == AS_CTB4) CHECK(same_f32(L->lift2_speed, speed) && same_f32(L->retract2_speed, 180));
+        if (as == AS_CTB4 || as == AS_CTBE) CHECK(same_f32(L->lift2_speed, speed) && same_f32(L->retract2_speed, 180));
         if (as == AS_GOO) CHECK(same_f32(L->retract_mm, lift) && L->pause == 0);
         CHECK(image_differences(j, as, &r, k, name) == 0);
     }
@@ -443,6 +471,12 @@ static void sphere_as_ctb_v4_on_a_non_square_panel(void)
 {
     check_sphere(AS_CTB4, 1, "sphere1.v4.ctb");
     check_sphere(AS_CTB4, 8, "sphere8.v4.ctb");
+}
+
+static void sphere_as_encrypted_ctb(void)
+{
+    check_sphere(AS_CTBE, 1, "sphere1.encrypted.ctb");
+    check_sphere(AS_CTBE, 8, "sphere8.encrypted.ctb");
 }
 
 static void sphere_as_goo(void)
@@ -480,7 +514,7 @@ static int corruption_seen(test_job *j, int as, unsigned char *file, size_t size
     int seen;
     size_t k;
     file[at] ^= 0x01;
-    if ((as == AS_GOO ? jr_read_goo(file, size, &r) : jr_read_ctb(file, size, &r)) != 0) return 1;
+    if (read_as(as, file, size, &r, 0) != 0) return 1;
     seen = 0;
     for (k = 0; k < r.layer_count; k++) {
         long bad = 0;
@@ -500,7 +534,7 @@ static void flipped_layer_bytes_are_detected(void)
 {
     static const double t[6] = {0.05, 0.05, 0.03, 0.03, 0.02, 0.02};
     int as;
-    for (as = AS_CTB3; as <= AS_GOO; as++) {
+    for (as = AS_CTB3; as <= AS_CTBE; as++) {
         test_job *j = job_new(64, 48, 8, 6, t);
         jr_job r;
         unsigned char *file = NULL;
@@ -515,7 +549,7 @@ static void flipped_layer_bytes_are_detected(void)
             size_t at = (size_t)L->data_offset + (size_t)L->data_size / 2;
             jr_free(&r);
             CHECKF(corruption_seen(j, as, file, size, at), "%s: a flipped bit at offset %zu goes unnoticed",
-                   as == AS_GOO ? "goo" : "ctb", at);
+                   format_of(as)->name, at);
         }
         free(file);
         remove(in_dir("corrupt.job"));
@@ -529,7 +563,7 @@ static void failures_leave_no_file(void)
 {
     static const double t[4] = {0.05, 0.05, 0.05, 0.05};
     int as;
-    for (as = AS_CTB4; as <= AS_GOO; as++) {
+    for (as = AS_CTB4; as <= AS_CTBE; as++) {
         const job_format *f = format_of(as);
         test_job *j = job_new(37, 23, 1, 4, t);
         char missing[200];
@@ -588,6 +622,139 @@ static void failures_leave_no_file(void)
     }
 }
 
+/* ---- 4b. the encrypted CTB: v4 and v5, its seal, 4 GiB, the presets ------ */
+
+static unsigned char *write_small_encrypted(test_job *j, unsigned version, const char *name, size_t *size)
+{
+    j->preset.version = version;
+    j->preset.format = "ctb-encrypted";
+    CHECKF(job_write(j, &JOB_FORMAT_CTB_ENCRYPTED, in_dir(name)) == RC_OK, "%s: not written", name);
+    return slurp(in_dir(name), size);
+}
+
+/* v5 (the default) has the resin parameters and 8 bytes before the
+   signature, v4 neither; both end in the signature and 4 bytes. Version 3
+   is refused. */
+static void encrypted_ctb_v4_and_v5(void)
+{
+    static const double t[3] = {0.05, 0.03, 0.04};
+    test_job *j = job_new(40, 30, 1, 3, t);
+    unsigned version;
+    void *w = (void *)&w;
+    int rc;
+    set_pixel(j, 2, 5, 5, 255);
+    for (version = 4; version <= 5; version++) {
+        unsigned char *file, s[288];
+        size_t size = 0, k;
+        jr_job r;
+        file = write_small_encrypted(j, version == 5 ? 0 : 4, "small.ctb", &size);
+        if (!file) continue;
+        CHECKF(jr_read_ctb_encrypted(file, size, &r) == 0, "v%u: %s", version, r.error);
+        CHECK(r.version == version && r.layer_count == 3 && r.width == 40 && r.height == 30);
+        for (k = 0; k < r.layer_count; k++) CHECK(image_differences(j, AS_CTBE, &r, k, "small.ctb") == 0);
+        CHECK(jr_ctb_encrypted_settings(file, size, s) == 0);
+        CHECK(le_u32(file + 24) + 32 + 4 == size && le_u32(file + 20) == 32);
+        if (version == 5) {
+            static const unsigned char before_signature[8] = {0xFA, 0x52, 0x20, 0x42, 0, 0, 0, 0};
+            CHECK(le_u32(s + 276) != 0 && !memcmp(file + le_u32(file + 24) - 8, before_signature, 8));
+        } else {
+            CHECK(le_u32(s + 276) == 0);
+        }
+        jr_free(&r);
+        free(file);
+        remove(in_dir("small.ctb"));
+    }
+    j->preset.version = 3;
+    complaint_begins();
+    rc = JOB_FORMAT_CTB_ENCRYPTED.open(&w, in_dir("v3.ctb"), &j->d);
+    complaint_ends(in_dir("v3.ctb"), "version 3");
+    CHECK(rc == RC_FAIL && w == NULL && entries_in_dir() == 0);
+    job_free(j);
+}
+
+/* The seal: a bit flipped in the signature, in the settings' checksum or in
+   the magic makes the reader refuse the file, saying what. */
+static void encrypted_ctb_seal_is_checked(void)
+{
+    static const double t[2] = {0.05, 0.05};
+    test_job *j = job_new(24, 16, 8, 2, t);
+    unsigned char *file;
+    size_t size = 0, i;
+    set_pixel(j, 1, 3, 3, 200);
+    file = write_small_encrypted(j, 0, "seal.ctb", &size);
+    if (file) {
+        struct { size_t at; const char *says; } flips[] = {
+            {0, "magic"}, {le_u32(file + 24) + 31, "signature"}, {48 + 2, "signature"}};
+        for (i = 0; i < sizeof flips / sizeof flips[0]; i++) {
+            jr_job r;
+            file[flips[i].at] ^= 0x10;
+            CHECKF(jr_read_ctb_encrypted(file, size, &r) != 0 && strstr(r.error, flips[i].says),
+                   "a bit flipped at offset %zu: \"%s\"", flips[i].at, r.error);
+            file[flips[i].at] ^= 0x10;
+        }
+    }
+    free(file);
+    remove(in_dir("seal.ctb"));
+    job_free(j);
+}
+
+/* The settings' and the header's offsets are 32-bit: a layer that would end
+   the file past 4 GiB is refused, in one line, before a byte of it is
+   written, and nothing is left; so are more layers than could ever fit. */
+static void encrypted_ctb_past_4_gib_is_refused(void)
+{
+    static const double t[3] = {0.05, 0.05, 0.05};
+    const job_format *f = &JOB_FORMAT_CTB_ENCRYPTED;
+    test_job *j = job_new(24, 16, 1, 3, t);
+    void *w = NULL;
+    int rc = f->open(&w, in_dir("huge.ctb"), &j->d);
+    CHECK(rc == RC_OK);
+    if (rc == RC_OK) {
+        job_blob blob;
+        CHECK(job_write_layer(f, w, 0, j->images[0], j->stride) == RC_OK);
+        /* the size of a layer's code a 4 GiB file would take, not its bytes:
+           the writer refuses it before it reads them */
+        memset(&blob, 0, sizeof blob);
+        blob.data = (unsigned char *)malloc(16);
+        blob.cap = 16;
+        blob.size = (size_t)0xFFFFFF00u;
+        complaint_begins();
+        rc = f->put(w, 1, &blob);
+        complaint_ends(in_dir("huge.ctb"), "past the 4 GiB");
+        CHECK(rc == RC_FAIL && blob.data == NULL);
+        f->close(w, 0);
+    }
+    CHECK(entries_in_dir() == 0);
+    j->d.layer_count = 50000000;
+    complaint_begins();
+    rc = f->open(&w, in_dir("many.ctb"), &j->d);
+    complaint_ends(in_dir("many.ctb"), "4 GiB");
+    CHECK(rc == RC_FAIL && w == NULL && entries_in_dir() == 0);
+    j->d.layer_count = 3;
+    job_free(j);
+}
+
+/* The printers that read only the encrypted CTB, with UVtools' figures
+   (PrusaSlicer/printer, each printer's .ini): the display in pixels and mm, the build
+   height, mirrored across. .ctb alone still names the unencrypted format. */
+static void encrypted_ctb_presets(void)
+{
+    static const struct { const char *name; int w, h; double mm[2], z; } want[] = {
+        {"elegoo-mars-3", 4098, 2560, {143.43, 89.6}, 175},
+        {"elegoo-saturn-4-ultra", 11520, 5120, {218.88, 122.88}, 220},
+        {"phrozen-sonic-mini-8k", 7500, 3240, {165, 71.28}, 180}};
+    size_t i;
+    for (i = 0; i < sizeof want / sizeof want[0]; i++) {
+        const printer *p = printer_find(want[i].name);
+        CHECKF(p && !strcmp(p->format, "ctb-encrypted") && p->width == want[i].w && p->height == want[i].h &&
+                   fabs(p->width * p->pitch[0] - want[i].mm[0]) < 1e-9 && fabs(p->height * p->pitch[1] - want[i].mm[1]) < 1e-9 &&
+                   p->z_max == want[i].z && p->mirror_x == 1 && p->mirror_y == 0 && p->rotate == 0 && p->version == 0,
+               "%s", want[i].name);
+    }
+    CHECK(job_format_named("ctb-encrypted") == &JOB_FORMAT_CTB_ENCRYPTED);
+    CHECK(job_format_for_path("job.ctb") == &JOB_FORMAT_CTB);
+}
+
 /* ---- 4. edges: odd widths, blank and full layers, runs past the limits --- */
 
 static uint32_t rng_state = 2463534242u;
@@ -603,12 +770,13 @@ static uint32_t rng(void)
 static void round_trip(test_job *j, const char *what)
 {
     int as;
-    for (as = AS_CTB3; as <= AS_GOO; as++) {
+    for (as = AS_CTB3; as <= AS_CTBE; as++) {
+        static const char *const ext[] = {"v3.ctb", "v4.ctb", "goo", "encrypted.ctb"};
         char name[64];
         jr_job r;
         unsigned char *file = NULL;
         size_t size, k;
-        snprintf(name, sizeof name, "%s.%s", what, as == AS_CTB3 ? "v3.ctb" : as == AS_CTB4 ? "v4.ctb" : "goo");
+        snprintf(name, sizeof name, "%s.%s", what, ext[as]);
         if (write_and_read(j, as, name, &r, &file, &size)) {
             for (k = 0; k < j->d.layer_count; k++) CHECK(image_differences(j, as, &r, k, name) == 0);
             jr_free(&r);
@@ -739,10 +907,15 @@ void test_formats_resin(void)
     }
     RUN(sphere_as_ctb_v3);
     RUN(sphere_as_ctb_v4_on_a_non_square_panel);
+    RUN(sphere_as_encrypted_ctb);
     RUN(sphere_as_goo);
     RUN(ctb_defaults_to_v4_and_adaslice);
     RUN(flipped_layer_bytes_are_detected);
     RUN(failures_leave_no_file);
+    RUN(encrypted_ctb_v4_and_v5);
+    RUN(encrypted_ctb_seal_is_checked);
+    RUN(encrypted_ctb_past_4_gib_is_refused);
+    RUN(encrypted_ctb_presets);
     RUN(odd_width_blank_full_and_noisy_layers);
     RUN(run_lengths_at_every_form_boundary);
     RUN(runs_longer_than_a_code_are_cut);

@@ -187,6 +187,7 @@ static void refusals_leave_nothing_behind(void)
     struct { const char *out, *args[10], *says; int status; } cases[] = {
         {"job.pwmx", {NULL}, "no job format has the extension .pwmx", 2},
         {"job.goo", {"--printer", "elegoo-saturn", NULL}, "reads ctb jobs, not goo", 2},
+        {"job.ctb", {"--printer", "elegoo-mars-3", "--format", "ctb", NULL}, "reads ctb-encrypted jobs, not ctb", 2},
         {"job.sl1", {"--printer", "prusa-sl1s", NULL}, "--uniform T", 2},
         {"job.sl1", {"--pixels", "240x240", "--pitch", "0.05", NULL}, "holds one layer height", 2},
         {"job.zip", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
@@ -305,7 +306,7 @@ static unsigned char *read_file(const char *path, size_t *size)
    the masker's mask; 1-bit and anti-aliased, on oblong pixels. */
 static void resin_files_hold_the_directory_jobs_masks(void)
 {
-    static const char *const formats[] = {"ctb", "goo"};
+    static const char *const formats[] = {"ctb", "goo", "ctb-encrypted"};
     const char *aa[2] = {"1", "4"};
     int pass, f;
     char model[256];
@@ -325,17 +326,19 @@ static void resin_files_hold_the_directory_jobs_masks(void)
         free(text);
         if (!read_dir_masks(dir, &m) || m.layers != n || n < 50) { CHECKF(0, "%s: %u masks, %zu layers", dir, m.layers, n); free(l); dir_masks_free(&m); return; }
         CHECK(m.width == 300 && m.height == 250 && m.bits == (pass ? 8u : 1u));
-        for (f = 0; f < 2; f++) {
+        for (f = 0; f < 3; f++) {
             char out[300];
             unsigned char *data;
             size_t size, bad_z = 0, bad_px = 0;
             jr_job job;
-            snprintf(out, sizeof out, "%s/job.%s", cli_dir, formats[f]);
-            r = cli_run("slice", model, "-o", out, SAME_JOB, NULL);
+            snprintf(out, sizeof out, "%s/job_%s.%s", cli_dir, formats[f], f == 1 ? "goo" : "ctb");
+            r = cli_run("slice", model, "-o", out, "--format", formats[f], SAME_JOB, NULL);
             CHECKF(r.status == 0, "%s: %s", out, r.err);
             cli_free(&r);
             data = read_file(out, &size);
-            if (!data || (f == 0 ? jr_read_ctb(data, size, &job) : jr_read_goo(data, size, &job)) != 0) {
+            if (!data || (f == 0   ? jr_read_ctb(data, size, &job)
+                          : f == 1 ? jr_read_goo(data, size, &job)
+                                   : jr_read_ctb_encrypted(data, size, &job)) != 0) {
                 CHECKF(0, "%.200s: the reader refuses it: %.200s", out, data ? job.error : "no file");
                 free(data);
                 continue;
@@ -353,7 +356,7 @@ static void resin_files_hold_the_directory_jobs_masks(void)
                     CHECKF(0, "%s layer %zu: z %.6f, exposure %.6f; the manifest: %.6f, %.6f", out, k + 1, L->z_mm, L->exposure_s,
                            top, l[k].exposure);
                 for (i = 0; i < px; i++) {
-                    unsigned char want = f == 0 ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
+                    unsigned char want = f != 1 ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
                     if (L->image[i] != want) { if (bad_px++ < 3) CHECKF(0, "%s layer %zu pixel %zu: %u, the mask %u", out, k + 1, i, L->image[i], want); break; }
                 }
             }
@@ -366,33 +369,93 @@ static void resin_files_hold_the_directory_jobs_masks(void)
     }
 }
 
+/* -o job.ctb for a printer that reads only the encrypted CTB writes that:
+   the Saturn 4 Ultra's display and build height, its name, mirrored across,
+   every layer's own Z and exposure as the plan has them (the plan is the
+   model's, the same on any display: the manifest of a small directory job
+   gives them), and every layer's code covering its 11520 x 5120 pixels
+   exactly (the images are too large to keep). */
+static void ctb_for_an_encrypted_ctb_printer(void)
+{
+    char model[256], out[300], dir[300], *text;
+    unsigned char *data;
+    size_t size, n = 0, k, bad = 0;
+    manifest_layer *l;
+    jr_job job;
+    cli_result r;
+    double top = 0, thinnest = 1, thickest = 0;
+    snprintf(model, sizeof model, "%s", sphere_obj());
+    snprintf(out, sizeof out, "%s/s4u.ctb", cli_dir);
+    snprintf(dir, sizeof dir, "%s/s4u_plan", cli_dir);
+    r = cli_run("slice", model, "--scale", "0.4", "--printer", "elegoo-saturn-4-ultra", "-o", out, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "(ctb-encrypted)"), "%s: %s%s", out, r.out, r.err);
+    cli_free(&r);
+    r = cli_run("slice", model, "--scale", "0.4", "--pixels", "100x100", "--pitch", "0.05", "-o", dir, NULL);
+    CHECKF(r.status == 0, "%s: %s", dir, r.err);
+    cli_free(&r);
+    l = read_manifest(dir, &n, &text);
+    free(text);
+    data = read_file(out, &size);
+    if (!data || jr_read_ctb_encrypted_ex(data, size, &job, JR_SKIP_IMAGES | JR_SKIP_PREVIEWS) != 0) {
+        CHECKF(0, "%.200s: the reader refuses it: %.200s", out, data ? job.error : "no file");
+        free(data);
+        free(l);
+        return;
+    }
+    CHECKF(job.magic == 0x12FD0107u && job.version == 5 && job.width == 11520 && job.height == 5120 && job.mirror == 1 &&
+               !strcmp(job.machine_name, "ELEGOO SATURN 4 ULTRA"),
+           "%s: 0x%08X v%u, %d x %d, mirror %d, \"%s\"", out, job.magic, job.version, job.width, job.height, job.mirror,
+           job.machine_name);
+    CHECKF(fabs(job.bed_mm[0] - 218.88) < 1e-4 && fabs(job.bed_mm[1] - 122.88) < 1e-4 && job.bed_mm[2] == 220,
+           "%s: %g x %g x %g mm", out, job.bed_mm[0], job.bed_mm[1], job.bed_mm[2]);
+    CHECKF(n > 10 && job.layer_count == n && job.per_layer_raw == 0x40 && job.bottom_layers == 3, "%s: %u layers, the plan %zu",
+           out, job.layer_count, n);
+    for (k = 0; k < n && k < job.layer_count; k++) {
+        const jr_layer *L = &job.layers[k];
+        top += l[k].thickness;
+        if (l[k].thickness < thinnest) thinnest = l[k].thickness;
+        if (l[k].thickness > thickest) thickest = l[k].thickness;
+        if ((fabs(L->z_mm - top) > 2e-5 || fabs(L->exposure_s - l[k].exposure) > 1e-5 * l[k].exposure) && bad++ < 3)
+            CHECKF(0, "%s layer %zu: z %.6f, exposure %.6f; the plan: %.6f, %.6f", out, k + 1, L->z_mm, L->exposure_s, top,
+                   l[k].exposure);
+    }
+    CHECKF(thickest > thinnest + 0.02, "layers of %g to %g mm: not an adaptive plan", thinnest, thickest);
+    CHECK(fabs(job.total_height_mm - top) < 2e-5);
+    jr_free(&job);
+    free(data);
+    free(l);
+}
+
 /* The same job twice is the same bytes, given SOURCE_DATE_EPOCH for the
    headers' dates. */
 static void jobs_are_reproducible(void)
 {
-    static const char *const ext[] = {"ctb", "goo", "zip", "sl1"};
+    static const char *const ext[] = {"ctb", "goo", "zip", "sl1", "ctb"};
+    static const char *const format[] = {"ctb", "goo", "chitu-zip", "sl1", "ctb-encrypted"};
     char model[256];
     int f;
     snprintf(model, sizeof model, "%s", sphere_obj());
     setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
-    for (f = 0; f < 4; f++) {
+    for (f = 0; f < 5; f++) {
         char a[300], b[400], dir_b[200];
         unsigned char *x, *y;
         size_t nx, ny;
         cli_result r;
-        snprintf(a, sizeof a, "%s/same.%s", cli_dir, ext[f]);
+        snprintf(a, sizeof a, "%s/same_%s.%s", cli_dir, format[f], ext[f]);
         snprintf(dir_b, sizeof dir_b, "%s/again", cli_dir);
         mkdir(dir_b, 0755);
-        snprintf(b, sizeof b, "%s/same.%s", dir_b, ext[f]);
-        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "-o", a, NULL);
+        snprintf(b, sizeof b, "%s/same_%s.%s", dir_b, format[f], ext[f]);
+        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "--format", format[f], "-o",
+                    a, NULL);
         CHECKF(r.status == 0, "%s: %s", a, r.err);
         cli_free(&r);
-        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "-o", b, NULL);
+        r = cli_run("slice", model, "--pixels", "300x250", "--pitch", "0.05", "--uniform", "0.05", "--format", format[f], "-o",
+                    b, NULL);
         CHECKF(r.status == 0, "%s: %s", b, r.err);
         cli_free(&r);
         x = read_file(a, &nx);
         y = read_file(b, &ny);
-        CHECKF(x && y && nx == ny && !memcmp(x, y, nx), "%s: two runs differ", ext[f]);
+        CHECKF(x && y && nx == ny && !memcmp(x, y, nx), "%s: two runs differ", format[f]);
         free(x);
         free(y);
     }
@@ -641,6 +704,7 @@ void test_slice_jobs(void)
     RUN(bad_exposure_values_exit_2);
     RUN(refusals_leave_nothing_behind);
     RUN(resin_files_hold_the_directory_jobs_masks);
+    RUN(ctb_for_an_encrypted_ctb_printer);
     RUN(jobs_are_reproducible);
     RUN(threads_write_the_same_job);
     RUN(headers_hold_the_regular_layers);
