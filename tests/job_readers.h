@@ -2,7 +2,7 @@
    tests to check the jobs adaslice writes:
      - ChiTuBox .ctb, versions 2-5 unencrypted layout (magic 0x12FD0086 for
        v2/v3, 0x12FD0106 or 0xFF220810 for v4/v5), little-endian;
-     - Elegoo .goo "V3.0", big-endian.
+     - Elegoo .goo "V3.0", big-endian (and Phrozen's .prz, the same file).
    Written from the byte layouts alone (see the notes on resin formats); no
    code from any slicer.  Only libc.
 
@@ -42,6 +42,8 @@ typedef struct jr_layer {
     unsigned long long data_offset; /* file offset of the encoded image (GOO: of the 0x55) */
     unsigned long long data_size;   /* its size in bytes (GOO: DataLength) */
     unsigned checksum;          /* GOO: the stored (verified) checksum byte */
+    unsigned long long diff_chunks; /* GOO: chunks of type 10, a difference from
+                                   the pixel before (a .prz must have none) */
     unsigned char *image;       /* width*height bytes, 8-bit grey, rows in file
                                    order; NULL with JR_SKIP_IMAGES */
 } jr_layer;

@@ -187,6 +187,7 @@ static void refusals_leave_nothing_behind(void)
     struct { const char *out, *args[10], *says; int status; } cases[] = {
         {"job.pwmx", {NULL}, "no job format has the extension .pwmx", 2},
         {"job.goo", {"--printer", "elegoo-saturn", NULL}, "reads ctb jobs, not goo", 2},
+        {"job.goo", {"--printer", "phrozen-sonic-mini-8k-s", NULL}, "reads prz jobs, not goo", 2},
         {"job.sl1", {"--printer", "prusa-sl1s", NULL}, "--uniform T", 2},
         {"job.sl1", {"--pixels", "240x240", "--pitch", "0.05", NULL}, "holds one layer height", 2},
         {"job.zip", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
@@ -302,10 +303,12 @@ static unsigned char *read_file(const char *path, size_t *size)
 /* One model, one display, sliced as a directory and as each resin file: the
    file's reader (tests/job_readers.c, from the formats' documentation) finds
    every layer's Z and exposure as the manifest has them and every pixel of
-   the masker's mask; 1-bit and anti-aliased, on oblong pixels. */
+   the masker's mask; 1-bit and anti-aliased, on oblong pixels. The .prz,
+   a GOO file, has no diff chunk in any layer, which the anti-aliased .goo
+   has (so the reader is seen to count them). */
 static void resin_files_hold_the_directory_jobs_masks(void)
 {
-    static const char *const formats[] = {"ctb", "goo"};
+    static const char *const formats[] = {"ctb", "goo", "prz"};
     const char *aa[2] = {"1", "4"};
     int pass, f;
     char model[256];
@@ -325,10 +328,11 @@ static void resin_files_hold_the_directory_jobs_masks(void)
         free(text);
         if (!read_dir_masks(dir, &m) || m.layers != n || n < 50) { CHECKF(0, "%s: %u masks, %zu layers", dir, m.layers, n); free(l); dir_masks_free(&m); return; }
         CHECK(m.width == 300 && m.height == 250 && m.bits == (pass ? 8u : 1u));
-        for (f = 0; f < 2; f++) {
+        for (f = 0; f < 3; f++) {
             char out[300];
             unsigned char *data;
             size_t size, bad_z = 0, bad_px = 0;
+            unsigned long long diffs = 0;
             jr_job job;
             snprintf(out, sizeof out, "%s/job.%s", cli_dir, formats[f]);
             r = cli_run("slice", model, "-o", out, SAME_JOB, NULL);
@@ -356,7 +360,10 @@ static void resin_files_hold_the_directory_jobs_masks(void)
                     unsigned char want = f == 0 ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
                     if (L->image[i] != want) { if (bad_px++ < 3) CHECKF(0, "%s layer %zu pixel %zu: %u, the mask %u", out, k + 1, i, L->image[i], want); break; }
                 }
+                if (f == 2) CHECKF(L->diff_chunks == 0, "%s layer %zu: %llu diff chunks", out, k + 1, L->diff_chunks);
+                diffs += L->diff_chunks;
             }
+            if (f == 1 && pass) CHECKF(diffs > 0, "%s: no diff chunk in an anti-aliased .goo", out);
             jr_free(&job);
             free(data);
         }
@@ -370,12 +377,12 @@ static void resin_files_hold_the_directory_jobs_masks(void)
    headers' dates. */
 static void jobs_are_reproducible(void)
 {
-    static const char *const ext[] = {"ctb", "goo", "zip", "sl1"};
+    static const char *const ext[] = {"ctb", "goo", "prz", "zip", "sl1", "uvj"};
     char model[256];
     int f;
     snprintf(model, sizeof model, "%s", sphere_obj());
     setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
-    for (f = 0; f < 4; f++) {
+    for (f = 0; f < (int)(sizeof ext / sizeof ext[0]); f++) {
         char a[300], b[400], dir_b[200];
         unsigned char *x, *y;
         size_t nx, ny;
