@@ -150,6 +150,6 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_UVJ = {"uvj", ".uvj", "UVtools UVJ, to convert in UVtools", 0.01, 1,
+const job_format JOB_FORMAT_UVJ = {"uvj", ".uvj", "UVtools UVJ, any printer's: UVtools converts it", 0.01, 1,
                                    ZIP_MEMBERS_MAX - 3 /* config.json, two previews */, open_job, encode, put, close_job,
                                    {{TINY_W, TINY_H}, {HUGE_W, HUGE_H}}};

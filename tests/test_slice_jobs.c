@@ -537,6 +537,40 @@ static void headers_hold_the_regular_layers(void)
     }
 }
 
+/* The Phrozen Sonic Mini 8K S reads .prz: -o without an extension gets it,
+   a GOO file of its display and name whose anti-aliased layers hold no diff
+   chunk. */
+static void the_8k_s_preset_writes_prz(void)
+{
+    char out[300], path[320];
+    unsigned char *data;
+    size_t size;
+    unsigned long long diffs = 0;
+    unsigned k;
+    jr_job job;
+    cli_result r;
+    snprintf(out, sizeof out, "%s/small", cli_dir);
+    snprintf(path, sizeof path, "%s.prz", out);
+    r = cli_run("slice", sphere_obj(), "--scale", "0.1", "--aa", "2", "--printer", "phrozen-sonic-mini-8k-s", "-o", out,
+                NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    data = read_file(path, &size);
+    if (!data || jr_read_goo_ex(data, size, &job, JR_SKIP_IMAGES) != 0) {
+        CHECKF(0, "%.200s: %.200s", path, data ? job.error : "not written");
+        free(data);
+        return;
+    }
+    CHECKF(job.width == 7536 && job.height == 3240 && job.layer_count > 3 &&
+               !strcmp(job.machine_name, "Phrozen Sonic Mini 8K S"),
+           "%d x %d, %u layers, machine %s", job.width, job.height, job.layer_count, job.machine_name);
+    for (k = 0; k < job.layer_count; k++) diffs += job.layers[k].diff_chunks;
+    CHECKF(diffs == 0, "%llu diff chunks in %u layers", diffs, job.layer_count);
+    jr_free(&job);
+    free(data);
+    remove(path);
+}
+
 /* A job directory cannot go stale: a shorter job after a longer one leaves
    none of the old layers, and print takes masks.rle only with the manifest
    that names it. */
@@ -651,6 +685,7 @@ void test_slice_jobs(void)
     RUN(jobs_are_reproducible);
     RUN(threads_write_the_same_job);
     RUN(headers_hold_the_regular_layers);
+    RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);
     RUN(an_interrupted_reslice_cannot_be_printed);
     cli_end();
