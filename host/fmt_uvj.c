@@ -10,11 +10,11 @@
    case-sensitively; numbers are plain JSON numbers, X, Y, Count, Layers,
    LightPWM and AntiAliasLevel integers (ushort, uint, byte). UVtools needs
    config.json and Properties.Size.Layers PNGs, found by the digits of their
-   file names (FileFormat.DecodeLayersFromZip); the previews may be missing,
-   and a layer missing from the Layers list keeps the file's defaults. Times
-   are in seconds, heights in mm, speeds in mm/min; UVtools rounds each Z to
-   0.001 mm. The file holds no mirror: the images are stored as this printer
-   shows them, as in every other format. */
+   file names (FileFormat.cs, DecodeLayersFromZip); the previews may be
+   missing. Times are in seconds, heights in mm, speeds in mm/min; UVtools
+   rounds each Z to 0.001 mm (Layer.cs, RoundHeight). The file holds no
+   mirror: the images are stored as the printer shows them, as in every
+   other format. */
 #include "jobfile.h"
 #include "json.h"
 #include "report.h"
@@ -24,7 +24,7 @@
 #include <stdlib.h>
 
 enum { TINY_W = 400, TINY_H = 400, HUGE_W = 800, HUGE_H = 480 }; /* UVJFile ThumbnailsOriginalSize */
-#define UVJ_SIDE_MAX 65535          /* Size.X and Size.Y are ushort */
+#define UVJ_USHORT_MAX 65535        /* Size.X, Size.Y and Bottom.Count are ushort */
 #define UVJ_AA_MAX 16               /* UVtools clamps AntiAliasLevel to 1..16 */
 
 typedef struct uvj {
@@ -107,10 +107,10 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     int rc;
     *writer = NULL;
     if (!d->layer_count) return complain(RC_FAIL, "cannot write %s: the job has no layers", path);
-    if (d->width > UVJ_SIDE_MAX || d->height > UVJ_SIDE_MAX || d->bottom_layers > UVJ_SIDE_MAX)
+    if (d->width > UVJ_USHORT_MAX || d->height > UVJ_USHORT_MAX || d->bottom_layers > UVJ_USHORT_MAX)
         return complain(RC_USAGE, "cannot write %s: UVtools reads a .uvj of up to %d pixels across and down and %d "
-                        "bottom layers, and this job has %d x %d pixels and %u bottom layers", path, UVJ_SIDE_MAX,
-                        UVJ_SIDE_MAX, d->width, d->height, d->bottom_layers);
+                        "bottom layers, and this job has %d x %d pixels and %u bottom layers", path, UVJ_USHORT_MAX,
+                        UVJ_USHORT_MAX, d->width, d->height, d->bottom_layers);
     if (!(w = (uvj *)calloc(1, sizeof *w))) return complain(RC_FAIL, "cannot write %s: out of memory", path);
     w->d = d;
     if ((rc = zip_open(&w->zip, path))) {
