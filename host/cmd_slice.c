@@ -97,24 +97,34 @@ static int write_contours(const slice_args *s, const plan_args *a, plan_job *j)
 
 /* ------------------------------------------------------------ the format */
 
+/* The formats' names, or their extensions, ", " between them. */
+static void list_formats(char *out, size_t size, int extensions)
+{
+    int i;
+    *out = 0;
+    for (i = 0; JOB_FORMATS[i]; i++) {
+        const char *what = extensions ? JOB_FORMATS[i]->extension : JOB_FORMATS[i]->name;
+        size_t n = strlen(out);
+        if (what) snprintf(out + n, size - n, "%s%s", n ? ", " : "", what);
+    }
+}
+
 /* By --format, else by the extension of -o; a path without one gets the
    preset's format (and its extension). *path is s->dir or, extended, malloc'd. */
 static int choose_format(const slice_args *s, const job_format **fmt, char **path)
 {
     const printer *preset = s->geometry_given ? s->preset : NULL; /* given, not the default */
+    char list[160];
     *path = NULL;
     if (s->format && !(*fmt = job_format_named(s->format))) {
-        char names[128] = "";
-        int i;
-        for (i = 0; JOB_FORMATS[i]; i++) {
-            size_t n = strlen(names);
-            snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", JOB_FORMATS[i]->name);
-        }
-        return complain(RC_USAGE, "--format %s: unknown (%s)", s->format, names);
+        list_formats(list, sizeof list, 0);
+        return complain(RC_USAGE, "--format %s: unknown (%s)", s->format, list);
     }
-    if (!s->format && !(*fmt = job_format_for_path(s->dir)))
-        return complain(RC_USAGE, "-o %s: no job format has the extension %s (.ctb, .goo, .zip, .sl1, or none for a "
-                                  "directory)", s->dir, strrchr(s->dir, '.'));
+    if (!s->format && !(*fmt = job_format_for_path(s->dir))) {
+        list_formats(list, sizeof list, 1);
+        return complain(RC_USAGE, "-o %s: no job format has the extension %s (%s, or none for a directory)", s->dir,
+                        strrchr(s->dir, '.'), list);
+    }
     if (!s->format && *fmt == &JOB_FORMAT_DIR && preset && !(*fmt = job_format_named(preset->format)))
         return complain(RC_FAIL, "--printer %s: its format %s is not built in", preset->name, preset->format);
     if (!s->format && preset && (*fmt)->extension) {
@@ -125,7 +135,8 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if (*fmt != &JOB_FORMAT_DIR && !s->geometry_given)
         return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice slice --help lists them) or "
                                   "--pixels WxH with --pitch MM", s->dir);
-    if (preset && *fmt != &JOB_FORMAT_DIR && strcmp(preset->format, (*fmt)->name))
+    /* a directory and a .uvj (for UVtools to convert) are any printer's */
+    if (preset && *fmt != &JOB_FORMAT_DIR && *fmt != &JOB_FORMAT_UVJ && strcmp(preset->format, (*fmt)->name))
         return complain(RC_USAGE, "-o %s: the %s reads %s jobs, not %s (leave the extension out for its own)", s->dir,
                         preset->name, preset->format, (*fmt)->name);
     if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR) {

@@ -12,7 +12,13 @@
    Each layer is encoded as it arrives and streamed through one fixed buffer,
    the checksum summed on the way; its DataLength, which precedes the data, is
    written after it by seeking back, and the header's fields (the volume is
-   known only at close) again at close. */
+   known only at close) again at close.
+
+   Phrozen's .prz (the Sonic Mini 8K S) is the same file: UVtools reads and
+   writes it with GooFile (its "prz" extension, added in v3.14.0, d8c42c6b),
+   and since v4.1.0 (f0de25c0) writes it without diff chunks, which that
+   printer's firmware decodes wrongly (UVtools issues 776, 810, 814): a
+   layer's grey runs there are whole grey chunks. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, localtime_r */
 #endif
@@ -213,6 +219,7 @@ typedef struct goo_coder {
     unsigned run_grey;           /* the pending run */
     uint64_t run_length;
     unsigned previous_grey;      /* the pixel before it: diff chunks are relative to it */
+    int diff_chunks;             /* 0: none (.prz) */
     int failed;                  /* out of memory */
 } goo_coder;
 
@@ -221,7 +228,7 @@ typedef struct goo_coder {
    b1.. << 4 | byte0[3:0]); 10 a diff of up to 15 from the previous pixel,
    byte0[5] its sign, byte0[4] a run byte following (else a run of 1). Diff
    chunks as UVtools uses them: for greys between 0 and 255 and runs up to
-   255. Longer runs are cut. */
+   255 (none when c->diff_chunks is 0). Longer runs are cut. */
 static void emit_run(goo_coder *c)
 {
     uint64_t left = c->run_length;
@@ -232,7 +239,7 @@ static void emit_run(goo_coder *c)
         unsigned char *p;
         if (job_blob_reserve(c->out, GOO_CHUNK_MAX)) { c->failed = 1; break; }
         p = c->out->data + c->out->size;
-        if (v > 0 && v < 255 && diff <= 15 && n <= GOO_DIFF_RUN_MAX) {
+        if (c->diff_chunks && v > 0 && v < 255 && diff <= 15 && n <= GOO_DIFF_RUN_MAX) {
             *p++ = (unsigned char)(0x80 | (v < prev ? 0x20 : 0) | (n > 1 ? 0x10 : 0) | diff);
             if (n > 1) *p++ = (unsigned char)n;
         } else {
@@ -296,9 +303,9 @@ static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
 
 /* The layer's data as DataLength counts it: the 0x55, the chunks and the
    checksum (the NOT of the chunks' sum, the magic left out). */
-static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+static int encode_runs(const goo_writer *w, size_t k, const unsigned char *image, size_t stride, job_blob *blob,
+                       int diff_chunks)
 {
-    const goo_writer *w = (const goo_writer *)writer;
     const job_desc *d = w->d;
     goo_coder c;
     unsigned sum = 0;
@@ -306,6 +313,7 @@ static int encode(const void *writer, size_t k, const unsigned char *image, size
     int y;
     memset(&c, 0, sizeof c);
     c.out = blob;
+    c.diff_chunks = diff_chunks;
     if (job_blob_reserve(blob, 1)) return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
     blob->data[blob->size++] = 0x55;
     for (y = 0; y < d->height; y++) mask_row_runs(image + (size_t)y * stride, d->bits, d->width, take_run, &c);
@@ -318,6 +326,16 @@ static int encode(const void *writer, size_t k, const unsigned char *image, size
         return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a goo layer can hold", w->file.path,
                         k + 1, blob->size);
     return RC_OK;
+}
+
+static int encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    return encode_runs((const goo_writer *)writer, k, image, stride, blob, 1);
+}
+
+static int encode_prz(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    return encode_runs((const goo_writer *)writer, k, image, stride, blob, 0);
 }
 
 /* The layer's definition, its data and the 0D 0A after each, in order. */
@@ -413,3 +431,5 @@ static int close_job(void *writer, int ok)
 
 const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, 0, open_job, encode, put, close_job,
                                   {{116, 116}, {290, 290}}};
+const job_format JOB_FORMAT_PRZ = {"prz", ".prz", "Phrozen PRZ (GOO without diff runs)", 0.01, 1, 0, open_job,
+                                   encode_prz, put, close_job, {{116, 116}, {290, 290}}};

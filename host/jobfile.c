@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 const job_format *const JOB_FORMATS[] = {&JOB_FORMAT_DIR, &JOB_FORMAT_CTB, &JOB_FORMAT_CTB_ENCRYPTED, &JOB_FORMAT_GOO,
-                                         &JOB_FORMAT_CHITU_ZIP, &JOB_FORMAT_SL1, NULL};
+                                         &JOB_FORMAT_PRZ, &JOB_FORMAT_CHITU_ZIP, &JOB_FORMAT_SL1, &JOB_FORMAT_UVJ, NULL};
 
 const job_format *job_format_named(const char *name)
 {

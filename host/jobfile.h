@@ -1,6 +1,6 @@
 /* Job files: what adaslice slice writes for the printers and slicers people
-   own (a ChiTuBox .ctb, an Elegoo .goo, a ChiTu G-code .zip, a Prusa .sl1, or
-   the job directory of jobdir.h). Every format is written through one layer
+   own (a ChiTuBox .ctb, an Elegoo .goo, a Phrozen .prz, a ChiTu G-code .zip, a
+   Prusa .sl1, UVtools' .uvj, or the job directory of jobdir.h). Every format is written through one layer
    loop (pipeline.h): the masker renders each layer once, bottom-up, the
    format's `encode` codes it (on any thread) and its `put` puts it into the
    job (in order); what the format needs besides the
@@ -114,9 +114,10 @@ typedef struct job_format {
 /* encode and put one after the other: a layer on one thread. */
 int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride);
 
-/* The formats: jobdir.c, fmt_ctb.c, fmt_ctb_encrypted.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
-extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_CTB_ENCRYPTED, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP,
-    JOB_FORMAT_SL1;
+/* The formats: jobdir.c, fmt_ctb.c, fmt_ctb_encrypted.c, fmt_goo.c (.goo and
+   .prz), fmt_chitu_zip.c, fmt_sl1.c, fmt_uvj.c. */
+extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_CTB_ENCRYPTED, JOB_FORMAT_GOO, JOB_FORMAT_PRZ,
+    JOB_FORMAT_CHITU_ZIP, JOB_FORMAT_SL1, JOB_FORMAT_UVJ;
 extern const job_format *const JOB_FORMATS[];  /* NULL-terminated */
 /* The format called `name`, or NULL. */
 const job_format *job_format_named(const char *name);

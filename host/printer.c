@@ -47,9 +47,10 @@ const printer PRINTERS[] = {
     {"elegoo-saturn-4", "ELEGOO SATURN 4", 11520, 5120, {0.019, 0.024}, 220, 1, 0, 0, "goo", 0,
      "Elegoo Saturn 4 (12K): 11520 x 5120 pixels, 218.88 x 122.88 mm, pixels of 19 x 24 um, Z 220 mm; GOO "
      "(UVtools ini \"Elegoo Saturn 4\" @a1afac02)"},
-    {"phrozen-sonic-mini-8k-s", "Phrozen Sonic Mini 8K S", 7536, 3240, {0.022, 0.022}, 170, 1, 0, 0, "goo", 0,
-     "Phrozen Sonic Mini 8K S: 7536 x 3240 pixels, 165.792 x 71.28 mm, Z 170 mm; GOO "
-     "(UVtools ini \"Phrozen Sonic Mini 8K S\" @d8c42c6b)"},
+    {"phrozen-sonic-mini-8k-s", "Phrozen Sonic Mini 8K S", 7536, 3240, {0.022, 0.022}, 170, 1, 0, 0, "prz", 0,
+     "Phrozen Sonic Mini 8K S: 7536 x 3240 pixels, 165.792 x 71.28 mm, Z 170 mm; PRZ, GOO without diff runs "
+     "(UVtools ini \"Phrozen Sonic Mini 8K S\" @d8c42c6b, whose notes say FILEFORMAT_GOO; the .prz Lychee and "
+     "UVtools write for it, and UVtools' GooFile.cs @f0de25c0)"},
     {"phrozen-shuffle-4k", "Phrozen Shuffle 4K", 2160, 3840, {0.0315, 0.0315}, 170, 0, 0, 0, "chitu-zip", 0,
      "Phrozen Shuffle 4K: 2160 x 3840 pixels, 68.04 x 120.96 mm, Z 170 mm; ChiTu G-code zip "
      "(UVtools ini \"Phrozen Shuffle 4K\" @097bbb86)"},

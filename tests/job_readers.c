@@ -765,6 +765,7 @@ static int goo_decode(jr_job *job, unsigned layer, const unsigned char *p, size_
                         layer, (u64)(len - at), base + at);
         if (type == 2) {
             int diff = (int)(b0 & 0x0F);
+            job->layers[layer].diff_chunks++;
             if (b0 & 0x20) diff = -diff;
             if (b0 & 0x10) {
                 if (i >= len)

@@ -4,7 +4,7 @@
        v2/v3, 0x12FD0106 or 0xFF220810 for v4/v5), little-endian;
      - the encrypted ChiTuBox .ctb (magic 0x12FD0107, v4/v5): the settings
        deciphered, the signature checked;
-     - Elegoo .goo "V3.0", big-endian.
+     - Elegoo .goo "V3.0", big-endian (and Phrozen's .prz, the same file).
    Written from the byte layouts alone (see the notes on resin formats); no
    code from any slicer.  libc, and the encrypted CTB's AES-256 and SHA-256
    from host/aes256.h and host/sha256.h, which test_crypto holds against
@@ -46,6 +46,8 @@ typedef struct jr_layer {
     unsigned long long data_offset; /* file offset of the encoded image (GOO: of the 0x55) */
     unsigned long long data_size;   /* its size in bytes (GOO: DataLength) */
     unsigned checksum;          /* GOO: the stored (verified) checksum byte */
+    unsigned long long diff_chunks; /* GOO: chunks of type 10, a difference from
+                                   the pixel before (a .prz must have none) */
     unsigned char *image;       /* width*height bytes, 8-bit grey, rows in file
                                    order; NULL with JR_SKIP_IMAGES */
 } jr_layer;

@@ -1,12 +1,13 @@
-/* Tests of the ChiTu G-code zip and Prusa SL1 writers (host/fmt_chitu_zip.c,
-   host/fmt_sl1.c). The reader here follows the formats' documentation, not
-   the writers: members come out through Info-ZIP's unzip -p, images through
-   OpenImageIO's oiiotool; run.gcode is run line by line as a printer would
-   (absolute moves after G90, M6054 shows an image, the light is on from
-   M106 S255 to M106 S0), so a layer's Z is where the moves left the plate
-   when the light went on and its exposure the G4 waits while it is on;
-   config.ini is read as slafw reads it (first layer layerHeightFirst, then
-   layerHeight each). Two sources: job_descs made here and handed to the
+/* Tests of the ChiTu G-code zip, Prusa SL1 and UVtools UVJ writers
+   (host/fmt_chitu_zip.c, host/fmt_sl1.c, host/fmt_uvj.c). The reader here
+   follows the formats' documentation, not the writers: members come out
+   through Info-ZIP's unzip -p, images through OpenImageIO's oiiotool;
+   run.gcode is run line by line as a printer would (absolute moves after
+   G90, M6054 shows an image, the light is on from M106 S255 to M106 S0), so
+   a layer's Z is where the moves left the plate when the light went on and
+   its exposure the G4 waits while it is on; config.ini is read as slafw
+   reads it (first layer layerHeightFirst, then layerHeight each); config.json
+   by a strict JSON reader of its own, as UVtools' classes name the keys. Two sources: job_descs made here and handed to the
    formats directly, and jobs written by adaslice slice, held against the
    job directory the same slice writes (masks.rle, manifest.json). */
 #ifndef _POSIX_C_SOURCE
@@ -296,6 +297,219 @@ static int parse_gcode(const char *text, gcode *g)
     }
     g->end_z = z;
     return 1;
+}
+
+/* ---- config.json, read strictly as RFC 8259 has it -------------------- */
+
+/* A JSON value: an object's members keep their order (keys[i], items[i]). */
+enum { J_NULL, J_BOOL, J_NUMBER, J_STRING, J_ARRAY, J_OBJECT };
+typedef struct jvalue {
+    int type;
+    double number;               /* J_NUMBER, J_BOOL (0 or 1) */
+    int integer;                 /* J_NUMBER written without a fraction or exponent */
+    char *string;                /* J_STRING, escapes of ASCII decoded */
+    struct jvalue *items;        /* J_ARRAY, J_OBJECT */
+    char **keys;                 /* J_OBJECT */
+    size_t count;
+} jvalue;
+
+typedef struct jparser {
+    const char *text, *at;
+    char error[160];
+} jparser;
+
+static void jfree(jvalue *v)
+{
+    for (size_t i = 0; i < v->count; i++) {
+        jfree(&v->items[i]);
+        if (v->keys) free(v->keys[i]);
+    }
+    free(v->items);
+    free(v->keys);
+    free(v->string);
+    memset(v, 0, sizeof *v);
+}
+
+static int jfail(jparser *p, const char *what)
+{
+    if (!p->error[0]) snprintf(p->error, sizeof p->error, "%s at byte %ld", what, (long)(p->at - p->text));
+    return 0;
+}
+
+static void jspace(jparser *p)
+{
+    while (*p->at == ' ' || *p->at == '\t' || *p->at == '\n' || *p->at == '\r') p->at++;
+}
+
+static int jstring(jparser *p, char **out)
+{
+    size_t cap = 16, n = 0;
+    char *s = (char *)malloc(cap);
+    p->at++; /* the quote */
+    while (s && *p->at != '"') {
+        int c = (unsigned char)*p->at++;
+        if (c < 0x20) { free(s); return jfail(p, "a control character or the end in a string"); }
+        if (c == '\\') {
+            const char *from = "\"\\/bfnrt", *to = "\"\\/\b\f\n\r\t", *e = strchr(from, *p->at);
+            if (*p->at == 'u') {
+                unsigned u = 0;
+                for (int i = 1; i <= 4; i++) {
+                    char h = p->at[i];
+                    if (!((h >= '0' && h <= '9') || (h >= 'a' && h <= 'f') || (h >= 'A' && h <= 'F'))) {
+                        free(s);
+                        return jfail(p, "a bad \\u escape");
+                    }
+                    u = u * 16 + (unsigned)(h <= '9' ? h - '0' : (h | 32) - 'a' + 10);
+                }
+                p->at += 5;
+                c = u < 0x80 ? (int)u : '?';
+            } else if (*p->at && e) {
+                c = to[e - from];
+                p->at++;
+            } else {
+                free(s);
+                return jfail(p, "a bad escape");
+            }
+        }
+        if (n + 2 > cap) {
+            char *more = (char *)realloc(s, cap *= 2);
+            if (!more) { free(s); return jfail(p, "out of memory"); }
+            s = more;
+        }
+        s[n++] = (char)c;
+    }
+    if (!s) return jfail(p, "out of memory");
+    s[n] = 0;
+    p->at++;
+    *out = s;
+    return 1;
+}
+
+static int jnumber(jparser *p, jvalue *v)
+{
+    const char *s = p->at;
+    int integer = 1;
+    if (*s == '-') s++;
+    if (*s == '0') s++;
+    else if (*s >= '1' && *s <= '9') while (*s >= '0' && *s <= '9') s++;
+    else return jfail(p, "a bad number");
+    if (*s == '.') {
+        integer = 0;
+        if (*++s < '0' || *s > '9') return jfail(p, "a bad fraction");
+        while (*s >= '0' && *s <= '9') s++;
+    }
+    if (*s == 'e' || *s == 'E') {
+        integer = 0;
+        if (*++s == '+' || *s == '-') s++;
+        if (*s < '0' || *s > '9') return jfail(p, "a bad exponent");
+        while (*s >= '0' && *s <= '9') s++;
+    }
+    v->type = J_NUMBER;
+    v->integer = integer;
+    v->number = strtod(p->at, NULL);
+    p->at = s;
+    return 1;
+}
+
+static int jvalue_parse(jparser *p, jvalue *v, int depth);
+
+/* An array's or an object's members, after its opening bracket. */
+static int jmembers(jparser *p, jvalue *v, int object, int depth)
+{
+    size_t cap = 0;
+    char close = object ? '}' : ']';
+    v->type = object ? J_OBJECT : J_ARRAY;
+    p->at++;
+    jspace(p);
+    if (*p->at == close) { p->at++; return 1; }
+    for (;;) {
+        char *key = NULL;
+        jspace(p);
+        if (object) {
+            if (*p->at != '"' || !jstring(p, &key)) return jfail(p, "a member without a quoted key");
+            for (size_t i = 0; i < v->count; i++)
+                if (!strcmp(v->keys[i], key)) { free(key); return jfail(p, "a key given twice"); }
+            jspace(p);
+            if (*p->at++ != ':') { free(key); return jfail(p, "no ':' after a key"); }
+        }
+        if (v->count == cap) {
+            jvalue *items = (jvalue *)realloc(v->items, (cap = cap * 2 + 8) * sizeof *items);
+            char **keys = object ? (char **)realloc(v->keys, cap * sizeof *keys) : NULL;
+            if (items) v->items = items;
+            if (keys) v->keys = keys;
+            if (!items || (object && !keys)) { free(key); return jfail(p, "out of memory"); }
+        }
+        memset(&v->items[v->count], 0, sizeof *v->items);
+        if (object) v->keys[v->count] = key;
+        v->count++;
+        if (!jvalue_parse(p, &v->items[v->count - 1], depth + 1)) return 0;
+        jspace(p);
+        if (*p->at == ',') { p->at++; continue; }
+        if (*p->at == close) { p->at++; return 1; }
+        return jfail(p, object ? "no ',' or '}' after a member" : "no ',' or ']' after an item");
+    }
+}
+
+static int jvalue_parse(jparser *p, jvalue *v, int depth)
+{
+    jspace(p);
+    if (depth > 32) return jfail(p, "nested too deep");
+    switch (*p->at) {
+    case '{': return jmembers(p, v, 1, depth);
+    case '[': return jmembers(p, v, 0, depth);
+    case '"': v->type = J_STRING; return jstring(p, &v->string);
+    case 't': if (strncmp(p->at, "true", 4)) break; p->at += 4; v->type = J_BOOL; v->number = 1; return 1;
+    case 'f': if (strncmp(p->at, "false", 5)) break; p->at += 5; v->type = J_BOOL; return 1;
+    case 'n': if (strncmp(p->at, "null", 4)) break; p->at += 4; v->type = J_NULL; return 1;
+    default: return jnumber(p, v);
+    }
+    return jfail(p, "an unknown word");
+}
+
+/* The document in text: 1, or 0 with the reason in error. */
+static int jparse(const char *text, jvalue *v, char *error, size_t size)
+{
+    jparser p = {text, text, ""};
+    int ok;
+    memset(v, 0, sizeof *v);
+    ok = jvalue_parse(&p, v, 0);
+    if (ok) {
+        jspace(&p);
+        if (*p.at) ok = jfail(&p, "more after the document");
+    }
+    if (!ok) jfree(v);
+    snprintf(error, size, "%s", p.error);
+    return ok;
+}
+
+/* The member at a dotted path ("Properties.Size.X") of nested objects, or NULL. */
+static const jvalue *jget(const jvalue *v, const char *path)
+{
+    while (v && *path) {
+        const char *dot = strchr(path, '.');
+        size_t n = dot ? (size_t)(dot - path) : strlen(path), i;
+        const jvalue *next = NULL;
+        for (i = 0; v->type == J_OBJECT && i < v->count; i++)
+            if (strlen(v->keys[i]) == n && !strncmp(v->keys[i], path, n)) next = &v->items[i];
+        v = next;
+        path += n + (dot != NULL);
+    }
+    return v;
+}
+
+/* The number at path, NAN if there is none. */
+static double jnum(const jvalue *v, const char *path)
+{
+    const jvalue *m = jget(v, path);
+    return m && m->type == J_NUMBER ? m->number : NAN;
+}
+
+/* The integer at path if it is one written as an integer in [0, max] (C#'s
+   byte, ushort and uint refuse anything else), else -1. */
+static long long jint(const jvalue *v, const char *path, double max)
+{
+    const jvalue *m = jget(v, path);
+    return m && m->type == J_NUMBER && m->integer && m->number >= 0 && m->number <= max ? (long long)m->number : -1;
 }
 
 /* ---- config.ini, as slafw reads it: "key = value" lines -------------- */
@@ -630,6 +844,108 @@ static void sl1_holds_every_layer_as_given(void)
     }
 }
 
+/* ---- UVJ: config.json as UVtools reads it ------------------------------ */
+
+/* The lifts of one UVtools Exposure object (the defaults' or a layer's)
+   against the job's motion: a one-stage peel that comes all the way back,
+   the rest before the light, full power. */
+static int uvj_moves_are(const jvalue *e, const job_motion *m, int bottom)
+{
+    double lift = bottom ? m->bottom_lift_mm : m->lift_mm, speed = 60 * (bottom ? m->bottom_lift_speed : m->lift_speed);
+    return fabs(jnum(e, "LiftHeight") - lift) < 1e-9 && fabs(jnum(e, "LiftSpeed") - speed) < 1e-9 &&
+           jnum(e, "LiftHeight2") == 0 && jnum(e, "RetractHeight2") == 0 &&
+           fabs(jnum(e, "RetractHeight") - lift) < 1e-9 && fabs(jnum(e, "RetractSpeed") - 60 * m->retract_speed) < 1e-9 &&
+           fabs(jnum(e, "WaitTimeBeforeCure") - m->wait_before_cure_s) < 1e-9 && jnum(e, "LightOffTime") == 0 &&
+           jnum(e, "WaitTimeAfterCure") == 0 && jnum(e, "WaitTimeAfterLift") == 0 && jint(e, "LightPWM", 255) == 255;
+}
+
+/* config.json against the job: UVJFile.cs's Settings class (sn4k3/UVtools
+   7b510f0d), its keys as the C# properties are named, matched
+   case-sensitively, and integers where C# has byte, ushort and uint; every
+   layer's Z and exposure, z_top[k] and exposure_s[k], and the moves of its
+   kind. aa: the AntiAliasLevel. */
+static void check_uvj_config(const char *archive, const job_desc *d, const double *z_top, const double *exposure_s,
+                             int aa)
+{
+    size_t size, n = d->layer_count, k, bad = 0;
+    char *text = (char *)member(archive, "config.json", &size), error[160] = "missing";
+    const jvalue *layers;
+    jvalue c;
+    if (!text || !jparse(text, &c, error, sizeof error)) {
+        CHECKF(0, "config.json: %s", error);
+        free(text);
+        return;
+    }
+    CHECKF(jint(&c, "Properties.Size.X", 65535) == d->width && jint(&c, "Properties.Size.Y", 65535) == d->height &&
+               jint(&c, "Properties.Size.Layers", 4294967295.0) == (long long)n,
+           "Size: %g x %g pixels, %g layers", jnum(&c, "Properties.Size.X"), jnum(&c, "Properties.Size.Y"),
+           jnum(&c, "Properties.Size.Layers"));
+    CHECK(fabs(jnum(&c, "Properties.Size.Millimeter.X") - d->display_mm[0]) < 1e-9 &&
+          fabs(jnum(&c, "Properties.Size.Millimeter.Y") - d->display_mm[1]) < 1e-9);
+    CHECK(jnum(&c, "Properties.Size.LayerHeight") >= 0.01);
+    CHECKF(jint(&c, "Properties.AntiAliasLevel", 255) == aa, "AntiAliasLevel %g, not %d",
+           jnum(&c, "Properties.AntiAliasLevel"), aa);
+    CHECK(jint(&c, "Properties.Bottom.Count", 65535) == (long long)d->bottom_layers &&
+          fabs(jnum(&c, "Properties.Bottom.LightOnTime") - d->bottom_exposure_s) < 1e-9);
+    CHECK(jnum(&c, "Properties.Exposure.LightOnTime") > 0);
+    CHECK(uvj_moves_are(jget(&c, "Properties.Exposure"), &d->motion, 0) &&
+          uvj_moves_are(jget(&c, "Properties.Bottom"), &d->motion, 1));
+    layers = jget(&c, "Layers");
+    CHECKF(layers && layers->type == J_ARRAY && layers->count == n, "Layers: %zu entries for %zu layers",
+           layers ? layers->count : 0, n);
+    for (k = 0; layers && k < n && k < layers->count; k++) {
+        const jvalue *l = &layers->items[k], *e = jget(l, "Exposure");
+        double z = jnum(l, "Z"), t = jnum(e, "LightOnTime");
+        if (!(fabs(z - z_top[k]) <= 1e-9 && fabs(t - exposure_s[k]) <= 1e-9 * exposure_s[k] &&
+              uvj_moves_are(e, &d->motion, k < d->bottom_layers)) && bad++ < 3) /* NAN: a key missing */
+            CHECKF(0, "Layers[%zu]: Z %.9g, exposure %.9g s; the job: %.9g, %.9g s, or its moves differ", k, z, t,
+                   z_top[k], exposure_s[k]);
+    }
+    jfree(&c);
+    free(text);
+}
+
+/* The members: config.json, the two previews and slice/00000000.png on, one
+   a layer and nothing else; names[k] gets layer k's. */
+static void check_uvj_members(const char *archive, size_t n, char (*names)[96])
+{
+    char *list = member_names(archive);
+    CHECKF(list && line_count(list) == n + 3 && has_line(list, "config.json") && has_line(list, "preview/tiny.png") &&
+               has_line(list, "preview/huge.png"), "members: %.300s", list ? list : "none");
+    for (size_t k = 0; k < n; k++) {
+        snprintf(names[k], sizeof names[k], "slice/%08zu.png", k);
+        CHECKF(list && has_line(list, names[k]), "no %s", names[k]);
+    }
+    free(list);
+}
+
+/* An adaptive job of 1-bit and of 8-bit images: every layer's Z, exposure
+   and image, the previews as drawn. */
+static void uvj_holds_every_layer_as_given(void)
+{
+    static const double t[] = {0.05, 0.05, 0.1, 0.03, 0.07, 0.012, 0.15, 0.1, 0.01, 0.02, 0.064, 0.066};
+    const size_t n = sizeof t / sizeof t[0];
+    static made_job j;
+    char path[512], images[16][96];
+    double z[16], e[16];
+    snprintf(path, sizeof path, "%s", in_dir("part.uvj"));
+    for (int bits = 1; bits <= 8; bits += 7) {
+        make_job(&j, t, n, bits, NULL);
+        CHECK(write_job(&JOB_FORMAT_UVJ, path, &j) == 0);
+        check_uvj_members(path, n, images);
+        for (size_t k = 0; k < n; k++) {
+            z[k] = j.layers[k].z_top;
+            e[k] = j.layers[k].exposure_s;
+        }
+        check_uvj_config(path, &j.d, z, e, bits == 8 ? j.d.supersample : 1);
+        check_grey_members(path, images, n, j.d.width, j.d.height, j.grey);
+        check_preview(path, "preview/tiny.png", 400, 400);
+        check_preview(path, "preview/huge.png", 800, 480);
+        free_job(&j);
+        remove(path);
+    }
+}
+
 /* ---- refusals, without a program -------------------------------------- */
 
 /* stderr into a file while fn runs */
@@ -704,13 +1020,14 @@ static void failed_jobs_leave_nothing(void)
 {
     static const double t[] = {0.05, 0.05, 0.05, 0.05};
     static made_job j;
-    const job_format *formats[] = {&JOB_FORMAT_CHITU_ZIP, &JOB_FORMAT_SL1};
-    char path[512], *err;
+    const job_format *formats[] = {&JOB_FORMAT_CHITU_ZIP, &JOB_FORMAT_SL1, &JOB_FORMAT_UVJ};
+    char path[512], name[64], *err;
     int rc;
-    for (int i = 0; i < 2; i++) {
+    for (int i = 0; i < 3; i++) {
         attempt a = {formats[i], path, &j, 1};
         make_job(&j, t, 4, 1, NULL);
-        snprintf(path, sizeof path, "%s", in_dir(i ? "failed.sl1" : "failed.zip"));
+        snprintf(name, sizeof name, "failed%s", formats[i]->extension);
+        snprintf(path, sizeof path, "%s", in_dir(name));
         err = stderr_of(try_job, &a, &rc);
         CHECKF(rc == 0 && err && !*err, "%s: %s", formats[i]->name, err ? err : "");
         CHECKF(dir_holds_only(NULL), "%s: a failed job left files", formats[i]->name);
@@ -723,14 +1040,16 @@ static void failed_jobs_leave_nothing(void)
         CHECK(dir_holds_only(NULL));
         free(err);
         j.d.layer_count = 4;
-        snprintf(path, sizeof path, "%s", in_dir(i ? "no/such/dir.sl1" : "no/such/dir.zip"));
+        snprintf(name, sizeof name, "no/such/dir%s", formats[i]->extension);
+        snprintf(path, sizeof path, "%s", in_dir(name));
         err = stderr_of(try_job, &a, &rc);
         CHECKF(rc != 0 && err && cli_one_message(err) && strstr(err, path), "%s, bad path: %s", formats[i]->name,
                err ? err : "");
         free(err);
         /* and a good one, for contrast, is the only file */
-        snprintf(path, sizeof path, "%s", in_dir(i ? "good.sl1" : "good.zip"));
-        CHECK(write_job(formats[i], path, &j) == 0 && cli_exists(path) && dir_holds_only(i ? "good.sl1" : "good.zip"));
+        snprintf(name, sizeof name, "good%s", formats[i]->extension);
+        snprintf(path, sizeof path, "%s", in_dir(name));
+        CHECK(write_job(formats[i], path, &j) == 0 && cli_exists(path) && dir_holds_only(name));
         remove(path);
         free_job(&j);
     }
@@ -968,6 +1287,55 @@ static void sliced_sl1_matches_the_job_directory(void)
     remove_dir(dir);
 }
 
+/* The hand for the Elegoo Mars 2 Pro, whose own format is CTB (adaptive
+   layers, 1-bit), and anti-aliased on a small display of no preset, named
+   by --format alone: config.json's Z, exposure and moves of every layer as
+   in the manifest, every image as in masks.rle, the previews of UVtools'
+   sizes. */
+static void sliced_uvj_matches_the_job_directory(void)
+{
+    static const char *const runs[2][11] = {
+        {"--printer", "elegoo-mars-2-pro", NULL},
+        {"--pixels", "640x400", "--pitch", "0.1", "--aa", "2", "--bottom-layers", "5", "--peel", "3", NULL}};
+    static const struct { int w, h; double mm[2]; unsigned bottom; int aa; } display[2] = {
+        {1620, 2560, {82.62, 130.56}, 3, 1}, {640, 400, {64, 40}, 5, 2}};
+    for (int r = 0; r < 2; r++) {
+        const char *dir_args[13] = {"--format", "dir"}, *uvj_args[13] = {"--format", "uvj"};
+        char out[512], uvj[512], dir[512];
+        dir_job j = {0};
+        job_desc d;
+        for (int i = 0; i < 10 && runs[r][i]; i++) dir_args[2 + i] = uvj_args[2 + i] = runs[r][i];
+        /* the first by its extension, the second by --format, which adds it */
+        snprintf(out, sizeof out, "%s", in_dir(r ? "hand" : "hand.uvj"));
+        snprintf(uvj, sizeof uvj, "%s", in_dir("hand.uvj"));
+        snprintf(dir, sizeof dir, "%s", in_dir("hand_dir"));
+        if (!slice(out, r ? uvj_args : runs[r]) || !slice(dir, dir_args) || !read_dir_job(dir, &j)) {
+            free_dir_job(&j);
+            remove(uvj);
+            remove_dir(dir);
+            return;
+        }
+        CHECK(j.count > 20 && j.width == (uint32_t)display[r].w && j.height == (uint32_t)display[r].h &&
+              j.bits == (r ? 8u : 1u));
+        desc_of(&j, display[r].mm[0], display[r].mm[1], 0, display[r].bottom, &d);
+        check_uvj_members(uvj, j.count, j.names);
+        check_uvj_config(uvj, &d, j.z_top, j.exposure_s, display[r].aa);
+        check_grey_members(uvj, j.names, j.count, (int)j.width, (int)j.height, j.grey);
+        for (int p = 0; p < 2; p++) {
+            size_t size;
+            unsigned char *png = member(uvj, p ? "preview/huge.png" : "preview/tiny.png", &size);
+            int w = 0, h = 0, depth = 0, colour = -1;
+            CHECKF(png && png_header(png, size, &w, &h, &depth, &colour) && w == (p ? 800 : 400) &&
+                       h == (p ? 480 : 400) && depth == 8 && colour == 2,
+                   "preview %d: %dx%d, depth %d, colour type %d", p, w, h, depth, colour);
+            free(png);
+        }
+        free_dir_job(&j);
+        remove(uvj);
+        remove_dir(dir);
+    }
+}
+
 void test_formats_zip(void)
 {
     if (!cli_begin("adaslice-formats-zip")) return;
@@ -977,5 +1345,7 @@ void test_formats_zip(void)
     RUN_NEEDING("unzip oiiotool", sl1_holds_every_layer_as_given);
     RUN_NEEDING("unzip oiiotool", sliced_chitu_zip_matches_the_job_directory);
     RUN_NEEDING("unzip oiiotool", sliced_sl1_matches_the_job_directory);
+    RUN_NEEDING("unzip oiiotool", uvj_holds_every_layer_as_given);
+    RUN_NEEDING("unzip oiiotool", sliced_uvj_matches_the_job_directory);
     cli_end();
 }

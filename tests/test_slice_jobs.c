@@ -188,6 +188,7 @@ static void refusals_leave_nothing_behind(void)
         {"job.pwmx", {NULL}, "no job format has the extension .pwmx", 2},
         {"job.goo", {"--printer", "elegoo-saturn", NULL}, "reads ctb jobs, not goo", 2},
         {"job.ctb", {"--printer", "elegoo-mars-3", "--format", "ctb", NULL}, "reads ctb-encrypted jobs, not ctb", 2},
+        {"job.goo", {"--printer", "phrozen-sonic-mini-8k-s", NULL}, "reads prz jobs, not goo", 2},
         {"job.sl1", {"--printer", "prusa-sl1s", NULL}, "--uniform T", 2},
         {"job.sl1", {"--pixels", "240x240", "--pitch", "0.05", NULL}, "holds one layer height", 2},
         {"job.zip", {"--pixels", "240x240", "--pitch", "0.05", "--uniform", "0.0005", "--bin", "0.0005", NULL},
@@ -303,10 +304,12 @@ static unsigned char *read_file(const char *path, size_t *size)
 /* One model, one display, sliced as a directory and as each resin file: the
    file's reader (tests/job_readers.c, from the formats' documentation) finds
    every layer's Z and exposure as the manifest has them and every pixel of
-   the masker's mask; 1-bit and anti-aliased, on oblong pixels. */
+   the masker's mask; 1-bit and anti-aliased, on oblong pixels. The .prz,
+   a GOO file, has no diff chunk in any layer, which the anti-aliased .goo
+   has (so the reader is seen to count them). */
 static void resin_files_hold_the_directory_jobs_masks(void)
 {
-    static const char *const formats[] = {"ctb", "goo", "ctb-encrypted"};
+    static const char *const formats[] = {"ctb", "goo", "ctb-encrypted", "prz"};
     const char *aa[2] = {"1", "4"};
     int pass, f;
     char model[256];
@@ -326,19 +329,22 @@ static void resin_files_hold_the_directory_jobs_masks(void)
         free(text);
         if (!read_dir_masks(dir, &m) || m.layers != n || n < 50) { CHECKF(0, "%s: %u masks, %zu layers", dir, m.layers, n); free(l); dir_masks_free(&m); return; }
         CHECK(m.width == 300 && m.height == 250 && m.bits == (pass ? 8u : 1u));
-        for (f = 0; f < 3; f++) {
+        for (f = 0; f < 4; f++) {
+            static const char *const ext[] = {"ctb", "goo", "ctb", "prz"};
+            int goo = f == 1 || f == 3;   /* .prz is a GOO file */
             char out[300];
             unsigned char *data;
             size_t size, bad_z = 0, bad_px = 0;
+            unsigned long long diffs = 0;
             jr_job job;
-            snprintf(out, sizeof out, "%s/job_%s.%s", cli_dir, formats[f], f == 1 ? "goo" : "ctb");
+            snprintf(out, sizeof out, "%s/job_%s.%s", cli_dir, formats[f], ext[f]);
             r = cli_run("slice", model, "-o", out, "--format", formats[f], SAME_JOB, NULL);
             CHECKF(r.status == 0, "%s: %s", out, r.err);
             cli_free(&r);
             data = read_file(out, &size);
-            if (!data || (f == 0   ? jr_read_ctb(data, size, &job)
-                          : f == 1 ? jr_read_goo(data, size, &job)
-                                   : jr_read_ctb_encrypted(data, size, &job)) != 0) {
+            if (!data || (f == 0 ? jr_read_ctb(data, size, &job)
+                          : goo  ? jr_read_goo(data, size, &job)
+                                 : jr_read_ctb_encrypted(data, size, &job)) != 0) {
                 CHECKF(0, "%.200s: the reader refuses it: %.200s", out, data ? job.error : "no file");
                 free(data);
                 continue;
@@ -356,10 +362,13 @@ static void resin_files_hold_the_directory_jobs_masks(void)
                     CHECKF(0, "%s layer %zu: z %.6f, exposure %.6f; the manifest: %.6f, %.6f", out, k + 1, L->z_mm, L->exposure_s,
                            top, l[k].exposure);
                 for (i = 0; i < px; i++) {
-                    unsigned char want = f != 1 ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
+                    unsigned char want = !goo ? jr_ctb_grey(m.grey[k][i]) : m.grey[k][i];
                     if (L->image[i] != want) { if (bad_px++ < 3) CHECKF(0, "%s layer %zu pixel %zu: %u, the mask %u", out, k + 1, i, L->image[i], want); break; }
                 }
+                if (f == 3) CHECKF(L->diff_chunks == 0, "%s layer %zu: %llu diff chunks", out, k + 1, L->diff_chunks);
+                diffs += L->diff_chunks;
             }
+            if (f == 1 && pass) CHECKF(diffs > 0, "%s: no diff chunk in an anti-aliased .goo", out);
             jr_free(&job);
             free(data);
         }
@@ -430,13 +439,13 @@ static void ctb_for_an_encrypted_ctb_printer(void)
    headers' dates. */
 static void jobs_are_reproducible(void)
 {
-    static const char *const ext[] = {"ctb", "goo", "zip", "sl1", "ctb"};
-    static const char *const format[] = {"ctb", "goo", "chitu-zip", "sl1", "ctb-encrypted"};
+    static const char *const ext[] = {"ctb", "goo", "zip", "sl1", "ctb", "prz", "uvj"};
+    static const char *const format[] = {"ctb", "goo", "chitu-zip", "sl1", "ctb-encrypted", "prz", "uvj"};
     char model[256];
     int f;
     snprintf(model, sizeof model, "%s", sphere_obj());
     setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
-    for (f = 0; f < 5; f++) {
+    for (f = 0; f < (int)(sizeof ext / sizeof ext[0]); f++) {
         char a[300], b[400], dir_b[200];
         unsigned char *x, *y;
         size_t nx, ny;
@@ -593,6 +602,40 @@ static void headers_hold_the_regular_layers(void)
     }
 }
 
+/* The Phrozen Sonic Mini 8K S reads .prz: -o without an extension gets it,
+   a GOO file of its display and name whose anti-aliased layers hold no diff
+   chunk. */
+static void the_8k_s_preset_writes_prz(void)
+{
+    char out[300], path[320];
+    unsigned char *data;
+    size_t size;
+    unsigned long long diffs = 0;
+    unsigned k;
+    jr_job job;
+    cli_result r;
+    snprintf(out, sizeof out, "%s/small", cli_dir);
+    snprintf(path, sizeof path, "%s.prz", out);
+    r = cli_run("slice", sphere_obj(), "--scale", "0.1", "--aa", "2", "--printer", "phrozen-sonic-mini-8k-s", "-o", out,
+                NULL);
+    CHECKF(r.status == 0, "%s", r.err);
+    cli_free(&r);
+    data = read_file(path, &size);
+    if (!data || jr_read_goo_ex(data, size, &job, JR_SKIP_IMAGES) != 0) {
+        CHECKF(0, "%.200s: %.200s", path, data ? job.error : "not written");
+        free(data);
+        return;
+    }
+    CHECKF(job.width == 7536 && job.height == 3240 && job.layer_count > 3 &&
+               !strcmp(job.machine_name, "Phrozen Sonic Mini 8K S"),
+           "%d x %d, %u layers, machine %s", job.width, job.height, job.layer_count, job.machine_name);
+    for (k = 0; k < job.layer_count; k++) diffs += job.layers[k].diff_chunks;
+    CHECKF(diffs == 0, "%llu diff chunks in %u layers", diffs, job.layer_count);
+    jr_free(&job);
+    free(data);
+    remove(path);
+}
+
 /* A job directory cannot go stale: a shorter job after a longer one leaves
    none of the old layers, and print takes masks.rle only with the manifest
    that names it. */
@@ -708,6 +751,7 @@ void test_slice_jobs(void)
     RUN(jobs_are_reproducible);
     RUN(threads_write_the_same_job);
     RUN(headers_hold_the_regular_layers);
+    RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);
     RUN(an_interrupted_reslice_cannot_be_printed);
     cli_end();
