@@ -1,9 +1,10 @@
 /* Job previews show the part as it stands on the plate, the build direction
    (+z) up the picture: an upright 10 x 10 x 80 mm box is drawn taller than
    wide and a flat 80 x 80 x 5 mm slab wider than tall, in the CTB and GOO
-   previews (read back by tests/job_readers.c) and in a job directory's
-   preview.png (read back by oiiotool); and the demo hand, stood on its wrist
-   by --orient 0,1,0, is drawn with the wrist below the fingers. */
+   previews (read back by tests/job_readers.c), in a job directory's
+   preview.png and in saliency --png's picture (read back by oiiotool); and
+   the demo hand, stood on its wrist by --orient 0,1,0, is drawn with the
+   wrist below the fingers. */
 #include "check.h"
 #include "cli_run.h"
 #include "job_readers.h"
@@ -17,7 +18,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The lit (not black) pixels' bounding box of a picture, rows top first. */
+/* The bounding box of the part's pixels, those not of the background (the
+   top left pixel's colour: the part is fitted inside a margin), rows top
+   first. */
 typedef struct lit_box { int left, top, right, bottom; size_t lit; } lit_box;
 
 static lit_box lit_pixels(const unsigned char *rgb, int w, int h)
@@ -27,7 +30,7 @@ static lit_box lit_pixels(const unsigned char *rgb, int w, int h)
     for (y = 0; y < h; y++)
         for (x = 0; x < w; x++) {
             const unsigned char *p = rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
-            if (!(p[0] | p[1] | p[2])) continue;
+            if (!memcmp(p, rgb, 3)) continue;
             b.lit++;
             if (x < b.left) b.left = x;
             if (x > b.right) b.right = x;
@@ -126,19 +129,16 @@ static void a_tower_stands_and_a_slab_lies_in_ctb_and_goo_previews(void)
     cli_end();
 }
 
-/* A job directory's preview.png, decoded by oiiotool to a PPM. */
-static void check_directory_preview(const char *model, int tall, double factor)
+/* A PNG of the part, decoded by oiiotool to a PPM, checked by check_shape. */
+static void check_png(const char *png, int tall, double factor)
 {
-    char job[600], png[700], ppm[700], log[700];
-    char *argv[] = {(char *)"oiiotool", png, (char *)"-d", (char *)"uint8", (char *)"-o", ppm, NULL};
+    char ppm[700], log[700];
+    char *argv[] = {(char *)"oiiotool", (char *)png, (char *)"-d", (char *)"uint8", (char *)"-o", ppm, NULL};
     unsigned char *text;
     size_t size;
     int w = 0, h = 0, maxval = 0, used = 0, picture;
-    snprintf(job, sizeof job, "%s.job", model);
-    if (!slice_to(model, "dir", job)) return;
-    snprintf(png, sizeof png, "%s/preview.png", job);
-    snprintf(ppm, sizeof ppm, "%s/preview.ppm", job);
-    snprintf(log, sizeof log, "%s/oiiotool.log", job);
+    snprintf(ppm, sizeof ppm, "%s.ppm", png);
+    snprintf(log, sizeof log, "%s.log", png);
     if (tool_run("openimageio-tools", argv, log, log) != 0) { CHECKF(0, "oiiotool cannot read %.300s", png); return; }
     text = read_file(ppm, &size);
     picture = text && sscanf((char *)text, "P6 %d %d %d%n", &w, &h, &maxval, &used) == 3 && maxval == 255 && w > 0 &&
@@ -148,11 +148,27 @@ static void check_directory_preview(const char *model, int tall, double factor)
     free(text);
 }
 
-static void a_tower_stands_and_a_slab_lies_in_a_job_directory_preview(void)
+/* A job directory's preview.png, and saliency --png's picture (the same
+   renderer, on a white ground) of the model as it loads. */
+static void check_pngs(const char *model, int tall, double factor)
+{
+    char job[600], png[700];
+    cli_result r;
+    snprintf(job, sizeof job, "%s.job", model);
+    snprintf(png, sizeof png, "%s/preview.png", job);
+    if (slice_to(model, "dir", job)) check_png(png, tall, factor);
+    snprintf(png, sizeof png, "%s.saliency.png", model);
+    r = cli_run("saliency", model, "--png", png, NULL);
+    CHECKF(r.status == 0, "saliency %.200s --png: exit %d: %.200s", model, r.status, r.err);
+    if (r.status == 0) check_png(png, tall, factor);
+    cli_free(&r);
+}
+
+static void a_tower_stands_and_a_slab_lies_in_png_previews(void)
 {
     if (!cli_begin("adaslice-previews")) { CHECK(0); return; }
-    check_directory_preview(box_model("tower.obj", 10, 10, 80), 1, TOWER_FACTOR);
-    check_directory_preview(box_model("slab.obj", 80, 80, 5), 0, SLAB_FACTOR);
+    check_pngs(box_model("tower.obj", 10, 10, 80), 1, TOWER_FACTOR);
+    check_pngs(box_model("slab.obj", 80, 80, 5), 0, SLAB_FACTOR);
     cli_end();
 }
 
@@ -224,6 +240,6 @@ static void the_demo_hand_stands_on_its_wrist(void)
 void test_previews(void)
 {
     RUN(a_tower_stands_and_a_slab_lies_in_ctb_and_goo_previews);
-    RUN_NEEDING("oiiotool", a_tower_stands_and_a_slab_lies_in_a_job_directory_preview);
+    RUN_NEEDING("oiiotool", a_tower_stands_and_a_slab_lies_in_png_previews);
     RUN(the_demo_hand_stands_on_its_wrist);
 }
