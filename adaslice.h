@@ -877,8 +877,9 @@ ADASLICE_DEF adaslice_result adaslice_cure_fit(double s1, double t1, double s2, 
 ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *cure, double thickness);
 
 typedef struct adaslice_preview_options {
-    double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 30 and -45
-                                            (raised over the plate's front-right corner) */
+    double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 30 and -45,
+                                            over the plate's front-right corner: the top in
+                                            view, heights drawn at cos 30 of their length */
     unsigned char colour[3];             /* the part's; 0, 0, 0: a resin grey-blue */
     const unsigned char *face_colours;   /* NULL, or R G B per triangle: each face its own
                                             colour (a weight map), shaded the same way */
