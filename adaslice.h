@@ -877,7 +877,9 @@ ADASLICE_DEF adaslice_result adaslice_cure_fit(double s1, double t1, double s2, 
 ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *cure, double thickness);
 
 typedef struct adaslice_preview_options {
-    double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 35 and 45 */
+    double elevation, azimuth;           /* degrees: where the viewer stands; 0, 0: 30 and -45,
+                                            over the plate's front-right corner: the top in
+                                            view, heights drawn at cos 30 of their length */
     unsigned char colour[3];             /* the part's; 0, 0, 0: a resin grey-blue */
     const unsigned char *face_colours;   /* NULL, or R G B per triangle: each face its own
                                             colour (a weight map), shaded the same way */
@@ -886,11 +888,13 @@ typedef struct adaslice_preview_options {
 } adaslice_preview_options;
 
 /* A shaded picture of the part for a job's preview: width x height pixels,
-   3 bytes (R, G, B) each, rows top first. The mesh is turned so the viewer
-   looks down at it (elevation above the plate, azimuth from +x towards +y),
-   rasterised by the LDI's rasteriser into a z-buffer at the picture's pixels
-   (the part fitted with a margin, pixels square), and each pixel takes the
-   nearest surface's normal, lit from the viewer's upper left. */
+   3 bytes (R, G, B) each, rows top first. The part is drawn as it stands on
+   the plate, +z (the build direction) up the picture: the viewer stands at
+   the elevation above the plate and the azimuth from +x towards +y (-y is the
+   front), looking down at it. The mesh is rasterised by the LDI's rasteriser
+   into a z-buffer at the picture's pixels (the part fitted with a margin,
+   pixels square), and each pixel takes the nearest surface's normal, lit from
+   above, over the viewer's left shoulder. */
 ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
                                               const adaslice_preview_options *options, unsigned char *rgb,
                                               adaslice_error *error);
@@ -6591,6 +6595,18 @@ ADASLICE_DEF double adaslice_cure_seconds(const adaslice_cure *c, double thickne
     return c->seconds * exp((thickness - c->thickness) / c->penetration);
 }
 
+/* The preview's camera, rows of rot: the picture's right, its up and the
+   direction towards the viewer, who stands el above the plate at az from +x.
+   Picture up is +z leaned back along the view, so the build direction stays
+   vertical in the picture whatever the viewpoint (turning the view onto +z
+   by the shortest rotation, as adaslice_rotation_to_z does, tips it). */
+static void adaslice__preview_camera(double el, double az, double rot[9])
+{
+    rot[0] = -sin(az);           rot[1] = cos(az);            rot[2] = 0;
+    rot[3] = -sin(el) * cos(az); rot[4] = -sin(el) * sin(az); rot[5] = cos(el);
+    rot[6] = cos(el) * cos(az);  rot[7] = cos(el) * sin(az);  rot[8] = sin(el);
+}
+
 ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
                                               const adaslice_preview_options *options, unsigned char *rgb,
                                               adaslice_error *err)
@@ -6603,7 +6619,9 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     adaslice_result r;
     float *depth;
     uint32_t *face;
-    double el, az, d[3], rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
+    /* in the camera's frame: up, towards the viewer and to the left, so the
+       top is the brightest and the two sides in view differ */
+    double el, az, rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
     const unsigned char *part, *back;
     size_t p;
     int k;
@@ -6613,14 +6631,13 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     if ((r = adaslice__mesh_check(mesh, "preview", err)) != ADASLICE_OK) return r;
     if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "preview: the mesh has no triangles");
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
-    el = (opt.elevation == 0 && opt.azimuth == 0 ? 35 : opt.elevation) * 3.14159265358979323846 / 180;
-    az = (opt.elevation == 0 && opt.azimuth == 0 ? 45 : opt.azimuth) * 3.14159265358979323846 / 180;
+    el = (opt.elevation == 0 && opt.azimuth == 0 ? 30 : opt.elevation) * 3.14159265358979323846 / 180;
+    az = (opt.elevation == 0 && opt.azimuth == 0 ? -45 : opt.azimuth) * 3.14159265358979323846 / 180;
     part = opt.colour[0] | opt.colour[1] | opt.colour[2] ? opt.colour : resin;
     back = opt.background;
     al = adaslice__allocator(opt.allocator);
-    /* the viewer's direction, turned onto +z: the LDI's last sample is the nearest */
-    d[0] = cos(el) * cos(az); d[1] = cos(el) * sin(az); d[2] = sin(el);
-    adaslice_rotation_to_z(d, rot);
+    /* the viewer's direction turned onto +z: the LDI's last sample is the nearest */
+    adaslice__preview_camera(el, az, rot);
     if (!adaslice__turned_copy(mesh, rot, &al, &turned)) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "preview: out of memory");
     adaslice_mesh_bounds(&turned, lo3, hi3);
     /* the part fills 90% of the picture's tighter side */
