@@ -10,6 +10,7 @@
 #include "cure.h"
 #include "jobdir.h"
 #include "jobfile.h"
+#include "layer_z.h"
 #include "layers.h"
 #include "output.h"
 #include "pipeline.h"
@@ -41,6 +42,7 @@ static void slice_usage(FILE *f)
           "  -o JOB              the job file or directory (required)\n"
           "  --format NAME       the format, whatever the extension\n", f);
     slice_options_usage(f);
+    layer_z_table(f);
     cure_usage(f);
     fputc('\n', f);
     plan_options_usage(f, FOR_SLICE);
@@ -118,7 +120,7 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if (!s->format && *fmt == &JOB_FORMAT_DIR && preset && !(*fmt = job_format_named(preset->format)))
         return complain(RC_FAIL, "--printer %s: its format %s is not built in", preset->name, preset->format);
     if (*fmt != &JOB_FORMAT_DIR && !s->geometry_given)
-        return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice slice --help lists them) or "
+        return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice printers lists them) or "
                                   "--pixels WxH with --pitch MM", s->dir);
     if (preset && *fmt != &JOB_FORMAT_DIR && strcmp(preset->format, (*fmt)->name))
         return complain(RC_USAGE, "-o %s: the %s reads %s jobs, not %s (leave the extension out for its own)", s->dir,
@@ -129,6 +131,16 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
         snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
     }
     return RC_OK;
+}
+
+/* The layers below the top one differ in thickness (the top one is what is
+   left of the part, thinner in a uniform plan too). */
+static int plan_is_adaptive(const adaslice_plan *p)
+{
+    size_t k;
+    for (k = 1; k + 1 < p->layer_count; k++)
+        if (fabs(p->layers[k].thickness - p->layers[0].thickness) > 1e-9) return 1;
+    return 0;
 }
 
 /* What the format cannot hold, said before a byte is written. */
@@ -146,11 +158,10 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
     }
     if (!f->adaptive && n > 1) {
         double t = p->layers[0].thickness;
-        for (k = 1; k + 1 < n; k++)
-            if (fabs(p->layers[k].thickness - t) > 1e-9)
-                return complain(RC_USAGE, "%s: %s holds one layer height, and this plan's layers are %g to %g mm: plan "
-                                          "uniform layers with --method finest or --method coarsest, or --uniform T",
-                                path, f->what, lo, hi);
+        if (plan_is_adaptive(p))
+            return complain(RC_USAGE, "%s: %s holds one layer height, and this plan's layers are %g to %g mm: plan "
+                                      "uniform layers with --method finest or --method coarsest, or --uniform T",
+                            path, f->what, lo, hi);
         if (fabs(p->layers[n - 1].thickness - t) > 1e-9)
             fprintf(stderr, "adaslice: warning: %s: the last layer is %g mm; %s holds one height, so it prints %g mm "
                             "(the top %g mm higher)\n",
@@ -393,12 +404,18 @@ int cmd_slice(int argc, char **argv)
     const job_format *f = NULL;
     char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *path = NULL, *extended = NULL, *csv = NULL,
          *svg = NULL, when[32];
-    int rest_argc = 0, rc;
+    int rest_argc = 0, rc, i;
 
     memset(&j, 0, sizeof j);
     memset(&sum, 0, sizeof sum);
     memset(&d, 0, sizeof d);
     if (!rest) return complain(RC_FAIL, "out of memory");
+    for (i = 1; i + 1 < argc; i++)
+        if (!strcmp(argv[i], "--printer") && !strcmp(argv[i + 1], "list")) {
+            printers_list(stdout);
+            free(rest);
+            return RC_OK;
+        }
     rc = parse_slice(argc, argv, &s, &rest_argc, rest, 1);
     if (rc < 0) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
@@ -447,6 +464,12 @@ int cmd_slice(int argc, char **argv)
         if (d.bottom_layers)
             printf(" (%u bottom layer%s of %g s)", d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
         printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
+        if (plan_is_adaptive(&j.plan[a.method])) {
+            const layer_z *z = layer_z_of(f->name);
+            printf("adaptive layers: per-layer Z on %s (%s): %s\n", s.preset ? s.preset->name : "the display", f->name,
+                   layer_z_says(z->support));
+            if (z->risk) printf("%s: %s\n", path, z->risk);
+        }
         if (s.cure.typical)
             printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "
                    "--exposure S1@T1,S2@T2\n", d.cure[0], d.cure[1], d.cure[2]);

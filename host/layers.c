@@ -74,7 +74,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
         else if (!strcmp(o, "--printer")) {
             const char *name = NULL;
             if (!(rc = file_option(argc, argv, &i, &name)) && !(s->preset = printer_find(name)))
-                rc = complain(RC_USAGE, "--printer %s: unknown (see adaslice slice --help for the presets)", name);
+                rc = complain(RC_USAGE, "--printer %s: unknown (adaslice printers lists the presets)", name);
         } else if (!strcmp(o, "--pixels")) {
             double wh[2];
             if (!(rc = numbers_option(argc, argv, &i, 'x', 2, "WxH, each 1 to 65536", wh))) {
