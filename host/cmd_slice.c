@@ -22,6 +22,8 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static void slice_usage(FILE *f)
 {
@@ -294,7 +296,8 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     slice_run run;
     pipeline_job pipe;
     previews pv;
-    int rc, odd = s->rotate & 1;
+    int rc, odd = s->rotate & 1, empty = 0, existed;
+    struct stat st;
     void (*was)(int);
 
     memset(&bar, 0, sizeof bar);
@@ -359,6 +362,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
 
     interrupted = 0;
     was = signal(SIGINT, on_sigint);
+    existed = stat(path, &st) == 0;
     if ((rc = f->open(&writer, path, d))) goto done;
     if (f == &JOB_FORMAT_DIR) {
         if ((rc = write_outputs(a, j))) goto done;
@@ -381,11 +385,18 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     pipe.done = layer_done;
     pipe.ctx = &run;
     rc = pipeline_run(&pipe);
+    /* a job that lights nothing prints nothing, silently: said, and removed */
+    if (!rc && !(d->volume_mm3 > 0))
+        rc = empty = complain(RC_FAIL, "%s: no pixel is lit in its %zu layer%s: the part (%g x %g mm) is smaller "
+                                       "than a pixel (%g x %g mm), misses the pixels' centres or encloses no volume; "
+                                       "nothing written", path, count, plural(count), d->part_mm[0], d->part_mm[1],
+                              m.grid.pitch[0], m.grid.pitch[1]);
 done:
     if (writer) {
         int closed = f->close(writer, rc == RC_OK);
         if (!rc) rc = closed;
     }
+    if (empty && f == &JOB_FORMAT_DIR && !jobdir_remove(path) && !existed) rmdir(path);
     signal(SIGINT, was);
     layer_masks_close(&m);
     previews_free(&pv);
