@@ -1145,6 +1145,17 @@ static void other_pitch_is_refused_first(void)
         cli_free(&r);
     }
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    {
+        /* a manifest that names no pitch is no job to print */
+        char *text = cli_read(cli_path("pitch_job/manifest.json")), *at = text ? strstr(text, "\"pitch_mm\"") : NULL;
+        if (at) memcpy(at + 7, "xx", 2);
+        if (text) cli_write(cli_path("pitch_job/manifest.json"), text);
+        free(text);
+        r = cli_run("print", cli_path("pitch_job"), "--port", "/dev/null", NULL);
+        CHECKF(at && r.status == 1 && cli_one_message(r.err) && strstr(r.err, "names no pixel pitch"), "%d %s", r.status,
+               r.err);
+        cli_free(&r);
+    }
     log = cli_read(cli_path("pitch.log"));
     CHECKF(log && !strstr(log, " step ") && !strstr(log, " uv 1"), "the printer moved or lit: %.200s", log ? log : "");
     free(log);
