@@ -270,8 +270,8 @@ int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
     if (tall > UNITS_TALL_MM)
         snprintf(hint, sizeof hint, "; a model in micrometres? --scale 0.001 reads it in millimetres, %g mm tall",
                  tall / 1000);
-    /* the default printer's height too: without it a part a hundred metres
-       tall was sliced into hundreds of thousands of layers */
+    /* the default printer's height too: the job is for it, and a part taller
+       than it builds would be sliced to the last layer for nothing */
     if (s->preset && tall > s->preset->z_max)
         return complain(RC_FAIL, "the part is %g mm tall: the %s%s%s builds %g mm%s", tall,
                         s->geometry_given ? "" : "default printer (", s->preset->name,
