@@ -296,7 +296,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     slice_run run;
     pipeline_job pipe;
     previews pv;
-    int rc, odd = s->rotate & 1, empty = 0, existed;
+    int rc, odd = s->rotate & 1, empty = 0, existed = 0;
     struct stat st;
     void (*was)(int);
 
