@@ -558,6 +558,23 @@ static int job_from_dir(print_job *pj, const char *dir)
     return RC_OK;
 }
 
+/* A job sliced for other pixels prints scaled by the ratio of the pitches
+   (0.1 mm pixels on a 0.05 mm display: half size), so it is refused before
+   anything moves; a tenth of a percent is rounding in the figures. */
+#define PITCH_TOLERANCE 0.001
+
+static int check_pitch(const print_job *pj, const char *dir, const serial_link *l, const char *port)
+{
+    double shown = l->id.pitch_nm / 1e6, across = shown / pj->file.pitch_mm[0], down = shown / pj->file.pitch_mm[1];
+    char scale[64];
+    if (fabs(across - 1) <= PITCH_TOLERANCE && fabs(down - 1) <= PITCH_TOLERANCE) return RC_OK;
+    if (fabs(across - down) <= PITCH_TOLERANCE * across) snprintf(scale, sizeof scale, "%.4g %%", across * 100);
+    else snprintf(scale, sizeof scale, "%.4g %% across and %.4g %% down", across * 100, down * 100);
+    return complain(RC_FAIL, "%s was sliced for pixels of %g x %g mm; the printer on %s shows %g mm pixels, so the part "
+                             "would print at %s of its size: slice it again with --pixels %ux%u --pitch %g",
+                    dir, pj->file.pitch_mm[0], pj->file.pitch_mm[1], port, shown, scale, l->id.width, l->id.height, shown);
+}
+
 /* --resume-from K against what the printer holds: K is the layer after the
    last fully exposed one of this job, which is paused (resumed in place,
    *in_place set) or stopped (an abort or a fault); or, with --home, any
@@ -700,6 +717,7 @@ int cmd_print(int argc, char **argv)
     printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
            l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
     fflush(stdout);
+    if (jobdir && (rc = check_pitch(&pj, jobdir, &l, pa.port))) goto done;
     if (!jobdir && (rc = job_from_model(&pj, &a, &j, &s, &l, &pa, &planned_by_printer))) goto done;
     if (pj.width != l.id.width || pj.height != l.id.height || pj.bits != l.id.bits) {
         rc = complain(RC_FAIL, "the masks are %u x %u px, %u-bit; the printer shows %u x %u px, %u-bit", pj.width, pj.height,

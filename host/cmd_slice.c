@@ -10,6 +10,7 @@
 #include "cure.h"
 #include "jobdir.h"
 #include "jobfile.h"
+#include "layer_z.h"
 #include "layers.h"
 #include "output.h"
 #include "pipeline.h"
@@ -21,6 +22,8 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static void slice_usage(FILE *f)
 {
@@ -41,6 +44,7 @@ static void slice_usage(FILE *f)
           "  -o JOB              the job file or directory (required)\n"
           "  --format NAME       the format, whatever the extension\n", f);
     slice_options_usage(f);
+    layer_z_table(f);
     cure_usage(f);
     fputc('\n', f);
     plan_options_usage(f, FOR_SLICE);
@@ -133,7 +137,7 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
         if (own && own->extension && !strcmp(own->extension, (*fmt)->extension)) *fmt = own;
     }
     if (*fmt != &JOB_FORMAT_DIR && !s->geometry_given)
-        return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice slice --help lists them) or "
+        return complain(RC_USAGE, "-o %s: which printer? give --printer NAME (adaslice printers lists them) or "
                                   "--pixels WxH with --pitch MM", s->dir);
     /* a directory and a .uvj (for UVtools to convert) are any printer's */
     if (preset && *fmt != &JOB_FORMAT_DIR && *fmt != &JOB_FORMAT_UVJ && strcmp(preset->format, (*fmt)->name))
@@ -145,6 +149,16 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
         snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
     }
     return RC_OK;
+}
+
+/* The layers below the top one differ in thickness (the top one is what is
+   left of the part, thinner in a uniform plan too). */
+static int plan_is_adaptive(const adaslice_plan *p)
+{
+    size_t k;
+    for (k = 1; k + 1 < p->layer_count; k++)
+        if (fabs(p->layers[k].thickness - p->layers[0].thickness) > 1e-9) return 1;
+    return 0;
 }
 
 /* What the format cannot hold, said before a byte is written. */
@@ -162,11 +176,10 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
     }
     if (!f->adaptive && n > 1) {
         double t = p->layers[0].thickness;
-        for (k = 1; k + 1 < n; k++)
-            if (fabs(p->layers[k].thickness - t) > 1e-9)
-                return complain(RC_USAGE, "%s: %s holds one layer height, and this plan's layers are %g to %g mm: plan "
-                                          "uniform layers with --method finest or --method coarsest, or --uniform T",
-                                path, f->what, lo, hi);
+        if (plan_is_adaptive(p))
+            return complain(RC_USAGE, "%s: %s holds one layer height, and this plan's layers are %g to %g mm: plan "
+                                      "uniform layers with --method finest or --method coarsest, or --uniform T",
+                            path, f->what, lo, hi);
         if (fabs(p->layers[n - 1].thickness - t) > 1e-9)
             fprintf(stderr, "adaslice: warning: %s: the last layer is %g mm; %s holds one height, so it prints %g mm "
                             "(the top %g mm higher)\n",
@@ -299,7 +312,8 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     slice_run run;
     pipeline_job pipe;
     previews pv;
-    int rc, odd = s->rotate & 1;
+    int rc, odd = s->rotate & 1, empty = 0, existed = 0;
+    struct stat st;
     void (*was)(int);
 
     memset(&bar, 0, sizeof bar);
@@ -364,6 +378,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
 
     interrupted = 0;
     was = signal(SIGINT, on_sigint);
+    existed = stat(path, &st) == 0;
     if ((rc = f->open(&writer, path, d))) goto done;
     if (f == &JOB_FORMAT_DIR) {
         if ((rc = write_outputs(a, j))) goto done;
@@ -386,11 +401,18 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     pipe.done = layer_done;
     pipe.ctx = &run;
     rc = pipeline_run(&pipe);
+    /* a job that lights nothing prints nothing, silently: said, and removed */
+    if (!rc && !(d->volume_mm3 > 0))
+        rc = empty = complain(RC_FAIL, "%s: no pixel is lit in its %zu layer%s: the part (%g x %g mm) is smaller "
+                                       "than a pixel (%g x %g mm), misses the pixels' centres or encloses no volume; "
+                                       "nothing written", path, count, plural(count), d->part_mm[0], d->part_mm[1],
+                              m.grid.pitch[0], m.grid.pitch[1]);
 done:
     if (writer) {
         int closed = f->close(writer, rc == RC_OK);
         if (!rc) rc = closed;
     }
+    if (empty && f == &JOB_FORMAT_DIR && !jobdir_remove(path) && !existed) rmdir(path);
     signal(SIGINT, was);
     layer_masks_close(&m);
     previews_free(&pv);
@@ -409,12 +431,18 @@ int cmd_slice(int argc, char **argv)
     const job_format *f = NULL;
     char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *path = NULL, *extended = NULL, *csv = NULL,
          *svg = NULL, when[32];
-    int rest_argc = 0, rc;
+    int rest_argc = 0, rc, i;
 
     memset(&j, 0, sizeof j);
     memset(&sum, 0, sizeof sum);
     memset(&d, 0, sizeof d);
     if (!rest) return complain(RC_FAIL, "out of memory");
+    for (i = 1; i + 1 < argc; i++)
+        if (!strcmp(argv[i], "--printer") && !strcmp(argv[i + 1], "list")) {
+            printers_list(stdout);
+            free(rest);
+            return RC_OK;
+        }
     rc = parse_slice(argc, argv, &s, &rest_argc, rest, 1);
     if (rc < 0) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
@@ -463,6 +491,12 @@ int cmd_slice(int argc, char **argv)
         if (d.bottom_layers)
             printf(" (%u bottom layer%s of %g s)", d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
         printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
+        if (plan_is_adaptive(&j.plan[a.method])) {
+            const layer_z *z = layer_z_of(f->name);
+            printf("adaptive layers: per-layer Z on %s (%s): %s\n", s.preset ? s.preset->name : "the display", f->name,
+                   layer_z_says(z->support));
+            if (z->risk) printf("%s: %s\n", path, z->risk);
+        }
         if (s.cure.typical)
             printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "
                    "--exposure S1@T1,S2@T2\n", d.cure[0], d.cure[1], d.cure[2]);

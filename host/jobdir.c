@@ -273,6 +273,17 @@ static int remove_old_job(const char *dir, size_t layers, int digits, char *path
     return rc;
 }
 
+int jobdir_remove(const char *dir)
+{
+    size_t size = strlen(dir) + 64;
+    char *path = (char *)malloc(size);
+    int rc;
+    if (!path) return complain(RC_FAIL, "out of memory");
+    rc = remove_old_job(dir, 0, layer_digits(0), path, size); /* no layer is this job's own: all go */
+    free(path);
+    return rc;
+}
+
 static int dir_open(void **writer, const char *dir, const job_desc *d)
 {
     dir_writer *w = (dir_writer *)calloc(1, sizeof *w);
@@ -468,8 +479,8 @@ const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per laye
 
 /* masks.rle is the job's when the manifest, written after it, names its
    CRC-32: a job without a manifest is not whole, and masks left from
-   another job do not match. */
-static int matches_manifest(const char *dir, const char *masks_path, const job_masks *m)
+   another job do not match. The manifest's pitch goes into m. */
+static int matches_manifest(const char *dir, const char *masks_path, job_masks *m)
 {
     char *path = dir_file(dir, "manifest.json"), *text = NULL;
     const char *at;
@@ -500,6 +511,13 @@ static int matches_manifest(const char *dir, const char *masks_path, const job_m
     if (named != crc) {
         complain(RC_FAIL, "%s belongs to another job than %s (CRC-32 %08x, the manifest names %08lx): slice it again",
                  masks_path, path, (unsigned)crc, named);
+        goto done;
+    }
+    /* the pitch the part was sliced at: a printer with other pixels prints it scaled */
+    at = strstr(text, "\"pitch_mm\"");
+    if (!at || sscanf(at + 10, " : [ %lf , %lf", &m->pitch_mm[0], &m->pitch_mm[1]) != 2 || !(m->pitch_mm[0] > 0) ||
+        !(m->pitch_mm[1] > 0)) {
+        complain(RC_FAIL, "%s names no pixel pitch (printer.pitch_mm): slice it again", path);
         goto done;
     }
     rc = RC_OK;

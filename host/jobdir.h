@@ -18,6 +18,10 @@ void layer_name(char name[40], size_t k, int digits, const char *ext);
 /* "DIR/layer_00001.EXT" */
 void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext);
 
+/* Removes the job in DIR (its manifest first, then the files a slice writes:
+   masks, previews, plan, layers), leaving DIR and anything else in it. */
+int jobdir_remove(const char *dir);
+
 /* The masks of a job as a printer takes them, with its exposures and motion. */
 typedef struct job_masks {
     uint32_t width, height, bits, layers, bin_nm;
@@ -27,12 +31,14 @@ typedef struct job_masks {
     unsigned char **codes;       /* per layer */
     size_t *sizes;
     uint32_t *crcs;
+    double pitch_mm[2];          /* read: the manifest's pixel pitch, mm across and down */
     unsigned char *file;         /* read: the whole file, which codes[] point into */
     size_t file_size;
 } job_masks;
 /* Room for `layers` layers (codes allocated by the caller, freed here). */
 int job_masks_alloc(job_masks *m, uint32_t layers);
 void job_masks_free(job_masks *m);
-/* Reads and checks DIR/masks.rle, naming the file and byte at fault. */
+/* Reads and checks DIR/masks.rle, naming the file and byte at fault, and
+   the pixel pitch its manifest names. */
 int jobdir_read_masks(const char *dir, job_masks *m);
 #endif

@@ -74,7 +74,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
         else if (!strcmp(o, "--printer")) {
             const char *name = NULL;
             if (!(rc = file_option(argc, argv, &i, &name)) && !(s->preset = printer_find(name)))
-                rc = complain(RC_USAGE, "--printer %s: unknown (see adaslice slice --help for the presets)", name);
+                rc = complain(RC_USAGE, "--printer %s: unknown (adaslice printers lists the presets)", name);
         } else if (!strcmp(o, "--pixels")) {
             double wh[2];
             if (!(rc = numbers_option(argc, argv, &i, 'x', 2, "WxH, each 1 to 65536", wh))) {
@@ -252,14 +252,34 @@ int layer_masks_check(const slice_args *s, int buffers)
                     buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
+/* Models come in metres or micrometres as well as millimetres, and the file
+   does not say which: a part under a millimetre each way, or over a metre
+   tall, was most likely read in the wrong unit. */
+#define UNITS_SMALL_MM 1.0
+#define UNITS_TALL_MM 1000.0
+
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
 {
     adaslice_grid g;
-    double size[3], lo[3], hi[3];
+    double size[3], lo[3], hi[3], tall, most;
+    char hint[160] = "";
     adaslice_mesh_bounds(mesh, lo, hi);
-    if (s->geometry_given && s->preset && hi[2] - lo[2] > s->preset->z_max)
-        return complain(RC_FAIL, "the part is %g mm tall: the %s builds %g mm", hi[2] - lo[2], s->preset->name,
-                        s->preset->z_max);
+    tall = hi[2] - lo[2];
+    most = hi[0] - lo[0] > hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
+    if (tall > most) most = tall;
+    if (tall > UNITS_TALL_MM)
+        snprintf(hint, sizeof hint, "; a model in micrometres? --scale 0.001 reads it in millimetres, %g mm tall",
+                 tall / 1000);
+    /* the default printer's height too: the job is for it, and a part taller
+       than it builds would be sliced to the last layer for nothing */
+    if (s->preset && tall > s->preset->z_max)
+        return complain(RC_FAIL, "the part is %g mm tall: the %s%s%s builds %g mm%s", tall,
+                        s->geometry_given ? "" : "default printer (", s->preset->name,
+                        s->geometry_given ? "" : "; --printer NAME for another)", s->preset->z_max, hint);
+    if (*hint) fprintf(stderr, "adaslice: warning: the part is %g mm tall%s\n", tall, hint);
+    else if (most < UNITS_SMALL_MM)
+        fprintf(stderr, "adaslice: warning: the part is %g x %g x %g mm; a model in metres? --scale 1000 reads it in "
+                        "millimetres, %g mm tall\n", hi[0] - lo[0], hi[1] - lo[1], tall, tall * 1000);
     return place_part(s, mesh, &g, size);
 }
 

@@ -27,6 +27,7 @@ static const command COMMANDS[] = {
     {"orient", "search the build directions for the fewest layers and least error", cmd_orient},
     {"saliency", "per-face weights from mesh saliency, and the mesh coloured by them", cmd_saliency},
     {"print", "print a model or a job on a printer running the adaslice firmware", cmd_print},
+    {"printers", "the printer presets, and which take each layer's own Z (adaptive layers)", cmd_printers},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

@@ -1116,6 +1116,51 @@ static void print_a_sliced_job(void)
     }
 }
 
+/* A job sliced for other pixels than the printer's is refused before
+   anything moves, naming both pitches and the scale it would print at: 0.1 mm
+   pixels on 0.05 mm ones print half size, the 2k-5.5's 47.25 um ones 5.8 %
+   too large. The printer's log shows no step and no light. */
+static void other_pitch_is_refused_first(void)
+{
+    static const char *const fine[] = {"--pitch-um", "50", NULL};
+    static const struct { const char *pitch, *says[3]; } jobs[] = {
+        {"0.1", {"sliced for pixels of 0.1 x 0.1 mm", "shows 0.05 mm pixels", "at 50 % of its size"}},
+        {"0.04725", {"sliced for pixels of 0.04725 x 0.04725 mm", "shows 0.05 mm pixels", "at 105.8 % of its size"}},
+        {"0.1,0.05", {"sliced for pixels of 0.1 x 0.05 mm", "shows 0.05 mm pixels", "at 50 % across and 100 % down"}},
+    };
+    child sim;
+    cli_result r;
+    char *log;
+    size_t c;
+    if (!start_sim_with(&sim, cli_path("pitch.log"), SIM_SPEED, fine)) return;
+    for (c = 0; c < sizeof jobs / sizeof jobs[0]; c++) {
+        r = cli_run("slice", MODEL, "--scale", "10", "--pixels", "240x200", "--pitch", jobs[c].pitch, "-o",
+                    cli_path("pitch_job"), CURE, NULL);
+        CHECKF(r.status == 0, "slice --pitch %s: %s", jobs[c].pitch, r.err);
+        cli_free(&r);
+        r = cli_run("print", cli_path("pitch_job"), "--port", sim.line + 4, NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, jobs[c].says[0]) && strstr(r.err, jobs[c].says[1]) &&
+               strstr(r.err, jobs[c].says[2]) && strstr(r.err, "--pitch 0.05"), "--pitch %s: %d %s", jobs[c].pitch,
+               r.status, r.err);
+        cli_free(&r);
+    }
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    {
+        /* a manifest that names no pitch is no job to print */
+        char *text = cli_read(cli_path("pitch_job/manifest.json")), *at = text ? strstr(text, "\"pitch_mm\"") : NULL;
+        if (at) memcpy(at + 7, "xx", 2);
+        if (text) cli_write(cli_path("pitch_job/manifest.json"), text);
+        free(text);
+        r = cli_run("print", cli_path("pitch_job"), "--port", "/dev/null", NULL);
+        CHECKF(at && r.status == 1 && cli_one_message(r.err) && strstr(r.err, "names no pixel pitch"), "%d %s", r.status,
+               r.err);
+        cli_free(&r);
+    }
+    log = cli_read(cli_path("pitch.log"));
+    CHECKF(log && !strstr(log, " step ") && !strstr(log, " uv 1"), "the printer moved or lit: %.200s", log ? log : "");
+    free(log);
+}
+
 /* Bad ports and arguments: one clear message, a non-zero exit. */
 static void bad_ports_are_named(void)
 {
@@ -1547,6 +1592,7 @@ void test_print(void)
     RUN(aborted_print_resumes);
     RUN(step_late_print_resumes_with_home);
     RUN(print_a_sliced_job);
+    RUN(other_pitch_is_refused_first);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);
     RUN(too_long_exposure_is_refused_first);
