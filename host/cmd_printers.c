@@ -11,7 +11,7 @@
 void printers_list(FILE *f)
 {
     int i;
-    fprintf(f, "%-24s %-10s %-13s %-12s %-10s %s\n", "PRESET", "FORMAT", "PIXELS", "PITCH (um)", "BUILD (mm)",
+    fprintf(f, "%-24s %-13s %-13s %-12s %-10s %s\n", "PRESET", "FORMAT", "PIXELS", "PITCH (um)", "BUILD (mm)",
             "PER-LAYER Z");
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
@@ -19,7 +19,7 @@ void printers_list(FILE *f)
         snprintf(pixels, sizeof pixels, "%d x %d", p->width, p->height);
         if (p->pitch[1] != p->pitch[0]) snprintf(pitch, sizeof pitch, "%g x %g", p->pitch[0] * 1000, p->pitch[1] * 1000);
         else snprintf(pitch, sizeof pitch, "%g", p->pitch[0] * 1000);
-        fprintf(f, "%-24s %-10s %-13s %-12s %-10g %s\n", p->name, p->format, pixels, pitch, p->z_max,
+        fprintf(f, "%-24s %-13s %-13s %-12s %-10g %s\n", p->name, p->format, pixels, pitch, p->z_max,
                 layer_z_says(layer_z_of(p->format)->support));
     }
     fputc('\n', f);

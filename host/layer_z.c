@@ -17,6 +17,18 @@ static const layer_z LAYER_Z[] = {
      "the GOO's advance-mode flag is on so that the printer takes each layer's own Z; UVtools leaves it off for GOO "
      "since a Saturn 4 froze mid-print (UVtools #997) and a Phrozen Mega 8K S started several mm high (#1040): "
      "watch the first layers of a first print"},
+    {"ctb-encrypted", LAYER_Z_PER_FORMAT,
+     "every layer's record holds its Z and the per-layer settings flag (0x40) is set, as UVtools writes it; no field "
+     "report either way",
+     NULL},
+    {"prz", LAYER_Z_FIELD_TROUBLE,
+     "a GOO file (UVtools reads both with GooFile.cs): the advance-mode flag makes the printer take every layer's Z; "
+     "the Phrozen Mega 8K S that started several mm high (sn4k3/UVtools#1040) printed a .prz",
+     "the .prz's advance-mode flag is on so that the printer takes each layer's own Z; UVtools leaves it off for "
+     "GOO and .prz since a Phrozen Mega 8K S .prz started several mm high (UVtools #1040): watch the first layers "
+     "of a first print"},
+    {"uvj", LAYER_Z_PER_FORMAT,
+     "config.json lists every layer's Z; the printer reads what UVtools converts it to, whose row here applies", NULL},
     {"sl1", LAYER_Z_NO, "config.ini holds one layer height: adaptive plans are refused", NULL},
 };
 enum { LAYER_Z_ROWS = sizeof LAYER_Z / sizeof LAYER_Z[0] };
@@ -47,5 +59,5 @@ void layer_z_table(FILE *f)
     int i;
     fputs("per-layer Z (what adaptive layers need of the printer), by the format it reads:\n", f);
     for (i = 0; i < LAYER_Z_ROWS; i++)
-        fprintf(f, "  %-10s %s: %s\n", LAYER_Z[i].format, layer_z_says(LAYER_Z[i].support), LAYER_Z[i].why);
+        fprintf(f, "  %-13s %s: %s\n", LAYER_Z[i].format, layer_z_says(LAYER_Z[i].support), LAYER_Z[i].why);
 }

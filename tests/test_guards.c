@@ -45,6 +45,8 @@ static const char *expected_z(const char *format)
     if (!strcmp(format, "ctb")) return "per the format, not field-verified";
     if (!strcmp(format, "goo")) return "per the format, field reports of trouble";
     if (!strcmp(format, "sl1")) return "no";
+    if (!strcmp(format, "ctb-encrypted") || !strcmp(format, "uvj")) return "per the format, not field-verified";
+    if (!strcmp(format, "prz")) return "per the format, field reports of trouble";
     return NULL;
 }
 
