@@ -148,6 +148,16 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1,
-                                          ZIP_MEMBERS_MAX - 3 /* two previews, run.gcode */, open_job, encode, put, close_job,
-                                          {{PREVIEW_W, PREVIEW_H}, {CROPPING_W, CROPPING_H}}};
+const job_format JOB_FORMAT_CHITU_ZIP = {
+    .name = "chitu-zip",
+    .extension = ".zip",
+    .what = "ChiTu G-code zip",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .max_layers = ZIP_MEMBERS_MAX - 3, /* two previews, run.gcode */
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{PREVIEW_W, PREVIEW_H}, {CROPPING_W, CROPPING_H}},
+};

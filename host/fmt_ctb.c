@@ -18,6 +18,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
 #endif
+#include "bytes.h"
 #include "jobfile.h"
 #include "report.h"
 
@@ -56,32 +57,9 @@ typedef struct ctb_writer {
     const char *machine;
     uint32_t small_preview_at, print_params_at, slicer_at, disclaimer_at, params_v4_at, table_at;
     unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
-    size_t layers_done;
     off_t end;                  /* where the next layer's LayerDefEx goes */
     int write_errno;
 } ctb_writer;
-
-static void put_u16(unsigned char *p, unsigned v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-    p[2] = (unsigned char)(v >> 16);
-    p[3] = (unsigned char)(v >> 24);
-}
-
-static void put_f32(unsigned char *p, double v)
-{
-    float f = (float)v;
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    put_u32(p, u);
-}
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
@@ -146,13 +124,13 @@ static size_t preview_encode(const unsigned char *rgb, size_t pixels, unsigned c
         size_t run = 1;
         while (i + run < pixels && run < CTB_PREVIEW_RUN_MAX && !memcmp(p, p + run * 3, 3)) run++;
         if (run >= 3) {
-            put_u16(out + n, word | 0x20);
-            put_u16(out + n + 2, (unsigned)(run - 1) | 0x3000);
+            put_le16(out + n, word | 0x20);
+            put_le16(out + n + 2, (unsigned)(run - 1) | 0x3000);
             n += 4;
         } else {
-            put_u16(out + n, word);
+            put_le16(out + n, word);
             n += 2;
-            if (run == 2) { put_u16(out + n, word); n += 2; }
+            if (run == 2) { put_le16(out + n, word); n += 2; }
         }
         i += run;
     }
@@ -173,10 +151,10 @@ static int write_preview(ctb_writer *w, uint32_t at, int width, int height, uint
         return complain(RC_FAIL, "cannot write %s: out of memory for the %dx%d preview", w->file.path, width, height);
     }
     len = preview_encode(rgb, pixels, code);
-    put_u32(head, (uint32_t)width);
-    put_u32(head + 4, (uint32_t)height);
-    put_u32(head + 8, at + CTB_PREVIEW_HEADER);
-    put_u32(head + 12, (uint32_t)len);
+    put_le32(head, (uint32_t)width);
+    put_le32(head + 4, (uint32_t)height);
+    put_le32(head + 8, at + CTB_PREVIEW_HEADER);
+    put_le32(head + 12, (uint32_t)len);
     write_at(w, at, head, sizeof head);
     write_at(w, at + CTB_PREVIEW_HEADER, code, len);
     free(rgb);
@@ -192,36 +170,36 @@ static void write_header(ctb_writer *w)
     const job_desc *d = w->d;
     unsigned char h[CTB_HEADER] = {0};
     double total_mm = d->layers[d->layer_count - 1].z_top;
-    put_u32(h, w->version >= 4 ? CTB_MAGIC_V4 : CTB_MAGIC_V3);
-    put_u32(h + 4, w->version);
-    put_f32(h + 8, d->display_mm[0]);
-    put_f32(h + 12, d->display_mm[1]);
+    put_le32(h, w->version >= 4 ? CTB_MAGIC_V4 : CTB_MAGIC_V3);
+    put_le32(h + 4, w->version);
+    put_le_f32(h + 8, d->display_mm[0]);
+    put_le_f32(h + 12, d->display_mm[1]);
     /* An unknown build height: the job's own is the least the printer has. */
-    put_f32(h + 16, d->z_max_mm > 0 ? d->z_max_mm : total_mm);
-    put_f32(h + 28, total_mm);
-    put_f32(h + 32, d->layer_height_mm);
-    put_f32(h + 36, d->exposure_s);
-    put_f32(h + 40, d->bottom_exposure_s);
-    put_f32(h + 44, light_off_s(w));
-    put_u32(h + 48, d->bottom_layers);
-    put_u32(h + 52, (uint32_t)d->width);
-    put_u32(h + 56, (uint32_t)d->height);
-    put_u32(h + 60, CTB_HEADER); /* the large preview comes first */
-    put_u32(h + 64, w->table_at);
-    put_u32(h + 68, (uint32_t)d->layer_count);
-    put_u32(h + 72, w->small_preview_at);
-    put_u32(h + 76, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
+    put_le_f32(h + 16, d->z_max_mm > 0 ? d->z_max_mm : total_mm);
+    put_le_f32(h + 28, total_mm);
+    put_le_f32(h + 32, d->layer_height_mm);
+    put_le_f32(h + 36, d->exposure_s);
+    put_le_f32(h + 40, d->bottom_exposure_s);
+    put_le_f32(h + 44, light_off_s(w));
+    put_le32(h + 48, d->bottom_layers);
+    put_le32(h + 52, (uint32_t)d->width);
+    put_le32(h + 56, (uint32_t)d->height);
+    put_le32(h + 60, CTB_HEADER); /* the large preview comes first */
+    put_le32(h + 64, w->table_at);
+    put_le32(h + 68, (uint32_t)d->layer_count);
+    put_le32(h + 72, w->small_preview_at);
+    put_le32(h + 76, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
     /* ProjectorType says only "mirrored" (UVtools reads any non-zero as
        flipped across); the images themselves are already flipped. */
-    put_u32(h + 80, d->mirror_x || d->mirror_y);
-    put_u32(h + 84, w->print_params_at);
-    put_u32(h + 88, CTB_PRINT_PARAMS);
-    put_u32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
-    put_u16(h + 96, 255);
-    put_u16(h + 98, 255);
-    put_u32(h + 100, 0); /* EncryptionKey: layer data in clear */
-    put_u32(h + 104, w->slicer_at);
-    put_u32(h + 108, CTB_SLICER_INFO);
+    put_le32(h + 80, d->mirror_x || d->mirror_y);
+    put_le32(h + 84, w->print_params_at);
+    put_le32(h + 88, CTB_PRINT_PARAMS);
+    put_le32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
+    put_le16(h + 96, 255);
+    put_le16(h + 98, 255);
+    put_le32(h + 100, 0); /* EncryptionKey: layer data in clear */
+    put_le32(h + 104, w->slicer_at);
+    put_le32(h + 108, CTB_SLICER_INFO);
     write_at(w, 0, h, sizeof h);
 }
 
@@ -229,15 +207,15 @@ static void write_print_params(ctb_writer *w)
 {
     const job_desc *d = w->d;
     unsigned char p[CTB_PRINT_PARAMS] = {0};
-    put_f32(p, bottom_lift_mm(&d->motion));
-    put_f32(p + 4, bottom_lift_speed(&d->motion));
-    put_f32(p + 8, d->motion.lift_mm);
-    put_f32(p + 12, mm_per_min(d->motion.lift_speed));
-    put_f32(p + 16, mm_per_min(d->motion.retract_speed));
-    put_f32(p + 20, d->volume_mm3 / 1000.0);
-    put_f32(p + 32, light_off_s(w));
-    put_f32(p + 36, light_off_s(w));
-    put_u32(p + 40, d->bottom_layers);
+    put_le_f32(p, bottom_lift_mm(&d->motion));
+    put_le_f32(p + 4, bottom_lift_speed(&d->motion));
+    put_le_f32(p + 8, d->motion.lift_mm);
+    put_le_f32(p + 12, mm_per_min(d->motion.lift_speed));
+    put_le_f32(p + 16, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p + 20, d->volume_mm3 / 1000.0);
+    put_le_f32(p + 32, light_off_s(w));
+    put_le_f32(p + 36, light_off_s(w));
+    put_le32(p + 40, d->bottom_layers);
     write_at(w, w->print_params_at, p, sizeof p);
 }
 
@@ -248,13 +226,13 @@ static void write_slicer_info(ctb_writer *w)
     size_t name_len = strlen(w->machine);
     if (w->version >= 4) {
         /* One-stage moves: the second stage is 0 mm, at the first stage's speed. */
-        put_f32(s + 4, bottom_lift_speed(&d->motion));
-        put_f32(s + 12, mm_per_min(d->motion.lift_speed));
-        put_f32(s + 20, mm_per_min(d->motion.retract_speed));
-        put_u32(s + 64, w->params_v4_at);
+        put_le_f32(s + 4, bottom_lift_speed(&d->motion));
+        put_le_f32(s + 12, mm_per_min(d->motion.lift_speed));
+        put_le_f32(s + 20, mm_per_min(d->motion.retract_speed));
+        put_le32(s + 64, w->params_v4_at);
     }
-    put_u32(s + 28, w->slicer_at + CTB_SLICER_INFO);
-    put_u32(s + 32, (uint32_t)name_len);
+    put_le32(s + 28, w->slicer_at + CTB_SLICER_INFO);
+    put_le32(s + 32, (uint32_t)name_len);
     /* AntiAliasFlag: UVtools' comment says 7 without AA and 0x0F with, but it
        always writes 0x0F; so do we. */
     s[36] = 0x0F;
@@ -264,11 +242,11 @@ static void write_slicer_info(ctb_writer *w)
     s[39] = (unsigned char)(w->version * 0x10);
     {
         int fixed;
-        put_u32(s + 40, (uint32_t)(job_time(&fixed) / 60));
+        put_le32(s + 40, (uint32_t)(job_time(&fixed) / 60));
     }
-    put_u32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
-    put_u32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
-    put_f32(s + 52, rest_before_cure_s(w));
+    put_le32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
+    put_le32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
+    put_le_f32(s + 52, rest_before_cure_s(w));
     write_at(w, w->slicer_at, s, sizeof s);
     write_at(w, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
 }
@@ -277,17 +255,17 @@ static void write_params_v4(ctb_writer *w)
 {
     const job_desc *d = w->d;
     unsigned char p[CTB_PARAMS_V4] = {0};
-    put_f32(p, mm_per_min(d->motion.retract_speed));
-    put_f32(p + 4, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p + 4, mm_per_min(d->motion.retract_speed));
     /* 4.0, 4.0 and 5: constants both UVtools and mslicer write; what they
        mean is not known. */
-    put_f32(p + 12, 4.0);
-    put_f32(p + 20, 4.0);
-    put_f32(p + 24, rest_before_cure_s(w));
-    put_u32(p + 48, 5);
-    put_u32(p + 52, (uint32_t)(d->layer_count - 1));
-    put_u32(p + 72, w->disclaimer_at);
-    put_u32(p + 76, CTB_DISCLAIMER_LEN);
+    put_le_f32(p + 12, 4.0);
+    put_le_f32(p + 20, 4.0);
+    put_le_f32(p + 24, rest_before_cure_s(w));
+    put_le32(p + 48, 5);
+    put_le32(p + 52, (uint32_t)(d->layer_count - 1));
+    put_le32(p + 72, w->disclaimer_at);
+    put_le32(p + 76, CTB_DISCLAIMER_LEN);
     write_at(w, w->params_v4_at, p, sizeof p);
 }
 
@@ -387,32 +365,26 @@ static int put(void *writer, size_t k, job_blob *blob)
     unsigned char *entry, ex[CTB_LAYER_DEF_EX] = {0};
     off_t data_at = w->end + CTB_LAYER_DEF_EX;
     uint64_t size = blob->size;
-    if (k != w->layers_done || k >= d->layer_count) {
-        free(blob->data);
-        blob->data = NULL;
-        return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layer%s", w->file.path, k,
-                        w->layers_done, d->layer_count, plural(d->layer_count));
-    }
     entry = w->table + k * CTB_LAYER_DEF;
-    put_f32(entry, L->z_top);
-    put_f32(entry + 4, L->exposure_s);
-    put_f32(entry + 8, light_off_s(w));
-    put_u32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
-    put_u32(entry + 16, (uint32_t)size);
-    put_u32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
-    put_u32(entry + 24, CTB_LAYER_DEF_EX);
+    put_le_f32(entry, L->z_top);
+    put_le_f32(entry + 4, L->exposure_s);
+    put_le_f32(entry + 8, light_off_s(w));
+    put_le32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
+    put_le32(entry + 16, (uint32_t)size);
+    put_le32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
+    put_le32(entry + 24, CTB_LAYER_DEF_EX);
     /* LayerDefEx repeats the entry byte for byte, then the layer's moves. */
     memcpy(ex, entry, CTB_LAYER_DEF);
-    put_u32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
-    put_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
-    put_f32(ex + 44, lift_speed(w, k));
-    put_f32(ex + 56, mm_per_min(d->motion.retract_speed));
+    put_le32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
+    put_le_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
+    put_le_f32(ex + 44, lift_speed(w, k));
+    put_le_f32(ex + 56, mm_per_min(d->motion.retract_speed));
     if (w->version >= 4) {
         memcpy(ex + 52, ex + 44, 4); /* the second stage: 0 mm at the same speeds */
         memcpy(ex + 64, ex + 56, 4);
-        put_f32(ex + 76, rest_before_cure_s(w));
+        put_le_f32(ex + 76, rest_before_cure_s(w));
     }
-    put_f32(ex + 80, 255.0);
+    put_le_f32(ex + 80, 255.0);
     /* the code's size is known, so both go out in order, with no seek back */
     write_at(w, w->end, ex, sizeof ex);
     if (!w->write_errno && fwrite(blob->data, 1, blob->size, w->file.f) != blob->size) w->write_errno = errno ? errno : EIO;
@@ -420,7 +392,6 @@ static int put(void *writer, size_t k, job_blob *blob)
     blob->data = NULL;
     if (w->write_errno) return write_failed(w);
     w->end = data_at + (off_t)size;
-    w->layers_done++;
     return RC_OK;
 }
 
@@ -501,10 +472,7 @@ static int close_job(void *writer, int ok)
     ctb_writer *w = (ctb_writer *)writer;
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
-    if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count, plural(w->d->layer_count));
-    } else if (ok) {
+    if (ok) {
         write_at(w, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
         write_blocks(w);
         rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
@@ -513,5 +481,15 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, 0, open_job, encode, put, close_job,
-                                  {{400, 300}, {200, 125}}};
+const job_format JOB_FORMAT_CTB = {
+    .name = "ctb",
+    .extension = ".ctb",
+    .what = "ChiTuBox CTB",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{400, 300}, {200, 125}},
+};

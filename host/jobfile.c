@@ -49,17 +49,57 @@ int job_blob_reserve(job_blob *b, size_t more)
     return 0;
 }
 
-int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride)
+int job_open(job_writer *w, const job_format *f, const char *path, const job_desc *d)
+{
+    memset(w, 0, sizeof *w);
+    w->format = f;
+    w->d = d;
+    w->path = path;
+    return f->open(&w->state, path, d);
+}
+
+int job_put(job_writer *w, size_t k, job_blob *blob)
+{
+    const job_desc *d = w->d;
+    int rc;
+    if (!w->state || k != w->layers_put || k >= d->layer_count) {
+        free(blob->data);
+        blob->data = NULL;
+        return complain(RC_FAIL, "%s: layer %zu handed to the %s writer after %zu of %zu layer%s", w->path, k,
+                        w->format->name, w->layers_put, d->layer_count, plural(d->layer_count));
+    }
+    rc = w->format->put(w->state, k, blob);
+    if (rc == RC_OK) w->layers_put++;
+    return rc;
+}
+
+int job_close(job_writer *w, int ok)
+{
+    void *state = w->state;
+    int rc = RC_OK, closed;
+    if (!state) return ok ? RC_FAIL : RC_OK;
+    w->state = NULL;
+    if (ok && w->layers_put != w->d->layer_count) {
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->path, w->layers_put,
+                      w->d->layer_count, plural(w->d->layer_count));
+        ok = 0;
+    }
+    closed = w->format->close(state, ok);
+    return rc ? rc : closed;
+}
+
+int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t stride)
 {
     job_blob blob;
     int rc;
     memset(&blob, 0, sizeof blob);
-    rc = f->encode(writer, k, image, stride, &blob);
+    if (!w->state) return job_put(w, k, &blob); /* the complaint */
+    rc = w->format->encode(w->state, k, image, stride, &blob);
     if (rc) {
         free(blob.data);
         return rc;
     }
-    return f->put(writer, k, &blob);
+    return job_put(w, k, &blob);
 }
 
 time_t job_time(int *fixed)

@@ -101,18 +101,39 @@ typedef struct job_format {
        shared. RC_OK or a complaint made. */
     int (*encode)(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob);
     /* The coded layers into the file, in order of k, one at a time (on any
-       thread); takes the blob's data (and frees it) either way. */
+       thread; job_put keeps the order); takes the blob's data (and frees it)
+       either way. */
     int (*put)(void *writer, size_t k, job_blob *blob);
-    /* ok: finish and put the file in place; !ok: remove what was written.
-       Frees the writer either way. */
+    /* ok (job_close has seen every layer put): finish and put the file in
+       place; !ok: remove what was written. Frees the writer either way. */
     int (*close)(void *writer, int ok);
     /* The sizes (w, h; 0: none) of the previews it asks d->preview for, so
        that they can be drawn ahead on a thread of their own. */
     int previews[2][2];
 } job_format;
 
+/* A job being written: the format's writer, and how many layers it has
+   taken. Every job goes through these, which keep the guards the formats
+   share (layer k only after layers 0 .. k-1, a good close only after all of
+   them), so that a format's put and close need not. */
+typedef struct job_writer {
+    const job_format *format;
+    void *state;                 /* the format's writer; NULL once closed */
+    const job_desc *d;
+    const char *path;            /* the caller's, until close */
+    size_t layers_put;
+} job_writer;
+/* The format's open; RC_OK, or a complaint made and w->state NULL. */
+int job_open(job_writer *w, const job_format *f, const char *path, const job_desc *d);
+/* The format's put for layer k, which must be the next one; takes the
+   blob's data (and frees it) either way. */
+int job_put(job_writer *w, size_t k, job_blob *blob);
+/* The format's close: ok, and every layer put, finishes the job; anything
+   else removes what was written. A writer never opened, or closed, gives
+   RC_OK for !ok. */
+int job_close(job_writer *w, int ok);
 /* encode and put one after the other: a layer on one thread. */
-int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride);
+int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t stride);
 
 /* The formats: jobdir.c, fmt_ctb.c, fmt_goo.c, fmt_chitu_zip.c, fmt_sl1.c. */
 extern const job_format JOB_FORMAT_DIR, JOB_FORMAT_CTB, JOB_FORMAT_GOO, JOB_FORMAT_CHITU_ZIP, JOB_FORMAT_SL1;

@@ -253,17 +253,17 @@ static void set_pitch(test_job *j, double across, double down)
    knows it only then. */
 static int job_write(test_job *j, const job_format *f, const char *path)
 {
-    void *w = NULL;
+    job_writer w;
     size_t k;
-    int rc = f->open(&w, path, &j->d);
+    int rc = job_open(&w, f, path, &j->d);
     if (rc != RC_OK) return rc;
     for (k = 0; k < j->d.layer_count; k++)
-        if ((rc = job_write_layer(f, w, k, j->images[k], j->stride)) != RC_OK) {
-            f->close(w, 0);
+        if ((rc = job_write_layer(&w, k, j->images[k], j->stride)) != RC_OK) {
+            job_close(&w, 0);
             return rc;
         }
     j->d.volume_mm3 = 1234.5;
-    return f->close(w, 1);
+    return job_close(&w, 1);
 }
 
 enum { AS_CTB3, AS_CTB4, AS_GOO };
@@ -533,56 +533,56 @@ static void failures_leave_no_file(void)
         const job_format *f = format_of(as);
         test_job *j = job_new(37, 23, 1, 4, t);
         char missing[200];
-        void *w = (void *)&w;
+        job_writer w;
         size_t k;
         int rc;
         j->preset.version = as == AS_CTB4 ? 4 : 0;
 
         snprintf(missing, sizeof missing, "%s/no-such-dir/job%s", dir, f->extension);
         complaint_begins();
-        rc = f->open(&w, missing, &j->d);
+        rc = job_open(&w, f, missing, &j->d);
         complaint_ends(missing, "No such file");
-        CHECKF(rc == RC_FAIL && w == NULL, "%s: open in a missing directory gave %d", f->name, rc);
+        CHECKF(rc == RC_FAIL && w.state == NULL, "%s: open in a missing directory gave %d", f->name, rc);
         CHECK(!exists(missing) && entries_in_dir() == 0);
 
         /* Layers written, then a close that gives up. */
-        rc = f->open(&w, in_dir("given_up.job"), &j->d);
+        rc = job_open(&w, f, in_dir("given_up.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            for (k = 0; k < 3; k++) CHECK(job_write_layer(f, w, k, j->images[k], j->stride) == RC_OK);
+            for (k = 0; k < 3; k++) CHECK(job_write_layer(&w, k, j->images[k], j->stride) == RC_OK);
             CHECK(entries_in_dir() == 1); /* the temporary file, while writing */
-            CHECK(f->close(w, 0) == RC_OK);
+            CHECK(job_close(&w, 0) == RC_OK);
         }
         CHECKF(entries_in_dir() == 0, "%s: %d files left after close(ok=0)", f->name, entries_in_dir());
 
         /* A good close after too few layers is refused, and leaves nothing. */
-        rc = f->open(&w, in_dir("short.job"), &j->d);
+        rc = job_open(&w, f, in_dir("short.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            CHECK(job_write_layer(f, w, 0, j->images[0], j->stride) == RC_OK);
+            CHECK(job_write_layer(&w, 0, j->images[0], j->stride) == RC_OK);
             complaint_begins();
-            CHECK(f->close(w, 1) == RC_FAIL);
+            CHECK(job_close(&w, 1) == RC_FAIL);
             complaint_ends(in_dir("short.job"), "1 of 4 layers");
         }
         CHECK(entries_in_dir() == 0);
 
         /* Layers out of order are refused. */
-        rc = f->open(&w, in_dir("order.job"), &j->d);
+        rc = job_open(&w, f, in_dir("order.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
             complaint_begins();
-            CHECK(job_write_layer(f, w, 1, j->images[1], j->stride) == RC_FAIL);
+            CHECK(job_write_layer(&w, 1, j->images[1], j->stride) == RC_FAIL);
             complaint_ends(in_dir("order.job"), "layer 1");
-            f->close(w, 0);
+            job_close(&w, 0);
         }
         CHECK(entries_in_dir() == 0);
 
         /* A preview that cannot be drawn fails the open. */
         j->preview_fails = 1;
         complaint_begins();
-        rc = f->open(&w, in_dir("no_preview.job"), &j->d);
+        rc = job_open(&w, f, in_dir("no_preview.job"), &j->d);
         complaint_ends(in_dir("no_preview.job"), "preview");
-        CHECK(rc == RC_FAIL && w == NULL);
+        CHECK(rc == RC_FAIL && w.state == NULL);
         CHECK(entries_in_dir() == 0);
         job_free(j);
     }
