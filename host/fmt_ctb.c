@@ -1,8 +1,9 @@
-/* ChiTuBox .ctb job files, versions 3 and 4, unencrypted (EncryptionKey 0),
-   little-endian: the header, both previews (400 x 300 and 200 x 125, RGB15
+/* ChiTuBox .ctb job files, versions 3 and 4, in the plain layout (not the
+   AES-wrapped "encrypted CTB" of magic 0x12FD0107), little-endian: the header, both previews (400 x 300 and 200 x 125, RGB15
    run-length), PrintParameters, SlicerInfo with the machine's name, for v4 the
    disclaimer and PrintParametersV4, the 36-byte layer table, and per layer an
-   84-byte LayerDefEx followed by the image in CTB's 7-bit run-length code.
+   84-byte LayerDefEx followed by the image in CTB's 7-bit run-length code,
+   XORed with the EncryptionKey's stream.
 
    Byte layouts: UVtools, UVtools.Core/FileFormats/ChituboxFile.cs (classes
    Header, Preview, PrintParameters, SlicerInfo, PrintParametersV4, LayerDef,
@@ -21,8 +22,10 @@
 #include "bytes.h"
 #include "jobfile.h"
 #include "report.h"
+#include "../adaslice_mcu.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
@@ -54,6 +57,7 @@ typedef struct ctb_writer {
     job_file file;
     const job_desc *d;          /* read again at close: the volume is known only then */
     unsigned version;
+    uint32_t key;               /* EncryptionKey: the layers' code is XORed with its stream */
     const char *machine;
     uint32_t small_preview_at, print_params_at, slicer_at, disclaimer_at, params_v4_at, table_at;
     unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
@@ -89,27 +93,57 @@ static int write_failed(ctb_writer *w)
 
 static int is_bottom(const ctb_writer *w, size_t k) { return k < w->d->bottom_layers; }
 
-/* The bottom lift falls back to the normal one when the desc leaves it 0: a
-   printer that does not peel tears the first layers off the plate. */
-static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
-static double bottom_lift_speed(const job_motion *m)
+/* The settle before each exposure. v4 has rests: like UVtools, a file with
+   a rest before cure keeps its light-off delays 0 so that the printer does
+   not wait twice. v3 has only the light-off delay, and a v3 printer counts it
+   from the end of the exposure, through the peel: the resin rests only for
+   what is left of it after the lift and retract. So v3 gets the peel's time
+   plus the settle, as UVtools writes it (ChituboxFile.cs, WaitTimeBeforeCure
+   below v4 -> FileFormat.SetLightOffDelay -> OperationCalculator.LightOffDelayC
+   .CalculateSeconds), to the hundredth of a second. */
+static double light_off_s(const ctb_writer *w, int bottom)
 {
-    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
+    const job_motion *m = &w->d->motion;
+    if (w->version >= 4) return 0;
+    return floor((job_peel_s(m, bottom) + m->wait_before_cure_s) * 100 + 0.5) / 100;
 }
-static double lift_mm(const ctb_writer *w, size_t k)
+static double rest_before_cure_s(const ctb_writer *w) { return w->version >= 4 ? w->d->motion.wait_before_cure_s : 0; }
+
+/* EncryptionKey: UVtools writes a random one in [255, 2^31 - 1) into every
+   ctb it makes (ChituboxFile.cs, EncodeInternally) and codes the layers with
+   it; a key of 0 (the layers in clear) is what no current slicer writes. Ours
+   is drawn from the job, its size and every layer's Z and exposure, so that
+   the same job gives the same bytes. */
+static uint32_t job_key(const job_desc *d)
 {
-    return is_bottom(w, k) ? bottom_lift_mm(&w->d->motion) : w->d->motion.lift_mm;
-}
-static double lift_speed(const ctb_writer *w, size_t k)
-{
-    return is_bottom(w, k) ? bottom_lift_speed(&w->d->motion) : mm_per_min(w->d->motion.lift_speed);
+    unsigned char b[8];
+    uint32_t crc;
+    size_t k;
+    put_le32(b, (uint32_t)d->width);
+    put_le32(b + 4, (uint32_t)d->height);
+    crc = adaslice_crc32(0, b, 8);
+    for (k = 0; k < d->layer_count; k++) {
+        put_le_f32(b, d->layers[k].z_top);
+        put_le_f32(b + 4, d->layers[k].exposure_s);
+        crc = adaslice_crc32(crc, b, 8);
+    }
+    return 255 + crc % (0x7FFFFFFFu - 255);
 }
 
-/* v4 has rest times; like UVtools, a file with a rest before cure keeps its
-   light-off delays 0 so that the printer does not wait twice. v3 has only the
-   light-off delay. */
-static double light_off_s(const ctb_writer *w) { return w->version >= 4 ? 0 : w->d->motion.wait_before_cure_s; }
-static double rest_before_cure_s(const ctb_writer *w) { return w->version >= 4 ? w->d->motion.wait_before_cure_s : 0; }
+/* The layer's code XORed with a stream drawn from the key and the layer's
+   index, four bytes to a word, the lowest first, the word stepped after
+   each four: the scheme UVtools reads and writes (ChituboxFile.cs,
+   LayerRleCryptBuffer). */
+static void layer_crypt(uint32_t key, uint32_t layer, unsigned char *p, size_t n)
+{
+    uint32_t step = key * 0x2D83CDACu + 0xD8A83423u;
+    uint32_t word = (layer * 0x1E1530CDu + 0xEC3D47CDu) * step;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        p[i] ^= (unsigned char)(word >> 8 * (i & 3));
+        if ((i & 3) == 3) word += step;
+    }
+}
 
 /* ---- previews --------------------------------------------------------- */
 
@@ -180,7 +214,7 @@ static void write_header(ctb_writer *w)
     put_le_f32(h + 32, d->layer_height_mm);
     put_le_f32(h + 36, d->exposure_s);
     put_le_f32(h + 40, d->bottom_exposure_s);
-    put_le_f32(h + 44, light_off_s(w));
+    put_le_f32(h + 44, light_off_s(w, 0));
     put_le32(h + 48, d->bottom_layers);
     put_le32(h + 52, (uint32_t)d->width);
     put_le32(h + 56, (uint32_t)d->height);
@@ -197,7 +231,7 @@ static void write_header(ctb_writer *w)
     put_le32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
     put_le16(h + 96, 255);
     put_le16(h + 98, 255);
-    put_le32(h + 100, 0); /* EncryptionKey: layer data in clear */
+    put_le32(h + 100, w->key);
     put_le32(h + 104, w->slicer_at);
     put_le32(h + 108, CTB_SLICER_INFO);
     write_at(w, 0, h, sizeof h);
@@ -207,14 +241,14 @@ static void write_print_params(ctb_writer *w)
 {
     const job_desc *d = w->d;
     unsigned char p[CTB_PRINT_PARAMS] = {0};
-    put_le_f32(p, bottom_lift_mm(&d->motion));
-    put_le_f32(p + 4, bottom_lift_speed(&d->motion));
+    put_le_f32(p, job_lift_mm(&d->motion, 1));
+    put_le_f32(p + 4, mm_per_min(job_lift_speed(&d->motion, 1)));
     put_le_f32(p + 8, d->motion.lift_mm);
     put_le_f32(p + 12, mm_per_min(d->motion.lift_speed));
     put_le_f32(p + 16, mm_per_min(d->motion.retract_speed));
     put_le_f32(p + 20, d->volume_mm3 / 1000.0);
-    put_le_f32(p + 32, light_off_s(w));
-    put_le_f32(p + 36, light_off_s(w));
+    put_le_f32(p + 32, light_off_s(w, 1));
+    put_le_f32(p + 36, light_off_s(w, 0));
     put_le32(p + 40, d->bottom_layers);
     write_at(w, w->print_params_at, p, sizeof p);
 }
@@ -226,7 +260,7 @@ static void write_slicer_info(ctb_writer *w)
     size_t name_len = strlen(w->machine);
     if (w->version >= 4) {
         /* One-stage moves: the second stage is 0 mm, at the first stage's speed. */
-        put_le_f32(s + 4, bottom_lift_speed(&d->motion));
+        put_le_f32(s + 4, mm_per_min(job_lift_speed(&d->motion, 1)));
         put_le_f32(s + 12, mm_per_min(d->motion.lift_speed));
         put_le_f32(s + 20, mm_per_min(d->motion.retract_speed));
         put_le32(s + 64, w->params_v4_at);
@@ -237,8 +271,13 @@ static void write_slicer_info(ctb_writer *w)
        always writes 0x0F; so do we. */
     s[36] = 0x0F;
     /* PerLayerSettings: the layers differ in Z step and exposure, so the
-       printer must take the table's values: Version x 0x10 (current UVtools;
-       older UVtools wrote 0x20 for v3). */
+       printer must take the table's values. Current UVtools writes Version x
+       0x10 when any layer differs from the globals: 0x30 for v3, 0x40 for v4
+       (ChituboxFile.cs @7b510f0d, PERLAYER_SETTINGS_CTBv3 and the
+       SlicerInfoSettings.PerLayerSettings line of OnBeforeEncode). UVtools
+       before 3.9.4 wrote 0x20 for v3; its CHANGELOG says the change "may fix
+       some recent problems where printer doesn't respect per layer
+       settings". */
     s[39] = (unsigned char)(w->version * 0x10);
     {
         int fixed;
@@ -350,6 +389,7 @@ static int encode(const void *writer, size_t k, const unsigned char *image, size
     for (y = 0; y < d->height; y++) mask_row_runs(image + (size_t)y * stride, d->bits, d->width, take_run, &c);
     emit_run(&c);
     if (c.failed) return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    layer_crypt(w->key, (uint32_t)k, blob->data, blob->size);
     if (blob->size > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a ctb layer can hold", w->file.path,
                         k + 1, blob->size);
@@ -368,7 +408,7 @@ static int put(void *writer, size_t k, job_blob *blob)
     entry = w->table + k * CTB_LAYER_DEF;
     put_le_f32(entry, L->z_top);
     put_le_f32(entry + 4, L->exposure_s);
-    put_le_f32(entry + 8, light_off_s(w));
+    put_le_f32(entry + 8, light_off_s(w, is_bottom(w, k)));
     put_le32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
     put_le32(entry + 16, (uint32_t)size);
     put_le32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
@@ -376,8 +416,8 @@ static int put(void *writer, size_t k, job_blob *blob)
     /* LayerDefEx repeats the entry byte for byte, then the layer's moves. */
     memcpy(ex, entry, CTB_LAYER_DEF);
     put_le32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
-    put_le_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
-    put_le_f32(ex + 44, lift_speed(w, k));
+    put_le_f32(ex + 40, job_lift_mm(&d->motion, is_bottom(w, k))); /* v4: the total of both stages */
+    put_le_f32(ex + 44, mm_per_min(job_lift_speed(&d->motion, is_bottom(w, k))));
     put_le_f32(ex + 56, mm_per_min(d->motion.retract_speed));
     if (w->version >= 4) {
         memcpy(ex + 52, ex + 44, 4); /* the second stage: 0 mm at the same speeds */
@@ -432,6 +472,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     }
     w->d = d;
     w->version = version;
+    w->key = job_key(d);
     w->machine = d->preset && d->preset->machine ? d->preset->machine : "adaslice";
 
     write_zeros(w, 0, CTB_HEADER);

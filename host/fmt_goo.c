@@ -21,6 +21,7 @@
 #include "report.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
@@ -67,18 +68,35 @@ static int write_failed(goo_writer *w)
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
-/* The bottom lift falls back to the normal one when the desc leaves it 0: a
-   printer that does not peel tears the first layers off the plate. */
-static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
-static double bottom_lift_speed(const job_motion *m)
-{
-    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
-}
-
 static double build_height_mm(const job_desc *d)
 {
     /* An unknown build height: the job's own is the least the printer has. */
     return d->z_max_mm > 0 ? d->z_max_mm : d->layers[d->layer_count - 1].z_top;
+}
+
+/* Advance mode ("0: normal mode; 1: advance mode, printing use the value of
+   'Layer Definition Content'", Elegoo's specification) is what makes the
+   printer take each layer's own Z and exposure. UVtools sets it only when a
+   layer differs from the header's globals (GooFile.cs @7b510f0d,
+   OnBeforeEncode: SupportPerLayerSettings && UsingPerLayerSettings), as
+   printers have frozen or started high with it on (UVtools #997, #1013,
+   #1040); so a job the globals describe leaves it off. That is a job whose
+   layers, the top one aside, each end at layer_height_mm times its number
+   and are exposed for the header's bottom or normal time (UVtools'
+   Layer.IsUsingGlobalParameters, with its tolerances: 0.001 mm, 0.01 s).
+   The top layer is what is left of the part: without advance mode it is
+   cured a whole layer thick at the normal time, which is what the normal
+   time is for. */
+static int advance_mode(const job_desc *d)
+{
+    size_t k;
+    for (k = 0; k + 1 < d->layer_count; k++) {
+        const job_layer *L = &d->layers[k];
+        double exposure = k < d->bottom_layers ? d->bottom_exposure_s : d->exposure_s;
+        if (fabs(L->z_top - d->layer_height_mm * (double)(k + 1)) > 0.001 || fabs(L->exposure_s - exposure) > 0.01)
+            return 1;
+    }
+    return 0;
 }
 
 /* ---- the header -------------------------------------------------------- */
@@ -147,24 +165,23 @@ static void put_fields(const goo_writer *w, unsigned char *f)
     put_be_f32(f + 55, wait_s); /* WaitTimeBeforeCure */
     put_be_f32(f + 59, d->bottom_exposure_s);
     put_be32(f + 63, d->bottom_layers);
-    put_be_f32(f + 67, bottom_lift_mm(m));
-    put_be_f32(f + 71, bottom_lift_speed(m));
+    put_be_f32(f + 67, job_lift_mm(m, 1));
+    put_be_f32(f + 71, mm_per_min(job_lift_speed(m, 1)));
     put_be_f32(f + 75, m->lift_mm);
     put_be_f32(f + 79, mm_per_min(m->lift_speed));
     /* One-stage moves: retract all the way the lift went; the second stages
        are 0 mm at the first stages' speeds. */
-    put_be_f32(f + 83, bottom_lift_mm(m));
+    put_be_f32(f + 83, job_lift_mm(m, 1));
     put_be_f32(f + 87, mm_per_min(m->retract_speed));
     put_be_f32(f + 91, m->lift_mm);
     put_be_f32(f + 95, mm_per_min(m->retract_speed));
-    put_be_f32(f + 103, bottom_lift_speed(m));
+    put_be_f32(f + 103, mm_per_min(job_lift_speed(m, 1)));
     put_be_f32(f + 111, mm_per_min(m->lift_speed));
     put_be_f32(f + 119, mm_per_min(m->retract_speed));
     put_be_f32(f + 127, mm_per_min(m->retract_speed));
     put_be16(f + 131, 255);
     put_be16(f + 133, 255);
-    /* Advance mode: the printer takes every layer's own Z, exposure and moves. */
-    f[135] = 1;
+    f[135] = (unsigned char)advance_mode(d);
     put_be32(f + 136, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
     put_be_f32(f + 140, d->volume_mm3);
     /* MaterialGrams: UVtools writes the millilitres there; we know no density. */
@@ -255,8 +272,8 @@ static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
     const job_desc *d = w->d;
     const job_motion *m = &d->motion;
     int bottom = k < d->bottom_layers;
-    double lift = bottom ? bottom_lift_mm(m) : m->lift_mm;
-    double speed = bottom ? bottom_lift_speed(m) : mm_per_min(m->lift_speed);
+    double lift = job_lift_mm(m, bottom);
+    double speed = mm_per_min(job_lift_speed(m, bottom));
     put_be_f32(e + 2, build_height_mm(d)); /* PausePositionZ, as UVtools and mslicer */
     put_be_f32(e + 6, d->layers[k].z_top);
     put_be_f32(e + 10, d->layers[k].exposure_s);

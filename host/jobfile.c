@@ -102,6 +102,24 @@ int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t 
     return job_put(w, k, &blob);
 }
 
+double job_lift_mm(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm;
+}
+
+double job_lift_speed(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed;
+}
+
+double job_peel_s(const job_motion *m, int bottom)
+{
+    double lift = job_lift_mm(m, bottom), up = job_lift_speed(m, bottom), t = 0;
+    if (up > 0) t += lift / up;
+    if (m->retract_speed > 0) t += lift / m->retract_speed;
+    return t;
+}
+
 time_t job_time(int *fixed)
 {
     const char *epoch = getenv("SOURCE_DATE_EPOCH");

@@ -146,6 +146,15 @@ const job_format *job_format_for_path(const char *path);
 
 /* ---- helpers the formats share (and maskrows.h) ---------------------- */
 
+/* The peel after a layer, bottom (one of the first bottom_layers) or not:
+   its lift, mm, and speed, mm/s. The bottom ones fall back to the normal
+   ones where the motion leaves them 0: a printer that does not peel tears
+   the first layers off the plate. */
+double job_lift_mm(const job_motion *m, int bottom);
+double job_lift_speed(const job_motion *m, int bottom);
+/* Seconds that peel takes: up at the lift speed, back at retract_speed. */
+double job_peel_s(const job_motion *m, int bottom);
+
 /* When the job was made, for the headers that carry it: SOURCE_DATE_EPOCH
    when set (the reproducible-builds convention: the same job, the same
    bytes), else now. *fixed says which; a fixed time is shown in UTC. */

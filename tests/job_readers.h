@@ -4,7 +4,9 @@
        v2/v3, 0x12FD0106 or 0xFF220810 for v4/v5), little-endian;
      - Elegoo .goo "V3.0", big-endian.
    Written from the byte layouts alone (see the notes on resin formats); no
-   code from any slicer.  Only libc.
+   code from any slicer. CTB layer data is read through the XOR stream of the
+   header's EncryptionKey as UVtools documents it in ChituboxFile.cs
+   (LayerRleCryptBuffer).  Only libc.
 
    Every offset and size is checked against the buffer; every layer image must
    decode to exactly width*height pixels; on any problem the reader returns -1
@@ -91,6 +93,10 @@ void jr_free(jr_job *job);
    stored, decoded as (v>>1)<<1|1 except 0): what to compare decoded CTB
    images against. */
 unsigned char jr_ctb_grey(unsigned char v);
+
+/* CTB layer n bytes of layer `layer` (from 0) in clear: the XOR stream of
+   the header's EncryptionKey (UVtools' published scheme; key 0: a copy). */
+void jr_ctb_decrypt(unsigned key, unsigned layer, const unsigned char *in, size_t n, unsigned char *out);
 
 #ifdef __cplusplus
 }

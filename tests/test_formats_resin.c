@@ -382,13 +382,30 @@ static void check_sphere(int as, int bits, const char *name)
         unsigned v = as == AS_CTB3 ? 3 : 4;
         CHECKF(r.version == v && r.magic == (v == 3 ? 0x12FD0086u : 0x12FD0106u), "%s: version %u magic 0x%08X", name,
                r.version, r.magic);
-        CHECKF(r.per_layer_raw == v * 0x10, "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
+        /* PerLayerSettings as current UVtools writes it for per-layer jobs:
+           Version x 0x10, 0x30 for v3 and 0x40 for v4 (sn4k3/UVtools @7b510f0d,
+           UVtools.Core/FileFormats/ChituboxFile.cs:44-45, PERLAYER_SETTINGS_CTBv3/v4,
+           and :1771-1773 in OnBeforeEncode). */
+        CHECKF(r.per_layer_raw == (v == 3 ? 0x30u : 0x40u), "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
         CHECKF(r.anti_alias == (bits == 8 ? 4 : 1), "%s: AntiAliasLevel %d", name, r.anti_alias);
-        CHECK(r.ctb_aa_flag == 0x0F && r.ctb_encryption_key == 0);
+        CHECK(r.ctb_aa_flag == 0x0F);
+        /* EncryptionKey: UVtools writes one in [255, 2^31 - 1) into every ctb
+           (@7b510f0d ChituboxFile.cs:1786-1789, new Random().Next(byte.MaxValue,
+           int.MaxValue)); the layers decode below through its XOR stream. */
+        CHECKF(r.ctb_encryption_key >= 255 && r.ctb_encryption_key < 0x7FFFFFFFu, "%s: EncryptionKey %u", name,
+               r.ctb_encryption_key);
         CHECK(same_f32(r.total_height_mm, j->layers[19].z_top));
         CHECK(r.mirror == (bits == 8));
-        /* Light-off (v3) or a rest before cure (v4), never both. */
-        CHECK(same_f32(r.light_off_s, v == 3 ? 1.25 : 0));
+        /* Light-off (v3) or a rest before cure (v4), never both. v3's light-off
+           runs through the peel, so UVtools writes lift / lift speed + lift /
+           retract speed + the rest, to 0.01 s (@7b510f0d ChituboxFile.cs:1358-1371,
+           WaitTimeBeforeCure below v4 -> FileFormat.cs:6405-6423 ->
+           Operations/OperationCalculator.cs:195-216): normal layers 6 mm at
+           1.5 mm/s up and 3 mm/s down, 4 + 2 + 1.25 = 7.25 s; bottom layers 8 mm
+           at 1 mm/s up, 8 + 2.667 + 1.25 = 11.92 s. */
+        CHECK(same_f32(r.light_off_s, v == 3 ? 7.25 : 0));
+        CHECK(same_f32(le_f32(file + le_u32(file + 84) + 32), v == 3 ? 11.92 : 0)); /* BottomLightOffDelay */
+        CHECK(same_f32(le_f32(file + le_u32(file + 84) + 36), v == 3 ? 7.25 : 0));  /* LightOffDelay */
         if (v == 4) CHECK(r.ctb_v4_last_layer_index == 19 && r.ctb_v4_disclaimer_length == 320);
         /* The volume is written at close: PrintParameters+20, in ml. */
         CHECK(same_f32(le_f32(file + le_u32(file + 84) + 20), 1.2345));
@@ -421,7 +438,7 @@ static void check_sphere(int as, int bits, const char *name)
                L->retract_speed);
         CHECK(same_f32(L->lift2_mm, 0) && same_f32(L->retract2_mm, 0));
         CHECK(same_f32(L->pwm, 255));
-        if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, 1.25) && same_f32(L->wait_before_cure_s, 0));
+        if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, bottom ? 11.92 : 7.25) && same_f32(L->wait_before_cure_s, 0));
         else CHECK(same_f32(L->light_off_s, 0) && same_f32(L->wait_before_cure_s, 1.25));
         if (as == AS_CTB4) CHECK(same_f32(L->lift2_speed, speed) && same_f32(L->retract2_speed, 180));
         if (as == AS_GOO) CHECK(same_f32(L->retract_mm, lift) && L->pause == 0);
@@ -470,6 +487,87 @@ static void ctb_defaults_to_v4_and_adaslice(void)
     free(file);
     remove(in_dir("plain.ctb"));
     job_free(j);
+}
+
+/* The layers are coded with the header's key, as UVtools codes every ctb it
+   writes (sn4k3/UVtools @7b510f0d, UVtools.Core/FileFormats/ChituboxFile.cs:
+   1786-1789 draws the key, :2225-2245 LayerRleCryptBuffer XORs the layers):
+   the key is one UVtools could have drawn, the layers decode to what was
+   handed in only through it (read with the key field zeroed, they do not),
+   and the same job gets the same key. */
+static void ctb_layers_are_coded_with_the_key(void)
+{
+    static const double t[5] = {0.05, 0.05, 0.04, 0.03, 0.05};
+    int as;
+    for (as = AS_CTB3; as <= AS_CTB4; as++) {
+        test_job *j = job_new(48, 40, 8, 5, t);
+        jr_job r, clear;
+        unsigned char *file = NULL, *again = NULL;
+        size_t size = 0, again_size = 0, k;
+        int x, y;
+        for (k = 0; k < 5; k++)
+            for (y = 0; y < 40; y++)
+                for (x = 0; x < 48; x++) set_pixel(j, k, x, y, (unsigned)((x * 5 + y * 9 + (int)k * 13) % 256));
+        if (write_and_read(j, as, "keyed.ctb", &r, &file, &size)) {
+            unsigned key = r.ctb_encryption_key;
+            CHECKF(key >= 255 && key < 0x7FFFFFFFu, "v%u: EncryptionKey %u", r.version, key);
+            for (k = 0; k < 5; k++) CHECK(image_differences(j, as, &r, k, "keyed.ctb") == 0);
+            jr_free(&r);
+            memset(file + 100, 0, 4);
+            if (jr_read_ctb(file, size, &clear) == 0) {
+                long bad = 0;
+                for (k = 0; k < 5; k++)
+                    for (y = 0; y < 40; y++)
+                        for (x = 0; x < 48; x++)
+                            bad += clear.layers[k].image[(size_t)y * 48 + (size_t)x] != jr_ctb_grey(source_grey(j, k, x, y));
+                CHECKF(bad > 0, "v%u: the layers read the same without the key", clear.version);
+                jr_free(&clear);
+            }
+            if (write_and_read(j, as, "keyed.ctb", &r, &again, &again_size)) {
+                CHECKF(r.ctb_encryption_key == key, "the same job got keys %u and %u", key, r.ctb_encryption_key);
+                jr_free(&r);
+            }
+        }
+        free(file);
+        free(again);
+        remove(in_dir("keyed.ctb"));
+        job_free(j);
+    }
+}
+
+/* GOO's advance mode (header 195445) is on only when a layer differs from
+   the header's globals, as UVtools writes it (sn4k3/UVtools @7b510f0d,
+   UVtools.Core/FileFormats/GooFile.cs:1205, PerLayerSettings =
+   SupportPerLayerSettings && UsingPerLayerSettings; FileFormat.cs:1988-1995;
+   Layers/Layer.cs:1163-1240, a layer's Z within 0.001 mm of LayerHeight x
+   its number, its exposure within 0.01 s of the global one): off for a
+   uniform plan (its top layer, what is left of the part, thinner), on for
+   adaptive layers and for a uniform one with an exposure of its own. Every
+   layer's own Z is stored either way. */
+static void goo_advance_mode_only_when_layers_differ(void)
+{
+    static const double uniform[6] = {0.05, 0.05, 0.05, 0.05, 0.05, 0.03};
+    static const double adaptive[6] = {0.05, 0.05, 0.05, 0.04, 0.05, 0.05};
+    int pass;
+    for (pass = 0; pass < 3; pass++) {
+        test_job *j = job_new(32, 24, 1, 6, pass == 1 ? adaptive : uniform);
+        jr_job r;
+        unsigned char *file = NULL;
+        size_t size = 0, k;
+        j->d.layer_height_mm = pass == 1 ? 0.04 : 0.05; /* the thinnest, the top one aside */
+        j->d.exposure_s = 1.2 * exp(j->d.layer_height_mm / 0.08);
+        if (pass == 2) j->layers[3].exposure_s += 0.5;
+        if (write_and_read(j, AS_GOO, "advance.goo", &r, &file, &size)) {
+            unsigned want = pass == 0 ? 0 : 1;
+            CHECKF(r.per_layer_raw == want, "%s: advance mode %u", pass == 0 ? "uniform" : pass == 1 ? "adaptive" : "own exposure",
+                   r.per_layer_raw);
+            for (k = 0; k < 6; k++) CHECK(same_f32(r.layers[k].z_mm, j->layers[k].z_top));
+            jr_free(&r);
+        }
+        free(file);
+        remove(in_dir("advance.goo"));
+        job_free(j);
+    }
 }
 
 /* ---- 2. corruption is caught ------------------------------------------- */
@@ -718,8 +816,13 @@ static void runs_longer_than_a_code_are_cut(void)
                 CHECK(lit->data_size == 7 && !memcmp(file + lit->data_offset, want_lit, 7));
                 CHECK(dark->data_size == 7 && !memcmp(file + dark->data_offset, want_dark, 7));
             } else {
-                CHECK(lit->data_size == 6 && !memcmp(file + lit->data_offset, ctb_lit, 6));
-                CHECK(dark->data_size == 6 && !memcmp(file + dark->data_offset, ctb_dark, 6));
+                unsigned char clear[2][6];
+                CHECK(lit->data_size == 6 && dark->data_size == 6);
+                if (lit->data_size == 6 && dark->data_size == 6) {
+                    jr_ctb_decrypt(r.ctb_encryption_key, 0, file + lit->data_offset, 6, clear[0]);
+                    jr_ctb_decrypt(r.ctb_encryption_key, 1, file + dark->data_offset, 6, clear[1]);
+                    CHECK(!memcmp(clear[0], ctb_lit, 6) && !memcmp(clear[1], ctb_dark, 6));
+                }
             }
             jr_free(&r);
         }
@@ -741,6 +844,8 @@ void test_formats_resin(void)
     RUN(sphere_as_ctb_v4_on_a_non_square_panel);
     RUN(sphere_as_goo);
     RUN(ctb_defaults_to_v4_and_adaslice);
+    RUN(ctb_layers_are_coded_with_the_key);
+    RUN(goo_advance_mode_only_when_layers_differ);
     RUN(flipped_layer_bytes_are_detected);
     RUN(failures_leave_no_file);
     RUN(odd_width_blank_full_and_noisy_layers);
