@@ -24,7 +24,6 @@
 #include "report.h"
 #include "../adaslice_mcu.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,34 +61,10 @@ typedef struct ctb_writer {
     uint32_t small_preview_at, print_params_at, slicer_at, disclaimer_at, params_v4_at, table_at;
     unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
     off_t end;                  /* where the next layer's LayerDefEx goes */
-    int write_errno;
 } ctb_writer;
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
-static void write_at(ctb_writer *w, off_t at, const void *bytes, size_t n)
-{
-    if (w->write_errno) return;
-    errno = 0;
-    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
-        w->write_errno = errno ? errno : EIO;
-}
-
-static void write_zeros(ctb_writer *w, off_t at, size_t n)
-{
-    static const unsigned char zero[4096];
-    if (!w->write_errno && fseeko(w->file.f, at, SEEK_SET) != 0) w->write_errno = errno ? errno : EIO;
-    while (n && !w->write_errno) {
-        size_t part = n < sizeof zero ? n : sizeof zero;
-        if (fwrite(zero, 1, part, w->file.f) != part) w->write_errno = errno ? errno : EIO;
-        n -= part;
-    }
-}
-
-static int write_failed(ctb_writer *w)
-{
-    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
-}
 
 static int is_bottom(const ctb_writer *w, size_t k) { return k < w->d->bottom_layers; }
 
@@ -189,12 +164,12 @@ static int write_preview(ctb_writer *w, uint32_t at, int width, int height, uint
     put_le32(head + 4, (uint32_t)height);
     put_le32(head + 8, at + CTB_PREVIEW_HEADER);
     put_le32(head + 12, (uint32_t)len);
-    write_at(w, at, head, sizeof head);
-    write_at(w, at + CTB_PREVIEW_HEADER, code, len);
+    job_file_write_at(&w->file, at, head, sizeof head);
+    job_file_write_at(&w->file, at + CTB_PREVIEW_HEADER, code, len);
     free(rgb);
     free(code);
     *next = at + CTB_PREVIEW_HEADER + (uint32_t)len;
-    return w->write_errno ? write_failed(w) : RC_OK;
+    return job_file_check(&w->file);
 }
 
 /* ---- the header blocks: placeholders at open, final at close ----------- */
@@ -234,7 +209,7 @@ static void write_header(ctb_writer *w)
     put_le32(h + 100, w->key);
     put_le32(h + 104, w->slicer_at);
     put_le32(h + 108, CTB_SLICER_INFO);
-    write_at(w, 0, h, sizeof h);
+    job_file_write_at(&w->file, 0, h, sizeof h);
 }
 
 static void write_print_params(ctb_writer *w)
@@ -250,7 +225,7 @@ static void write_print_params(ctb_writer *w)
     put_le_f32(p + 32, light_off_s(w, 1));
     put_le_f32(p + 36, light_off_s(w, 0));
     put_le32(p + 40, d->bottom_layers);
-    write_at(w, w->print_params_at, p, sizeof p);
+    job_file_write_at(&w->file, w->print_params_at, p, sizeof p);
 }
 
 static void write_slicer_info(ctb_writer *w)
@@ -286,8 +261,8 @@ static void write_slicer_info(ctb_writer *w)
     put_le32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
     put_le32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
     put_le_f32(s + 52, rest_before_cure_s(w));
-    write_at(w, w->slicer_at, s, sizeof s);
-    write_at(w, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
+    job_file_write_at(&w->file, w->slicer_at, s, sizeof s);
+    job_file_write_at(&w->file, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
 }
 
 static void write_params_v4(ctb_writer *w)
@@ -305,7 +280,7 @@ static void write_params_v4(ctb_writer *w)
     put_le32(p + 52, (uint32_t)(d->layer_count - 1));
     put_le32(p + 72, w->disclaimer_at);
     put_le32(p + 76, CTB_DISCLAIMER_LEN);
-    write_at(w, w->params_v4_at, p, sizeof p);
+    job_file_write_at(&w->file, w->params_v4_at, p, sizeof p);
 }
 
 static void write_blocks(ctb_writer *w)
@@ -426,11 +401,11 @@ static int put(void *writer, size_t k, job_blob *blob)
     }
     put_le_f32(ex + 80, 255.0);
     /* the code's size is known, so both go out in order, with no seek back */
-    write_at(w, w->end, ex, sizeof ex);
-    if (!w->write_errno && fwrite(blob->data, 1, blob->size, w->file.f) != blob->size) w->write_errno = errno ? errno : EIO;
+    job_file_write_at(&w->file, w->end, ex, sizeof ex);
+    job_file_append(&w->file, blob->data, blob->size);
     free(blob->data);
     blob->data = NULL;
-    if (w->write_errno) return write_failed(w);
+    if (w->file.err) return job_file_check(&w->file);
     w->end = data_at + (off_t)size;
     return RC_OK;
 }
@@ -475,7 +450,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     w->key = job_key(d);
     w->machine = d->preset && d->preset->machine ? d->preset->machine : "adaslice";
 
-    write_zeros(w, 0, CTB_HEADER);
+    job_file_write_at(&w->file, 0, NULL, CTB_HEADER);
     if ((rc = write_preview(w, CTB_HEADER, 400, 300, &w->small_preview_at)) != RC_OK ||
         (rc = write_preview(w, w->small_preview_at, 200, 125, &w->print_params_at)) != RC_OK) {
         free_writer(w);
@@ -487,7 +462,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         w->disclaimer_at = at;
         w->params_v4_at = at + CTB_DISCLAIMER_LEN;
         at = w->params_v4_at + CTB_PARAMS_V4;
-        write_at(w, w->disclaimer_at, ctb_disclaimer, CTB_DISCLAIMER_LEN);
+        job_file_write_at(&w->file, w->disclaimer_at, ctb_disclaimer, CTB_DISCLAIMER_LEN);
     }
     w->table_at = at;
     table_end = (uint64_t)at + (uint64_t)d->layer_count * CTB_LAYER_DEF;
@@ -497,10 +472,9 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         return rc;
     }
     write_blocks(w);
-    write_zeros(w, at, d->layer_count * CTB_LAYER_DEF);
+    job_file_write_at(&w->file, at, NULL, d->layer_count * CTB_LAYER_DEF);
     w->end = (off_t)table_end;
-    if (w->write_errno) {
-        rc = write_failed(w);
+    if ((rc = job_file_check(&w->file)) != RC_OK) {
         free_writer(w);
         return rc;
     }
@@ -514,9 +488,9 @@ static int close_job(void *writer, int ok)
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
     if (ok) {
-        write_at(w, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
+        job_file_write_at(&w->file, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
         write_blocks(w);
-        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+        rc = job_file_commit(&w->file);
     }
     free_writer(w); /* after a commit there is nothing left to discard */
     return rc;

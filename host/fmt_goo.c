@@ -20,7 +20,6 @@
 #include "jobfile.h"
 #include "report.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,7 +41,6 @@ typedef struct goo_writer {
     job_file file;
     const job_desc *d;          /* read again at close: the volume is known only then */
     off_t end;                  /* where the next layer's definition goes */
-    int write_errno;
 } goo_writer;
 
 /* A fixed-width text field: cut to leave room for the NUL, NUL-padded. */
@@ -53,18 +51,6 @@ static void put_text(unsigned char *p, size_t width, const char *s)
     memcpy(p, s, n);
 }
 
-static void write_at(goo_writer *w, off_t at, const void *bytes, size_t n)
-{
-    if (w->write_errno) return;
-    errno = 0;
-    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
-        w->write_errno = errno ? errno : EIO;
-}
-
-static int write_failed(goo_writer *w)
-{
-    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
-}
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
@@ -196,8 +182,8 @@ static void write_header_fields(goo_writer *w)
     unsigned char names[GOO_SMALL_PREVIEW] = {0}, fields[GOO_HEADER - GOO_FIELDS] = {0};
     put_names(w, names);
     put_fields(w, fields);
-    write_at(w, 0, names, sizeof names);
-    write_at(w, GOO_FIELDS, fields, sizeof fields);
+    job_file_write_at(&w->file, 0, names, sizeof names);
+    job_file_write_at(&w->file, GOO_FIELDS, fields, sizeof fields);
 }
 
 /* ---- layer images: 0x55, chunks, checksum -------------------------------- */
@@ -323,12 +309,12 @@ static int put(void *writer, size_t k, job_blob *blob)
     size_t size = blob->size;
     put_layer_def(w, k, def);
     put_be32(def + 66, (uint32_t)size);
-    write_at(w, w->end, def, sizeof def);
-    if (!w->write_errno && (fwrite(blob->data, 1, size, w->file.f) != size || fwrite("\r\n", 1, 2, w->file.f) != 2))
-        w->write_errno = errno ? errno : EIO;
+    job_file_write_at(&w->file, w->end, def, sizeof def);
+    job_file_append(&w->file, blob->data, size);
+    job_file_append(&w->file, "\r\n", 2);
     free(blob->data);
     blob->data = NULL;
-    if (w->write_errno) return write_failed(w);
+    if (w->file.err) return job_file_check(&w->file);
     w->end += (off_t)(GOO_LAYER_DEF + size + 2);
     return RC_OK;
 }
@@ -364,9 +350,9 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     w->d = d;
     if ((rc = put_preview(w, header + GOO_SMALL_PREVIEW, 116)) == RC_OK &&
         (rc = put_preview(w, header + GOO_BIG_PREVIEW, 290)) == RC_OK) {
-        write_at(w, 0, header, GOO_HEADER);
+        job_file_write_at(&w->file, 0, header, GOO_HEADER);
         write_header_fields(w);
-        if (w->write_errno) rc = write_failed(w);
+        rc = job_file_check(&w->file);
     }
     free(header);
     if (rc != RC_OK) {
@@ -386,9 +372,9 @@ static int close_job(void *writer, int ok)
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
     if (ok) {
-        write_at(w, w->end, ending, sizeof ending);
+        job_file_write_at(&w->file, w->end, ending, sizeof ending);
         write_header_fields(w);
-        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+        rc = job_file_commit(&w->file);
     }
     job_file_discard(&w->file); /* after a commit there is nothing left to discard */
     free(w);

@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 const job_format *const JOB_FORMATS[] = {&JOB_FORMAT_DIR, &JOB_FORMAT_CTB, &JOB_FORMAT_GOO, &JOB_FORMAT_CHITU_ZIP,
@@ -157,10 +158,39 @@ int job_file_open(job_file *jf, const char *path)
     return RC_OK;
 }
 
+void job_file_append(job_file *jf, const void *src, size_t n)
+{
+    static const unsigned char zero[4096];
+    if (jf->err) return;
+    errno = 0;
+    while (n) {
+        size_t part = src || n < sizeof zero ? n : sizeof zero;
+        if (fwrite(src ? src : zero, 1, part, jf->f) != part) {
+            jf->err = errno ? errno : EIO;
+            return;
+        }
+        if (src) src = (const unsigned char *)src + part;
+        n -= part;
+    }
+}
+
+void job_file_write_at(job_file *jf, uint64_t at, const void *src, size_t n)
+{
+    if (jf->err) return;
+    errno = 0;
+    if (fseeko(jf->f, (off_t)at, SEEK_SET) != 0) jf->err = errno ? errno : EIO;
+    else job_file_append(jf, src, n);
+}
+
+int job_file_check(const job_file *jf)
+{
+    return jf->err ? complain(RC_FAIL, "cannot write %s: %s", jf->path, strerror(jf->err)) : RC_OK;
+}
+
 int job_file_commit(job_file *jf)
 {
     /* errno after an earlier failed write may be anyone's: say EIO */
-    int err = ferror(jf->f) ? EIO : 0;
+    int err = jf->err ? jf->err : ferror(jf->f) ? EIO : 0;
     if (fflush(jf->f) != 0 && !err) err = errno;
     if (fclose(jf->f) != 0 && !err) err = errno;
     jf->f = NULL;

@@ -10,7 +10,6 @@
 #include "report.h"
 #include "../adaslice_mcu.h"
 
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -58,11 +57,9 @@ static void put_common(unsigned char *p, const char *name, size_t len, int metho
 
 static int write_bytes(zip_writer *z, const void *data, size_t size)
 {
-    errno = 0;
-    if (size && fwrite(data, 1, size, z->file.f) != size)
-        return complain(RC_FAIL, "cannot write %s: %s", z->file.path, strerror(errno ? errno : EIO));
+    job_file_append(&z->file, data, size);
     z->offset += size;
-    return RC_OK;
+    return job_file_check(&z->file);
 }
 
 int zip_open(zip_writer **z, const char *path)
