@@ -168,9 +168,10 @@ typedef struct job_file {
     int err;                     /* the first failed write's errno (0: none) */
 } job_file;
 int job_file_open(job_file *jf, const char *path);
-/* n bytes at byte `at` (src NULL: zeros), or where the last write ended.
-   After a failure they write nothing and err keeps why, so a writer puts a
-   whole block and looks once: job_file_check, or the commit, complains. */
+/* n bytes (src NULL: zeros) at byte `at`, or (append) where the last write
+   ended. After a failure they write nothing and err keeps why, so a writer
+   puts a whole block and looks once: job_file_check, or the commit,
+   complains. */
 void job_file_write_at(job_file *jf, uint64_t at, const void *src, size_t n);
 void job_file_append(job_file *jf, const void *src, size_t n);
 /* RC_OK, or the complaint "cannot write PATH: why" made for err. */
