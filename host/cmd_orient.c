@@ -247,36 +247,40 @@ int cmd_orient(int argc, char **argv)
         rc = write_atomic(o.map, write_map, &m);
     }
     if (!rc && a.json) {
-        printf("{\n  \"model\": ");
-        json_quote(stdout, a.model);
-        printf(",\n  \"repair\": ");
-        model_report_json(stdout, &repair);
-        printf(",\n  \"directions\": %zu,\n  \"alpha\": ", o.dirs);
-        json_write_number(stdout, o.alpha);
-        printf(",\n  \"metric\": \"%s\",\n  \"seconds\": %.3f,\n  \"best\": [", METRIC_NAMES[a.metric], (now_ms() - t0) / 1000);
+        json_writer w;
+        json_init(&w, stdout);
+        json_begin_object(&w, NULL, 0);
+        json_string(&w, "model", a.model);
+        model_report_json(&w, "repair", &repair);
+        json_int(&w, "directions", (long long)o.dirs);
+        json_number(&w, "alpha", o.alpha);
+        json_string(&w, "metric", METRIC_NAMES[a.metric]);
+        json_number(&w, "seconds", (now_ms() - t0) / 1000);
+        json_begin_array(&w, "best", 0);
         for (i = 0; i < count; i++) {
             const adaslice_direction_score *s = &scores[minima[i]];
             double r[9], axis[3], deg;
-            int k;
             adaslice_rotation_to_z(s->direction, r);
             axis_angle(s->direction, axis, &deg);
-            printf("%s\n    {\"direction\": [%.9g, %.9g, %.9g], \"layers\": %zu, \"mean_error\": ", i ? "," : "",
-                   s->direction[0], s->direction[1], s->direction[2], s->layers);
-            json_write_number(stdout, s->mean_error);
-            printf(", \"worst_error\": ");
-            json_write_number(stdout, s->worst_error);
-            printf(", \"F\": ");
-            json_write_number(stdout, s->score);
-            printf(", \"rotation\": [");
-            for (k = 0; k < 9; k++) printf("%s%.9g", k ? ", " : "", r[k]);
-            printf("], \"axis\": [%.9g, %.9g, %.9g], \"angle_deg\": %.9g}", axis[0], axis[1], axis[2], deg);
+            json_begin_object(&w, NULL, 1);
+            json_numbers(&w, "direction", s->direction, 3);
+            json_int(&w, "layers", (long long)s->layers);
+            json_number(&w, "mean_error", s->mean_error);
+            json_number(&w, "worst_error", s->worst_error);
+            json_number(&w, "F", s->score);
+            json_numbers(&w, "rotation", r, 9);
+            json_numbers(&w, "axis", axis, 3);
+            json_number(&w, "angle_deg", deg);
+            json_end(&w);
         }
-        printf("\n  ],\n  \"as_loaded\": {\"feasible\": %s, \"layers\": %zu, \"worst_error\": ",
-               scores[o.dirs].feasible ? "true" : "false", scores[o.dirs].layers);
-        json_write_number(stdout, scores[o.dirs].worst_error);
-        printf(", \"F\": ");
-        json_write_number(stdout, scores[o.dirs].score);
-        printf("}\n}\n");
+        json_end(&w);
+        json_begin_object(&w, "as_loaded", 1);
+        json_bool(&w, "feasible", scores[o.dirs].feasible);
+        json_int(&w, "layers", (long long)scores[o.dirs].layers);
+        json_number(&w, "worst_error", scores[o.dirs].worst_error);
+        json_number(&w, "F", scores[o.dirs].score);
+        json_end(&w);
+        json_end(&w);
     } else if (!rc) {
         size_t feasible = 0;
         for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;

@@ -139,104 +139,104 @@ static void print_summary(const plan_args *a, const plan_job *j)
     if (a->compare) print_compare(a, j);
 }
 
-static void print_json_plan_fields(FILE *f, const adaslice_plan *p)
+static void json_plan_fields(json_writer *w, const adaslice_plan *p)
 {
-    fprintf(f, "\"layers\": %zu, \"worst_error\": ", p->layer_count);
-    json_write_number(f, p->worst_error);
-    fputs(", \"total_error\": ", f);
-    json_write_number(f, p->total_error);
-    fprintf(f, ", \"over_eps\": %zu", p->over_eps);
+    json_int(w, "layers", (long long)p->layer_count);
+    json_number(w, "worst_error", p->worst_error);
+    json_number(w, "total_error", p->total_error);
+    json_int(w, "over_eps", (long long)p->over_eps);
 }
 
 static void print_json(const plan_args *a, const plan_job *j)
 {
     const adaslice_plan *p = &j->plan[a->method];
     const adaslice_profile *pr = &j->profile;
+    json_writer w;
     size_t k;
     int r;
     cure_args c;
     compare_cure(a, &c);
-    printf("{\n  \"model\": ");
-    json_quote(stdout, a->model ? a->model : a->profile);
-    printf(",\n  \"source\": \"%s\",\n  \"format\": ", a->model ? "mesh" : "profile");
-    if (a->model) json_quote(stdout, format_name(j->format));
-    else printf("null");
+    json_init(&w, stdout);
+    json_begin_object(&w, NULL, 0);
+    json_string(&w, "model", a->model ? a->model : a->profile);
+    json_string(&w, "source", a->model ? "mesh" : "profile");
+    json_string(&w, "format", a->model ? format_name(j->format) : NULL);
     if (a->model) {
-        printf(",\n  \"triangles\": %zu,\n  \"degenerate_dropped\": %zu,\n  \"repair\": ", j->triangles, j->degenerate);
-        model_report_json(stdout, &j->repair);
+        json_int(&w, "triangles", (long long)j->triangles);
+        json_int(&w, "degenerate_dropped", (long long)j->degenerate);
+        model_report_json(&w, "repair", &j->repair);
     } else {
-        printf(",\n  \"triangles\": null,\n  \"degenerate_dropped\": null,\n  \"repair\": null");
+        json_null(&w, "triangles");
+        json_null(&w, "degenerate_dropped");
+        json_null(&w, "repair");
     }
-    printf(",\n  \"metric\": \"%s\",\n  \"sampler\": \"%s\",\n  \"unsampled_bins\": %zu,\n  \"method\": \"%s\",\n  \"eps\": ",
-           METRIC_NAMES[a->metric], SAMPLER_NAMES[a->sampler], j->profile.unsampled_bins, METHOD_NAMES[a->method]);
-    json_write_number(stdout, p->eps);
-    printf(",\n  \"tmin\": ");
-    json_write_number(stdout, a->tmin);
-    printf(",\n  \"tmax\": ");
-    json_write_number(stdout, a->tmax);
-    printf(",\n  \"bin\": ");
-    json_write_number(stdout, pr->bin);
-    printf(",\n  \"bins\": %zu,\n  \"bins_min\": %u,\n  \"bins_max\": %u,\n  \"height_mm\": ",
-           pr->bin_count, p->bins_min, p->bins_max);
-    json_write_number(stdout, pr->height);
-    if (a->budget) printf(",\n  \"budget\": %zu", a->budget);
-    printf(",\n  \"sharp\": ");
-    if (a->sharp > 0) json_write_number(stdout, a->sharp);
-    else printf("null");
-    printf(",\n  ");
-    print_json_plan_fields(stdout, p);
-    printf(",\n  \"forced_planes\": %zu,\n  \"time_ms\": {\"load\": %.3f, \"profile\": %.3f, \"plan\": %.3f}",
-           p->forced_planes, j->ms_load, j->ms_profile, j->ms_plan);
-    printf(",\n  \"layer_list\": [");
+    json_string(&w, "metric", METRIC_NAMES[a->metric]);
+    json_string(&w, "sampler", SAMPLER_NAMES[a->sampler]);
+    json_int(&w, "unsampled_bins", (long long)j->profile.unsampled_bins);
+    json_string(&w, "method", METHOD_NAMES[a->method]);
+    json_number(&w, "eps", p->eps);
+    json_number(&w, "tmin", a->tmin);
+    json_number(&w, "tmax", a->tmax);
+    json_number(&w, "bin", pr->bin);
+    json_int(&w, "bins", (long long)pr->bin_count);
+    json_int(&w, "bins_min", p->bins_min);
+    json_int(&w, "bins_max", p->bins_max);
+    json_number(&w, "height_mm", pr->height);
+    if (a->budget) json_int(&w, "budget", (long long)a->budget);
+    if (a->sharp > 0) json_number(&w, "sharp", a->sharp);
+    else json_null(&w, "sharp");
+    json_plan_fields(&w, p);
+    json_int(&w, "forced_planes", (long long)p->forced_planes);
+    json_begin_object(&w, "time_ms", 1);
+    json_number(&w, "load", j->ms_load);
+    json_number(&w, "profile", j->ms_profile);
+    json_number(&w, "plan", j->ms_plan);
+    json_end(&w);
+    json_begin_array(&w, "layer_list", 0);
     for (k = 0; k < p->layer_count; k++) {
         const adaslice_layer *l = &p->layers[k];
-        printf("%s\n    {\"z_bottom\": ", k ? "," : "");
-        json_write_number(stdout, l->z_bottom);
-        printf(", \"z_top\": ");
-        json_write_number(stdout, l->z_top);
-        printf(", \"thickness\": ");
-        json_write_number(stdout, l->thickness);
-        printf(", \"error\": ");
-        json_write_number(stdout, l->error);
-        printf("}");
+        json_begin_object(&w, NULL, 1);
+        json_number(&w, "z_bottom", l->z_bottom);
+        json_number(&w, "z_top", l->z_top);
+        json_number(&w, "thickness", l->thickness);
+        json_number(&w, "error", l->error);
+        json_end(&w);
     }
-    printf("\n  ]");
+    json_end(&w);
     if (a->compare) {
-        printf(",\n  \"compare\": [");
+        json_begin_array(&w, "compare", 0);
         for (r = 0; r < TABLE3_ROWS; r++) {
             const adaslice_error *e = &j->why[TABLE3[r]];
             if (!j->planned[TABLE3[r]]) continue;
-            printf("%s\n    {\"method\": \"%s\", ", r ? "," : "", METHOD_NAMES[TABLE3[r]]);
+            json_begin_object(&w, NULL, 1);
+            json_string(&w, "method", METHOD_NAMES[TABLE3[r]]);
             if (e->result == ADASLICE_OK) {
-                print_json_plan_fields(stdout, &j->plan[TABLE3[r]]);
-                printf(", \"print_time_s\": ");
-                json_write_number(stdout, cure_plan_seconds(&c, &j->plan[TABLE3[r]]));
+                json_plan_fields(&w, &j->plan[TABLE3[r]]);
+                json_number(&w, "print_time_s", cure_plan_seconds(&c, &j->plan[TABLE3[r]]));
             } else {
-                printf("\"layers\": null, \"min_eps\": ");
-                json_write_number(stdout, e->min_eps);
+                json_null(&w, "layers");
+                json_number(&w, "min_eps", e->min_eps);
             }
-            printf("}");
+            json_end(&w);
         }
-        printf("\n  ],\n  \"uniform_no_worse\": ");
+        json_end(&w);
         if (j->uniform_found) {
             const adaslice_plan *best = &j->plan[ADASLICE_METHOD_OPTIMAL];
             double t_best = cure_plan_seconds(&c, best), t_uni = cure_plan_seconds(&c, &j->uniform);
-            printf("{\"thickness\": ");
-            json_write_number(stdout, j->uniform.layers[0].thickness);
-            printf(", \"uniform_layers\": %zu, \"uniform_worst_error\": ", j->uniform.layer_count);
-            json_write_number(stdout, j->uniform.worst_error);
-            printf(", \"uniform_print_time_s\": ");
-            json_write_number(stdout, t_uni);
-            printf(", \"optimal_layers\": %zu, \"optimal_print_time_s\": ", best->layer_count);
-            json_write_number(stdout, t_best);
-            printf(", \"print_time_saved_percent\": ");
-            json_write_number(stdout, 100 * (1 - t_best / t_uni));
-            printf("}");
+            json_begin_object(&w, "uniform_no_worse", 1);
+            json_number(&w, "thickness", j->uniform.layers[0].thickness);
+            json_int(&w, "uniform_layers", (long long)j->uniform.layer_count);
+            json_number(&w, "uniform_worst_error", j->uniform.worst_error);
+            json_number(&w, "uniform_print_time_s", t_uni);
+            json_int(&w, "optimal_layers", (long long)best->layer_count);
+            json_number(&w, "optimal_print_time_s", t_best);
+            json_number(&w, "print_time_saved_percent", 100 * (1 - t_best / t_uni));
+            json_end(&w);
         } else {
-            printf("null");
+            json_null(&w, "uniform_no_worse");
         }
     }
-    printf("\n}\n");
+    json_end(&w);
 }
 
 int cmd_plan(int argc, char **argv)

@@ -5,9 +5,11 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "bytes.h"
 #include "commands.h"
 #include "cure.h"
 #include "jobdir.h"
+#include "json.h"
 #include "layers.h"
 #include "maskrows.h"
 #include "options.h"
@@ -145,7 +147,7 @@ static void print_job_free(print_job *pj)
 static uint32_t crc_u32(uint32_t crc, uint32_t v)
 {
     unsigned char b[4];
-    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8); b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+    put_le32(b, v);
     return adaslice_crc32(crc, b, 4);
 }
 
@@ -393,21 +395,38 @@ typedef struct report {
 static void write_report(FILE *f, const void *ctx)
 {
     const report *r = (const report *)ctx;
+    const double display[3] = {r->pj->width, r->pj->height, r->pj->bits};
+    json_writer w;
     uint32_t k, z = 0;
-    fprintf(f, "{\n  \"layers\": %u,\n  \"first_layer\": %u,\n  \"bin_nm\": %u,\n  \"planned_by_printer\": %s,\n",
-            r->pj->layers, r->first, r->pj->bin_nm, r->planned_by_printer ? "true" : "false");
-    fprintf(f, "  \"display\": [%u, %u, %u],\n  \"seconds\": %.3f,\n  \"bytes_out\": %lu,\n  \"bytes_in\": %lu,\n"
-               "  \"mask_code_bytes\": %lu,\n  \"retransmitted_frames\": %lu,\n  \"naks\": %lu,\n"
-               "  \"longest_wait_ms\": %.1f,\n  \"masks\": [",
-            r->pj->width, r->pj->height, r->pj->bits, r->seconds, r->l->bytes_out, r->l->bytes_in, r->mask_bytes,
-            r->l->retransmits, r->l->naks, r->l->longest_wait);
+    json_init(&w, f);
+    json_begin_object(&w, NULL, 0);
+    json_int(&w, "layers", r->pj->layers);
+    json_int(&w, "first_layer", r->first);
+    json_int(&w, "bin_nm", r->pj->bin_nm);
+    json_bool(&w, "planned_by_printer", r->planned_by_printer);
+    json_numbers(&w, "display", display, 3);
+    json_number(&w, "seconds", r->seconds);
+    json_int(&w, "bytes_out", (long long)r->l->bytes_out);
+    json_int(&w, "bytes_in", (long long)r->l->bytes_in);
+    json_int(&w, "mask_code_bytes", (long long)r->mask_bytes);
+    json_int(&w, "retransmitted_frames", (long long)r->l->retransmits);
+    json_int(&w, "naks", (long long)r->l->naks);
+    json_number(&w, "longest_wait_ms", r->l->longest_wait);
+    json_begin_array(&w, "masks", 0);
     for (k = 0; k < r->pj->layers; k++) {
+        char crc[9];
         z += r->pj->lengths[k];
-        fprintf(f, "%s\n    {\"layer\": %u, \"top_bins\": %u, \"crc32\": \"%08x\", \"code_bytes\": %u, \"exposure_ms\": %u}",
-                k ? "," : "", k + 1, z, (unsigned)r->layers[k].crc, (unsigned)r->layers[k].code_bytes,
-                (unsigned)r->pj->exposure_ms[k]);
+        snprintf(crc, sizeof crc, "%08x", (unsigned)r->layers[k].crc);
+        json_begin_object(&w, NULL, 1);
+        json_int(&w, "layer", (long long)k + 1);
+        json_int(&w, "top_bins", z);
+        json_string(&w, "crc32", crc);
+        json_int(&w, "code_bytes", (long long)r->layers[k].code_bytes);
+        json_int(&w, "exposure_ms", (long long)r->pj->exposure_ms[k]);
+        json_end(&w);
     }
-    fputs("\n  ]\n}\n", f);
+    json_end(&w);
+    json_end(&w);
 }
 
 /* -------------------------------------------------------------- options */

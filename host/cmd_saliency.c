@@ -3,6 +3,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "bytes.h"
 #include "model.h"
 #include "options.h"
 #include "output.h"
@@ -84,13 +85,6 @@ static void ramp(double w, unsigned char rgb[3])
     for (k = 0; k < 3; k++) rgb[k] = (unsigned char)(stops[i][k] + (x - i) * (stops[i + 1][k] - stops[i][k]) + 0.5);
 }
 
-static void put_le32(FILE *f, uint32_t v)
-{
-    unsigned char b[4];
-    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8); b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
-    fwrite(b, 1, 4, f);
-}
-
 /* Colours per vertex, with every triangle on its own vertices, so that every
    viewer shows each face in its weight's colour (per-face colours are often
    ignored); little-endian whatever the host. */
@@ -110,17 +104,17 @@ static void write_ply(FILE *f, const void *ctx)
         ramp(w->weight[t], rgb);
         for (c = 0; c < 3; c++) {
             const float *p = m->vertices + 3 * (size_t)m->triangles[3 * t + c];
-            for (k = 0; k < 3; k++) {
-                uint32_t bits;
-                memcpy(&bits, &p[k], 4);
-                put_le32(f, bits);
-            }
-            fwrite(rgb, 1, 3, f);
+            unsigned char vertex[15];
+            for (k = 0; k < 3; k++) put_le_f32(vertex + 4 * k, p[k]);
+            memcpy(vertex + 12, rgb, 3);
+            fwrite(vertex, 1, sizeof vertex, f);
         }
     }
     for (t = 0; t < m->triangle_count; t++) {
-        fputc(3, f);
-        for (c = 0; c < 3; c++) put_le32(f, (uint32_t)(3 * t + (size_t)c));
+        unsigned char face[13];
+        face[0] = 3;
+        for (c = 0; c < 3; c++) put_le32(face + 1 + 4 * c, (uint32_t)(3 * t + (size_t)c));
+        fwrite(face, 1, sizeof face, f);
     }
 }
 

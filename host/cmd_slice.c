@@ -307,7 +307,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     size_t k, count = p->layer_count;
     layer_masks m;
     job_layer *layers;
-    void *writer = NULL;
+    job_writer out;
     progress bar;
     slice_run run;
     pipeline_job pipe;
@@ -317,6 +317,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     void (*was)(int);
 
     memset(&bar, 0, sizeof bar);
+    memset(&out, 0, sizeof out);
     previews_start(&pv, j, f, s->threads);
     if ((rc = layer_masks_open(&m, s, j))) { previews_free(&pv); return rc; }
     if (!(layers = (job_layer *)calloc(count ? count : 1, sizeof *layers))) {
@@ -379,7 +380,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     interrupted = 0;
     was = signal(SIGINT, on_sigint);
     existed = stat(path, &st) == 0;
-    if ((rc = f->open(&writer, path, d))) goto done;
+    if ((rc = job_open(&out, f, path, d))) goto done;
     if (f == &JOB_FORMAT_DIR) {
         if ((rc = write_outputs(a, j))) goto done;
         if (s->svg && (rc = write_contours(s, a, j))) goto done;
@@ -391,8 +392,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     run.path = path;
     run.bar = &bar;
     memset(&pipe, 0, sizeof pipe);
-    pipe.format = f;
-    pipe.writer = writer;
+    pipe.out = &out;
     pipe.layers = count;
     pipe.image_bytes = m.stride * (size_t)m.height;
     pipe.stride = m.stride;
@@ -408,8 +408,8 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
                                        "nothing written", path, count, plural(count), d->part_mm[0], d->part_mm[1],
                               m.grid.pitch[0], m.grid.pitch[1]);
 done:
-    if (writer) {
-        int closed = f->close(writer, rc == RC_OK);
+    if (out.state) {
+        int closed = job_close(&out, rc == RC_OK);
         if (!rc) rc = closed;
     }
     if (empty && f == &JOB_FORMAT_DIR && !jobdir_remove(path) && !existed) rmdir(path);

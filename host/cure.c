@@ -158,7 +158,7 @@ int cure_finish(cure_args *c, double tmin, double tmax)
 
 double cure_print_time(const job_motion *m, const job_layer *layers, size_t count)
 {
-    double per_layer = m->wait_before_cure_s + m->lift_mm / m->lift_speed + m->lift_mm / m->retract_speed, t = 0;
+    double per_layer = m->wait_before_cure_s + job_peel_s(m, 0), t = 0;
     size_t k;
     for (k = 0; k < count; k++) t += layers[k].exposure_s + per_layer;
     return t;

@@ -9,6 +9,7 @@
    symbols is then coded as the smallest of dynamic Huffman (code lengths
    limited to 15 bits by package-merge), fixed Huffman or stored. */
 #include "deflate.h"
+#include "bytes.h"
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,11 +69,7 @@ static void put(deflater *d, uint32_t bits, unsigned n)
     d->acc |= (uint64_t)bits << d->nacc;
     d->nacc += n;
     if (d->nacc >= 32) {
-        unsigned char *o = d->out + d->size;
-        o[0] = (unsigned char)d->acc;
-        o[1] = (unsigned char)(d->acc >> 8);
-        o[2] = (unsigned char)(d->acc >> 16);
-        o[3] = (unsigned char)(d->acc >> 24);
+        put_le32(d->out + d->size, (uint32_t)d->acc);
         d->size += 4;
         d->acc >>= 32;
         d->nacc -= 32;
@@ -247,10 +244,9 @@ static int flush_block(deflater *d, size_t start, size_t end, int final)
             size_t len = end - start < 65535 ? end - start : 65535;
             put(d, (uint32_t)(final && start + len == end), 3);
             align_byte(d);
-            d->out[d->size++] = (unsigned char)len;
-            d->out[d->size++] = (unsigned char)(len >> 8);
-            d->out[d->size++] = (unsigned char)~len;
-            d->out[d->size++] = (unsigned char)(~len >> 8);
+            put_le16(d->out + d->size, (unsigned)len);
+            put_le16(d->out + d->size + 2, (unsigned)(~len & 0xFFFF));
+            d->size += 4;
             memcpy(d->out + d->size, d->data + start, len);
             d->size += len;
             start += len;

@@ -77,8 +77,8 @@ static void write_gcode(FILE *f, const void *ctx)
     fprintf(f, ";bottomLayCount:%u\n;bottomLayerCount:%u\n", d->bottom_layers, d->bottom_layers);
     fprintf(f, ";shrinkageX:100\n;shrinkageY:100\n;shrinkageZ:100\n;mirror:%d\n;totalLayer:%zu\n", mirror,
             d->layer_count);
-    key(f, "bottomLayerLiftHeight", m->bottom_lift_mm, 6);
-    key(f, "bottomLayerLiftSpeed", m->bottom_lift_speed * 60, 3);
+    key(f, "bottomLayerLiftHeight", job_lift_mm(m, 1), 6);
+    key(f, "bottomLayerLiftSpeed", job_lift_speed(m, 1) * 60, 3);
     key(f, "bottomLightOffTime", m->wait_before_cure_s, 3);
     key(f, "lightOffTime", m->wait_before_cure_s, 3);
     fputs(";START_GCODE_BEGIN\nG21;\nG90;\nM106 S0;\nG28 Z0;\n\n;START_GCODE_END\n\n", f);
@@ -91,8 +91,7 @@ static void write_gcode(FILE *f, const void *ctx)
         fprintf(f, ";LAYER_START:%zu\n;currPos:", k);
         zip_number(f, l->z_top, 6);
         fprintf(f, "\nM6054 \"%zu.png\";show Image\n", k + 1);
-        move(f, "G0", l->z_top + (bottom ? m->bottom_lift_mm : m->lift_mm),
-             bottom ? m->bottom_lift_speed : m->lift_speed);
+        move(f, "G0", l->z_top + job_lift_mm(m, bottom), job_lift_speed(m, bottom));
         move(f, "G0", l->z_top, m->retract_speed);
         fprintf(f, "G4 P%.0f;\nM106 S255;light on\nG4 P%.0f;\nM106 S0; light off\n\n;LAYER_END\n\n", wait_ms,
                 l->exposure_s * 1000);
@@ -148,6 +147,16 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_CHITU_ZIP = {"chitu-zip", ".zip", "ChiTu G-code zip", 0.01, 1,
-                                          ZIP_MEMBERS_MAX - 3 /* two previews, run.gcode */, open_job, encode, put, close_job,
-                                          {{PREVIEW_W, PREVIEW_H}, {CROPPING_W, CROPPING_H}}};
+const job_format JOB_FORMAT_CHITU_ZIP = {
+    .name = "chitu-zip",
+    .extension = ".zip",
+    .what = "ChiTu G-code zip",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .max_layers = ZIP_MEMBERS_MAX - 3, /* two previews, run.gcode */
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{PREVIEW_W, PREVIEW_H}, {CROPPING_W, CROPPING_H}},
+};

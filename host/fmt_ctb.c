@@ -1,8 +1,9 @@
-/* ChiTuBox .ctb job files, versions 3 and 4, unencrypted (EncryptionKey 0),
-   little-endian: the header, both previews (400 x 300 and 200 x 125, RGB15
+/* ChiTuBox .ctb job files, versions 3 and 4, in the plain layout (not the
+   AES-wrapped "encrypted CTB" of magic 0x12FD0107), little-endian: the header, both previews (400 x 300 and 200 x 125, RGB15
    run-length), PrintParameters, SlicerInfo with the machine's name, for v4 the
    disclaimer and PrintParametersV4, the 36-byte layer table, and per layer an
-   84-byte LayerDefEx followed by the image in CTB's 7-bit run-length code.
+   84-byte LayerDefEx followed by the image in CTB's 7-bit run-length code,
+   XORed with the EncryptionKey's stream.
 
    Byte layouts: UVtools, UVtools.Core/FileFormats/ChituboxFile.cs (classes
    Header, Preview, PrintParameters, SlicerInfo, PrintParametersV4, LayerDef,
@@ -18,10 +19,12 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
 #endif
+#include "bytes.h"
 #include "fmt_ctb.h"
 #include "report.h"
+#include "../adaslice_mcu.h"
 
-#include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
@@ -52,85 +55,54 @@ typedef struct ctb_writer {
     job_file file;
     const job_desc *d;          /* read again at close: the volume is known only then */
     unsigned version;
+    uint32_t key;               /* EncryptionKey: the layers' code is XORed with its stream */
     const char *machine;
     uint32_t small_preview_at, print_params_at, slicer_at, disclaimer_at, params_v4_at, table_at;
     unsigned char *table;       /* layer_count entries of 36 bytes, written at close */
-    size_t layers_done;
     off_t end;                  /* where the next layer's LayerDefEx goes */
-    int write_errno;
 } ctb_writer;
-
-static void put_u16(unsigned char *p, unsigned v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-    p[2] = (unsigned char)(v >> 16);
-    p[3] = (unsigned char)(v >> 24);
-}
-
-static void put_f32(unsigned char *p, double v)
-{
-    float f = (float)v;
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    put_u32(p, u);
-}
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
-static void write_at(ctb_writer *w, off_t at, const void *bytes, size_t n)
-{
-    if (w->write_errno) return;
-    errno = 0;
-    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
-        w->write_errno = errno ? errno : EIO;
-}
-
-static void write_zeros(ctb_writer *w, off_t at, size_t n)
-{
-    static const unsigned char zero[4096];
-    if (!w->write_errno && fseeko(w->file.f, at, SEEK_SET) != 0) w->write_errno = errno ? errno : EIO;
-    while (n && !w->write_errno) {
-        size_t part = n < sizeof zero ? n : sizeof zero;
-        if (fwrite(zero, 1, part, w->file.f) != part) w->write_errno = errno ? errno : EIO;
-        n -= part;
-    }
-}
-
-static int write_failed(ctb_writer *w)
-{
-    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
-}
 
 static int is_bottom(const ctb_writer *w, size_t k) { return k < w->d->bottom_layers; }
 
-/* The bottom lift falls back to the normal one when the desc leaves it 0: a
-   printer that does not peel tears the first layers off the plate. */
-static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
-static double bottom_lift_speed(const job_motion *m)
+/* The settle before each exposure. v4 has rests: like UVtools, a file with
+   a rest before cure keeps its light-off delays 0 so that the printer does
+   not wait twice. v3 has only the light-off delay, and a v3 printer counts it
+   from the end of the exposure, through the peel: the resin rests only for
+   what is left of it after the lift and retract. So v3 gets the peel's time
+   plus the settle, as UVtools writes it (ChituboxFile.cs, WaitTimeBeforeCure
+   below v4 -> FileFormat.SetLightOffDelay -> OperationCalculator.LightOffDelayC
+   .CalculateSeconds), to the hundredth of a second. */
+static double light_off_s(const ctb_writer *w, int bottom)
 {
-    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
+    const job_motion *m = &w->d->motion;
+    if (w->version >= 4) return 0;
+    return floor((job_peel_s(m, bottom) + m->wait_before_cure_s) * 100 + 0.5) / 100;
 }
-static double lift_mm(const ctb_writer *w, size_t k)
-{
-    return is_bottom(w, k) ? bottom_lift_mm(&w->d->motion) : w->d->motion.lift_mm;
-}
-static double lift_speed(const ctb_writer *w, size_t k)
-{
-    return is_bottom(w, k) ? bottom_lift_speed(&w->d->motion) : mm_per_min(w->d->motion.lift_speed);
-}
-
-/* v4 has rest times; like UVtools, a file with a rest before cure keeps its
-   light-off delays 0 so that the printer does not wait twice. v3 has only the
-   light-off delay. */
-static double light_off_s(const ctb_writer *w) { return w->version >= 4 ? 0 : w->d->motion.wait_before_cure_s; }
 static double rest_before_cure_s(const ctb_writer *w) { return w->version >= 4 ? w->d->motion.wait_before_cure_s : 0; }
+
+/* EncryptionKey: UVtools writes a random one in [255, 2^31 - 1) into every
+   ctb it makes (ChituboxFile.cs, EncodeInternally) and codes the layers with
+   it; a key of 0 (the layers in clear) is what no current slicer writes. Ours
+   is drawn from the job, its size and every layer's Z and exposure, so that
+   the same job gives the same bytes. */
+static uint32_t job_key(const job_desc *d)
+{
+    unsigned char b[8];
+    uint32_t crc;
+    size_t k;
+    put_le32(b, (uint32_t)d->width);
+    put_le32(b + 4, (uint32_t)d->height);
+    crc = adaslice_crc32(0, b, 8);
+    for (k = 0; k < d->layer_count; k++) {
+        put_le_f32(b, d->layers[k].z_top);
+        put_le_f32(b + 4, d->layers[k].exposure_s);
+        crc = adaslice_crc32(crc, b, 8);
+    }
+    return 255 + crc % (0x7FFFFFFFu - 255);
+}
 
 /* ---- previews --------------------------------------------------------- */
 
@@ -145,13 +117,13 @@ size_t ctb_preview_encode(const unsigned char *rgb, size_t pixels, unsigned char
         size_t run = 1;
         while (i + run < pixels && run < CTB_PREVIEW_RUN_MAX && !memcmp(p, p + run * 3, 3)) run++;
         if (run >= 3) {
-            put_u16(out + n, word | 0x20);
-            put_u16(out + n + 2, (unsigned)(run - 1) | 0x3000);
+            put_le16(out + n, word | 0x20);
+            put_le16(out + n + 2, (unsigned)(run - 1) | 0x3000);
             n += 4;
         } else {
-            put_u16(out + n, word);
+            put_le16(out + n, word);
             n += 2;
-            if (run == 2) { put_u16(out + n, word); n += 2; }
+            if (run == 2) { put_le16(out + n, word); n += 2; }
         }
         i += run;
     }
@@ -172,16 +144,16 @@ static int write_preview(ctb_writer *w, uint32_t at, int width, int height, uint
         return complain(RC_FAIL, "cannot write %s: out of memory for the %dx%d preview", w->file.path, width, height);
     }
     len = ctb_preview_encode(rgb, pixels, code);
-    put_u32(head, (uint32_t)width);
-    put_u32(head + 4, (uint32_t)height);
-    put_u32(head + 8, at + CTB_PREVIEW_HEADER);
-    put_u32(head + 12, (uint32_t)len);
-    write_at(w, at, head, sizeof head);
-    write_at(w, at + CTB_PREVIEW_HEADER, code, len);
+    put_le32(head, (uint32_t)width);
+    put_le32(head + 4, (uint32_t)height);
+    put_le32(head + 8, at + CTB_PREVIEW_HEADER);
+    put_le32(head + 12, (uint32_t)len);
+    job_file_write_at(&w->file, at, head, sizeof head);
+    job_file_write_at(&w->file, at + CTB_PREVIEW_HEADER, code, len);
     free(rgb);
     free(code);
     *next = at + CTB_PREVIEW_HEADER + (uint32_t)len;
-    return w->write_errno ? write_failed(w) : RC_OK;
+    return job_file_check(&w->file);
 }
 
 /* ---- the header blocks: placeholders at open, final at close ----------- */
@@ -191,53 +163,53 @@ static void write_header(ctb_writer *w)
     const job_desc *d = w->d;
     unsigned char h[CTB_HEADER] = {0};
     double total_mm = d->layers[d->layer_count - 1].z_top;
-    put_u32(h, w->version >= 4 ? CTB_MAGIC_V4 : CTB_MAGIC_V3);
-    put_u32(h + 4, w->version);
-    put_f32(h + 8, d->display_mm[0]);
-    put_f32(h + 12, d->display_mm[1]);
+    put_le32(h, w->version >= 4 ? CTB_MAGIC_V4 : CTB_MAGIC_V3);
+    put_le32(h + 4, w->version);
+    put_le_f32(h + 8, d->display_mm[0]);
+    put_le_f32(h + 12, d->display_mm[1]);
     /* An unknown build height: the job's own is the least the printer has. */
-    put_f32(h + 16, d->z_max_mm > 0 ? d->z_max_mm : total_mm);
-    put_f32(h + 28, total_mm);
-    put_f32(h + 32, d->layer_height_mm);
-    put_f32(h + 36, d->exposure_s);
-    put_f32(h + 40, d->bottom_exposure_s);
-    put_f32(h + 44, light_off_s(w));
-    put_u32(h + 48, d->bottom_layers);
-    put_u32(h + 52, (uint32_t)d->width);
-    put_u32(h + 56, (uint32_t)d->height);
-    put_u32(h + 60, CTB_HEADER); /* the large preview comes first */
-    put_u32(h + 64, w->table_at);
-    put_u32(h + 68, (uint32_t)d->layer_count);
-    put_u32(h + 72, w->small_preview_at);
-    put_u32(h + 76, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
+    put_le_f32(h + 16, d->z_max_mm > 0 ? d->z_max_mm : total_mm);
+    put_le_f32(h + 28, total_mm);
+    put_le_f32(h + 32, d->layer_height_mm);
+    put_le_f32(h + 36, d->exposure_s);
+    put_le_f32(h + 40, d->bottom_exposure_s);
+    put_le_f32(h + 44, light_off_s(w, 0));
+    put_le32(h + 48, d->bottom_layers);
+    put_le32(h + 52, (uint32_t)d->width);
+    put_le32(h + 56, (uint32_t)d->height);
+    put_le32(h + 60, CTB_HEADER); /* the large preview comes first */
+    put_le32(h + 64, w->table_at);
+    put_le32(h + 68, (uint32_t)d->layer_count);
+    put_le32(h + 72, w->small_preview_at);
+    put_le32(h + 76, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
     /* ProjectorType says only "mirrored" (UVtools reads any non-zero as
        flipped across); the images themselves are already flipped. */
-    put_u32(h + 80, d->mirror_x || d->mirror_y);
-    put_u32(h + 84, w->print_params_at);
-    put_u32(h + 88, CTB_PRINT_PARAMS);
-    put_u32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
-    put_u16(h + 96, 255);
-    put_u16(h + 98, 255);
-    put_u32(h + 100, 0); /* EncryptionKey: layer data in clear */
-    put_u32(h + 104, w->slicer_at);
-    put_u32(h + 108, CTB_SLICER_INFO);
-    write_at(w, 0, h, sizeof h);
+    put_le32(h + 80, d->mirror_x || d->mirror_y);
+    put_le32(h + 84, w->print_params_at);
+    put_le32(h + 88, CTB_PRINT_PARAMS);
+    put_le32(h + 92, 1); /* CTB keeps the real anti-alias level in SlicerInfo */
+    put_le16(h + 96, 255);
+    put_le16(h + 98, 255);
+    put_le32(h + 100, w->key);
+    put_le32(h + 104, w->slicer_at);
+    put_le32(h + 108, CTB_SLICER_INFO);
+    job_file_write_at(&w->file, 0, h, sizeof h);
 }
 
 static void write_print_params(ctb_writer *w)
 {
     const job_desc *d = w->d;
     unsigned char p[CTB_PRINT_PARAMS] = {0};
-    put_f32(p, bottom_lift_mm(&d->motion));
-    put_f32(p + 4, bottom_lift_speed(&d->motion));
-    put_f32(p + 8, d->motion.lift_mm);
-    put_f32(p + 12, mm_per_min(d->motion.lift_speed));
-    put_f32(p + 16, mm_per_min(d->motion.retract_speed));
-    put_f32(p + 20, d->volume_mm3 / 1000.0);
-    put_f32(p + 32, light_off_s(w));
-    put_f32(p + 36, light_off_s(w));
-    put_u32(p + 40, d->bottom_layers);
-    write_at(w, w->print_params_at, p, sizeof p);
+    put_le_f32(p, job_lift_mm(&d->motion, 1));
+    put_le_f32(p + 4, mm_per_min(job_lift_speed(&d->motion, 1)));
+    put_le_f32(p + 8, d->motion.lift_mm);
+    put_le_f32(p + 12, mm_per_min(d->motion.lift_speed));
+    put_le_f32(p + 16, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p + 20, d->volume_mm3 / 1000.0);
+    put_le_f32(p + 32, light_off_s(w, 1));
+    put_le_f32(p + 36, light_off_s(w, 0));
+    put_le32(p + 40, d->bottom_layers);
+    job_file_write_at(&w->file, w->print_params_at, p, sizeof p);
 }
 
 static void write_slicer_info(ctb_writer *w)
@@ -247,47 +219,52 @@ static void write_slicer_info(ctb_writer *w)
     size_t name_len = strlen(w->machine);
     if (w->version >= 4) {
         /* One-stage moves: the second stage is 0 mm, at the first stage's speed. */
-        put_f32(s + 4, bottom_lift_speed(&d->motion));
-        put_f32(s + 12, mm_per_min(d->motion.lift_speed));
-        put_f32(s + 20, mm_per_min(d->motion.retract_speed));
-        put_u32(s + 64, w->params_v4_at);
+        put_le_f32(s + 4, mm_per_min(job_lift_speed(&d->motion, 1)));
+        put_le_f32(s + 12, mm_per_min(d->motion.lift_speed));
+        put_le_f32(s + 20, mm_per_min(d->motion.retract_speed));
+        put_le32(s + 64, w->params_v4_at);
     }
-    put_u32(s + 28, w->slicer_at + CTB_SLICER_INFO);
-    put_u32(s + 32, (uint32_t)name_len);
+    put_le32(s + 28, w->slicer_at + CTB_SLICER_INFO);
+    put_le32(s + 32, (uint32_t)name_len);
     /* AntiAliasFlag: UVtools' comment says 7 without AA and 0x0F with, but it
        always writes 0x0F; so do we. */
     s[36] = 0x0F;
     /* PerLayerSettings: the layers differ in Z step and exposure, so the
-       printer must take the table's values: Version x 0x10 (current UVtools;
-       older UVtools wrote 0x20 for v3). */
+       printer must take the table's values. Current UVtools writes Version x
+       0x10 when any layer differs from the globals: 0x30 for v3, 0x40 for v4
+       (ChituboxFile.cs @7b510f0d, PERLAYER_SETTINGS_CTBv3 and the
+       SlicerInfoSettings.PerLayerSettings line of OnBeforeEncode). UVtools
+       before 3.9.4 wrote 0x20 for v3; its CHANGELOG says the change "may fix
+       some recent problems where printer doesn't respect per layer
+       settings". */
     s[39] = (unsigned char)(w->version * 0x10);
     {
         int fixed;
-        put_u32(s + 40, (uint32_t)(job_time(&fixed) / 60));
+        put_le32(s + 40, (uint32_t)(job_time(&fixed) / 60));
     }
-    put_u32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
-    put_u32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
-    put_f32(s + 52, rest_before_cure_s(w));
-    write_at(w, w->slicer_at, s, sizeof s);
-    write_at(w, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
+    put_le32(s + 44, (uint32_t)(d->supersample > 1 ? d->supersample : 1));
+    put_le32(s + 48, 0x01090000); /* SoftwareVersion: what UVtools writes for every version */
+    put_le_f32(s + 52, rest_before_cure_s(w));
+    job_file_write_at(&w->file, w->slicer_at, s, sizeof s);
+    job_file_write_at(&w->file, w->slicer_at + CTB_SLICER_INFO, w->machine, name_len);
 }
 
 static void write_params_v4(ctb_writer *w)
 {
     const job_desc *d = w->d;
     unsigned char p[CTB_PARAMS_V4] = {0};
-    put_f32(p, mm_per_min(d->motion.retract_speed));
-    put_f32(p + 4, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p, mm_per_min(d->motion.retract_speed));
+    put_le_f32(p + 4, mm_per_min(d->motion.retract_speed));
     /* 4.0, 4.0 and 5: constants both UVtools and mslicer write; what they
        mean is not known. */
-    put_f32(p + 12, 4.0);
-    put_f32(p + 20, 4.0);
-    put_f32(p + 24, rest_before_cure_s(w));
-    put_u32(p + 48, 5);
-    put_u32(p + 52, (uint32_t)(d->layer_count - 1));
-    put_u32(p + 72, w->disclaimer_at);
-    put_u32(p + 76, CTB_DISCLAIMER_LEN);
-    write_at(w, w->params_v4_at, p, sizeof p);
+    put_le_f32(p + 12, 4.0);
+    put_le_f32(p + 20, 4.0);
+    put_le_f32(p + 24, rest_before_cure_s(w));
+    put_le32(p + 48, 5);
+    put_le32(p + 52, (uint32_t)(d->layer_count - 1));
+    put_le32(p + 72, w->disclaimer_at);
+    put_le32(p + 76, CTB_DISCLAIMER_LEN);
+    job_file_write_at(&w->file, w->params_v4_at, p, sizeof p);
 }
 
 static void write_blocks(ctb_writer *w)
@@ -390,6 +367,7 @@ static int encode(const void *writer, size_t k, const unsigned char *image, size
     const ctb_writer *w = (const ctb_writer *)writer;
     if (ctb_rle_encode(w->d, image, stride, blob))
         return complain(RC_FAIL, "%s: out of memory coding layer %zu", w->file.path, k + 1);
+    ctb_layer_xor(w->key, (uint32_t)k, blob->data, blob->size);
     if (blob->size > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: layer %zu encodes to %zu bytes, more than a ctb layer can hold", w->file.path,
                         k + 1, blob->size);
@@ -405,40 +383,33 @@ static int put(void *writer, size_t k, job_blob *blob)
     unsigned char *entry, ex[CTB_LAYER_DEF_EX] = {0};
     off_t data_at = w->end + CTB_LAYER_DEF_EX;
     uint64_t size = blob->size;
-    if (k != w->layers_done || k >= d->layer_count) {
-        free(blob->data);
-        blob->data = NULL;
-        return complain(RC_FAIL, "%s: layer %zu handed to the ctb writer after %zu of %zu layer%s", w->file.path, k,
-                        w->layers_done, d->layer_count, plural(d->layer_count));
-    }
     entry = w->table + k * CTB_LAYER_DEF;
-    put_f32(entry, L->z_top);
-    put_f32(entry + 4, L->exposure_s);
-    put_f32(entry + 8, light_off_s(w));
-    put_u32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
-    put_u32(entry + 16, (uint32_t)size);
-    put_u32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
-    put_u32(entry + 24, CTB_LAYER_DEF_EX);
+    put_le_f32(entry, L->z_top);
+    put_le_f32(entry + 4, L->exposure_s);
+    put_le_f32(entry + 8, light_off_s(w, is_bottom(w, k)));
+    put_le32(entry + 12, (uint32_t)data_at);              /* low 32 bits ... */
+    put_le32(entry + 16, (uint32_t)size);
+    put_le32(entry + 20, (uint32_t)((uint64_t)data_at >> 32)); /* ... and the 4 GiB page */
+    put_le32(entry + 24, CTB_LAYER_DEF_EX);
     /* LayerDefEx repeats the entry byte for byte, then the layer's moves. */
     memcpy(ex, entry, CTB_LAYER_DEF);
-    put_u32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
-    put_f32(ex + 40, lift_mm(w, k)); /* v4: the total of both stages */
-    put_f32(ex + 44, lift_speed(w, k));
-    put_f32(ex + 56, mm_per_min(d->motion.retract_speed));
+    put_le32(ex + 36, (uint32_t)(CTB_LAYER_DEF_EX + size));
+    put_le_f32(ex + 40, job_lift_mm(&d->motion, is_bottom(w, k))); /* v4: the total of both stages */
+    put_le_f32(ex + 44, mm_per_min(job_lift_speed(&d->motion, is_bottom(w, k))));
+    put_le_f32(ex + 56, mm_per_min(d->motion.retract_speed));
     if (w->version >= 4) {
         memcpy(ex + 52, ex + 44, 4); /* the second stage: 0 mm at the same speeds */
         memcpy(ex + 64, ex + 56, 4);
-        put_f32(ex + 76, rest_before_cure_s(w));
+        put_le_f32(ex + 76, rest_before_cure_s(w));
     }
-    put_f32(ex + 80, 255.0);
+    put_le_f32(ex + 80, 255.0);
     /* the code's size is known, so both go out in order, with no seek back */
-    write_at(w, w->end, ex, sizeof ex);
-    if (!w->write_errno && fwrite(blob->data, 1, blob->size, w->file.f) != blob->size) w->write_errno = errno ? errno : EIO;
+    job_file_write_at(&w->file, w->end, ex, sizeof ex);
+    job_file_append(&w->file, blob->data, blob->size);
     free(blob->data);
     blob->data = NULL;
-    if (w->write_errno) return write_failed(w);
+    if (w->file.err) return job_file_check(&w->file);
     w->end = data_at + (off_t)size;
-    w->layers_done++;
     return RC_OK;
 }
 
@@ -479,9 +450,10 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     }
     w->d = d;
     w->version = version;
+    w->key = job_key(d);
     w->machine = d->preset && d->preset->machine ? d->preset->machine : "adaslice";
 
-    write_zeros(w, 0, CTB_HEADER);
+    job_file_write_at(&w->file, 0, NULL, CTB_HEADER);
     if ((rc = write_preview(w, CTB_HEADER, 400, 300, &w->small_preview_at)) != RC_OK ||
         (rc = write_preview(w, w->small_preview_at, 200, 125, &w->print_params_at)) != RC_OK) {
         free_writer(w);
@@ -493,7 +465,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         w->disclaimer_at = at;
         w->params_v4_at = at + CTB_DISCLAIMER_LEN;
         at = w->params_v4_at + CTB_PARAMS_V4;
-        write_at(w, w->disclaimer_at, ctb_disclaimer, CTB_DISCLAIMER_LEN);
+        job_file_write_at(&w->file, w->disclaimer_at, ctb_disclaimer, CTB_DISCLAIMER_LEN);
     }
     w->table_at = at;
     table_end = (uint64_t)at + (uint64_t)d->layer_count * CTB_LAYER_DEF;
@@ -503,10 +475,9 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         return rc;
     }
     write_blocks(w);
-    write_zeros(w, at, d->layer_count * CTB_LAYER_DEF);
+    job_file_write_at(&w->file, at, NULL, d->layer_count * CTB_LAYER_DEF);
     w->end = (off_t)table_end;
-    if (w->write_errno) {
-        rc = write_failed(w);
+    if ((rc = job_file_check(&w->file)) != RC_OK) {
         free_writer(w);
         return rc;
     }
@@ -519,17 +490,24 @@ static int close_job(void *writer, int ok)
     ctb_writer *w = (ctb_writer *)writer;
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
-    if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count, plural(w->d->layer_count));
-    } else if (ok) {
-        write_at(w, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
+    if (ok) {
+        job_file_write_at(&w->file, w->table_at, w->table, w->d->layer_count * CTB_LAYER_DEF);
         write_blocks(w);
-        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+        rc = job_file_commit(&w->file);
     }
     free_writer(w); /* after a commit there is nothing left to discard */
     return rc;
 }
 
-const job_format JOB_FORMAT_CTB = {"ctb", ".ctb", "ChiTuBox CTB", 0.01, 1, 0, open_job, encode, put, close_job,
-                                  {{400, 300}, {200, 125}}};
+const job_format JOB_FORMAT_CTB = {
+    .name = "ctb",
+    .extension = ".ctb",
+    .what = "ChiTuBox CTB",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{400, 300}, {200, 125}},
+};

@@ -75,33 +75,11 @@ typedef struct ctbe_writer {
     const char *machine;
     uint32_t large_preview_at, small_preview_at, machine_at, disclaimer_at, resin_at, pointers_at;
     unsigned char *pointers;    /* layer_count entries of 16 bytes, written at close */
-    size_t layers_done;
     uint64_t end;               /* where the next layer's LayerDef goes */
-    int write_errno;
 } ctbe_writer;
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
-/* The bottom lift falls back to the normal one when the desc leaves it 0, as
-   fmt_ctb.c's does. */
-static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
-static double bottom_lift_speed(const job_motion *m)
-{
-    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
-}
-
-static int write_failed(ctbe_writer *w)
-{
-    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
-}
-
-static void write_at(ctbe_writer *w, uint64_t at, const void *bytes, size_t n)
-{
-    if (w->write_errno) return;
-    errno = 0;
-    if (fseeko(w->file.f, (off_t)at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
-        w->write_errno = errno ? errno : EIO;
-}
 
 /* data[0, n) enciphered in place, n a multiple of 16, each time from the IV:
    the settings and the signature are enciphered apart. */
@@ -208,8 +186,8 @@ static void fill_settings(const ctbe_writer *w, unsigned char s[CTBE_SETTINGS])
     /* ProjectorType: UVtools reads any non-zero as mirrored; the images are
        already flipped */
     put_le32(s + 80, d->mirror_x || d->mirror_y);
-    put_le_f32(s + 84, bottom_lift_mm(m));
-    put_le_f32(s + 88, bottom_lift_speed(m));
+    put_le_f32(s + 84, job_lift_mm(m, 1));
+    put_le_f32(s + 88, mm_per_min(job_lift_speed(m, 1)));
     put_le_f32(s + 92, m->lift_mm);
     put_le_f32(s + 96, mm_per_min(m->lift_speed));
     put_le_f32(s + 100, retract);
@@ -218,7 +196,7 @@ static void fill_settings(const ctbe_writer *w, unsigned char s[CTBE_SETTINGS])
     put_le16(s + 124, 255);                      /* LightPWM, BottomLightPWM */
     put_le16(s + 126, 255);
     put_le32(s + 128, CTBE_LAYER_KEY);
-    put_le_f32(s + 136, bottom_lift_speed(m));   /* the second stages: 0 mm */
+    put_le_f32(s + 136, mm_per_min(job_lift_speed(m, 1)));   /* the second stages: 0 mm */
     put_le_f32(s + 144, mm_per_min(m->lift_speed));
     put_le_f32(s + 152, retract);
     put_le32(s + 160, w->machine_at);
@@ -266,10 +244,7 @@ static int put(void *writer, size_t k, job_blob *blob)
     unsigned char def[CTBE_LAYER_DEF] = {0};
     uint64_t data_at = w->end + CTBE_LAYER_DEF, after = data_at + blob->size;
     int rc = RC_OK;
-    if (k != w->layers_done || k >= d->layer_count)
-        rc = complain(RC_FAIL, "%s: layer %zu handed to the encrypted ctb writer after %zu of %zu layer%s", w->file.path,
-                      k, w->layers_done, d->layer_count, plural(d->layer_count));
-    else if (after + tail_size(w) > CTBE_MAX_FILE)
+    if (after + tail_size(w) > CTBE_MAX_FILE)
         rc = complain(RC_FAIL, "%s: layer %zu of %zu would end at byte %llu, past the 4 GiB an encrypted ctb's 32-bit "
                       "offsets reach (fewer or smaller layers: a coarser plan, --aa 1, a smaller part)",
                       w->file.path, k + 1, d->layer_count, (unsigned long long)after);
@@ -283,8 +258,8 @@ static int put(void *writer, size_t k, job_blob *blob)
     put_le_f32(def + 8, L->exposure_s);
     put_le32(def + 16, (uint32_t)data_at); /* the 4 GiB page at +20 stays 0 */
     put_le32(def + 24, (uint32_t)blob->size);
-    put_le_f32(def + 40, bottom ? bottom_lift_mm(m) : m->lift_mm);
-    put_le_f32(def + 44, bottom ? bottom_lift_speed(m) : mm_per_min(m->lift_speed));
+    put_le_f32(def + 40, job_lift_mm(m, bottom));
+    put_le_f32(def + 44, mm_per_min(job_lift_speed(m, bottom)));
     memcpy(def + 52, def + 44, 4);         /* the second stage: 0 mm at the same speed */
     put_le_f32(def + 56, mm_per_min(m->retract_speed));
     memcpy(def + 64, def + 56, 4);
@@ -292,13 +267,12 @@ static int put(void *writer, size_t k, job_blob *blob)
     put_le_f32(def + 80, 255.0);                 /* LightPWM */
     put_le32(w->pointers + k * CTBE_POINTER, (uint32_t)w->end);
     put_le32(w->pointers + k * CTBE_POINTER + 8, CTBE_LAYER_DEF);
-    write_at(w, w->end, def, sizeof def);
-    if (!w->write_errno && fwrite(blob->data, 1, blob->size, w->file.f) != blob->size) w->write_errno = errno ? errno : EIO;
+    job_file_write_at(&w->file, w->end, def, sizeof def);
+    job_file_append(&w->file, blob->data, blob->size);
     free(blob->data);
     blob->data = NULL;
-    if (w->write_errno) return write_failed(w);
+    if (w->file.err) return job_file_check(&w->file);
     w->end = after;
-    w->layers_done++;
     return RC_OK;
 }
 
@@ -364,11 +338,10 @@ static int open_job(void **writer, const char *path, const job_desc *d)
         free_writer(w);
         return complain(RC_FAIL, "cannot write %s: out of memory", path);
     }
-    write_at(w, 0, b.data, b.size);
+    job_file_write_at(&w->file, 0, b.data, b.size);
     w->end = b.size + (uint64_t)d->layer_count * CTBE_POINTER;
     bytebuf_free(&b);
-    if (w->write_errno) {
-        rc = write_failed(w);
+    if ((rc = job_file_check(&w->file))) {
         free_writer(w);
         return rc;
     }
@@ -392,13 +365,13 @@ static void write_close_blocks(ctbe_writer *w)
     encipher(sig, CTBE_SIGNATURE);
     put_le32(sig + CTBE_SIGNATURE, 0x6D4232B3u); /* UVtools' 4 unknown bytes after the signature */
     signature_at = (uint32_t)(w->end + (uint64_t)(sig - tail));
-    write_at(w, w->end, tail, tail_size(w));
-    write_at(w, w->pointers_at, w->pointers, w->d->layer_count * CTBE_POINTER);
+    job_file_write_at(&w->file, w->end, tail, tail_size(w));
+    job_file_write_at(&w->file, w->pointers_at, w->pointers, w->d->layer_count * CTBE_POINTER);
     fill_settings(w, settings);
     encipher(settings, sizeof settings);
-    write_at(w, CTBE_HEADER, settings, sizeof settings);
+    job_file_write_at(&w->file, CTBE_HEADER, settings, sizeof settings);
     fill_header(w, header, signature_at);
-    write_at(w, 0, header, sizeof header);
+    job_file_write_at(&w->file, 0, header, sizeof header);
 }
 
 static int close_job(void *writer, int ok)
@@ -406,16 +379,23 @@ static int close_job(void *writer, int ok)
     ctbe_writer *w = (ctbe_writer *)writer;
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
-    if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count, plural(w->d->layer_count));
-    } else if (ok) {
+    if (ok) {
         write_close_blocks(w);
-        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+        rc = job_file_commit(&w->file);
     }
     free_writer(w); /* after a commit there is nothing left to discard */
     return rc;
 }
 
-const job_format JOB_FORMAT_CTB_ENCRYPTED = {"ctb-encrypted", ".ctb", "ChiTuBox CTB, encrypted (ChiTuBox 1.9+)", 0.01, 1, 0,
-                                             open_job, encode, put, close_job, {{400, 300}, {200, 125}}};
+const job_format JOB_FORMAT_CTB_ENCRYPTED = {
+    .name = "ctb-encrypted",
+    .extension = ".ctb",
+    .what = "ChiTuBox CTB, encrypted (ChiTuBox 1.9+)",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{400, 300}, {200, 125}},
+};

@@ -22,10 +22,11 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, localtime_r */
 #endif
+#include "bytes.h"
 #include "jobfile.h"
 #include "report.h"
 
-#include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
@@ -45,32 +46,8 @@ static const unsigned char goo_magic[8] = {0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0
 typedef struct goo_writer {
     job_file file;
     const job_desc *d;          /* read again at close: the volume is known only then */
-    size_t layers_done;
     off_t end;                  /* where the next layer's definition goes */
-    int write_errno;
 } goo_writer;
-
-static void put_u16(unsigned char *p, unsigned v)
-{
-    p[0] = (unsigned char)(v >> 8);
-    p[1] = (unsigned char)v;
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)(v >> 24);
-    p[1] = (unsigned char)(v >> 16);
-    p[2] = (unsigned char)(v >> 8);
-    p[3] = (unsigned char)v;
-}
-
-static void put_f32(unsigned char *p, double v)
-{
-    float f = (float)v;
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    put_u32(p, u);
-}
 
 /* A fixed-width text field: cut to leave room for the NUL, NUL-padded. */
 static void put_text(unsigned char *p, size_t width, const char *s)
@@ -80,33 +57,38 @@ static void put_text(unsigned char *p, size_t width, const char *s)
     memcpy(p, s, n);
 }
 
-static void write_at(goo_writer *w, off_t at, const void *bytes, size_t n)
-{
-    if (w->write_errno) return;
-    errno = 0;
-    if (fseeko(w->file.f, at, SEEK_SET) != 0 || fwrite(bytes, 1, n, w->file.f) != n)
-        w->write_errno = errno ? errno : EIO;
-}
-
-static int write_failed(goo_writer *w)
-{
-    return complain(RC_FAIL, "cannot write %s: %s", w->file.path, strerror(w->write_errno));
-}
 
 static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
-
-/* The bottom lift falls back to the normal one when the desc leaves it 0: a
-   printer that does not peel tears the first layers off the plate. */
-static double bottom_lift_mm(const job_motion *m) { return m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm; }
-static double bottom_lift_speed(const job_motion *m)
-{
-    return mm_per_min(m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed);
-}
 
 static double build_height_mm(const job_desc *d)
 {
     /* An unknown build height: the job's own is the least the printer has. */
     return d->z_max_mm > 0 ? d->z_max_mm : d->layers[d->layer_count - 1].z_top;
+}
+
+/* Advance mode ("0: normal mode; 1: advance mode, printing use the value of
+   'Layer Definition Content'", Elegoo's specification) is what makes the
+   printer take each layer's own Z and exposure. UVtools sets it only when a
+   layer differs from the header's globals (GooFile.cs @7b510f0d,
+   OnBeforeEncode: SupportPerLayerSettings && UsingPerLayerSettings), as
+   printers have frozen or started high with it on (UVtools #997, #1013,
+   #1040); so a job the globals describe leaves it off. That is a job whose
+   layers, the top one aside, each end at layer_height_mm times its number
+   and are exposed for the header's bottom or normal time (UVtools'
+   Layer.IsUsingGlobalParameters, with its tolerances: 0.001 mm, 0.01 s).
+   The top layer is what is left of the part: without advance mode it is
+   cured a whole layer thick at the normal time, which is what the normal
+   time is for. */
+static int advance_mode(const job_desc *d)
+{
+    size_t k;
+    for (k = 0; k + 1 < d->layer_count; k++) {
+        const job_layer *L = &d->layers[k];
+        double exposure = k < d->bottom_layers ? d->bottom_exposure_s : d->exposure_s;
+        if (fabs(L->z_top - d->layer_height_mm * (double)(k + 1)) > 0.001 || fabs(L->exposure_s - exposure) > 0.01)
+            return 1;
+    }
+    return 0;
 }
 
 /* ---- the header -------------------------------------------------------- */
@@ -122,7 +104,7 @@ static int put_preview(goo_writer *w, unsigned char *to, int side)
     }
     for (i = 0; i < pixels; i++) {
         const unsigned char *p = rgb + i * 3;
-        put_u16(to + i * 2, (unsigned)(p[0] >> 3) << 11 | (unsigned)(p[1] >> 2) << 5 | (unsigned)(p[2] >> 3));
+        put_be16(to + i * 2, (unsigned)(p[0] >> 3) << 11 | (unsigned)(p[1] >> 2) << 5 | (unsigned)(p[2] >> 3));
     }
     to[pixels * 2] = 0x0D;
     to[pixels * 2 + 1] = 0x0A;
@@ -148,8 +130,8 @@ static void put_names(const goo_writer *w, unsigned char *h)
     put_text(h + 92, 32, d->preset && d->preset->machine ? d->preset->machine : "adaslice");
     put_text(h + 124, 32, "DLP"); /* MachineType as UVtools writes it (mslicer: "Default") */
     put_text(h + 156, 32, "adaslice");
-    put_u16(h + 188, (unsigned)(d->supersample > 1 ? d->supersample : 1));
-    put_u16(h + 190, 1); /* GreyLevel, as UVtools */
+    put_be16(h + 188, (unsigned)(d->supersample > 1 ? d->supersample : 1));
+    put_be16(h + 190, 1); /* GreyLevel, as UVtools */
 }
 
 /* The fields from 195310 to the end of the header. */
@@ -158,47 +140,46 @@ static void put_fields(const goo_writer *w, unsigned char *f)
     const job_desc *d = w->d;
     const job_motion *m = &d->motion;
     double wait_s = m->wait_before_cure_s;
-    put_u32(f, (uint32_t)d->layer_count);
-    put_u16(f + 4, (unsigned)d->width);
-    put_u16(f + 6, (unsigned)d->height);
+    put_be32(f, (uint32_t)d->layer_count);
+    put_be16(f + 4, (unsigned)d->width);
+    put_be16(f + 6, (unsigned)d->height);
     f[8] = d->mirror_x != 0;
     f[9] = d->mirror_y != 0;
-    put_f32(f + 10, d->display_mm[0]);
-    put_f32(f + 14, d->display_mm[1]);
-    put_f32(f + 18, build_height_mm(d));
-    put_f32(f + 22, d->layer_height_mm);
-    put_f32(f + 26, d->exposure_s);
+    put_be_f32(f + 10, d->display_mm[0]);
+    put_be_f32(f + 14, d->display_mm[1]);
+    put_be_f32(f + 18, build_height_mm(d));
+    put_be_f32(f + 22, d->layer_height_mm);
+    put_be_f32(f + 26, d->exposure_s);
     /* Wait-time mode: the rest before each exposure is a WaitTimeBeforeCure
        and the light-off delay stays 0 (UVtools sets the two so). */
     f[30] = 1;
-    put_f32(f + 43, wait_s); /* BottomWaitTimeBeforeCure */
-    put_f32(f + 55, wait_s); /* WaitTimeBeforeCure */
-    put_f32(f + 59, d->bottom_exposure_s);
-    put_u32(f + 63, d->bottom_layers);
-    put_f32(f + 67, bottom_lift_mm(m));
-    put_f32(f + 71, bottom_lift_speed(m));
-    put_f32(f + 75, m->lift_mm);
-    put_f32(f + 79, mm_per_min(m->lift_speed));
+    put_be_f32(f + 43, wait_s); /* BottomWaitTimeBeforeCure */
+    put_be_f32(f + 55, wait_s); /* WaitTimeBeforeCure */
+    put_be_f32(f + 59, d->bottom_exposure_s);
+    put_be32(f + 63, d->bottom_layers);
+    put_be_f32(f + 67, job_lift_mm(m, 1));
+    put_be_f32(f + 71, mm_per_min(job_lift_speed(m, 1)));
+    put_be_f32(f + 75, m->lift_mm);
+    put_be_f32(f + 79, mm_per_min(m->lift_speed));
     /* One-stage moves: retract all the way the lift went; the second stages
        are 0 mm at the first stages' speeds. */
-    put_f32(f + 83, bottom_lift_mm(m));
-    put_f32(f + 87, mm_per_min(m->retract_speed));
-    put_f32(f + 91, m->lift_mm);
-    put_f32(f + 95, mm_per_min(m->retract_speed));
-    put_f32(f + 103, bottom_lift_speed(m));
-    put_f32(f + 111, mm_per_min(m->lift_speed));
-    put_f32(f + 119, mm_per_min(m->retract_speed));
-    put_f32(f + 127, mm_per_min(m->retract_speed));
-    put_u16(f + 131, 255);
-    put_u16(f + 133, 255);
-    /* Advance mode: the printer takes every layer's own Z, exposure and moves. */
-    f[135] = 1;
-    put_u32(f + 136, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
-    put_f32(f + 140, d->volume_mm3);
+    put_be_f32(f + 83, job_lift_mm(m, 1));
+    put_be_f32(f + 87, mm_per_min(m->retract_speed));
+    put_be_f32(f + 91, m->lift_mm);
+    put_be_f32(f + 95, mm_per_min(m->retract_speed));
+    put_be_f32(f + 103, mm_per_min(job_lift_speed(m, 1)));
+    put_be_f32(f + 111, mm_per_min(m->lift_speed));
+    put_be_f32(f + 119, mm_per_min(m->retract_speed));
+    put_be_f32(f + 127, mm_per_min(m->retract_speed));
+    put_be16(f + 131, 255);
+    put_be16(f + 133, 255);
+    f[135] = (unsigned char)advance_mode(d);
+    put_be32(f + 136, (uint32_t)(d->print_time_s > 0 ? d->print_time_s + 0.5 : 0));
+    put_be_f32(f + 140, d->volume_mm3);
     /* MaterialGrams: UVtools writes the millilitres there; we know no density. */
-    put_f32(f + 144, d->volume_mm3 / 1000.0);
+    put_be_f32(f + 144, d->volume_mm3 / 1000.0);
     put_text(f + 152, 8, "$");
-    put_u32(f + 160, GOO_HEADER);
+    put_be32(f + 160, GOO_HEADER);
     f[164] = 1; /* GrayScaleLevel: grey 0x00-0xFF */
 }
 
@@ -207,8 +188,8 @@ static void write_header_fields(goo_writer *w)
     unsigned char names[GOO_SMALL_PREVIEW] = {0}, fields[GOO_HEADER - GOO_FIELDS] = {0};
     put_names(w, names);
     put_fields(w, fields);
-    write_at(w, 0, names, sizeof names);
-    write_at(w, GOO_FIELDS, fields, sizeof fields);
+    job_file_write_at(&w->file, 0, names, sizeof names);
+    job_file_write_at(&w->file, GOO_FIELDS, fields, sizeof fields);
 }
 
 /* ---- layer images: 0x55, chunks, checksum -------------------------------- */
@@ -284,19 +265,19 @@ static void put_layer_def(const goo_writer *w, size_t k, unsigned char *e)
     const job_desc *d = w->d;
     const job_motion *m = &d->motion;
     int bottom = k < d->bottom_layers;
-    double lift = bottom ? bottom_lift_mm(m) : m->lift_mm;
-    double speed = bottom ? bottom_lift_speed(m) : mm_per_min(m->lift_speed);
-    put_f32(e + 2, build_height_mm(d)); /* PausePositionZ, as UVtools and mslicer */
-    put_f32(e + 6, d->layers[k].z_top);
-    put_f32(e + 10, d->layers[k].exposure_s);
-    put_f32(e + 26, m->wait_before_cure_s);
-    put_f32(e + 30, lift);
-    put_f32(e + 34, speed);
-    put_f32(e + 42, speed);
-    put_f32(e + 46, lift);
-    put_f32(e + 50, mm_per_min(m->retract_speed));
-    put_f32(e + 58, mm_per_min(m->retract_speed));
-    put_u16(e + 62, 255);
+    double lift = job_lift_mm(m, bottom);
+    double speed = mm_per_min(job_lift_speed(m, bottom));
+    put_be_f32(e + 2, build_height_mm(d)); /* PausePositionZ, as UVtools and mslicer */
+    put_be_f32(e + 6, d->layers[k].z_top);
+    put_be_f32(e + 10, d->layers[k].exposure_s);
+    put_be_f32(e + 26, m->wait_before_cure_s);
+    put_be_f32(e + 30, lift);
+    put_be_f32(e + 34, speed);
+    put_be_f32(e + 42, speed);
+    put_be_f32(e + 46, lift);
+    put_be_f32(e + 50, mm_per_min(m->retract_speed));
+    put_be_f32(e + 58, mm_per_min(m->retract_speed));
+    put_be16(e + 62, 255);
     e[64] = 0x0D;
     e[65] = 0x0A;
 }
@@ -342,25 +323,17 @@ static int encode_prz(const void *writer, size_t k, const unsigned char *image, 
 static int put(void *writer, size_t k, job_blob *blob)
 {
     goo_writer *w = (goo_writer *)writer;
-    const job_desc *d = w->d;
     unsigned char def[GOO_LAYER_DEF] = {0};
     size_t size = blob->size;
-    if (k != w->layers_done || k >= d->layer_count) {
-        free(blob->data);
-        blob->data = NULL;
-        return complain(RC_FAIL, "%s: layer %zu handed to the goo writer after %zu of %zu layer%s", w->file.path, k,
-                        w->layers_done, d->layer_count, plural(d->layer_count));
-    }
     put_layer_def(w, k, def);
-    put_u32(def + 66, (uint32_t)size);
-    write_at(w, w->end, def, sizeof def);
-    if (!w->write_errno && (fwrite(blob->data, 1, size, w->file.f) != size || fwrite("\r\n", 1, 2, w->file.f) != 2))
-        w->write_errno = errno ? errno : EIO;
+    put_be32(def + 66, (uint32_t)size);
+    job_file_write_at(&w->file, w->end, def, sizeof def);
+    job_file_append(&w->file, blob->data, size);
+    job_file_append(&w->file, "\r\n", 2);
     free(blob->data);
     blob->data = NULL;
-    if (w->write_errno) return write_failed(w);
+    if (w->file.err) return job_file_check(&w->file);
     w->end += (off_t)(GOO_LAYER_DEF + size + 2);
-    w->layers_done++;
     return RC_OK;
 }
 
@@ -395,9 +368,9 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     w->d = d;
     if ((rc = put_preview(w, header + GOO_SMALL_PREVIEW, 116)) == RC_OK &&
         (rc = put_preview(w, header + GOO_BIG_PREVIEW, 290)) == RC_OK) {
-        write_at(w, 0, header, GOO_HEADER);
+        job_file_write_at(&w->file, 0, header, GOO_HEADER);
         write_header_fields(w);
-        if (w->write_errno) rc = write_failed(w);
+        rc = job_file_check(&w->file);
     }
     free(header);
     if (rc != RC_OK) {
@@ -416,20 +389,37 @@ static int close_job(void *writer, int ok)
     goo_writer *w = (goo_writer *)writer;
     int rc = RC_OK;
     if (!w) return ok ? RC_FAIL : RC_OK;
-    if (ok && w->layers_done != w->d->layer_count) {
-        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->file.path, w->layers_done,
-                      w->d->layer_count, plural(w->d->layer_count));
-    } else if (ok) {
-        write_at(w, w->end, ending, sizeof ending);
+    if (ok) {
+        job_file_write_at(&w->file, w->end, ending, sizeof ending);
         write_header_fields(w);
-        rc = w->write_errno ? write_failed(w) : job_file_commit(&w->file);
+        rc = job_file_commit(&w->file);
     }
     job_file_discard(&w->file); /* after a commit there is nothing left to discard */
     free(w);
     return rc;
 }
 
-const job_format JOB_FORMAT_GOO = {"goo", ".goo", "Elegoo GOO", 0.01, 1, 0, open_job, encode, put, close_job,
-                                  {{116, 116}, {290, 290}}};
-const job_format JOB_FORMAT_PRZ = {"prz", ".prz", "Phrozen PRZ (GOO without diff runs)", 0.01, 1, 0, open_job,
-                                   encode_prz, put, close_job, {{116, 116}, {290, 290}}};
+const job_format JOB_FORMAT_GOO = {
+    .name = "goo",
+    .extension = ".goo",
+    .what = "Elegoo GOO",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{116, 116}, {290, 290}},
+};
+const job_format JOB_FORMAT_PRZ = {
+    .name = "prz",
+    .extension = ".prz",
+    .what = "Phrozen PRZ (GOO without diff runs)",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .open = open_job,
+    .encode = encode_prz,
+    .put = put,
+    .close = close_job,
+    .previews = {{116, 116}, {290, 290}},
+};

@@ -213,6 +213,16 @@ static int close_job(void *writer, int ok)
     return rc ? rc : closed;
 }
 
-const job_format JOB_FORMAT_SL1 = {"sl1", ".sl1", "Prusa SL1/SL1S", 0.01, 0,
-                                    ZIP_MEMBERS_MAX - 4 /* two thumbnails, two inis */, open_job, encode, put, close_job,
-                                    {{400, 400}, {800, 480}}};
+const job_format JOB_FORMAT_SL1 = {
+    .name = "sl1",
+    .extension = ".sl1",
+    .what = "Prusa SL1/SL1S",
+    .min_layer_mm = 0.01,
+    .adaptive = 0,
+    .max_layers = ZIP_MEMBERS_MAX - 4, /* two thumbnails, two inis */
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{400, 400}, {800, 480}},
+};

@@ -150,6 +150,16 @@ static int close_job(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_UVJ = {"uvj", ".uvj", "UVtools UVJ, any printer's: UVtools converts it", 0.01, 1,
-                                   ZIP_MEMBERS_MAX - 3 /* config.json, two previews */, open_job, encode, put, close_job,
-                                   {{TINY_W, TINY_H}, {HUGE_W, HUGE_H}}};
+const job_format JOB_FORMAT_UVJ = {
+    .name = "uvj",
+    .extension = ".uvj",
+    .what = "UVtools UVJ, any printer's: UVtools converts it",
+    .min_layer_mm = 0.01,
+    .adaptive = 1,
+    .max_layers = ZIP_MEMBERS_MAX - 3, /* config.json, two previews */
+    .open = open_job,
+    .encode = encode,
+    .put = put,
+    .close = close_job,
+    .previews = {{TINY_W, TINY_H}, {HUGE_W, HUGE_H}},
+};

@@ -2,6 +2,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#include "bytes.h"
 #include "json.h"
 #include "jobdir.h"
 #include "jobfile.h"
@@ -64,73 +65,72 @@ typedef struct dir_writer {
 
 static void write_manifest(FILE *f, const void *ctx)
 {
-    const job_desc *d = ((const dir_writer *)ctx)->d;
-    int digits = ((const dir_writer *)ctx)->digits;
+    const dir_writer *dw = (const dir_writer *)ctx;
+    const job_desc *d = dw->d;
+    json_writer w;
+    char crc[9];
     size_t k;
-    fputs("{\n  \"format\": \"adaslice-job\",\n  \"version\": ", f);
-    json_quote(f, ADASLICE_VERSION);
-    fputs(",\n  \"complete\": true,\n  \"model\": ", f);
-    json_quote(f, d->model);
-    fputs(",\n  \"printer\": {\"name\": ", f);
-    if (d->preset) json_quote(f, d->preset->name); else fputs("null", f);
-    fprintf(f, ", \"width_px\": %d, \"height_px\": %d, \"pitch_mm\": [", d->width, d->height);
-    json_write_number(f, d->pitch[0]);
-    fputs(", ", f);
-    json_write_number(f, d->pitch[1]);
-    fprintf(f, "], \"mirror\": \"%s\", \"rotate\": %s},\n", MIRRORS[d->mirror_x | (d->mirror_y << 1)], ROTATIONS[d->rotate]);
-    fprintf(f, "  \"mask\": {\"bits\": %d, \"supersample\": %d, \"slice_at\": \"%s\"},\n", d->bits, d->supersample,
-            d->slice_at);
-    fputs("  \"part_mm\": [", f);
-    for (k = 0; k < 3; k++) { if (k) fputs(", ", f); json_write_number(f, d->part_mm[k]); }
-    fputs("],\n  \"place_mm\": [", f);
-    json_write_number(f, d->place_mm[0]);
-    fputs(", ", f);
-    json_write_number(f, d->place_mm[1]);
-    fprintf(f, "],\n  \"metric\": \"%s\",\n  \"method\": \"%s\",\n  \"eps\": ", d->metric, d->method);
-    json_write_number(f, d->eps);
-    fputs(",\n  \"working_curve\": {\"seconds\": ", f);
-    json_write_number(f, d->cure[0]);
-    fputs(", \"thickness_mm\": ", f);
-    json_write_number(f, d->cure[1]);
-    fputs(", \"penetration_mm\": ", f);
-    if (d->cure[2] > 0) json_write_number(f, d->cure[2]); else fputs("null", f);
-    fprintf(f, "},\n  \"bottom_layers\": %u,\n  \"bottom_exposure_s\": ", d->bottom_layers);
-    json_write_number(f, d->bottom_exposure_s);
-    fputs(",\n  \"motion\": {\"peel_mm\": ", f);
-    json_write_number(f, d->motion.lift_mm);
-    fputs(", \"peel_speed_mm_s\": ", f);
-    json_write_number(f, d->motion.lift_speed);
-    fputs(", \"return_speed_mm_s\": ", f);
-    json_write_number(f, d->motion.retract_speed);
-    fputs(", \"settle_s\": ", f);
-    json_write_number(f, d->motion.wait_before_cure_s);
-    fputs("},\n  \"print_time_s\": ", f);
-    json_write_number(f, d->print_time_s);
-    fputs(",\n  \"volume_mm3\": ", f);
-    json_write_number(f, d->volume_mm3);
-    fputs(",\n  \"masks_rle_crc32\": ", f);
-    if (((const dir_writer *)ctx)->has_masks) fprintf(f, "\"%08x\"", (unsigned)((const dir_writer *)ctx)->masks_crc);
-    else fputs("null", f);
-    fprintf(f, ",\n  \"layer_count\": %zu,\n  \"layers\": [", d->layer_count);
+    json_init(&w, f);
+    json_begin_object(&w, NULL, 0);
+    json_string(&w, "format", "adaslice-job");
+    json_string(&w, "version", ADASLICE_VERSION);
+    json_bool(&w, "complete", 1);
+    json_string(&w, "model", d->model);
+    json_begin_object(&w, "printer", 1);
+    json_string(&w, "name", d->preset ? d->preset->name : NULL);
+    json_int(&w, "width_px", d->width);
+    json_int(&w, "height_px", d->height);
+    json_numbers(&w, "pitch_mm", d->pitch, 2);
+    json_string(&w, "mirror", MIRRORS[d->mirror_x | (d->mirror_y << 1)]);
+    json_int(&w, "rotate", 90 * d->rotate);
+    json_end(&w);
+    json_begin_object(&w, "mask", 1);
+    json_int(&w, "bits", d->bits);
+    json_int(&w, "supersample", d->supersample);
+    json_string(&w, "slice_at", d->slice_at);
+    json_end(&w);
+    json_numbers(&w, "part_mm", d->part_mm, 3);
+    json_numbers(&w, "place_mm", d->place_mm, 2);
+    json_string(&w, "metric", d->metric);
+    json_string(&w, "method", d->method);
+    json_number(&w, "eps", d->eps);
+    json_begin_object(&w, "working_curve", 1);
+    json_number(&w, "seconds", d->cure[0]);
+    json_number(&w, "thickness_mm", d->cure[1]);
+    if (d->cure[2] > 0) json_number(&w, "penetration_mm", d->cure[2]);
+    else json_null(&w, "penetration_mm");
+    json_end(&w);
+    json_int(&w, "bottom_layers", d->bottom_layers);
+    json_number(&w, "bottom_exposure_s", d->bottom_exposure_s);
+    json_begin_object(&w, "motion", 1);
+    json_number(&w, "peel_mm", d->motion.lift_mm);
+    json_number(&w, "peel_speed_mm_s", d->motion.lift_speed);
+    json_number(&w, "return_speed_mm_s", d->motion.retract_speed);
+    json_number(&w, "settle_s", d->motion.wait_before_cure_s);
+    json_end(&w);
+    json_number(&w, "print_time_s", d->print_time_s);
+    json_number(&w, "volume_mm3", d->volume_mm3);
+    snprintf(crc, sizeof crc, "%08x", (unsigned)dw->masks_crc);
+    json_string(&w, "masks_rle_crc32", dw->has_masks ? crc : NULL);
+    json_int(&w, "layer_count", (long long)d->layer_count);
+    json_begin_array(&w, "layers", 0);
     for (k = 0; k < d->layer_count; k++) {
         const job_layer *l = &d->layers[k];
         char name[40];
-        layer_name(name, k, digits, "png");
-        fprintf(f, "%s\n    {\"index\": %zu, \"file\": \"%s\", \"z_bottom\": ", k ? "," : "", k + 1, name);
-        json_write_number(f, l->z_bottom);
-        fputs(", \"z_top\": ", f);
-        json_write_number(f, l->z_top);
-        fputs(", \"thickness\": ", f);
-        json_write_number(f, l->thickness);
-        fputs(", \"exposure_s\": ", f);
-        json_write_number(f, l->exposure_s);
-        fputs(", \"lit_area_mm2\": ", f);
-        json_write_number(f, l->lit_mm2);
-        fputc('}', f);
+        layer_name(name, k, dw->digits, "png");
+        json_begin_object(&w, NULL, 1);
+        json_int(&w, "index", (long long)k + 1);
+        json_string(&w, "file", name);
+        json_number(&w, "z_bottom", l->z_bottom);
+        json_number(&w, "z_top", l->z_top);
+        json_number(&w, "thickness", l->thickness);
+        json_number(&w, "exposure_s", l->exposure_s);
+        json_number(&w, "lit_area_mm2", l->lit_mm2);
+        json_end(&w);
     }
-    fputs("\n  ]\n}\n", f);
+    json_end(&w);
+    json_end(&w);
 }
-
 
 /* DIR/NAME, malloc'd; NULL after a complaint. */
 static char *dir_file(const char *dir, const char *name)
@@ -179,13 +179,9 @@ static void masks_out(dir_writer *w, const void *bytes, size_t n)
 
 static void masks_u32(dir_writer *w, uint32_t v)
 {
-    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
+    unsigned char b[4];
+    put_le32(b, v);
     masks_out(w, b, 4);
-}
-
-static uint32_t get_u32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
 #define MASKS_HEADER 44   /* magic and nine u32 */
@@ -472,8 +468,18 @@ static int dir_close(void *writer, int ok)
     return rc;
 }
 
-const job_format JOB_FORMAT_DIR = {"dir", NULL, "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
-                                   0, 1, 0, dir_open, dir_encode, dir_put, dir_close, {{DIR_PREVIEW_W, DIR_PREVIEW_H}}};
+const job_format JOB_FORMAT_DIR = {
+    .name = "dir",
+    .extension = NULL,
+    .what = "a job directory: a PNG per layer, masks.rle for adaslice print, manifest.json",
+    .min_layer_mm = 0,
+    .adaptive = 1,
+    .open = dir_open,
+    .encode = dir_encode,
+    .put = dir_put,
+    .close = dir_close,
+    .previews = {{DIR_PREVIEW_W, DIR_PREVIEW_H}},
+};
 
 /* ------------------------------------------------------------ reading */
 
@@ -572,15 +578,15 @@ int jobdir_read_masks(const char *dir, job_masks *m)
         complain(RC_FAIL, "%s: not an adaslice mask file (bad magic at byte 0)", path);
         goto done;
     }
-    m->width = get_u32(m->file + 8);
-    m->height = get_u32(m->file + 12);
-    m->bits = get_u32(m->file + 16);
-    k = get_u32(m->file + 20);
-    m->bin_nm = get_u32(m->file + 24);
-    m->peel_nm = get_u32(m->file + 28);
-    m->peel_speed_um_s = get_u32(m->file + 32);
-    m->return_speed_um_s = get_u32(m->file + 36);
-    m->settle_ms = get_u32(m->file + 40);
+    m->width = get_le32(m->file + 8);
+    m->height = get_le32(m->file + 12);
+    m->bits = get_le32(m->file + 16);
+    k = get_le32(m->file + 20);
+    m->bin_nm = get_le32(m->file + 24);
+    m->peel_nm = get_le32(m->file + 28);
+    m->peel_speed_um_s = get_le32(m->file + 32);
+    m->return_speed_um_s = get_le32(m->file + 36);
+    m->settle_ms = get_le32(m->file + 40);
     if (!k || k > m->file_size / MASKS_LAYER || !m->bin_nm) {
         complain(RC_FAIL, "%s: byte 20: the file does not hold %u layer%s of %u nm", path, k, plural(k), m->bin_nm);
         goto done;
@@ -588,18 +594,18 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     if (job_masks_alloc(m, k)) goto done;
     for (at = MASKS_HEADER, k = 0; k < m->layers; k++) {
         uint32_t code;
-        if (m->file_size - at < MASKS_LAYER || (code = get_u32(m->file + at + 12)) > m->file_size - at - MASKS_LAYER) {
+        if (m->file_size - at < MASKS_LAYER || (code = get_le32(m->file + at + 12)) > m->file_size - at - MASKS_LAYER) {
             complain(RC_FAIL, "%s: byte %zu: layer %u runs past the end of the file", path, at, k + 1);
             goto done;
         }
-        m->lengths[k] = get_u32(m->file + at);
-        m->exposure_ms[k] = get_u32(m->file + at + 4);
+        m->lengths[k] = get_le32(m->file + at);
+        m->exposure_ms[k] = get_le32(m->file + at + 4);
         if (!m->exposure_ms[k] || m->exposure_ms[k] > 3600000u) {
             complain(RC_FAIL, "%s: byte %zu: layer %u's exposure of %u ms is not 1 ms to an hour", path, at + 4, k + 1,
                      m->exposure_ms[k]);
             goto done;
         }
-        m->crcs[k] = get_u32(m->file + at + 8);
+        m->crcs[k] = get_le32(m->file + at + 8);
         m->sizes[k] = code;
         m->codes[k] = m->file + at + MASKS_LAYER;
         at += MASKS_LAYER + code;

@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 const job_format *const JOB_FORMATS[] = {&JOB_FORMAT_DIR, &JOB_FORMAT_CTB, &JOB_FORMAT_CTB_ENCRYPTED, &JOB_FORMAT_GOO,
@@ -49,17 +50,75 @@ int job_blob_reserve(job_blob *b, size_t more)
     return 0;
 }
 
-int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride)
+int job_open(job_writer *w, const job_format *f, const char *path, const job_desc *d)
+{
+    memset(w, 0, sizeof *w);
+    w->format = f;
+    w->d = d;
+    w->path = path;
+    return f->open(&w->state, path, d);
+}
+
+int job_put(job_writer *w, size_t k, job_blob *blob)
+{
+    const job_desc *d = w->d;
+    int rc;
+    if (!w->state || k != w->layers_put || k >= d->layer_count) {
+        free(blob->data);
+        blob->data = NULL;
+        return complain(RC_FAIL, "%s: layer %zu handed to the %s writer after %zu of %zu layer%s", w->path, k,
+                        w->format->name, w->layers_put, d->layer_count, plural(d->layer_count));
+    }
+    rc = w->format->put(w->state, k, blob);
+    if (rc == RC_OK) w->layers_put++;
+    return rc;
+}
+
+int job_close(job_writer *w, int ok)
+{
+    void *state = w->state;
+    int rc = RC_OK, closed;
+    if (!state) return ok ? RC_FAIL : RC_OK;
+    w->state = NULL;
+    if (ok && w->layers_put != w->d->layer_count) {
+        rc = complain(RC_FAIL, "%s: only %zu of %zu layer%s written; no file made", w->path, w->layers_put,
+                      w->d->layer_count, plural(w->d->layer_count));
+        ok = 0;
+    }
+    closed = w->format->close(state, ok);
+    return rc ? rc : closed;
+}
+
+int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t stride)
 {
     job_blob blob;
     int rc;
     memset(&blob, 0, sizeof blob);
-    rc = f->encode(writer, k, image, stride, &blob);
+    if (!w->state) return job_put(w, k, &blob); /* the complaint */
+    rc = w->format->encode(w->state, k, image, stride, &blob);
     if (rc) {
         free(blob.data);
         return rc;
     }
-    return f->put(writer, k, &blob);
+    return job_put(w, k, &blob);
+}
+
+double job_lift_mm(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm;
+}
+
+double job_lift_speed(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed;
+}
+
+double job_peel_s(const job_motion *m, int bottom)
+{
+    double lift = job_lift_mm(m, bottom), up = job_lift_speed(m, bottom), t = 0;
+    if (up > 0) t += lift / up;
+    if (m->retract_speed > 0) t += lift / m->retract_speed;
+    return t;
 }
 
 time_t job_time(int *fixed)
@@ -99,10 +158,39 @@ int job_file_open(job_file *jf, const char *path)
     return RC_OK;
 }
 
+void job_file_append(job_file *jf, const void *src, size_t n)
+{
+    static const unsigned char zero[4096];
+    if (jf->err) return;
+    errno = 0;
+    while (n) {
+        size_t part = src || n < sizeof zero ? n : sizeof zero;
+        if (fwrite(src ? src : zero, 1, part, jf->f) != part) {
+            jf->err = errno ? errno : EIO;
+            return;
+        }
+        if (src) src = (const unsigned char *)src + part;
+        n -= part;
+    }
+}
+
+void job_file_write_at(job_file *jf, uint64_t at, const void *src, size_t n)
+{
+    if (jf->err) return;
+    errno = 0;
+    if (fseeko(jf->f, (off_t)at, SEEK_SET) != 0) jf->err = errno ? errno : EIO;
+    else job_file_append(jf, src, n);
+}
+
+int job_file_check(const job_file *jf)
+{
+    return jf->err ? complain(RC_FAIL, "cannot write %s: %s", jf->path, strerror(jf->err)) : RC_OK;
+}
+
 int job_file_commit(job_file *jf)
 {
     /* errno after an earlier failed write may be anyone's: say EIO */
-    int err = ferror(jf->f) ? EIO : 0;
+    int err = jf->err ? jf->err : ferror(jf->f) ? EIO : 0;
     if (fflush(jf->f) != 0 && !err) err = errno;
     if (fclose(jf->f) != 0 && !err) err = errno;
     jf->f = NULL;

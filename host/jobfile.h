@@ -101,18 +101,39 @@ typedef struct job_format {
        shared. RC_OK or a complaint made. */
     int (*encode)(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob);
     /* The coded layers into the file, in order of k, one at a time (on any
-       thread); takes the blob's data (and frees it) either way. */
+       thread; job_put keeps the order); takes the blob's data (and frees it)
+       either way. */
     int (*put)(void *writer, size_t k, job_blob *blob);
-    /* ok: finish and put the file in place; !ok: remove what was written.
-       Frees the writer either way. */
+    /* ok (job_close has seen every layer put): finish and put the file in
+       place; !ok: remove what was written. Frees the writer either way. */
     int (*close)(void *writer, int ok);
     /* The sizes (w, h; 0: none) of the previews it asks d->preview for, so
        that they can be drawn ahead on a thread of their own. */
     int previews[2][2];
 } job_format;
 
+/* A job being written: the format's writer, and how many layers it has
+   taken. Every job goes through these, which keep the guards the formats
+   share (layer k only after layers 0 .. k-1, a good close only after all of
+   them), so that a format's put and close need not. */
+typedef struct job_writer {
+    const job_format *format;
+    void *state;                 /* the format's writer; NULL once closed */
+    const job_desc *d;
+    const char *path;            /* the caller's, until close */
+    size_t layers_put;
+} job_writer;
+/* The format's open; RC_OK, or a complaint made and w->state NULL. */
+int job_open(job_writer *w, const job_format *f, const char *path, const job_desc *d);
+/* The format's put for layer k, which must be the next one; takes the
+   blob's data (and frees it) either way. */
+int job_put(job_writer *w, size_t k, job_blob *blob);
+/* The format's close: ok, and every layer put, finishes the job; anything
+   else removes what was written. A writer never opened, or closed, gives
+   RC_OK for !ok. */
+int job_close(job_writer *w, int ok);
 /* encode and put one after the other: a layer on one thread. */
-int job_write_layer(const job_format *f, void *writer, size_t k, const unsigned char *image, size_t stride);
+int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t stride);
 
 /* The formats: jobdir.c, fmt_ctb.c, fmt_ctb_encrypted.c, fmt_goo.c (.goo and
    .prz), fmt_chitu_zip.c, fmt_sl1.c, fmt_uvj.c. */
@@ -128,6 +149,15 @@ const job_format *job_format_for_path(const char *path);
 
 /* ---- helpers the formats share (and maskrows.h) ---------------------- */
 
+/* The peel after a layer, bottom (one of the first bottom_layers) or not:
+   its lift, mm, and speed, mm/s. The bottom ones fall back to the normal
+   ones where the motion leaves them 0: a printer that does not peel tears
+   the first layers off the plate. */
+double job_lift_mm(const job_motion *m, int bottom);
+double job_lift_speed(const job_motion *m, int bottom);
+/* Seconds that peel takes: up at the lift speed, back at retract_speed. */
+double job_peel_s(const job_motion *m, int bottom);
+
 /* When the job was made, for the headers that carry it: SOURCE_DATE_EPOCH
    when set (the reproducible-builds convention: the same job, the same
    bytes), else now. *fixed says which; a fixed time is shown in UTC. */
@@ -138,8 +168,18 @@ time_t job_time(int *fixed);
 typedef struct job_file {
     FILE *f;
     char *path, *tmp;
+    int err;                     /* the first failed write's errno (0: none) */
 } job_file;
 int job_file_open(job_file *jf, const char *path);
+/* n bytes (src NULL: zeros) at byte `at`, or (append) where the last write
+   ended. After a failure they write nothing and err keeps why, so a writer
+   puts a whole block and looks once: job_file_check, or the commit,
+   complains. */
+void job_file_write_at(job_file *jf, uint64_t at, const void *src, size_t n);
+void job_file_append(job_file *jf, const void *src, size_t n);
+/* RC_OK, or the complaint "cannot write PATH: why" made for err. */
+int job_file_check(const job_file *jf);
+/* Puts the file in place, unless a write failed: then it is removed. */
 int job_file_commit(job_file *jf);
 void job_file_discard(job_file *jf);
 #endif

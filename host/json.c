@@ -10,7 +10,7 @@ void json_init(json_writer *w, FILE *f)
     w->f = f;
 }
 
-void json_quote(FILE *f, const char *s)
+static void json_quote(FILE *f, const char *s)
 {
     fputc('"', f);
     for (; *s; s++) {
@@ -20,6 +20,23 @@ void json_quote(FILE *f, const char *s)
         else fputc(c, f);
     }
     fputc('"', f);
+}
+
+static void json_write_number(FILE *f, double v)
+{
+    char text[32];
+    int digits;
+    if (!isfinite(v)) {
+        fputs("null", f);
+        return;
+    }
+    /* the shortest of %.15g .. %.17g that reads back as v */
+    for (digits = 15; digits < 17; digits++) {
+        snprintf(text, sizeof text, "%.*g", digits, v);
+        if (strtod(text, NULL) == v) break;
+    }
+    if (digits == 17) snprintf(text, sizeof text, "%.17g", v);
+    fputs(text, f);
 }
 
 /* The comma, the line break and the key before a value at the current depth. */
@@ -78,21 +95,12 @@ void json_number(json_writer *w, const char *key, double v)
     json_write_number(w->f, v);
 }
 
-void json_write_number(FILE *f, double v)
+void json_numbers(json_writer *w, const char *key, const double *v, size_t n)
 {
-    char text[32];
-    int digits;
-    if (!isfinite(v)) {
-        fputs("null", f);
-        return;
-    }
-    /* the shortest of %.15g .. %.17g that reads back as v */
-    for (digits = 15; digits < 17; digits++) {
-        snprintf(text, sizeof text, "%.*g", digits, v);
-        if (strtod(text, NULL) == v) break;
-    }
-    if (digits == 17) snprintf(text, sizeof text, "%.17g", v);
-    fputs(text, f);
+    size_t i;
+    json_begin_array(w, key, 1);
+    for (i = 0; i < n; i++) json_number(w, NULL, v[i]);
+    json_end(w);
 }
 
 void json_int(json_writer *w, const char *key, long long v)

@@ -19,6 +19,7 @@
    (ferror). */
 #ifndef ADASLICE_HOST_JSON_H
 #define ADASLICE_HOST_JSON_H
+#include <stddef.h>
 #include <stdio.h>
 
 #define JSON_MAX_DEPTH 16
@@ -36,10 +37,9 @@ void json_begin_array(json_writer *w, const char *key, int oneline);
 void json_end(json_writer *w);
 void json_string(json_writer *w, const char *key, const char *v);   /* v NULL: null */
 void json_number(json_writer *w, const char *key, double v);
+/* n numbers as an array on one line: a point, a matrix, a pitch. */
+void json_numbers(json_writer *w, const char *key, const double *v, size_t n);
 void json_int(json_writer *w, const char *key, long long v);
 void json_bool(json_writer *w, const char *key, int v);
 void json_null(json_writer *w, const char *key);
-/* A string literal of s, escaped, and a number (null if not finite), alone. */
-void json_quote(FILE *f, const char *s);
-void json_write_number(FILE *f, double v);
 #endif

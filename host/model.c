@@ -50,13 +50,18 @@ int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mes
     return RC_OK;
 }
 
-void model_report_json(FILE *f, const adaslice_mesh_report *r)
+void model_report_json(json_writer *w, const char *key, const adaslice_mesh_report *r)
 {
-    fprintf(f, "{\"shells\": %zu, \"closed_shells\": %zu, \"open_edges\": %zu, \"nonmanifold_edges\": %zu, "
-               "\"inconsistent_edges\": %zu, \"welded_nearby\": %zu, \"degenerate_dropped\": %zu, \"flipped_facets\": %zu, "
-               "\"flipped_shells\": %zu, \"volume_mm3\": ",
-            r->shells, r->closed_shells, r->open_edges, r->nonmanifold_edges, r->inconsistent_edges, r->welded_nearby,
-            r->degenerate_dropped, r->flipped_facets, r->flipped_shells);
-    json_write_number(f, r->volume);
-    fputc('}', f);
+    json_begin_object(w, key, 1);
+    json_int(w, "shells", (long long)r->shells);
+    json_int(w, "closed_shells", (long long)r->closed_shells);
+    json_int(w, "open_edges", (long long)r->open_edges);
+    json_int(w, "nonmanifold_edges", (long long)r->nonmanifold_edges);
+    json_int(w, "inconsistent_edges", (long long)r->inconsistent_edges);
+    json_int(w, "welded_nearby", (long long)r->welded_nearby);
+    json_int(w, "degenerate_dropped", (long long)r->degenerate_dropped);
+    json_int(w, "flipped_facets", (long long)r->flipped_facets);
+    json_int(w, "flipped_shells", (long long)r->flipped_shells);
+    json_number(w, "volume_mm3", r->volume);
+    json_end(w);
 }

@@ -80,7 +80,7 @@ static void take_steps(pipeline *p)
             pthread_mutex_unlock(&p->lock);
             rc = s->rc;
             if (!rc) {
-                rc = job->format->put(job->writer, s->k, &s->blob);
+                rc = job_put(job->out, s->k, &s->blob);
                 if (!rc && job->done) job->done(job->ctx, s->k);
             }
             free(s->blob.data);
@@ -103,7 +103,7 @@ static void take_steps(pipeline *p)
         } else if ((s = lowest(p, SLOT_RENDERED)) != NULL) {
             s->state = SLOT_BUSY;
             pthread_mutex_unlock(&p->lock);
-            s->rc = job->format->encode(job->writer, s->k, s->image, job->stride, &s->blob);
+            s->rc = job->out->format->encode(job->out->state, s->k, s->image, job->stride, &s->blob);
             pthread_mutex_lock(&p->lock);
             s->state = SLOT_ENCODED;
         } else {

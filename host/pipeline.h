@@ -1,7 +1,7 @@
 /* The layer loop on every core: layers are rendered one at a time in order
    (the masker sweeps bottom-up), coded several at once (the format's
    `encode`: PNGs, run-length codes), and put into the job one at a time in
-   order (the format's `put`), so the job is the same bytes whatever the
+   order (job_put), so the job is the same bytes whatever the
    number of threads. Each step runs on whichever of the threads, the
    calling one among them, is free for it. */
 #ifndef ADASLICE_HOST_PIPELINE_H
@@ -10,8 +10,7 @@
 #include "jobfile.h"
 
 typedef struct pipeline_job {
-    const job_format *format;
-    void *writer;                /* the format's, open */
+    job_writer *out;             /* open */
     size_t layers;
     size_t image_bytes, stride;  /* of each layer's image */
     int threads;                 /* the calling one and threads - 1 more; 1: all on the calling one */

@@ -2,6 +2,7 @@
    specification and RFC 1950 (zlib); the deflate inside is deflate.c's, told
    that the same byte one row up is a row length + 1 back. */
 #include "png.h"
+#include "bytes.h"
 #include "deflate.h"
 #include "maskrows.h"
 #include "../adaslice.h"
@@ -42,14 +43,6 @@ uint32_t png_adler32(uint32_t adler, const void *data, size_t size)
 }
 
 /* ---- PNG ---------------------------------------------------------------- */
-
-static void put_be32(unsigned char *o, uint32_t v)
-{
-    o[0] = (unsigned char)(v >> 24);
-    o[1] = (unsigned char)(v >> 16);
-    o[2] = (unsigned char)(v >> 8);
-    o[3] = (unsigned char)v;
-}
 
 /* Rows of filter byte + data. The matcher codes runs and bytes repeated from
    one row up, so a row costs little under None where its words are flat (all

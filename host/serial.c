@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "serial.h"
+#include "bytes.h"
 #include "report.h"
 #include "../link/tty.h"
 
@@ -165,8 +166,7 @@ static int serial_resend_all(serial_link *l)
         uint16_t crc;
         f[2] = (uint8_t)((f[2] & ~LINK_ROUND_BIT) | l->round);
         crc = link_crc16(f, n - 3);
-        f[n - 3] = (uint8_t)(crc >> 8);
-        f[n - 2] = (uint8_t)crc;
+        put_be16(f + n - 3, crc);
         if ((rc = serial_write(l, f, n))) return rc;
     }
     l->retransmits += (unsigned long)l->count;

@@ -4,12 +4,12 @@
    known before a member's header goes out (its bytes are in memory), so no
    member needs a data descriptor. */
 #include "zip.h"
+#include "bytes.h"
 #include "deflate.h"
 #include "png.h"
 #include "report.h"
 #include "../adaslice_mcu.h"
 
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -29,23 +29,10 @@ enum {
 struct zip_writer {
     job_file file;
     uint64_t offset;           /* bytes written so far: the next local header's offset */
-    unsigned char *central;    /* the central directory, one header per member so far */
-    size_t central_size, central_cap;
+    bytebuf central;           /* the central directory, one header per member so far */
     unsigned members;
     int failed;                /* a zip_add failed: the archive is not to be kept */
 };
-
-static void put16(unsigned char *p, unsigned v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put32(unsigned char *p, uint32_t v)
-{
-    put16(p, v & 0xFFFF);
-    put16(p + 2, v >> 16);
-}
 
 /* The 26 bytes a local header (from its offset 4) and a central header (from
    its offset 6) share: version needed, flags, method, time, date, CRC-32,
@@ -56,25 +43,23 @@ static void put_common(unsigned char *p, const char *name, size_t len, int metho
     unsigned flags = 0;
     for (size_t i = 0; i < len; i++)
         if ((unsigned char)name[i] >= 0x80) flags = UTF8_NAME; /* names come from the command line */
-    put16(p, method ? 20 : 10); /* 2.0 for deflate, 1.0 for stored */
-    put16(p + 2, flags);
-    put16(p + 4, (unsigned)method);
-    put16(p + 6, 0);
-    put16(p + 8, DOS_DATE);
-    put32(p + 10, crc);
-    put32(p + 14, (uint32_t)csize);
-    put32(p + 18, (uint32_t)size);
-    put16(p + 22, (unsigned)len);
-    put16(p + 24, 0);
+    put_le16(p, method ? 20 : 10); /* 2.0 for deflate, 1.0 for stored */
+    put_le16(p + 2, flags);
+    put_le16(p + 4, (unsigned)method);
+    put_le16(p + 6, 0);
+    put_le16(p + 8, DOS_DATE);
+    put_le32(p + 10, crc);
+    put_le32(p + 14, (uint32_t)csize);
+    put_le32(p + 18, (uint32_t)size);
+    put_le16(p + 22, (unsigned)len);
+    put_le16(p + 24, 0);
 }
 
 static int write_bytes(zip_writer *z, const void *data, size_t size)
 {
-    errno = 0;
-    if (size && fwrite(data, 1, size, z->file.f) != size)
-        return complain(RC_FAIL, "cannot write %s: %s", z->file.path, strerror(errno ? errno : EIO));
+    job_file_append(&z->file, data, size);
     z->offset += size;
-    return RC_OK;
+    return job_file_check(&z->file);
 }
 
 int zip_open(zip_writer **z, const char *path)
@@ -123,31 +108,25 @@ static int add(zip_writer *z, const char *name, const void *data, size_t size, i
         }
     }
     /* the whole archive under 4 GiB keeps every offset and size in 32 bits */
-    if (z->offset + LOCAL_HEADER + len + csize + z->central_size + CENTRAL_HEADER + len + END_RECORD >= ZIP_LIMIT)
+    if (z->offset + LOCAL_HEADER + len + csize + z->central.size + CENTRAL_HEADER + len + END_RECORD >= ZIP_LIMIT)
         return complain(RC_FAIL, "cannot write %s: with %s the archive reaches 4 GiB (ZIP64 is not written)", path,
                         name);
-    if (z->central_size + CENTRAL_HEADER + len > z->central_cap) {
-        size_t cap = (z->central_size + CENTRAL_HEADER + len) * 2;
-        if (!(c = (unsigned char *)realloc(z->central, cap)))
-            return complain(RC_FAIL, "cannot write %s: out of memory", path);
-        z->central = c;
-        z->central_cap = cap;
-    }
-    c = z->central + z->central_size;
-    put32(c, 0x02014b50);
-    put16(c + 4, 3 << 8 | 20);  /* made by: UNIX (the attributes below), APPNOTE 2.0 */
+    if (!(c = bytebuf_room(&z->central, CENTRAL_HEADER + len)))
+        return complain(RC_FAIL, "cannot write %s: out of memory", path);
+    put_le32(c, 0x02014b50);
+    put_le16(c + 4, 3 << 8 | 20);  /* made by: UNIX (the attributes below), APPNOTE 2.0 */
     put_common(c + 6, name, len, method, crc, csize, size);
-    put16(c + 32, 0);           /* comment length */
-    put16(c + 34, 0);           /* disk number */
-    put16(c + 36, 0);           /* internal attributes */
-    put32(c + 38, (uint32_t)0100644 << 16); /* a regular file, rw-r--r-- */
-    put32(c + 42, (uint32_t)z->offset);
+    put_le16(c + 32, 0);           /* comment length */
+    put_le16(c + 34, 0);           /* disk number */
+    put_le16(c + 36, 0);           /* internal attributes */
+    put_le32(c + 38, (uint32_t)0100644 << 16); /* a regular file, rw-r--r-- */
+    put_le32(c + 42, (uint32_t)z->offset);
     memcpy(c + CENTRAL_HEADER, name, len);
-    put32(local, 0x04034b50);
+    put_le32(local, 0x04034b50);
     put_common(local + 4, name, len, method, crc, csize, size);
     if (write_bytes(z, local, LOCAL_HEADER) || write_bytes(z, name, len) || write_bytes(z, body, csize))
         return RC_FAIL;
-    z->central_size += CENTRAL_HEADER + len;
+    z->central.size += CENTRAL_HEADER + len;
     z->members++;
     z->failed = 0;
     return RC_OK;
@@ -170,22 +149,22 @@ int zip_close(zip_writer *z, int ok)
     if (ok && !z->failed) {
         unsigned char end[END_RECORD];
         uint64_t start = z->offset;
-        put32(end, 0x06054b50);
-        put16(end + 4, 0);                 /* this disk */
-        put16(end + 6, 0);                 /* the disk the central directory starts on */
-        put16(end + 8, z->members);        /* members on this disk */
-        put16(end + 10, z->members);       /* and in all */
-        put32(end + 12, (uint32_t)z->central_size);
-        put32(end + 16, (uint32_t)start);
-        put16(end + 20, 0);                /* comment length */
-        if (write_bytes(z, z->central, z->central_size) == RC_OK && write_bytes(z, end, END_RECORD) == RC_OK)
+        put_le32(end, 0x06054b50);
+        put_le16(end + 4, 0);                 /* this disk */
+        put_le16(end + 6, 0);                 /* the disk the central directory starts on */
+        put_le16(end + 8, z->members);        /* members on this disk */
+        put_le16(end + 10, z->members);       /* and in all */
+        put_le32(end + 12, (uint32_t)z->central.size);
+        put_le32(end + 16, (uint32_t)start);
+        put_le16(end + 20, 0);                /* comment length */
+        if (write_bytes(z, z->central.data, z->central.size) == RC_OK && write_bytes(z, end, END_RECORD) == RC_OK)
             rc = job_file_commit(&z->file);
         else
             job_file_discard(&z->file);
     } else {
         job_file_discard(&z->file);
     }
-    free(z->central);
+    bytebuf_free(&z->central);
     free(z);
     return rc;
 }

@@ -246,6 +246,15 @@ static int xs_get(xstream *s, unsigned *out)
     return 1;
 }
 
+void jr_ctb_decrypt(unsigned key, unsigned layer, const unsigned char *in, size_t n, unsigned char *out)
+{
+    xstream s;
+    unsigned c;
+    size_t i = 0;
+    xs_start(&s, in, n, (uint32_t)key, (uint32_t)layer);
+    while (xs_get(&s, &c)) out[i++] = (unsigned char)c;
+}
+
 /* RLE7: byte v (bit 7 clear) = one pixel; bit 7 set = run, length follows
    (0xxxxxxx | 10xxxxxx+1 | 110xxxxx+2 | 1110xxxx+3 bytes, big-endian);
    grey = v ? v<<1|1 : 0. */

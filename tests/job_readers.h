@@ -6,7 +6,9 @@
        deciphered, the signature checked;
      - Elegoo .goo "V3.0", big-endian (and Phrozen's .prz, the same file).
    Written from the byte layouts alone (see the notes on resin formats); no
-   code from any slicer.  libc, and the encrypted CTB's AES-256 and SHA-256
+   code from any slicer. CTB layer data is read through the XOR stream of the
+   header's EncryptionKey as UVtools documents it in ChituboxFile.cs
+   (LayerRleCryptBuffer).  libc, and the encrypted CTB's AES-256 and SHA-256
    from host/aes256.h and host/sha256.h, which test_crypto holds against
    the FIPS and NIST vectors.
 
@@ -107,6 +109,10 @@ void jr_free(jr_job *job);
    stored, decoded as (v>>1)<<1|1 except 0): what to compare decoded CTB
    images against. */
 unsigned char jr_ctb_grey(unsigned char v);
+
+/* CTB layer n bytes of layer `layer` (from 0) in clear: the XOR stream of
+   the header's EncryptionKey (UVtools' published scheme; key 0: a copy). */
+void jr_ctb_decrypt(unsigned key, unsigned layer, const unsigned char *in, size_t n, unsigned char *out);
 
 #ifdef __cplusplus
 }

@@ -255,17 +255,17 @@ static void set_pitch(test_job *j, double across, double down)
    knows it only then. */
 static int job_write(test_job *j, const job_format *f, const char *path)
 {
-    void *w = NULL;
+    job_writer w;
     size_t k;
-    int rc = f->open(&w, path, &j->d);
+    int rc = job_open(&w, f, path, &j->d);
     if (rc != RC_OK) return rc;
     for (k = 0; k < j->d.layer_count; k++)
-        if ((rc = job_write_layer(f, w, k, j->images[k], j->stride)) != RC_OK) {
-            f->close(w, 0);
+        if ((rc = job_write_layer(&w, k, j->images[k], j->stride)) != RC_OK) {
+            job_close(&w, 0);
             return rc;
         }
     j->d.volume_mm3 = 1234.5;
-    return f->close(w, 1);
+    return job_close(&w, 1);
 }
 
 enum { AS_CTB3, AS_CTB4, AS_GOO, AS_CTBE };
@@ -410,13 +410,30 @@ static void check_sphere(int as, int bits, const char *name)
         unsigned v = as == AS_CTB3 ? 3 : 4;
         CHECKF(r.version == v && r.magic == (v == 3 ? 0x12FD0086u : 0x12FD0106u), "%s: version %u magic 0x%08X", name,
                r.version, r.magic);
-        CHECKF(r.per_layer_raw == v * 0x10, "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
+        /* PerLayerSettings as current UVtools writes it for per-layer jobs:
+           Version x 0x10, 0x30 for v3 and 0x40 for v4 (sn4k3/UVtools @7b510f0d,
+           UVtools.Core/FileFormats/ChituboxFile.cs:44-45, PERLAYER_SETTINGS_CTBv3/v4,
+           and :1771-1773 in OnBeforeEncode). */
+        CHECKF(r.per_layer_raw == (v == 3 ? 0x30u : 0x40u), "%s: PerLayerSettings 0x%02X", name, r.per_layer_raw);
         CHECKF(r.anti_alias == (bits == 8 ? 4 : 1), "%s: AntiAliasLevel %d", name, r.anti_alias);
-        CHECK(r.ctb_aa_flag == 0x0F && r.ctb_encryption_key == 0);
+        CHECK(r.ctb_aa_flag == 0x0F);
+        /* EncryptionKey: UVtools writes one in [255, 2^31 - 1) into every ctb
+           (@7b510f0d ChituboxFile.cs:1786-1789, new Random().Next(byte.MaxValue,
+           int.MaxValue)); the layers decode below through its XOR stream. */
+        CHECKF(r.ctb_encryption_key >= 255 && r.ctb_encryption_key < 0x7FFFFFFFu, "%s: EncryptionKey %u", name,
+               r.ctb_encryption_key);
         CHECK(same_f32(r.total_height_mm, j->layers[19].z_top));
         CHECK(r.mirror == (bits == 8));
-        /* Light-off (v3) or a rest before cure (v4), never both. */
-        CHECK(same_f32(r.light_off_s, v == 3 ? 1.25 : 0));
+        /* Light-off (v3) or a rest before cure (v4), never both. v3's light-off
+           runs through the peel, so UVtools writes lift / lift speed + lift /
+           retract speed + the rest, to 0.01 s (@7b510f0d ChituboxFile.cs:1358-1371,
+           WaitTimeBeforeCure below v4 -> FileFormat.cs:6405-6423 ->
+           Operations/OperationCalculator.cs:195-216): normal layers 6 mm at
+           1.5 mm/s up and 3 mm/s down, 4 + 2 + 1.25 = 7.25 s; bottom layers 8 mm
+           at 1 mm/s up, 8 + 2.667 + 1.25 = 11.92 s. */
+        CHECK(same_f32(r.light_off_s, v == 3 ? 7.25 : 0));
+        CHECK(same_f32(le_f32(file + le_u32(file + 84) + 32), v == 3 ? 11.92 : 0)); /* BottomLightOffDelay */
+        CHECK(same_f32(le_f32(file + le_u32(file + 84) + 36), v == 3 ? 7.25 : 0));  /* LightOffDelay */
         if (v == 4) CHECK(r.ctb_v4_last_layer_index == 19 && r.ctb_v4_disclaimer_length == 320);
         /* The volume is written at close: PrintParameters+20, in ml. */
         CHECK(same_f32(le_f32(file + le_u32(file + 84) + 20), 1.2345));
@@ -449,7 +466,7 @@ static void check_sphere(int as, int bits, const char *name)
                L->retract_speed);
         CHECK(same_f32(L->lift2_mm, 0) && same_f32(L->retract2_mm, 0));
         CHECK(same_f32(L->pwm, 255));
-        if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, 1.25) && same_f32(L->wait_before_cure_s, 0));
+        if (as == AS_CTB3) CHECK(same_f32(L->light_off_s, bottom ? 11.92 : 7.25) && same_f32(L->wait_before_cure_s, 0));
         else CHECK(same_f32(L->light_off_s, 0) && same_f32(L->wait_before_cure_s, 1.25));
         if (as == AS_CTB4 || as == AS_CTBE) CHECK(same_f32(L->lift2_speed, speed) && same_f32(L->retract2_speed, 180));
         if (as == AS_GOO) CHECK(same_f32(L->retract_mm, lift) && L->pause == 0);
@@ -504,6 +521,87 @@ static void ctb_defaults_to_v4_and_adaslice(void)
     free(file);
     remove(in_dir("plain.ctb"));
     job_free(j);
+}
+
+/* The layers are coded with the header's key, as UVtools codes every ctb it
+   writes (sn4k3/UVtools @7b510f0d, UVtools.Core/FileFormats/ChituboxFile.cs:
+   1786-1789 draws the key, :2225-2245 LayerRleCryptBuffer XORs the layers):
+   the key is one UVtools could have drawn, the layers decode to what was
+   handed in only through it (read with the key field zeroed, they do not),
+   and the same job gets the same key. */
+static void ctb_layers_are_coded_with_the_key(void)
+{
+    static const double t[5] = {0.05, 0.05, 0.04, 0.03, 0.05};
+    int as;
+    for (as = AS_CTB3; as <= AS_CTB4; as++) {
+        test_job *j = job_new(48, 40, 8, 5, t);
+        jr_job r, clear;
+        unsigned char *file = NULL, *again = NULL;
+        size_t size = 0, again_size = 0, k;
+        int x, y;
+        for (k = 0; k < 5; k++)
+            for (y = 0; y < 40; y++)
+                for (x = 0; x < 48; x++) set_pixel(j, k, x, y, (unsigned)((x * 5 + y * 9 + (int)k * 13) % 256));
+        if (write_and_read(j, as, "keyed.ctb", &r, &file, &size)) {
+            unsigned key = r.ctb_encryption_key;
+            CHECKF(key >= 255 && key < 0x7FFFFFFFu, "v%u: EncryptionKey %u", r.version, key);
+            for (k = 0; k < 5; k++) CHECK(image_differences(j, as, &r, k, "keyed.ctb") == 0);
+            jr_free(&r);
+            memset(file + 100, 0, 4);
+            if (jr_read_ctb(file, size, &clear) == 0) {
+                long bad = 0;
+                for (k = 0; k < 5; k++)
+                    for (y = 0; y < 40; y++)
+                        for (x = 0; x < 48; x++)
+                            bad += clear.layers[k].image[(size_t)y * 48 + (size_t)x] != jr_ctb_grey(source_grey(j, k, x, y));
+                CHECKF(bad > 0, "v%u: the layers read the same without the key", clear.version);
+                jr_free(&clear);
+            }
+            if (write_and_read(j, as, "keyed.ctb", &r, &again, &again_size)) {
+                CHECKF(r.ctb_encryption_key == key, "the same job got keys %u and %u", key, r.ctb_encryption_key);
+                jr_free(&r);
+            }
+        }
+        free(file);
+        free(again);
+        remove(in_dir("keyed.ctb"));
+        job_free(j);
+    }
+}
+
+/* GOO's advance mode (header 195445) is on only when a layer differs from
+   the header's globals, as UVtools writes it (sn4k3/UVtools @7b510f0d,
+   UVtools.Core/FileFormats/GooFile.cs:1205, PerLayerSettings =
+   SupportPerLayerSettings && UsingPerLayerSettings; FileFormat.cs:1988-1995;
+   Layers/Layer.cs:1163-1240, a layer's Z within 0.001 mm of LayerHeight x
+   its number, its exposure within 0.01 s of the global one): off for a
+   uniform plan (its top layer, what is left of the part, thinner), on for
+   adaptive layers and for a uniform one with an exposure of its own. Every
+   layer's own Z is stored either way. */
+static void goo_advance_mode_only_when_layers_differ(void)
+{
+    static const double uniform[6] = {0.05, 0.05, 0.05, 0.05, 0.05, 0.03};
+    static const double adaptive[6] = {0.05, 0.05, 0.05, 0.04, 0.05, 0.05};
+    int pass;
+    for (pass = 0; pass < 3; pass++) {
+        test_job *j = job_new(32, 24, 1, 6, pass == 1 ? adaptive : uniform);
+        jr_job r;
+        unsigned char *file = NULL;
+        size_t size = 0, k;
+        j->d.layer_height_mm = pass == 1 ? 0.04 : 0.05; /* the thinnest, the top one aside */
+        j->d.exposure_s = 1.2 * exp(j->d.layer_height_mm / 0.08);
+        if (pass == 2) j->layers[3].exposure_s += 0.5;
+        if (write_and_read(j, AS_GOO, "advance.goo", &r, &file, &size)) {
+            unsigned want = pass == 0 ? 0 : 1;
+            CHECKF(r.per_layer_raw == want, "%s: advance mode %u", pass == 0 ? "uniform" : pass == 1 ? "adaptive" : "own exposure",
+                   r.per_layer_raw);
+            for (k = 0; k < 6; k++) CHECK(same_f32(r.layers[k].z_mm, j->layers[k].z_top));
+            jr_free(&r);
+        }
+        free(file);
+        remove(in_dir("advance.goo"));
+        job_free(j);
+    }
 }
 
 /* ---- 2. corruption is caught ------------------------------------------- */
@@ -567,56 +665,56 @@ static void failures_leave_no_file(void)
         const job_format *f = format_of(as);
         test_job *j = job_new(37, 23, 1, 4, t);
         char missing[200];
-        void *w = (void *)&w;
+        job_writer w;
         size_t k;
         int rc;
         j->preset.version = as == AS_CTB4 ? 4 : 0;
 
         snprintf(missing, sizeof missing, "%s/no-such-dir/job%s", dir, f->extension);
         complaint_begins();
-        rc = f->open(&w, missing, &j->d);
+        rc = job_open(&w, f, missing, &j->d);
         complaint_ends(missing, "No such file");
-        CHECKF(rc == RC_FAIL && w == NULL, "%s: open in a missing directory gave %d", f->name, rc);
+        CHECKF(rc == RC_FAIL && w.state == NULL, "%s: open in a missing directory gave %d", f->name, rc);
         CHECK(!exists(missing) && entries_in_dir() == 0);
 
         /* Layers written, then a close that gives up. */
-        rc = f->open(&w, in_dir("given_up.job"), &j->d);
+        rc = job_open(&w, f, in_dir("given_up.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            for (k = 0; k < 3; k++) CHECK(job_write_layer(f, w, k, j->images[k], j->stride) == RC_OK);
+            for (k = 0; k < 3; k++) CHECK(job_write_layer(&w, k, j->images[k], j->stride) == RC_OK);
             CHECK(entries_in_dir() == 1); /* the temporary file, while writing */
-            CHECK(f->close(w, 0) == RC_OK);
+            CHECK(job_close(&w, 0) == RC_OK);
         }
         CHECKF(entries_in_dir() == 0, "%s: %d files left after close(ok=0)", f->name, entries_in_dir());
 
         /* A good close after too few layers is refused, and leaves nothing. */
-        rc = f->open(&w, in_dir("short.job"), &j->d);
+        rc = job_open(&w, f, in_dir("short.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
-            CHECK(job_write_layer(f, w, 0, j->images[0], j->stride) == RC_OK);
+            CHECK(job_write_layer(&w, 0, j->images[0], j->stride) == RC_OK);
             complaint_begins();
-            CHECK(f->close(w, 1) == RC_FAIL);
+            CHECK(job_close(&w, 1) == RC_FAIL);
             complaint_ends(in_dir("short.job"), "1 of 4 layers");
         }
         CHECK(entries_in_dir() == 0);
 
         /* Layers out of order are refused. */
-        rc = f->open(&w, in_dir("order.job"), &j->d);
+        rc = job_open(&w, f, in_dir("order.job"), &j->d);
         CHECK(rc == RC_OK);
         if (rc == RC_OK) {
             complaint_begins();
-            CHECK(job_write_layer(f, w, 1, j->images[1], j->stride) == RC_FAIL);
+            CHECK(job_write_layer(&w, 1, j->images[1], j->stride) == RC_FAIL);
             complaint_ends(in_dir("order.job"), "layer 1");
-            f->close(w, 0);
+            job_close(&w, 0);
         }
         CHECK(entries_in_dir() == 0);
 
         /* A preview that cannot be drawn fails the open. */
         j->preview_fails = 1;
         complaint_begins();
-        rc = f->open(&w, in_dir("no_preview.job"), &j->d);
+        rc = job_open(&w, f, in_dir("no_preview.job"), &j->d);
         complaint_ends(in_dir("no_preview.job"), "preview");
-        CHECK(rc == RC_FAIL && w == NULL);
+        CHECK(rc == RC_FAIL && w.state == NULL);
         CHECK(entries_in_dir() == 0);
         job_free(j);
     }
@@ -886,8 +984,13 @@ static void runs_longer_than_a_code_are_cut(void)
                 CHECK(lit->data_size == 7 && !memcmp(file + lit->data_offset, want_lit, 7));
                 CHECK(dark->data_size == 7 && !memcmp(file + dark->data_offset, want_dark, 7));
             } else {
-                CHECK(lit->data_size == 6 && !memcmp(file + lit->data_offset, ctb_lit, 6));
-                CHECK(dark->data_size == 6 && !memcmp(file + dark->data_offset, ctb_dark, 6));
+                unsigned char clear[2][6];
+                CHECK(lit->data_size == 6 && dark->data_size == 6);
+                if (lit->data_size == 6 && dark->data_size == 6) {
+                    jr_ctb_decrypt(r.ctb_encryption_key, 0, file + lit->data_offset, 6, clear[0]);
+                    jr_ctb_decrypt(r.ctb_encryption_key, 1, file + dark->data_offset, 6, clear[1]);
+                    CHECK(!memcmp(clear[0], ctb_lit, 6) && !memcmp(clear[1], ctb_dark, 6));
+                }
             }
             jr_free(&r);
         }
@@ -910,6 +1013,8 @@ void test_formats_resin(void)
     RUN(sphere_as_encrypted_ctb);
     RUN(sphere_as_goo);
     RUN(ctb_defaults_to_v4_and_adaslice);
+    RUN(ctb_layers_are_coded_with_the_key);
+    RUN(goo_advance_mode_only_when_layers_differ);
     RUN(flipped_layer_bytes_are_detected);
     RUN(failures_leave_no_file);
     RUN(encrypted_ctb_v4_and_v5);

@@ -630,11 +630,11 @@ static void free_job(made_job *j)
 /* open, every layer, close(ok); the formats' return codes folded */
 static int write_job(const job_format *f, const char *path, made_job *j)
 {
-    void *w = NULL;
-    int rc = f->open(&w, path, &j->d);
-    for (size_t k = 0; rc == 0 && k < j->d.layer_count; k++) rc = job_write_layer(f, w, k, j->image[k], j->stride);
-    if (w) {
-        int closed = f->close(w, rc == 0);
+    job_writer w;
+    int rc = job_open(&w, f, path, &j->d);
+    for (size_t k = 0; rc == 0 && k < j->d.layer_count; k++) rc = job_write_layer(&w, k, j->image[k], j->stride);
+    if (w.state) {
+        int closed = job_close(&w, rc == 0);
         if (!rc) rc = closed;
     }
     return rc;
@@ -974,12 +974,12 @@ typedef struct attempt { const job_format *f; const char *path; made_job *j; int
 static int try_job(void *ctx)
 {
     attempt *a = (attempt *)ctx;
-    void *w = NULL;
+    job_writer w;
     int rc;
     if (!a->layers_then_fail) return write_job(a->f, a->path, a->j);
-    rc = a->f->open(&w, a->path, &a->j->d);
-    for (size_t k = 0; rc == 0 && k < 3; k++) rc = job_write_layer(a->f, w, k, a->j->image[k], a->j->stride);
-    if (w) a->f->close(w, 0); /* as after a failed render */
+    rc = job_open(&w, a->f, a->path, &a->j->d);
+    for (size_t k = 0; rc == 0 && k < 3; k++) rc = job_write_layer(&w, k, a->j->image[k], a->j->stride);
+    job_close(&w, 0); /* as after a failed render */
     return rc;
 }
 

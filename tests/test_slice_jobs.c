@@ -353,6 +353,12 @@ static void resin_files_hold_the_directory_jobs_masks(void)
                    job.height, job.layer_count);
             CHECKF(fabs(job.bed_mm[0] - 15) < 1e-4 && fabs(job.bed_mm[1] - 15) < 1e-4, "%s: display %g x %g mm", out,
                    job.bed_mm[0], job.bed_mm[1]);
+            /* the ctb's layers are coded with a key, as UVtools codes them
+               (sn4k3/UVtools @7b510f0d ChituboxFile.cs:1786-1789), and read
+               below through it; adaptive layers need the goo's advance mode
+               (GooFile.cs:1205) */
+            if (f == 0) CHECKF(job.ctb_encryption_key != 0, "%s: EncryptionKey 0", out);
+            else CHECKF(job.per_layer_raw == 1, "%s: advance mode %u for adaptive layers", out, job.per_layer_raw);
             for (k = 0; k < n && k < job.layer_count; k++) {
                 const jr_layer *L = &job.layers[k];
                 double top = 0;
@@ -597,6 +603,9 @@ static void headers_hold_the_regular_layers(void)
                job.layer_height_mm, job.exposure_s);
         /* while the top layer itself is thinner and exposed for its thickness */
         CHECK(job.layer_count > 2 && job.layers[job.layer_count - 1].exposure_s < 2);
+        /* the globals describe a uniform job, so the goo leaves advance mode
+           off, as UVtools does (sn4k3/UVtools @7b510f0d GooFile.cs:1205) */
+        if (f == 1) CHECKF(job.per_layer_raw == 0, "%s: advance mode %u for a uniform job", out, job.per_layer_raw);
         jr_free(&job);
         free(data);
     }
