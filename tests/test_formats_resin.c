@@ -804,12 +804,12 @@ static void encrypted_ctb_past_4_gib_is_refused(void)
     static const double t[3] = {0.05, 0.05, 0.05};
     const job_format *f = &JOB_FORMAT_CTB_ENCRYPTED;
     test_job *j = job_new(24, 16, 1, 3, t);
-    void *w = NULL;
-    int rc = f->open(&w, in_dir("huge.ctb"), &j->d);
+    job_writer w;
+    int rc = job_open(&w, f, in_dir("huge.ctb"), &j->d);
     CHECK(rc == RC_OK);
     if (rc == RC_OK) {
         job_blob blob;
-        CHECK(job_write_layer(f, w, 0, j->images[0], j->stride) == RC_OK);
+        CHECK(job_write_layer(&w, 0, j->images[0], j->stride) == RC_OK);
         /* the size of a layer's code a 4 GiB file would take, not its bytes:
            the writer refuses it before it reads them */
         memset(&blob, 0, sizeof blob);
@@ -817,17 +817,17 @@ static void encrypted_ctb_past_4_gib_is_refused(void)
         blob.cap = 16;
         blob.size = (size_t)0xFFFFFF00u;
         complaint_begins();
-        rc = f->put(w, 1, &blob);
+        rc = job_put(&w, 1, &blob);
         complaint_ends(in_dir("huge.ctb"), "past the 4 GiB");
         CHECK(rc == RC_FAIL && blob.data == NULL);
-        f->close(w, 0);
+        job_close(&w, 0);
     }
     CHECK(entries_in_dir() == 0);
     j->d.layer_count = 50000000;
     complaint_begins();
-    rc = f->open(&w, in_dir("many.ctb"), &j->d);
+    rc = job_open(&w, f, in_dir("many.ctb"), &j->d);
     complaint_ends(in_dir("many.ctb"), "4 GiB");
-    CHECK(rc == RC_FAIL && w == NULL && entries_in_dir() == 0);
+    CHECK(rc == RC_FAIL && w.state == NULL && entries_in_dir() == 0);
     j->d.layer_count = 3;
     job_free(j);
 }
