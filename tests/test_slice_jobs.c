@@ -358,7 +358,8 @@ static void resin_files_hold_the_directory_jobs_masks(void)
                below through it; adaptive layers need the goo's advance mode
                (GooFile.cs:1205) */
             if (f == 0) CHECKF(job.ctb_encryption_key != 0, "%s: EncryptionKey 0", out);
-            else CHECKF(job.per_layer_raw == 1, "%s: advance mode %u for adaptive layers", out, job.per_layer_raw);
+            else if (goo) CHECKF(job.per_layer_raw == 1, "%s: advance mode %u for adaptive layers", out, job.per_layer_raw);
+            else CHECKF(job.per_layer_raw == 0x40, "%s: per-layer settings 0x%x for adaptive layers", out, job.per_layer_raw);
             for (k = 0; k < n && k < job.layer_count; k++) {
                 const jr_layer *L = &job.layers[k];
                 double top = 0;
