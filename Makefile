@@ -173,6 +173,8 @@ $(B)/check_models: $(call objs,san,tests/check_models.c $(FW_SRC) $(LIB_SRC))
 	$(CC) $(SAN) $^ -o $@ -lm
 
 check-models: $(B)/check_models $(B)/adaslice
+	@test -d $(MODELS) || { echo "make check-models: no model directory at $(MODELS): it holds the public meshes" \
+	    "(shared/models beside this clone, outside the repository); give another place with MODELS=DIR"; exit 1; }
 	ADASLICE_BIN=$(B)/adaslice $(B)/check_models $(MODELS)
 
 # ---- make bench -----------------------------------------------------------
