@@ -8,6 +8,7 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #endif
 #include "check.h"
+#include "util.h"
 #include "../adaslice.h"
 
 #include <dirent.h>
@@ -52,18 +53,6 @@ static const char *cli_path(const char *name)
     return p;
 }
 
-static char *cli_read(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    char *s = NULL;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (s = (char *)malloc((size_t)n + 1)) != NULL)
-        s[fread(s, 1, (size_t)n, f)] = 0;
-    fclose(f);
-    return s;
-}
 
 static inline void cli_write(const char *path, const char *text)
 {
@@ -100,8 +89,8 @@ static inline cli_result cli_run(const char *first, ...)
     r.status = -1;
     if (pid > 0 && waitpid(pid, &st, 0) == pid && WIFEXITED(st)) r.status = WEXITSTATUS(st);
     CHECKF(r.status != 127, "cannot run %s (build it first; tests run from the repository root)", cli_tool);
-    r.out = cli_read(out);
-    r.err = cli_read(err);
+    r.out = read_whole_text(out);
+    r.err = read_whole_text(err);
     if (!r.out) r.out = (char *)calloc(1, 1);
     if (!r.err) r.err = (char *)calloc(1, 1);
     return r;

@@ -18,7 +18,7 @@ typedef struct print_report {
 
 static inline int read_print_report(const char *path, print_report *r)
 {
-    char *text = cli_read(path), *at;
+    char *text = read_whole_text(path), *at;
     uint32_t k = 0;
     const char *f;
     memset(r, 0, sizeof *r);

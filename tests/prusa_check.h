@@ -34,7 +34,7 @@ typedef struct prusa_result {
 static inline int prusa_run(char **argv, const char *log_path, char **log)
 {
     int status = tool_run("prusa-slicer", argv, log_path, log_path);
-    *log = cli_read(log_path);
+    *log = read_whole_text(log_path);
     if (!*log) *log = (char *)calloc(1, 1);
     return status;
 }
@@ -112,7 +112,7 @@ static inline int prusa_slices_the_plan(const char *model, double scale, prusa_r
     if (status != 0) { free(log); return 0; }
     /* the plan's tops: plan.csv's third column; the last ends on the part's
        top, which the bins overshoot by less than one */
-    csv = cli_read(cli_path("fdm.csv"));
+    csv = read_whole_text(cli_path("fdm.csv"));
     for (row = csv ? strchr(csv, '\n') : NULL; row && row[1]; row = strchr(row + 1, '\n')) {
         char *p = row + 1;
         int c;
@@ -123,7 +123,7 @@ static inline int prusa_slices_the_plan(const char *model, double scale, prusa_r
     }
     free(csv);
     if (n) tops[n - 1] = tops[n - 1] < height ? tops[n - 1] : height;
-    gcode = cli_read(gcode_path);
+    gcode = read_whole_text(gcode_path);
     for (cap = 0, line = gcode; line && (line = strstr(line, "\n;Z:")) != NULL; line += 4) {
         if (g == cap) zs = (double *)realloc(zs, (cap = cap ? 2 * cap : 256) * sizeof *zs);
         zs[g++] = strtod(line + 4, NULL);

@@ -173,7 +173,7 @@ static void check_avr_exit(avr_child *c, const char *log)
     char path[300], *err;
     int status = avr_stop(c);
     snprintf(path, sizeof path, "%s.err", log);
-    err = cli_read(path);
+    err = read_whole_text(path);
     if (c->early && status == 0)
         CHECKF(0, "harness failure, not the firmware's: avr-run was stopped by a signal from outside the test: %.200s", err ? err : "");
     else if (status == 4 && err && strstr(err, "--timeout budget"))
@@ -654,7 +654,7 @@ static void gcode_print_by_printcore(void)
         nanosleep(&ts, NULL);
     }
     check_avr_exit(&c, "build/test_avr/printcore.log");
-    text = cli_read(out);
+    text = read_whole_text(out);
     for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
         if (!strncmp(line, "SENT: N", 7) && strncmp(line, "SENT: N-1 ", 10)) sent++;
         if (!strncmp(line, "RECV: ok", 8)) oks++;

@@ -147,7 +147,7 @@ static void plan_of_a_sphere(void)
     const char *plan_csv = cli_path("plan.csv"), *profile_csv = cli_path("profile.csv"), *svg = cli_path("plot.svg");
     cli_result r = cli_run("plan", sphere_stl(), "--json", "--out", plan_csv, "--profile-out", profile_csv,
                        "--plot", svg, NULL);
-    char *csv = cli_read(plan_csv), *prof = cli_read(profile_csv), *plot = cli_read(svg), *line, *save = NULL;
+    char *csv = read_whole_text(plan_csv), *prof = read_whole_text(profile_csv), *plot = read_whole_text(svg), *line, *save = NULL;
     double layers = cli_json_number(r.out, "layers"), bins = cli_json_number(r.out, "bins"), bin = cli_json_number(r.out, "bin");
     double height = cli_json_number(r.out, "height_mm"), eps = cli_json_number(r.out, "eps");
     double tmin = cli_json_number(r.out, "tmin"), tmax = cli_json_number(r.out, "tmax"), top = 0;
@@ -298,9 +298,9 @@ static void slice_writes_a_job(void)
     CHECKF(r.status == 0 && !*r.err, "exit %d: %s", r.status, r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    manifest = cli_read(path);
+    manifest = read_whole_text(path);
     snprintf(path, sizeof path, "%s/plan.csv", job);
-    csv = cli_read(path);
+    csv = read_whole_text(path);
     CHECK(manifest && csv);
     if (!manifest || !csv) { free(manifest); free(csv); return; }
     layers = (size_t)cli_json_number(manifest, "layer_count");
@@ -309,7 +309,7 @@ static void slice_writes_a_job(void)
     CHECK(strstr(manifest, "\"complete\": true") && strstr(manifest, "\"width_px\": 2560") && strstr(manifest, "\"bits\": 1"));
     for (k = 1; k <= layers; k++) {
         snprintf(path, sizeof path, "%s/layer_%05zu.png", job, k);
-        png = cli_read(path);
+        png = read_whole_text(path);
         CHECKF(png && !memcmp(png, "\x89PNG\r\n\x1a\n", 8) && png[24] == 1, "layer %zu: not a 1-bit PNG", k);
         free(png);
         snprintf(path, sizeof path, "%s/layer_%05zu.svg", job, k);
@@ -325,7 +325,7 @@ static void slice_writes_a_job(void)
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/layer_00001.png", job);
-    png = cli_read(path);
+    png = read_whole_text(path);
     CHECK(png && png[24] == 8);
     free(png);
 
@@ -335,7 +335,7 @@ static void slice_writes_a_job(void)
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/layer_00001.png", job);
-    png = cli_read(path);
+    png = read_whole_text(path);
     CHECK(png && (unsigned char)png[18] == 0x0a && (unsigned char)png[19] == 0x00 && (unsigned char)png[22] == 0x05 &&
           (unsigned char)png[23] == 0xa0); /* width 2560, height 1440 */
     free(png);
@@ -350,7 +350,7 @@ static void slice_writes_a_job(void)
             CHECK(r.status == 0);
             cli_free(&r);
             snprintf(path, sizeof path, "%s/manifest.json", job);
-            mf = cli_read(path);
+            mf = read_whole_text(path);
             lit = mf ? strstr(mf, "\"lit_area_mm2\"") : NULL;
             if (lit) snprintf(t ? other : first, 64, "%.40s", lit);
             free(mf);
@@ -361,12 +361,12 @@ static void slice_writes_a_job(void)
     /* a 10 mm sphere on a 5 x 5 mm plate: refused before a byte is written,
        so the job there stays whole */
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    manifest = cli_read(path);
+    manifest = read_whole_text(path);
     r = cli_run("slice", sphere_stl(), "-o", job, "--pixels", "100x100", "--pitch", "0.05", NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "does not fit") && strstr(r.err, "5 mm too wide"),
            "exit %d: %s", r.status, r.err);
     cli_free(&r);
-    csv = cli_read(path);
+    csv = read_whole_text(path);
     CHECK(manifest && csv && !strcmp(manifest, csv));
     free(manifest);
     free(csv);

@@ -26,7 +26,7 @@ static const char *bump_obj(void)
 /* The values of a weights file, one per line; their count in *n. */
 static double *read_values(const char *path, size_t *n)
 {
-    char *text = cli_read(path), *p, *end;
+    char *text = read_whole_text(path), *p, *end;
     double *v = NULL;
     size_t cap = 0;
     *n = 0;
@@ -63,7 +63,7 @@ static void saliency_command_writes_weights_and_a_coloured_mesh(void)
     CHECK(ones >= 1);
     CHECK(adaslice_mesh_load_file(ply, NULL, &coloured, &e) == ADASLICE_OK);
     CHECK(coloured.triangle_count == m.triangle_count && coloured.vertex_count == 3 * m.triangle_count);
-    header = cli_read(ply);
+    header = read_whole_text(ply);
     CHECK(header && strstr(header, "format binary_little_endian 1.0\n") && strstr(header, "property uchar red\n"));
     a = cli_run("plan", model, "--saliency", "--json", NULL);
     b = cli_run("plan", model, "--weights", weights, "--json", NULL);
@@ -275,7 +275,7 @@ static void importance_blends_saliency_view_and_user_weights(void)
         const char *png = cli_path("view.png");
         char *bytes;
         r = cli_run("saliency", model, "--importance", "0,1,0", "--png", png, NULL);
-        bytes = cli_read(png);
+        bytes = read_whole_text(png);
         CHECKF(r.status == 0 && bytes && !memcmp(bytes, "\x89PNG\r\n\x1a\n", 8), "--png: %s", r.err);
         free(bytes);
         cli_free(&r);

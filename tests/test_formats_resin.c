@@ -6,6 +6,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #endif
+#include "util.h"
 #include "check.h"
 #include "job_readers.h"
 #include "../host/jobfile.h"
@@ -31,18 +32,6 @@ static const char *in_dir(const char *name)
     return path;
 }
 
-static unsigned char *slurp(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    struct stat st;
-    unsigned char *data = NULL;
-    *size = 0;
-    if (!f) return NULL;
-    if (fstat(fileno(f), &st) == 0 && (data = (unsigned char *)malloc((size_t)st.st_size + 1)) != NULL)
-        *size = fread(data, 1, (size_t)st.st_size, f);
-    fclose(f);
-    return data;
-}
 
 static int exists(const char *path)
 {
@@ -118,7 +107,7 @@ static void complaint_ends(const char *path, const char *about)
         close(saved_stderr);
         saved_stderr = -1;
     }
-    text = slurp(complaint_file(), &n);
+    text = read_whole_file(complaint_file(), &n);
     if (text) text[n] = 0;
     CHECKF(text && strstr((char *)text, path) && strstr((char *)text, about) && strchr((char *)text, '\n') == (char *)text + n - 1,
            "wanted one line naming %s and \"%s\", got \"%s\"", path, about, text ? (char *)text : "");
@@ -292,7 +281,7 @@ static int write_and_read(test_job *j, int as, const char *name, jr_job *out, un
     rc = job_write(j, format_of(as), path);
     CHECKF(rc == RC_OK, "%s: writer returned %d", name, rc);
     if (rc != RC_OK) return 0;
-    *file = slurp(path, size);
+    *file = read_whole_file(path, size);
     CHECKF(*file != NULL, "%s: not there after a good close", name);
     if (!*file) return 0;
     read_rc = read_as(as, *file, *size, out, 0);
@@ -727,7 +716,7 @@ static unsigned char *write_small_encrypted(test_job *j, unsigned version, const
     j->preset.version = version;
     j->preset.format = "ctb-encrypted";
     CHECKF(job_write(j, &JOB_FORMAT_CTB_ENCRYPTED, in_dir(name)) == RC_OK, "%s: not written", name);
-    return slurp(in_dir(name), size);
+    return read_whole_file(in_dir(name), size);
 }
 
 /* v5 (the default) has the resin parameters and 8 bytes before the
@@ -968,7 +957,7 @@ static void runs_longer_than_a_code_are_cut(void)
         int rc;
         j->preset.version = as == AS_CTB3 ? 3 : as == AS_CTB4 ? 4 : 0;
         CHECK(job_write(j, format_of(as), in_dir(name)) == RC_OK);
-        file = slurp(in_dir(name), &size);
+        file = read_whole_file(in_dir(name), &size);
         CHECK(file != NULL);
         if (!file) continue;
         rc = as == AS_GOO ? jr_read_goo_ex(file, size, &r, JR_SKIP_IMAGES) : jr_read_ctb_ex(file, size, &r, JR_SKIP_IMAGES);

@@ -13,6 +13,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* dup */
 #endif
+#include "util.h"
 #include "check.h"
 #include "cli_run.h"
 #include "maskgen.h"
@@ -38,21 +39,6 @@ static const char *in_dir(const char *name)
     return p;
 }
 
-static unsigned char *read_all(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *s = NULL;
-    long n;
-    *size = 0;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (s = (unsigned char *)malloc((size_t)n + 1)) != NULL) {
-        *size = fread(s, 1, (size_t)n, f);
-        s[*size] = 0;
-    }
-    fclose(f);
-    return s;
-}
 
 /* ---- the archive through unzip, the images through oiiotool ----------- */
 
@@ -62,7 +48,7 @@ static unsigned char *member(const char *archive, const char *name, size_t *size
     char *argv[] = {(char *)"unzip", (char *)"-p", (char *)archive, (char *)name, NULL};
     unsigned char *data;
     int st = tool_run("unzip", argv, in_dir("member"), in_dir("unzip.log"));
-    data = st == 0 ? read_all(in_dir("member"), size) : NULL;
+    data = st == 0 ? read_whole_file(in_dir("member"), size) : NULL;
     if (!data) *size = 0;
     remove(in_dir("member"));
     remove(in_dir("unzip.log"));
@@ -75,7 +61,7 @@ static char *member_names(const char *archive)
     char *argv[] = {(char *)"unzip", (char *)"-Z1", (char *)archive, NULL};
     size_t n;
     char *names = tool_run("unzip", argv, in_dir("names"), in_dir("unzip.log")) == 0
-                      ? (char *)read_all(in_dir("names"), &n) : NULL;
+                      ? (char *)read_whole_file(in_dir("names"), &n) : NULL;
     remove(in_dir("names"));
     remove(in_dir("unzip.log"));
     return names;
@@ -138,7 +124,7 @@ static void decode_pngs(unsigned char *const *png, const size_t *size, size_t co
     CHECKF(ran, "oiiotool cannot read the PNGs");
     for (i = 0; i < count && i < BATCH; i++) {
         size_t got;
-        unsigned char *text = ran ? read_all(pnm[i], &got) : NULL;
+        unsigned char *text = ran ? read_whole_file(pnm[i], &got) : NULL;
         int width, height, maxval, used = 0;
         if (text && sscanf((char *)text, channels == 3 ? "P6 %d %d %d%n" : "P5 %d %d %d%n", &width, &height,
                            &maxval, &used) == 3 && width == w && height == h && maxval == 255 &&
@@ -964,7 +950,7 @@ static char *stderr_of(int (*fn)(void *), void *ctx, int *rc)
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
-    text = (char *)read_all(in_dir("stderr"), &n);
+    text = (char *)read_whole_file(in_dir("stderr"), &n);
     remove(in_dir("stderr"));
     return text;
 }
@@ -1104,9 +1090,9 @@ static int read_dir_job(const char *dir, dir_job *j)
     unsigned char *rle;
     memset(j, 0, sizeof *j);
     snprintf(path, sizeof path, "%s/manifest.json", dir);
-    manifest = (char *)read_all(path, &n);
+    manifest = (char *)read_whole_file(path, &n);
     snprintf(path, sizeof path, "%s/masks.rle", dir);
-    rle = read_all(path, &n);
+    rle = read_whole_file(path, &n);
     CHECKF(manifest && rle && n >= 44 && !memcmp(rle, "ADASMSK2", 8), "%s: no manifest, or no masks.rle of ADASMSK2",
            dir);
     if (!manifest || !rle || n < 44 || memcmp(rle, "ADASMSK2", 8)) { free(manifest); free(rle); return 0; }

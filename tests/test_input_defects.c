@@ -204,7 +204,7 @@ static void profile_z_column_gives_the_bin(void)
     cli_free(&r);
 
     /* line 7 is missing: line 8 (now 7) is two bins above the one before */
-    text = cli_read(csv);
+    text = read_whole_text(csv);
     if (text) {
         char *line = text;
         int k;

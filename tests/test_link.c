@@ -3,6 +3,7 @@
    offsets and types, the state, phase and error tables and the example frames
    must agree, so the document cannot drift from the code. And every message
    survives put and get. */
+#include "util.h"
 #include "../link/frame.h"
 #include "../link/messages.h"
 #include "check.h"
@@ -11,21 +12,6 @@
 
 #define PROTOCOL_MD "link/PROTOCOL.md"
 
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    char *s;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) || !(s = (char *)malloc((size_t)n + 1))) {
-        fclose(f);
-        return NULL;
-    }
-    if (fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); fclose(f); return NULL; }
-    s[n] = 0;
-    fclose(f);
-    return s;
-}
 
 /* The next line of *at (NUL-terminated in place), or NULL at the end. */
 static char *next_line(char **at)
@@ -70,7 +56,7 @@ static int type_bytes(int t) { return t == LINK_U8 ? 1 : t == LINK_U16 ? 2 : 4; 
    message the code lacks. */
 static void protocol_md_matches_the_messages(void)
 {
-    char *text = read_text(PROTOCOL_MD), *at = text, *line;
+    char *text = read_whole_text(PROTOCOL_MD), *at = text, *line;
     const link_message *m = NULL;
     unsigned seen[256] = {0}, field = 0, sections = 0, offset = 0;
     const link_message *msg;
@@ -128,7 +114,7 @@ static void protocol_md_matches_states_phases_and_errors(void)
     static const char *const error_texts[] = {LINK_ERROR_LIST(TEXT_OF)};
 #undef NAME_OF
 #undef TEXT_OF
-    char *text = read_text(PROTOCOL_MD), *at = text, *line;
+    char *text = read_whole_text(PROTOCOL_MD), *at = text, *line;
     int table = -1, rows[3] = {0, 0, 0};
     if (!text) { CHECKF(0, "cannot read %s", PROTOCOL_MD); return; }
     while ((line = next_line(&at)) != NULL) {
@@ -157,7 +143,7 @@ static void protocol_md_matches_states_phases_and_errors(void)
 /* The example frames in the document are what the code builds. */
 static void protocol_md_example_frames_are_exact(void)
 {
-    char *text = read_text(PROTOCOL_MD), *p, *q;
+    char *text = read_whole_text(PROTOCOL_MD), *p, *q;
     uint8_t want[2][LINK_FRAME_MAX], payload[LINK_PAYLOAD_MAX];
     size_t want_n[2];
     link_hello hello;

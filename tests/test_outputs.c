@@ -50,7 +50,7 @@ static void layer_svgs_agree_with_the_manifest(void)
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    manifest = cli_read(path);
+    manifest = read_whole_text(path);
     CHECK(manifest != NULL);
     if (!manifest) return;
     layers = (size_t)cli_json_number(manifest, "layer_count");
@@ -67,7 +67,7 @@ static void layer_svgs_agree_with_the_manifest(void)
         z1 = cli_json_number(entry, "z_top");
         t = cli_json_number(entry, "thickness");
         snprintf(path, sizeof path, "%s/layer_%05zu.svg", job, k);
-        svg = cli_read(path);
+        svg = read_whole_text(path);
         CHECKF(svg != NULL, "no layer_%05zu.svg", k);
         if (!svg) continue;
         snprintf(title, sizeof title, "layer %zu of %zu", k, layers);
@@ -136,7 +136,7 @@ static void orient_map_tiles_and_has_a_colour_bar(void)
     r = cli_run("orient", box, "--dirs", "300", "--json", "--map", map, NULL);
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     best = cli_json_number(r.out, "F");
-    svg = cli_read(map);
+    svg = read_whole_text(map);
     cli_free(&r);
     CHECK(rect && svg);
     if (!rect || !svg) goto done;
@@ -258,7 +258,7 @@ static void compare_gives_the_saving_against_uniform_layers(void)
     CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    manifest = cli_read(path);
+    manifest = read_whole_text(path);
     CHECKF(manifest && fabs(cli_json_number(manifest, "print_time_s") - to) < 1e-6 * to, "slice: %g s, --compare: %g s",
            manifest ? cli_json_number(manifest, "print_time_s") : NAN, to);
     free(manifest);

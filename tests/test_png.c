@@ -6,6 +6,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, posix_spawn */
 #endif
+#include "util.h"
 #include "check.h"
 #include "maskgen.h"
 #include "../host/png.h"
@@ -44,19 +45,6 @@ static int write_file(const char *path, const unsigned char *data, size_t size)
     return ok;
 }
 
-static unsigned char *read_file(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *s = NULL;
-    long n;
-    *size = 0;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (s = (unsigned char *)malloc((size_t)n + 1)) != NULL)
-        *size = fread(s, 1, (size_t)n, f);
-    fclose(f);
-    return s;
-}
 
 /* ---- images and the round trip ------------------------------------------ */
 
@@ -140,7 +128,7 @@ static int run_oiiotool(char **args)
                   "`apt-get install -y openimageio-tools`");
     } else {
         size_t n;
-        char *text = (char *)read_file(log, &n), *error = NULL;
+        char *text = (char *)read_whole_file(log, &n), *error = NULL;
         if (text) {
             text[n] = 0;
             error = strstr(text, "ERROR");
@@ -157,7 +145,7 @@ static int run_oiiotool(char **args)
 static unsigned char *read_pnm(const char *path, int w, int h, int channels)
 {
     size_t n, size = (size_t)w * (size_t)h * (size_t)channels;
-    unsigned char *s = read_file(path, &n), *pixels = NULL;
+    unsigned char *s = read_whole_file(path, &n), *pixels = NULL;
     int width, height, maxval, used = 0;
     if (s) {
         s[n] = 0;

@@ -5,6 +5,7 @@
    preview.png and in saliency --png's picture (read back by oiiotool); and
    the demo hand, stood on its wrist by --orient 0,1,0, is drawn with the
    wrist below the fingers. */
+#include "util.h"
 #include "check.h"
 #include "cli_run.h"
 #include "job_readers.h"
@@ -79,19 +80,6 @@ static int slice_to(const char *model, const char *format, const char *job)
     return ok;
 }
 
-static unsigned char *read_file(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *s = NULL;
-    long n;
-    *size = 0;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (s = (unsigned char *)malloc((size_t)n + 1)) != NULL)
-        *size = fread(s, 1, (size_t)n, f);
-    fclose(f);
-    return s;
-}
 
 /* Both previews of a CTB or GOO job of the model, checked by check_shape. */
 static void check_file_previews(const char *model, const char *format, int tall, double factor)
@@ -103,7 +91,7 @@ static void check_file_previews(const char *model, const char *format, int tall,
     int k, read;
     snprintf(job, sizeof job, "%s.%s", model, format);
     if (!slice_to(model, format, job)) return;
-    data = read_file(job, &size);
+    data = read_whole_file(job, &size);
     read = data && (!strcmp(format, "ctb") ? jr_read_ctb_ex(data, size, &r, JR_SKIP_IMAGES)
                                            : jr_read_goo_ex(data, size, &r, JR_SKIP_IMAGES)) == 0;
     CHECKF(read, "%.200s: %.200s", job, data ? r.error : "cannot read it");
@@ -140,7 +128,7 @@ static void check_png(const char *png, int tall, double factor)
     snprintf(ppm, sizeof ppm, "%s.ppm", png);
     snprintf(log, sizeof log, "%s.log", png);
     if (tool_run("openimageio-tools", argv, log, log) != 0) { CHECKF(0, "oiiotool cannot read %.300s", png); return; }
-    text = read_file(ppm, &size);
+    text = read_whole_file(ppm, &size);
     picture = text && sscanf((char *)text, "P6 %d %d %d%n", &w, &h, &maxval, &used) == 3 && maxval == 255 && w > 0 &&
               h > 0 && size - (size_t)used - 1 == (size_t)w * (size_t)h * 3;
     CHECKF(picture, "%.300s: not an 8-bit RGB picture", ppm);

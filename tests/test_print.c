@@ -99,7 +99,7 @@ typedef struct sim_log {
 
 static int read_sim_log(const char *path, sim_log *l)
 {
-    char *text = cli_read(path), *line, *save = NULL;
+    char *text = read_whole_text(path), *line, *save = NULL;
     size_t cap = 0;
     int paused = 0;
     memset(l, 0, sizeof *l);
@@ -335,7 +335,7 @@ static void print_through_a_faulty_line(void)
     child_stop(&relay);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (r.status == 0) {
-        char *stats = cli_read(cli_path("relay.txt"));
+        char *stats = read_whole_text(cli_path("relay.txt"));
         unsigned long up = 0, up_drop = 0, up_bad = 0, down = 0, down_drop = 0, down_bad = 0;
         CHECK(stats && sscanf(stats, "up %lu %lu %lu\ndown %lu %lu %lu", &up, &up_drop, &up_bad, &down, &down_drop, &down_bad) == 6);
         /* the faults happened, at about the rate asked */
@@ -413,7 +413,7 @@ static int wait_for_exposures(const char *log_path, int n)
 {
     int i;
     for (i = 0; i < 600; i++) {
-        char *log = cli_read(log_path), *at;
+        char *log = read_whole_text(log_path), *at;
         int lit = 0;
         for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
         free(log);
@@ -493,7 +493,7 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     (void)wait_for_exposures(cli_path("sim5.log"), 6);
     kill(pid, SIGINT);
     status = wait_exit(pid, 30);
-    out = cli_read(cli_path("print5.out"));
+    out = read_whole_text(cli_path("print5.out"));
     CHECKF(status == 3, "Ctrl-C: exit %d: %s", status, out ? out : "");
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
@@ -609,7 +609,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     reset_at = seconds_now();
     status = wait_exit(pid, 30);
     took = seconds_now() - reset_at;
-    out = cli_read(cli_path("print9.out"));
+    out = read_whole_text(cli_path("print9.out"));
     CHECKF(status == 4 && took < 5, "after the reset: exit %d in %.2f s: %s", status, took, out ? out : "");
     layer = restart_message(out, &old_id, &new_id);
     CHECKF(layer >= 3 && new_id == old_id + 1, "no restart message (boot id %u -> %u, layer %u): %s", old_id, new_id, layer,
@@ -633,7 +633,7 @@ static void mcu_reset_mid_print_on_the_simulator(void)
     if (!check_case_failed()) {
         /* from the show of layer K after the restart to the end: homed again, Z at each layer's top */
         size_t from = nth_show_from_end(&l, rep.layers - layer + 1);
-        char *log = cli_read(cli_path("sim9.log"));
+        char *log = read_whole_text(cli_path("sim9.log"));
         CHECK(log && strstr(log, " reset signal"));
         free(log);
         CHECK(rep.first == layer);
@@ -688,7 +688,7 @@ static void mcu_reset_mid_exposure_owes_only_the_rest(void)
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (check_case_failed()) return;
     /* layer 1's light: the piece before the reset and the first after it */
-    log = cli_read(cli_path("sim15.log"));
+    log = read_whole_text(cli_path("sim15.log"));
     for (line = log ? strtok_r(log, "\n", &save) : NULL; line; line = strtok_r(NULL, "\n", &save)) {
         unsigned long long t;
         char what[16], arg[16];
@@ -748,7 +748,7 @@ static void unplugged_port_ends_as_a_lost_printer(void)
     status = wait_exit(pid, 30);
     took = seconds_now() - gone;
     child_stop(&relay);
-    out = cli_read(cli_path("print16.out"));
+    out = read_whole_text(cli_path("print16.out"));
     for (at = out; at && (at = strstr(at, "adaslice: ")) != NULL; at++) lines++;
     at = out ? strstr(out, " went away (") : NULL;
     CHECKF(status == 5 && took < 5 && lines == 1 && at, "unplugged: exit %d %.2f s after, %u messages: %s", status, took, lines,
@@ -839,7 +839,7 @@ static void mcu_halted_mid_exposure_on_the_simulator(void)
     halted = seconds_now();
     status = wait_exit(pid, 30);
     took = seconds_now() - halted;
-    out = cli_read(cli_path("print11.out"));
+    out = read_whole_text(cli_path("print11.out"));
     layer = check_lost_message(status, took, out, "at layer 2 (exposing): layer 1 was the last fully exposed");
     printf("    halted mid-exposure: exit %d %.2f s after SIGSTOP\n", status, took);
     free(out);
@@ -877,7 +877,7 @@ static void mcu_halted_while_homing_or_planning(void)
         pid = hand_print_in_background(port, extra, cli_path("print12.out"));
         for (i = 0; i < 1000 && !halted; i++) {
             free(log);
-            log = cli_read(cli_path("sim12.log"));
+            log = read_whole_text(cli_path("sim12.log"));
             if (c == 0 && log && strstr(log, " step -1 ")) {
                 sleep_ms(500);
                 kill(sim.pid, SIGSTOP);
@@ -892,7 +892,7 @@ static void mcu_halted_while_homing_or_planning(void)
         CHECKF(halted, "%s never began", c ? "planning" : "homing");
         status = wait_exit(pid, 150);
         took = seconds_now() - halted;
-        out = cli_read(cli_path("print12.out"));
+        out = read_whole_text(cli_path("print12.out"));
         CHECK(check_lost_message(status, took, out, c ? "while planning, before" : "while homing, before") == 0);
         printf("    halted while %s: exit %d %.2f s after the halt\n", c ? "planning" : "homing", status, took);
         free(out);
@@ -1029,7 +1029,7 @@ static void aborted_print_resumes(void)
     kill(pid, SIGCONT);
     CHECKF(state == LINK_STATE_READY, "after ABORT the printer is %s", state < 0 ? "silent" : link_state_name((unsigned)state));
     status = wait_exit(pid, 30);
-    out = cli_read(cli_path("print13.out"));
+    out = read_whole_text(cli_path("print13.out"));
     k = check_stop_message(status, out, "aborted", 0);
     free(out);
     CHECKF(k >= 5, "continue from layer %u", k);
@@ -1060,7 +1060,7 @@ static void step_late_print_resumes_with_home(void)
     CHECKF(k == 5, "continue from layer %u", k);
     if (check_case_failed()) { child_stop(&sim); return; }
     {
-        char *log = cli_read(cli_path("sim14.log"));
+        char *log = read_whole_text(cli_path("sim14.log"));
         CHECK(log && strstr(log, " late\n"));
         free(log);
     }
@@ -1147,7 +1147,7 @@ static void other_pitch_is_refused_first(void)
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     {
         /* a manifest that names no pitch is no job to print */
-        char *text = cli_read(cli_path("pitch_job/manifest.json")), *at = text ? strstr(text, "\"pitch_mm\"") : NULL;
+        char *text = read_whole_text(cli_path("pitch_job/manifest.json")), *at = text ? strstr(text, "\"pitch_mm\"") : NULL;
         if (at) memcpy(at + 7, "xx", 2);
         if (text) cli_write(cli_path("pitch_job/manifest.json"), text);
         free(text);
@@ -1156,7 +1156,7 @@ static void other_pitch_is_refused_first(void)
                r.err);
         cli_free(&r);
     }
-    log = cli_read(cli_path("pitch.log"));
+    log = read_whole_text(cli_path("pitch.log"));
     CHECKF(log && !strstr(log, " step ") && !strstr(log, " uv 1"), "the printer moved or lit: %.200s", log ? log : "");
     free(log);
 }
@@ -1196,7 +1196,7 @@ static void too_long_exposure_is_refused_first(void)
            strstr(r.err, "at most 300.000 s"), "%d %s", r.status, r.err);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    log = cli_read(cli_path("long.log"));
+    log = read_whole_text(cli_path("long.log"));
     CHECKF(log && !strstr(log, " step ") && !strstr(log, " uv 1"), "the printer moved or lit: %.200s", log ? log : "");
     free(log);
 }
@@ -1316,7 +1316,7 @@ static char *qemu_print_then(const char *command, const char *out_name, int *sta
     pid = print_in_background(pargv, cli_path(out_name));
     /* into the print: planned, homed, printing, a few of its 21 layers */
     for (i = 0; i < 3000; i++) {
-        out = cli_read(cli_path(out_name));
+        out = read_whole_text(cli_path(out_name));
         if (out && strstr(out, "printing layers 1 to ")) break;
         free(out);
         out = NULL;
@@ -1339,7 +1339,7 @@ static char *qemu_print_then(const char *command, const char *out_name, int *sta
     *took = seconds_now() - sent_at;
     if (fd >= 0) close(fd);
     child_stop(&qemu);
-    return cli_read(cli_path(out_name));
+    return read_whole_text(cli_path(out_name));
 }
 
 /* QEMU's system_reset mid-print, from its monitor: the image starts again
@@ -1543,7 +1543,7 @@ static void hung_loop_keeps_light_and_watchdog(void)
         host = print_in_background(args, cli_path("hang.out"));
         for (i = 0; i < 1500; i++) {
             free(text);
-            text = cli_read(log_path);
+            text = read_whole_text(log_path);
             if (text && strstr(text, " reset watchdog")) break;
             { struct timespec ts = {0, 20000000}; nanosleep(&ts, NULL); }
         }
@@ -1551,7 +1551,7 @@ static void hung_loop_keeps_light_and_watchdog(void)
         waitpid(host, &st, 0);
         CHECKF(child_stop(&sim) == 0, "the simulator failed");
         free(text);
-        text = cli_read(log_path);
+        text = read_whole_text(log_path);
         for (line = text ? strtok_r(text, "\n", &save) : NULL; line; line = strtok_r(NULL, "\n", &save)) {
             char what[16] = "", arg[32] = "";
             if (line[0] == '#' || sscanf(line, "%llu %15s %31s", &t, what, arg) < 2) continue;

@@ -143,7 +143,7 @@ static void steps_on_time_under_qemu(void)
     cli_free(&r);
     status = qemu_wait(&q, 10);
     CHECKF(status == 0, "QEMU ended with %d (0: the firmware exited cleanly on EXIT)", status);
-    err = cli_read(cli_path("qemu.err"));
+    err = read_whole_text(cli_path("qemu.err"));
     have_report = read_print_report(cli_path("report.json"), &rep);
     CHECKF(have_report && rep.layers > 1, "the report has %u layers", have_report ? rep.layers : 0);
     {
@@ -278,13 +278,13 @@ static void watchdog_resets_a_hung_loop(void)
         struct timespec ts = {0, 100000000};
         nanosleep(&ts, NULL);
         free(err);
-        err = cli_read(cli_path("qemu.err"));
+        err = read_whole_text(cli_path("qemu.err"));
         booted_again = err && qemu_said(err, "fw-mps2: boot", 1) >= 0;
     }
     if (host > 0) { kill(host, SIGTERM); waitpid(host, NULL, 0); }
     qemu_wait(&q, 0);
     if (!booted_again) {
-        char *log = cli_read(cli_path("host.log"));
+        char *log = read_whole_text(cli_path("host.log"));
         CHECKF(0, "no second boot within 60 s: %s; the host: %s", err ? err : "", log ? log : "");
         free(log);
     }

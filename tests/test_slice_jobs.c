@@ -4,6 +4,7 @@
    unknown extension, the wrong format for a printer, a part too big or too
    tall, layers a format cannot hold, an adaptive plan for .sl1, bad exposure
    values): a one-line message, a non-zero exit and nothing written. */
+#include "util.h"
 #include "cli_run.h"
 #include <signal.h>
 #include <time.h>
@@ -33,7 +34,7 @@ static manifest_layer *read_manifest(const char *dir, size_t *n, char **text_out
     size_t k = 0, count;
     snprintf(path, sizeof path, "%s/manifest.json", dir);
     *n = 0;
-    *text_out = text = cli_read(path);
+    *text_out = text = read_whole_text(path);
     if (!text) return NULL;
     count = (size_t)cli_json_number(text, "layer_count");
     l = (manifest_layer *)calloc(count + 1, sizeof *l);
@@ -288,18 +289,6 @@ static void dir_masks_free(dir_masks *m)
     free(m->grey);
 }
 
-static unsigned char *read_file(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *d = NULL;
-    long n;
-    *size = 0;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 && (d = (unsigned char *)malloc((size_t)n)))
-        *size = fread(d, 1, (size_t)n, f);
-    fclose(f);
-    return d;
-}
 
 /* One model, one display, sliced as a directory and as each resin file: the
    file's reader (tests/job_readers.c, from the formats' documentation) finds
@@ -341,7 +330,7 @@ static void resin_files_hold_the_directory_jobs_masks(void)
             r = cli_run("slice", model, "-o", out, "--format", formats[f], SAME_JOB, NULL);
             CHECKF(r.status == 0, "%s: %s", out, r.err);
             cli_free(&r);
-            data = read_file(out, &size);
+            data = read_whole_file(out, &size);
             if (!data || (f == 0 ? jr_read_ctb(data, size, &job)
                           : goo  ? jr_read_goo(data, size, &job)
                                  : jr_read_ctb_encrypted(data, size, &job)) != 0) {
@@ -411,7 +400,7 @@ static void ctb_for_an_encrypted_ctb_printer(void)
     cli_free(&r);
     l = read_manifest(dir, &n, &text);
     free(text);
-    data = read_file(out, &size);
+    data = read_whole_file(out, &size);
     if (!data || jr_read_ctb_encrypted_ex(data, size, &job, JR_SKIP_IMAGES | JR_SKIP_PREVIEWS) != 0) {
         CHECKF(0, "%.200s: the reader refuses it: %.200s", out, data ? job.error : "no file");
         free(data);
@@ -469,8 +458,8 @@ static void jobs_are_reproducible(void)
                     b, NULL);
         CHECKF(r.status == 0, "%s: %s", b, r.err);
         cli_free(&r);
-        x = read_file(a, &nx);
-        y = read_file(b, &ny);
+        x = read_whole_file(a, &nx);
+        y = read_whole_file(b, &ny);
         CHECKF(x && y && nx == ny && !memcmp(x, y, nx), "%s: two runs differ", format[f]);
         free(x);
         free(y);
@@ -494,8 +483,8 @@ static int same_directories(const char *a, const char *b, char what[300])
         if (e->d_name[0] == '.') continue;
         snprintf(x, sizeof x, "%s/%s", a, e->d_name);
         snprintf(y, sizeof y, "%s/%s", b, e->d_name);
-        p = read_file(x, &np);
-        q = read_file(y, &nq);
+        p = read_whole_file(x, &np);
+        q = read_whole_file(y, &nq);
         same = p && q && np == nq && !memcmp(p, q, np);
         if (!same) snprintf(what, 300, "%s differs", e->d_name);
         files++;
@@ -566,8 +555,8 @@ static void threads_write_the_same_job(void)
                     "--threads", "2", "-o", y, NULL);
         CHECKF(r.status == 0, "%s", r.err);
         cli_free(&r);
-        p = read_file(x, &np);
-        q = read_file(y, &nq);
+        p = read_whole_file(x, &np);
+        q = read_whole_file(y, &nq);
         CHECKF(p && q && np == nq && !memcmp(p, q, np), "ctb --aa %s: one thread and two differ", aa[a]);
         free(p);
         free(q);
@@ -594,7 +583,7 @@ static void headers_hold_the_regular_layers(void)
                     "--penetration", "0.1", "-o", out, NULL);
         CHECKF(r.status == 0, "%s: %s", out, r.err);
         cli_free(&r);
-        data = read_file(out, &size);
+        data = read_whole_file(out, &size);
         if (!data || (f == 0 ? jr_read_ctb(data, size, &job) : jr_read_goo(data, size, &job)) != 0) {
             CHECKF(0, "%.200s: the reader refuses it", out);
             free(data);
@@ -630,7 +619,7 @@ static void the_8k_s_preset_writes_prz(void)
                 NULL);
     CHECKF(r.status == 0, "%s", r.err);
     cli_free(&r);
-    data = read_file(path, &size);
+    data = read_whole_file(path, &size);
     if (!data || jr_read_goo_ex(data, size, &job, JR_SKIP_IMAGES) != 0) {
         CHECKF(0, "%.200s: %.200s", path, data ? job.error : "not written");
         free(data);
@@ -666,7 +655,7 @@ static void job_directories_cannot_go_stale(void)
     CHECKF(r.status == 0, "%s", r.err);
     cli_free(&r);
     snprintf(path, sizeof path, "%s/manifest.json", job);
-    text = cli_read(path);
+    text = read_whole_text(path);
     if (text) layers = (size_t)cli_json_number(text, "layer_count");
     free(text);
     for (d = opendir(job); d && (e = readdir(d)) != NULL;) pngs += !strncmp(e->d_name, "layer_", 6);
@@ -684,7 +673,7 @@ static void job_directories_cannot_go_stale(void)
         FILE *f;
         snprintf(from, sizeof from, "%s/masks.rle", other);
         snprintf(to, sizeof to, "%s/masks.rle", job);
-        bytes = read_file(from, &n);
+        bytes = read_whole_file(from, &n);
         f = fopen(to, "wb");
         CHECK(bytes && f && fwrite(bytes, 1, n, f) == n);
         if (f) fclose(f);

@@ -6,6 +6,7 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, dup */
 #endif
+#include "util.h"
 #include "check.h"
 #include "maskgen.h"
 #include "tool_run.h"
@@ -40,19 +41,6 @@ static uint32_t rng(void)
     return rng_state;
 }
 
-static unsigned char *read_all(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *s = NULL;
-    long n;
-    *size = 0;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (s = (unsigned char *)malloc((size_t)n + 1)) != NULL)
-        *size = fread(s, 1, (size_t)n, f);
-    fclose(f);
-    return s;
-}
 
 /* The names in the directory besides "." and "..", one per line. */
 static void list_dir(char *out, size_t size)
@@ -104,7 +92,7 @@ static char *capture_end(void)
     fflush(stderr);
     dup2(saved_stderr, 2);
     close(saved_stderr);
-    s = (char *)read_all(in_dir("stderr"), &n);
+    s = (char *)read_whole_file(in_dir("stderr"), &n);
     if (s) s[n] = 0;
     remove(in_dir("stderr"));
     return s;
@@ -198,7 +186,7 @@ static uint32_t le32(const unsigned char *p) { return le16(p) | (uint32_t)le16(p
 static void check_layout(const char *path, const archive *a)
 {
     size_t n, offset = 0, cd, cd_size;
-    unsigned char *zip = read_all(path, &n);
+    unsigned char *zip = read_whole_file(path, &n);
     const unsigned char *end, *c;
     CHECKF(zip && n >= 22, "%s: no archive", path);
     if (!zip || n < 22) { free(zip); return; }
@@ -254,7 +242,7 @@ static void unzip_tests(const char *path)
     char *argv[] = {(char *)"unzip", (char *)"-t", (char *)path, NULL}, *out;
     size_t n;
     int st = tool_run("unzip", argv, in_dir("unzip.log"), in_dir("unzip.log"));
-    out = (char *)read_all(in_dir("unzip.log"), &n);
+    out = (char *)read_whole_file(in_dir("unzip.log"), &n);
     if (out) out[n] = 0;
     CHECKF(st == 0 && out && strstr(out, "No errors detected"), "unzip -t %s: status %d: %.300s", path, st,
            out ? out : "");
@@ -269,7 +257,7 @@ static void unzip_member_matches(const char *path, const member *m)
     unsigned char *got;
     size_t n;
     int st = tool_run("unzip", argv, in_dir("member"), in_dir("unzip.log"));
-    got = read_all(in_dir("member"), &n);
+    got = read_whole_file(in_dir("member"), &n);
     CHECKF(st == 0 && got && n == m->size && !memcmp(got, m->data, n), "unzip -p %s %s: status %d, %zu bytes of %zu%s",
            path, m->name, st, n, m->size, got && n == m->size ? ", bytes differ" : "");
     free(got);
@@ -311,8 +299,8 @@ static void archives_are_laid_out_as_the_appnote_says(void)
     check_layout(in_dir("job.zip"), a);
     /* the same members give the same bytes, and no temporary file is left */
     CHECK(write_archive(in_dir("again.zip"), a) == 0);
-    one = read_all(in_dir("job.zip"), &n1);
-    two = read_all(in_dir("again.zip"), &n2);
+    one = read_whole_file(in_dir("job.zip"), &n1);
+    two = read_whole_file(in_dir("again.zip"), &n2);
     CHECK(one && two && n1 == n2 && !memcmp(one, two, n1));
     list_dir(names, sizeof names);
     CHECKF(!strcmp(names, "job.zip\nagain.zip\n") || !strcmp(names, "again.zip\njob.zip\n"), "the directory holds %s",
@@ -442,7 +430,7 @@ static void unzip_extracts_three_hundred_members(void)
         size_t n;
         unsigned char *got;
         snprintf(path, sizeof path, "%s/%s", out, a->m[i].name);
-        got = read_all(path, &n);
+        got = read_whole_file(path, &n);
         CHECKF(got && n == a->m[i].size && !memcmp(got, a->m[i].data, n), "%s: extracted %zu bytes of %zu%s", path,
                n, a->m[i].size, got && n == a->m[i].size ? ", bytes differ" : "");
         free(got);
