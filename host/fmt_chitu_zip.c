@@ -38,7 +38,7 @@ static void move(FILE *f, const char *g, double z, double mm_per_s)
     fprintf(f, "%s Z", g);
     zip_number(f, z, 6);
     fputs(" F", f);
-    zip_number(f, mm_per_s * 60, 3);
+    zip_number(f, mm_per_min(mm_per_s), 3);
     fputs(";\n", f);
 }
 
@@ -70,15 +70,15 @@ static void write_gcode(FILE *f, const void *ctx)
     key(f, "normalExposureTime", d->exposure_s, 3);
     key(f, "bottomLayExposureTime", d->bottom_exposure_s, 3); /* sic, beside the next: ChiTuBox writes both */
     key(f, "bottomLayerExposureTime", d->bottom_exposure_s, 3);
-    key(f, "normalDropSpeed", m->retract_speed * 60, 3);
+    key(f, "normalDropSpeed", mm_per_min(m->retract_speed), 3);
     key(f, "normalLayerLiftHeight", m->lift_mm, 6);
     fputs(";zSlowUpDistance:0\n", f);
-    key(f, "normalLayerLiftSpeed", m->lift_speed * 60, 3);
+    key(f, "normalLayerLiftSpeed", mm_per_min(m->lift_speed), 3);
     fprintf(f, ";bottomLayCount:%u\n;bottomLayerCount:%u\n", d->bottom_layers, d->bottom_layers);
     fprintf(f, ";shrinkageX:100\n;shrinkageY:100\n;shrinkageZ:100\n;mirror:%d\n;totalLayer:%zu\n", mirror,
             d->layer_count);
     key(f, "bottomLayerLiftHeight", job_lift_mm(m, 1), 6);
-    key(f, "bottomLayerLiftSpeed", job_lift_speed(m, 1) * 60, 3);
+    key(f, "bottomLayerLiftSpeed", mm_per_min(job_lift_speed(m, 1)), 3);
     key(f, "bottomLightOffTime", m->wait_before_cure_s, 3);
     key(f, "lightOffTime", m->wait_before_cure_s, 3);
     fputs(";START_GCODE_BEGIN\nG21;\nG90;\nM106 S0;\nG28 Z0;\n\n;START_GCODE_END\n\n", f);

@@ -62,7 +62,6 @@ typedef struct ctb_writer {
     off_t end;                  /* where the next layer's LayerDefEx goes */
 } ctb_writer;
 
-static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
 
 static int is_bottom(const ctb_writer *w, size_t k) { return k < w->d->bottom_layers; }

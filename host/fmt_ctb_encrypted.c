@@ -78,7 +78,6 @@ typedef struct ctbe_writer {
     uint64_t end;               /* where the next layer's LayerDef goes */
 } ctbe_writer;
 
-static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
 
 /* data[0, n) enciphered in place, n a multiple of 16, each time from the IV:

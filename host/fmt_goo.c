@@ -58,7 +58,6 @@ static void put_text(unsigned char *p, size_t width, const char *s)
 }
 
 
-static double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
 static double build_height_mm(const job_desc *d)
 {

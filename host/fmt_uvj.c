@@ -40,8 +40,8 @@ typedef struct uvj {
 static void exposure(json_writer *j, const job_desc *d, double exposure_s, int bottom)
 {
     const job_motion *m = &d->motion;
-    double lift = bottom ? m->bottom_lift_mm : m->lift_mm;
-    double lift_speed = 60 * (bottom ? m->bottom_lift_speed : m->lift_speed), retract_speed = 60 * m->retract_speed;
+    double lift = job_lift_mm(m, bottom);
+    double lift_speed = mm_per_min(job_lift_speed(m, bottom)), retract_speed = mm_per_min(m->retract_speed);
     json_number(j, "WaitTimeBeforeCure", m->wait_before_cure_s);
     json_int(j, "LightOffTime", 0);
     json_number(j, "LightOnTime", exposure_s);

@@ -157,6 +157,8 @@ double job_lift_mm(const job_motion *m, int bottom);
 double job_lift_speed(const job_motion *m, int bottom);
 /* Seconds that peel takes: up at the lift speed, back at retract_speed. */
 double job_peel_s(const job_motion *m, int bottom);
+/* The resin formats keep speeds in mm/min. */
+static inline double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 
 /* When the job was made, for the headers that carry it: SOURCE_DATE_EPOCH
    when set (the reproducible-builds convention: the same job, the same
