@@ -37,7 +37,7 @@ all: $(B)/adaslice
 # adaslice_mcu.h): one object per configuration, linked by every program.
 LIB_SRC   = host/library.c
 LINK_SRC  = link/frame.c link/messages.c
-HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c)) link/tty.c $(LINK_SRC)
+HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c host/print/*.c)) link/tty.c $(LINK_SRC)
 FW_SRC    = firmware/core.c firmware/motion.c firmware/gcode.c $(LINK_SRC)
 # The one list of test groups: tests/test_NAME.c defines test_NAME().
 TESTS     = $(sort $(wildcard tests/test_*.c))
