@@ -588,6 +588,7 @@ static void print_step(fw_state *fw, uint64_t now)
             if (!move_layer(fw, fw->peel_nm, fw->peel_speed, fw->phase_end)) return;
             break;
         case LINK_PHASE_DARK:
+            if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
             /* the host puts its screen out before Z moves (SCREEN 0) */
             if (fw->screen) return;
             fw->phase = LINK_PHASE_PEEL;

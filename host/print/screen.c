@@ -375,10 +375,11 @@ static void write_all(int fd, const uint8_t *p, size_t n)
 static void guard_stop(screen *s, int port_fd)
 {
     if (port_fd >= 0) {
-        uint8_t out[2 * LINK_FRAME_MAX + 1], hello = LINK_PROTOCOL_VERSION;
+        uint8_t out[3 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
         size_t n = 0;
-        /* a sync byte ends a frame the host was cut off in the middle of */
-        out[n++] = LINK_SYNC;
+        /* twice: a frame the host was cut off in the middle of may take
+           the first (the deframer finds frames again after damage) */
+        n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x56, LINK_MSG_PAUSE, NULL, 0);
         write_all(port_fd, out, n);
@@ -388,6 +389,17 @@ static void guard_stop(screen *s, int port_fd)
     s->shown = 0;
     memset(s->map, 0, s->map_size);
     (void)pan_to(s, 0);
+    wait_shown(s);
+    if (port_fd >= 0) {
+        /* and the printer told, so that it knows the screen as it is */
+        uint8_t out[LINK_FRAME_MAX], dark[LINK_SIZE_SCREEN];
+        link_screen m;
+        m.layer = 0;
+        m.exposure_ms = 0;
+        (void)link_put_screen(dark, &m);
+        write_all(port_fd, out, link_frame_build(out, 0x57, LINK_MSG_SCREEN, dark, sizeof dark));
+        (void)tcdrain(port_fd);
+    }
 }
 
 int screen_guard(screen *s, int port_fd)

@@ -260,8 +260,10 @@ static void watch_step(sim *s)
     size_t n, k;
     const unsigned char *b;
     if (!s->watch_path) return;
+    static const unsigned char zero[4096];
     b = screen_view(s, &n);
-    for (k = 0; k < n && !b[k]; k++) {}
+    for (k = 0; k < n; k += sizeof zero)
+        if (memcmp(b + k, zero, n - k < sizeof zero ? n - k : sizeof zero)) break;
     if (k < n && s->lit_steps++ < 1000) log_line(s, s->now, "screen lit");
 }
 
