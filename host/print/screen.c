@@ -28,6 +28,28 @@
 static const char *const PACKINGS[] = {"gray", "rgb", "bgr"};
 static const char *const MIRRORS[] = {"none", "x", "y"};
 
+/* ------------------------------------------------------------ panels */
+
+/* The figures are those of host/printer.c's presets of the same panels. */
+const screen_panel SCREEN_PANELS[] = {
+    {"2k-5.5", 2560, 1440, SCREEN_GRAY, 47.25,
+     "5.5-inch 2K RGB LCD (Elegoo Mars, Anycubic Photon class): 2560 x 1440 pixels of 47.25 um, 120.96 x 68.04 mm, "
+     "a mask pixel per RGB pixel (ChiTu Systems, \"5 things you need to know when choosing LCD screen\", 2020)"},
+    {"mono-4k-6.1", 1280, 2400, SCREEN_RGB, 35,
+     "6.1-inch 4K mono LCD (Anycubic Photon Mono 4K class): 3840 x 2400 mono pixels of 35 um, driven as a 1280 x 2400 "
+     "RGB panel, three mask pixels per framebuffer pixel (xyzdims.com, \"MSLA Anycubic Photon Mono 4K\", 2023); red "
+     "first is assumed: check the order with adaslice show --pattern ruler"},
+};
+const int SCREEN_PANEL_COUNT = (int)(sizeof SCREEN_PANELS / sizeof SCREEN_PANELS[0]);
+
+static const screen_panel *panel_find(const char *name)
+{
+    int k;
+    for (k = 0; k < SCREEN_PANEL_COUNT; k++)
+        if (!strcmp(SCREEN_PANELS[k].name, name)) return &SCREEN_PANELS[k];
+    return NULL;
+}
+
 /* ------------------------------------------------------------ options */
 
 int screen_option(int argc, char **argv, int *i, screen_options *o, int *rc)
@@ -37,6 +59,15 @@ int screen_option(int argc, char **argv, int *i, screen_options *o, int *rc)
     else if (!strcmp(opt, "--screen-packing")) *rc = name_option(argc, argv, i, PACKINGS, 3, "gray, rgb or bgr", &o->packing);
     else if (!strcmp(opt, "--screen-mirror")) *rc = name_option(argc, argv, i, MIRRORS, 3, "none, x or y", &o->mirror);
     else if (!strcmp(opt, "--screen-pitch")) *rc = number_option(argc, argv, i, 0, &o->pitch_um);
+    else if (!strcmp(opt, "--screen-panel")) {
+        if (!(*rc = file_option(argc, argv, i, &o->panel)) && !panel_find(o->panel)) {
+            char names[256] = "";
+            int k;
+            for (k = 0; k < SCREEN_PANEL_COUNT; k++)
+                snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? ", " : "", SCREEN_PANELS[k].name);
+            *rc = complain(RC_USAGE, "--screen-panel %s: not a panel adaslice knows (%s)", o->panel, names);
+        }
+    }
     else if (!strcmp(opt, "--screen-rotate")) {
         static const char *const turns[] = {"0", "90", "180", "270"};
         *rc = name_option(argc, argv, i, turns, 4, "0, 90, 180 or 270", &o->rotate);
@@ -56,8 +87,16 @@ void screen_usage(FILE *f)
           "  --screen-rotate D     the panel turned 0|90|180|270 degrees clockwise [0]\n"
           "  --screen-mirror M     none|x|y, before the turn                    [none]\n"
           "  --screen-pitch UM     the panel's pixel pitch: a job of another is\n"
-          "                        refused                                   [unchecked]\n",
+          "                        refused                                   [unchecked]\n"
+          "  --screen-panel NAME   a panel's framebuffer, packing and pitch:\n",
           f);
+    {
+        int k;
+        for (k = 0; k < SCREEN_PANEL_COUNT; k++)
+            fprintf(f, "                          %-12s a %u x %u framebuffer, %s, %g um\n", SCREEN_PANELS[k].name,
+                    SCREEN_PANELS[k].fb_width, SCREEN_PANELS[k].fb_height, PACKINGS[SCREEN_PANELS[k].packing],
+                    SCREEN_PANELS[k].pitch_um);
+    }
 }
 
 /* ------------------------------------------------------------ geometry */
@@ -88,11 +127,14 @@ void screen_panel_row(const screen *s, const unsigned char *mask, size_t stride,
         for (px = 0; px < s->panel_w; px++, row += dx) values[px] = *row;
     } else if (dy == 0 && dx == 1 && !(x & 7)) {
         /* the common case, a row as it is: whole bytes at a time */
+        static unsigned char expand[256][8];
         const unsigned char *row = mask + (size_t)y * stride;
-        for (px = 0; px + 8 <= s->panel_w; px += 8) {
-            unsigned b = row[px >> 3], k;
-            for (k = 0; k < 8; k++) values[px + k] = (unsigned char)(((b >> (7u - k)) & 1u) * 255u);
+        if (!expand[255][0]) {
+            unsigned b, k;
+            for (b = 0; b < 256; b++)
+                for (k = 0; k < 8; k++) expand[b][k] = (unsigned char)(((b >> (7u - k)) & 1u) * 255u);
         }
+        for (px = 0; px + 8 <= s->panel_w; px += 8) memcpy(values + px, expand[row[px >> 3]], 8);
         for (; px < s->panel_w; px++) values[px] = (unsigned char)mask_pixel(mask, stride, bits, px, (uint32_t)y);
     } else {
         for (px = 0; px < s->panel_w; px++, x += dx, y += dy)
@@ -100,24 +142,35 @@ void screen_panel_row(const screen *s, const unsigned char *mask, size_t stride,
     }
 }
 
-static void put_pixel(unsigned char *out, uint32_t bpp, uint32_t v)
-{
-    if (bpp == 32) memcpy(out, &v, 4);
-    else if (bpp == 16) { uint16_t h = (uint16_t)v; memcpy(out, &h, 2); }
-    else { out[0] = (unsigned char)v; out[1] = (unsigned char)(v >> 8); out[2] = (unsigned char)(v >> 16); }
-}
+/* Pixels out in the framebuffer's depth, one loop per depth (this is the
+   print's critical path: a 4K layer is 9 million mask pixels). */
+#define SCREEN_PUT_LOOP(count, PIXEL)                                                                               \
+    do {                                                                                                            \
+        uint32_t x_, v_;                                                                                            \
+        if (s->bpp == 32)                                                                                           \
+            for (x_ = 0; x_ < (count); x_++, out += 4) { v_ = PIXEL(x_); memcpy(out, &v_, 4); }                     \
+        else if (s->bpp == 24)                                                                                      \
+            for (x_ = 0; x_ < (count); x_++, out += 3) {                                                            \
+                v_ = PIXEL(x_);                                                                                     \
+                out[0] = (unsigned char)v_; out[1] = (unsigned char)(v_ >> 8); out[2] = (unsigned char)(v_ >> 16);   \
+            }                                                                                                       \
+        else                                                                                                        \
+            for (x_ = 0; x_ < (count); x_++, out += 2) { uint16_t h_ = (uint16_t)PIXEL(x_); memcpy(out, &h_, 2); } \
+    } while (0)
 
 void screen_pack_row(const screen *s, const unsigned char *values, unsigned char *out)
 {
-    uint32_t x, bytes = s->bpp / 8;
     const uint32_t *r = s->lut[0], *g = s->lut[1], *b = s->lut[2];
     if (s->packing == SCREEN_GRAY) {
-        for (x = 0; x < s->xres; x++, out += bytes) put_pixel(out, s->bpp, r[values[x]] | g[values[x]] | b[values[x]]);
+#define GRAY_PIXEL(x) (r[values[x]] | g[values[x]] | b[values[x]])
+        SCREEN_PUT_LOOP(s->xres, GRAY_PIXEL);
+#undef GRAY_PIXEL
     } else {
         /* three mono pixels a screen pixel, the first in the red subpixel (rgb) or the blue (bgr) */
-        int first = s->packing == SCREEN_RGB ? 0 : 2;
-        for (x = 0; x < s->xres; x++, out += bytes, values += 3)
-            put_pixel(out, s->bpp, s->lut[first][values[0]] | g[values[1]] | s->lut[2 - first][values[2]]);
+        const uint32_t *first = s->packing == SCREEN_RGB ? r : b, *third = s->packing == SCREEN_RGB ? b : r;
+#define RGB_PIXEL(x) (first[values[3 * (x)]] | g[values[3 * (x) + 1]] | third[values[3 * (x) + 2]])
+        SCREEN_PUT_LOOP(s->xres, RGB_PIXEL);
+#undef RGB_PIXEL
     }
 }
 
@@ -221,8 +274,8 @@ static int open_fb(screen *s, const char *dev)
         uint32_t crtc = 0;
         s->vsync = ioctl(s->fd, FBIO_WAITFORVSYNC, &crtc) == 0;
     }
-    if (!s->pitch_um && var.width && var.width != 0xffffffffu)
-        s->pitch_um = 0; /* the driver's millimetres are rounded: the pitch is checked only when given */
+    /* var.width, the driver's millimetres, is rounded or 0: the pitch is
+       checked only when --screen-pitch or --screen-panel gives it */
     return RC_OK;
 }
 
@@ -272,6 +325,17 @@ int screen_open(screen *s, const screen_options *o)
     s->pitch_um = o->pitch_um;
     rc = !strncmp(o->device, "file:", 5) ? open_file(s, o->device + 5, &packing) : open_fb(s, o->device);
     if (rc) { screen_close(s); return rc; }
+    if (o->panel) {
+        const screen_panel *p = panel_find(o->panel);
+        if (p && (s->xres != p->fb_width || s->yres != p->fb_height)) {
+            rc = complain(RC_FAIL, "--screen %s is %u x %u px; the %s panel's framebuffer is %u x %u", s->name, s->xres, s->yres,
+                          p->name, p->fb_width, p->fb_height);
+            screen_close(s);
+            return rc;
+        }
+        if (p && packing < 0) packing = p->packing;
+        if (p && !s->pitch_um) s->pitch_um = p->pitch_um;
+    }
     s->packing = packing < 0 ? SCREEN_GRAY : packing;
     s->rotate = o->rotate;
     s->mirror = o->mirror;

@@ -33,7 +33,21 @@ typedef struct screen_options {
     int rotate;              /* --screen-rotate 0|90|180|270, in quarter turns */
     int mirror;              /* --screen-mirror none|x|y */
     double pitch_um;         /* --screen-pitch: the panel's pixel pitch, 0 unknown */
+    const char *panel;       /* --screen-panel: a preset (SCREEN_PANELS), NULL none */
 } screen_options;
+
+/* DIY panels: the framebuffer their HDMI driver board shows, the packing
+   and the pitch (--screen-panel NAME; --screen-packing and --screen-pitch
+   still win). */
+typedef struct screen_panel {
+    const char *name;
+    uint32_t fb_width, fb_height;
+    int packing;
+    double pitch_um;
+    const char *about;       /* the panel, and where its figures come from */
+} screen_panel;
+extern const screen_panel SCREEN_PANELS[];
+extern const int SCREEN_PANEL_COUNT;
 
 typedef struct screen {
     int fd, is_file;

@@ -12,16 +12,20 @@
    the end of an exposure and the dark screen that lets Z peel. */
 #define SCREEN_POLL_MS 5
 
-/* Our screen dark, then the printer told. */
-static int go_dark(screen_print *p)
+int screen_print_said_dark(serial_link *l)
 {
     uint8_t buf[LINK_SIZE_SCREEN];
     link_screen m;
-    int rc = screen_dark(p->scr);
-    if (rc) return rc;
     m.layer = 0;
     m.exposure_ms = 0;
-    return serial_send(p->l, LINK_MSG_SCREEN, buf, link_put_screen(buf, &m));
+    return serial_send(l, LINK_MSG_SCREEN, buf, link_put_screen(buf, &m));
+}
+
+/* Our screen dark, then the printer told. */
+static int go_dark(screen_print *p)
+{
+    int rc = screen_dark(p->scr);
+    return rc ? rc : screen_print_said_dark(p->l);
 }
 
 /* PAUSE, its effect waited for (the light out: a pause takes while the

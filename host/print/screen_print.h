@@ -27,6 +27,9 @@ typedef struct screen_print {
     volatile sig_atomic_t *interrupted; /* Ctrl-C: pause */
 } screen_print;
 
+/* SCREEN 0 to the printer: the host's screen is dark (as screen_open
+   leaves it), so that Z may home and move before the print begins. */
+int screen_print_said_dark(serial_link *l);
 /* The print from motion.first_layer to the end: RC_OK, RC_PAUSED (paused,
    said with the layer to resume from), or the stop's code and message.
    The screen is dark whenever this returns. */
