@@ -414,9 +414,11 @@ static int screen_mask(void *ctx, uint32_t k, const unsigned char **image, size_
         *stride = pj->masks.stride;
         return RC_OK;
     }
-    if (!src->image && !(src->image = (unsigned char *)malloc(src->stride * pj->height)))
+    if (!src->image && !(src->image = (unsigned char *)malloc(src->stride * (pj->height + 1u))))
         return complain(RC_FAIL, "out of memory for a mask");
-    if (adaslice_rle_decoder_init(&dec, pj->width, pj->height, (int)pj->bits, src->image, src->stride) ||
+    /* the decoder's row after the image's */
+    if (adaslice_rle_decoder_init(&dec, pj->width, pj->height, (int)pj->bits, src->image + src->stride * pj->height,
+                                  src->stride) ||
         adaslice_rle_decode(&dec, pj->code, pj->code_size, screen_row, src) || !adaslice_rle_finished(&dec) ||
         ADASLICE_RLE_CRC(&dec) != pj->crc)
         return complain(RC_FAIL, "layer %u: its mask in masks.rle does not decode to its CRC-32 %08x", k, (unsigned)pj->crc);

@@ -7,4 +7,5 @@ int cmd_slice(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
 int cmd_saliency(int argc, char **argv);
 int cmd_print(int argc, char **argv);
+int cmd_show(int argc, char **argv);
 #endif

@@ -26,6 +26,7 @@ static const command COMMANDS[] = {
     {"orient", "search the build directions for the fewest layers and least error", cmd_orient},
     {"saliency", "per-face weights from mesh saliency, and the mesh coloured by them", cmd_saliency},
     {"print", "print a model or a job on a printer running the adaslice firmware", cmd_print},
+    {"show", "a job's layer or a test pattern on a DIY printer's screen (a framebuffer)", cmd_show},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };
 

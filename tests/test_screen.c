@@ -12,6 +12,7 @@
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
+#include <math.h>
 #include <poll.h>
 #include <signal.h>
 #include <time.h>
@@ -651,6 +652,98 @@ static void fault_leaves_it_dark(void)
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 
+/* adaslice show in the background until the file lights (then SIGTERM):
+   the file's bytes while shown, and whether it was dark after. */
+static unsigned char *shown_by(char *const argv[], const char *fb, size_t *n, int *dark_after)
+{
+    pid_t pid;
+    double t0;
+    unsigned char *b = NULL;
+    int st;
+    remove(fb);
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        int null = open("/dev/null", O_RDWR);
+        dup2(null, 0); dup2(null, 1);
+        execv(cli_tool, argv);
+        _exit(127);
+    }
+    for (t0 = seconds_now(); seconds_now() - t0 < 20; sleep_ms(5)) {
+        size_t m;
+        unsigned char *c = read_file(fb, &m);
+        int lit = c && m && !all_zero(fb);
+        free(c);
+        if (lit) break;
+    }
+    sleep_ms(50); /* the drawing done: it lights as it draws */
+    b = read_file(fb, n);
+    kill(pid, SIGTERM);
+    waitpid(pid, &st, 0);
+    CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 0, "show: %d", st);
+    *dark_after = all_zero(fb);
+    return b;
+}
+
+/* show: a job's layer exactly (masks.rle's CRC), the patterns as they are
+   documented, and dark once it ends. */
+static void show_layer_and_patterns(void)
+{
+    job_crcs j;
+    char spec[600];
+    size_t n;
+    int dark;
+    unsigned char *b, *mask = (unsigned char *)malloc(3840 * 2400);
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0}, g = {1280, 2400, 24, SCREEN_RGB, 0, 0};
+    if (!mask || !slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { free(mask); CHECK(!"no job"); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbs"));
+    {
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)cli_path("job"), (char *)"--layer", (char *)"30",
+                        (char *)"--screen", spec, (char *)"--seconds", (char *)"60", NULL};
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        CHECK(b && n == 80 * 200 * 3 && !unpack(b, &f, 240, 200, 1, mask) &&
+              adaslice_crc32(0, mask, 30 * 200) == j.crc[29]);
+        CHECK(dark);
+        free(b);
+    }
+    snprintf(spec, sizeof spec, "file:%s,1280x2400,24", cli_path("fbs"));
+    {
+        /* the mono 4K panel: 35 um, so a millimetre is 28.57 pixels */
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)"--pattern", (char *)"ruler", (char *)"--screen", spec,
+                        (char *)"--screen-panel", (char *)"mono-4k-6.1", (char *)"--seconds", (char *)"60", NULL};
+        unsigned x, lit = 0, want = 0, row = 1014; /* 35.5 mm down: clear of the lines and the squares */
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        CHECK(b && n == 1280 * 2400 * 3 && !unpack(b, &g, 3840, 2400, 1, mask));
+        for (x = 0; b && x < 3840; x++) {
+            int on = (mask[row * 480 + x / 8] >> (7 - x % 8)) & 1;
+            double mm = x / (1000.0 / 35);
+            int line = fabs(mm - floor(mm + 0.5)) * (1000.0 / 35) < 0.5 ||
+                       ((int)floor(mm + 0.5) % 10 == 0 && x >= floor(floor(mm + 0.5) * 1000.0 / 35 + 0.5) &&
+                        x < floor(floor(mm + 0.5) * 1000.0 / 35 + 0.5) + 3);
+            lit += (unsigned)on;
+            want += (unsigned)(on == line);
+        }
+        CHECKF(want == 3840 && lit >= 134, "ruler: row %u has %u lit pixels, %u of 3840 as the pitch puts them", row, lit, want);
+        /* the corner's big square (2 .. 7 mm) and the small one right of it (8 .. 10.5 mm, 2 .. 4.5 mm down) */
+        CHECK(b && (mask[114 * 480 + 114 / 8] >> (7 - 114 % 8)) & 1);
+        CHECK(b && (mask[100 * 480 + 265 / 8] >> (7 - 265 % 8)) & 1);
+        CHECK(b && !((mask[170 * 480 + 265 / 8] >> (7 - 265 % 8)) & 1));
+        CHECK(dark);
+        free(b);
+    }
+    {
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)"--pattern", (char *)"white", (char *)"--screen", spec,
+                        (char *)"--screen-packing", (char *)"rgb", (char *)"--seconds", (char *)"60", NULL};
+        size_t k, bad = 0;
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        for (k = 0; b && k < n; k++) bad += b[k] != 0xff;
+        CHECKF(b && n == 1280 * 2400 * 3 && !bad, "white: %zu bytes, %zu not lit", n, bad);
+        CHECK(dark);
+        free(b);
+    }
+    free(mask);
+    free(j.crc);
+}
+
 void test_screen(void)
 {
     if (!cli_begin("adaslice-screen")) { CHECK(!"no temporary directory"); return; }
@@ -659,6 +752,7 @@ void test_screen(void)
     RUN(print_shows_each_layer);
     RUN(aa_job_on_a_turned_gray_screen);
     RUN(wrong_screen_is_refused);
+    RUN(show_layer_and_patterns);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
     cli_end();
