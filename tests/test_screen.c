@@ -12,6 +12,7 @@
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
+#include <errno.h>
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
@@ -255,18 +256,12 @@ static void full_layer_unpacked_back(void)
 
 typedef struct child { pid_t pid; int out; char line[256]; } child;
 
-/* fw-sim with the test display, watching `watch`; "pty PATH" in c->line. */
-static int start_sim(child *c, const char *log, const char *speed, const char *watch, const char *const *extra)
+/* argv[0] started, its stdout read until "pty PATH" (in c->line). */
+static int start_child(child *c, char *const argv[])
 {
-    char *argv[24];
-    int fds[2], n = 0;
+    int fds[2];
     size_t len = 0;
     double waited = 0;
-    argv[n++] = (char *)SIM_BIN; argv[n++] = (char *)"--log"; argv[n++] = (char *)log;
-    argv[n++] = (char *)"--speed"; argv[n++] = (char *)speed; argv[n++] = (char *)"--display"; argv[n++] = (char *)"240x200";
-    argv[n++] = (char *)"--pitch-um"; argv[n++] = (char *)"100"; argv[n++] = (char *)"--watch-screen"; argv[n++] = (char *)watch;
-    while (extra && *extra && n < 22) argv[n++] = (char *)*extra++;
-    argv[n] = NULL;
     memset(c, 0, sizeof *c);
     if (pipe(fds) != 0) return 0;
     fflush(NULL);
@@ -292,8 +287,21 @@ static int start_sim(child *c, const char *log, const char *speed, const char *w
         if (!strncmp(c->line, "pty ", 4)) return 1;
         len = 0;
     }
-    CHECKF(0, "the simulator %s did not start (make builds it)", SIM_BIN);
+    CHECKF(0, "%s did not start (make builds it)", argv[0]);
     return 0;
+}
+
+/* fw-sim with the test display, watching `watch`. */
+static int start_sim(child *c, const char *log, const char *speed, const char *watch, const char *const *extra)
+{
+    char *argv[24];
+    int n = 0;
+    argv[n++] = (char *)SIM_BIN; argv[n++] = (char *)"--log"; argv[n++] = (char *)log;
+    argv[n++] = (char *)"--speed"; argv[n++] = (char *)speed; argv[n++] = (char *)"--display"; argv[n++] = (char *)"240x200";
+    argv[n++] = (char *)"--pitch-um"; argv[n++] = (char *)"100"; argv[n++] = (char *)"--watch-screen"; argv[n++] = (char *)watch;
+    while (extra && *extra && n < 22) argv[n++] = (char *)*extra++;
+    argv[n] = NULL;
+    return start_child(c, argv);
 }
 
 static int stop_sim(child *c)
@@ -382,6 +390,7 @@ static int observe(const char *log_path, const char *watch, const fb_layout *f, 
             uint32_t crc;
             size_t bad;
             s->exposures++;
+            if (!layer) layer = nth; /* avr-run does not see the layer: a print straight through */
             if (nth < 4096) s->layer_of[nth] = (unsigned)layer;
             snprintf(copy, sizeof copy, "%s.uv%lu", watch, nth);
             fb = read_file(copy, &m);
@@ -744,6 +753,83 @@ static void show_layer_and_patterns(void)
     free(j.crc);
 }
 
+/* A real framebuffer where the machine has one (/dev/fb0, or
+   $ADASLICE_TEST_FB): a checkerboard drawn through the ioctls and the
+   mapping, read back from the mapping, then dark. Skipped, saying why,
+   where there is none. */
+static void real_framebuffer_if_any(void)
+{
+    const char *dev = getenv("ADASLICE_TEST_FB") ? getenv("ADASLICE_TEST_FB") : "/dev/fb0";
+    screen s;
+    screen_options o;
+    unsigned char *mask;
+    uint32_t w, h, x, y, page_bytes, k, lit = 0;
+    int fd = open(dev, O_RDWR);
+    if (fd < 0) { printf("     (skipped: %s: %s)\n", dev, strerror(errno)); return; }
+    close(fd);
+    memset(&o, 0, sizeof o);
+    o.device = dev;
+    o.packing = -1;
+    if (screen_open(&s, &o) != 0) { printf("     (skipped: %s is not a framebuffer adaslice draws on)\n", dev); return; }
+    w = s.panel_w;
+    h = s.panel_h;
+    mask = (unsigned char *)calloc((w + 7) / 8, h);
+    for (y = 0; mask && y < h; y++)
+        for (x = 0; x < w; x++)
+            if ((x / 16 + y / 16) % 2) mask[y * ((w + 7) / 8) + x / 8] |= (unsigned char)(0x80u >> (x % 8));
+    CHECK(mask && screen_show(&s, mask, (w + 7) / 8, w, h, 1) == 0);
+    page_bytes = s.line_length * s.yres;
+    for (k = 0; k < page_bytes; k++) lit += s.map[(size_t)s.shown * page_bytes + k] != 0;
+    CHECKF(lit > 0, "%s: nothing drawn on the page shown", dev);
+    CHECK(screen_dark(&s) == 0);
+    for (k = 0, lit = 0; k < page_bytes; k++) lit += s.map[(size_t)s.shown * page_bytes + k] != 0;
+    CHECKF(!lit, "%s: %u bytes lit after dark", dev, lit);
+    printf("     %s: %u x %u at %u bpp, %u page%s\n", dev, s.xres, s.yres, s.bpp, s.pages, s.pages > 1 ? "s" : "");
+    screen_close(&s);
+    free(mask);
+}
+
+/* The RAMPS image (ATmega2560) under simavr, its display 240 x 200 as the
+   simulator's: the same observer in avr-run, at the MOSFET's and the STEP
+   pin's edges. */
+static void ramps_print_under_simavr(void)
+{
+    child avr;
+    job_crcs j;
+    seen s;
+    char spec[600], *argv[] = {(char *)"build/avr-run", (char *)"--log", NULL, (char *)"--z-start", (char *)"20",
+                               (char *)"--max-seconds", (char *)"600", (char *)"--timeout", (char *)"1800",
+                               (char *)"--watch-screen", NULL, (char *)"build/fw-ramps-test.elf", NULL};
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    cli_result r;
+    unsigned k, in_order = 1;
+    r = cli_run("slice", "examples/models/hand_closed.obj", "--scale", "5", "--pixels", "240x200", "--pitch", "0.1",
+                "--exposure", "0.05", "--penetration", "0.1", "--bottom-layers", "1", "--bottom-exposure", "0.1", "--peel", "3",
+                "--peel-speed", "10", "--return-speed", "10", "--settle", "0.02", "-o", cli_path("jobr"), NULL);
+    CHECKF(r.status == 0, "slice: %s", r.err);
+    cli_free(&r);
+    if (!read_job(cli_path("jobr"), &j)) { CHECK(!"no job"); return; }
+    argv[2] = (char *)cli_path("avr.log");
+    argv[10] = (char *)cli_path("fbr");
+    remove(cli_path("fbr"));
+    if (!start_child(&avr, argv)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbr"));
+    r = cli_run("print", cli_path("jobr"), "--port", avr.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 0, "print --screen on the RAMPS image: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&avr) == 0, "avr-run failed");
+    CHECK(all_zero(cli_path("fbr")));
+    CHECK(observe(cli_path("avr.log"), cli_path("fbr"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers && !s.wrong, "%u UV-ons for %u layers, %u right, %u wrong: %s",
+           s.exposures, j.layers, s.right, s.wrong, s.first_wrong);
+    for (k = 1; k <= s.exposures && k < 4096; k++) in_order &= s.layer_of[k] == k;
+    CHECK(in_order);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    printf("     RAMPS: %u layers, each UV-on over its own layer; %u STEP edges, none under a lit screen\n", j.layers, s.steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
 void test_screen(void)
 {
     if (!cli_begin("adaslice-screen")) { CHECK(!"no temporary directory"); return; }
@@ -753,7 +839,9 @@ void test_screen(void)
     RUN(aa_job_on_a_turned_gray_screen);
     RUN(wrong_screen_is_refused);
     RUN(show_layer_and_patterns);
+    RUN(real_framebuffer_if_any);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
     cli_end();
 }
