@@ -643,6 +643,72 @@ static void pause_and_killed_host_leave_it_dark(void)
     free(j.crc);
 }
 
+/* A layer the host cannot draw (its code in masks.rle damaged: it does not
+   decode to its CRC) pauses the print before that layer: the light never
+   comes on over the layer before, the screen is dark, and the message
+   names the layer to resume from. */
+static void undrawable_layer_pauses(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600], path[600];
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    size_t n, at = 44;
+    unsigned char *b;
+    unsigned k;
+    FILE *out;
+    cli_result r;
+    if (!slice_job(cli_path("jobd"), NULL) || !read_job(cli_path("jobd"), &j)) { CHECK(!"no job"); return; }
+    /* layer 5's code: past the 16 bytes of each layer before it */
+    snprintf(path, sizeof path, "%s/masks.rle", cli_path("jobd"));
+    b = read_file(path, &n);
+    for (k = 0; b && k < 4; k++) at += 16 + (b[at + 12] | (size_t)b[at + 13] << 8 | (size_t)b[at + 14] << 16);
+    CHECK(b && at + 20 < n);
+    if (!b || at + 20 >= n) { free(b); free(j.crc); return; }
+    b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+    if ((out = fopen(path, "wb")) != NULL) { CHECK(fwrite(b, 1, n, out) == n); fclose(out); }
+    {
+        /* the manifest names masks.rle's CRC-32: made to agree, so that only
+           the layer's own check finds the damage */
+        char was[9], now[9], mpath[600], *m, *hit;
+        size_t mn;
+        snprintf(mpath, sizeof mpath, "%s/manifest.json", cli_path("jobd"));
+        snprintf(now, sizeof now, "%08x", (unsigned)adaslice_crc32(0, b, n));
+        m = (char *)read_file(mpath, &mn);
+        CHECK(m != NULL);
+        if (m) {
+            uint32_t before;
+            b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+            before = adaslice_crc32(0, b, n);
+            b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+            snprintf(was, sizeof was, "%08x", (unsigned)before);
+            m[mn] = 0;
+            hit = strstr(m, was);
+            CHECKF(hit != NULL, "manifest.json does not name masks.rle's CRC-32 %s", was);
+            if (hit) memcpy(hit, now, 8);
+            if (hit && (out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+            free(m);
+        }
+    }
+    free(b);
+    remove(cli_path("fbd"));
+    if (!start_sim(&sim, cli_path("simd.log"), "100", cli_path("fbd"), NULL)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbd"));
+    r = cli_run("print", cli_path("jobd"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 3 && strstr(r.err, "layer 5") && strstr(r.err, "the layer could not be shown: paused at layer 5") &&
+           strstr(r.err, "--resume-from 5"), "a damaged layer 5: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(cli_path("fbd")));
+    CHECK(observe(cli_path("simd.log"), cli_path("fbd"), &f, &j, &s));
+    CHECKF(s.exposures == 4 && s.right == 4 && !s.uv_after_pause, "%u UV-ons (%u right, %u while paused): %s", s.exposures,
+           s.right, s.uv_after_pause, s.first_wrong);
+    CHECK(!s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
 /* A fault (a step that cannot be timed) ends the print: the screen dark. */
 static void fault_leaves_it_dark(void)
 {
@@ -842,6 +908,7 @@ void test_screen(void)
     RUN(real_framebuffer_if_any);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
+    RUN(undrawable_layer_pauses);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
     cli_end();
 }
