@@ -403,7 +403,7 @@ int screen_show(screen *s, const unsigned char *mask, size_t stride, uint32_t w,
     }
     /* one page: it is dark (the print keeps it so between layers); the
        light waits for the drawing's end */
-    draw(s, page_at(s, 0), mask, stride, w, h, bits);
+    draw(s, page_at(s, s->shown), mask, stride, w, h, bits);
     wait_shown(s);
     return RC_OK;
 }

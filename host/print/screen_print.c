@@ -127,7 +127,7 @@ static int run(screen_print *p)
         progress_show(&bar, s->state == LINK_STATE_DONE ? p->layers : s->exposed, p->layers, "layers", z);
         if (s->state == LINK_STATE_DONE) return go_dark(p);
         if (s->state == LINK_STATE_PAUSED) {
-            if (s->screen && (rc = go_dark(p))) return rc;
+            if ((rc = go_dark(p))) return rc;
             if (!(s->flags & LINK_FLAG_LINK_LOST)) return paused(p, "the printer paused");
             /* the link came back: the pause was not the operator's */
             if ((rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
