@@ -666,6 +666,12 @@ static void screen(fw_state *fw, const link_screen *m, uint8_t seq, uint64_t now
         fw->screen = 0;
         return;
     }
+    if (m->layer == LINK_SCREEN_PATTERN) {
+        /* a test pattern, for EXPOSE: outside a print, Z still */
+        if (printing || moving(fw) || fw->uv_on) { fail(fw, LINK_ERR_SCREEN_LAYER, seq); return; }
+        fw->screen = m->layer;
+        return;
+    }
     if (!printing || m->layer != fw->layer || moving(fw) ||
         (fw->phase != LINK_PHASE_WAIT_MASK && fw->phase != LINK_PHASE_SETTLE)) {
         fail(fw, LINK_ERR_SCREEN_LAYER, seq);
@@ -765,13 +771,14 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     }
     case LINK_MSG_EXPOSE:
         if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE && fw->state != LINK_STATE_IDLE) || moving(fw) ||
-            fw->uv_on || !fw->mask_ready) {
+            fw->uv_on || (!fw->mask_ready && fw->screen != LINK_SCREEN_PATTERN)) {
             fail(fw, LINK_ERR_BUSY, seq);
             break;
         }
         (void)link_get_expose(&m.expose, p, size);
         if (!m.expose.ms || m.expose.ms > FW_EXPOSURE_MAX_MS) { fail(fw, LINK_ERR_MASK_EXPOSURE, seq); break; }
-        fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
+        /* the host's test pattern, or the last verified mask */
+        if (fw->screen != LINK_SCREEN_PATTERN) fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
         fw->phase_end = now + FW_MS(fw, m.expose.ms);
         uv(fw, 1, now, fw->phase_end);
         fw->exposing = 1;

@@ -31,6 +31,9 @@
 /* the host's own screen (a DIY printer's LCD on a Linux board): `layer` is
    drawn whole and on screen, lit for exposure_ms; layer 0: the screen is dark */
 #define LINK_FIELDS_SCREEN(F) F(u32, layer) F(u32, exposure_ms)
+/* SCREEN's layer for a test pattern of the host's (adaslice show), outside
+   a print: EXPOSE may light it */
+#define LINK_SCREEN_PATTERN 0xffffffffu
 #define LINK_FIELDS_MOVE(F) F(i32, z_nm) F(u32, speed_um_s)
 #define LINK_FIELDS_EXPOSE(F) F(u32, ms)
 #define LINK_FIELDS_PRINT(F)                                                                                        \

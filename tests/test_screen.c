@@ -819,6 +819,61 @@ static void show_layer_and_patterns(void)
     free(j.crc);
 }
 
+/* show --pattern white --port --expose: an exposure test. The printer
+   lights the white screen once, for the time asked, under the observer's
+   eyes; the screen is dark after, and the printer takes a print next (the
+   host said the screen is dark). */
+static void white_exposure_test(void)
+{
+    child sim;
+    char spec[600], copy[600];
+    size_t n, k, unlit = 0;
+    unsigned char *b;
+    unsigned uv_ons = 0;
+    char *log, *at;
+    cli_result r;
+    remove(cli_path("fbx"));
+    if (!start_sim(&sim, cli_path("simx.log"), "10", cli_path("fbx"), NULL)) return;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbx"));
+    r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "0.5", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "lit for 0.500 s"), "show --expose: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECK(all_zero(cli_path("fbx")));
+    r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "100000", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "lights 0.001 to"), "show --expose too long: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    if (slice_job(cli_path("job"), NULL)) {
+        r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+        CHECKF(r.status == 0, "a print after the exposure test: exit %d: %s", r.status, r.err);
+        cli_free(&r);
+    }
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    log = (char *)read_file(cli_path("simx.log"), &n);
+    if (log) {
+        unsigned long long on = 0, off = 0;
+        char *first;
+        log[n] = 0;
+        for (at = log; (at = strstr(at, " uv 1")) != NULL; at++) uv_ons++;
+        /* the first light: 0.5 s to the tick (10 MHz) */
+        if ((first = strstr(log, " uv 1")) != NULL) {
+            while (first > log && first[-1] != '\n') first--;
+            sscanf(first, "%llu", &on);
+            if ((at = strstr(first, " uv 0")) != NULL) {
+                while (at > log && at[-1] != '\n') at--;
+                sscanf(at, "%llu", &off);
+            }
+        }
+        CHECKF(off - on == 5000000ull, "the white screen lit %llu ticks", off - on);
+    }
+    free(log);
+    CHECKF(uv_ons > 1, "%u UV-ons", uv_ons);
+    snprintf(copy, sizeof copy, "%s.uv1", cli_path("fbx"));
+    b = read_file(copy, &n);
+    for (k = 0; b && k < n; k++) unlit += b[k] != 0xff;
+    CHECKF(b && n == 80 * 200 * 3 && !unlit, "the first light: %zu bytes of screen, %zu not white", n, unlit);
+    free(b);
+}
+
 /* A real framebuffer where the machine has one (/dev/fb0, or
    $ADASLICE_TEST_FB): a checkerboard drawn through the ioctls and the
    mapping, read back from the mapping, then dark. Skipped, saying why,
@@ -905,6 +960,7 @@ void test_screen(void)
     RUN(aa_job_on_a_turned_gray_screen);
     RUN(wrong_screen_is_refused);
     RUN(show_layer_and_patterns);
+    RUN(white_exposure_test);
     RUN(real_framebuffer_if_any);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);

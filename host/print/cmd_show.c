@@ -8,6 +8,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "screen.h"
+#include "screen_print.h"
 #include "../commands.h"
 #include "../jobdir.h"
 #include "../options.h"
@@ -28,10 +29,10 @@ static void on_stop(int sig) { (void)sig; stop = 1; }
 
 typedef struct show_args {
     screen_options screen;
-    const char *job;
-    size_t layer;
+    const char *job, *port;
+    size_t layer, baud;
     int pattern;
-    double seconds, cell_mm;
+    double seconds, cell_mm, expose_s;
 } show_args;
 
 static void show_usage(FILE *f)
@@ -50,6 +51,9 @@ static void show_usage(FILE *f)
           "  --pattern P           checker, ruler, white or dark\n"
           "  --cell MM             the checker's squares                           [1]\n"
           "  --seconds S           hold the image S seconds           [until Ctrl-C]\n"
+          "  --port DEV --expose S the printer (adaslice firmware) on DEV lights the\n"
+          "                        image S seconds (an exposure test), then show ends\n"
+          "  --baud B              9600 ... 230400                               [115200]\n"
           "\n", f);
     screen_usage(f);
 }
@@ -61,6 +65,7 @@ static int parse_show(int argc, char **argv, show_args *a)
     a->screen.packing = -1;
     a->pattern = PATTERN_NONE;
     a->cell_mm = 1;
+    a->baud = 115200;
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
         if (!strcmp(o, "--help") || !strcmp(o, "-h")) { show_usage(stdout); return -1; }
@@ -68,6 +73,9 @@ static int parse_show(int argc, char **argv, show_args *a)
         else if (!strcmp(o, "--pattern")) rc = name_option(argc, argv, &i, PATTERNS, 4, "checker, ruler, white or dark", &a->pattern);
         else if (!strcmp(o, "--seconds")) rc = number_option(argc, argv, &i, 0, &a->seconds);
         else if (!strcmp(o, "--cell")) rc = number_option(argc, argv, &i, 0, &a->cell_mm);
+        else if (!strcmp(o, "--port")) rc = file_option(argc, argv, &i, &a->port);
+        else if (!strcmp(o, "--baud")) rc = count_option(argc, argv, &i, 4000000, &a->baud);
+        else if (!strcmp(o, "--expose")) rc = number_option(argc, argv, &i, 0, &a->expose_s);
         else if (screen_option(argc, argv, &i, &a->screen, &rc)) {}
         else if (o[0] == '-' && o[1]) rc = complain(RC_USAGE, "show: unknown option %s (adaslice show --help)", o);
         else if (a->job) rc = complain(RC_USAGE, "show: one JOBDIR (%s, then %s)", a->job, o);
@@ -78,6 +86,8 @@ static int parse_show(int argc, char **argv, show_args *a)
     if (a->pattern == PATTERN_NONE && !a->job) return complain(RC_USAGE, "show needs a JOBDIR and --layer N, or --pattern");
     if (a->pattern != PATTERN_NONE && a->job) return complain(RC_USAGE, "show: a JOBDIR or a --pattern, not both");
     if (a->job && !a->layer) return complain(RC_USAGE, "show %s: which layer? --layer N", a->job);
+    if (!a->port != !a->expose_s) return complain(RC_USAGE, "show: --port DEV and --expose S go together");
+    if (a->pattern == PATTERN_DARK && a->port) return complain(RC_USAGE, "show --pattern dark: nothing to expose");
     return RC_OK;
 }
 
@@ -181,6 +191,40 @@ static int job_image(const show_args *a, image *m)
     return rc;
 }
 
+/* ------------------------------------------------------------ the light */
+
+/* The image on screen lit by the printer for a->expose_s: SCREEN says the
+   host shows a pattern of its own, EXPOSE lights it (the printer's timer
+   ends it); Ctrl-C puts it out (SCREEN 0). */
+static int expose(serial_link *l, const show_args *a)
+{
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_screen sm;
+    link_expose em;
+    double t0;
+    int rc, lit = 0;
+    sm.layer = LINK_SCREEN_PATTERN;
+    sm.exposure_ms = 0;
+    em.ms = (uint32_t)(a->expose_s * 1000 + 0.5);
+    if (!em.ms || em.ms > l->id.max_exposure_ms)
+        return complain(RC_USAGE, "show --expose %g: the printer on %s lights 0.001 to %.3f s at once", a->expose_s, a->port,
+                        l->id.max_exposure_ms / 1000.0);
+    if ((rc = serial_send(l, LINK_MSG_SCREEN, buf, link_put_screen(buf, &sm))) ||
+        (rc = serial_send(l, LINK_MSG_EXPOSE, buf, link_put_expose(buf, &em))) || (rc = serial_status(l)))
+        return rc;
+    if (!(l->st.flags & LINK_FLAG_UV) && l->st.error != LINK_ERR_NONE)
+        return complain(RC_FAIL, "the printer on %s would not light the screen: %s", a->port, link_error_name(l->st.error));
+    printf("lit for %.3f s\n", em.ms / 1000.0);
+    fflush(stdout);
+    for (t0 = now_ms(); !stop && now_ms() - t0 < em.ms + 5000.0;) {
+        if ((rc = serial_pump(l, 20)) || (rc = serial_status(l))) return rc;
+        if (l->st.flags & LINK_FLAG_UV) lit = 1;
+        else if (lit || now_ms() - t0 > em.ms) break;
+    }
+    if (stop) fprintf(stderr, "adaslice: interrupted: the light put out\n");
+    return RC_OK;
+}
+
 /* ------------------------------------------------------------ the command */
 
 int cmd_show(int argc, char **argv)
@@ -188,32 +232,43 @@ int cmd_show(int argc, char **argv)
     show_args a;
     screen s;
     image m;
+    serial_link l;
     struct sigaction sa;
     double t0;
     int rc;
     memset(&m, 0, sizeof m);
     memset(&s, 0, sizeof s);
-    s.fd = s.guard_fd = -1;
+    memset(&l, 0, sizeof l);
+    s.fd = s.guard_fd = l.fd = -1;
     if ((rc = parse_show(argc, argv, &a))) return rc < 0 ? RC_OK : rc;
     if ((rc = screen_open(&s, &a.screen))) return rc;
     if (a.pattern == PATTERN_DARK) { screen_close(&s); return RC_OK; }
-    if ((rc = a.job ? job_image(&a, &m) : pattern_image(&a, &s, &m)) || (rc = screen_guard(&s, -1)) ||
-        (rc = screen_show(&s, m.px, m.stride, m.w, m.h, m.bits)))
-        goto done;
-    if (a.job) printf("layer %zu of %s on %s\n", a.layer, a.job, s.name);
-    else printf("%s on %s: %u x %u px%s\n", PATTERNS[a.pattern], s.name, m.w, m.h, s.pitch_um > 0 ? "" : " (pitch unknown)");
-    fflush(stdout);
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_stop;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
+    if ((a.port && (rc = serial_connect(&l, a.port, (long)a.baud, 3))) ||
+        (rc = a.job ? job_image(&a, &m) : pattern_image(&a, &s, &m)) || (rc = screen_guard(&s, l.fd)) ||
+        (rc = screen_show(&s, m.px, m.stride, m.w, m.h, m.bits)))
+        goto done;
+    if (a.port) {
+        rc = expose(&l, &a);
+        goto done;
+    }
+    if (a.job) printf("layer %zu of %s on %s\n", a.layer, a.job, s.name);
+    else printf("%s on %s: %u x %u px%s\n", PATTERNS[a.pattern], s.name, m.w, m.h, s.pitch_um > 0 ? "" : " (pitch unknown)");
+    fflush(stdout);
     for (t0 = now_ms(); !stop && (a.seconds <= 0 || now_ms() - t0 < a.seconds * 1000);) {
         struct timespec ts = {0, 20000000L};
         nanosleep(&ts, NULL);
     }
 done:
     screen_close(&s); /* dark */
+    if (l.fd >= 0) {
+        if (screen_print_said_dark(&l) == RC_OK) (void)serial_status(&l);
+        serial_close(&l);
+    }
     free(m.px);
     return rc;
 }
