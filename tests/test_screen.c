@@ -727,30 +727,32 @@ static void fault_leaves_it_dark(void)
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 
-/* adaslice show in the background until the file lights (then SIGTERM):
-   the file's bytes while shown, and whether it was dark after. */
+/* adaslice show in the background until it says the image is shown (its
+   line on stdout comes once screen_show has returned), then SIGTERM: the
+   file's bytes while shown, and whether it was dark after. */
 static unsigned char *shown_by(char *const argv[], const char *fb, size_t *n, int *dark_after)
 {
     pid_t pid;
     double t0;
     unsigned char *b = NULL;
+    const char *said = cli_path("show.out");
     int st;
     remove(fb);
+    remove(said);
     fflush(NULL);
     if ((pid = fork()) == 0) {
-        int null = open("/dev/null", O_RDWR);
-        dup2(null, 0); dup2(null, 1);
+        int null = open("/dev/null", O_RDWR), o = open(said, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(null, 0); dup2(o, 1);
         execv(cli_tool, argv);
         _exit(127);
     }
-    for (t0 = seconds_now(); seconds_now() - t0 < 20; sleep_ms(5)) {
+    for (t0 = seconds_now(); seconds_now() - t0 < 60; sleep_ms(5)) {
         size_t m;
-        unsigned char *c = read_file(fb, &m);
-        int lit = c && m && !all_zero(fb);
-        free(c);
-        if (lit) break;
+        char *text = (char *)read_file(said, &m);
+        int shown = text && m && memchr(text, '\n', m);
+        free(text);
+        if (shown) break;
     }
-    sleep_ms(50); /* the drawing done: it lights as it draws */
     b = read_file(fb, n);
     kill(pid, SIGTERM);
     waitpid(pid, &st, 0);
