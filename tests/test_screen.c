@@ -510,6 +510,28 @@ static void wrong_screen_is_refused(void)
     r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "50", NULL);
     CHECKF(r.status == 1 && strstr(r.err, "the job's pixels are 100 um") && strstr(r.err, "are 50 um"), "%d %s", r.status, r.err);
     cli_free(&r);
+    /* the printer's pitch is 100 um too: the job's own, from its manifest */
+    {
+        char mpath[600], *m, *at;
+        size_t mn;
+        FILE *out;
+        snprintf(mpath, sizeof mpath, "%s/manifest.json", cli_path("job"));
+        m = (char *)read_file(mpath, &mn);
+        if (m) m[mn] = 0;
+        at = m ? strstr(m, "\"pitch_mm\": [0.1, 0.1]") : NULL;
+        CHECK(at != NULL);
+        if (at) {
+            memcpy(at, "\"pitch_mm\": [0.2, 0.1]", 22);
+            if ((out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+            r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "100", NULL);
+            CHECKF(r.status == 1 && strstr(r.err, "job's pixels are 200 x 100 um; the screen") && strstr(r.err, "are 100 um"),
+                   "%d %s", r.status, r.err);
+            cli_free(&r);
+            memcpy(at, "\"pitch_mm\": [0.1, 0.1]", 22);
+            if ((out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+        }
+        free(m);
+    }
     r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", "file:nowhere", NULL);
     CHECKF(r.status == 2 && strstr(r.err, "file:PATH,WxH,BPP"), "%d %s", r.status, r.err);
     cli_free(&r);

@@ -249,7 +249,8 @@ int cmd_show(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     if ((a.port && (rc = serial_connect(&l, a.port, (long)a.baud, 3))) ||
-        (rc = a.job ? job_image(&a, &m) : pattern_image(&a, &s, &m)) || (rc = screen_guard(&s, l.fd)) ||
+        (rc = a.job ? job_image(&a, &m) : pattern_image(&a, &s, &m)) || (a.job && (rc = screen_fits_job(&s, a.job))) ||
+        (rc = screen_guard(&s, l.fd)) ||
         (rc = screen_show(&s, m.px, m.stride, m.w, m.h, m.bits)))
         goto done;
     if (a.port) {

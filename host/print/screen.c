@@ -199,7 +199,6 @@ static void wait_us(uint32_t us)
 static int open_file(screen *s, const char *spec, int *packing)
 {
     char path[256];
-    const char *comma = strrchr(spec, ',');
     unsigned long w = 0, h = 0, bpp = 0;
     char pack[8] = "";
     int fields, k;
@@ -211,7 +210,6 @@ static int open_file(screen *s, const char *spec, int *packing)
     memcpy(path, spec, (size_t)(first - spec));
     path[first - spec] = 0;
     fields = sscanf(first + 1, "%lux%lu,%lu,%7s", &w, &h, &bpp, pack);
-    (void)comma;
     if (fields < 3 || !w || !h || w > 65535 || h > 65535 || (bpp != 16 && bpp != 24 && bpp != 32))
         return complain(RC_USAGE, "--screen file:%s: expected file:PATH,WxH,BPP[,gray|rgb|bgr] with BPP 16, 24 or 32", spec);
     if (fields == 4) {
@@ -374,6 +372,25 @@ int screen_fits(const screen *s, uint32_t w, uint32_t h, uint32_t pitch_nm)
     if (pitch_nm && s->pitch_um > 0 && fabs(pitch_nm / 1000.0 - s->pitch_um) > 1e-3 * s->pitch_um)
         return complain(RC_FAIL, "the job's pixels are %g um; the screen %s's are %g um (--screen-pitch)", pitch_nm / 1000.0,
                         s->name, s->pitch_um);
+    return RC_OK;
+}
+
+int screen_fits_job(const screen *s, const char *dir)
+{
+    char path[1024], text[4096], *at;
+    size_t n;
+    double x, y;
+    FILE *f;
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    if (!(f = fopen(path, "rb"))) return RC_OK;
+    n = fread(text, 1, sizeof text - 1, f); /* the printer comes first, near the top */
+    fclose(f);
+    text[n] = 0;
+    if (!(at = strstr(text, "\"pitch_mm\": [")) || sscanf(at + 13, "%lf , %lf", &x, &y) != 2 || !(x > 0) || !(y > 0))
+        return RC_OK;
+    if (s->pitch_um > 0 && (fabs(x * 1000 - s->pitch_um) > 1e-3 * s->pitch_um || fabs(y * 1000 - s->pitch_um) > 1e-3 * s->pitch_um))
+        return complain(RC_FAIL, "%s's pixels are %g x %g um; the screen %s's are %g um", dir, x * 1000, y * 1000, s->name,
+                        s->pitch_um);
     return RC_OK;
 }
 
