@@ -382,82 +382,6 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
     }
 }
 
-/* ------------------------------------------------------- the host's screen */
-
-/* What print/screen_print.c asks of the job: layer k's mask as an image. */
-typedef struct screen_source {
-    print_job *pj;
-    report_layer *rep;
-    unsigned char *image;          /* a JOBDIR's mask, decoded */
-    size_t stride;
-} screen_source;
-
-static void screen_row(void *ctx, uint32_t y, const unsigned char *row)
-{
-    screen_source *src = (screen_source *)ctx;
-    memcpy(src->image + (size_t)y * src->stride, row, src->stride);
-}
-
-static int screen_mask(void *ctx, uint32_t k, const unsigned char **image, size_t *stride)
-{
-    screen_source *src = (screen_source *)ctx;
-    print_job *pj = src->pj;
-    adaslice_rle_decoder dec;
-    int rc;
-    src->stride = job_stride(pj);
-    /* a MODEL's layer again (after a pause) is the image rendered last */
-    if (!(pj->from_model && k == pj->rendered) && (rc = job_mask(pj, k))) return rc;
-    src->rep[k - 1].crc = pj->crc;
-    src->rep[k - 1].code_bytes = 0;
-    if (pj->from_model) {
-        *image = pj->masks.image;
-        *stride = pj->masks.stride;
-        return RC_OK;
-    }
-    if (!src->image && !(src->image = (unsigned char *)malloc(src->stride * (pj->height + 1u))))
-        return complain(RC_FAIL, "out of memory for a mask");
-    /* the decoder's row after the image's */
-    if (adaslice_rle_decoder_init(&dec, pj->width, pj->height, (int)pj->bits, src->image + src->stride * pj->height,
-                                  src->stride) ||
-        adaslice_rle_decode(&dec, pj->code, pj->code_size, screen_row, src) || !adaslice_rle_finished(&dec) ||
-        ADASLICE_RLE_CRC(&dec) != pj->crc)
-        return complain(RC_FAIL, "layer %u: its mask in masks.rle does not decode to its CRC-32 %08x", k, (unsigned)pj->crc);
-    *image = src->image;
-    *stride = src->stride;
-    return RC_OK;
-}
-
-/* The print with the masks on the host's screen, already open. */
-static int print_on_screen(serial_link *l, const print_args *pa, print_job *pj, screen *scr, int in_place,
-                           report_layer *rep)
-{
-    screen_source src;
-    screen_print p;
-    int rc;
-    memset(&src, 0, sizeof src);
-    memset(&p, 0, sizeof p);
-    src.pj = pj;
-    src.rep = rep;
-    p.l = l;
-    p.scr = scr;
-    p.layers = pj->layers;
-    p.width = pj->width;
-    p.height = pj->height;
-    p.bits = pj->bits;
-    p.exposure_ms = pj->exposure_ms;
-    p.exposure_left = (uint32_t)pa->exposure_left;
-    p.in_place = in_place;
-    p.motion = pj->motion;
-    p.motion.first_layer = pa->resume_from ? (uint32_t)pa->resume_from : 1;
-    p.motion.job = pj->job;
-    p.mask = screen_mask;
-    p.ctx = &src;
-    p.interrupted = &interrupted;
-    rc = screen_print_run(&p);
-    free(src.image);
-    return rc;
-}
-
 typedef struct report {
     const print_job *pj;
     const report_layer *layers;
@@ -564,6 +488,82 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
     if (pa->exposure_left && !pa->resume_from) return complain(RC_USAGE, "--exposure-left: the light of the layer --resume-from K names");
     return RC_OK;
+}
+
+/* ------------------------------------------------------- the host's screen */
+
+/* What print/screen_print.c asks of the job: layer k's mask as an image. */
+typedef struct screen_source {
+    print_job *pj;
+    report_layer *rep;
+    unsigned char *image;          /* a JOBDIR's mask, decoded */
+    size_t stride;
+} screen_source;
+
+static void screen_row(void *ctx, uint32_t y, const unsigned char *row)
+{
+    screen_source *src = (screen_source *)ctx;
+    memcpy(src->image + (size_t)y * src->stride, row, src->stride);
+}
+
+static int screen_mask(void *ctx, uint32_t k, const unsigned char **image, size_t *stride)
+{
+    screen_source *src = (screen_source *)ctx;
+    print_job *pj = src->pj;
+    adaslice_rle_decoder dec;
+    int rc;
+    src->stride = job_stride(pj);
+    /* a MODEL's layer again (after a pause) is the image rendered last */
+    if (!(pj->from_model && k == pj->rendered) && (rc = job_mask(pj, k))) return rc;
+    src->rep[k - 1].crc = pj->crc;
+    src->rep[k - 1].code_bytes = 0;
+    if (pj->from_model) {
+        *image = pj->masks.image;
+        *stride = pj->masks.stride;
+        return RC_OK;
+    }
+    if (!src->image && !(src->image = (unsigned char *)malloc(src->stride * (pj->height + 1u))))
+        return complain(RC_FAIL, "out of memory for a mask");
+    /* the decoder's row after the image's */
+    if (adaslice_rle_decoder_init(&dec, pj->width, pj->height, (int)pj->bits, src->image + src->stride * pj->height,
+                                  src->stride) ||
+        adaslice_rle_decode(&dec, pj->code, pj->code_size, screen_row, src) || !adaslice_rle_finished(&dec) ||
+        ADASLICE_RLE_CRC(&dec) != pj->crc)
+        return complain(RC_FAIL, "layer %u: its mask in masks.rle does not decode to its CRC-32 %08x", k, (unsigned)pj->crc);
+    *image = src->image;
+    *stride = src->stride;
+    return RC_OK;
+}
+
+/* The print with the masks on the host's screen, already open. */
+static int print_on_screen(serial_link *l, const print_args *pa, print_job *pj, screen *scr, int in_place,
+                           report_layer *rep)
+{
+    screen_source src;
+    screen_print p;
+    int rc;
+    memset(&src, 0, sizeof src);
+    memset(&p, 0, sizeof p);
+    src.pj = pj;
+    src.rep = rep;
+    p.l = l;
+    p.scr = scr;
+    p.layers = pj->layers;
+    p.width = pj->width;
+    p.height = pj->height;
+    p.bits = pj->bits;
+    p.exposure_ms = pj->exposure_ms;
+    p.exposure_left = (uint32_t)pa->exposure_left;
+    p.in_place = in_place;
+    p.motion = pj->motion;
+    p.motion.first_layer = pa->resume_from ? (uint32_t)pa->resume_from : 1;
+    p.motion.job = pj->job;
+    p.mask = screen_mask;
+    p.ctx = &src;
+    p.interrupted = &interrupted;
+    rc = screen_print_run(&p);
+    free(src.image);
+    return rc;
 }
 
 /* ------------------------------------------------------------ the steps */
