@@ -10,6 +10,7 @@
    masks.rle: the host's own claims take no part. */
 #define _XOPEN_SOURCE 700
 #include "cli_run.h"
+#include "print_report.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
 #include <errno.h>
@@ -461,6 +462,40 @@ static void print_shows_each_layer(void)
     CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
     free(s.layer_of);
     free(j.crc);
+}
+
+/* A MODEL printed with --screen: the printer plans, the host renders each
+   layer as it is needed and shows it. The masks are the host's own here
+   (its --report's CRCs, not a slicer's file), so this checks the
+   rendering path's placement on the screen; the observer still reads the
+   screen itself. */
+static void model_print_shows_each_layer(void)
+{
+    child sim;
+    job_crcs j;
+    print_report rep;
+    seen s;
+    char spec[600];
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    cli_result r;
+    remove(cli_path("fbm"));
+    if (!start_sim(&sim, cli_path("simm.log"), "100", cli_path("fbm"), NULL)) return;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbm"));
+    r = cli_run("print", "examples/models/hand_closed.obj", "--scale", "15", "--port", sim.line + 4, "--exposure", "0.1",
+                "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10",
+                "--return-speed", "10", "--settle", "0.05", "--screen", spec, "--report", cli_path("repm.json"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "planned by the printer"), "print MODEL --screen: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    if (!read_print_report(cli_path("repm.json"), &rep)) { CHECK(!"no report"); return; }
+    j.w = 240; j.h = 200; j.bits = 1; j.layers = rep.layers; j.crc = rep.crcs;
+    CHECK(observe(cli_path("simm.log"), cli_path("fbm"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers, "%u UV-ons for %u layers, %u right: %s", s.exposures, j.layers,
+           s.right, s.first_wrong);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    CHECK(all_zero(cli_path("fbm")));
+    free(s.layer_of);
+    print_report_free(&rep);
 }
 
 /* An anti-aliased (8-bit) job on a gray 32 bpp screen turned a quarter and
@@ -981,6 +1016,7 @@ void test_screen(void)
     RUN(packing_by_hand);
     RUN(full_layer_unpacked_back);
     RUN(print_shows_each_layer);
+    RUN(model_print_shows_each_layer);
     RUN(aa_job_on_a_turned_gray_screen);
     RUN(wrong_screen_is_refused);
     RUN(show_layer_and_patterns);
