@@ -37,7 +37,7 @@ all: $(B)/adaslice
 # adaslice_mcu.h): one object per configuration, linked by every program.
 LIB_SRC   = host/library.c
 LINK_SRC  = link/frame.c link/messages.c
-HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c)) link/tty.c $(LINK_SRC)
+HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c host/print/*.c)) link/tty.c $(LINK_SRC)
 FW_SRC    = firmware/core.c firmware/motion.c firmware/gcode.c $(LINK_SRC)
 # The one list of test groups: tests/test_NAME.c defines test_NAME().
 TESTS     = $(sort $(wildcard tests/test_*.c))
@@ -106,7 +106,8 @@ test: $(TEST_PROGRAMS)
 	$(RUN_TESTS) --without-tools
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
-BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs $(B)/bench_avr
+BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs $(B)/bench_avr \
+                 $(B)/bench_screen
 check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-mps2-trace.elf $(B)/fw-mps2-hang.elf \
        $(B)/fw-ramps-test.elf $(B)/avr-run $(B)/avr-bench.elf $(BENCH_PROGRAMS)
 	$(RUN_TESTS)
@@ -192,6 +193,8 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
+$(B)/bench_screen: $(call objs,bench,bench/bench_screen.c host/print/screen.c host/options.c host/report.c $(LINK_SRC)) $(BENCH_LIB)
+	$(CC) $^ -o $@ -lm
 $(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c)
 	$(CC) $^ -o $@ -lm
 
@@ -199,6 +202,7 @@ bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-tra
        $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
+	$(B)/bench_screen
 	$(B)/bench_saliency $(MODELS)
 	$(B)/bench_jobs $(B)/adaslice $(MODELS)
 	$(B)/bench_wire $(MODELS)

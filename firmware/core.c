@@ -155,6 +155,7 @@ static FW_NOINLINE void send_status(fw_state *fw)
     m.exposed = fw->exposed;
     m.exposure_left_ms = exposure_left_ms(fw);
     m.job = fw->job;
+    m.screen = fw->screen;
     send(fw, LINK_MSG_STATUS_REPLY, p, link_put_status(p, &m));
 }
 
@@ -480,6 +481,9 @@ static void print_fault(fw_state *fw, uint8_t error, uint64_t now)
 static int move_layer(fw_state *fw, uint32_t extra_nm, uint32_t speed, uint64_t now)
 {
     fw->steps.budget = 0;
+    /* never under a mask on the host's screen (the print's phases see to
+       it; this is the last word) */
+    if (fw->screen) { print_fault(fw, LINK_ERR_SCREEN_LIT, now); return 0; }
     if (fw_axis_move_to(&fw->axis, steps_of_plane(fw, fw->top_plane, extra_nm), speed, now) == FW_AXIS_OK) return 1;
     print_fault(fw, LINK_ERR_MOVE_FAILED, now);
     return 0;
@@ -500,6 +504,7 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
         return;
     }
     if (!fw->axis.homed) { fail(fw, LINK_ERR_NOT_HOMED, seq); return; }
+    if (fw->screen) { fail(fw, LINK_ERR_SCREEN_LIT, seq); return; }
     if (first < 1 || first > fw->layers) { fail(fw, LINK_ERR_MESSAGE, seq); return; }
     fw->peel_nm = m->peel_nm;
     fw->peel_speed = um_s_to_steps(fw, m->peel_speed_um_s);
@@ -517,6 +522,7 @@ static void print_start(fw_state *fw, const link_print *m, uint8_t seq, uint64_t
     }
     fw->mask_ready = first - 1;
     fw->mask_layer = 0;
+    fw->host_screen = 0;
     fw->exposure_left = 0;
     fw->pause_wanted = 0;
     fw->paused_by_link = 0;
@@ -543,8 +549,8 @@ static void print_step(fw_state *fw, uint64_t now)
             break;
         case LINK_PHASE_WAIT_MASK:
             if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
-            if (fw->mask_ready < fw->layer) return;
-            fw->port.show(fw->port.ctx, (int)(fw->layer & 1u), now);
+            if (fw->host_screen ? fw->screen != fw->layer : fw->mask_ready < fw->layer) return;
+            if (!fw->host_screen) fw->port.show(fw->port.ctx, (int)(fw->layer & 1u), now);
             fw->phase = LINK_PHASE_SETTLE;
             fw->phase_end = now + FW_MS(fw, fw->settle_ms);
             break;
@@ -554,6 +560,8 @@ static void print_step(fw_state *fw, uint64_t now)
             /* the last word before the light: whatever happened since the
                move (a pause, a host's command, a bug), never expose elsewhere */
             if (!at_layer_top(fw)) { print_fault(fw, LINK_ERR_WRONG_HEIGHT, now); return; }
+            /* the host's screen went dark meanwhile (a pause): it draws the layer again */
+            if (fw->host_screen && fw->screen != fw->layer) { fw->phase = LINK_PHASE_WAIT_MASK; break; }
             fw->phase = LINK_PHASE_EXPOSE;
             {
                 uint64_t on = fw->phase_end;
@@ -574,9 +582,17 @@ static void print_step(fw_state *fw, uint64_t now)
             }
             fw->uv_on = 0; /* the port's timer put it out at phase_end */
             fw->exposed = fw->layer;
+            if (fw->host_screen) { fw->phase = LINK_PHASE_DARK; break; }
             fw->port.show(fw->port.ctx, -1, fw->phase_end);
             fw->phase = LINK_PHASE_PEEL;
             if (!move_layer(fw, fw->peel_nm, fw->peel_speed, fw->phase_end)) return;
+            break;
+        case LINK_PHASE_DARK:
+            if (fw->pause_wanted) { fw->state = LINK_STATE_PAUSED; return; }
+            /* the host puts its screen out before Z moves (SCREEN 0) */
+            if (fw->screen) return;
+            fw->phase = LINK_PHASE_PEEL;
+            if (!move_layer(fw, fw->peel_nm, fw->peel_speed, now)) return;
             break;
         case LINK_PHASE_PEEL:
             if (moving(fw)) return;
@@ -612,7 +628,8 @@ static void resume(fw_state *fw, uint8_t seq, uint64_t now)
     /* a layer not yet exposed goes back to its top first, from whichever
        phase the pause held (a peel's pause goes on to the next layer's
        move anyway) */
-    if (fw->phase != LINK_PHASE_PEEL && !at_layer_top(fw)) {
+    if (fw->phase != LINK_PHASE_PEEL && fw->phase != LINK_PHASE_DARK && !at_layer_top(fw)) {
+        if (fw->screen) { fw->state = LINK_STATE_PAUSED; fail(fw, LINK_ERR_SCREEN_LIT, seq); return; }
         fw->phase = LINK_PHASE_MOVE;
         if (!move_layer(fw, 0, fw->return_speed, now)) return;
     }
@@ -634,6 +651,38 @@ static void abort_all(fw_state *fw, uint64_t now)
     fw->phase = LINK_PHASE_MOVE;
 }
 
+/* SCREEN: what the host's screen shows. Layer 0, dark, is taken at any
+   time; a light on under a layer the host has put out is a pause (UV off,
+   the rest of the exposure kept). A layer is taken only as the one the
+   print waits for, with Z standing at its top (or paused there), and its
+   exposure as MASK's (a resumed layer's rest comes first). fw_run's next
+   pass moves the print on. */
+static void screen(fw_state *fw, const link_screen *m, uint8_t seq, uint64_t now)
+{
+    int printing = fw->state == LINK_STATE_PRINTING || fw->state == LINK_STATE_PAUSED;
+    if (!m->layer) {
+        if (fw->state == LINK_STATE_PRINTING && fw->phase == LINK_PHASE_EXPOSE) print_pause(fw, 0, now);
+        if (fw->exposing) { fw->exposing = 0; uv(fw, 0, now, now); }
+        fw->screen = 0;
+        return;
+    }
+    if (m->layer == LINK_SCREEN_PATTERN) {
+        /* a test pattern, for EXPOSE: outside a print, Z still */
+        if (printing || moving(fw) || fw->uv_on) { fail(fw, LINK_ERR_SCREEN_LAYER, seq); return; }
+        fw->screen = m->layer;
+        return;
+    }
+    if (!printing || m->layer != fw->layer || moving(fw) ||
+        (fw->phase != LINK_PHASE_WAIT_MASK && fw->phase != LINK_PHASE_SETTLE)) {
+        fail(fw, LINK_ERR_SCREEN_LAYER, seq);
+        return;
+    }
+    if (!m->exposure_ms || m->exposure_ms > FW_EXPOSURE_MAX_MS) { fail(fw, LINK_ERR_MASK_EXPOSURE, seq); return; }
+    fw->screen = m->layer;
+    fw->host_screen = 1;
+    fw->exposure_ms[m->layer & 1u] = m->exposure_ms;
+}
+
 /* ------------------------------------------------------------------ frames */
 
 /* MOVE and HOME: never while a print is under way or paused (the paused
@@ -651,7 +700,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     uint8_t seq = f[1], type = (uint8_t)(f[2] & ~LINK_ROUND_BIT), round = f[2] & LINK_ROUND_BIT;
     const uint8_t *p = f + 3;
     size_t size = n - LINK_FRAME_MIN;
-    union { link_profile profile; link_plan_get plan_get; link_plan_set plan_set; link_mask mask; link_move move;
+    union { link_profile profile; link_plan_get plan_get; link_plan_set plan_set; link_mask mask; link_screen screen; link_move move;
             link_expose expose; link_print print; link_exit exit; } m;
     fw->heard = now;
     if (!fw->binary) {
@@ -702,8 +751,10 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         /* acknowledged once decoded, in later passes */
         if (!mask_data(fw, p, size, seq)) return;
         break;
+    case LINK_MSG_SCREEN: (void)link_get_screen(&m.screen, p, size); screen(fw, &m.screen, seq, now); break;
     case LINK_MSG_HOME:
         if (!can_move(fw)) fail(fw, LINK_ERR_BUSY, seq);
+        else if (fw->screen) fail(fw, LINK_ERR_SCREEN_LIT, seq);
         else if (axis_error(fw, fw_axis_home(&fw->axis, now), seq)) fw->state = LINK_STATE_HOMING;
         break;
     case LINK_MSG_MOVE: {
@@ -711,6 +762,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         (void)link_get_move(&m.move, p, size);
         target = m.move.z_nm;
         if (!can_move(fw)) { fail(fw, LINK_ERR_BUSY, seq); break; }
+        if (fw->screen) { fail(fw, LINK_ERR_SCREEN_LIT, seq); break; }
         if (target < 0) { fail(fw, LINK_ERR_LIMIT, seq); break; }
         if (axis_error(fw, fw_axis_move_to(&fw->axis, fw_axis_steps_of_nm(&fw->axis, (uint64_t)target),
                                            um_s_to_steps(fw, m.move.speed_um_s), now), seq))
@@ -719,13 +771,14 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     }
     case LINK_MSG_EXPOSE:
         if ((fw->state != LINK_STATE_READY && fw->state != LINK_STATE_DONE && fw->state != LINK_STATE_IDLE) || moving(fw) ||
-            fw->uv_on || !fw->mask_ready) {
+            fw->uv_on || (!fw->mask_ready && fw->screen != LINK_SCREEN_PATTERN)) {
             fail(fw, LINK_ERR_BUSY, seq);
             break;
         }
         (void)link_get_expose(&m.expose, p, size);
         if (!m.expose.ms || m.expose.ms > FW_EXPOSURE_MAX_MS) { fail(fw, LINK_ERR_MASK_EXPOSURE, seq); break; }
-        fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
+        /* the host's test pattern, or the last verified mask */
+        if (fw->screen != LINK_SCREEN_PATTERN) fw->port.show(fw->port.ctx, (int)(fw->mask_ready & 1u), now);
         fw->phase_end = now + FW_MS(fw, m.expose.ms);
         uv(fw, 1, now, fw->phase_end);
         fw->exposing = 1;

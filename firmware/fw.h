@@ -220,6 +220,12 @@ typedef struct fw_state {
     uint64_t exposure_left;    /* ticks of exposure a pause interrupted */
     uint32_t exposed;          /* the last layer whose exposure ended, 0 none */
     uint32_t job;              /* the job hash PRINT came with, 0 none */
+    /* the host's screen (SCREEN): the layer it says is drawn whole and on
+       screen, 0 dark. Z moves only while it is 0; a print lights a layer
+       only while it is that layer, once host_screen says the print's masks
+       are the host's (the first SCREEN of a layer since PRINT) */
+    uint32_t screen;
+    uint8_t host_screen;
     uint8_t uv_on;
     uint8_t exposing;          /* an EXPOSE message's light, until phase_end */
     uint8_t halted;            /* fw_stack_fault: nothing lights or moves until reset */

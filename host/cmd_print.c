@@ -17,6 +17,7 @@
 #include "plan_job.h"
 #include "report.h"
 #include "serial.h"
+#include "print/screen_print.h"
 
 #include <math.h>
 #include <signal.h>
@@ -36,6 +37,7 @@ typedef struct print_args {
     int home;               /* --home: a resumed print may home Z */
     int then_exit;          /* emulators: EXIT after the print */
     double give_up_s;       /* a printer that answers nothing this long ends the print */
+    screen_options screen;  /* --screen: the host shows the masks (print/screen.h) */
 } print_args;
 
 /* ------------------------------------------------------------- the job */
@@ -470,6 +472,8 @@ static void print_usage(FILE *f)
           "masks (the display's size and pitch come from the printer)\n"
           "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
           "\n", f);
+    screen_usage(f);
+    fputc('\n', f);
     cure_usage(f);
     fputc('\n', f);
     plan_options_usage(f, FOR_PRINT);
@@ -481,6 +485,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     memset(pa, 0, sizeof *pa);
     pa->baud = 115200;
     pa->give_up_s = 3;
+    pa->screen.packing = -1;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
@@ -494,6 +499,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
         else if (!strcmp(o, "--home")) pa->home = 1;
         else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
+        else if (screen_option(argc, argv, &i, &pa->screen, &rc)) {}
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
         else rest[(*rest_argc)++] = argv[i];
     }
@@ -501,6 +507,82 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
     if (pa->exposure_left && !pa->resume_from) return complain(RC_USAGE, "--exposure-left: the light of the layer --resume-from K names");
     return RC_OK;
+}
+
+/* ------------------------------------------------------- the host's screen */
+
+/* What print/screen_print.c asks of the job: layer k's mask as an image. */
+typedef struct screen_source {
+    print_job *pj;
+    report_layer *rep;
+    unsigned char *image;          /* a JOBDIR's mask, decoded */
+    size_t stride;
+} screen_source;
+
+static void screen_row(void *ctx, uint32_t y, const unsigned char *row)
+{
+    screen_source *src = (screen_source *)ctx;
+    memcpy(src->image + (size_t)y * src->stride, row, src->stride);
+}
+
+static int screen_mask(void *ctx, uint32_t k, const unsigned char **image, size_t *stride)
+{
+    screen_source *src = (screen_source *)ctx;
+    print_job *pj = src->pj;
+    adaslice_rle_decoder dec;
+    int rc;
+    src->stride = job_stride(pj);
+    /* a MODEL's layer again (after a pause) is the image rendered last */
+    if (!(pj->from_model && k == pj->rendered) && (rc = job_mask(pj, k))) return rc;
+    src->rep[k - 1].crc = pj->crc;
+    src->rep[k - 1].code_bytes = 0;
+    if (pj->from_model) {
+        *image = pj->masks.image;
+        *stride = pj->masks.stride;
+        return RC_OK;
+    }
+    if (!src->image && !(src->image = (unsigned char *)malloc(src->stride * (pj->height + 1u))))
+        return complain(RC_FAIL, "out of memory for a mask");
+    /* the decoder's row after the image's */
+    if (adaslice_rle_decoder_init(&dec, pj->width, pj->height, (int)pj->bits, src->image + src->stride * pj->height,
+                                  src->stride) ||
+        adaslice_rle_decode(&dec, pj->code, pj->code_size, screen_row, src) || !adaslice_rle_finished(&dec) ||
+        ADASLICE_RLE_CRC(&dec) != pj->crc)
+        return complain(RC_FAIL, "layer %u: its mask in masks.rle does not decode to its CRC-32 %08x", k, (unsigned)pj->crc);
+    *image = src->image;
+    *stride = src->stride;
+    return RC_OK;
+}
+
+/* The print with the masks on the host's screen, already open. */
+static int print_on_screen(serial_link *l, const print_args *pa, print_job *pj, screen *scr, int in_place,
+                           report_layer *rep)
+{
+    screen_source src;
+    screen_print p;
+    int rc;
+    memset(&src, 0, sizeof src);
+    memset(&p, 0, sizeof p);
+    src.pj = pj;
+    src.rep = rep;
+    p.l = l;
+    p.scr = scr;
+    p.layers = pj->layers;
+    p.width = pj->width;
+    p.height = pj->height;
+    p.bits = pj->bits;
+    p.exposure_ms = pj->exposure_ms;
+    p.exposure_left = (uint32_t)pa->exposure_left;
+    p.in_place = in_place;
+    p.motion = pj->motion;
+    p.motion.first_layer = pa->resume_from ? (uint32_t)pa->resume_from : 1;
+    p.motion.job = pj->job;
+    p.mask = screen_mask;
+    p.ctx = &src;
+    p.interrupted = &interrupted;
+    rc = screen_print_run(&p);
+    free(src.image);
+    return rc;
 }
 
 /* ------------------------------------------------------------ the steps */
@@ -718,6 +800,7 @@ int cmd_print(int argc, char **argv)
     plan_job j;
     print_job pj;
     serial_link l;
+    screen scr;
     report_layer *rep = NULL;
     int rc, planned_by_printer = 0, in_place = 0;
     unsigned long mask_bytes = 0;
@@ -729,7 +812,8 @@ int cmd_print(int argc, char **argv)
     memset(&pj, 0, sizeof pj);
     memset(&a, 0, sizeof a);
     memset(&l, 0, sizeof l);
-    l.fd = -1;
+    memset(&scr, 0, sizeof scr);
+    l.fd = scr.fd = scr.guard_fd = -1;
     if ((rc = parse_target(argc, argv, &pa, &s, &a, &jobdir))) return rc < 0 ? RC_OK : rc;
     pj.from_model = !jobdir;
     if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
@@ -763,6 +847,10 @@ int cmd_print(int argc, char **argv)
                       pj.exposure_ms[pa.resume_from - 1]);
         goto done;
     }
+    if (pa.screen.device && ((rc = screen_open(&scr, &pa.screen)) || (rc = screen_fits(&scr, pj.width, pj.height, l.id.pitch_nm)) ||
+                             (jobdir && (rc = screen_fits_job(&scr, jobdir))) ||
+                             (rc = screen_guard(&scr, l.fd)) || (rc = screen_print_said_dark(&l))))
+        goto done;
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
     pj.job = job_hash(&pj, jobdir ? NULL : &j.mesh, &s);
     memset(&sa, 0, sizeof sa);
@@ -771,7 +859,7 @@ int cmd_print(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     started = now_ms();
     if ((rc = prepare(&l, &pa, &j, &pj, planned_by_printer, base_name(jobdir ? jobdir : a.model), &in_place))) goto done;
-    rc = print_loop(&l, &pa, &pj, in_place, rep, &mask_bytes);
+    rc = pa.screen.device ? print_on_screen(&l, &pa, &pj, &scr, in_place, rep) : print_loop(&l, &pa, &pj, in_place, rep, &mask_bytes);
     if (!rc && pa.then_exit) rc = end_emulator(&l);
     if (!rc) {
         uint32_t printed = pj.layers - (pa.resume_from ? (uint32_t)pa.resume_from - 1 : 0);
@@ -792,6 +880,7 @@ int cmd_print(int argc, char **argv)
         if ((wrc = write_atomic(pa.report, write_report, &r))) rc = wrc;
     }
 done:
+    screen_close(&scr);
     serial_close(&l);
     print_job_free(&pj);
     free(rep);

@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LINK_PROTOCOL_VERSION 4
+#define LINK_PROTOCOL_VERSION 5
 
 /* ------------------------------------------------------------- the fields */
 
@@ -28,6 +28,12 @@
 #define LINK_FIELDS_PLAN_GET(F) F(u32, first)
 #define LINK_FIELDS_PLAN_SET(F) F(u32, layers) F(u32, bin_nm)
 #define LINK_FIELDS_MASK(F) F(u32, layer) F(u32, code_bytes) F(u32, crc32) F(u32, exposure_ms)
+/* the host's own screen (a DIY printer's LCD on a Linux board): `layer` is
+   drawn whole and on screen, lit for exposure_ms; layer 0: the screen is dark */
+#define LINK_FIELDS_SCREEN(F) F(u32, layer) F(u32, exposure_ms)
+/* SCREEN's layer for a test pattern of the host's (adaslice show), outside
+   a print: EXPOSE may light it */
+#define LINK_SCREEN_PATTERN 0xffffffffu
 #define LINK_FIELDS_MOVE(F) F(i32, z_nm) F(u32, speed_um_s)
 #define LINK_FIELDS_EXPOSE(F) F(u32, ms)
 #define LINK_FIELDS_PRINT(F)                                                                                        \
@@ -43,7 +49,8 @@
 #define LINK_FIELDS_STATUS(F)                                                                                       \
     F(u8, state) F(u8, phase) F(u8, error) F(u8, error_seq) F(u8, flags) F(u32, layer) F(u32, layers)               \
     F(u32, mask_ready) F(u32, mask_layer) F(u32, mask_got) F(u16, masks_refused) F(i32, z_nm) F(u32, bins_in)       \
-    F(u32, bad_frames) F(u8, window) F(u32, boot_id) F(u32, exposed) F(u32, exposure_left_ms) F(u32, job)
+    F(u32, bad_frames) F(u8, window) F(u32, boot_id) F(u32, exposed) F(u32, exposure_left_ms) F(u32, job)         \
+    F(u32, screen)
 #define LINK_FIELDS_PLAN(F) F(u32, first) F(u32, layers) F(u32, bin_nm)
 /* no fixed fields */
 #define LINK_FIELDS_NONE(F)
@@ -62,6 +69,7 @@
     M(PLAN_DATA, plan_data, 0x14, 0, LINK_FIELDS_NONE, 1)                                                           \
     M(MASK, mask, 0x20, 0, LINK_FIELDS_MASK, 0)                                                                     \
     M(MASK_DATA, mask_data, 0x21, 0, LINK_FIELDS_NONE, 1)                                                           \
+    M(SCREEN, screen, 0x22, 0, LINK_FIELDS_SCREEN, 0)                                                               \
     M(HOME, home, 0x30, 0, LINK_FIELDS_NONE, 0)                                                                     \
     M(MOVE, move, 0x31, 0, LINK_FIELDS_MOVE, 0)                                                                     \
     M(EXPOSE, expose, 0x32, 0, LINK_FIELDS_EXPOSE, 0)                                                               \
@@ -93,7 +101,7 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(PRINTING, "printing") S(PAUSED, "paused") S(DONE, "done")
 #define LINK_PHASE_LIST(S)                                                                                          \
     S(MOVE, "moving to the layer") S(WAIT_MASK, "waiting for its mask") S(SETTLE, "settling")                       \
-    S(EXPOSE, "exposing") S(PEEL, "peeling")
+    S(EXPOSE, "exposing") S(PEEL, "peeling") S(DARK, "waiting for the host's screen to go dark")
 /* STATUS error: the last command refused, with the sequence number of its frame */
 #define LINK_ERROR_LIST(S)                                                                                          \
     S(NONE, "none")                                                                                                 \
@@ -115,7 +123,9 @@ enum { LINK_MESSAGE_LIST(LINK__TYPE) LINK_MSG_END_ };
     S(ENDSTOP, "the Z endstop closed during a move")    /* a crash or lost steps: stopped dead, Z unhomed, UV off */  \
     S(WRONG_HEIGHT, "Z was not at the layer's height")  /* the light stayed off: print stopped */                     \
     S(MOVE_FAILED, "the print's move was refused")      /* the light stayed off: print stopped */                     \
-    S(STACK, "the stack overran: halted until reset")    /* as STEP_LATE, and nothing lights or moves again */
+    S(STACK, "the stack overran: halted until reset")    /* as STEP_LATE, and nothing lights or moves again */ \
+    S(SCREEN_LIT, "the host's screen shows a mask")     /* Z moves only once the host says it is dark */    \
+    S(SCREEN_LAYER, "not the layer the print waits for") /* SCREEN of another layer, or while Z moves */
 
 #define LINK__STATE(NAME, text) LINK_STATE_##NAME,
 #define LINK__PHASE(NAME, text) LINK_PHASE_##NAME,
@@ -164,7 +174,7 @@ LINK_MESSAGE_LIST(LINK__DECLARE)
 #define LINK_CODEC_LIST(C)                                                                                          \
     C(HELLO, hello, LINK_FIELDS_HELLO, 0) C(PROFILE, profile, LINK_FIELDS_PROFILE, 0)                               \
     C(PLAN_GET, plan_get, LINK_FIELDS_PLAN_GET, 0) C(PLAN_SET, plan_set, LINK_FIELDS_PLAN_SET, 0)                   \
-    C(MASK, mask, LINK_FIELDS_MASK, 0) C(MOVE, move, LINK_FIELDS_MOVE, 0) C(EXPOSE, expose, LINK_FIELDS_EXPOSE, 0)  \
+    C(MASK, mask, LINK_FIELDS_MASK, 0) C(SCREEN, screen, LINK_FIELDS_SCREEN, 0) C(MOVE, move, LINK_FIELDS_MOVE, 0) C(EXPOSE, expose, LINK_FIELDS_EXPOSE, 0)  \
     C(PRINT, print, LINK_FIELDS_PRINT, 0) C(EXIT, exit, LINK_FIELDS_EXIT, 0) C(ACK, ack, LINK_FIELDS_ACK, 0)        \
     C(IDENTIFY, identify, LINK_FIELDS_IDENTIFY, 0) C(STATUS_REPLY, status, LINK_FIELDS_STATUS, 0)                   \
     C(PLAN, plan, LINK_FIELDS_PLAN, 1)

@@ -21,6 +21,11 @@
        <cycle> pass <cycles>         a loop pass of at least --log-passes cycles (with
                                      --profile-passes: ": function cycles ..." after it)
        <cycle> canary                the stack's canary (stack.ld's __stack_canary) changed
+       <cycle> screen <n> 0 <crc32> <lit>  --watch-screen: at the nth UV-on, the host's
+                                     screen file (its CRC-32 and nonzero bytes; a copy in
+                                     FILE.uv<n>); the layer is the firmware's, unseen here: 0
+       <cycle> screen lit            --watch-screen: a STEP edge while the file held a
+                                     nonzero byte (every edge is checked)
        # end cycles=C worst_pass=P worst_moving_pass=M worst_work=W worst_moving_work=V passes=N stack_peak=S
              stack_reserve=Q canary=K resets=R late=L
 
@@ -101,7 +106,9 @@ static const char USAGE[] =
     "  --obstacle-at MM   once SIGUSR1 arrives, the endstop also reads pressed\n"
     "                     while the carriage is at or below MM (a crash)  [none]\n"
     "  --overrun-at-uv N  make the stack overrun its room down to the canary when UV\n"
-    "                     goes on the Nth time (a RAMPS_TEST_OVERRUN image) [never]\n";
+    "                     goes on the Nth time (a RAMPS_TEST_OVERRUN image) [never]\n"
+    "  --watch-screen F   the host's screen file (adaslice print --screen file:F,...), read\n"
+    "                     at every UV-on and STEP edge, as fw-sim's        [none]\n";
 
 static volatile sig_atomic_t stop_signal, obstacle_signal;
 static void on_signal(int sig) { stop_signal = sig; }
@@ -133,6 +140,8 @@ typedef struct run {
     int in_pass;
     uint64_t slept;              /* cycles the core spent asleep */
     unsigned long rx_pushed, rx_taken; /* bytes into simavr's UART, RX interrupts taken */
+    const char *watch;           /* --watch-screen */
+    unsigned long lit_steps;
 } run;
 
 static run R;
@@ -271,6 +280,57 @@ static void drive_endstop(void)
     }
 }
 
+/* --watch-screen: the file's bytes now (malloc'd), NULL if unreadable. */
+static unsigned char *screen_bytes(size_t *size)
+{
+    FILE *f = fopen(R.watch, "rb");
+    unsigned char *b = NULL;
+    long n;
+    *size = 0;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (b = (unsigned char *)malloc((size_t)n)) != NULL && fread(b, 1, (size_t)n, f) == (size_t)n)
+        *size = (size_t)n;
+    fclose(f);
+    return b;
+}
+
+static void watch_step(void)
+{
+    size_t n, k;
+    unsigned char *b;
+    if (!R.watch) return;
+    b = screen_bytes(&n);
+    for (k = 0; k < n && !b[k]; k++) {}
+    if (k < n && R.lit_steps++ < 1000) log_event("screen lit");
+    free(b);
+}
+
+static void watch_uv_on(void)
+{
+    size_t n, k, lit = 0;
+    unsigned char *b;
+    uint32_t crc = 0xffffffffu;
+    char copy[512];
+    FILE *f;
+    if (!R.watch || !R.log) return;
+    b = screen_bytes(&n);
+    for (k = 0; k < n; k++) {
+        int bit;
+        lit += b[k] != 0;
+        crc ^= b[k];
+        for (bit = 0; bit < 8; bit++) crc = crc >> 1 ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    fprintf(R.log, "%llu screen %lu 0 %08lx %zu\n", (unsigned long long)R.avr->cycle, R.uv_ons,
+            (unsigned long)(crc ^ 0xffffffffu), lit);
+    snprintf(copy, sizeof copy, "%s.uv%lu", R.watch, R.uv_ons);
+    if (b && (f = fopen(copy, "wb")) != NULL) {
+        (void)fwrite(b, 1, n, f);
+        fclose(f);
+    }
+    free(b);
+}
+
 static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
 {
     int v = value != 0;
@@ -280,6 +340,7 @@ static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
     R.step = v;
     if (v) {
         R.position += R.dir ? 1 : -1;
+        watch_step();
         log_event(R.dir ? "step +1" : "step -1");
         drive_endstop();
     } else {
@@ -316,6 +377,7 @@ static void on_uv(struct avr_irq_t *irq, uint32_t value, void *param)
     R.uv = v;
     log_event(v ? "uv 1" : "uv 0");
     if (v && ++R.uv_ons == R.poke_at_uv) R.avr->data[GPIOR2_ADDR] = R.poke; /* the RAMPS_TEST_ hooks */
+    if (v) watch_uv_on();
 }
 
 /* A loop pass from R.pass_begin to `end`: the worst, with and without its
@@ -527,6 +589,7 @@ int main(int argc, char **argv)
         else if (!strcmp(o, "--overrun-at-uv")) { R.poke_at_uv = strtoul(argv[++i], NULL, 10); R.poke = 0x5A; }
         else if (!strcmp(o, "--log-passes")) R.log_passes = strtoull(argv[++i], NULL, 10);
         else if (!strcmp(o, "--obstacle-at")) R.obstacle = (int32_t)(atof(argv[++i]) * BOARD_STEPS_PER_MM + 0.5);
+        else if (!strcmp(o, "--watch-screen")) R.watch = argv[++i];
         else if (!strcmp(o, "--profile-passes")) P.threshold = strtoull(argv[++i], NULL, 10);
         else { fprintf(stderr, "avr-run: unknown option %s\n%s", o, USAGE); return 2; }
     }

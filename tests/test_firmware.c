@@ -698,6 +698,98 @@ static void a_pause_never_exposes_elsewhere(void)
     fake_free(&p);
 }
 
+static void send_screen(fake_printer *p, uint32_t layer, uint32_t exposure_ms)
+{
+    uint8_t b[LINK_SIZE_SCREEN];
+    link_screen m;
+    m.layer = layer;
+    m.exposure_ms = exposure_ms;
+    fake_send(p, LINK_MSG_SCREEN, b, link_put_screen(b, &m));
+}
+
+/* Runs until the print waits for the host's screen (WAIT_MASK, Z still) or
+   10 s pass. */
+static void run_to_wait(fake_printer *p)
+{
+    uint64_t end = p->now + 10ull * FAKE_TICK_HZ;
+    while (p->now < end && fake_state(p) == LINK_STATE_PRINTING &&
+           (p->status.phase != LINK_PHASE_WAIT_MASK || (p->status.flags & LINK_FLAG_MOVING)))
+        fake_run(p, p->now + FAKE_TICK_HZ / 1000);
+}
+
+/* The host's screen (SCREEN): the light comes on only under the layer the
+   host says it shows, for the exposure it gives; Z waits in DARK after the
+   exposure until the host says the screen is dark; SCREEN 0 mid-exposure
+   is a pause that keeps the rest, which the layer gets once shown again;
+   another layer, a bad exposure, or SCREEN outside a print is refused; and
+   a screen left lit (an ABORT) keeps Z still until SCREEN 0. */
+static void host_screen_rules(void)
+{
+    static fake_printer p;
+    uint8_t lengths[2] = {40, 40}, mv[LINK_SIZE_MOVE];
+    link_move move = {20000000, 0};
+    size_t lit_steps;
+    int32_t at;
+    fake_init(&p, 8, 8, 1);
+    p.keep_events = 1;
+    p.heartbeat = FAKE_TICK_HZ / 5; /* the host's polls: the link stays alive */
+    send_plan(&p, lengths, 2, 2000);
+    home(&p);
+    send_screen(&p, 1, 500); /* not printing */
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_SCREEN_LAYER && !p.status.screen);
+    start_print(&p, 1);
+    run_to_wait(&p);
+    CHECK(p.status.phase == LINK_PHASE_WAIT_MASK && p.true_position == 32);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(lit_ticks(&p, &lit_steps) == 0 && fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_WAIT_MASK);
+    send_screen(&p, 2, 500);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_SCREEN_LAYER && !p.status.screen);
+    send_screen(&p, 1, 0);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.error == LINK_ERR_MASK_EXPOSURE && !p.status.screen);
+    send_screen(&p, 1, 500);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.screen == 1);
+    /* settle (200 ms), 500 ms of light, then Z waits for the dark */
+    fake_run(&p, p.now + 3ull * FAKE_TICK_HZ);
+    CHECKF(fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_DARK && p.true_position == 32 &&
+           p.status.exposed == 1, "phase %d at %d steps", p.status.phase, (int)p.true_position);
+    CHECK(lit_ticks(&p, &lit_steps) == FAKE_TICK_HZ / 2 && !lit_steps);
+    send_screen(&p, 0, 0);
+    run_to_wait(&p);
+    CHECK(p.status.layer == 2 && p.status.phase == LINK_PHASE_WAIT_MASK && p.true_position == 64 && !p.status.screen);
+    /* SCREEN 0 while layer 2 exposes: a pause, the rest kept */
+    send_screen(&p, 2, 500);
+    while (fake_state(&p) == LINK_STATE_PRINTING && p.status.phase != LINK_PHASE_EXPOSE) fake_run(&p, p.now + FAKE_TICK_HZ / 1000);
+    fake_run(&p, p.now + FAKE_TICK_HZ / 5);
+    send_screen(&p, 0, 0);
+    CHECKF(fake_state(&p) == LINK_STATE_PAUSED && !(p.status.flags & LINK_FLAG_UV) && p.status.exposure_left_ms == 300,
+           "state %d, %u ms left", p.status.state, p.status.exposure_left_ms);
+    fake_send(&p, LINK_MSG_RESUME, NULL, 0);
+    fake_run(&p, p.now + 2ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_WAIT_MASK); /* shown again first */
+    CHECK(lit_ticks(&p, &lit_steps) == FAKE_TICK_HZ / 2 + FAKE_TICK_HZ / 5);
+    send_screen(&p, 2, 500);
+    fake_run(&p, p.now + 2ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_PRINTING && p.status.phase == LINK_PHASE_DARK && p.status.exposed == 2);
+    CHECKF(lit_ticks(&p, &lit_steps) == FAKE_TICK_HZ && !lit_steps, "%llu ticks of light",
+           (unsigned long long)lit_ticks(&p, &lit_steps));
+    /* an ABORT with the screen lit: nothing moves until the host says it is dark */
+    fake_send(&p, LINK_MSG_ABORT, NULL, 0);
+    at = p.true_position;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_SCREEN_LIT && p.status.screen == 2);
+    fake_send(&p, LINK_MSG_HOME, NULL, 0);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_SCREEN_LIT);
+    start_print(&p, 1);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.status.error == LINK_ERR_SCREEN_LIT);
+    fake_run(&p, p.now + FAKE_TICK_HZ);
+    CHECK(p.true_position == at);
+    send_screen(&p, 0, 0);
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + 20ull * FAKE_TICK_HZ);
+    CHECK(fake_state(&p) == LINK_STATE_READY && p.true_position == 8000);
+    fake_free(&p);
+}
+
 /* The Z-min switch closing during a move, where the carriage cannot be at
    it (lost steps, a crash into the vat): stopped dead with the light off,
    Z unhomed, error ENDSTOP; a move down to the switch's own point and the
@@ -824,5 +916,6 @@ void test_firmware(void)
     RUN(pause_and_link_loss);
     RUN(a_pause_never_exposes_elsewhere);
     RUN(endstop_during_a_move);
+    RUN(host_screen_rules);
     RUN(gcode_uv_safety);
 }

@@ -49,8 +49,11 @@
 #define BOARD_ACCEL_STEPS_S2    ((uint32_t)BOARD_ACCEL_MM_S2 * BOARD_STEPS_PER_MM)
 #define BOARD_LINK_TIMEOUT_MS 1000u
 
-/* The display is driven by another computer (NanoDLP on a Raspberry Pi):
-   masks sent here are decoded and CRC-checked by the core and counted. */
+/* The display is driven by another computer: adaslice print --screen on a
+   Linux board (SCREEN messages: the light only under the layer the host
+   shows, Z only under a dark screen; link/PROTOCOL.md), or NanoDLP in
+   G-code mode. Masks sent here are decoded and CRC-checked by the core and
+   counted. The display's size is the panel's, as the host checks its jobs. */
 #ifndef BOARD_DISPLAY_W
 #define BOARD_DISPLAY_W 2560u
 #endif

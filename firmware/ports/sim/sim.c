@@ -25,6 +25,18 @@
        <tick> reset watchdog|signal|pin  the MCU restarts: the watchdog was not
                                          refreshed, SIGUSR1 (a reset button), or
                                          --reset-in-exposure
+       <tick> screen <n> <layer> <crc32> <lit>
+                                         --watch-screen: at the nth UV-on, the
+                                         host's screen file then (its CRC-32
+                                         and nonzero bytes; a copy in
+                                         FILE.uv<n>) and the printing layer
+       <tick> screen lit                 --watch-screen: a step pulse while the
+                                         file held a nonzero byte (every pulse
+                                         is checked)
+
+   --watch-screen FILE is the observer of a host that shows the layers on
+   its own screen (adaslice print --screen file:FILE,...): it reads the file
+   itself at the pins' edges, whatever the host says.
 
    Time is virtual: 10 MHz ticks, running --speed times faster than the wall
    clock, so tests can print with real exposure times in a fraction of the
@@ -60,6 +72,8 @@
 #include <time.h>
 #include <unistd.h>
 #include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 
 #define SIM_TICK_HZ 10000000u
 
@@ -91,10 +105,11 @@ static const char USAGE[] =
     "                        the first step after the Nth exposure cannot be armed in\n"
     "                        time: a STEP_LATE fault (tests)                  [never]\n"
     "  --boot-id N           the first boot id (then one more each restart)   [random]\n"
+    "  --watch-screen FILE   the host's screen file, read at every UV-on and step (tests) [none]\n"
     "  --help                this text\n";
 
 typedef struct sim_options {
-    const char *log_path;
+    const char *log_path, *watch_screen;
     double speed;
     unsigned long width, height, bits;
     double pitch_um, z_start, steps_per_mm, max_speed, accel, home_speed, z_max, home_travel;
@@ -127,6 +142,11 @@ typedef struct sim {
     int exit_requested, exit_code;
     int faults;                  /* the core misused the hardware */
     int logged_state, logged_flags;
+    const char *watch_path;      /* --watch-screen */
+    int watch_fd;
+    unsigned char *watch_map;
+    size_t watch_size;
+    unsigned long lit_steps;     /* step pulses under a lit screen file */
 } sim;
 
 static volatile sig_atomic_t stop_signal, reset_signal;
@@ -186,6 +206,67 @@ static void log_line(sim *s, uint64_t when, const char *event)
     if (s->log) fprintf(s->log, "%llu %s\n", (unsigned long long)when, event);
 }
 
+static void fault(sim *s, const char *what);
+
+/* --watch-screen: the file mapped as it is now (remapped when its size
+   changes: the host sizes it when it opens it); NULL while it is empty or
+   missing. */
+static const unsigned char *screen_view(sim *s, size_t *size)
+{
+    struct stat st;
+    if (s->watch_fd < 0) s->watch_fd = open(s->watch_path, O_RDONLY);
+    if (s->watch_fd < 0 || fstat(s->watch_fd, &st) != 0) { *size = 0; return NULL; }
+    if ((size_t)st.st_size != s->watch_size) {
+        if (s->watch_map) munmap(s->watch_map, s->watch_size);
+        s->watch_map = NULL;
+        s->watch_size = (size_t)st.st_size;
+        if (s->watch_size) {
+            void *m = mmap(NULL, s->watch_size, PROT_READ, MAP_SHARED, s->watch_fd, 0);
+            s->watch_map = m == MAP_FAILED ? NULL : (unsigned char *)m;
+        }
+    }
+    *size = s->watch_map ? s->watch_size : 0;
+    return s->watch_map;
+}
+
+static size_t nonzero_bytes(const unsigned char *b, size_t n)
+{
+    size_t k, lit = 0;
+    for (k = 0; k < n; k++) lit += b[k] != 0;
+    return lit;
+}
+
+/* At a UV-on: what the screen file holds, logged, and kept as FILE.uv<n>. */
+static void watch_uv_on(sim *s)
+{
+    size_t n;
+    const unsigned char *b;
+    char copy[512];
+    FILE *f;
+    if (!s->watch_path || !s->log) return;
+    b = screen_view(s, &n);
+    fprintf(s->log, "%llu screen %lu %lu %08lx %zu\n", (unsigned long long)s->now, s->exposures,
+            (unsigned long)s->fw->layer, (unsigned long)adaslice_crc32(0, b, n), b ? nonzero_bytes(b, n) : 0);
+    snprintf(copy, sizeof copy, "%s.uv%lu", s->watch_path, s->exposures);
+    if (b && (f = fopen(copy, "wb")) != NULL) {
+        if (fwrite(b, 1, n, f) != n) fault(s, "could not copy the screen file");
+        fclose(f);
+    }
+}
+
+/* At a step pulse: the screen file must be dark. */
+static void watch_step(sim *s)
+{
+    size_t n, k;
+    const unsigned char *b;
+    if (!s->watch_path) return;
+    static const unsigned char zero[4096];
+    b = screen_view(s, &n);
+    for (k = 0; k < n; k += sizeof zero)
+        if (memcmp(b + k, zero, n - k < sizeof zero ? n - k : sizeof zero)) break;
+    if (k < n && s->lit_steps++ < 1000) log_line(s, s->now, "screen lit");
+}
+
 /* Blocks while the host is not reading (a UART waits the same way), but
    gives up once a signal asks the sim to stop: the master is non-blocking
    so that a stop can never hang in write(). */
@@ -231,6 +312,7 @@ static void hw_step_pulse(void *ctx, int dir)
     sim *s = (sim *)ctx;
     const fw_steps *q = &s->fw->steps;
     s->true_position += dir;
+    watch_step(s);
     if (s->log)
         fprintf(s->log, "%llu step %+d %llu\n", (unsigned long long)s->now, dir,
                 (unsigned long long)q->tick[q->tail % FW_STEP_QUEUE]);
@@ -257,6 +339,7 @@ static void hw_uv(void *ctx, int on, uint64_t when, uint64_t until)
        came after its dwell) puts it out now, and the log must show it on
        until then */
     log_line(s, when > s->now ? when : s->now, on ? "uv 1" : "uv 0");
+    if (on) watch_uv_on(s);
 }
 
 static void hw_watchdog(void *ctx)
@@ -435,6 +518,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
 {
     int i;
     o->log_path = NULL;
+    o->watch_screen = NULL;
     o->speed = 1;
     o->width = 2560;
     o->height = 1440;
@@ -499,6 +583,7 @@ static int parse_options(int argc, char **argv, sim_options *o)
             ok = parse_whole(opt, v, 0, LINK_STATE_COUNT - 1, &st);
             o->stop_at_state = (long)st;
         }
+        else if (!strcmp(opt, "--watch-screen")) { o->watch_screen = v; ok = 1; }
         else if (!strcmp(opt, "--boot-id")) ok = parse_whole(opt, v, 1, 0xFFFFFFFFul, &o->boot_id);
         else {
             fprintf(stderr, "fw-sim: unknown option %s (fw-sim --help lists the options)\n", opt);
@@ -682,6 +767,8 @@ int main(int argc, char **argv)
     s.late_after = opt.late_after_exposure;
     s.reset_in = opt.reset_in_exposure;
     s.stop_at_state = opt.stop_at_state;
+    s.watch_path = opt.watch_screen;
+    s.watch_fd = -1;
     clock_speed = opt.speed;
     clock_gettime(CLOCK_MONOTONIC, &clock_start);
     restart(&s, &fw, &port, workspace, ws_bytes, NULL);

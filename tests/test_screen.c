@@ -1,0 +1,1017 @@
+/* The host's screen (host/print/screen.h) and adaslice print --screen on the
+   simulator. The screen is a file laid out as a framebuffer
+   (--screen file:PATH,WxH,BPP,packing: the drawing code of /dev/fb0 over
+   an mmap of the file); the observer is fw-sim --watch-screen, which reads
+   the file itself at the printer's pin edges: at every UV-on it logs the
+   layer and keeps a copy of the file, at every step pulse it checks that
+   the file is all zero. The copies are unpacked here by a reference of our
+   own (the packing as the issue states it, pixel by pixel, the turn and
+   mirror applied forwards), and their CRC-32 compared with the job's
+   masks.rle: the host's own claims take no part. */
+#define _XOPEN_SOURCE 700
+#include "cli_run.h"
+#include "print_report.h"
+#include "../adaslice.h"
+#include "../host/print/screen.h"
+#include <errno.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <time.h>
+
+#define SIM_BIN "build/fw-sim"
+#define JOB_ARGS "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "--exposure", "0.1", "--penetration", "0.1", \
+                 "--bottom-layers", "2", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05"
+
+/* ------------------------------------------------------ the reference */
+
+/* A framebuffer pixel's red, green and blue, 0..255: 24 and 32 bpp hold
+   blue, green, red (, unused) bytes; 16 bpp is RGB 5:6:5, little-endian. */
+static void fb_rgb(const unsigned char *fb, unsigned fbw, unsigned bpp, unsigned x, unsigned y, unsigned rgb[3])
+{
+    const unsigned char *p = fb + ((size_t)y * fbw + x) * (bpp / 8);
+    if (bpp == 16) {
+        unsigned v = p[0] | (unsigned)p[1] << 8;
+        rgb[0] = (v >> 11) * 255 / 31;
+        rgb[1] = ((v >> 5) & 63) * 255 / 63;
+        rgb[2] = (v & 31) * 255 / 31;
+    } else {
+        rgb[0] = p[2];
+        rgb[1] = p[1];
+        rgb[2] = p[0];
+    }
+}
+
+typedef struct fb_layout { unsigned w, h, bpp, packing, rotate, mirror; } fb_layout;
+
+/* The panel's mono pixel (px, py): gray, one a screen pixel (R = G = B,
+   else 999); rgb / bgr, three a screen pixel from its red / blue subpixel. */
+static unsigned panel_value(const unsigned char *fb, const fb_layout *f, unsigned px, unsigned py)
+{
+    unsigned rgb[3];
+    if (f->packing == SCREEN_GRAY) {
+        fb_rgb(fb, f->w, f->bpp, px, py, rgb);
+        return rgb[0] == rgb[1] && rgb[1] == rgb[2] ? rgb[0] : 999;
+    }
+    fb_rgb(fb, f->w, f->bpp, px / 3, py, rgb);
+    return f->packing == SCREEN_RGB ? rgb[px % 3] : rgb[2 - px % 3];
+}
+
+/* Where the mask's pixel (x, y) of w x h lands: mirrored, then turned
+   clockwise. */
+static void to_panel(const fb_layout *f, unsigned w, unsigned h, unsigned x, unsigned y, unsigned *px, unsigned *py)
+{
+    if (f->mirror == SCREEN_MIRROR_X) x = w - 1 - x;
+    if (f->mirror == SCREEN_MIRROR_Y) y = h - 1 - y;
+    switch (f->rotate) {
+    case 1: *px = h - 1 - y; *py = x; break;
+    case 2: *px = w - 1 - x; *py = h - 1 - y; break;
+    case 3: *px = y; *py = w - 1 - x; break;
+    default: *px = x; *py = y; break;
+    }
+}
+
+/* The mask a framebuffer shows, rows as the job's (1-bit MSB first, or
+   8-bit), into mask; the count of pixels that are not a mask's value (a
+   1-bit mask's are 0 and 255). */
+static size_t unpack(const unsigned char *fb, const fb_layout *f, unsigned w, unsigned h, int bits, unsigned char *mask)
+{
+    size_t stride = bits == 8 ? w : (w + 7) / 8, bad = 0;
+    unsigned x, y;
+    memset(mask, 0, stride * h);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            unsigned px, py, v;
+            to_panel(f, w, h, x, y, &px, &py);
+            v = panel_value(fb, f, px, py);
+            if (bits == 8) { if (v > 255) bad++; else mask[y * stride + x] = (unsigned char)v; }
+            else if (v == 255) mask[y * stride + x / 8] |= (unsigned char)(0x80u >> (x % 8));
+            else if (v != 0) bad++;
+        }
+    return bad;
+}
+
+
+static int all_zero(const char *path)
+{
+    size_t n, k;
+    unsigned char *b = read_whole_file(path, &n);
+    for (k = 0; b && k < n && !b[k]; k++) {}
+    free(b);
+    return b && n && k == n;
+}
+
+/* ------------------------------------------------------ drawing */
+
+/* The mask drawn on a file screen by the tool's code, the file's bytes back. */
+static unsigned char *drawn(const char *spec, const screen_options *o_in, const unsigned char *mask, size_t stride,
+                            unsigned w, unsigned h, int bits, size_t *size)
+{
+    screen s;
+    screen_options o = *o_in;
+    char path[512];
+    const char *comma = strchr(spec, ',');
+    unsigned char *b = NULL;
+    o.device = spec;
+    *size = 0;
+    snprintf(path, sizeof path, "%.*s", (int)(comma - spec - 5), spec + 5);
+    remove(path);
+    if (screen_open(&s, &o) != 0) { CHECKF(0, "screen_open %s failed", spec); return NULL; }
+    CHECK(screen_show(&s, mask, stride, w, h, bits) == 0);
+    b = read_whole_file(path, size);
+    screen_close(&s);
+    return b;
+}
+
+static void check_bytes(const unsigned char *got, size_t n, const unsigned char *want, size_t m, const char *what)
+{
+    size_t k;
+    char g[128] = "", *at = g;
+    CHECKF(got && n == m && !memcmp(got, want, m), "%s: %zu bytes, want %zu", what, n, m);
+    if (got && n == m && memcmp(got, want, m)) {
+        for (k = 0; k < n && at < g + sizeof g - 4; k++) at += sprintf(at, "%02x ", got[k]);
+        CHECKF(0, "%s: got %s", what, g);
+    }
+}
+
+/* A 6 x 2 mask by hand: rows 101100 and 010011. */
+static void packing_by_hand(void)
+{
+    static const unsigned char mask[2] = {0xb0, 0x4c};
+    static const unsigned char rgb24[] = {0xff, 0x00, 0xff, 0x00, 0x00, 0xff, 0x00, 0xff, 0x00, 0xff, 0xff, 0x00};
+    static const unsigned char bgr24[] = {0xff, 0x00, 0xff, 0xff, 0x00, 0x00, 0x00, 0xff, 0x00, 0x00, 0xff, 0xff};
+    static const unsigned char rgb16[] = {0x1f, 0xf8, 0x00, 0xf8, 0xe0, 0x07, 0xff, 0x07};
+    /* mirrored: 001101 and 110010 */
+    static const unsigned char rgb24x[] = {0xff, 0x00, 0x00, 0xff, 0x00, 0xff, 0x00, 0xff, 0xff, 0x00, 0xff, 0x00};
+    /* turned 90 degrees clockwise onto a 2 x 6 gray panel: row y is column x
+       of the mask bottom row first (the top row is the right column) */
+    static const unsigned char turned[6][2] = {{0, 1}, {1, 0}, {0, 1}, {0, 1}, {1, 0}, {1, 0}};
+    unsigned char gray32[6 * 2 * 4];
+    screen_options o;
+    unsigned char *b;
+    size_t n;
+    int k;
+    memset(&o, 0, sizeof o);
+    o.packing = -1;
+    {
+        char spec[600];
+        snprintf(spec, sizeof spec, "file:%s,2x2,24,rgb", cli_path("fb6x2"));
+        b = drawn(spec, &o, mask, 1, 6, 2, 1, &n);
+        check_bytes(b, n, rgb24, sizeof rgb24, "rgb, 24 bpp");
+        free(b);
+        snprintf(spec, sizeof spec, "file:%s,2x2,24,bgr", cli_path("fb6x2"));
+        b = drawn(spec, &o, mask, 1, 6, 2, 1, &n);
+        check_bytes(b, n, bgr24, sizeof bgr24, "bgr, 24 bpp");
+        free(b);
+        snprintf(spec, sizeof spec, "file:%s,2x2,16", cli_path("fb6x2"));
+        o.packing = SCREEN_RGB; /* --screen-packing over the spec's default */
+        b = drawn(spec, &o, mask, 1, 6, 2, 1, &n);
+        check_bytes(b, n, rgb16, sizeof rgb16, "rgb, 16 bpp");
+        free(b);
+        snprintf(spec, sizeof spec, "file:%s,2x2,24,rgb", cli_path("fb6x2"));
+        o.mirror = SCREEN_MIRROR_X;
+        b = drawn(spec, &o, mask, 1, 6, 2, 1, &n);
+        check_bytes(b, n, rgb24x, sizeof rgb24x, "rgb, 24 bpp, mirrored");
+        free(b);
+        for (k = 0; k < 12; k++) {
+            unsigned v = turned[k / 2][k % 2] ? 0xff : 0;
+            gray32[4 * k] = gray32[4 * k + 1] = gray32[4 * k + 2] = (unsigned char)v;
+            gray32[4 * k + 3] = 0;
+        }
+        snprintf(spec, sizeof spec, "file:%s,2x6,32,gray", cli_path("fb6x2"));
+        o.mirror = SCREEN_MIRROR_NONE;
+        o.packing = -1;
+        o.rotate = 1;
+        b = drawn(spec, &o, mask, 1, 6, 2, 1, &n);
+        check_bytes(b, n, gray32, sizeof gray32, "gray, 32 bpp, turned 90");
+        free(b);
+    }
+}
+
+/* A whole layer of random pixels, 1-bit and 8-bit, through every packing,
+   depth, turn and mirror, unpacked back by the reference: the same mask. */
+static void full_layer_unpacked_back(void)
+{
+    enum { W = 240, H = 201 };
+    static const struct { unsigned bpp, packing, rotate, mirror; int bits; } cases[] = {
+        {24, SCREEN_RGB, 0, 0, 1}, {32, SCREEN_BGR, 0, 0, 1}, {16, SCREEN_RGB, 2, 1, 1}, {24, SCREEN_GRAY, 1, 0, 1},
+        {32, SCREEN_GRAY, 3, 2, 1}, {24, SCREEN_RGB, 1, 1, 1}, {32, SCREEN_GRAY, 0, 0, 8}, {24, SCREEN_RGB, 3, 2, 8},
+        {32, SCREEN_BGR, 2, 0, 8}, {24, SCREEN_GRAY, 1, 1, 8},
+    };
+    unsigned char *mask = (unsigned char *)malloc(W * H), *back = (unsigned char *)malloc(W * H);
+    unsigned c, seed = 12345;
+    size_t k;
+    if (!mask || !back) { free(mask); free(back); CHECK(!"out of memory"); return; }
+    for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        fb_layout f;
+        screen_options o;
+        char spec[600];
+        size_t stride = cases[c].bits == 8 ? W : (W + 7) / 8, n, bad;
+        unsigned pw = cases[c].rotate & 1 ? H : W, ph = cases[c].rotate & 1 ? W : H;
+        unsigned char *b;
+        if (cases[c].packing != SCREEN_GRAY && pw % 3) continue;
+        for (k = 0; k < stride * H; k++) {
+            seed = seed * 1103515245u + 12345u;
+            mask[k] = (unsigned char)(seed >> 16);
+        }
+        f.w = cases[c].packing == SCREEN_GRAY ? pw : pw / 3;
+        f.h = ph;
+        f.bpp = cases[c].bpp;
+        f.packing = cases[c].packing;
+        f.rotate = cases[c].rotate;
+        f.mirror = cases[c].mirror;
+        memset(&o, 0, sizeof o);
+        o.packing = (int)f.packing;
+        o.rotate = (int)f.rotate;
+        o.mirror = (int)f.mirror;
+        snprintf(spec, sizeof spec, "file:%s,%ux%u,%u", cli_path("fbfull"), f.w, f.h, f.bpp);
+        b = drawn(spec, &o, mask, stride, W, H, cases[c].bits, &n);
+        CHECKF(b && n == (size_t)f.w * f.h * f.bpp / 8, "case %u: %zu bytes", c, n);
+        if (!b || n != (size_t)f.w * f.h * f.bpp / 8) { free(b); continue; }
+        bad = unpack(b, &f, W, H, cases[c].bits, back);
+        if (cases[c].bits == 8 && f.bpp == 16) bad = 0;
+        CHECKF(!bad && !memcmp(mask, back, stride * H) &&
+               adaslice_crc32(0, mask, stride * H) == adaslice_crc32(0, back, stride * H),
+               "case %u (%u bpp, packing %u, turn %u, mirror %u, %d-bit): %zu odd pixels, the mask %s", c, f.bpp,
+               f.packing, f.rotate, f.mirror, cases[c].bits, bad, memcmp(mask, back, stride * H) ? "differs" : "is back");
+        free(b);
+    }
+    free(mask);
+    free(back);
+}
+
+/* ------------------------------------------------------ on the simulator */
+
+typedef struct child { pid_t pid; int out; char line[256]; } child;
+
+/* argv[0] started, its stdout read until "pty PATH" (in c->line). */
+static int start_child(child *c, char *const argv[])
+{
+    int fds[2];
+    size_t len = 0;
+    double waited = 0;
+    memset(c, 0, sizeof *c);
+    if (pipe(fds) != 0) return 0;
+    fflush(NULL);
+    if ((c->pid = fork()) == 0) {
+        int null = open("/dev/null", O_RDONLY);
+        dup2(null, 0);
+        dup2(fds[1], 1);
+        dup2(fds[1], 2);
+        close(fds[0]);
+        execv(argv[0], argv);
+        _exit(127);
+    }
+    close(fds[1]);
+    c->out = fds[0];
+    while (waited < 10000) {
+        struct pollfd p;
+        char ch;
+        p.fd = c->out; p.events = POLLIN; p.revents = 0;
+        if (poll(&p, 1, 100) <= 0) { waited += 100; continue; }
+        if (read(c->out, &ch, 1) != 1) break;
+        if (ch != '\n') { if (len + 1 < sizeof c->line) c->line[len++] = ch; continue; }
+        c->line[len] = 0;
+        if (!strncmp(c->line, "pty ", 4)) return 1;
+        len = 0;
+    }
+    CHECKF(0, "%s did not start (make builds it)", argv[0]);
+    return 0;
+}
+
+/* fw-sim with the test display, watching `watch`. */
+static int start_sim(child *c, const char *log, const char *speed, const char *watch, const char *const *extra)
+{
+    char *argv[24];
+    int n = 0;
+    argv[n++] = (char *)SIM_BIN; argv[n++] = (char *)"--log"; argv[n++] = (char *)log;
+    argv[n++] = (char *)"--speed"; argv[n++] = (char *)speed; argv[n++] = (char *)"--display"; argv[n++] = (char *)"240x200";
+    argv[n++] = (char *)"--pitch-um"; argv[n++] = (char *)"100"; argv[n++] = (char *)"--watch-screen"; argv[n++] = (char *)watch;
+    while (extra && *extra && n < 22) argv[n++] = (char *)*extra++;
+    argv[n] = NULL;
+    return start_child(c, argv);
+}
+
+static int stop_sim(child *c)
+{
+    int st = 0;
+    if (c->pid <= 0) return -1;
+    kill(c->pid, SIGTERM);
+    waitpid(c->pid, &st, 0);
+    close(c->out);
+    c->pid = 0;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static void sleep_ms(long ms) { struct timespec t = {ms / 1000, (ms % 1000) * 1000000L}; nanosleep(&t, NULL); }
+
+static double seconds_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + t.tv_nsec / 1e9;
+}
+
+/* The CRC-32 of each layer's mask in JOB/masks.rle (the job's own record),
+   and the display. */
+typedef struct job_crcs { unsigned w, h, bits, layers; uint32_t *crc; } job_crcs;
+
+static int read_job(const char *dir, job_crcs *j)
+{
+    char path[600];
+    size_t n, at = 44;
+    unsigned char *b;
+    unsigned k;
+    snprintf(path, sizeof path, "%s/masks.rle", dir);
+    b = read_whole_file(path, &n);
+    memset(j, 0, sizeof *j);
+    if (!b || n < 44 || memcmp(b, "ADASMSK2", 8)) { free(b); return 0; }
+#define U32(p) ((uint32_t)(p)[0] | (uint32_t)(p)[1] << 8 | (uint32_t)(p)[2] << 16 | (uint32_t)(p)[3] << 24)
+    j->w = U32(b + 8); j->h = U32(b + 12); j->bits = U32(b + 16); j->layers = U32(b + 20);
+    j->crc = (uint32_t *)calloc(j->layers + 1u, sizeof *j->crc);
+    for (k = 0; j->crc && k < j->layers && at + 16 <= n; k++) {
+        j->crc[k] = U32(b + at + 8);
+        at += 16 + U32(b + at + 12);
+    }
+#undef U32
+    free(b);
+    return j->crc && k == j->layers;
+}
+
+/* What the observer saw: each UV-on's layer and whether the screen file
+   then held exactly that layer's mask; lit step pulses; pauses. */
+typedef struct seen {
+    unsigned exposures, right, wrong, steps, lit_steps, user_pauses, uv_after_pause;
+    unsigned *layer_of;              /* the layer of each UV-on, 1-based */
+    char first_wrong[160];
+} seen;
+
+static int observe(const char *log_path, const char *watch, const fb_layout *f, const job_crcs *j, seen *s)
+{
+    size_t n;
+    char *text, *line, *save = NULL;
+    unsigned char *mask = (unsigned char *)malloc((size_t)j->w * j->h);
+    int paused = 0;
+    memset(s, 0, sizeof *s);
+    text = (char *)read_whole_file(log_path, &n);
+    if (!text || !mask) { free(text); free(mask); return 0; }
+    text[n] = 0;
+    s->layer_of = (unsigned *)calloc(4096, sizeof *s->layer_of);
+    for (line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        unsigned long long when;
+        unsigned long nth, layer;
+        char what[16];
+        if (sscanf(line, "%llu %15s", &when, what) != 2) continue;
+        if (!strcmp(what, "step")) s->steps++;
+        else if (!strcmp(what, "uv") && strstr(line, " uv 1") && paused) s->uv_after_pause++;
+        else if (!strcmp(what, "state")) {
+            unsigned st = 0, fl = 0;
+            sscanf(line, "%*u %*s %u %u", &st, &fl);
+            if (st == 6 && !paused && !(fl & 8)) s->user_pauses++;
+            paused = st == 6;
+        } else if (!strcmp(what, "screen") && !strcmp(strstr(line, "screen") + 7, "lit")) {
+            s->lit_steps++;
+        } else if (!strcmp(what, "screen") && sscanf(line, "%*u %*s %lu %lu", &nth, &layer) == 2) {
+            char copy[600];
+            size_t m, stride = j->bits == 8 ? j->w : (j->w + 7) / 8;
+            unsigned char *fb;
+            uint32_t crc;
+            size_t bad;
+            s->exposures++;
+            if (!layer) layer = nth; /* avr-run does not see the layer: a print straight through */
+            if (nth < 4096) s->layer_of[nth] = (unsigned)layer;
+            snprintf(copy, sizeof copy, "%s.uv%lu", watch, nth);
+            fb = read_whole_file(copy, &m);
+            if (!fb || m != (size_t)f->w * f->h * f->bpp / 8 || !layer || layer > j->layers) {
+                s->wrong++;
+                if (!s->first_wrong[0])
+                    snprintf(s->first_wrong, sizeof s->first_wrong, "UV-on %lu (layer %lu): the screen file was %zu bytes", nth,
+                             layer, m);
+                free(fb);
+                continue;
+            }
+            bad = unpack(fb, f, j->w, j->h, (int)j->bits, mask);
+            crc = adaslice_crc32(0, mask, stride * j->h);
+            if (!bad && crc == j->crc[layer - 1]) s->right++;
+            else {
+                s->wrong++;
+                if (!s->first_wrong[0])
+                    snprintf(s->first_wrong, sizeof s->first_wrong, "UV-on %lu (layer %lu): the screen held %08x (%zu odd "
+                             "pixels); the job's layer is %08x", nth, layer, (unsigned)crc, bad, (unsigned)j->crc[layer - 1]);
+            }
+            free(fb);
+        }
+    }
+    free(text);
+    free(mask);
+    return 1;
+}
+
+static int slice_job(const char *dir, const char *aa)
+{
+    cli_result r = aa ? cli_run("slice", "examples/models/hand_closed.obj", JOB_ARGS, "--bottom-exposure", "0.5", "--aa", aa,
+                                "-o", dir, NULL)
+                      : cli_run("slice", "examples/models/hand_closed.obj", JOB_ARGS, "--bottom-exposure", "0.5", "-o", dir,
+                                NULL);
+    int ok = r.status == 0;
+    CHECKF(ok, "slice: %s", r.err);
+    cli_free(&r);
+    return ok;
+}
+
+/* The job printed with its masks on a file screen, 80 x 200 at 24 bpp, three
+   mono pixels a screen pixel (a mono panel): at every UV-on the file held
+   exactly the layer's mask, every layer once and in order; not one step
+   under a lit screen; dark at the end. */
+static void print_shows_each_layer(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600];
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    cli_result r;
+    unsigned k, in_order = 1;
+    if (!slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { CHECK(!"no job"); return; }
+    remove(cli_path("fb"));
+    if (!start_sim(&sim, cli_path("sim.log"), "100", cli_path("fb"), NULL)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fb"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "shown on"), "print --screen: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(cli_path("fb")));
+    CHECK(observe(cli_path("sim.log"), cli_path("fb"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers && !s.wrong, "%u UV-ons for %u layers, %u right, %u wrong: %s",
+           s.exposures, j.layers, s.right, s.wrong, s.first_wrong);
+    for (k = 1; k <= s.exposures && k < 4096; k++) in_order &= s.layer_of[k] == k;
+    CHECK(in_order);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
+/* A MODEL printed with --screen: the printer plans, the host renders each
+   layer as it is needed and shows it. The masks are the host's own here
+   (its --report's CRCs, not a slicer's file), so this checks the
+   rendering path's placement on the screen; the observer still reads the
+   screen itself. */
+static void model_print_shows_each_layer(void)
+{
+    child sim;
+    job_crcs j;
+    print_report rep;
+    seen s;
+    char spec[600];
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    cli_result r;
+    remove(cli_path("fbm"));
+    if (!start_sim(&sim, cli_path("simm.log"), "100", cli_path("fbm"), NULL)) return;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbm"));
+    r = cli_run("print", "examples/models/hand_closed.obj", "--scale", "15", "--port", sim.line + 4, "--exposure", "0.1",
+                "--penetration", "0.1", "--bottom-layers", "2", "--bottom-exposure", "0.5", "--peel", "2", "--peel-speed", "10",
+                "--return-speed", "10", "--settle", "0.05", "--screen", spec, "--report", cli_path("repm.json"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "planned by the printer"), "print MODEL --screen: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    if (!read_print_report(cli_path("repm.json"), &rep)) { CHECK(!"no report"); return; }
+    j.w = 240; j.h = 200; j.bits = 1; j.layers = rep.layers; j.crc = rep.crcs;
+    CHECK(observe(cli_path("simm.log"), cli_path("fbm"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers, "%u UV-ons for %u layers, %u right: %s", s.exposures, j.layers,
+           s.right, s.first_wrong);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    CHECK(all_zero(cli_path("fbm")));
+    free(s.layer_of);
+    print_report_free(&rep);
+}
+
+/* An anti-aliased (8-bit) job on a gray 32 bpp screen turned a quarter and
+   mirrored: grey levels, exactly. */
+static void aa_job_on_a_turned_gray_screen(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600];
+    fb_layout f = {200, 240, 32, SCREEN_GRAY, 1, SCREEN_MIRROR_X};
+    const char *extra[] = {"--bits", "8", NULL};
+    cli_result r;
+    if (!slice_job(cli_path("jobaa"), "4") || !read_job(cli_path("jobaa"), &j)) { CHECK(!"no job"); return; }
+    CHECK(j.bits == 8);
+    remove(cli_path("fbaa"));
+    if (!start_sim(&sim, cli_path("simaa.log"), "100", cli_path("fbaa"), extra)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,200x240,32", cli_path("fbaa"));
+    r = cli_run("print", cli_path("jobaa"), "--port", sim.line + 4, "--screen", spec, "--screen-rotate", "90",
+                "--screen-mirror", "x", "--screen-pitch", "100", NULL);
+    CHECKF(r.status == 0, "print --screen: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(observe(cli_path("simaa.log"), cli_path("fbaa"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers, "%u UV-ons for %u layers, %u right: %s", s.exposures, j.layers,
+           s.right, s.first_wrong);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
+/* A screen without the job's pixels or pitch is refused before anything
+   moves, naming both. */
+static void wrong_screen_is_refused(void)
+{
+    child sim;
+    char spec[600];
+    cli_result r;
+    if (!slice_job(cli_path("job"), NULL)) return;
+    if (!start_sim(&sim, cli_path("simw.log"), "100", cli_path("fbw"), NULL)) return;
+    snprintf(spec, sizeof spec, "file:%s,100x200,24,rgb", cli_path("fbw"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 1 && strstr(r.err, "the job's masks are 240 x 200 px; the screen") && strstr(r.err, "shows 300 x 200 px"),
+           "%d %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbw"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "50", NULL);
+    CHECKF(r.status == 1 && strstr(r.err, "the job's pixels are 100 um") && strstr(r.err, "are 50 um"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    /* the printer's pitch is 100 um too: the job's own, from its manifest */
+    {
+        char mpath[600], *m, *at;
+        size_t mn;
+        FILE *out;
+        snprintf(mpath, sizeof mpath, "%s/manifest.json", cli_path("job"));
+        m = (char *)read_whole_file(mpath, &mn);
+        if (m) m[mn] = 0;
+        at = m ? strstr(m, "\"pitch_mm\": [0.1, 0.1]") : NULL;
+        CHECK(at != NULL);
+        if (at) {
+            memcpy(at, "\"pitch_mm\": [0.2, 0.1]", 22);
+            if ((out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+            r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "100", NULL);
+            CHECKF(r.status == 1 && strstr(r.err, "job's pixels are 200 x 100 um; the screen") && strstr(r.err, "are 100 um"),
+                   "%d %s", r.status, r.err);
+            cli_free(&r);
+            memcpy(at, "\"pitch_mm\": [0.1, 0.1]", 22);
+            if ((out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+        }
+        free(m);
+    }
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", "file:nowhere", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "file:PATH,WxH,BPP"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+}
+
+/* Waits (up to 12 s) until the log shows n exposures begun. */
+static int wait_for_exposures(const char *log_path, unsigned n)
+{
+    int i;
+    for (i = 0; i < 600; i++) {
+        size_t m;
+        char *log = (char *)read_whole_file(log_path, &m), *at;
+        unsigned lit = 0;
+        if (log) { log[m] = 0; for (at = log; (at = strstr(at, " uv 1")) != NULL; at++) lit++; }
+        free(log);
+        if (lit >= n) return 1;
+        sleep_ms(20);
+    }
+    return 0;
+}
+
+static pid_t print_in_background(const char *job, const char *port, const char *spec, const char *out_path)
+{
+    pid_t pid;
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        int o = open(out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
+        dup2(null, 0);
+        dup2(o, 1);
+        dup2(o, 2);
+        execl(cli_tool, cli_tool, "print", job, "--port", port, "--screen", spec, (char *)NULL);
+        _exit(127);
+    }
+    return pid;
+}
+
+static int wait_exit(pid_t pid, double seconds)
+{
+    double t0 = seconds_now();
+    int st;
+    while (seconds_now() - t0 < seconds) {
+        if (waitpid(pid, &st, WNOHANG) == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+        sleep_ms(5);
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, &st, 0);
+    return -1;
+}
+
+/* Ctrl-C mid-print: paused (exit 3), the screen dark, no light after it;
+   then a killed host (SIGKILL) mid-exposure: its guard pauses the printer
+   and darkens the screen; each time the print resumes in place with
+   --screen and ends with every exposure under its own layer. */
+static void pause_and_killed_host_leave_it_dark(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600], k[16], *out, *at;
+    const char *extra[] = {"--link-timeout-ms", "3000", NULL};
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    unsigned layer = 0, uv_before;
+    pid_t pid;
+    int status;
+    double t0, dark_after = -1;
+    cli_result r;
+    if (!slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { CHECK(!"no job"); return; }
+    remove(cli_path("fbp"));
+    if (!start_sim(&sim, cli_path("simp.log"), "10", cli_path("fbp"), extra)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbp"));
+    /* Ctrl-C */
+    pid = print_in_background(cli_path("job"), sim.line + 4, spec, cli_path("p1.out"));
+    CHECK(wait_for_exposures(cli_path("simp.log"), 4));
+    kill(pid, SIGINT);
+    status = wait_exit(pid, 30);
+    out = read_whole_text(cli_path("p1.out"));
+    CHECKF(status == 3 && out && strstr(out, "the screen dark"), "Ctrl-C: exit %d: %s", status, out ? out : "");
+    at = out ? strstr(out, "--resume-from ") : NULL;
+    CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
+    free(out);
+    CHECK(all_zero(cli_path("fbp")));
+    /* the host killed while a layer exposes */
+    snprintf(k, sizeof k, "%u", layer);
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        int o = open(cli_path("p2.out"), O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
+        dup2(null, 0); dup2(o, 1); dup2(o, 2);
+        execl(cli_tool, cli_tool, "print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k,
+              (char *)NULL);
+        _exit(127);
+    }
+    {
+        size_t m;
+        char *log = (char *)read_whole_file(cli_path("simp.log"), &m), *p;
+        uv_before = 0;
+        if (log) { log[m] = 0; for (p = log; (p = strstr(p, " uv 1")) != NULL; p++) uv_before++; }
+        free(log);
+    }
+    CHECK(wait_for_exposures(cli_path("simp.log"), uv_before + 3));
+    /* mid-exposure: the screen shows a layer */
+    for (t0 = seconds_now(); all_zero(cli_path("fbp")) && seconds_now() - t0 < 10;) sleep_ms(1);
+    kill(pid, SIGKILL);
+    t0 = seconds_now();
+    (void)wait_exit(pid, 10);
+    while (seconds_now() - t0 < 10) {
+        if (all_zero(cli_path("fbp"))) { dark_after = seconds_now() - t0; break; }
+        sleep_ms(1);
+    }
+    CHECKF(dark_after >= 0, "the screen was still lit %.1f s after the host was killed", seconds_now() - t0);
+    printf("     (dark %.0f ms after the host was killed)\n", dark_after * 1000);
+    sleep_ms(300);
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
+    /* the guard's pause kept the layer's rest: resumed in place from the
+       layer after the last fully exposed */
+    if (r.status == 2 && (at = strstr(r.err, "resume from ")) != NULL && sscanf(at + 12, "%u", &layer) == 1) {
+        cli_free(&r);
+        snprintf(k, sizeof k, "%u", layer);
+        r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
+    }
+    CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume after the kill: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(cli_path("fbp")));
+    CHECK(observe(cli_path("simp.log"), cli_path("fbp"), &f, &j, &s));
+    CHECKF(s.right == s.exposures && !s.wrong && s.exposures >= j.layers, "%u UV-ons for %u layers, %u right: %s",
+           s.exposures, j.layers, s.right, s.first_wrong);
+    CHECKF(s.user_pauses == 2 && !s.uv_after_pause, "%u pauses, %u lights while paused", s.user_pauses, s.uv_after_pause);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
+/* A layer the host cannot draw (its code in masks.rle damaged: it does not
+   decode to its CRC) pauses the print before that layer: the light never
+   comes on over the layer before, the screen is dark, and the message
+   names the layer to resume from. */
+static void undrawable_layer_pauses(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600], path[600];
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    size_t n, at = 44;
+    unsigned char *b;
+    unsigned k;
+    FILE *out;
+    cli_result r;
+    if (!slice_job(cli_path("jobd"), NULL) || !read_job(cli_path("jobd"), &j)) { CHECK(!"no job"); return; }
+    /* layer 5's code: past the 16 bytes of each layer before it */
+    snprintf(path, sizeof path, "%s/masks.rle", cli_path("jobd"));
+    b = read_whole_file(path, &n);
+    for (k = 0; b && k < 4; k++) at += 16 + (b[at + 12] | (size_t)b[at + 13] << 8 | (size_t)b[at + 14] << 16);
+    CHECK(b && at + 20 < n);
+    if (!b || at + 20 >= n) { free(b); free(j.crc); return; }
+    b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+    if ((out = fopen(path, "wb")) != NULL) { CHECK(fwrite(b, 1, n, out) == n); fclose(out); }
+    {
+        /* the manifest names masks.rle's CRC-32: made to agree, so that only
+           the layer's own check finds the damage */
+        char was[9], now[9], mpath[600], *m, *hit;
+        size_t mn;
+        snprintf(mpath, sizeof mpath, "%s/manifest.json", cli_path("jobd"));
+        snprintf(now, sizeof now, "%08x", (unsigned)adaslice_crc32(0, b, n));
+        m = (char *)read_whole_file(mpath, &mn);
+        CHECK(m != NULL);
+        if (m) {
+            uint32_t before;
+            b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+            before = adaslice_crc32(0, b, n);
+            b[at + 16 + (b[at + 12] | (size_t)b[at + 13] << 8) / 2] ^= 0x5a;
+            snprintf(was, sizeof was, "%08x", (unsigned)before);
+            m[mn] = 0;
+            hit = strstr(m, was);
+            CHECKF(hit != NULL, "manifest.json does not name masks.rle's CRC-32 %s", was);
+            if (hit) memcpy(hit, now, 8);
+            if (hit && (out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
+            free(m);
+        }
+    }
+    free(b);
+    remove(cli_path("fbd"));
+    if (!start_sim(&sim, cli_path("simd.log"), "100", cli_path("fbd"), NULL)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbd"));
+    r = cli_run("print", cli_path("jobd"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 3 && strstr(r.err, "layer 5") && strstr(r.err, "the layer could not be shown: paused at layer 5") &&
+           strstr(r.err, "--resume-from 5"), "a damaged layer 5: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(cli_path("fbd")));
+    CHECK(observe(cli_path("simd.log"), cli_path("fbd"), &f, &j, &s));
+    CHECKF(s.exposures == 4 && s.right == 4 && !s.uv_after_pause, "%u UV-ons (%u right, %u while paused): %s", s.exposures,
+           s.right, s.uv_after_pause, s.first_wrong);
+    CHECK(!s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
+/* A fault (a step that cannot be timed) ends the print: the screen dark. */
+static void fault_leaves_it_dark(void)
+{
+    child sim;
+    char spec[600];
+    const char *extra[] = {"--late-step-after-exposure", "3", NULL};
+    cli_result r;
+    if (!slice_job(cli_path("job"), NULL)) return;
+    remove(cli_path("fbf"));
+    if (!start_sim(&sim, cli_path("simf.log"), "100", cli_path("fbf"), extra)) return;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbf"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 1 && strstr(r.err, "stopped printing"), "a fault: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECK(all_zero(cli_path("fbf")));
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+}
+
+/* adaslice show in the background until it says the image is shown (its
+   line on stdout comes once screen_show has returned), then SIGTERM: the
+   file's bytes while shown, and whether it was dark after. */
+static unsigned char *shown_by(char *const argv[], const char *fb, size_t *n, int *dark_after)
+{
+    pid_t pid;
+    double t0;
+    unsigned char *b = NULL;
+    const char *said = cli_path("show.out");
+    int st;
+    remove(fb);
+    remove(said);
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        int null = open("/dev/null", O_RDWR), o = open(said, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(null, 0); dup2(o, 1);
+        execv(cli_tool, argv);
+        _exit(127);
+    }
+    for (t0 = seconds_now(); seconds_now() - t0 < 60; sleep_ms(5)) {
+        size_t m;
+        char *text = (char *)read_whole_file(said, &m);
+        int shown = text && m && memchr(text, '\n', m);
+        free(text);
+        if (shown) break;
+    }
+    b = read_whole_file(fb, n);
+    kill(pid, SIGTERM);
+    waitpid(pid, &st, 0);
+    CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 0, "show: %d", st);
+    *dark_after = all_zero(fb);
+    return b;
+}
+
+/* show: a job's layer exactly (masks.rle's CRC), the patterns as they are
+   documented, and dark once it ends. */
+static void show_layer_and_patterns(void)
+{
+    job_crcs j;
+    char spec[600];
+    size_t n;
+    int dark;
+    unsigned char *b, *mask = (unsigned char *)malloc(3840 * 2400);
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0}, g = {1280, 2400, 24, SCREEN_RGB, 0, 0};
+    if (!mask || !slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { free(mask); CHECK(!"no job"); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbs"));
+    {
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)cli_path("job"), (char *)"--layer", (char *)"30",
+                        (char *)"--screen", spec, (char *)"--seconds", (char *)"60", NULL};
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        CHECK(b && n == 80 * 200 * 3 && !unpack(b, &f, 240, 200, 1, mask) &&
+              adaslice_crc32(0, mask, 30 * 200) == j.crc[29]);
+        CHECK(dark);
+        free(b);
+    }
+    snprintf(spec, sizeof spec, "file:%s,1280x2400,24", cli_path("fbs"));
+    {
+        /* the mono 4K panel: 35 um, so a millimetre is 28.57 pixels */
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)"--pattern", (char *)"ruler", (char *)"--screen", spec,
+                        (char *)"--screen-panel", (char *)"mono-4k-6.1", (char *)"--seconds", (char *)"60", NULL};
+        unsigned x, lit = 0, want = 0, row = 1014; /* 35.5 mm down: clear of the lines and the squares */
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        CHECK(b && n == 1280 * 2400 * 3 && !unpack(b, &g, 3840, 2400, 1, mask));
+        for (x = 0; b && x < 3840; x++) {
+            int on = (mask[row * 480 + x / 8] >> (7 - x % 8)) & 1;
+            double mm = x / (1000.0 / 35);
+            int line = fabs(mm - floor(mm + 0.5)) * (1000.0 / 35) < 0.5 ||
+                       ((int)floor(mm + 0.5) % 10 == 0 && x >= floor(floor(mm + 0.5) * 1000.0 / 35 + 0.5) &&
+                        x < floor(floor(mm + 0.5) * 1000.0 / 35 + 0.5) + 3);
+            lit += (unsigned)on;
+            want += (unsigned)(on == line);
+        }
+        CHECKF(want == 3840 && lit >= 134, "ruler: row %u has %u lit pixels, %u of 3840 as the pitch puts them", row, lit, want);
+        /* the corner's big square (2 .. 7 mm) and the small one right of it (8 .. 10.5 mm, 2 .. 4.5 mm down) */
+        CHECK(b && (mask[114 * 480 + 114 / 8] >> (7 - 114 % 8)) & 1);
+        CHECK(b && (mask[100 * 480 + 265 / 8] >> (7 - 265 % 8)) & 1);
+        CHECK(b && !((mask[170 * 480 + 265 / 8] >> (7 - 265 % 8)) & 1));
+        CHECK(dark);
+        free(b);
+    }
+    {
+        char *argv[] = {(char *)cli_tool, (char *)"show", (char *)"--pattern", (char *)"white", (char *)"--screen", spec,
+                        (char *)"--screen-packing", (char *)"rgb", (char *)"--seconds", (char *)"60", NULL};
+        size_t k, bad = 0;
+        b = shown_by(argv, cli_path("fbs"), &n, &dark);
+        for (k = 0; b && k < n; k++) bad += b[k] != 0xff;
+        CHECKF(b && n == 1280 * 2400 * 3 && !bad, "white: %zu bytes, %zu not lit", n, bad);
+        CHECK(dark);
+        free(b);
+    }
+    free(mask);
+    free(j.crc);
+}
+
+/* show --pattern white --port --expose: an exposure test. The printer
+   lights the white screen once, for the time asked, under the observer's
+   eyes; the screen is dark after, and the printer takes a print next (the
+   host said the screen is dark). */
+static void white_exposure_test(void)
+{
+    child sim;
+    char spec[600], copy[600];
+    size_t n, k, unlit = 0;
+    unsigned char *b;
+    unsigned uv_ons = 0;
+    char *log, *at;
+    cli_result r;
+    remove(cli_path("fbx"));
+    if (!start_sim(&sim, cli_path("simx.log"), "10", cli_path("fbx"), NULL)) return;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbx"));
+    r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "0.5", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "lit for 0.500 s"), "show --expose: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECK(all_zero(cli_path("fbx")));
+    r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "100000", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "lights 0.001 to"), "show --expose too long: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    if (slice_job(cli_path("job"), NULL)) {
+        r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+        CHECKF(r.status == 0, "a print after the exposure test: exit %d: %s", r.status, r.err);
+        cli_free(&r);
+    }
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    log = (char *)read_whole_file(cli_path("simx.log"), &n);
+    if (log) {
+        unsigned long long on = 0, off = 0;
+        char *first;
+        log[n] = 0;
+        for (at = log; (at = strstr(at, " uv 1")) != NULL; at++) uv_ons++;
+        /* the first light: 0.5 s to the tick (10 MHz) */
+        if ((first = strstr(log, " uv 1")) != NULL) {
+            while (first > log && first[-1] != '\n') first--;
+            sscanf(first, "%llu", &on);
+            if ((at = strstr(first, " uv 0")) != NULL) {
+                while (at > log && at[-1] != '\n') at--;
+                sscanf(at, "%llu", &off);
+            }
+        }
+        CHECKF(off - on == 5000000ull, "the white screen lit %llu ticks", off - on);
+    }
+    free(log);
+    CHECKF(uv_ons > 1, "%u UV-ons", uv_ons);
+    snprintf(copy, sizeof copy, "%s.uv1", cli_path("fbx"));
+    b = read_whole_file(copy, &n);
+    for (k = 0; b && k < n; k++) unlit += b[k] != 0xff;
+    CHECKF(b && n == 80 * 200 * 3 && !unlit, "the first light: %zu bytes of screen, %zu not white", n, unlit);
+    free(b);
+}
+
+/* A real framebuffer where the machine has one (/dev/fb0, or
+   $ADASLICE_TEST_FB): a checkerboard drawn through the ioctls and the
+   mapping, read back from the mapping, then dark. Skipped, saying why,
+   where there is none. */
+static void real_framebuffer_if_any(void)
+{
+    const char *dev = getenv("ADASLICE_TEST_FB") ? getenv("ADASLICE_TEST_FB") : "/dev/fb0";
+    screen s;
+    screen_options o;
+    unsigned char *mask;
+    uint32_t w, h, x, y, page_bytes, k, lit = 0;
+    int fd = open(dev, O_RDWR);
+    if (fd < 0) { printf("     (skipped: %s: %s)\n", dev, strerror(errno)); return; }
+    close(fd);
+    memset(&o, 0, sizeof o);
+    o.device = dev;
+    o.packing = -1;
+    if (screen_open(&s, &o) != 0) { printf("     (skipped: %s is not a framebuffer adaslice draws on)\n", dev); return; }
+    w = s.panel_w;
+    h = s.panel_h;
+    mask = (unsigned char *)calloc((w + 7) / 8, h);
+    for (y = 0; mask && y < h; y++)
+        for (x = 0; x < w; x++)
+            if ((x / 16 + y / 16) % 2) mask[y * ((w + 7) / 8) + x / 8] |= (unsigned char)(0x80u >> (x % 8));
+    CHECK(mask && screen_show(&s, mask, (w + 7) / 8, w, h, 1) == 0);
+    page_bytes = s.line_length * s.yres;
+    for (k = 0; k < page_bytes; k++) lit += s.map[(size_t)s.shown * page_bytes + k] != 0;
+    CHECKF(lit > 0, "%s: nothing drawn on the page shown", dev);
+    CHECK(screen_dark(&s) == 0);
+    for (k = 0, lit = 0; k < page_bytes; k++) lit += s.map[(size_t)s.shown * page_bytes + k] != 0;
+    CHECKF(!lit, "%s: %u bytes lit after dark", dev, lit);
+    printf("     %s: %u x %u at %u bpp, %u page%s\n", dev, s.xres, s.yres, s.bpp, s.pages, s.pages > 1 ? "s" : "");
+    screen_close(&s);
+    free(mask);
+}
+
+/* The RAMPS image (ATmega2560) under simavr, its display 240 x 200 as the
+   simulator's: the same observer in avr-run, at the MOSFET's and the STEP
+   pin's edges. */
+static void ramps_print_under_simavr(void)
+{
+    child avr;
+    job_crcs j;
+    seen s;
+    char spec[600], *argv[] = {(char *)"build/avr-run", (char *)"--log", NULL, (char *)"--z-start", (char *)"20",
+                               (char *)"--max-seconds", (char *)"600", (char *)"--timeout", (char *)"1800",
+                               (char *)"--watch-screen", NULL, (char *)"build/fw-ramps-test.elf", NULL};
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    cli_result r;
+    unsigned k, in_order = 1;
+    r = cli_run("slice", "examples/models/hand_closed.obj", "--scale", "5", "--pixels", "240x200", "--pitch", "0.1",
+                "--exposure", "0.05", "--penetration", "0.1", "--bottom-layers", "1", "--bottom-exposure", "0.1", "--peel", "3",
+                "--peel-speed", "10", "--return-speed", "10", "--settle", "0.02", "-o", cli_path("jobr"), NULL);
+    CHECKF(r.status == 0, "slice: %s", r.err);
+    cli_free(&r);
+    if (!read_job(cli_path("jobr"), &j)) { CHECK(!"no job"); return; }
+    argv[2] = (char *)cli_path("avr.log");
+    argv[10] = (char *)cli_path("fbr");
+    remove(cli_path("fbr"));
+    if (!start_child(&avr, argv)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbr"));
+    r = cli_run("print", cli_path("jobr"), "--port", avr.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 0, "print --screen on the RAMPS image: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&avr) == 0, "avr-run failed");
+    CHECK(all_zero(cli_path("fbr")));
+    CHECK(observe(cli_path("avr.log"), cli_path("fbr"), &f, &j, &s));
+    CHECKF(s.exposures == j.layers && s.right == j.layers && !s.wrong, "%u UV-ons for %u layers, %u right, %u wrong: %s",
+           s.exposures, j.layers, s.right, s.wrong, s.first_wrong);
+    for (k = 1; k <= s.exposures && k < 4096; k++) in_order &= s.layer_of[k] == k;
+    CHECK(in_order);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    printf("     RAMPS: %u layers, each UV-on over its own layer; %u STEP edges, none under a lit screen\n", j.layers, s.steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
+void test_screen(void)
+{
+    if (!cli_begin("adaslice-screen")) { CHECK(!"no temporary directory"); return; }
+    RUN(packing_by_hand);
+    RUN(full_layer_unpacked_back);
+    RUN(print_shows_each_layer);
+    RUN(model_print_shows_each_layer);
+    RUN(aa_job_on_a_turned_gray_screen);
+    RUN(wrong_screen_is_refused);
+    RUN(show_layer_and_patterns);
+    RUN(white_exposure_test);
+    RUN(real_framebuffer_if_any);
+    RUN(pause_and_killed_host_leave_it_dark);
+    RUN(fault_leaves_it_dark);
+    RUN(undrawable_layer_pauses);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
+    cli_end();
+}
