@@ -149,8 +149,14 @@ static void protocol_md_example_frames_are_exact(void)
     link_hello hello;
     link_mask mask;
     int k;
+    char says[64];
     if (!text) { CHECKF(0, "cannot read %s", PROTOCOL_MD); return; }
-    hello.version = 2;
+    /* the version the document gives is the one the code speaks */
+    snprintf(says, sizeof says, "# The adaslice serial protocol (version %d)", LINK_PROTOCOL_VERSION);
+    CHECKF(!strncmp(text, says, strlen(says)), "%s does not open with \"%s\"", PROTOCOL_MD, says);
+    snprintf(says, sizeof says, "Example: HELLO (version %d)", LINK_PROTOCOL_VERSION);
+    CHECKF(strstr(text, says) != NULL, "%s has no \"%s\"", PROTOCOL_MD, says);
+    hello.version = LINK_PROTOCOL_VERSION;
     want_n[0] = link_frame_build(want[0], 0x2a, LINK_MSG_HELLO, payload, link_put_hello(payload, &hello));
     mask.layer = 7;
     mask.code_bytes = 1234;
