@@ -68,6 +68,8 @@
        adaslice_grid_plate              a printer's display as a grid of z rays
        adaslice_masker_init             layer masks, made bottom-up in one sweep
        adaslice_masker_slice            the mask at the next height
+       adaslice_masker_layer            the mask of the next layer by a rule: a
+                                        section, envelope (union) or core
        adaslice_masker_free
        adaslice_masker_bytes            what a masker will allocate, before it does
        adaslice_contours_slice          cross-section polygons at sorted heights
@@ -224,6 +226,17 @@
    badly wound mesh leaves a ray unbalanced it must be positive counted from
    above too, so no column is ever lit above the part. supersample s > 1 gives
    8-bit masks from s x s rays per pixel. Memory: 2 bytes per ray.
+   adaslice_masker_layer takes a layer's range and the options' slice_at:
+   the section at its middle (default; dimensionally right on average, but a
+   layer t thick drops a feature thinner than t/2 and undersizes a face
+   sloping away below by up to t/2), at its first or last bin, or over the
+   whole range, read from each ray's crossings in one pass: ENVELOPE lights a
+   ray inside anywhere in the range (the union of the layer's sections, as a
+   merged layer of thin slices: no detail is lost, each layer is oversized by
+   at most its slope's run over t), CORE one inside all through it (the
+   intersection: never oversized). A tip thinner than a layer survives in
+   the envelope. Both cost a bit per ray and the rays that changed in a
+   layer, no second pass over the grid.
 
    CONTOURS  adaslice_contours_slice cuts the mesh at sorted heights (absolute z,
    mm) in one sweep after Minetto et al., "An optimal algorithm for 3D triangle
@@ -749,10 +762,25 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
 ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch_x,
                                                double pitch_y, const double offset[2]);
 
+/* Which heights of a layer its mask shows (adaslice_masker_layer). */
+typedef enum adaslice_slice_at {
+    ADASLICE_SLICE_MIDDLE = 0, /* the section at the layer's middle height */
+    ADASLICE_SLICE_BOTTOM,     /* the section at the centre of its first bin */
+    ADASLICE_SLICE_TOP,        /* the section at the centre of its last bin */
+    ADASLICE_SLICE_ENVELOPE,   /* lit where the part is inside anywhere in [z_bottom, z_top]:
+                                  the union of its sections; never cuts into the part */
+    ADASLICE_SLICE_CORE        /* lit where it is inside throughout [z_bottom, z_top]: the
+                                  intersection; never oversized */
+} adaslice_slice_at;
+
 typedef struct adaslice_mask_options {
     int supersample;                     /* s; 0 or 1: 1-bit masks, else 8-bit from s x s
                                             rays per pixel (at most 16) */
     const adaslice_allocator *allocator; /* NULL: default */
+    adaslice_slice_at slice_at;          /* adaslice_masker_layer's rule; 0: middle */
+    double bin;                          /* bottom and top cut at the centre of the first
+                                            and last bin of this size, mm; 0:
+                                            ADASLICE_DEFAULT_BIN */
 } adaslice_mask_options;
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -797,6 +825,13 @@ typedef struct adaslice_masker {
     size_t seg_cap;
     uint64_t *cross;             /* where they cross the ray rows */
     size_t cross_cap;
+    adaslice_slice_at slice_at;  /* the options' rule, and its bin */
+    double bin;
+    int range;                   /* sweeping a layer's range by this rule (envelope, core) */
+    unsigned char *changed;      /* envelope, core: a bit per ray whose inside changed in
+                                  the last layer's range; those rays are listed in */
+    size_t *pending, pending_count, pending_cap;
+    int nomem;                   /* the list could not grow during a sweep */
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -806,6 +841,16 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *masker, const
 /* The mask at `height` (absolute z, mm) in masker->image; heights must not
    decrease from call to call. */
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
+/* The mask of the layer [z_bottom, z_top] (absolute z, mm) by the options'
+   slice_at: a section (middle, bottom, top) or, along each ray's sorted
+   crossings, envelope (lit if an inside interval of the ray meets the open
+   range (z_bottom, z_top)) or core (lit if one holds all of it: a face
+   lying at an end parts two layers and counts in neither); with s > 1 each of the s x s
+   rays by the same rule. Layers come bottom-up: z_bottom (envelope, core) or
+   the cut's height never below the previous call's. Envelope and core need
+   balanced edges (a closed mesh): ADASLICE_ERR_UNSUPPORTED at init otherwise. */
+ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *masker, double z_bottom, double z_top,
+                                                   adaslice_error *error);
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
 /* The bytes adaslice_masker_init asks for on a width x height grid at
    `supersample` for a mesh of `triangles`: a caller's limit checked before
@@ -5900,10 +5945,11 @@ static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
 
 ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles)
 {
-    /* as adaslice_masker_init allocates: the image, a winding per ray, a
-       coverage per pixel when anti-aliased, and three words per triangle */
+    /* as adaslice_masker_init allocates: the image, a winding per ray (and
+       a bit for envelope and core), a coverage per pixel when anti-aliased,
+       and three words per triangle */
     double s = supersample > 1 ? supersample : 1, pixels = (double)width * height;
-    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * sizeof(int16_t) +
+    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * (sizeof(int16_t) + 1.0 / 8) +
                    (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
     return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
@@ -5920,6 +5966,8 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->coverage);
     adaslice__free(&al, mk->seg);
     adaslice__free(&al, mk->cross);
+    adaslice__free(&al, mk->changed);
+    adaslice__free(&al, mk->pending);
     adaslice__gaps_free(mk->gaps);
     memset(mk, 0, sizeof *mk);
 }
@@ -5957,6 +6005,11 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     if (s < 1 || s > 16 || (double)grid->width * s > ADASLICE__GRID_LIMIT || (double)grid->height * s > ADASLICE__GRID_LIMIT)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: supersampling %d is outside 1..16 (or too fine for the grid)", s);
     if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "masks: the mesh has no triangles");
+    mk->slice_at = options ? options->slice_at : ADASLICE_SLICE_MIDDLE;
+    mk->bin = options && options->bin != 0 ? options->bin : ADASLICE_DEFAULT_BIN;
+    if ((unsigned)mk->slice_at > ADASLICE_SLICE_CORE || !(mk->bin > 0) || mk->bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: slice_at %d or bin %g is not one of the rules",
+                              (int)mk->slice_at, mk->bin);
     mk->allocator = adaslice__allocator(options ? options->allocator : NULL);
     mk->mesh = mesh;
     mk->grid = *grid;
@@ -5972,6 +6025,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     pixels = (size_t)grid->width * (size_t)grid->height;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
     if ((res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK) return res;
+    if (mk->gaps && mk->slice_at >= ADASLICE_SLICE_ENVELOPE) {
+        size_t loose = mk->gaps->count;
+        adaslice_masker_free(mk);
+        return adaslice__fail(err, ADASLICE_ERR_UNSUPPORTED, 0, 0,
+                              "masks: envelope and core masks read the part along rays and need a closed mesh; "
+                              "this one has %zu unbalanced edges (repair it, or slice at a height)", loose);
+    }
+    if (mk->slice_at >= ADASLICE_SLICE_ENVELOPE)
+        mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
     /* sections need no winding per ray */
     if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
@@ -5979,13 +6041,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, 2 * mesh->triangle_count, sizeof(adaslice__zkey)));
-    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
+    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys ||
+        (mk->slice_at >= ADASLICE_SLICE_ENVELOPE && !mk->changed)) {
         adaslice__free(&mk->allocator, keys);
         adaslice_masker_free(mk);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
     }
     memset(mk->image, 0, mk->stride * (size_t)grid->height);
     if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
+    if (mk->changed) memset(mk->changed, 0, rays / 8 + 1);
     if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
     for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__zbits(adaslice__tri_z(mesh, t, 0)); keys[t].t = (uint32_t)t; }
     sorted = adaslice__sort_zkeys(keys, keys + mesh->triangle_count, mesh->triangle_count);
@@ -5996,29 +6060,70 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     return ADASLICE_OK;
 }
 
+/* Ray i of ray row `row` turns on or off in the image. */
+static void adaslice__mask_show(adaslice_masker *mk, size_t row, size_t i, int on)
+{
+    size_t s = (size_t)mk->supersample, r = row / s;
+    mk->lit_rays += on ? 1 : -1;
+    if (s == 1) {
+        mk->image[r * mk->stride + (i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
+    } else {
+        size_t px = r * mk->stride + i / s;
+        mk->coverage[px] = (uint16_t)(mk->coverage[px] + (on ? 1 : -1));
+        mk->image[px] = mk->grey[mk->coverage[px]];
+    }
+}
+
 /* A ray's winding number changes by one at each sample; a pixel changes
-   when one of its rays crosses between zero and positive. */
+   when one of its rays crosses between zero and positive. Sweeping a
+   layer's range (envelope, core) the image shows each ray as it was at the
+   range's bottom until its first change: then an envelope shows it for good
+   if it came in, a core hides it for good if it went out; later changes
+   show nothing. The changed rays are listed and set right (to their inside
+   at the top) before the next sweep. */
 static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
 {
     adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
-    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1, s = (int16_t)mk->supersample;
-    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
-    size_t row = (size_t)(span->row / s);
+    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
+    size_t base = (size_t)span->row * (size_t)mk->rays.width;
+    int16_t *w = mk->winding + base;
     int i;
     for (i = span->first; i < span->end; i++) {
         int before = w[i] > 0, after;
         w[i] = (int16_t)(w[i] + step);
         after = w[i] > 0;
         if (before == after) continue;
-        mk->lit_rays += after ? 1 : -1;
-        if (s == 1) {
-            mk->image[row * mk->stride + (size_t)(i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
-        } else {
-            size_t px = row * mk->stride + (size_t)(i / s);
-            mk->coverage[px] = (uint16_t)(mk->coverage[px] + (after ? 1 : -1));
-            mk->image[px] = mk->grey[mk->coverage[px]];
+        if (mk->range) {
+            size_t ray = base + (size_t)i;
+            unsigned char bit = (unsigned char)(1u << (ray & 7));
+            if (mk->changed[ray >> 3] & bit) continue;
+            if (mk->pending_count == mk->pending_cap) {
+                size_t *more = ADASLICE__CAST(size_t *, adaslice__grow(&mk->allocator, mk->pending, mk->pending_count,
+                                                                       &mk->pending_cap, mk->pending_count + 1, sizeof(size_t)));
+                if (!more) { mk->nomem = 1; continue; }
+                mk->pending = more;
+            }
+            mk->changed[ray >> 3] |= bit;
+            mk->pending[mk->pending_count++] = ray;
+            if (after != (mk->range == ADASLICE_SLICE_ENVELOPE)) continue;
         }
+        adaslice__mask_show(mk, (size_t)span->row, (size_t)i, after);
     }
+}
+
+/* The rays the last range changed show their inside at its top again: an
+   envelope showed them all, a core none. */
+static void adaslice__mask_settle(adaslice_masker *mk)
+{
+    size_t k, width = (size_t)mk->rays.width;
+    int shown = mk->slice_at == ADASLICE_SLICE_ENVELOPE;
+    for (k = 0; k < mk->pending_count; k++) {
+        size_t ray = mk->pending[k];
+        int inside = mk->winding[ray] > 0;
+        mk->changed[ray >> 3] &= (unsigned char)~(1u << (ray & 7));
+        if (inside != shown) adaslice__mask_show(mk, ray / width, ray % width, inside);
+    }
+    mk->pending_count = 0;
 }
 
 /* ---- masks of open meshes: each layer's section filled in the plane */
@@ -6153,12 +6258,15 @@ nomem:
     return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
 }
 
-ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
+/* Applies the samples below `height` not applied yet; with `past`, those
+   at it too. */
+static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height, int past, adaslice_error *err)
 {
     adaslice__raster r;
     const adaslice_mesh *m = mk->mesh;
     double h = height - mk->depth_origin;
     size_t k, kept = 0;
+    if (past && h >= mk->done && h < DBL_MAX) h = nextafter(h, DBL_MAX);
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
     if (mk->gaps) {
@@ -6191,8 +6299,41 @@ ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double h
                                   "masks: triangle %u lies more than 2^21 pixels from the printer's grid", (unsigned)mk->active[k]);
     mk->done = h;
     mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
+    if (mk->nomem) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the rays changing below %g mm", height);
     adaslice__ok(err);
     return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
+{
+    if (mk->pending_count) adaslice__mask_settle(mk);
+    return adaslice__masker_sweep(mk, height, 0, err);
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *mk, double z_bottom, double z_top, adaslice_error *err)
+{
+    adaslice_result r;
+    double half = 0.5 * mk->bin;
+    if (!(z_top >= z_bottom))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: layer [%g, %g] mm is upside down", z_bottom, z_top);
+    /* bottom and top: the centre of the first or last bin, the middle if the
+       layer is thinner than a bin */
+    if (half > 0.5 * (z_top - z_bottom)) half = 0.5 * (z_top - z_bottom);
+    switch (mk->slice_at) {
+    case ADASLICE_SLICE_BOTTOM: return adaslice_masker_slice(mk, z_bottom + half, err);
+    case ADASLICE_SLICE_TOP: return adaslice_masker_slice(mk, z_top - half, err);
+    case ADASLICE_SLICE_ENVELOPE:
+    case ADASLICE_SLICE_CORE:
+        /* the open range (z_bottom, z_top): a face lying at either end is
+           the boundary of the layers it parts, inside neither */
+        if (mk->pending_count) adaslice__mask_settle(mk);
+        if ((r = adaslice__masker_sweep(mk, z_bottom, 1, err)) != ADASLICE_OK) return r;
+        mk->range = (int)mk->slice_at;
+        r = adaslice__masker_sweep(mk, z_top, 0, err);
+        mk->range = 0;
+        return r;
+    default: return adaslice_masker_slice(mk, 0.5 * (z_bottom + z_top), err);
+    }
 }
 
 
