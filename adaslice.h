@@ -186,7 +186,14 @@
                plan feasible in units is feasible in mm (volume adds one unit
                per bin unless every value was exact). The §3.3 pre-pass
                forces a plane where |phi[i] - phi[i-1]| > sharp, unless that
-               would leave a stretch no layers can fill.
+               would leave a stretch no layers can fill. It never makes a
+               feasible eps infeasible: bottom-up, a plane is kept where some
+               plan through it and the planes kept below stays within eps and
+               has at most one layer more per plane kept than the plan
+               without the pre-pass; else it moves to the nearest plane
+               (within tmax) that does, else it is dropped; plan.changes
+               lists those, and why. (Budget mode keeps the planes as they
+               are.)
                budget > 0: the smallest eps whose plan has at most that many
                layers (bisection over eps in units).
      greedy    ref. [3], local: each layer as thick as the profile at its
@@ -676,6 +683,17 @@ typedef struct adaslice_layer {
     double error;             /* the layer's error under the profile's metric */
 } adaslice_layer;
 
+/* A plane the §3.3 pre-pass wanted but did not force where it wanted. */
+typedef struct adaslice_plane_change {
+    uint32_t wanted;            /* the plane (bin index) at the sharp change */
+    uint32_t placed;            /* the nearest plane (within a thickest layer) that keeps
+                                   the plan feasible and costs at most one layer more,
+                                   or 0: dropped, none does */
+    int infeasible;             /* why: 1, with a plane at `wanted` no plan keeps every
+                                   layer within eps; 0, one would, with more than one
+                                   layer more */
+} adaslice_plane_change;
+
 typedef struct adaslice_plan {
     size_t layer_count;         /* K */
     adaslice_layer *layers;     /* K layers, bottom first */
@@ -684,7 +702,12 @@ typedef struct adaslice_plan {
     double worst_error;         /* max layer error */
     double total_error;         /* sum of layer errors */
     size_t over_eps;            /* layers whose error exceeds eps (baselines only) */
-    size_t forced_planes;       /* planes set by the sharp-change pre-pass */
+    size_t forced_planes;       /* planes set by the sharp-change pre-pass (moved ones
+                                   included): K is at most this many above the plan
+                                   without the pre-pass */
+    size_t plane_changes;       /* sharp-change planes moved or dropped so that eps
+                                   stays feasible, listed bottom first in */
+    adaslice_plane_change *changes;
     uint32_t bins_min, bins_max;/* ceil(tmin/b), floor(tmax/b) */
     adaslice_allocator allocator;
 } adaslice_plan;
@@ -701,7 +724,8 @@ ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t
 /* The integers a printer plans on (link/PROTOCOL.md): with eps =
    options->eps_units units, units[i] is b * phi[i] rounded up to whole units
    and capped at eps_units + 1 (a bin above eps fits no layer either way), and
-   forced[i] = 1 where the §3.3 pre-pass puts a plane on top of bin i. Fed to
+   forced[i] = 1 where the §3.3 pre-pass puts a plane on top of bin i (kept,
+   moved or dropped for eps_units as adaslice_plan_profile does). Fed to
    adaslice_dp (eps = eps_units) they give adaslice_plan_profile's planes
    with the same options, bit for bit. units and forced hold N entries. */
 #define ADASLICE_PRINTER_EPS_UNITS 1048576u
@@ -5464,6 +5488,128 @@ static uint32_t adaslice__sharp_planes(const adaslice_profile *p, uint32_t n, do
     return count;
 }
 
+/* Fewest layers from plane i to the top, for every i (UNREACHED where none
+   within eps): the DP run down from the top on the bins reversed (an
+   additive layer error reads the same either way), or for volume deviation,
+   whose error hangs on a layer's first bin, straight down in O(N w). */
+static void adaslice__layers_above(adaslice__job *job, uint64_t eps, void *ring, size_t ring_size, uint32_t *above)
+{
+    uint32_t n = job->n, i, l;
+    if (!job->volume) {
+        adaslice_dp dp;
+        (void)adaslice_dp_init(&dp, ring, ring_size, n, job->lo, job->hi, eps, 0, 0);
+        above[n] = 0;
+        for (i = 1; i <= n; i++) {
+            adaslice_dp_push(&dp, job->units[n - i], 0);
+            above[n - i] = adaslice_dp_layers(&dp);
+        }
+        return;
+    }
+    above[n] = 0;
+    for (i = n; i-- > 0;) {
+        uint64_t run = 0;
+        uint32_t best = ADASLICE__UNREACHED;
+        for (l = 1; l <= job->hi && i + l <= n; l++) {
+            uint64_t u = job->units[i + l - 1], f = job->units[i];
+            run += (u > f ? u - f : f - u) + job->slack;
+            if (run > eps) break;
+            if (l >= job->lo && above[i + l] != ADASLICE__UNREACHED && above[i + l] + 1 < best) best = above[i + l] + 1;
+        }
+        above[i] = best;
+    }
+}
+
+/* Fewest layers from plane `from` to every plane up to `to` (no forced plane
+   between), into from_layers[plane]; `dp` carries on from where it stopped. */
+static void adaslice__layers_from(adaslice__job *job, adaslice_dp *dp, uint32_t from, uint32_t to, uint32_t *from_layers)
+{
+    while (from + dp->plane < to) {
+        adaslice_dp_push(dp, job->units[from + dp->plane], 0);
+        from_layers[from + dp->plane] = adaslice_dp_layers(dp);
+    }
+}
+
+/* §3.3 without making eps infeasible: the pre-pass's planes (job->forced),
+   bottom-up, each kept, moved or dropped so that with the planes kept below
+   it a plan within eps exists whose count is at most K0 (no pre-pass) plus
+   the planes kept: with L the last plane kept and C the fewest layers up to
+   it, a plane f is kept when C + S(L, f) + S(f, N) <= K0 + kept + 1 (S: the
+   fewest layers between two planes). That holds at the top by induction, so
+   the plan exists and has at most K0 + kept layers. Tried at the plane
+   wanted, then 1, 2, ... bins below and above it, up to a thickest layer
+   away, never onto or past a neighbour. Changes go to *changes (allocated,
+   `*count` of them); returns the planes kept, or UNREACHED out of memory.
+   No plan at all within eps: every plane is dropped, silently (the error
+   then is the plan's own). */
+static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const adaslice_allocator *al,
+                                       adaslice_plane_change **changes, size_t *count)
+{
+    uint32_t n = job->n, i, L = 0, C = 0, kept = 0, K0, *above, *from, *wanted, wanted_count = 0;
+    size_t ring_size = adaslice_dp_workspace(n, job->hi, job->volume), cap = 0;
+    void *ring;
+    adaslice_dp dp;
+    *changes = NULL;
+    *count = 0;
+    for (i = 1; i < n; i++) wanted_count += job->forced[i] != 0;
+    if (!wanted_count) return 0;
+    above = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)n + 1, 2 * sizeof(uint32_t)));
+    wanted = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)wanted_count + 1, sizeof(uint32_t)));
+    ring = adaslice__alloc(al, 1, ring_size);
+    if (!above || !wanted || !ring) goto nomem;
+    from = above + n + 1;
+    for (i = 1, wanted_count = 0; i < n; i++) if (job->forced[i]) wanted[wanted_count++] = i;
+    wanted[wanted_count] = n;
+    memset(job->forced, 0, (size_t)n + 1);
+    adaslice__layers_above(job, eps, ring, ring_size, above);
+    K0 = above[0];
+    if (K0 == ADASLICE__UNREACHED) goto done;
+    (void)adaslice_dp_init(&dp, ring, ring_size, n, job->lo, job->hi, eps, job->volume, job->slack);
+    for (i = 0; i < wanted_count; i++) {
+        uint32_t c = wanted[i], next = wanted[i + 1], d, placed = 0, reach = c + job->hi < next ? c + job->hi : next - 1;
+        int infeasible;
+        adaslice__layers_from(job, &dp, L, reach, from);
+        infeasible = from[c] == ADASLICE__UNREACHED || above[c] == ADASLICE__UNREACHED;
+        for (d = 0; d <= job->hi && !placed; d++) {
+            int side;
+            for (side = 0; side < 2 && !placed; side++) {
+                uint32_t f = side ? c + d : c - d;
+                if ((side && (d == 0 || f > reach)) || (!side && d >= c - L)) continue;
+                if (from[f] != ADASLICE__UNREACHED && above[f] != ADASLICE__UNREACHED &&
+                    (uint64_t)C + from[f] + above[f] <= (uint64_t)K0 + kept + 1)
+                    placed = f;
+            }
+        }
+        if (placed != c) {
+            if (*count == cap) {
+                adaslice_plane_change *more = ADASLICE__CAST(adaslice_plane_change *,
+                    adaslice__grow(al, *changes, *count, &cap, *count + 1, sizeof(adaslice_plane_change)));
+                if (!more) goto nomem;
+                *changes = more;
+            }
+            (*changes)[*count].wanted = c;
+            (*changes)[*count].placed = placed;
+            (*changes)[(*count)++].infeasible = infeasible;
+        }
+        if (!placed) continue;
+        job->forced[placed] = 1;
+        C += from[placed];
+        L = placed;
+        kept++;
+        (void)adaslice_dp_init(&dp, ring, ring_size, n - L, job->lo, job->hi, eps, job->volume, job->slack);
+    }
+done:
+    adaslice__free(al, above);
+    adaslice__free(al, wanted);
+    adaslice__free(al, ring);
+    return kept;
+nomem:
+    adaslice__free(al, *changes);
+    *changes = NULL;
+    *count = 0;
+    kept = ADASLICE__UNREACHED;
+    goto done;
+}
+
 static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice_plan_options *opt,
                                               double eps, adaslice_plan *plan, adaslice_error *err)
 {
@@ -5494,6 +5640,9 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     } else {
         eps_units = adaslice__eps_units(eps, job->quantum);
     }
+    if (job->forced && !opt->budget &&
+        adaslice__sharp_settle(job, eps_units, &plan->allocator, &plan->changes, &plan->plane_changes) == ADASLICE__UNREACHED)
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
     layers = adaslice__job_run(job, eps_units);
     if (layers == ADASLICE__UNREACHED) {
         uint32_t reach = job->dp.reach;
@@ -5630,7 +5779,7 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     adaslice_allocator al;
     adaslice_result r = ADASLICE_OK;
     unsigned char *ok = NULL;
-    uint32_t *planes = NULL, count, forced = 0, lo, hi;
+    uint32_t *planes = NULL, count, forced = 0, lo, hi, i;
     void *ring = NULL;
 
     if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
@@ -5692,6 +5841,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
             forced = adaslice__sharp_planes(p, job.n, opt.sharp, ok, job.forced);
         }
         r = adaslice__plan_optimal(&job, &opt, opt.eps, plan, err);
+        if (job.forced) /* those kept, moved or not */
+            for (forced = 0, i = 1; i < job.n; i++) forced += job.forced[i] != 0;
         plan->forced_planes = forced;
         if (r == ADASLICE_ERR_INFEASIBLE && forced && err) {
             size_t len = strlen(err->message);
@@ -5744,6 +5895,30 @@ ADASLICE_DEF adaslice_result adaslice_plan_units(const adaslice_profile *p, cons
     }
     adaslice__tileable(ok, n, lo, hi);
     (void)adaslice__sharp_planes(p, n, opt.sharp, ok, planes);
+    {   /* kept, moved or dropped for eps_units as adaslice_plan_profile does */
+        adaslice__job job;
+        adaslice_plane_change *changes = NULL;
+        size_t count = 0;
+        uint32_t kept = ADASLICE__UNREACHED;
+        memset(&job, 0, sizeof job);
+        job.profile = p;
+        job.n = n;
+        job.lo = lo;
+        job.hi = hi;
+        job.forced = planes;
+        job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, n, sizeof(uint64_t)));
+        if (job.units) {
+            for (i = 0; i < n; i++) job.units[i] = units[i];
+            kept = adaslice__sharp_settle(&job, opt.eps_units, &al, &changes, &count);
+        }
+        adaslice__free(&al, changes);
+        adaslice__free(&al, job.units);
+        if (kept == ADASLICE__UNREACHED) {
+            adaslice__free(&al, ok);
+            adaslice__free(&al, planes);
+            return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan units: out of memory");
+        }
+    }
     /* the plane on top of bin i is plane i + 1; the top plane is never forced */
     for (i = 0; i + 1 < n; i++) forced[i] = planes[i + 1];
     adaslice__free(&al, ok);
@@ -5759,6 +5934,7 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
     al = plan->allocator;
     adaslice__free(&al, plan->planes);
     adaslice__free(&al, plan->layers);
+    adaslice__free(&al, plan->changes);
     memset(plan, 0, sizeof *plan);
 }
 

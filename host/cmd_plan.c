@@ -135,6 +135,11 @@ static void print_summary(const plan_args *a, const plan_job *j)
         printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes, plural(p->forced_planes), a->sharp);
     else if (a->method == ADASLICE_METHOD_OPTIMAL)
         printf("forced     none (sharp-change pre-pass off)\n");
+    if (p->plane_changes) {
+        char line[1024];
+        plan_changes_line(p, pr->bin, line, sizeof line);
+        printf("           %s\n", line);
+    }
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
     if (a->compare) print_compare(a, j);
 }
@@ -185,8 +190,18 @@ static void print_json(const plan_args *a, const plan_job *j)
     else printf("null");
     printf(",\n  ");
     print_json_plan_fields(stdout, p);
-    printf(",\n  \"forced_planes\": %zu,\n  \"time_ms\": {\"load\": %.3f, \"profile\": %.3f, \"plan\": %.3f}",
-           p->forced_planes, j->ms_load, j->ms_profile, j->ms_plan);
+    printf(",\n  \"forced_planes\": %zu,\n  \"forced_changes\": [", p->forced_planes);
+    for (k = 0; k < p->plane_changes; k++) {
+        const adaslice_plane_change *c = &p->changes[k];
+        printf("%s{\"wanted_mm\": ", k ? ", " : "");
+        json_write_number(stdout, c->wanted * pr->bin);
+        printf(", \"placed_mm\": ");
+        if (c->placed) json_write_number(stdout, c->placed * pr->bin);
+        else printf("null");
+        printf(", \"why\": \"%s\"}", c->infeasible ? "infeasible" : "cost");
+    }
+    printf("],\n  \"time_ms\": {\"load\": %.3f, \"profile\": %.3f, \"plan\": %.3f}", j->ms_load, j->ms_profile,
+           j->ms_plan);
     printf(",\n  \"layer_list\": [");
     for (k = 0; k < p->layer_count; k++) {
         const adaslice_layer *l = &p->layers[k];

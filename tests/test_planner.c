@@ -155,19 +155,44 @@ static int plan_is_valid(const ref_case *c, const adaslice_plan *plan, double ep
     return 1;
 }
 
+/* The pre-pass's planes (c->forced) as the planner reports it kept them:
+   each change moves a wanted plane or drops it. 0 if a change names a plane
+   that was not wanted, or moves it onto another. */
+static int ref_apply_changes(ref_case *c, const adaslice_plan *plan)
+{
+    size_t k;
+    int i, count = 0;
+    for (k = 0; k < plan->plane_changes; k++) {
+        const adaslice_plane_change *ch = &plan->changes[k];
+        if (ch->wanted < 1 || (int)ch->wanted >= c->n || !c->forced[ch->wanted]) return 0;
+        c->forced[ch->wanted] = 0;
+    }
+    for (k = 0; k < plan->plane_changes; k++) {
+        const adaslice_plane_change *ch = &plan->changes[k];
+        if (!ch->placed) continue;
+        if ((int)ch->placed >= c->n || c->forced[ch->placed]) return 0;
+        c->forced[ch->placed] = 1;
+    }
+    for (i = 1; i < c->n; i++) count += c->forced[i];
+    return (size_t)count == plan->forced_planes;
+}
+
 /* Random dyadic profiles, so that every sum is exact in double and the
-   reference and the planner cannot disagree by rounding. */
+   reference and the planner cannot disagree by rounding. The pre-pass's
+   planes are the reference's (ref_forced) as the planner reports it kept,
+   moved or dropped them; whenever a plan exists without them, one exists
+   with them, with at most one layer more per plane kept. */
 static void optimal_equals_brute_force(void)
 {
-    int trial, feasible = 0, infeasible = 0, volumes = 0, budgets = 0, forced_cases = 0;
+    int trial, feasible = 0, infeasible = 0, volumes = 0, budgets = 0, forced_cases = 0, changed = 0;
     for (trial = 0; trial < 12000; trial++) {
-        ref_case c;
+        ref_case c, wanted, free_case;
         adaslice_profile p;
         adaslice_plan_options o;
         adaslice_plan plan;
         adaslice_error e;
-        ref_best best, any;
-        int i, reach = 0, reach_any = 0, max_n;
+        ref_best best, any, orig;
+        int i, reach = 0, reach_any = 0, dummy = 0, max_n;
         double sharp = (rng() % 3 == 0) ? 0.25 * (1 + rng() % 4) : ADASLICE_SHARP_OFF;
         adaslice_result r;
         memset(&c, 0, sizeof c);
@@ -180,6 +205,9 @@ static void optimal_equals_brute_force(void)
         for (i = 0; i < c.n; i++) c.phi[i] = (rng() % 5 == 0) ? 0 : (rng() % 33) / 16.0;
         c.eps = (1 + rng() % 256) / 256.0 * c.hi * c.bin * (c.volume ? 1.0 : 1.2);
         ref_forced(&c, sharp);
+        wanted = c;
+        free_case = c;
+        memset(free_case.forced, 0, sizeof free_case.forced);
         memset(&p, 0, sizeof p);
         p.metric = c.volume ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
         p.bin_count = (size_t)c.n;
@@ -192,38 +220,50 @@ static void optimal_equals_brute_force(void)
         o.tmax = (rng() % 2) ? c.hi * c.bin : (c.hi + 0.5) * c.bin;
         o.sharp = sharp;
 
+        /* without the pre-pass: whether any plan exists */
         memset(&best, 0, sizeof best);
-        ref_search(&c, 0, 0, 0, c.eps, 1 << 30, &best, &reach);
+        ref_search(&free_case, 0, 0, 0, c.eps, 1 << 30, &best, &reach);
         memset(&any, 0, sizeof any);
-        ref_search(&c, 0, 0, 0, 1e300, 1 << 30, &any, &reach_any);
+        ref_search(&free_case, 0, 0, 0, 1e300, 1 << 30, &any, &reach_any);
         r = adaslice_plan_profile(&p, &o, &plan, &e);
         for (i = 1; i < c.n; i++) forced_cases += c.forced[i];
         if (best.found) {
+            ref_best kept;
+            int free_layers = best.layers;
             feasible++;
             CHECKF(r == ADASLICE_OK, "trial %d: feasible but planner says %s", trial, e.message);
             if (r != ADASLICE_OK) continue;
-            CHECKF((int)plan.layer_count == best.layers, "trial %d: %zu layers, brute force %d", trial,
-                   plan.layer_count, best.layers);
-            CHECKF(plan.worst_error == best.worst, "trial %d: worst %.17g, brute force %.17g", trial,
-                   plan.worst_error, best.worst);
+            changed += plan.plane_changes > 0;
+            CHECKF(ref_apply_changes(&c, &plan), "trial %d: the changes reported do not fit the planes wanted", trial);
+            memset(&kept, 0, sizeof kept);
+            ref_search(&c, 0, 0, 0, c.eps, 1 << 30, &kept, &dummy);
+            CHECKF(kept.found, "trial %d: no plan through the planes kept", trial);
+            CHECKF((int)plan.layer_count == kept.layers, "trial %d: %zu layers, brute force %d", trial,
+                   plan.layer_count, kept.layers);
+            CHECKF(plan.worst_error == kept.worst, "trial %d: worst %.17g, brute force %.17g", trial,
+                   plan.worst_error, kept.worst);
+            CHECKF(plan.layer_count <= (size_t)free_layers + plan.forced_planes,
+                   "trial %d: %zu layers with %zu planes kept, %d without the pre-pass", trial, plan.layer_count,
+                   plan.forced_planes, free_layers);
             CHECKF(plan_is_valid(&c, &plan, c.eps), "trial %d: plan breaks a constraint", trial);
             CHECK(plan.over_eps == 0);
             adaslice_plan_free(&plan);
-            /* budget: the smallest eps with at most B layers */
-            if (trial % 3 == 0) {
+            /* budget (the pre-pass's planes as wanted): the smallest eps with at most B layers */
+            memset(&orig, 0, sizeof orig);
+            ref_search(&wanted, 0, 0, 0, c.eps, 1 << 30, &orig, &dummy);
+            if (trial % 3 == 0 && orig.found) {
                 ref_best b;
-                int dummy = 0;
-                o.budget = (size_t)best.layers + rng() % 3;
+                o.budget = (size_t)orig.layers + rng() % 3;
                 memset(&b, 0, sizeof b);
-                ref_search(&c, 0, 0, 0, 1e300, (int)o.budget, &b, &dummy);
+                ref_search(&wanted, 0, 0, 0, 1e300, (int)o.budget, &b, &dummy);
                 r = adaslice_plan_profile(&p, &o, &plan, &e);
                 CHECKF(r == ADASLICE_OK && b.found, "trial %d: budget %zu fails: %s", trial, o.budget, e.message);
                 if (r == ADASLICE_OK) {
                     CHECKF(plan.worst_error == b.min_worst && plan.eps == b.min_worst,
                            "trial %d: budget %zu gives worst %.17g eps %.17g, brute force %.17g", trial, o.budget,
                            plan.worst_error, plan.eps, b.min_worst);
-                    CHECK(plan.layer_count <= o.budget);
-                    CHECK(plan_is_valid(&c, &plan, plan.eps));
+                    CHECK(plan.layer_count <= o.budget && plan.plane_changes == 0);
+                    CHECK(plan_is_valid(&wanted, &plan, plan.eps));
                     adaslice_plan_free(&plan);
                 }
                 budgets++;
@@ -245,9 +285,11 @@ static void optimal_equals_brute_force(void)
         }
         volumes += c.volume;
     }
-    CHECKF(feasible > 3000 && infeasible > 1000 && volumes > 1500 && budgets > 800 && forced_cases > 500,
-           "coverage: %d feasible, %d infeasible, %d volume, %d budget, %d forced planes", feasible, infeasible,
-           volumes, budgets, forced_cases);
+    CHECKF(feasible > 3000 && infeasible > 1000 && volumes > 1500 && budgets > 800 && forced_cases > 500 && changed > 50,
+           "coverage: %d feasible, %d infeasible, %d volume, %d budget, %d forced planes, %d plans with planes changed",
+           feasible, infeasible, volumes, budgets, forced_cases, changed);
+    printf("  (%d feasible, %d infeasible, %d forced planes wanted, %d plans moved or dropped some)\n", feasible,
+           infeasible, forced_cases, changed);
 }
 
 /* Baselines never break the thickness bounds (but the uniform remainder) and
