@@ -409,11 +409,112 @@ static void bad_arguments_are_named(void)
     CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_INFEASIBLE && strstr(e.message, "thinner"));
 }
 
+/* Profiles of a few thousand bins, smooth stretches parted by jumps (as a
+   part's walls meet its flats), and eps from the smallest any plan allows
+   without the pre-pass up to twice that: with the pre-pass (sharp 0.5) a
+   plan always exists, its worst error is within eps, it has a plane at each
+   plane the pre-pass kept (those wanted, as the changes say), and it has at
+   most one layer more per plane kept than the plan without the pre-pass. */
+static void the_pre_pass_never_makes_eps_infeasible(void)
+{
+    static double phi[4000];
+    static unsigned char wanted[4001];
+    static const double steps[] = {1, 1.0000001, 1.001, 1.01, 1.03, 1.1, 1.3, 2};
+    int trial, plans = 0, changed = 0, moved = 0, dropped = 0;
+    size_t most_over = 0;
+    for (trial = 0; trial < 120; trial++) {
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan with, without;
+        adaslice_error e;
+        int n = 800 + (int)(rng() % 3000), i, last = 0, lo, hi, volume = trial % 5 == 4;
+        double level = (rng() % 64) / 64.0, min_eps;
+        size_t st;
+        for (i = 0; i < n; i++) {
+            if (rng() % 97 == 0) level = (rng() % 64) / 64.0;              /* a jump */
+            else level += ((double)(rng() % 9) - 4) / 1024;                 /* a slope */
+            if (level < 0) level = 0;
+            if (level > 1) level = 1;
+            phi[i] = volume ? 20 * level : level;
+        }
+        memset(&p, 0, sizeof p);
+        p.metric = volume ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        p.bin_count = (size_t)n;
+        p.bin = 0.002;
+        p.height = n * p.bin;
+        p.phi = phi;
+        memset(&o, 0, sizeof o);
+        o.tmin = (double)(10 + rng() % 16) * p.bin;
+        o.tmax = (double)(40 + rng() % 36) * p.bin;
+        lo = (int)(o.tmin / p.bin + 0.5);
+        hi = (int)(o.tmax / p.bin + 0.5);
+        /* the planes the pre-pass wants: jumps > 0.5, skipping those no thickness fits */
+        memset(wanted, 0, sizeof wanted);
+        for (i = 1; i < n; i++)
+            if (fabs(phi[i] - phi[i - 1]) > 0.5 && ref_tileable(i - last, lo, hi) && ref_tileable(n - i, lo, hi)) {
+                wanted[i] = 1;
+                last = i;
+            }
+        o.sharp = ADASLICE_SHARP_OFF;
+        o.eps = 1e-9;
+        CHECK(adaslice_plan_profile(&p, &o, &without, &e) == ADASLICE_ERR_INFEASIBLE && e.min_eps > 0);
+        min_eps = e.min_eps;
+        for (st = 0; st < sizeof steps / sizeof *steps; st++) {
+            size_t k, c;
+            int kept = 0, missing = 0;
+            o.eps = min_eps * steps[st];
+            o.sharp = ADASLICE_SHARP_OFF;
+            CHECKF(adaslice_plan_profile(&p, &o, &without, &e) == ADASLICE_OK, "trial %d: eps %.9g: %s", trial, o.eps, e.message);
+            o.sharp = 0.5;
+            if (adaslice_plan_profile(&p, &o, &with, &e) != ADASLICE_OK) {
+                CHECKF(0, "trial %d (%s, %d bins, %d..%d per layer): eps %.9g (%g x the smallest) is feasible without "
+                       "the pre-pass but not with it: %s", trial, volume ? "volume" : "cusp", n, lo, hi, o.eps, steps[st], e.message);
+                adaslice_plan_free(&without);
+                continue;
+            }
+            plans++;
+            changed += with.plane_changes > 0;
+            /* the planes kept: those wanted, moved or dropped as reported */
+            {
+                static unsigned char kept_at[4001];
+                memcpy(kept_at, wanted, (size_t)n + 1);
+                for (c = 0; c < with.plane_changes; c++) {
+                    CHECK(kept_at[with.changes[c].wanted]);
+                    kept_at[with.changes[c].wanted] = 0;
+                    if (with.changes[c].placed) moved++; else dropped++;
+                }
+                for (c = 0; c < with.plane_changes; c++) if (with.changes[c].placed) kept_at[with.changes[c].placed] = 1;
+                for (i = 1; i < n; i++) {
+                    int on_plan = 0;
+                    if (!kept_at[i]) continue;
+                    kept++;
+                    for (k = 0; k <= with.layer_count && !on_plan; k++) on_plan = with.planes[k] == (uint32_t)i;
+                    missing += !on_plan;
+                }
+            }
+            CHECKF(missing == 0 && (size_t)kept == with.forced_planes, "trial %d: %d of %d planes kept are not on the plan (%zu reported)",
+                   trial, missing, kept, with.forced_planes);
+            CHECKF(with.worst_error <= o.eps && with.over_eps == 0, "trial %d: worst %.9g over eps %.9g", trial, with.worst_error, o.eps);
+            CHECKF(with.layer_count <= without.layer_count + with.forced_planes,
+                   "trial %d: eps %.9g: %zu layers with %zu planes kept, %zu without the pre-pass", trial, o.eps,
+                   with.layer_count, with.forced_planes, without.layer_count);
+            if (with.layer_count > without.layer_count && with.layer_count - without.layer_count > most_over)
+                most_over = with.layer_count - without.layer_count;
+            adaslice_plan_free(&with);
+            adaslice_plan_free(&without);
+        }
+    }
+    CHECKF(plans == 120 * 8 && changed > 20, "%d plans, %d with planes moved or dropped", plans, changed);
+    printf("  (%d plans, %d with planes changed: %d moved, %d dropped; at most %zu layers over the plan without)\n",
+           plans, changed, moved, dropped, most_over);
+}
+
 void test_planner(void)
 {
     RUN(fig3_k_and_d_arrays);
     RUN(fig3_plan_and_stuck_greedy);
     RUN(optimal_equals_brute_force);
+    RUN(the_pre_pass_never_makes_eps_infeasible);
     RUN(baselines_keep_their_constraints);
     RUN(quantising_never_breaks_eps);
     RUN(rounding_cannot_hide_an_excess);
