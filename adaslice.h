@@ -242,8 +242,9 @@
    merged layer of thin slices: no detail is lost, each layer is oversized by
    at most its slope's run over t), CORE one inside all through it (the
    intersection: never oversized). A tip thinner than a layer survives in
-   the envelope. Both cost a bit per ray and the rays that changed in a
-   layer, no second pass over the grid.
+   the envelope. Both cost a bit per ray, the layer's rasterised spans
+   (as many as its rasterising makes) and one ray row's crossings sorted;
+   no pass over the grid.
 
    CONTOURS  adaslice_contours_slice cuts the mesh at sorted heights (absolute z,
    mm) in one sweep after Minetto et al., "An optimal algorithm for 3D triangle
@@ -852,9 +853,12 @@ typedef struct adaslice_masker {
     adaslice_slice_at slice_at;  /* the options' rule, and its bin */
     double bin;
     int range;                   /* sweeping a layer's range by this rule (envelope, core) */
-    unsigned char *changed;      /* envelope, core: a bit per ray whose inside changed in
-                                  the last layer's range; those rays are listed in */
-    size_t *pending, pending_count, pending_cap;
+    unsigned char *changed;      /* envelope, core: a bit per ray shown otherwise than its
+                                  inside at the last layer's top */
+    struct adaslice__span *spans;/* the samples of the last layer's range, as spans */
+    size_t span_count, span_cap;
+    struct adaslice__crossing *crossings; /* one ray row's crossings, sorted */
+    size_t crossing_cap;
     int nomem;                   /* the list could not grow during a sweep */
     adaslice_allocator allocator;
 } adaslice_masker;
@@ -6143,7 +6147,8 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->seg);
     adaslice__free(&al, mk->cross);
     adaslice__free(&al, mk->changed);
-    adaslice__free(&al, mk->pending);
+    adaslice__free(&al, mk->spans);
+    adaslice__free(&al, mk->crossings);
     adaslice__gaps_free(mk->gaps);
     memset(mk, 0, sizeof *mk);
 }
@@ -6252,54 +6257,121 @@ static void adaslice__mask_show(adaslice_masker *mk, size_t row, size_t i, int o
 
 /* A ray's winding number changes by one at each sample; a pixel changes
    when one of its rays crosses between zero and positive. Sweeping a
-   layer's range (envelope, core) the image shows each ray as it was at the
-   range's bottom until its first change: then an envelope shows it for good
-   if it came in, a core hides it for good if it went out; later changes
-   show nothing. The changed rays are listed and set right (to their inside
-   at the top) before the next sweep. */
+   layer's range (envelope, core) the samples come triangle by triangle, not
+   in depth order along each ray: the windings are summed (their total
+   needs no order), the image still shows the range's bottom, and the spans
+   are kept for adaslice__mask_range to read each ray's crossings in order. */
 static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
 {
     adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
     int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
-    size_t base = (size_t)span->row * (size_t)mk->rays.width;
-    int16_t *w = mk->winding + base;
+    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
     int i;
+    if (mk->range) {
+        if (mk->span_count == mk->span_cap) {
+            adaslice__span *more = ADASLICE__CAST(adaslice__span *, adaslice__grow(&mk->allocator, mk->spans, mk->span_count,
+                                                                                   &mk->span_cap, mk->span_count + 1, sizeof *more));
+            if (!more) { mk->nomem = 1; return; }
+            mk->spans = more;
+        }
+        mk->spans[mk->span_count++] = *span;
+        for (i = span->first; i < span->end; i++) w[i] = (int16_t)(w[i] + step);
+        return;
+    }
     for (i = span->first; i < span->end; i++) {
         int before = w[i] > 0, after;
         w[i] = (int16_t)(w[i] + step);
         after = w[i] > 0;
-        if (before == after) continue;
-        if (mk->range) {
-            size_t ray = base + (size_t)i;
-            unsigned char bit = (unsigned char)(1u << (ray & 7));
-            if (mk->changed[ray >> 3] & bit) continue;
-            if (mk->pending_count == mk->pending_cap) {
-                size_t *more = ADASLICE__CAST(size_t *, adaslice__grow(&mk->allocator, mk->pending, mk->pending_count,
-                                                                       &mk->pending_cap, mk->pending_count + 1, sizeof(size_t)));
-                if (!more) { mk->nomem = 1; continue; }
-                mk->pending = more;
-            }
-            mk->changed[ray >> 3] |= bit;
-            mk->pending[mk->pending_count++] = ray;
-            if (after != (mk->range == ADASLICE_SLICE_ENVELOPE)) continue;
-        }
-        adaslice__mask_show(mk, (size_t)span->row, (size_t)i, after);
+        if (before != after) adaslice__mask_show(mk, (size_t)span->row, (size_t)i, after);
     }
 }
 
-/* The rays the last range changed show their inside at its top again: an
-   envelope showed them all, a core none. */
+typedef struct adaslice__crossing {
+    uint32_t ray;   /* in the row */
+    int32_t step;   /* +1 enters, -1 leaves */
+    double depth;
+} adaslice__crossing;
+
+static int adaslice__crossing_cmp(const void *a, const void *b)
+{
+    const adaslice__crossing *x = ADASLICE__CAST(const adaslice__crossing *, a), *y = ADASLICE__CAST(const adaslice__crossing *, b);
+    if (x->ray != y->ray) return x->ray < y->ray ? -1 : 1;
+    return x->depth < y->depth ? -1 : x->depth > y->depth;
+}
+
+static int adaslice__span_row_cmp(const void *a, const void *b)
+{
+    const adaslice__span *x = ADASLICE__CAST(const adaslice__span *, a), *y = ADASLICE__CAST(const adaslice__span *, b);
+    return x->row != y->row ? (x->row < y->row ? -1 : 1) : (x->first < y->first ? -1 : x->first > y->first);
+}
+
+/* After a layer's range is swept: row by row, each ray's crossings in the
+   range sorted by depth, its winding w0 at the bottom (its winding now less
+   their sum) carried through them, a depth's crossings at once. Envelope:
+   lit if w0 or the winding after some depth is positive (an inside interval
+   meets the range); core: lit if w0 and every one is. Rays shown otherwise
+   than their inside at the top get a bit, set right before the next sweep. */
+static adaslice_result adaslice__mask_range(adaslice_masker *mk, adaslice_error *err)
+{
+    size_t a = 0, b, k, n, c, width = (size_t)mk->rays.width;
+    int envelope = mk->range == ADASLICE_SLICE_ENVELOPE;
+    if (mk->span_count) qsort(mk->spans, mk->span_count, sizeof *mk->spans, adaslice__span_row_cmp);
+    for (; a < mk->span_count; a = b) {
+        size_t row = (size_t)mk->spans[a].row;
+        for (n = 0, b = a; b < mk->span_count && (size_t)mk->spans[b].row == row; b++)
+            n += (size_t)(mk->spans[b].end - mk->spans[b].first);
+        if (n > mk->crossing_cap) {
+            adaslice__crossing *more = ADASLICE__CAST(adaslice__crossing *, adaslice__grow(&mk->allocator, mk->crossings, 0,
+                                                                                           &mk->crossing_cap, n, sizeof *more));
+            if (!more) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for a row's %zu crossings", n);
+            mk->crossings = more;
+        }
+        for (n = 0, k = a; k < b; k++) {
+            const adaslice__span *sp = &mk->spans[k];
+            int i;
+            for (i = sp->first; i < sp->end; i++, n++) {
+                mk->crossings[n].ray = (uint32_t)i;
+                mk->crossings[n].step = (sp->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
+                mk->crossings[n].depth = adaslice__span_depth(sp, i);
+            }
+        }
+        qsort(mk->crossings, n, sizeof *mk->crossings, adaslice__crossing_cmp);
+        for (c = 0; c < n;) {
+            size_t end = c, ray = row * width + mk->crossings[c].ray;
+            long w1 = mk->winding[ray], w, sum = 0;
+            int before, lit;
+            for (; end < n && mk->crossings[end].ray == mk->crossings[c].ray; end++) sum += mk->crossings[end].step;
+            w = w1 - sum;
+            before = lit = w > 0;
+            while (c < end) {
+                double d = mk->crossings[c].depth;
+                for (; c < end && mk->crossings[c].depth == d; c++) w += mk->crossings[c].step;
+                if (envelope ? w > 0 : w <= 0) lit = envelope;
+            }
+            if (lit != before) adaslice__mask_show(mk, row, ray % width, lit);
+            if (lit != (w1 > 0)) mk->changed[ray >> 3] |= (unsigned char)(1u << (ray & 7));
+        }
+    }
+    return ADASLICE_OK;
+}
+
+/* The rays the last range showed otherwise than their inside at its top
+   show it again. */
 static void adaslice__mask_settle(adaslice_masker *mk)
 {
     size_t k, width = (size_t)mk->rays.width;
-    int shown = mk->slice_at == ADASLICE_SLICE_ENVELOPE;
-    for (k = 0; k < mk->pending_count; k++) {
-        size_t ray = mk->pending[k];
-        int inside = mk->winding[ray] > 0;
-        mk->changed[ray >> 3] &= (unsigned char)~(1u << (ray & 7));
-        if (inside != shown) adaslice__mask_show(mk, ray / width, ray % width, inside);
+    for (k = 0; k < mk->span_count; k++) {
+        const adaslice__span *sp = &mk->spans[k];
+        size_t row = (size_t)sp->row, i;
+        for (i = (size_t)sp->first; i < (size_t)sp->end; i++) {
+            size_t ray = row * width + i;
+            unsigned char bit = (unsigned char)(1u << (ray & 7));
+            if (!(mk->changed[ray >> 3] & bit)) continue; /* shown right, or set right through another span */
+            mk->changed[ray >> 3] &= (unsigned char)~bit;
+            adaslice__mask_show(mk, row, i, mk->winding[ray] > 0);
+        }
     }
-    mk->pending_count = 0;
+    mk->span_count = 0;
 }
 
 /* ---- masks of open meshes: each layer's section filled in the plane */
@@ -6475,14 +6547,14 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
                                   "masks: triangle %u lies more than 2^21 pixels from the printer's grid", (unsigned)mk->active[k]);
     mk->done = h;
     mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
-    if (mk->nomem) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the rays changing below %g mm", height);
+    if (mk->nomem) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the samples below %g mm", height);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
 
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
 {
-    if (mk->pending_count) adaslice__mask_settle(mk);
+    if (mk->span_count) adaslice__mask_settle(mk);
     return adaslice__masker_sweep(mk, height, 0, err);
 }
 
@@ -6502,11 +6574,14 @@ ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *mk, double z
     case ADASLICE_SLICE_CORE:
         /* the open range (z_bottom, z_top): a face lying at either end is
            the boundary of the layers it parts, inside neither */
-        if (mk->pending_count) adaslice__mask_settle(mk);
+        if (mk->span_count) adaslice__mask_settle(mk);
         if ((r = adaslice__masker_sweep(mk, z_bottom, 1, err)) != ADASLICE_OK) return r;
+        if (z_top - mk->depth_origin < mk->done) return ADASLICE_OK; /* no thickness: the section */
         mk->range = (int)mk->slice_at;
         r = adaslice__masker_sweep(mk, z_top, 0, err);
+        if (r == ADASLICE_OK) r = adaslice__mask_range(mk, err);
         mk->range = 0;
+        mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
         return r;
     default: return adaslice_masker_slice(mk, 0.5 * (z_bottom + z_top), err);
     }

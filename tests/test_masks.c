@@ -291,6 +291,71 @@ static void sphere_layer_areas(int s, double pixel)
 static void sphere_envelope_is_the_largest_section(void) { sphere_layer_areas(1, 0.01); }
 static void sphere_envelope_antialiased(void) { sphere_layer_areas(2, 0.02); }
 
+/* The hand (overhangs, fingers starting and ending inside layers), layers
+   of 0.15 mm: each layer's envelope holds every pixel lit at any of 30
+   heights spread through the layer's open range, and its core none that is
+   dark at any of them; what the envelope adds to those 30 sections (rays
+   inside for less than their spacing, 5 um, near horizontal faces) and what
+   the core lacks are few. Over many layers, so the rays a layer changed are
+   set right again for the next, and skipped layers are passed in one sweep. */
+static void hand_envelope_holds_every_section_of_its_layer(void)
+{
+    adaslice_load_options lo;
+    adaslice_mesh m;
+    adaslice_error e;
+    adaslice_grid g;
+    adaslice_masker env, core, point;
+    static unsigned char any[440][350], all[440][350];
+    double bounds_lo[3], bounds_hi[3], zb;
+    long lit = 0, extra = 0, missing_env = 0, core_lit = 0, core_extra = 0;
+    int layers = 0, i, j, h;
+    const int heights = 30;
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 88.7;
+    CHECKF(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &m, &e) == ADASLICE_OK, "%s", e.message);
+    adaslice_mesh_bounds(&m, bounds_lo, bounds_hi);
+    g = plate_around(&m, 0.2, 0.2, 350, 440);
+    CHECK(layer_masker(&env, &m, &g, 1, ADASLICE_SLICE_ENVELOPE) == ADASLICE_OK);
+    CHECK(layer_masker(&core, &m, &g, 1, ADASLICE_SLICE_CORE) == ADASLICE_OK);
+    CHECK(layer_masker(&point, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+    for (zb = bounds_lo[2] + 0.013; zb < bounds_hi[2]; zb += layers % 3 ? 0.15 : 0.15 * 8) {
+        /* three layers in a row, then seven skipped (the maskers pass them in one sweep) */
+        double zt = zb + 0.15;
+        memset(any, 0, sizeof any);
+        memset(all, 1, sizeof all);
+        for (h = 0; h < heights; h++) {
+            CHECK(adaslice_masker_slice(&point, zb + 0.15 * (h + 0.5) / heights, NULL) == ADASLICE_OK);
+            for (j = 0; j < g.height; j++)
+                for (i = 0; i < g.width; i++) {
+                    int b = mask_bit(&point, i, j);
+                    any[j][i] |= (unsigned char)b;
+                    all[j][i] &= (unsigned char)b;
+                }
+        }
+        CHECK(adaslice_masker_layer(&env, zb, zt, NULL) == ADASLICE_OK);
+        CHECK(adaslice_masker_layer(&core, zb, zt, NULL) == ADASLICE_OK);
+        for (j = 0; j < g.height; j++)
+            for (i = 0; i < g.width; i++) {
+                int en = mask_bit(&env, i, j), co = mask_bit(&core, i, j);
+                lit += en;
+                missing_env += any[j][i] && !en;
+                extra += en && !any[j][i];
+                core_lit += co;
+                core_extra += co && !all[j][i];
+            }
+        layers++;
+    }
+    CHECKF(missing_env == 0, "%ld pixels lit in a section of their layer but not in its envelope", missing_env);
+    CHECKF(core_extra == 0, "%ld pixels of a core dark in a section of their layer", core_extra);
+    CHECKF(layers > 20 && lit > 100000 && extra * 200 < lit, "%d layers, %ld pixels lit, %ld beyond the 30 sections",
+           layers, lit, extra);
+    printf("  (hand: %d layers, %ld envelope pixels, %ld beyond the sections; %ld core pixels)\n", layers, lit, extra, core_lit);
+    adaslice_masker_free(&env);
+    adaslice_masker_free(&core);
+    adaslice_masker_free(&point);
+    adaslice_mesh_free(&m);
+}
+
 /* Envelope and core read rays: a mesh that cannot be read along them is
    refused, with the count of unbalanced edges; a bad rule is an argument
    error; a layer upside down too. */
@@ -332,5 +397,6 @@ void test_masks(void)
     RUN(pin_thinner_than_a_layer_survives_in_the_envelope);
     RUN(sphere_envelope_is_the_largest_section);
     RUN(sphere_envelope_antialiased);
+    RUN(hand_envelope_holds_every_section_of_its_layer);
     RUN(envelope_needs_a_closed_mesh);
 }
