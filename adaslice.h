@@ -239,9 +239,9 @@
    sloping away below by up to t/2), at its first or last bin, or over the
    whole range, read from each ray's crossings in one pass: ENVELOPE lights a
    ray inside anywhere in the range (the union of the layer's sections, as a
-   merged layer of thin slices: no detail is lost, each layer is oversized by
-   at most its slope's run over t), CORE one inside all through it (the
-   intersection: never oversized). A tip thinner than a layer survives in
+   merged layer of thin slices: no detail is lost; a wall at theta to the
+   plate is oversized by up to t cot(theta)), CORE one inside all through it
+   (the intersection: never oversized, undersized as much). A tip thinner than a layer survives in
    the envelope. Both cost a bit per ray, the layer's rasterised spans
    (as many as its rasterising makes) and one ray row's crossings sorted;
    no pass over the grid.
@@ -792,9 +792,9 @@ typedef enum adaslice_slice_at {
     ADASLICE_SLICE_MIDDLE = 0, /* the section at the layer's middle height */
     ADASLICE_SLICE_BOTTOM,     /* the section at the centre of its first bin */
     ADASLICE_SLICE_TOP,        /* the section at the centre of its last bin */
-    ADASLICE_SLICE_ENVELOPE,   /* lit where the part is inside anywhere in [z_bottom, z_top]:
+    ADASLICE_SLICE_ENVELOPE,   /* lit where the part is inside anywhere in (z_bottom, z_top):
                                   the union of its sections; never cuts into the part */
-    ADASLICE_SLICE_CORE        /* lit where it is inside throughout [z_bottom, z_top]: the
+    ADASLICE_SLICE_CORE        /* lit where it is inside throughout (z_bottom, z_top): the
                                   intersection; never oversized */
 } adaslice_slice_at;
 
@@ -824,7 +824,8 @@ typedef struct adaslice_mask_options {
    row crossings per layer instead of the incremental sweep.
    With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
    grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
-   per pixel when s > 1, plus the image. */
+   per pixel when s > 1, plus the image; envelope and core a bit per ray
+   more, the spans of a layer's range and a row's crossings. */
 typedef struct adaslice_masker {
     const adaslice_mesh *mesh;
     adaslice_grid grid;          /* the printer's pixels; axis must be z */
@@ -859,7 +860,7 @@ typedef struct adaslice_masker {
     size_t span_count, span_cap;
     struct adaslice__crossing *crossings; /* one ray row's crossings, sorted */
     size_t crossing_cap;
-    int nomem;                   /* the list could not grow during a sweep */
+    int nomem;                   /* the spans could not grow during a sweep */
     adaslice_allocator allocator;
 } adaslice_masker;
 
