@@ -68,6 +68,8 @@
        adaslice_grid_plate              a printer's display as a grid of z rays
        adaslice_masker_init             layer masks, made bottom-up in one sweep
        adaslice_masker_slice            the mask at the next height
+       adaslice_masker_layer            the mask of the next layer by a rule: a
+                                        section, envelope (union) or core
        adaslice_masker_free
        adaslice_masker_bytes            what a masker will allocate, before it does
        adaslice_contours_slice          cross-section polygons at sorted heights
@@ -184,7 +186,14 @@
                plan feasible in units is feasible in mm (volume adds one unit
                per bin unless every value was exact). The §3.3 pre-pass
                forces a plane where |phi[i] - phi[i-1]| > sharp, unless that
-               would leave a stretch no layers can fill.
+               would leave a stretch no layers can fill. It never makes a
+               feasible eps infeasible: bottom-up, a plane is kept where some
+               plan through it and the planes kept below stays within eps and
+               has at most one layer more per plane kept than the plan
+               without the pre-pass; else it moves to the nearest plane
+               (within tmax) that does, else it is dropped; plan.changes
+               lists those, and why. (Budget mode keeps the planes as they
+               are.)
                budget > 0: the smallest eps whose plan has at most that many
                layers (bisection over eps in units).
      greedy    ref. [3], local: each layer as thick as the profile at its
@@ -224,6 +233,18 @@
    badly wound mesh leaves a ray unbalanced it must be positive counted from
    above too, so no column is ever lit above the part. supersample s > 1 gives
    8-bit masks from s x s rays per pixel. Memory: 2 bytes per ray.
+   adaslice_masker_layer takes a layer's range and the options' slice_at:
+   the section at its middle (default; dimensionally right on average, but a
+   layer t thick drops a feature thinner than t/2 and undersizes a face
+   sloping away below by up to t/2), at its first or last bin, or over the
+   whole range, read from each ray's crossings in one pass: ENVELOPE lights a
+   ray inside anywhere in the range (the union of the layer's sections, as a
+   merged layer of thin slices: no detail is lost; a wall at theta to the
+   plate is oversized by up to t cot(theta)), CORE one inside all through it
+   (the intersection: never oversized, undersized as much). A tip thinner than a layer survives in
+   the envelope. Both cost a bit per ray, the layer's rasterised spans
+   (as many as its rasterising makes) and one ray row's crossings sorted;
+   no pass over the grid.
 
    CONTOURS  adaslice_contours_slice cuts the mesh at sorted heights (absolute z,
    mm) in one sweep after Minetto et al., "An optimal algorithm for 3D triangle
@@ -663,6 +684,17 @@ typedef struct adaslice_layer {
     double error;             /* the layer's error under the profile's metric */
 } adaslice_layer;
 
+/* A plane the §3.3 pre-pass wanted but did not force where it wanted. */
+typedef struct adaslice_plane_change {
+    uint32_t wanted;            /* the plane (bin index) at the sharp change */
+    uint32_t placed;            /* the nearest plane (within a thickest layer) that keeps
+                                   the plan feasible and costs at most one layer more,
+                                   or 0: dropped, none does */
+    int infeasible;             /* why: 1, with a plane at `wanted` no plan keeps every
+                                   layer within eps; 0, one would, with more than one
+                                   layer more */
+} adaslice_plane_change;
+
 typedef struct adaslice_plan {
     size_t layer_count;         /* K */
     adaslice_layer *layers;     /* K layers, bottom first */
@@ -671,7 +703,12 @@ typedef struct adaslice_plan {
     double worst_error;         /* max layer error */
     double total_error;         /* sum of layer errors */
     size_t over_eps;            /* layers whose error exceeds eps (baselines only) */
-    size_t forced_planes;       /* planes set by the sharp-change pre-pass */
+    size_t forced_planes;       /* planes set by the sharp-change pre-pass (moved ones
+                                   included): K is at most this many above the plan
+                                   without the pre-pass */
+    size_t plane_changes;       /* sharp-change planes moved or dropped so that eps
+                                   stays feasible, listed bottom first in */
+    adaslice_plane_change *changes;
     uint32_t bins_min, bins_max;/* ceil(tmin/b), floor(tmax/b) */
     adaslice_allocator allocator;
 } adaslice_plan;
@@ -688,7 +725,8 @@ ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *profile, size_t
 /* The integers a printer plans on (link/PROTOCOL.md): with eps =
    options->eps_units units, units[i] is b * phi[i] rounded up to whole units
    and capped at eps_units + 1 (a bin above eps fits no layer either way), and
-   forced[i] = 1 where the §3.3 pre-pass puts a plane on top of bin i. Fed to
+   forced[i] = 1 where the §3.3 pre-pass puts a plane on top of bin i (kept,
+   moved or dropped for eps_units as adaslice_plan_profile does). Fed to
    adaslice_dp (eps = eps_units) they give adaslice_plan_profile's planes
    with the same options, bit for bit. units and forced hold N entries. */
 #define ADASLICE_PRINTER_EPS_UNITS 1048576u
@@ -749,10 +787,25 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
 ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch_x,
                                                double pitch_y, const double offset[2]);
 
+/* Which heights of a layer its mask shows (adaslice_masker_layer). */
+typedef enum adaslice_slice_at {
+    ADASLICE_SLICE_MIDDLE = 0, /* the section at the layer's middle height */
+    ADASLICE_SLICE_BOTTOM,     /* the section at the centre of its first bin */
+    ADASLICE_SLICE_TOP,        /* the section at the centre of its last bin */
+    ADASLICE_SLICE_ENVELOPE,   /* lit where the part is inside anywhere in (z_bottom, z_top):
+                                  the union of its sections; never cuts into the part */
+    ADASLICE_SLICE_CORE        /* lit where it is inside throughout (z_bottom, z_top): the
+                                  intersection; never oversized */
+} adaslice_slice_at;
+
 typedef struct adaslice_mask_options {
     int supersample;                     /* s; 0 or 1: 1-bit masks, else 8-bit from s x s
                                             rays per pixel (at most 16) */
     const adaslice_allocator *allocator; /* NULL: default */
+    adaslice_slice_at slice_at;          /* adaslice_masker_layer's rule; 0: middle */
+    double bin;                          /* bottom and top cut at the centre of the first
+                                            and last bin of this size, mm; 0:
+                                            ADASLICE_DEFAULT_BIN */
 } adaslice_mask_options;
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -771,7 +824,8 @@ typedef struct adaslice_mask_options {
    row crossings per layer instead of the incremental sweep.
    With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
    grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
-   per pixel when s > 1, plus the image. */
+   per pixel when s > 1, plus the image; envelope and core a bit per ray
+   more, the spans of a layer's range and a row's crossings. */
 typedef struct adaslice_masker {
     const adaslice_mesh *mesh;
     adaslice_grid grid;          /* the printer's pixels; axis must be z */
@@ -797,6 +851,16 @@ typedef struct adaslice_masker {
     size_t seg_cap;
     uint64_t *cross;             /* where they cross the ray rows */
     size_t cross_cap;
+    adaslice_slice_at slice_at;  /* the options' rule, and its bin */
+    double bin;
+    int range;                   /* sweeping a layer's range by this rule (envelope, core) */
+    unsigned char *changed;      /* envelope, core: a bit per ray shown otherwise than its
+                                  inside at the last layer's top */
+    struct adaslice__span *spans;/* the samples of the last layer's range, as spans */
+    size_t span_count, span_cap;
+    struct adaslice__crossing *crossings; /* one ray row's crossings, sorted */
+    size_t crossing_cap;
+    int nomem;                   /* the spans could not grow during a sweep */
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -806,6 +870,16 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *masker, const
 /* The mask at `height` (absolute z, mm) in masker->image; heights must not
    decrease from call to call. */
 ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
+/* The mask of the layer [z_bottom, z_top] (absolute z, mm) by the options'
+   slice_at: a section (middle, bottom, top) or, along each ray's sorted
+   crossings, envelope (lit if an inside interval of the ray meets the open
+   range (z_bottom, z_top)) or core (lit if one holds all of it: a face
+   lying at an end parts two layers and counts in neither); with s > 1 each of the s x s
+   rays by the same rule. Layers come bottom-up: z_bottom (envelope, core) or
+   the cut's height never below the previous call's. Envelope and core need
+   balanced edges (a closed mesh): ADASLICE_ERR_UNSUPPORTED at init otherwise. */
+ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *masker, double z_bottom, double z_top,
+                                                   adaslice_error *error);
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
 /* The bytes adaslice_masker_init asks for on a width x height grid at
    `supersample` for a mesh of `triangles`: a caller's limit checked before
@@ -5423,6 +5497,128 @@ static uint32_t adaslice__sharp_planes(const adaslice_profile *p, uint32_t n, do
     return count;
 }
 
+/* Fewest layers from plane i to the top, for every i (UNREACHED where none
+   within eps): the DP run down from the top on the bins reversed (an
+   additive layer error reads the same either way), or for volume deviation,
+   whose error hangs on a layer's first bin, straight down in O(N w). */
+static void adaslice__layers_above(adaslice__job *job, uint64_t eps, void *ring, size_t ring_size, uint32_t *above)
+{
+    uint32_t n = job->n, i, l;
+    if (!job->volume) {
+        adaslice_dp dp;
+        (void)adaslice_dp_init(&dp, ring, ring_size, n, job->lo, job->hi, eps, 0, 0);
+        above[n] = 0;
+        for (i = 1; i <= n; i++) {
+            adaslice_dp_push(&dp, job->units[n - i], 0);
+            above[n - i] = adaslice_dp_layers(&dp);
+        }
+        return;
+    }
+    above[n] = 0;
+    for (i = n; i-- > 0;) {
+        uint64_t run = 0;
+        uint32_t best = ADASLICE__UNREACHED;
+        for (l = 1; l <= job->hi && i + l <= n; l++) {
+            uint64_t u = job->units[i + l - 1], f = job->units[i];
+            run += (u > f ? u - f : f - u) + job->slack;
+            if (run > eps) break;
+            if (l >= job->lo && above[i + l] != ADASLICE__UNREACHED && above[i + l] + 1 < best) best = above[i + l] + 1;
+        }
+        above[i] = best;
+    }
+}
+
+/* Fewest layers from plane `from` to every plane up to `to` (no forced plane
+   between), into from_layers[plane]; `dp` carries on from where it stopped. */
+static void adaslice__layers_from(adaslice__job *job, adaslice_dp *dp, uint32_t from, uint32_t to, uint32_t *from_layers)
+{
+    while (from + dp->plane < to) {
+        adaslice_dp_push(dp, job->units[from + dp->plane], 0);
+        from_layers[from + dp->plane] = adaslice_dp_layers(dp);
+    }
+}
+
+/* §3.3 without making eps infeasible: the pre-pass's planes (job->forced),
+   bottom-up, each kept, moved or dropped so that with the planes kept below
+   it a plan within eps exists whose count is at most K0 (no pre-pass) plus
+   the planes kept: with L the last plane kept and C the fewest layers up to
+   it, a plane f is kept when C + S(L, f) + S(f, N) <= K0 + kept + 1 (S: the
+   fewest layers between two planes). That holds at the top by induction, so
+   the plan exists and has at most K0 + kept layers. Tried at the plane
+   wanted, then 1, 2, ... bins below and above it, up to a thickest layer
+   away, never onto or past a neighbour. Changes go to *changes (allocated,
+   `*count` of them); returns the planes kept, or UNREACHED out of memory.
+   No plan at all within eps: every plane is dropped, silently (the error
+   then is the plan's own). */
+static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const adaslice_allocator *al,
+                                       adaslice_plane_change **changes, size_t *count)
+{
+    uint32_t n = job->n, i, L = 0, C = 0, kept = 0, K0, *above, *from, *wanted, wanted_count = 0;
+    size_t ring_size = adaslice_dp_workspace(n, job->hi, job->volume), cap = 0;
+    void *ring;
+    adaslice_dp dp;
+    *changes = NULL;
+    *count = 0;
+    for (i = 1; i < n; i++) wanted_count += job->forced[i] != 0;
+    if (!wanted_count) return 0;
+    above = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)n + 1, 2 * sizeof(uint32_t)));
+    wanted = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)wanted_count + 1, sizeof(uint32_t)));
+    ring = adaslice__alloc(al, 1, ring_size);
+    if (!above || !wanted || !ring) goto nomem;
+    from = above + n + 1;
+    for (i = 1, wanted_count = 0; i < n; i++) if (job->forced[i]) wanted[wanted_count++] = i;
+    wanted[wanted_count] = n;
+    memset(job->forced, 0, (size_t)n + 1);
+    adaslice__layers_above(job, eps, ring, ring_size, above);
+    K0 = above[0];
+    if (K0 == ADASLICE__UNREACHED) goto done;
+    (void)adaslice_dp_init(&dp, ring, ring_size, n, job->lo, job->hi, eps, job->volume, job->slack);
+    for (i = 0; i < wanted_count; i++) {
+        uint32_t c = wanted[i], next = wanted[i + 1], d, placed = 0, reach = c + job->hi < next ? c + job->hi : next - 1;
+        int infeasible;
+        adaslice__layers_from(job, &dp, L, reach, from);
+        infeasible = from[c] == ADASLICE__UNREACHED || above[c] == ADASLICE__UNREACHED;
+        for (d = 0; d <= job->hi && !placed; d++) {
+            int side;
+            for (side = 0; side < 2 && !placed; side++) {
+                uint32_t f = side ? c + d : c - d;
+                if ((side && (d == 0 || f > reach)) || (!side && d >= c - L)) continue;
+                if (from[f] != ADASLICE__UNREACHED && above[f] != ADASLICE__UNREACHED &&
+                    (uint64_t)C + from[f] + above[f] <= (uint64_t)K0 + kept + 1)
+                    placed = f;
+            }
+        }
+        if (placed != c) {
+            if (*count == cap) {
+                adaslice_plane_change *more = ADASLICE__CAST(adaslice_plane_change *,
+                    adaslice__grow(al, *changes, *count, &cap, *count + 1, sizeof(adaslice_plane_change)));
+                if (!more) goto nomem;
+                *changes = more;
+            }
+            (*changes)[*count].wanted = c;
+            (*changes)[*count].placed = placed;
+            (*changes)[(*count)++].infeasible = infeasible;
+        }
+        if (!placed) continue;
+        job->forced[placed] = 1;
+        C += from[placed];
+        L = placed;
+        kept++;
+        (void)adaslice_dp_init(&dp, ring, ring_size, n - L, job->lo, job->hi, eps, job->volume, job->slack);
+    }
+done:
+    adaslice__free(al, above);
+    adaslice__free(al, wanted);
+    adaslice__free(al, ring);
+    return kept;
+nomem:
+    adaslice__free(al, *changes);
+    *changes = NULL;
+    *count = 0;
+    kept = ADASLICE__UNREACHED;
+    goto done;
+}
+
 static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice_plan_options *opt,
                                               double eps, adaslice_plan *plan, adaslice_error *err)
 {
@@ -5453,6 +5649,9 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     } else {
         eps_units = adaslice__eps_units(eps, job->quantum);
     }
+    if (job->forced && !opt->budget &&
+        adaslice__sharp_settle(job, eps_units, &plan->allocator, &plan->changes, &plan->plane_changes) == ADASLICE__UNREACHED)
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
     layers = adaslice__job_run(job, eps_units);
     if (layers == ADASLICE__UNREACHED) {
         uint32_t reach = job->dp.reach;
@@ -5589,7 +5788,7 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     adaslice_allocator al;
     adaslice_result r = ADASLICE_OK;
     unsigned char *ok = NULL;
-    uint32_t *planes = NULL, count, forced = 0, lo, hi;
+    uint32_t *planes = NULL, count, forced = 0, lo, hi, i;
     void *ring = NULL;
 
     if (!plan) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "plan: no output given");
@@ -5651,6 +5850,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
             forced = adaslice__sharp_planes(p, job.n, opt.sharp, ok, job.forced);
         }
         r = adaslice__plan_optimal(&job, &opt, opt.eps, plan, err);
+        if (job.forced) /* those kept, moved or not */
+            for (forced = 0, i = 1; i < job.n; i++) forced += job.forced[i] != 0;
         plan->forced_planes = forced;
         if (r == ADASLICE_ERR_INFEASIBLE && forced && err) {
             size_t len = strlen(err->message);
@@ -5703,6 +5904,30 @@ ADASLICE_DEF adaslice_result adaslice_plan_units(const adaslice_profile *p, cons
     }
     adaslice__tileable(ok, n, lo, hi);
     (void)adaslice__sharp_planes(p, n, opt.sharp, ok, planes);
+    {   /* kept, moved or dropped for eps_units as adaslice_plan_profile does */
+        adaslice__job job;
+        adaslice_plane_change *changes = NULL;
+        size_t count = 0;
+        uint32_t kept = ADASLICE__UNREACHED;
+        memset(&job, 0, sizeof job);
+        job.profile = p;
+        job.n = n;
+        job.lo = lo;
+        job.hi = hi;
+        job.forced = planes;
+        job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, n, sizeof(uint64_t)));
+        if (job.units) {
+            for (i = 0; i < n; i++) job.units[i] = units[i];
+            kept = adaslice__sharp_settle(&job, opt.eps_units, &al, &changes, &count);
+        }
+        adaslice__free(&al, changes);
+        adaslice__free(&al, job.units);
+        if (kept == ADASLICE__UNREACHED) {
+            adaslice__free(&al, ok);
+            adaslice__free(&al, planes);
+            return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan units: out of memory");
+        }
+    }
     /* the plane on top of bin i is plane i + 1; the top plane is never forced */
     for (i = 0; i + 1 < n; i++) forced[i] = planes[i + 1];
     adaslice__free(&al, ok);
@@ -5718,6 +5943,7 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
     al = plan->allocator;
     adaslice__free(&al, plan->planes);
     adaslice__free(&al, plan->layers);
+    adaslice__free(&al, plan->changes);
     memset(plan, 0, sizeof *plan);
 }
 
@@ -5904,10 +6130,11 @@ static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
 
 ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles)
 {
-    /* as adaslice_masker_init allocates: the image, a winding per ray, a
-       coverage per pixel when anti-aliased, and three words per triangle */
+    /* as adaslice_masker_init allocates: the image, a winding per ray (and
+       a bit for envelope and core), a coverage per pixel when anti-aliased,
+       and three words per triangle */
     double s = supersample > 1 ? supersample : 1, pixels = (double)width * height;
-    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * sizeof(int16_t) +
+    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * (sizeof(int16_t) + 1.0 / 8) +
                    (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
     return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
@@ -5924,6 +6151,9 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->coverage);
     adaslice__free(&al, mk->seg);
     adaslice__free(&al, mk->cross);
+    adaslice__free(&al, mk->changed);
+    adaslice__free(&al, mk->spans);
+    adaslice__free(&al, mk->crossings);
     adaslice__gaps_free(mk->gaps);
     memset(mk, 0, sizeof *mk);
 }
@@ -5961,6 +6191,11 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     if (s < 1 || s > 16 || (double)grid->width * s > ADASLICE__GRID_LIMIT || (double)grid->height * s > ADASLICE__GRID_LIMIT)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: supersampling %d is outside 1..16 (or too fine for the grid)", s);
     if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "masks: the mesh has no triangles");
+    mk->slice_at = options ? options->slice_at : ADASLICE_SLICE_MIDDLE;
+    mk->bin = options && options->bin != 0 ? options->bin : ADASLICE_DEFAULT_BIN;
+    if ((unsigned)mk->slice_at > ADASLICE_SLICE_CORE || !(mk->bin > 0) || mk->bin > DBL_MAX)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: slice_at %d or bin %g is not one of the rules",
+                              (int)mk->slice_at, mk->bin);
     mk->allocator = adaslice__allocator(options ? options->allocator : NULL);
     mk->mesh = mesh;
     mk->grid = *grid;
@@ -5976,6 +6211,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     pixels = (size_t)grid->width * (size_t)grid->height;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
     if ((res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK) return res;
+    if (mk->gaps && mk->slice_at >= ADASLICE_SLICE_ENVELOPE) {
+        size_t loose = mk->gaps->count;
+        adaslice_masker_free(mk);
+        return adaslice__fail(err, ADASLICE_ERR_UNSUPPORTED, 0, 0,
+                              "masks: envelope and core masks read the part along rays and need a closed mesh; "
+                              "this one has %zu unbalanced edges (repair it, or slice at a height)", loose);
+    }
+    if (mk->slice_at >= ADASLICE_SLICE_ENVELOPE)
+        mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
     /* sections need no winding per ray */
     if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
@@ -5983,13 +6227,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, 2 * mesh->triangle_count, sizeof(adaslice__zkey)));
-    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys) {
+    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys ||
+        (mk->slice_at >= ADASLICE_SLICE_ENVELOPE && !mk->changed)) {
         adaslice__free(&mk->allocator, keys);
         adaslice_masker_free(mk);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
     }
     memset(mk->image, 0, mk->stride * (size_t)grid->height);
     if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
+    if (mk->changed) memset(mk->changed, 0, rays / 8 + 1);
     if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
     for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__zbits(adaslice__tri_z(mesh, t, 0)); keys[t].t = (uint32_t)t; }
     sorted = adaslice__sort_zkeys(keys, keys + mesh->triangle_count, mesh->triangle_count);
@@ -6000,29 +6246,137 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     return ADASLICE_OK;
 }
 
+/* Ray i of ray row `row` turns on or off in the image. */
+static void adaslice__mask_show(adaslice_masker *mk, size_t row, size_t i, int on)
+{
+    size_t s = (size_t)mk->supersample, r = row / s;
+    mk->lit_rays += on ? 1 : -1;
+    if (s == 1) {
+        mk->image[r * mk->stride + (i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
+    } else {
+        size_t px = r * mk->stride + i / s;
+        mk->coverage[px] = (uint16_t)(mk->coverage[px] + (on ? 1 : -1));
+        mk->image[px] = mk->grey[mk->coverage[px]];
+    }
+}
+
 /* A ray's winding number changes by one at each sample; a pixel changes
-   when one of its rays crosses between zero and positive. */
+   when one of its rays crosses between zero and positive. Sweeping a
+   layer's range (envelope, core) the samples come triangle by triangle, not
+   in depth order along each ray: the windings are summed (their total
+   needs no order), the image still shows the range's bottom, and the spans
+   are kept for adaslice__mask_range to read each ray's crossings in order. */
 static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
 {
     adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
-    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1, s = (int16_t)mk->supersample;
+    int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
     int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
-    size_t row = (size_t)(span->row / s);
     int i;
+    if (mk->range) {
+        if (mk->span_count == mk->span_cap) {
+            adaslice__span *more = ADASLICE__CAST(adaslice__span *, adaslice__grow(&mk->allocator, mk->spans, mk->span_count,
+                                                                                   &mk->span_cap, mk->span_count + 1, sizeof *more));
+            if (!more) { mk->nomem = 1; return; }
+            mk->spans = more;
+        }
+        mk->spans[mk->span_count++] = *span;
+        for (i = span->first; i < span->end; i++) w[i] = (int16_t)(w[i] + step);
+        return;
+    }
     for (i = span->first; i < span->end; i++) {
         int before = w[i] > 0, after;
         w[i] = (int16_t)(w[i] + step);
         after = w[i] > 0;
-        if (before == after) continue;
-        mk->lit_rays += after ? 1 : -1;
-        if (s == 1) {
-            mk->image[row * mk->stride + (size_t)(i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
-        } else {
-            size_t px = row * mk->stride + (size_t)(i / s);
-            mk->coverage[px] = (uint16_t)(mk->coverage[px] + (after ? 1 : -1));
-            mk->image[px] = mk->grey[mk->coverage[px]];
+        if (before != after) adaslice__mask_show(mk, (size_t)span->row, (size_t)i, after);
+    }
+}
+
+typedef struct adaslice__crossing {
+    uint32_t ray;   /* in the row */
+    int32_t step;   /* +1 enters, -1 leaves */
+    double depth;
+} adaslice__crossing;
+
+static int adaslice__crossing_cmp(const void *a, const void *b)
+{
+    const adaslice__crossing *x = ADASLICE__CAST(const adaslice__crossing *, a), *y = ADASLICE__CAST(const adaslice__crossing *, b);
+    if (x->ray != y->ray) return x->ray < y->ray ? -1 : 1;
+    return x->depth < y->depth ? -1 : x->depth > y->depth;
+}
+
+static int adaslice__span_row_cmp(const void *a, const void *b)
+{
+    const adaslice__span *x = ADASLICE__CAST(const adaslice__span *, a), *y = ADASLICE__CAST(const adaslice__span *, b);
+    return x->row != y->row ? (x->row < y->row ? -1 : 1) : (x->first < y->first ? -1 : x->first > y->first);
+}
+
+/* After a layer's range is swept: row by row, each ray's crossings in the
+   range sorted by depth, its winding w0 at the bottom (its winding now less
+   their sum) carried through them, a depth's crossings at once. Envelope:
+   lit if w0 or the winding after some depth is positive (an inside interval
+   meets the range); core: lit if w0 and every one is. Rays shown otherwise
+   than their inside at the top get a bit, set right before the next sweep. */
+static adaslice_result adaslice__mask_range(adaslice_masker *mk, adaslice_error *err)
+{
+    size_t a = 0, b, k, n, c, width = (size_t)mk->rays.width;
+    int envelope = mk->range == ADASLICE_SLICE_ENVELOPE;
+    if (mk->span_count) qsort(mk->spans, mk->span_count, sizeof *mk->spans, adaslice__span_row_cmp);
+    for (; a < mk->span_count; a = b) {
+        size_t row = (size_t)mk->spans[a].row;
+        for (n = 0, b = a; b < mk->span_count && (size_t)mk->spans[b].row == row; b++)
+            n += (size_t)(mk->spans[b].end - mk->spans[b].first);
+        if (n > mk->crossing_cap) {
+            adaslice__crossing *more = ADASLICE__CAST(adaslice__crossing *, adaslice__grow(&mk->allocator, mk->crossings, 0,
+                                                                                           &mk->crossing_cap, n, sizeof *more));
+            if (!more) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for a row's %zu crossings", n);
+            mk->crossings = more;
+        }
+        for (n = 0, k = a; k < b; k++) {
+            const adaslice__span *sp = &mk->spans[k];
+            int i;
+            for (i = sp->first; i < sp->end; i++, n++) {
+                mk->crossings[n].ray = (uint32_t)i;
+                mk->crossings[n].step = (sp->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
+                mk->crossings[n].depth = adaslice__span_depth(sp, i);
+            }
+        }
+        qsort(mk->crossings, n, sizeof *mk->crossings, adaslice__crossing_cmp);
+        for (c = 0; c < n;) {
+            size_t end = c, ray = row * width + mk->crossings[c].ray;
+            long w1 = mk->winding[ray], w, sum = 0;
+            int before, lit;
+            for (; end < n && mk->crossings[end].ray == mk->crossings[c].ray; end++) sum += mk->crossings[end].step;
+            w = w1 - sum;
+            before = lit = w > 0;
+            while (c < end) {
+                double d = mk->crossings[c].depth;
+                for (; c < end && mk->crossings[c].depth == d; c++) w += mk->crossings[c].step;
+                if (envelope ? w > 0 : w <= 0) lit = envelope;
+            }
+            if (lit != before) adaslice__mask_show(mk, row, ray % width, lit);
+            if (lit != (w1 > 0)) mk->changed[ray >> 3] |= (unsigned char)(1u << (ray & 7));
         }
     }
+    return ADASLICE_OK;
+}
+
+/* The rays the last range showed otherwise than their inside at its top
+   show it again. */
+static void adaslice__mask_settle(adaslice_masker *mk)
+{
+    size_t k, width = (size_t)mk->rays.width;
+    for (k = 0; k < mk->span_count; k++) {
+        const adaslice__span *sp = &mk->spans[k];
+        size_t row = (size_t)sp->row, i;
+        for (i = (size_t)sp->first; i < (size_t)sp->end; i++) {
+            size_t ray = row * width + i;
+            unsigned char bit = (unsigned char)(1u << (ray & 7));
+            if (!(mk->changed[ray >> 3] & bit)) continue; /* shown right, or set right through another span */
+            mk->changed[ray >> 3] &= (unsigned char)~bit;
+            adaslice__mask_show(mk, row, i, mk->winding[ray] > 0);
+        }
+    }
+    mk->span_count = 0;
 }
 
 /* ---- masks of open meshes: each layer's section filled in the plane */
@@ -6157,12 +6511,15 @@ nomem:
     return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
 }
 
-ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
+/* Applies the samples below `height` not applied yet; with `past`, those
+   at it too. */
+static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height, int past, adaslice_error *err)
 {
     adaslice__raster r;
     const adaslice_mesh *m = mk->mesh;
     double h = height - mk->depth_origin;
     size_t k, kept = 0;
+    if (past && h >= mk->done && h < DBL_MAX) h = nextafter(h, DBL_MAX);
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
     if (mk->gaps) {
@@ -6195,8 +6552,44 @@ ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double h
                                   "masks: triangle %u lies more than 2^21 pixels from the printer's grid", (unsigned)mk->active[k]);
     mk->done = h;
     mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
+    if (mk->nomem) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the samples below %g mm", height);
     adaslice__ok(err);
     return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *mk, double height, adaslice_error *err)
+{
+    if (mk->span_count) adaslice__mask_settle(mk);
+    return adaslice__masker_sweep(mk, height, 0, err);
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *mk, double z_bottom, double z_top, adaslice_error *err)
+{
+    adaslice_result r;
+    double half = 0.5 * mk->bin;
+    if (!(z_top >= z_bottom))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: layer [%g, %g] mm is upside down", z_bottom, z_top);
+    /* bottom and top: the centre of the first or last bin, the middle if the
+       layer is thinner than a bin */
+    if (half > 0.5 * (z_top - z_bottom)) half = 0.5 * (z_top - z_bottom);
+    switch (mk->slice_at) {
+    case ADASLICE_SLICE_BOTTOM: return adaslice_masker_slice(mk, z_bottom + half, err);
+    case ADASLICE_SLICE_TOP: return adaslice_masker_slice(mk, z_top - half, err);
+    case ADASLICE_SLICE_ENVELOPE:
+    case ADASLICE_SLICE_CORE:
+        /* the open range (z_bottom, z_top): a face lying at either end is
+           the boundary of the layers it parts, inside neither */
+        if (mk->span_count) adaslice__mask_settle(mk);
+        if ((r = adaslice__masker_sweep(mk, z_bottom, 1, err)) != ADASLICE_OK) return r;
+        if (z_top - mk->depth_origin < mk->done) return ADASLICE_OK; /* no thickness: the section */
+        mk->range = (int)mk->slice_at;
+        r = adaslice__masker_sweep(mk, z_top, 0, err);
+        if (r == ADASLICE_OK) r = adaslice__mask_range(mk, err);
+        mk->range = 0;
+        mk->lit = (double)mk->lit_rays / ((double)mk->supersample * mk->supersample);
+        return r;
+    default: return adaslice_masker_slice(mk, 0.5 * (z_bottom + z_top), err);
+    }
 }
 
 

@@ -135,6 +135,11 @@ static void print_summary(const plan_args *a, const plan_job *j)
         printf("forced     %zu plane%s at sharp changes (> %g)\n", p->forced_planes, plural(p->forced_planes), a->sharp);
     else if (a->method == ADASLICE_METHOD_OPTIMAL)
         printf("forced     none (sharp-change pre-pass off)\n");
+    if (p->plane_changes) {
+        char line[1024];
+        plan_changes_line(p, pr->bin, line, sizeof line);
+        printf("           %s\n", line);
+    }
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
     if (a->compare) print_compare(a, j);
 }
@@ -187,6 +192,17 @@ static void print_json(const plan_args *a, const plan_job *j)
     else json_null(&w, "sharp");
     json_plan_fields(&w, p);
     json_int(&w, "forced_planes", (long long)p->forced_planes);
+    json_begin_array(&w, "forced_changes", 1);
+    for (k = 0; k < p->plane_changes; k++) {
+        const adaslice_plane_change *c = &p->changes[k];
+        json_begin_object(&w, NULL, 1);
+        json_number(&w, "wanted_mm", c->wanted * pr->bin);
+        if (c->placed) json_number(&w, "placed_mm", c->placed * pr->bin);
+        else json_null(&w, "placed_mm");
+        json_string(&w, "why", c->infeasible ? "infeasible" : "cost");
+        json_end(&w);
+    }
+    json_end(&w);
     json_begin_object(&w, "time_ms", 1);
     json_number(&w, "load", j->ms_load);
     json_number(&w, "profile", j->ms_profile);

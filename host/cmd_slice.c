@@ -486,6 +486,12 @@ int cmd_slice(int argc, char **argv)
         printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
                plural(d.layer_count), sum.lo, sum.hi, base_name(a.model), s.preset ? s.preset->name : "the display",
                d.width, d.height, d.pitch[0] * 1000, d.pitch[1] * 1000, f->name);
+        printf("masks %s: %s\n", d.slice_at, SLICE_AT_MEANING[s.slice_at]);
+        if (j.plan[a.method].plane_changes) {
+            char line[1024];
+            plan_changes_line(&j.plan[a.method], j.profile.bin, line, sizeof line);
+            printf("%s\n", line);
+        }
         printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
                sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
         if (d.bottom_layers)

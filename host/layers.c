@@ -12,7 +12,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const SLICE_AT[] = {"bottom", "middle", "top"};
+const char *const SLICE_AT[] = {"bottom", "middle", "top", "envelope", "core"};
+const char *const SLICE_AT_MEANING[] = {
+    "each layer's section at the centre of its first bin",
+    "each layer's section at its middle height",
+    "each layer's section at the centre of its last bin",
+    "lit where the part is inside anywhere in the layer (never cut into)",
+    "lit where the part is inside all through the layer (never oversized)"};
+/* the library's rule for each of SLICE_AT's names */
+static const adaslice_slice_at SLICE_RULES[] = {ADASLICE_SLICE_BOTTOM, ADASLICE_SLICE_MIDDLE, ADASLICE_SLICE_TOP,
+                                                ADASLICE_SLICE_ENVELOPE, ADASLICE_SLICE_CORE};
 const char *const MIRRORS[] = {"none", "x", "y", "xy"};
 const char *const ROTATIONS[] = {"0", "90", "180", "270"};
 
@@ -32,8 +41,11 @@ void slice_options_usage(FILE *f)
           "masks\n"
           "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
           "                      (1: 1-bit masks)                            [1]\n"
-          "  --slice-at WHERE    bottom, middle or top of each layer (the centre of its\n"
-          "                      first, middle or last bin)                  [middle]\n"
+          "  --slice-at WHERE    bottom, middle or top of each layer (the section at the\n"
+          "                      centre of its first, middle or last bin); envelope: lit\n"
+          "                      where the part is inside anywhere in the layer (never\n"
+          "                      cuts into it, keeps tips thinner than a layer); core:\n"
+          "                      inside all through the layer (never oversized) [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
           "  --memory MB         the most the masks may take       [half the machine's memory]\n"
@@ -101,7 +113,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
             size_t n = 1;
             rc = count_option(argc, argv, &i, 16, &n);
             s->supersample = (int)n;
-        } else if (!strcmp(o, "--slice-at")) rc = name_option(argc, argv, &i, SLICE_AT, 3, "bottom, middle or top", &s->slice_at);
+        } else if (!strcmp(o, "--slice-at")) rc = name_option(argc, argv, &i, SLICE_AT, 5, "bottom, middle, top, envelope or core", &s->slice_at);
         else if (!strcmp(o, "--mirror")) rc = name_option(argc, argv, &i, MIRRORS, 4, "none, x, y or xy", &mirror);
         else if (!strcmp(o, "--place")) {
             rc = numbers_option(argc, argv, &i, ',', 2, "X,Y in mm", s->place);
@@ -283,12 +295,15 @@ int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
     return place_part(s, mesh, &g, size);
 }
 
-/* Where layer k is sliced, mm above the part's bottom. */
+/* Where layer k is sliced, mm above the part's bottom (as adaslice_masker_layer
+   cuts); envelope and core masks, made over the whole layer, say the middle. */
 double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
 {
     const adaslice_layer *l = &j->plan[j->args->method].layers[k];
-    if (s->slice_at == 0) return l->z_bottom + j->profile.bin / 2;
-    if (s->slice_at == 2) return l->z_top - j->profile.bin / 2;
+    double half = j->profile.bin / 2;
+    if (half > l->thickness / 2) half = l->thickness / 2;
+    if (s->slice_at == 0) return l->z_bottom + half;
+    if (s->slice_at == 2) return l->z_top - half;
     return 0.5 * (l->z_bottom + l->z_top);
 }
 
@@ -324,6 +339,8 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
     if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
     memset(&mo, 0, sizeof mo);
     mo.supersample = s->supersample;
+    mo.slice_at = SLICE_RULES[s->slice_at];
+    mo.bin = j->profile.bin;
     if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK)
         return library_error(&err);
     m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
@@ -341,7 +358,8 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
 int layer_masks_render(layer_masks *m, size_t k, unsigned char *out)
 {
     adaslice_error err;
-    if (adaslice_masker_slice(&m->masker, m->j->profile.z0 + layer_slice_height(m->s, m->j, k), &err) != ADASLICE_OK)
+    const adaslice_layer *l = &m->j->plan[m->j->args->method].layers[k];
+    if (adaslice_masker_layer(&m->masker, m->j->profile.z0 + l->z_bottom, m->j->profile.z0 + l->z_top, &err) != ADASLICE_OK)
         return library_error(&err);
     orient_image(m, m->s, out, m->stride);
     return RC_OK;

@@ -10,7 +10,8 @@
 #include "plan_job.h"
 #include "printer.h"
 
-extern const char *const SLICE_AT[];   /* bottom, middle, top */
+extern const char *const SLICE_AT[];   /* bottom, middle, top, envelope, core */
+extern const char *const SLICE_AT_MEANING[]; /* what each gives, for the summary */
 extern const char *const MIRRORS[];    /* none, x, y, xy */
 extern const char *const ROTATIONS[];  /* 0, 90, 180, 270 */
 
@@ -21,7 +22,7 @@ typedef struct slice_args {
     int width, height;           /* the plate's pixels along x and y (turned back if --rotate) */
     double pitch[2];             /* mm per plate pixel along x and y */
     int supersample;             /* --aa S; 1: 1-bit masks */
-    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer */
+    int slice_at;                /* 0 bottom, 1 middle, 2 top of each layer, 3 envelope, 4 core */
     int placed;                  /* --place X,Y given */
     double place[2];             /* the part's centre, mm from the plate's centre */
     int mirror_x, mirror_y;

@@ -525,3 +525,32 @@ int write_outputs(const plan_args *a, const plan_job *j)
     if (a->plot && write_atomic(a->plot, write_plot, j)) return RC_FAIL;
     return RC_OK;
 }
+
+void plan_changes_line(const adaslice_plan *p, double bin, char *out, size_t cap)
+{
+    size_t k, n = 0, shown = 6, moved = 0, dropped;
+    int why[2] = {0, 0};
+    *out = 0;
+    if (!p->plane_changes) return;
+    for (k = 0; k < p->plane_changes; k++) {
+        moved += p->changes[k].placed != 0;
+        why[p->changes[k].infeasible != 0] = 1;
+    }
+    dropped = p->plane_changes - moved;
+    n += (size_t)snprintf(out, cap, "the sharp-change pre-pass %s", moved ? "moved " : "dropped ");
+    if (moved) n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, "%zu plane%s%s", moved, plural(moved), dropped ? " and dropped " : "");
+    if (dropped) n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, "%zu plane%s", dropped, plural(dropped));
+    n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, " so that eps %g stays feasible:", p->eps);
+    for (k = 0; k < p->plane_changes && k < shown; k++) {
+        const adaslice_plane_change *c = &p->changes[k];
+        char to[40];
+        if (c->placed) snprintf(to, sizeof to, "to %g mm", c->placed * bin);
+        else snprintf(to, sizeof to, "dropped");
+        n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, "%s z = %g mm %s (%s)", k ? "," : "", c->wanted * bin, to,
+                              c->infeasible ? "infeasible" : "cost");
+    }
+    if (p->plane_changes > shown) n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, ", and %zu more", p->plane_changes - shown);
+    if (why[1]) n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, "; infeasible: with a plane there no plan keeps every layer within eps");
+    if (why[0]) n += (size_t)snprintf(out + n, n < cap ? cap - n : 0, "; cost: it would add more than one layer");
+    if (n >= cap && cap > 4) memcpy(out + cap - 4, "...", 4);
+}

@@ -72,6 +72,10 @@ void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_option
 /* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */
 int run_plan(const plan_args *a, plan_job *j);
 int write_outputs(const plan_args *a, const plan_job *j);
+/* The one line saying which sharp-change planes the planner moved or dropped
+   so that eps stays feasible, at which heights and why, into out ("" when
+   none was). */
+void plan_changes_line(const adaslice_plan *p, double bin, char *out, size_t cap);
 /* The thickest uniform layers within the bounds of `than` whose worst error is
    no larger than its worst: what the same quality costs without adaptive
    layers. 1 with *out made (free it), 0 if even the thinnest are worse. */

@@ -609,6 +609,49 @@ static void bad_model_is_named(void)
     cli_free(&r);
 }
 
+/* Issue 30's case: the hand at x60, standing, in UVtools' 0.03..0.10 mm
+   range. Without the pre-pass eps 0.03 is feasible (its smallest is about
+   0.02992); the default --sharp 0.5 wants a plane (z = 1.676 mm) after which
+   none is, and used to refuse. Now the plan exists, within eps, one line
+   says which plane moved where and why, --json lists it, and the plan has at
+   most one layer more per plane kept than the plan with --sharp 0. */
+static void the_pre_pass_keeps_the_hands_eps_feasible(void)
+{
+    const char *common[] = {"plan", "examples/models/hand_closed.obj", "--scale", "60", "--orient", "0,1,0", "--tmin",
+                            "0.03", "--tmax", "0.1", "--eps", "0.03"};
+    cli_result with, without, json;
+    double k_with, k_without, forced;
+    const char *line;
+    with = cli_run(common[0], common[1], common[2], common[3], common[4], common[5], common[6], common[7], common[8],
+                   common[9], common[10], common[11], NULL);
+    without = cli_run(common[0], common[1], common[2], common[3], common[4], common[5], common[6], common[7], common[8],
+                      common[9], common[10], common[11], "--sharp", "0", NULL);
+    json = cli_run(common[0], common[1], common[2], common[3], common[4], common[5], common[6], common[7], common[8],
+                   common[9], common[10], common[11], "--json", NULL);
+    CHECKF(with.status == 0 && !*with.err, "with the pre-pass: exit %d: %s", with.status, with.err);
+    CHECKF(without.status == 0, "--sharp 0: exit %d: %s", without.status, without.err);
+    line = strstr(with.out, "the sharp-change pre-pass moved 1 plane");
+    {   /* on that one line: the height and the reason */
+        const char *end = line ? strchr(line, '\n') : NULL, *z = line ? strstr(line, "z = 1.676 mm to ") : NULL,
+                   *why = line ? strstr(line, "(infeasible)") : NULL;
+        CHECKF(end && z && why && z < end && why < end, "no line saying which plane moved and why:\n%s", with.out);
+    }
+    CHECK(json.status == 0 && strstr(json.out, "\"forced_changes\": [{\"wanted_mm\": ") && strstr(json.out, "\"why\": \"infeasible\""));
+    k_with = cli_json_number(json.out, "layers");
+    forced = cli_json_number(json.out, "forced_planes");
+    CHECKF(cli_json_number(json.out, "worst_error") <= 0.03, "worst %g", cli_json_number(json.out, "worst_error"));
+    {
+        const char *at = strstr(without.out, "layers     ");
+        k_without = at ? strtod(at + 11, NULL) : -1;
+    }
+    CHECKF(k_without > 1000 && k_with >= k_without && k_with <= k_without + forced,
+           "%g layers with the pre-pass (%g planes kept), %g without", k_with, forced, k_without);
+    printf("  (hand, eps 0.03: %g layers with %g sharp-change planes, %g without)\n", k_with, forced, k_without);
+    cli_free(&with);
+    cli_free(&without);
+    cli_free(&json);
+}
+
 void test_cli(void)
 {
     if (!cli_begin("adaslice-cli")) return;
@@ -619,6 +662,7 @@ void test_cli(void)
     RUN(profile_input);
     RUN(bad_profile_lines_are_named);
     RUN(infeasible_eps_names_the_smallest);
+    RUN(the_pre_pass_keeps_the_hands_eps_feasible);
     RUN(compare_prints_table_3);
     RUN(slice_writes_a_job);
     RUN(orient_finds_directions);

@@ -41,7 +41,7 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double px
     for (k = 0; k < heights; k++) z[k] = lo[2] + (hi[2] - lo[2]) * (k + 0.37) / heights;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
-    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
     CHECK(adaslice_mesh_weld(m, NULL, &e) == ADASLICE_OK);
     CHECK(adaslice_contours_slice(m, z, (size_t)heights, NULL, &c, &e) == ADASLICE_OK);
     CHECK(adaslice_profile_exact(m, &po, &prof, &e) == ADASLICE_OK);
@@ -134,7 +134,7 @@ static void rays_through_edges_light_exactly_once(void)
     g.pitch[0] = g.pitch[1] = 0.5;
     g.origin[0] = g.origin[1] = -10.25; /* centres at multiples of 0.5 */
     g.width = g.height = 41;
-    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK);
     for (j = 0; j < g.height; j++)
         for (i = 0; i < g.width; i++) {
@@ -157,7 +157,7 @@ static void antialiased_masks_cover_the_area(void)
     adaslice_masker mk;
     size_t p, sum = 0;
     double poly = 256 / 2.0 * 25 * sin(2 * M_PI / 256);
-    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL, ADASLICE_SLICE_MIDDLE, 0}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 2, NULL) == ADASLICE_OK);
     for (p = 0; p < (size_t)g.width * g.height; p++) sum += mk.image[p];
     /* rays: 0.025 mm apart; the circle's 31.4 mm of edge misjudges at most a ray's diagonal */
@@ -165,6 +165,219 @@ static void antialiased_masks_cover_the_area(void)
     CHECKF(fabs(sum / 255.0 - mk.lit) <= 0.5 * 0.01 * (double)g.width * g.height / 16 + 1, "grey sum %g, lit %g", sum / 255.0, mk.lit);
     CHECK(mk.image[(size_t)(g.height / 2) * mk.stride + (size_t)(g.width / 2)] == 255 && mk.image[0] == 0);
     adaslice_masker_free(&mk);
+    gen_free(&m);
+}
+
+/* ---- masks of a layer's whole range: envelope (union) and core (intersection) */
+
+static adaslice_result layer_masker(adaslice_masker *mk, const adaslice_mesh *m, const adaslice_grid *g, int s,
+                                    adaslice_slice_at rule)
+{
+    adaslice_mask_options o;
+    memset(&o, 0, sizeof o);
+    o.supersample = s;
+    o.slice_at = rule;
+    return adaslice_masker_init(mk, m, g, &o, NULL);
+}
+
+/* A 10 x 10 x 1 mm plate with a 1 x 1 mm pin standing 0.04 mm above it (its
+   own box, overlapping the plate's), sliced in 0.1 mm layers: the layer
+   [1.0, 1.1] holds the whole pin. At its middle (1.05) the pin is gone; the
+   envelope lights its footprint, the core nothing; the layer above is empty
+   in all three (the envelope lets go of the rays that left). Each layer's
+   core lies within its middle section and that within its envelope, pixel
+   for pixel. */
+static void pin_thinner_than_a_layer_survives_in_the_envelope(void)
+{
+    adaslice_mesh m = gen_box(0, 0, 0, 10, 10, 1), pin = gen_box(4.5, 4.5, 0.5, 5.5, 5.5, 1.04);
+    adaslice_grid g;
+    adaslice_masker mk[3];
+    static const adaslice_slice_at rules[3] = {ADASLICE_SLICE_CORE, ADASLICE_SLICE_MIDDLE, ADASLICE_SLICE_ENVELOPE};
+    int k, r, i, j, nested = 1;
+    gen_append(&m, &pin);
+    g = plate_around(&m, 0.05, 0.05, 220, 220);
+    for (r = 0; r < 3; r++) CHECK(layer_masker(&mk[r], &m, &g, 1, rules[r]) == ADASLICE_OK);
+    for (k = 0; k < 12; k++) {
+        double zb = 0.1 * k, zt = 0.1 * (k + 1);
+        for (r = 0; r < 3; r++) CHECK(adaslice_masker_layer(&mk[r], zb, zt, NULL) == ADASLICE_OK);
+        for (j = 0; j < g.height; j++)
+            for (i = 0; i < g.width; i++)
+                if (mask_bit(&mk[0], i, j) > mask_bit(&mk[1], i, j) || mask_bit(&mk[1], i, j) > mask_bit(&mk[2], i, j)) nested = 0;
+        if (k < 10) {
+            /* the plate: 200 x 200 pixels in every rule */
+            for (r = 0; r < 3; r++) CHECKF(mk[r].lit == 40000, "layer %d, rule %d: %g pixels lit", k, (int)rules[r], mk[r].lit);
+        } else if (k == 10) {
+            CHECKF(mk[2].lit == 400, "envelope of the pin's layer: %g pixels, want 20 x 20", mk[2].lit);
+            CHECKF(mk[1].lit == 0 && mk[0].lit == 0, "middle %g, core %g pixels: want none", mk[1].lit, mk[0].lit);
+            CHECK(mask_bit(&mk[2], 110, 110) && !mask_bit(&mk[2], 80, 80));
+        } else {
+            for (r = 0; r < 3; r++) CHECKF(mk[r].lit == 0, "above the pin, rule %d: %g pixels", (int)rules[r], mk[r].lit);
+        }
+    }
+    CHECK(nested);
+    for (r = 0; r < 3; r++) adaslice_masker_free(&mk[r]);
+    gen_free(&m);
+    gen_free(&pin);
+}
+
+/* A UV sphere of radius R = 5 (256 x 256) centred at z = 5, in layers of
+   0.05, 0.15 and 0.1 mm in turn (a plan's mix). Every section of a sphere is
+   a disc about the axis, so the union of a layer's sections is its largest
+   one: radius^2 = R^2 - z*^2, z* the height in the layer nearest the centre
+   (0 where the layer spans the equator); the intersection is its smallest,
+   z* the end farther from the centre. The polyhedron lies between the sphere
+   and the sphere of radius rho R, rho = cos(a), a bounding the angle any
+   facet spans (its quad's diagonal), so its sections lie between the two
+   discs: tessellation error pi (1 - rho^2) R^2 ~ 0.06 mm^2. Pixel centres
+   misjudge only within half a pixel diagonal of the edge: sqrt(2) p times
+   the perimeter 2 pi r. p = 0.01 mm (1-bit) or a ray pitch of 0.01 (--aa 2
+   on 0.02 mm pixels): the tolerance is 0.44 mm^2 at the equator, where the
+   area is 78.5 mm^2. The same layers' middle sections differ from the
+   envelope by pi ((z_mid)^2 - z*^2): more than the tolerance in a third of
+   the layers or more (counted), so the test tells the rules apart; the
+   errors measured are a few hundredths of the tolerance (printed). */
+static void sphere_layer_areas(int s, double pixel)
+{
+    const double R = 5, cz = 5, thick[3] = {0.05, 0.15, 0.1};
+    const int slices = 256, stacks = 256;
+    adaslice_mesh m = gen_sphere(R, slices, stacks, 0);
+    adaslice_grid g = plate_around(&m, pixel, pixel, (int)(10.4 / pixel), (int)(10.4 / pixel));
+    adaslice_masker env, core;
+    double a = sqrt(pow(M_PI / stacks, 2) + pow(2 * M_PI / slices, 2)), rho = cos(a);
+    double tess = M_PI * (1 - rho * rho) * R * R, zb = 0, worst_env = 0, worst_core = 0;
+    double ray = pixel / s;
+    int k = 0, telling = 0, layers = 0;
+    CHECK(layer_masker(&env, &m, &g, s, ADASLICE_SLICE_ENVELOPE) == ADASLICE_OK);
+    CHECK(layer_masker(&core, &m, &g, s, ADASLICE_SLICE_CORE) == ADASLICE_OK);
+    while (zb < 2 * R - 1e-9) {
+        double zt = zb + thick[k++ % 3], lo, hi, near, far, want_env, want_core, tol_env, tol_core, got_env, got_core, mid;
+        size_t p, grey = 0;
+        if (zt > 2 * R) zt = 2 * R;
+        lo = zb - cz; hi = zt - cz;
+        near = lo <= 0 && hi >= 0 ? 0 : fmin(fabs(lo), fabs(hi));
+        far = fmax(fabs(lo), fabs(hi));
+        want_env = M_PI * (R * R - near * near);
+        want_core = M_PI * (R * R - far * far);
+        tol_env = tess + sqrt(2.0) * ray * 2 * M_PI * sqrt(R * R - near * near) + ray * ray;
+        tol_core = tess + sqrt(2.0) * ray * 2 * M_PI * sqrt(R * R - far * far) + ray * ray;
+        CHECK(adaslice_masker_layer(&env, zb, zt, NULL) == ADASLICE_OK);
+        CHECK(adaslice_masker_layer(&core, zb, zt, NULL) == ADASLICE_OK);
+        got_env = env.lit * pixel * pixel;
+        got_core = core.lit * pixel * pixel;
+        CHECKF(fabs(got_env - want_env) <= tol_env, "s %d, envelope [%g, %g]: %g mm^2, want %g +- %g", s, zb, zt,
+               got_env, want_env, tol_env);
+        CHECKF(fabs(got_core - want_core) <= tol_core, "s %d, core [%g, %g]: %g mm^2, want %g +- %g", s, zb, zt,
+               got_core, want_core, tol_core);
+        if (fabs(got_env - want_env) / tol_env > worst_env) worst_env = fabs(got_env - want_env) / tol_env;
+        if (fabs(got_core - want_core) / tol_core > worst_core) worst_core = fabs(got_core - want_core) / tol_core;
+        mid = 0.5 * (zb + zt) - cz;
+        if (M_PI * (mid * mid - near * near) > tol_env) telling++;
+        if (s > 1) { /* the grey levels carry the same rays: 255 per pixel, each within half a level */
+            for (p = 0; p < (size_t)g.width * g.height; p++) grey += env.image[p];
+            CHECKF(fabs(grey / 255.0 - env.lit) <= 0.5 / 255 * (double)g.width * g.height,
+                   "grey sum %g, lit %g", grey / 255.0, env.lit);
+        }
+        layers++;
+        zb = zt;
+    }
+    CHECKF(telling > layers / 3, "only %d of %d layers tell the envelope from the middle section", telling, layers);
+    printf("  (sphere --aa %d: %d layers; worst error %.2f of the tolerance (envelope), %.2f (core))\n", s, layers,
+           worst_env, worst_core);
+    adaslice_masker_free(&env);
+    adaslice_masker_free(&core);
+    gen_free(&m);
+}
+
+static void sphere_envelope_is_the_largest_section(void) { sphere_layer_areas(1, 0.01); }
+static void sphere_envelope_antialiased(void) { sphere_layer_areas(2, 0.02); }
+
+/* The hand (overhangs, fingers starting and ending inside layers), layers
+   of 0.15 mm: each layer's envelope holds every pixel lit at any of 30
+   heights spread through the layer's open range, and its core none that is
+   dark at any of them; what the envelope adds to those 30 sections (rays
+   inside for less than their spacing, 5 um, near horizontal faces) and what
+   the core lacks are few. Over many layers, so the rays a layer changed are
+   set right again for the next, and skipped layers are passed in one sweep. */
+static void hand_envelope_holds_every_section_of_its_layer(void)
+{
+    adaslice_load_options lo;
+    adaslice_mesh m;
+    adaslice_error e;
+    adaslice_grid g;
+    adaslice_masker env, core, point;
+    static unsigned char any[440][350], all[440][350];
+    double bounds_lo[3], bounds_hi[3], zb;
+    long lit = 0, extra = 0, missing_env = 0, core_lit = 0, core_extra = 0;
+    int layers = 0, i, j, h;
+    const int heights = 30;
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 88.7;
+    CHECKF(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &m, &e) == ADASLICE_OK, "%s", e.message);
+    adaslice_mesh_bounds(&m, bounds_lo, bounds_hi);
+    g = plate_around(&m, 0.2, 0.2, 350, 440);
+    CHECK(layer_masker(&env, &m, &g, 1, ADASLICE_SLICE_ENVELOPE) == ADASLICE_OK);
+    CHECK(layer_masker(&core, &m, &g, 1, ADASLICE_SLICE_CORE) == ADASLICE_OK);
+    CHECK(layer_masker(&point, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+    for (zb = bounds_lo[2] + 0.013; zb < bounds_hi[2]; zb += layers % 3 ? 0.15 : 0.15 * 8) {
+        /* three layers in a row, then seven skipped (the maskers pass them in one sweep) */
+        double zt = zb + 0.15;
+        memset(any, 0, sizeof any);
+        memset(all, 1, sizeof all);
+        for (h = 0; h < heights; h++) {
+            CHECK(adaslice_masker_slice(&point, zb + 0.15 * (h + 0.5) / heights, NULL) == ADASLICE_OK);
+            for (j = 0; j < g.height; j++)
+                for (i = 0; i < g.width; i++) {
+                    int b = mask_bit(&point, i, j);
+                    any[j][i] |= (unsigned char)b;
+                    all[j][i] &= (unsigned char)b;
+                }
+        }
+        CHECK(adaslice_masker_layer(&env, zb, zt, NULL) == ADASLICE_OK);
+        CHECK(adaslice_masker_layer(&core, zb, zt, NULL) == ADASLICE_OK);
+        for (j = 0; j < g.height; j++)
+            for (i = 0; i < g.width; i++) {
+                int en = mask_bit(&env, i, j), co = mask_bit(&core, i, j);
+                lit += en;
+                missing_env += any[j][i] && !en;
+                extra += en && !any[j][i];
+                core_lit += co;
+                core_extra += co && !all[j][i];
+            }
+        layers++;
+    }
+    CHECKF(missing_env == 0, "%ld pixels lit in a section of their layer but not in its envelope", missing_env);
+    CHECKF(core_extra == 0, "%ld pixels of a core dark in a section of their layer", core_extra);
+    CHECKF(layers > 20 && lit > 100000 && extra * 200 < lit, "%d layers, %ld pixels lit, %ld beyond the 30 sections",
+           layers, lit, extra);
+    printf("  (hand: %d layers, %ld envelope pixels, %ld beyond the sections; %ld core pixels)\n", layers, lit, extra, core_lit);
+    adaslice_masker_free(&env);
+    adaslice_masker_free(&core);
+    adaslice_masker_free(&point);
+    adaslice_mesh_free(&m);
+}
+
+/* Envelope and core read rays: a mesh that cannot be read along them is
+   refused, with the count of unbalanced edges; a bad rule is an argument
+   error; a layer upside down too. */
+static void envelope_needs_a_closed_mesh(void)
+{
+    adaslice_mesh m = gen_box(0, 0, 0, 4, 4, 2);
+    adaslice_grid g = plate_around(&m, 0.1, 0.1, 60, 60);
+    adaslice_masker mk;
+    adaslice_mask_options o;
+    adaslice_error e;
+    memset(&o, 0, sizeof o);
+    CHECK(layer_masker(&mk, &m, &g, 1, ADASLICE_SLICE_ENVELOPE) == ADASLICE_OK);
+    CHECK(adaslice_masker_layer(&mk, 1, 0.9, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "upside down"));
+    adaslice_masker_free(&mk);
+    o.slice_at = (adaslice_slice_at)7;
+    CHECK(adaslice_masker_init(&mk, &m, &g, &o, &e) == ADASLICE_ERR_ARGUMENT);
+    m.triangle_count -= 2; /* a face gone */
+    CHECK(layer_masker(&mk, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+    adaslice_masker_free(&mk);
+    o.slice_at = ADASLICE_SLICE_CORE;
+    CHECK(adaslice_masker_init(&mk, &m, &g, &o, &e) == ADASLICE_ERR_UNSUPPORTED && strstr(e.message, "closed mesh"));
+    m.triangle_count += 2;
     gen_free(&m);
 }
 
@@ -181,4 +394,9 @@ void test_masks(void)
     RUN(bundled_hand_masks_match_contours);
     RUN(rays_through_edges_light_exactly_once);
     RUN(antialiased_masks_cover_the_area);
+    RUN(pin_thinner_than_a_layer_survives_in_the_envelope);
+    RUN(sphere_envelope_is_the_largest_section);
+    RUN(sphere_envelope_antialiased);
+    RUN(hand_envelope_holds_every_section_of_its_layer);
+    RUN(envelope_needs_a_closed_mesh);
 }

@@ -155,19 +155,44 @@ static int plan_is_valid(const ref_case *c, const adaslice_plan *plan, double ep
     return 1;
 }
 
+/* The pre-pass's planes (c->forced) as the planner reports it kept them:
+   each change moves a wanted plane or drops it. 0 if a change names a plane
+   that was not wanted, or moves it onto another. */
+static int ref_apply_changes(ref_case *c, const adaslice_plan *plan)
+{
+    size_t k;
+    int i, count = 0;
+    for (k = 0; k < plan->plane_changes; k++) {
+        const adaslice_plane_change *ch = &plan->changes[k];
+        if (ch->wanted < 1 || (int)ch->wanted >= c->n || !c->forced[ch->wanted]) return 0;
+        c->forced[ch->wanted] = 0;
+    }
+    for (k = 0; k < plan->plane_changes; k++) {
+        const adaslice_plane_change *ch = &plan->changes[k];
+        if (!ch->placed) continue;
+        if ((int)ch->placed >= c->n || c->forced[ch->placed]) return 0;
+        c->forced[ch->placed] = 1;
+    }
+    for (i = 1; i < c->n; i++) count += c->forced[i];
+    return (size_t)count == plan->forced_planes;
+}
+
 /* Random dyadic profiles, so that every sum is exact in double and the
-   reference and the planner cannot disagree by rounding. */
+   reference and the planner cannot disagree by rounding. The pre-pass's
+   planes are the reference's (ref_forced) as the planner reports it kept,
+   moved or dropped them; whenever a plan exists without them, one exists
+   with them, with at most one layer more per plane kept. */
 static void optimal_equals_brute_force(void)
 {
-    int trial, feasible = 0, infeasible = 0, volumes = 0, budgets = 0, forced_cases = 0;
+    int trial, feasible = 0, infeasible = 0, volumes = 0, budgets = 0, forced_cases = 0, changed = 0;
     for (trial = 0; trial < 12000; trial++) {
-        ref_case c;
+        ref_case c, wanted, free_case;
         adaslice_profile p;
         adaslice_plan_options o;
         adaslice_plan plan;
         adaslice_error e;
-        ref_best best, any;
-        int i, reach = 0, reach_any = 0, max_n;
+        ref_best best, any, orig;
+        int i, reach = 0, reach_any = 0, dummy = 0, max_n;
         double sharp = (rng() % 3 == 0) ? 0.25 * (1 + rng() % 4) : ADASLICE_SHARP_OFF;
         adaslice_result r;
         memset(&c, 0, sizeof c);
@@ -180,6 +205,9 @@ static void optimal_equals_brute_force(void)
         for (i = 0; i < c.n; i++) c.phi[i] = (rng() % 5 == 0) ? 0 : (rng() % 33) / 16.0;
         c.eps = (1 + rng() % 256) / 256.0 * c.hi * c.bin * (c.volume ? 1.0 : 1.2);
         ref_forced(&c, sharp);
+        wanted = c;
+        free_case = c;
+        memset(free_case.forced, 0, sizeof free_case.forced);
         memset(&p, 0, sizeof p);
         p.metric = c.volume ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
         p.bin_count = (size_t)c.n;
@@ -192,38 +220,50 @@ static void optimal_equals_brute_force(void)
         o.tmax = (rng() % 2) ? c.hi * c.bin : (c.hi + 0.5) * c.bin;
         o.sharp = sharp;
 
+        /* without the pre-pass: whether any plan exists */
         memset(&best, 0, sizeof best);
-        ref_search(&c, 0, 0, 0, c.eps, 1 << 30, &best, &reach);
+        ref_search(&free_case, 0, 0, 0, c.eps, 1 << 30, &best, &reach);
         memset(&any, 0, sizeof any);
-        ref_search(&c, 0, 0, 0, 1e300, 1 << 30, &any, &reach_any);
+        ref_search(&free_case, 0, 0, 0, 1e300, 1 << 30, &any, &reach_any);
         r = adaslice_plan_profile(&p, &o, &plan, &e);
         for (i = 1; i < c.n; i++) forced_cases += c.forced[i];
         if (best.found) {
+            ref_best kept;
+            int free_layers = best.layers;
             feasible++;
             CHECKF(r == ADASLICE_OK, "trial %d: feasible but planner says %s", trial, e.message);
             if (r != ADASLICE_OK) continue;
-            CHECKF((int)plan.layer_count == best.layers, "trial %d: %zu layers, brute force %d", trial,
-                   plan.layer_count, best.layers);
-            CHECKF(plan.worst_error == best.worst, "trial %d: worst %.17g, brute force %.17g", trial,
-                   plan.worst_error, best.worst);
+            changed += plan.plane_changes > 0;
+            CHECKF(ref_apply_changes(&c, &plan), "trial %d: the changes reported do not fit the planes wanted", trial);
+            memset(&kept, 0, sizeof kept);
+            ref_search(&c, 0, 0, 0, c.eps, 1 << 30, &kept, &dummy);
+            CHECKF(kept.found, "trial %d: no plan through the planes kept", trial);
+            CHECKF((int)plan.layer_count == kept.layers, "trial %d: %zu layers, brute force %d", trial,
+                   plan.layer_count, kept.layers);
+            CHECKF(plan.worst_error == kept.worst, "trial %d: worst %.17g, brute force %.17g", trial,
+                   plan.worst_error, kept.worst);
+            CHECKF(plan.layer_count <= (size_t)free_layers + plan.forced_planes,
+                   "trial %d: %zu layers with %zu planes kept, %d without the pre-pass", trial, plan.layer_count,
+                   plan.forced_planes, free_layers);
             CHECKF(plan_is_valid(&c, &plan, c.eps), "trial %d: plan breaks a constraint", trial);
             CHECK(plan.over_eps == 0);
             adaslice_plan_free(&plan);
-            /* budget: the smallest eps with at most B layers */
-            if (trial % 3 == 0) {
+            /* budget (the pre-pass's planes as wanted): the smallest eps with at most B layers */
+            memset(&orig, 0, sizeof orig);
+            ref_search(&wanted, 0, 0, 0, c.eps, 1 << 30, &orig, &dummy);
+            if (trial % 3 == 0 && orig.found) {
                 ref_best b;
-                int dummy = 0;
-                o.budget = (size_t)best.layers + rng() % 3;
+                o.budget = (size_t)orig.layers + rng() % 3;
                 memset(&b, 0, sizeof b);
-                ref_search(&c, 0, 0, 0, 1e300, (int)o.budget, &b, &dummy);
+                ref_search(&wanted, 0, 0, 0, 1e300, (int)o.budget, &b, &dummy);
                 r = adaslice_plan_profile(&p, &o, &plan, &e);
                 CHECKF(r == ADASLICE_OK && b.found, "trial %d: budget %zu fails: %s", trial, o.budget, e.message);
                 if (r == ADASLICE_OK) {
                     CHECKF(plan.worst_error == b.min_worst && plan.eps == b.min_worst,
                            "trial %d: budget %zu gives worst %.17g eps %.17g, brute force %.17g", trial, o.budget,
                            plan.worst_error, plan.eps, b.min_worst);
-                    CHECK(plan.layer_count <= o.budget);
-                    CHECK(plan_is_valid(&c, &plan, plan.eps));
+                    CHECK(plan.layer_count <= o.budget && plan.plane_changes == 0);
+                    CHECK(plan_is_valid(&wanted, &plan, plan.eps));
                     adaslice_plan_free(&plan);
                 }
                 budgets++;
@@ -245,9 +285,11 @@ static void optimal_equals_brute_force(void)
         }
         volumes += c.volume;
     }
-    CHECKF(feasible > 3000 && infeasible > 1000 && volumes > 1500 && budgets > 800 && forced_cases > 500,
-           "coverage: %d feasible, %d infeasible, %d volume, %d budget, %d forced planes", feasible, infeasible,
-           volumes, budgets, forced_cases);
+    CHECKF(feasible > 3000 && infeasible > 1000 && volumes > 1500 && budgets > 800 && forced_cases > 500 && changed > 50,
+           "coverage: %d feasible, %d infeasible, %d volume, %d budget, %d forced planes, %d plans with planes changed",
+           feasible, infeasible, volumes, budgets, forced_cases, changed);
+    printf("  (%d feasible, %d infeasible, %d forced planes wanted, %d plans moved or dropped some)\n", feasible,
+           infeasible, forced_cases, changed);
 }
 
 /* Baselines never break the thickness bounds (but the uniform remainder) and
@@ -367,11 +409,112 @@ static void bad_arguments_are_named(void)
     CHECK(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_ERR_INFEASIBLE && strstr(e.message, "thinner"));
 }
 
+/* Profiles of a few thousand bins, smooth stretches parted by jumps (as a
+   part's walls meet its flats), and eps from the smallest any plan allows
+   without the pre-pass up to twice that: with the pre-pass (sharp 0.5) a
+   plan always exists, its worst error is within eps, it has a plane at each
+   plane the pre-pass kept (those wanted, as the changes say), and it has at
+   most one layer more per plane kept than the plan without the pre-pass. */
+static void the_pre_pass_never_makes_eps_infeasible(void)
+{
+    static double phi[4000];
+    static unsigned char wanted[4001];
+    static const double steps[] = {1, 1.0000001, 1.001, 1.01, 1.03, 1.1, 1.3, 2};
+    int trial, plans = 0, changed = 0, moved = 0, dropped = 0;
+    size_t most_over = 0;
+    for (trial = 0; trial < 120; trial++) {
+        adaslice_profile p;
+        adaslice_plan_options o;
+        adaslice_plan with, without;
+        adaslice_error e;
+        int n = 800 + (int)(rng() % 3000), i, last = 0, lo, hi, volume = trial % 5 == 4;
+        double level = (rng() % 64) / 64.0, min_eps;
+        size_t st;
+        for (i = 0; i < n; i++) {
+            if (rng() % 97 == 0) level = (rng() % 64) / 64.0;              /* a jump */
+            else level += ((double)(rng() % 9) - 4) / 1024;                 /* a slope */
+            if (level < 0) level = 0;
+            if (level > 1) level = 1;
+            phi[i] = volume ? 20 * level : level;
+        }
+        memset(&p, 0, sizeof p);
+        p.metric = volume ? ADASLICE_METRIC_VOLUME : ADASLICE_METRIC_CUSP;
+        p.bin_count = (size_t)n;
+        p.bin = 0.002;
+        p.height = n * p.bin;
+        p.phi = phi;
+        memset(&o, 0, sizeof o);
+        o.tmin = (double)(10 + rng() % 16) * p.bin;
+        o.tmax = (double)(40 + rng() % 36) * p.bin;
+        lo = (int)(o.tmin / p.bin + 0.5);
+        hi = (int)(o.tmax / p.bin + 0.5);
+        /* the planes the pre-pass wants: jumps > 0.5, skipping those no thickness fits */
+        memset(wanted, 0, sizeof wanted);
+        for (i = 1; i < n; i++)
+            if (fabs(phi[i] - phi[i - 1]) > 0.5 && ref_tileable(i - last, lo, hi) && ref_tileable(n - i, lo, hi)) {
+                wanted[i] = 1;
+                last = i;
+            }
+        o.sharp = ADASLICE_SHARP_OFF;
+        o.eps = 1e-9;
+        CHECK(adaslice_plan_profile(&p, &o, &without, &e) == ADASLICE_ERR_INFEASIBLE && e.min_eps > 0);
+        min_eps = e.min_eps;
+        for (st = 0; st < sizeof steps / sizeof *steps; st++) {
+            size_t k, c;
+            int kept = 0, missing = 0;
+            o.eps = min_eps * steps[st];
+            o.sharp = ADASLICE_SHARP_OFF;
+            CHECKF(adaslice_plan_profile(&p, &o, &without, &e) == ADASLICE_OK, "trial %d: eps %.9g: %s", trial, o.eps, e.message);
+            o.sharp = 0.5;
+            if (adaslice_plan_profile(&p, &o, &with, &e) != ADASLICE_OK) {
+                CHECKF(0, "trial %d (%s, %d bins, %d..%d per layer): eps %.9g (%g x the smallest) is feasible without "
+                       "the pre-pass but not with it: %s", trial, volume ? "volume" : "cusp", n, lo, hi, o.eps, steps[st], e.message);
+                adaslice_plan_free(&without);
+                continue;
+            }
+            plans++;
+            changed += with.plane_changes > 0;
+            /* the planes kept: those wanted, moved or dropped as reported */
+            {
+                static unsigned char kept_at[4001];
+                memcpy(kept_at, wanted, (size_t)n + 1);
+                for (c = 0; c < with.plane_changes; c++) {
+                    CHECK(kept_at[with.changes[c].wanted]);
+                    kept_at[with.changes[c].wanted] = 0;
+                    if (with.changes[c].placed) moved++; else dropped++;
+                }
+                for (c = 0; c < with.plane_changes; c++) if (with.changes[c].placed) kept_at[with.changes[c].placed] = 1;
+                for (i = 1; i < n; i++) {
+                    int on_plan = 0;
+                    if (!kept_at[i]) continue;
+                    kept++;
+                    for (k = 0; k <= with.layer_count && !on_plan; k++) on_plan = with.planes[k] == (uint32_t)i;
+                    missing += !on_plan;
+                }
+            }
+            CHECKF(missing == 0 && (size_t)kept == with.forced_planes, "trial %d: %d of %d planes kept are not on the plan (%zu reported)",
+                   trial, missing, kept, with.forced_planes);
+            CHECKF(with.worst_error <= o.eps && with.over_eps == 0, "trial %d: worst %.9g over eps %.9g", trial, with.worst_error, o.eps);
+            CHECKF(with.layer_count <= without.layer_count + with.forced_planes,
+                   "trial %d: eps %.9g: %zu layers with %zu planes kept, %zu without the pre-pass", trial, o.eps,
+                   with.layer_count, with.forced_planes, without.layer_count);
+            if (with.layer_count > without.layer_count && with.layer_count - without.layer_count > most_over)
+                most_over = with.layer_count - without.layer_count;
+            adaslice_plan_free(&with);
+            adaslice_plan_free(&without);
+        }
+    }
+    CHECKF(plans == 120 * 8 && changed > 20, "%d plans, %d with planes moved or dropped", plans, changed);
+    printf("  (%d plans, %d with planes changed: %d moved, %d dropped; at most %zu layers over the plan without)\n",
+           plans, changed, moved, dropped, most_over);
+}
+
 void test_planner(void)
 {
     RUN(fig3_k_and_d_arrays);
     RUN(fig3_plan_and_stuck_greedy);
     RUN(optimal_equals_brute_force);
+    RUN(the_pre_pass_never_makes_eps_infeasible);
     RUN(baselines_keep_their_constraints);
     RUN(quantising_never_breaks_eps);
     RUN(rounding_cannot_hide_an_excess);

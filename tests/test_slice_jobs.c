@@ -91,6 +91,54 @@ static void exposure_follows_the_working_curve(void)
     free(text);
 }
 
+/* --slice-at envelope and core: the summary and the manifest name the rule;
+   the resin follows the rules' nesting (core <= middle <= envelope), and on a
+   sphere the envelope takes more resin than the sphere and the core less:
+   every layer's envelope is its largest section, its core its smallest. */
+static void slice_at_envelope_and_core(void)
+{
+    static const char *const rules[3] = {"core", "middle", "envelope"};
+    double volume[3] = {0, 0, 0}, sphere = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        char name[600], *text, *at;
+        const char *job;
+        cli_result r;
+        snprintf(name, sizeof name, "at_%s", rules[k]);
+        job = cli_path(name);
+        r = cli_run("slice", sphere_obj(), "--pixels", "240x240", "--pitch", "0.05", "-o", job, "--slice-at", rules[k], NULL);
+        CHECKF(r.status == 0 && !*r.err, "%s: exit %d: %s", rules[k], r.status, r.err);
+        snprintf(name, sizeof name, "masks %s: ", rules[k]);
+        CHECKF(strstr(r.out, name) != NULL, "%s: the summary does not say the rule: %s", rules[k], r.out);
+        cli_free(&r);
+        snprintf(name, sizeof name, "%s/manifest.json", job);
+        text = read_whole_text(name);
+        CHECK(text != NULL);
+        if (!text) continue;
+        at = strstr(text, "\"slice_at\"");
+        snprintf(name, sizeof name, "\"%s\"", rules[k]);
+        CHECKF(at && strstr(at, name) && strstr(at, name) - at < 16, "%s: the manifest's slice_at", rules[k]);
+        volume[k] = cli_json_number(text, "volume_mm3");
+        free(text);
+    }
+    {   /* the 64 x 32 sphere's own volume, from its triangles */
+        adaslice_mesh m = gen_sphere(5, 64, 32, 0);
+        size_t t;
+        for (t = 0; t < m.triangle_count; t++) {
+            const float *a = m.vertices + 3 * m.triangles[3 * t], *b = m.vertices + 3 * m.triangles[3 * t + 1],
+                        *c = m.vertices + 3 * m.triangles[3 * t + 2];
+            sphere += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                       a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
+        }
+        gen_free(&m);
+    }
+    CHECKF(volume[0] < volume[1] && volume[1] < volume[2], "resin: core %g, middle %g, envelope %g mm^3", volume[0],
+           volume[1], volume[2]);
+    CHECKF(volume[0] < sphere && sphere < volume[2], "sphere %g mm^3, core %g, envelope %g", sphere, volume[0], volume[2]);
+    CHECKF(fabs(volume[1] - sphere) < 0.01 * sphere, "middle %g mm^3, sphere %g", volume[1], sphere);
+    printf("  (sphere %.1f mm^3: core %.1f, middle %.1f, envelope %.1f)\n", sphere, volume[0], volume[1], volume[2]);
+}
+
 /* Two calibrated points: Dp = (t2 - t1) / ln(s2 / s1), and the curve passes
    through both. */
 static void two_points_fit_the_penetration(void)
@@ -742,6 +790,7 @@ void test_slice_jobs(void)
     if (!cli_begin("adaslice-jobs")) { CHECK(!"no temporary directory"); return; }
     RUN(exposure_follows_the_working_curve);
     RUN(two_points_fit_the_penetration);
+    RUN(slice_at_envelope_and_core);
     RUN(one_exposure_for_adaptive_layers_warns);
     RUN(bad_exposure_values_exit_2);
     RUN(refusals_leave_nothing_behind);
