@@ -37,11 +37,11 @@ all: $(B)/adaslice
 # adaslice_mcu.h): one object per configuration, linked by every program.
 LIB_SRC   = host/library.c
 LINK_SRC  = link/frame.c link/messages.c
-HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c host/print/*.c)) link/tty.c $(LINK_SRC)
+HOST_SRC  = $(filter-out $(LIB_SRC),$(wildcard host/*.c host/*/*.c)) link/tty.c $(LINK_SRC)
 FW_SRC    = firmware/core.c firmware/motion.c firmware/gcode.c $(LINK_SRC)
 # The one list of test groups: tests/test_NAME.c defines test_NAME().
 TESTS     = $(sort $(wildcard tests/test_*.c))
-TEST_SRC  = tests/run.c $(TESTS) host/png.c $(FW_SRC) $(LIB_SRC)
+TEST_SRC  = tests/run.c $(TESTS) host/codec/png.c $(FW_SRC) $(LIB_SRC)
 TEST_SRC += tests/job_readers.c $(filter-out host/main.c,$(HOST_SRC))
 
 # Objects, built once per configuration: build/rel (the tool, CFLAGS),
@@ -180,16 +180,16 @@ check-models: $(B)/check_models $(B)/adaslice
 
 # ---- make bench -----------------------------------------------------------
 BENCH_LIB = $(call objs,bench,$(LIB_SRC))
-$(B)/bench_plan: $(call objs,bench,bench/bench.c host/png.c host/deflate.c host/maskrows.c) $(BENCH_LIB)
+$(B)/bench_plan: $(call objs,bench,bench/bench.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/png.c host/deflate.c host/maskrows.c) $(BENCH_LIB)
+$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_wire: $(call objs,bench,bench/bench_wire.c $(LINK_SRC)) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c host/report.c host/plan_job.c host/model.c host/output.c \
-                  host/search.c host/svg.c host/weights.c) $(BENCH_LIB)
+                  host/search.c host/svg.c host/weights.c host/json.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm

@@ -6,7 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "../host/png.h"
+#include "../host/codec/png.h"
 #include <stdio.h>
 #include "models.h"
 #include "timing.h"

@@ -8,7 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "../host/png.h"
+#include "../host/codec/png.h"
 #include "../tests/maskgen.h"
 #include <stdio.h>
 #include "timing.h"

@@ -162,7 +162,7 @@ static void bench_model(const char *dir, const char *name, row *r)
     r->bins = p.bin_count;
     r->bins_max = plan.bins_max;
 
-    /* the profile upload, cut into frames as host/cmd_print.c cuts it */
+    /* the profile upload, cut into frames as host/print/cmd_print.c cuts it */
     units = (uint32_t *)malloc(p.bin_count * sizeof *units);
     forced = (unsigned char *)malloc(p.bin_count);
     if (!units || !forced) fail(name, "out of memory", NULL);

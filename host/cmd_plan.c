@@ -7,7 +7,7 @@
 #include "output.h"
 #include "plan_job.h"
 #include "report.h"
-#include "threemf.h"
+#include "formats/threemf.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,7 +1,7 @@
 /* adaslice printers: the presets, and whether each printer takes every
    layer's own Z (layer_z.h), which an adaptive plan needs. */
 #include "commands.h"
-#include "layer_z.h"
+#include "formats/layer_z.h"
 #include "printer.h"
 #include "report.h"
 

@@ -7,7 +7,7 @@
 #include "model.h"
 #include "options.h"
 #include "output.h"
-#include "png.h"
+#include "codec/png.h"
 #include "report.h"
 #include "weights.h"
 

@@ -5,7 +5,7 @@
 #define ADASLICE_HOST_CURE_H
 #include <stdio.h>
 #include "../adaslice.h"
-#include "jobfile.h"
+#include "formats/jobfile.h"
 
 typedef struct cure_args {
     double seconds[2], thickness[2];  /* --exposure S[@T][,S2@T2]: one or two points */

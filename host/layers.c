@@ -4,7 +4,7 @@
 /* The display and mask options and the layer masks: see layers.h. */
 #include "layers.h"
 #include "options.h"
-#include "pipeline.h"
+#include "formats/pipeline.h"
 #include "report.h"
 
 #include <math.h>

@@ -3,8 +3,8 @@
    from the byte layouts: every access goes through a bounds check, every
    error names a file offset. */
 #include "job_readers.h"
-#include "../host/aes256.h"
-#include "../host/sha256.h"
+#include "../host/codec/aes256.h"
+#include "../host/codec/sha256.h"
 
 #include <stdarg.h>
 #include <stdint.h>

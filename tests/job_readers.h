@@ -9,7 +9,7 @@
    code from any slicer. CTB layer data is read through the XOR stream of the
    header's EncryptionKey as UVtools documents it in ChituboxFile.cs
    (LayerRleCryptBuffer).  libc, and the encrypted CTB's AES-256 and SHA-256
-   from host/aes256.h and host/sha256.h, which test_crypto holds against
+   from host/codec/aes256.h and host/codec/sha256.h, which test_crypto holds against
    the FIPS and NIST vectors.
 
    Every offset and size is checked against the buffer; every layer image must

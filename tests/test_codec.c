@@ -3,7 +3,7 @@
 #include "../adaslice.h"
 #include "check.h"
 #include "codec_reference.h"
-#include "../host/maskrows.h"
+#include "../host/codec/maskrows.h"
 #include "maskgen.h"
 #include <stdlib.h>
 #include <string.h>

@@ -1,10 +1,10 @@
-/* host/aes256.c and host/sha256.c against the published vectors: FIPS-197
+/* host/codec/aes256.c and host/codec/sha256.c against the published vectors: FIPS-197
    Appendix C.3 (AES-256), NIST SP 800-38A F.2.5 and F.2.6 (CBC-AES256),
    FIPS 180-4's examples for SHA-256 (NIST CSRC "Example Algorithms":
    "abc", the 448-bit message, one million 'a'). */
 #include "check.h"
-#include "../host/aes256.h"
-#include "../host/sha256.h"
+#include "../host/codec/aes256.h"
+#include "../host/codec/sha256.h"
 #include <stdlib.h>
 #include <string.h>
 

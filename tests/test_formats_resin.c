@@ -1,5 +1,5 @@
-/* Tests of the resin job writers (host/fmt_ctb.c, host/fmt_ctb_encrypted.c,
-   host/fmt_goo.c): every file
+/* Tests of the resin job writers (host/formats/fmt_ctb.c, host/formats/fmt_ctb_encrypted.c,
+   host/formats/fmt_goo.c): every file
    is read back by the independent readers of tests/job_readers.c (written
    from the byte layouts, not from the writers), header, layer table and
    every pixel of every layer compared with what was handed in. */
@@ -9,7 +9,7 @@
 #include "util.h"
 #include "check.h"
 #include "job_readers.h"
-#include "../host/jobfile.h"
+#include "../host/formats/jobfile.h"
 #include "../host/printer.h"
 #include "../host/report.h"
 

@@ -1,5 +1,5 @@
 /* Tests of the ChiTu G-code zip, Prusa SL1 and UVtools UVJ writers
-   (host/fmt_chitu_zip.c, host/fmt_sl1.c, host/fmt_uvj.c). The reader here
+   (host/formats/fmt_chitu_zip.c, host/formats/fmt_sl1.c, host/formats/fmt_uvj.c). The reader here
    follows the formats' documentation, not the writers: members come out
    through Info-ZIP's unzip -p, images through OpenImageIO's oiiotool;
    run.gcode is run line by line as a printer would (absolute moves after
@@ -18,7 +18,7 @@
 #include "cli_run.h"
 #include "maskgen.h"
 #include "tool_run.h"
-#include "../host/jobfile.h"
+#include "../host/formats/jobfile.h"
 #include "../host/printer.h"
 #include "../adaslice_mcu.h"
 

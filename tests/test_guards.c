@@ -4,8 +4,8 @@
    builds, a part in the wrong unit, and a job that lights no pixel. */
 #include "cli_run.h"
 #include "meshgen.h"
-#include "../host/jobfile.h"
-#include "../host/layer_z.h"
+#include "../host/formats/jobfile.h"
+#include "../host/formats/layer_z.h"
 #include "../host/printer.h"
 
 #include <time.h>
@@ -76,7 +76,7 @@ static void every_format_has_a_per_layer_z_row(void)
     for (i = 0; JOB_FORMATS[i]; i++) {
         const layer_z *z = layer_z_of(JOB_FORMATS[i]->name);
         const char *want = expected_z(JOB_FORMATS[i]->name);
-        CHECKF(z->support != LAYER_Z_UNKNOWN, "%s: no per-layer Z row (host/layer_z.c)", JOB_FORMATS[i]->name);
+        CHECKF(z->support != LAYER_Z_UNKNOWN, "%s: no per-layer Z row (host/formats/layer_z.c)", JOB_FORMATS[i]->name);
         CHECKF((z->support == LAYER_Z_NO) == !JOB_FORMATS[i]->adaptive, "%s: per-layer Z '%s', adaptive %d",
                JOB_FORMATS[i]->name, layer_z_says(z->support), JOB_FORMATS[i]->adaptive);
         if (want) CHECKF(!strcmp(layer_z_says(z->support), want), "%s: '%s'", JOB_FORMATS[i]->name, layer_z_says(z->support));

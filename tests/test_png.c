@@ -1,4 +1,4 @@
-/* Tests of the PNG writer (host/png.c). Every image is decoded by an
+/* Tests of the PNG writer (host/codec/png.c). Every image is decoded by an
    independent decoder, OpenImageIO's oiiotool (libpng and zlib underneath,
    which also check the chunk CRCs and the Adler-32), converted to 8-bit PGM
    and compared pixel for pixel; oiiotool shows 1-bit pixels as 0 and 255.
@@ -9,7 +9,7 @@
 #include "util.h"
 #include "check.h"
 #include "maskgen.h"
-#include "../host/png.h"
+#include "../host/codec/png.h"
 #include "../adaslice.h"
 
 #include <dirent.h>

@@ -1,4 +1,4 @@
-/* Tests of the ZIP writer (host/zip.c). Two readers check what it writes:
+/* Tests of the ZIP writer (host/codec/zip.c). Two readers check what it writes:
    Info-ZIP's unzip, which tests every member's CRC (-t) and extracts it (-p,
    -d) for a byte-for-byte comparison; and, without any program, a walk of
    the archive by the APPNOTE's layouts that holds the end record, the
@@ -10,7 +10,7 @@
 #include "check.h"
 #include "maskgen.h"
 #include "tool_run.h"
-#include "../host/zip.h"
+#include "../host/codec/zip.h"
 #include "../adaslice_mcu.h"
 
 #include <dirent.h>

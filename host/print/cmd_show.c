@@ -10,7 +10,7 @@
 #include "screen.h"
 #include "screen_print.h"
 #include "../commands.h"
-#include "../jobdir.h"
+#include "../formats/jobdir.h"
 #include "../options.h"
 #include "../report.h"
 #include "../../adaslice_mcu.h"

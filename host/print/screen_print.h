@@ -8,7 +8,7 @@
 #define ADASLICE_HOST_PRINT_SCREEN_PRINT_H
 #include <signal.h>
 #include "screen.h"
-#include "../serial.h"
+#include "serial.h"
 
 /* Layer k's (1-based) mask into *image (rows of *stride bytes, top first),
    valid until the next call; RC_OK or a complaint made. */

@@ -35,11 +35,11 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
 #endif
-#include "aes256.h"
-#include "bytes.h"
+#include "../codec/aes256.h"
+#include "../bytes.h"
 #include "fmt_ctb.h"
-#include "report.h"
-#include "sha256.h"
+#include "../report.h"
+#include "../codec/sha256.h"
 
 #include <errno.h>
 #include <stdlib.h>

@@ -5,8 +5,8 @@
 #define ADASLICE_HOST_SERIAL_H
 #include <stddef.h>
 #include <stdint.h>
-#include "../link/frame.h"
-#include "../link/messages.h"
+#include "../../link/frame.h"
+#include "../../link/messages.h"
 
 #define SERIAL_QUEUE 16
 

@@ -3,7 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "jobfile.h"
-#include "report.h"
+#include "../report.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -101,24 +101,6 @@ int job_write_layer(job_writer *w, size_t k, const unsigned char *image, size_t 
         return rc;
     }
     return job_put(w, k, &blob);
-}
-
-double job_lift_mm(const job_motion *m, int bottom)
-{
-    return bottom && m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm;
-}
-
-double job_lift_speed(const job_motion *m, int bottom)
-{
-    return bottom && m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed;
-}
-
-double job_peel_s(const job_motion *m, int bottom)
-{
-    double lift = job_lift_mm(m, bottom), up = job_lift_speed(m, bottom), t = 0;
-    if (up > 0) t += lift / up;
-    if (m->retract_speed > 0) t += lift / m->retract_speed;
-    return t;
 }
 
 time_t job_time(int *fixed)

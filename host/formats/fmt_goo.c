@@ -22,9 +22,9 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, localtime_r */
 #endif
-#include "bytes.h"
+#include "../bytes.h"
 #include "jobfile.h"
-#include "report.h"
+#include "../report.h"
 
 #include <math.h>
 #include <stdlib.h>

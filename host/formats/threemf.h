@@ -14,7 +14,7 @@
    maximum layer heights for PrusaSlicer. */
 #ifndef ADASLICE_HOST_THREEMF_H
 #define ADASLICE_HOST_THREEMF_H
-#include "plan_job.h"
+#include "../plan_job.h"
 
 /* The thickest layer a nozzle lays in PrusaSlicer unless told otherwise
    (max_layer_height 0: 75 % of the nozzle), and its floor for any layer. */

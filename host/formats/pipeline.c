@@ -9,7 +9,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "pipeline.h"
-#include "report.h"
+#include "../report.h"
 
 #include <pthread.h>
 #include <stdlib.h>

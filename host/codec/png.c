@@ -2,10 +2,10 @@
    specification and RFC 1950 (zlib); the deflate inside is deflate.c's, told
    that the same byte one row up is a row length + 1 back. */
 #include "png.h"
-#include "bytes.h"
+#include "../bytes.h"
 #include "deflate.h"
 #include "maskrows.h"
-#include "../adaslice.h"
+#include "../../adaslice.h"
 #include <stdlib.h>
 #include <string.h>
 

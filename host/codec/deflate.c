@@ -9,7 +9,7 @@
    symbols is then coded as the smallest of dynamic Huffman (code lengths
    limited to 15 bits by package-merge), fixed Huffman or stored. */
 #include "deflate.h"
-#include "bytes.h"
+#include "../bytes.h"
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>

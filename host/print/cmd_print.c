@@ -1,23 +1,23 @@
 /* adaslice print: drives a printer running the adaslice firmware over a
-   serial port (host/serial.h: POSIX termios only), after link/PROTOCOL.md.
+   serial port (host/print/serial.h: POSIX termios only), after link/PROTOCOL.md.
    The printer plans from the quantised profile (or takes the host's plan),
    then the host streams mask k+1 while layer k exposes. */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
-#include "bytes.h"
-#include "commands.h"
-#include "cure.h"
-#include "jobdir.h"
-#include "json.h"
-#include "layers.h"
-#include "maskrows.h"
-#include "options.h"
-#include "output.h"
-#include "plan_job.h"
-#include "report.h"
+#include "../bytes.h"
+#include "../commands.h"
+#include "../cure.h"
+#include "../formats/jobdir.h"
+#include "../json.h"
+#include "../layers.h"
+#include "../codec/maskrows.h"
+#include "../options.h"
+#include "../output.h"
+#include "../plan_job.h"
+#include "../report.h"
 #include "serial.h"
-#include "print/screen_print.h"
+#include "screen_print.h"
 
 #include <math.h>
 #include <signal.h>

@@ -19,10 +19,10 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fseeko, off_t */
 #endif
-#include "bytes.h"
+#include "../bytes.h"
 #include "fmt_ctb.h"
-#include "report.h"
-#include "../adaslice_mcu.h"
+#include "../report.h"
+#include "../../adaslice_mcu.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,15 +2,15 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
-#include "bytes.h"
-#include "json.h"
+#include "../bytes.h"
+#include "../json.h"
 #include "jobdir.h"
 #include "jobfile.h"
-#include "maskrows.h"
-#include "layers.h"
-#include "output.h"
-#include "png.h"
-#include "report.h"
+#include "../codec/maskrows.h"
+#include "../layers.h"
+#include "../output.h"
+#include "../codec/png.h"
+#include "../report.h"
 
 #include <errno.h>
 #include <dirent.h>

@@ -10,9 +10,9 @@
 #define _POSIX_C_SOURCE 200809L /* gmtime_r */
 #endif
 #include "jobfile.h"
-#include "output.h"
-#include "report.h"
-#include "zip.h"
+#include "../output.h"
+#include "../report.h"
+#include "../codec/zip.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -2,10 +2,10 @@
    core specification (1.3): [Content_Types].xml, _rels/.rels and the model
    part 3D/3dmodel.model. */
 #include "threemf.h"
-#include "options.h"
-#include "output.h"
-#include "report.h"
-#include "zip.h"
+#include "../options.h"
+#include "../output.h"
+#include "../report.h"
+#include "../codec/zip.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,6 +1,6 @@
 /* Rows of layer masks: see maskrows.h. */
 #include "maskrows.h"
-#include "../adaslice_mcu.h"
+#include "../../adaslice_mcu.h"
 #include <string.h>
 
 void mask_row_grey(const unsigned char *image, size_t stride, int bits, int width, int y, unsigned char *out)

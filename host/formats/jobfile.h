@@ -15,8 +15,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <time.h>
-#include "maskrows.h"
-#include "printer.h"
+#include "../codec/maskrows.h"
+#include "../printer.h"
 
 /* One layer as the printer moves and exposes it. */
 typedef struct job_layer {
@@ -153,10 +153,22 @@ const job_format *job_format_for_path(const char *path);
    its lift, mm, and speed, mm/s. The bottom ones fall back to the normal
    ones where the motion leaves them 0: a printer that does not peel tears
    the first layers off the plate. */
-double job_lift_mm(const job_motion *m, int bottom);
-double job_lift_speed(const job_motion *m, int bottom);
+static inline double job_lift_mm(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_mm > 0 ? m->bottom_lift_mm : m->lift_mm;
+}
+static inline double job_lift_speed(const job_motion *m, int bottom)
+{
+    return bottom && m->bottom_lift_speed > 0 ? m->bottom_lift_speed : m->lift_speed;
+}
 /* Seconds that peel takes: up at the lift speed, back at retract_speed. */
-double job_peel_s(const job_motion *m, int bottom);
+static inline double job_peel_s(const job_motion *m, int bottom)
+{
+    double lift = job_lift_mm(m, bottom), up = job_lift_speed(m, bottom), t = 0;
+    if (up > 0) t += lift / up;
+    if (m->retract_speed > 0) t += lift / m->retract_speed;
+    return t;
+}
 /* The resin formats keep speeds in mm/min. */
 static inline double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
 

@@ -4,11 +4,11 @@
    known before a member's header goes out (its bytes are in memory), so no
    member needs a data descriptor. */
 #include "zip.h"
-#include "bytes.h"
+#include "../bytes.h"
 #include "deflate.h"
 #include "png.h"
-#include "report.h"
-#include "../adaslice_mcu.h"
+#include "../report.h"
+#include "../../adaslice_mcu.h"
 
 #include <float.h>
 #include <math.h>

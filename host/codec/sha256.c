@@ -1,6 +1,6 @@
 /* SHA-256: see sha256.h. Sections are FIPS 180-4's. */
 #include "sha256.h"
-#include "bytes.h"
+#include "../bytes.h"
 #include <string.h>
 
 /* 4.2.2: the first 32 bits of the fractional parts of the cube roots of the

@@ -16,9 +16,9 @@
    mirror: the images are stored as the printer shows them, as in every
    other format. */
 #include "jobfile.h"
-#include "json.h"
-#include "report.h"
-#include "zip.h"
+#include "../json.h"
+#include "../report.h"
+#include "../codec/zip.h"
 
 #include <stdio.h>
 #include <stdlib.h>

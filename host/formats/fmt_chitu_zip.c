@@ -7,9 +7,9 @@
    The firmware executes those moves, so every layer is printed at its own
    absolute Z with its own exposure: adaptive plans print as planned. */
 #include "jobfile.h"
-#include "output.h"
-#include "report.h"
-#include "zip.h"
+#include "../output.h"
+#include "../report.h"
+#include "../codec/zip.h"
 
 #include <stdio.h>
 #include <stdlib.h>

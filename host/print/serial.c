@@ -3,9 +3,9 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "serial.h"
-#include "bytes.h"
-#include "report.h"
-#include "../link/tty.h"
+#include "../bytes.h"
+#include "../report.h"
+#include "../../link/tty.h"
 
 #include <errno.h>
 #include <fcntl.h>

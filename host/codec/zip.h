@@ -7,8 +7,8 @@
 #ifndef ADASLICE_HOST_ZIP_H
 #define ADASLICE_HOST_ZIP_H
 #include <stddef.h>
-#include "jobfile.h"
-#include "output.h"
+#include "../formats/jobfile.h"
+#include "../output.h"
 
 typedef struct zip_writer zip_writer;
 
