@@ -165,7 +165,7 @@
    diagonal), the centre-surround maps |G(s) - G(2s)| normalised after Itti
    and summed; a triangle weighs the mean of its corners, the heaviest 1.
    Neighbourhoods come from grids with vertices pooled in cells s/3 wide:
-   linear time, about a second for 200K triangles. Multiply in weights of your
+   time linear in the triangles. Multiply in weights of your
    own (the tool reads a file and regions). All three read the surface with
    vertices within weld_tolerance merged, on a copy. adaslice_curvature_profile
    gives k(z), the area-weighted mean |H| of the surface in each bin, for the
@@ -588,8 +588,8 @@ ADASLICE_DEF adaslice_result adaslice_mean_curvature(const adaslice_mesh *mesh, 
    Neighbourhoods come from grids, never all pairs: vertices are pooled into
    cells s/3 wide, each acting as its vertex count at its centroid with its
    mean |H| (the Gaussian's first-order error cancels about a centroid), and
-   the cells within 2s come from a grid of cells s wide. Linear time and
-   memory: about a second and 27 MiB for 200K triangles on one core. */
+   the cells within 2s come from a grid of cells s wide. Time and memory
+   linear in the triangles. */
 ADASLICE_DEF adaslice_result adaslice_saliency(const adaslice_mesh *mesh, float *face_weight,
                                                const adaslice_surface_options *options, adaslice_error *error);
 

@@ -162,7 +162,7 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t pl
    layer count, or ADASLICE_UNREACHED (nothing changes). */
 ADASLICE_DEF uint32_t adaslice_dp_reverse(adaslice_dp *dp);
 /* The same work in slices, for a caller whose every pass must stay short (a
-   firmware: 12,000 planes are a few hundred thousand cycles): at most
+   firmware: the whole reversal is linear in the planes): at most
    `budget` planes a call. Returns 1 while planes are left, 0 once the plan
    reads bottom-up (at once when no plan reaches the top). */
 ADASLICE_DEF int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget);
@@ -231,8 +231,8 @@ ADASLICE_DEF adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, cons
                                                  void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
                                                  void *ctx);
 /* The same, putting at most `max_bytes` (>= 1) bytes of rows through the CRC
-   before it returns, for a caller whose every pass must stay short (on an
-   8-bit core one 2560-pixel row's CRC is 39,000 cycles). A row is emitted
+   before it returns, for a caller whose every pass must stay short (a
+   row's CRC is a table step a byte: long on an 8-bit core). A row is emitted
    once its CRC is complete. A repeated row longer than
    ADASLICE_RLE_REPEAT_COST bytes takes its CRC by one multiplication (as
    zlib's crc32_combine) and costs that many bytes of the budget. *used
@@ -792,10 +792,9 @@ static uint32_t adaslice__crc32_mul(uint32_t a, uint32_t b)
    call's `whole`) allows. The budget is in row bytes of CRC. A repeated
    row's CRC comes by combination, as zlib's crc32_combine: for rows A then
    B, crc(AB) = crc(A) * x^(8 |B|) + crc(B) mod the polynomial, one
-   multiplication where the row's bytes are hundreds of table steps (39,000
-   cycles for a 2560-pixel row on an 8-bit core); it costs
-   ADASLICE_RLE_REPEAT_COST bytes, about what it takes (1,000 cycles on an
-   ATmega2560, 8 bytes 980). */
+   multiplication where the row's bytes are hundreds of table steps; it costs
+   ADASLICE_RLE_REPEAT_COST bytes of the budget, about what the
+   multiplication takes (docs/BENCHMARKS.md has the cycles on an ATmega2560). */
 static void adaslice__rle_flush(adaslice_rle_decoder *dec, uint32_t *budget, uint32_t whole,
                                 void (*emit)(void *, uint32_t, const unsigned char *), void *ctx)
 {
