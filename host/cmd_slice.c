@@ -143,12 +143,21 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if (preset && *fmt != &JOB_FORMAT_DIR && *fmt != &JOB_FORMAT_UVJ && strcmp(preset->format, (*fmt)->name))
         return complain(RC_USAGE, "-o %s: the %s reads %s jobs, not %s (leave the extension out for its own)", s->dir,
                         preset->name, preset->format, (*fmt)->name);
-    if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR) {
+    /* an extension is added to a new name (or a directory's), never to a file,
+       a device or a FIFO that exists: -o /dev/null writes /dev/null */
+    if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR &&
+        (output_kind(s->dir) == OUT_NEW || output_kind(s->dir) == OUT_DIRECTORY)) {
         size_t n = strlen(s->dir) + strlen((*fmt)->extension) + 1;
         if (!(*path = (char *)malloc(n))) return complain(RC_FAIL, "out of memory");
         snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
     }
     return RC_OK;
+}
+
+/* -o's path takes the job: before the model is loaded. */
+static int output_check_dir_or_file(const job_format *f, const char *path)
+{
+    return f == &JOB_FORMAT_DIR ? output_check_dir("-o", path) : output_check("-o", path);
 }
 
 /* The layers below the top one differ in thickness (the top one is what is
@@ -263,9 +272,6 @@ static int draw_preview(void *ctx, int w, int h, unsigned char *rgb)
     return draw_picture(p->j, w, h, rgb);
 }
 
-static volatile sig_atomic_t interrupted;
-static void on_sigint(int sig) { (void)sig; interrupted = 1; }
-
 
 /* ------------------------------------------------------------- the layers */
 
@@ -286,7 +292,7 @@ static int render_layer(void *ctx, size_t k, unsigned char *image)
     slice_run *r = (slice_run *)ctx;
     layer_masks *m = r->masks;
     int rc;
-    if (interrupted) return complain(RC_FAIL, "interrupted at layer %zu of %zu: %s not written", k + 1, r->d->layer_count, r->path);
+    if (output_interrupted()) return RC_FAIL; /* said once, by outputs_finish */
     if ((rc = layer_masks_render(m, k, image))) return rc;
     r->layers[k].lit_mm2 = m->masker.lit * m->grid.pitch[0] * m->grid.pitch[1];
     r->d->volume_mm3 += r->layers[k].lit_mm2 * r->layers[k].thickness;
@@ -314,7 +320,6 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     previews pv;
     int rc, odd = s->rotate & 1, empty = 0, existed = 0;
     struct stat st;
-    void (*was)(int);
 
     memset(&bar, 0, sizeof bar);
     memset(&out, 0, sizeof out);
@@ -377,8 +382,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     memcpy(d->place_mm, s->place, sizeof d->place_mm);
     d->rotate = s->rotate;
 
-    interrupted = 0;
-    was = signal(SIGINT, on_sigint);
+    outputs_hold_signals(); /* from here a signal stops the layers and the job is removed */
     existed = stat(path, &st) == 0;
     if ((rc = job_open(&out, f, path, d))) goto done;
     if (f == &JOB_FORMAT_DIR) {
@@ -413,7 +417,6 @@ done:
         if (!rc) rc = closed;
     }
     if (empty && f == &JOB_FORMAT_DIR && !jobdir_remove(path) && !existed) rmdir(path);
-    signal(SIGINT, was);
     layer_masks_close(&m);
     previews_free(&pv);
     free(layers);
@@ -453,6 +456,8 @@ int cmd_slice(int argc, char **argv)
     free(rest);
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
+    if (!rc) rc = output_check_dir_or_file(f, extended ? extended : s.dir);
+    if (!rc) rc = check_plan_outputs(&a);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
     if (!rc) rc = layer_masks_check(&s, pipeline_images(s.threads));
     if (rc) { free(extended); return rc; }

@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <time.h>
 #include "maskrows.h"
+#include "output.h"
 #include "printer.h"
 
 /* One layer as the printer moves and exposes it. */
@@ -163,12 +164,14 @@ double job_peel_s(const job_motion *m, int bottom);
    bytes), else now. *fixed says which; a fixed time is shown in UTC. */
 time_t job_time(int *fixed);
 
-/* A file written under "PATH.tmp.PID" and renamed into place by
-   job_file_commit; job_file_discard removes it. */
+/* A job file, through output.h: a regular file under "PATH.tmp.PID" renamed
+   into place by job_file_commit (job_file_discard removes it); a device, a
+   FIFO or "-" written straight at the commit. */
 typedef struct job_file {
-    FILE *f;
-    char *path, *tmp;
+    FILE *f;                     /* seekable, whatever the path is */
+    char *path;                  /* as given, for messages */
     int err;                     /* the first failed write's errno (0: none) */
+    output out;
 } job_file;
 int job_file_open(job_file *jf, const char *path);
 /* n bytes (src NULL: zeros) at byte `at`, or (append) where the last write

@@ -10,6 +10,7 @@
    answering. Every message is one line on stderr that starts with "adaslice: ". */
 #include "../adaslice.h"
 #include "commands.h"
+#include "output.h"
 #include "report.h"
 
 #include <errno.h>
@@ -76,7 +77,10 @@ int main(int argc, char **argv)
         rc = RC_OK;
     } else {
         if (!(c = find_command(argv[1]))) return RC_USAGE;
-        rc = c->run(argc - 1, argv + 1);
+        /* print keeps its own SIGINT (it pauses the printer); the others stop
+           and leave nothing half-written (output.h) */
+        if (c->run != cmd_print) outputs_catch_signals();
+        rc = outputs_finish(c->run(argc - 1, argv + 1));
     }
     /* a full disk or closed pipe on stdout is a failure, not a silent success */
     if (fflush(stdout) != 0 || ferror(stdout)) return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));

@@ -72,6 +72,9 @@ void plan_options_of(const plan_args *a, adaslice_method m, adaslice_plan_option
 /* Profile (from the model or --profile) and plan; RC_OK or a complaint made. */
 int run_plan(const plan_args *a, plan_job *j);
 int write_outputs(const plan_args *a, const plan_job *j);
+/* --out, --profile-out and --plot can be written (output_check): before the
+   model is loaded. */
+int check_plan_outputs(const plan_args *a);
 /* The thickest uniform layers within the bounds of `than` whose worst error is
    no larger than its worst: what the same quality costs without adaptive
    layers. 1 with *out made (free it), 0 if even the thinnest are worse. */
