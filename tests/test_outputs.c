@@ -5,12 +5,17 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700 /* mknod of a character device (XSI) */
+#endif
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "meshgen.h"
 #include "../host/report.h"
 
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -265,11 +270,249 @@ static void compare_gives_the_saving_against_uniform_layers(void)
     cli_remove_all(job);
 }
 
+
+/* ------------------------------------------------ the kinds of output path */
+
+/* What an output option can be given besides a new file (issue 26): a
+   symlink (its target is written, the link stays), a FIFO (a reader gets the
+   bytes, the FIFO stays), a character device like /dev/null (stays one) and
+   "-" (standard output). */
+enum { TO_LINK, TO_FIFO, TO_DEVICE, TO_STDOUT, TO_KINDS };
+static const char *const TO_NAMES[TO_KINDS] = {"a symlink", "a FIFO", "a null device", "-"};
+
+typedef struct target {
+    int kind;
+    char path[400];              /* what the option is given */
+    char real[400];              /* TO_LINK: the link's target; TO_FIFO: what the reader got */
+    pid_t reader;
+} target;
+
+/* A null device of our own as root (who could replace /dev/null if the tool
+   regressed), /dev/null otherwise (nobody else can). 0 if there is none to use. */
+static int null_device(char *path, size_t size, const char *name)
+{
+    struct stat st;
+    if (geteuid() != 0) {
+        snprintf(path, size, "/dev/null");
+        return 1;
+    }
+    snprintf(path, size, "%s/null-%s", cli_dir, name);
+    return stat("/dev/null", &st) == 0 && mknod(path, S_IFCHR | 0666, st.st_rdev) == 0;
+}
+
+/* The path of `kind` for output `name`; 0 when this machine has none. */
+static int target_make(target *t, int kind, const char *name)
+{
+    memset(t, 0, sizeof *t);
+    t->kind = kind;
+    switch (kind) {
+    case TO_LINK:
+        snprintf(t->real, sizeof t->real, "%s/real-%s", cli_dir, name);
+        snprintf(t->path, sizeof t->path, "%s/link-%s", cli_dir, name);
+        cli_write(t->real, "old");
+        {
+            char rel[200];
+            snprintf(rel, sizeof rel, "real-%s", name); /* relative: read from the link's directory */
+            CHECK(symlink(rel, t->path) == 0);
+        }
+        return 1;
+    case TO_FIFO:
+        snprintf(t->path, sizeof t->path, "%s/fifo-%s", cli_dir, name);
+        snprintf(t->real, sizeof t->real, "%s/got-%s", cli_dir, name);
+        CHECK(mkfifo(t->path, 0644) == 0);
+        fflush(NULL);
+        t->reader = fork();
+        if (t->reader == 0) {
+            char buf[65536];
+            ssize_t n;
+            int in, out;
+            alarm(5); /* a FIFO replaced by a file is never opened for writing */
+            in = open(t->path, O_RDONLY);
+            out = open(t->real, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            if (in < 0 || out < 0) _exit(1);
+            while ((n = read(in, buf, sizeof buf)) > 0)
+                if (write(out, buf, (size_t)n) != n) _exit(1);
+            _exit(n < 0);
+        }
+        CHECK(t->reader > 0);
+        return t->reader > 0;
+    case TO_DEVICE: return null_device(t->path, sizeof t->path, name);
+    default: snprintf(t->path, sizeof t->path, "-"); return 1;
+    }
+}
+
+/* The output went where t says, starting with `signature` (NULL: any bytes),
+   and the path is what it was; then it is removed. */
+static void target_check(target *t, const char *what, const cli_result *r, const char *signature)
+{
+    struct stat st;
+    unsigned char *got = NULL;
+    size_t size = 0;
+    const char *kind = TO_NAMES[t->kind];
+    CHECKF(r->status == 0, "%s to %s: exit %d, %s", what, kind, r->status, r->err);
+    switch (t->kind) {
+    case TO_LINK:
+        CHECKF(lstat(t->path, &st) == 0 && S_ISLNK(st.st_mode), "%s: the symlink was replaced", what);
+        got = read_whole_file(t->real, &size);
+        break;
+    case TO_FIFO: {
+        int st2 = 0, fd = open(t->path, O_WRONLY | O_NONBLOCK); /* a reader still waiting gets its end */
+        if (fd >= 0) close(fd);
+        CHECK(waitpid(t->reader, &st2, 0) == t->reader);
+        CHECKF(WIFEXITED(st2) && WEXITSTATUS(st2) == 0, "%s: the FIFO's reader got nothing (status %d)", what, st2);
+        CHECKF(lstat(t->path, &st) == 0 && S_ISFIFO(st.st_mode), "%s: the FIFO was replaced", what);
+        got = read_whole_file(t->real, &size);
+        break;
+    }
+    case TO_DEVICE:
+        CHECKF(stat(t->path, &st) == 0 && S_ISCHR(st.st_mode), "%.100s: %.200s is no longer a device", what, t->path);
+        break;
+    default:
+        got = read_whole_file(cli_path("stdout"), &size);
+        break;
+    }
+    if (t->kind != TO_DEVICE) {
+        CHECKF(got && size > 3 && memcmp(got, "old", 3) != 0, "%s to %s: nothing written there (%zu bytes)", what, kind, size);
+        if (got && signature)
+            CHECKF(size >= strlen(signature) && !memcmp(got, signature, strlen(signature)), "%s to %s: not the output", what,
+                   kind);
+    }
+    free(got);
+    if (t->kind != TO_STDOUT && strcmp(t->path, "/dev/null")) remove(t->path);
+    if (t->kind == TO_LINK || t->kind == TO_FIFO) remove(t->real);
+}
+
+/* Every output option: its command (OUT where the path goes) and how its
+   bytes begin. */
+typedef struct output_option { const char *args[18]; const char *signature; } output_option;
+#define MODEL "MODEL"
+#define PIXELS "--pixels", "120x120", "--pitch", "0.1", "--uniform", "0.1"
+static const output_option OUTPUT_OPTIONS[] = {
+    {{"plan", MODEL, "--out", "OUT"}, "layer,"},
+    {{"plan", MODEL, "--plot", "OUT"}, "<"},
+    {{"plan", MODEL, "--profile-out", "OUT"}, NULL},
+    {{"plan", MODEL, "--3mf", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "ctb", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "ctb-encrypted", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "goo", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "prz", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "chitu-zip", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "sl1", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "uvj", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "ctb", "-o", "JOB", "--out", "OUT"}, "layer,"},
+    {{"orient", MODEL, "--dirs", "8", "--map", "OUT"}, "<"},
+    {{"saliency", MODEL, "-o", "OUT"}, NULL},
+    {{"saliency", MODEL, "--ply", "OUT"}, "ply"},
+    {{"saliency", MODEL, "--png", "OUT"}, "\x89PNG"},
+};
+
+static void outputs_never_replace_links_fifos_or_devices(void)
+{
+    size_t i, a;
+    int kind;
+    for (i = 0; i < sizeof OUTPUT_OPTIONS / sizeof OUTPUT_OPTIONS[0]; i++)
+        for (kind = 0; kind < TO_KINDS; kind++) {
+            const output_option *o = &OUTPUT_OPTIONS[i];
+            const char *argv[20] = {NULL};
+            char what[200] = "", name[40];
+            target t;
+            cli_result r;
+            snprintf(name, sizeof name, "out%zu", i);
+            if (!target_make(&t, kind, name)) continue; /* no null device of our own: mknod refused */
+            for (a = 0; o->args[a]; a++) {
+                argv[a] = !strcmp(o->args[a], MODEL) ? raised_sphere()
+                          : !strcmp(o->args[a], "OUT") ? t.path
+                          : !strcmp(o->args[a], "JOB") ? cli_path("job.ctb") : o->args[a];
+                if (strlen(what) + strlen(o->args[a]) + 2 < sizeof what) {
+                    strcat(what, o->args[a]);
+                    strcat(what, " ");
+                }
+            }
+            r = cli_run(argv[0], argv[1], argv[2], argv[3], argv[4], argv[5], argv[6], argv[7], argv[8], argv[9],
+                        argv[10], argv[11], argv[12], argv[13], argv[14], argv[15], argv[16], argv[17], NULL);
+            target_check(&t, what, &r, o->signature);
+            cli_free(&r);
+            remove(cli_path("job.ctb"));
+        }
+    {
+        DIR *d = opendir(cli_dir); /* nothing left under a temporary name */
+        struct dirent *e;
+        while (d && (e = readdir(d)) != NULL) CHECKF(!strstr(e->d_name, ".tmp."), "left behind: %s", e->d_name);
+        if (d) closedir(d);
+    }
+}
+
+/* slice adds its format's extension to a new name only: -o /dev/null with a
+   printer's format writes /dev/null, not /dev/null.ctb; a job directory
+   cannot go to a device. */
+static void no_extension_on_a_path_that_exists(void)
+{
+    char dev[400];
+    cli_result r;
+    if (!null_device(dev, sizeof dev, "ext")) return;
+    r = cli_run("slice", raised_sphere(), "--printer", "elegoo-mars-3", "-o", dev, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, dev) && !strstr(r.out, ".ctb"), "exit %d: %s%s", r.status, r.out, r.err);
+    cli_free(&r);
+    snprintf(dev + strlen(dev), sizeof dev - strlen(dev), ".ctb");
+    CHECKF(!cli_exists(dev), "%s written", dev);
+    dev[strlen(dev) - 4] = 0;
+    r = cli_run("slice", raised_sphere(), "-o", dev, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "not a directory"), "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    if (strcmp(dev, "/dev/null")) remove(dev);
+}
+
+/* The index of the last argument. */
+static size_t argc_last(const char *const *argv)
+{
+    size_t n = 0;
+    while (n < 7 && argv[n + 1]) n++;
+    return n;
+}
+
+/* Every output path is checked before the model is loaded: a model that
+   does not exist is never reached, the output's message wins, exit 2. */
+static void output_paths_are_checked_before_the_work(void)
+{
+    const char *dir = cli_path("a-directory.ctb"), *nothing = cli_path("no-such-model.stl");
+    char in_dir[500], missing[500];
+    cli_result r;
+    size_t i;
+    const char *const cases[][8] = {
+        {"slice", "MODEL", "--pixels", "100x100", "--pitch", "0.1", "-o", "DIR"},
+        {"print", "MODEL", "--port", "/no-such-port", "--report", "DIR"},
+        {"plan", "MODEL", "--out", "DIR"},
+        {"plan", "MODEL", "--plot", "MISSING"},
+        {"plan", "MODEL", "--3mf", "DIR"},
+        {"orient", "MODEL", "--map", "DIR"},
+        {"saliency", "MODEL", "--png", "MISSING"},
+        {"slice", "MODEL", "--pixels", "100x100", "--pitch", "0.1", "-o", "MISSING"},
+    };
+    mkdir(dir, 0755);
+    snprintf(missing, sizeof missing, "%s/no-such-dir/out", cli_dir);
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const char *argv[8];
+        size_t a;
+        for (a = 0; a < 8; a++)
+            argv[a] = !cases[i][a] ? NULL : !strcmp(cases[i][a], "MODEL") ? nothing : !strcmp(cases[i][a], "DIR") ? dir
+                      : !strcmp(cases[i][a], "MISSING") ? missing : cases[i][a];
+        r = cli_run(argv[0], argv[1], argv[2], argv[3], argv[4], argv[5], argv[6], argv[7], NULL);
+        snprintf(in_dir, sizeof in_dir, "%s", strstr(r.err, dir) ? dir : missing);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, in_dir) && !strstr(r.err, "no-such-model"),
+               "%s %s: exit %d, %s", argv[0], argv[argc_last(argv)], r.status, r.err);
+        cli_free(&r);
+    }
+    rmdir(dir);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(orient_map_tiles_and_has_a_colour_bar);
     RUN(compare_gives_the_saving_against_uniform_layers);
+    RUN(outputs_never_replace_links_fifos_or_devices);
+    RUN(no_extension_on_a_path_that_exists);
+    RUN(output_paths_are_checked_before_the_work);
     cli_end();
 }
