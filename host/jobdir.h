@@ -18,9 +18,14 @@ void layer_name(char name[40], size_t k, int digits, const char *ext);
 /* "DIR/layer_00001.EXT" */
 void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext);
 
-/* Removes the job in DIR (its manifest first, then the files a slice writes:
-   masks, previews, plan, layers), leaving DIR and anything else in it. */
+/* Removes the job in DIR: its manifest first, then the files it names (its
+   "files" list; in a manifest from before the list, its layers' files, their
+   SVGs, masks.rle, preview.png, plan.csv and plot.svg), leaving DIR and
+   anything else in it. */
 int jobdir_remove(const char *dir);
+/* Before the work: a DIR that holds files and no manifest.json is someone
+   else's, refused (RC_USAGE, said) unless force. */
+int jobdir_check(const char *dir, int force);
 
 /* The masks of a job as a printer takes them, with its exposures and motion. */
 typedef struct job_masks {

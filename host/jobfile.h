@@ -19,6 +19,8 @@
 #include "output.h"
 #include "printer.h"
 
+enum { DIR_PLAN_CSV = 1, DIR_PLOT_SVG = 2, DIR_LAYER_SVGS = 4 };
+
 /* One layer as the printer moves and exposes it. */
 typedef struct job_layer {
     double z_bottom, z_top;      /* mm above the plate: the part's bottom is at 0 */
@@ -68,6 +70,11 @@ typedef struct job_desc {
                                     layer gets S) */
     double part_mm[3], place_mm[2];
     int rotate;                  /* quarter turns, as --rotate */
+    /* The directory format: the files the caller writes into it besides the
+       writer's own (DIR_*), listed in its manifest and removed with it; and
+       dir_force: write into a directory that holds files and no manifest. */
+    unsigned dir_extras;
+    int dir_force;
     /* A shaded picture of the part, w x h pixels, 3 bytes (R, G, B) a pixel,
        rows top first, for the formats' previews; 0 or -1 (out of memory). */
     int (*preview)(void *ctx, int w, int h, unsigned char *rgb);

@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 /* A 10 mm sphere standing 20 mm above the model's origin, so that heights
    above the part's bottom and the model's z differ. */
@@ -505,6 +506,261 @@ static void output_paths_are_checked_before_the_work(void)
     rmdir(dir);
 }
 
+/* ------------------------------------------------ signals and full disks */
+
+static void pause_ms(long ms)
+{
+    struct timespec t;
+    t.tv_sec = ms / 1000;
+    t.tv_nsec = ms % 1000 * 1000000L;
+    nanosleep(&t, NULL);
+}
+
+/* The tool on argv (argv[0] its command), stderr into err; its pid. */
+static pid_t spawn(const char *const *argv, const char *err)
+{
+    const char *full[24];
+    size_t n = 0;
+    pid_t pid;
+    full[n++] = cli_tool;
+    while (argv[n - 1] && n < 23) { full[n] = argv[n - 1]; n++; }
+    full[n] = NULL;
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        int null = open("/dev/null", O_RDWR), e = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (null < 0 || e < 0 || dup2(null, 0) < 0 || dup2(null, 1) < 0 || dup2(e, 2) < 0) _exit(126);
+        execv(cli_tool, (char *const *)full);
+        _exit(127);
+    }
+    CHECK(pid > 0);
+    return pid;
+}
+
+/* A file whose name holds `part` in dir (the run's temporary file, its first layer). */
+static int dir_holds(const char *dir, const char *part)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int found = 0;
+    while (d && !found && (e = readdir(d)) != NULL) found = strstr(e->d_name, part) != NULL;
+    if (d) closedir(d);
+    return found;
+}
+
+static size_t entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    size_t n = 0;
+    while (d && (e = readdir(d)) != NULL) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    if (d) closedir(d);
+    return n;
+}
+
+/* Signals `sig` to the run once `part` shows in `watch` (gone: once it has
+   gone from there); it exits 128 + sig saying so in one line. */
+static void interrupt_when(const char *const *argv, const char *watch, const char *part, int gone, int sig,
+                           const char *what)
+{
+    const char *err = cli_path("interrupted.err");
+    char expect[80], *text;
+    int st = 0, waited;
+    pid_t pid = spawn(argv, err);
+    for (waited = 0; waited < 3000 && dir_holds(watch, part) == gone; waited++) pause_ms(10);
+    CHECKF(dir_holds(watch, part) != gone, "%s: %s %s in %s after 30 s", what, part, gone ? "still" : "not", watch);
+    kill(pid, sig);
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 128 + sig, "%s: status %d, not exit %d", what, st, 128 + sig);
+    text = read_whole_text(err);
+    snprintf(expect, sizeof expect, "interrupted by %s", sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP");
+    CHECKF(text && cli_one_message(text) && strstr(text, expect), "%s: stderr '%s'", what, text ? text : "");
+    free(text);
+}
+
+/* SIGTERM, SIGHUP and SIGINT to a slice leave no temporary file and no part
+   of a directory job: the run removes every file it wrote. */
+static void signals_leave_nothing_behind(void)
+{
+    static const int signals[] = {SIGTERM, SIGHUP, SIGINT};
+    char watch[300], job[400], plan[400];
+    size_t i;
+    snprintf(watch, sizeof watch, "%s/signalled", cli_dir);
+    snprintf(job, sizeof job, "%s/job.ctb", watch);
+    snprintf(plan, sizeof plan, "%s/plan.csv", watch);
+    for (i = 0; i < 3; i++) {
+        const char *file_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                  "0.01", "--threads", "1", "-o", job, "--out", plan, NULL};
+        const char *dir_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                 "0.01", "--threads", "2", "-o", job, NULL};
+        char what[80];
+        mkdir(watch, 0755);
+        snprintf(what, sizeof what, "a .ctb job, signal %d", signals[i]);
+        interrupt_when(file_job, watch, ".tmp.", 0, signals[i], what);
+        CHECKF(entries(watch) == 0, "%s: %zu files left in %s (plan.csv, the temporary file)", what, entries(watch), watch);
+        /* a directory job made by the run: gone, with everything in it */
+        snprintf(job, sizeof job, "%s/jobdir", watch);
+        snprintf(what, sizeof what, "a directory job, signal %d", signals[i]);
+        interrupt_when(dir_job, job, "layer_", 0, signals[i], what);
+        CHECKF(!cli_exists(job), "%s: %s left (%zu files in it)", what, job, entries(job));
+        cli_remove_all(job);
+        snprintf(job, sizeof job, "%s/job.ctb", watch);
+        cli_remove_all(watch);
+    }
+    /* an earlier job in the directory, then an interrupted re-slice: it has
+       removed the old job and leaves nothing of its own; the directory stays */
+    {
+        const char *dir_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                 "0.01", "--threads", "2", "-o", watch, NULL};
+        cli_result r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", watch, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        interrupt_when(dir_job, watch, "manifest.json", 1, SIGTERM, "a re-slice"); /* the old job is going */
+        CHECKF(cli_exists(watch) && entries(watch) == 0, "a re-slice: %zu files left", entries(watch));
+        cli_remove_all(watch);
+    }
+}
+
+/* Ctrl-C while every command works (before anything is written): exit 130
+   and one line, slice --orient best and orient alike. */
+static void every_command_exits_130_on_ctrl_c(void)
+{
+    const char *orient[] = {"orient", raised_sphere(), "--dirs", "1000000", NULL};
+    const char *slice[] = {"slice", raised_sphere(), "--orient", "best", "--pixels", "400x400", "--pitch", "0.05", "-o",
+                           cli_path("never"), NULL};
+    const char *const *runs[] = {orient, slice};
+    size_t i;
+    for (i = 0; i < 2; i++) {
+        const char *err = cli_path("ctrl-c.err");
+        char *text;
+        int st = 0;
+        pid_t pid = spawn(runs[i], err);
+        pause_ms(700);
+        kill(pid, SIGINT);
+        CHECK(waitpid(pid, &st, 0) == pid);
+        text = read_whole_text(err);
+        CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 130 && text && cli_one_message(text) &&
+                   strstr(text, "interrupted by SIGINT"),
+               "%s: status %d, '%s'", runs[i][0], st, text ? text : "");
+        free(text);
+    }
+    CHECK(!cli_exists(cli_path("never")));
+}
+
+/* A write that fails (a full disk: /dev/full, written straight) fails the
+   run with one line naming it, and removes what the run had written. */
+static void a_full_disk_leaves_nothing(void)
+{
+    const char *csv = cli_path("full-plan.csv"), *profile = cli_path("full-profile.csv"), *job = cli_path("full-job");
+    const char *weights = cli_path("full-weights.csv"), *ply = cli_path("full.ply");
+    cli_result r;
+    if (!cli_exists("/dev/full")) return;
+    r = cli_run("plan", raised_sphere(), "--out", csv, "--profile-out", profile, "--plot", "/dev/full", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(csv) && !cli_exists(profile), "plan: plan.csv or profile.csv left after the plot failed");
+    cli_free(&r);
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", job, "--plot", "/dev/full", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(job), "slice: the directory job is left (%zu files)", entries(job));
+    cli_free(&r);
+    cli_remove_all(job);
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--format", "ctb", "-o", "/dev/full",
+                "--out", csv, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(csv), "slice: plan.csv left after the job failed");
+    cli_free(&r);
+    r = cli_run("saliency", raised_sphere(), "-o", weights, "--ply", ply, "--png", "/dev/full", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(weights) && !cli_exists(ply), "saliency: the weights or the PLY left after the PNG failed");
+    cli_free(&r);
+}
+
+/* ------------------------------------------------ a directory job's files */
+
+static int same_text(const char *path, const char *text)
+{
+    char *got = read_whole_text(path);
+    int same = got && !strcmp(got, text);
+    free(got);
+    return same;
+}
+
+/* A slice into a directory of someone's files is refused unless --force;
+   then, and on every re-slice, only the files an earlier manifest lists go. */
+static void a_directory_job_removes_only_its_own_files(void)
+{
+    static const char *const users[] = {"layer_99999.png", "layer_00070.png", "layer_00001.svg", "notes.txt"};
+    char dir[300], path[400], *manifest;
+    cli_result r;
+    size_t i;
+    snprintf(dir, sizeof dir, "%s/userdir", cli_dir);
+    mkdir(dir, 0755);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        cli_write(path, users[i]);
+    }
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, dir) && strstr(r.err, "--force"), "exit %d: %s",
+           r.status, r.err);
+    cli_free(&r);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        CHECKF(same_text(path, users[i]), "refused, yet %s was touched", users[i]);
+    }
+    CHECK(entries(dir) == 4);
+
+    /* --force: the job among them (its layer 70 written over) */
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "0.1", "-o", dir,
+                "--force", NULL);
+    CHECKF(r.status == 0, "--force: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    manifest = read_whole_text(path);
+    CHECKF(manifest && strstr(manifest, "\"files\": [") && strstr(manifest, "\"masks.rle\"") &&
+               strstr(manifest, "\"layer_00100.png\"") && strstr(manifest, "\"plan.csv\"") &&
+               !strstr(manifest, "\"notes.txt\""),
+           "the manifest does not list the job's files");
+    free(manifest);
+
+    /* a re-slice of fewer layers: the old job's go, the user's stay */
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "0.5", "-o", dir, NULL);
+    CHECKF(r.status == 0, "re-slice: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        /* layer_00070.png: --force wrote the job's layer 70 over it, and the job took it away */
+        CHECKF(i == 1 ? !cli_exists(path) : same_text(path, users[i]), "a re-slice removed, changed or kept %s", users[i]);
+    }
+    snprintf(path, sizeof path, "%s/layer_00050.png", dir);
+    CHECKF(!cli_exists(path), "the earlier job's layer 50 is left");
+    snprintf(path, sizeof path, "%s/layer_00020.png", dir);
+    CHECKF(cli_exists(path), "no layer 20");
+
+    /* a manifest from before the list: its layers' files go, nothing else */
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    manifest = read_whole_text(path);
+    if (manifest) {
+        char *list = strstr(manifest, "\"files\": ["), *end = list ? strchr(list, ']') : NULL;
+        if (list && end) {
+            memmove(list, end + 3, strlen(end + 3) + 1); /* "files": [...],\n out */
+            cli_write(path, manifest);
+        }
+        free(manifest);
+    }
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "1", "-o", dir, NULL);
+    CHECKF(r.status == 0, "after an old manifest: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/layer_00020.png", dir);
+    CHECKF(!cli_exists(path), "an old manifest's layer 20 is left");
+    /* (the SVG beside a listed layer goes too: an old job's --svg wrote them unlisted) */
+    for (i = 0; i < 4; i++)
+        if (i != 1 && i != 2) {
+            snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+            CHECKF(same_text(path, users[i]), "after an old manifest, %s was removed or changed", users[i]);
+        }
+    cli_remove_all(dir);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
@@ -514,5 +770,9 @@ void test_outputs(void)
     RUN(outputs_never_replace_links_fifos_or_devices);
     RUN(no_extension_on_a_path_that_exists);
     RUN(output_paths_are_checked_before_the_work);
+    RUN(signals_leave_nothing_behind);
+    RUN(every_command_exits_130_on_ctrl_c);
+    RUN(a_full_disk_leaves_nothing);
+    RUN(a_directory_job_removes_only_its_own_files);
     cli_end();
 }
