@@ -288,18 +288,29 @@ typedef struct target {
     pid_t reader;
 } target;
 
-/* A null device of our own as root (who could replace /dev/null if the tool
-   regressed), /dev/null otherwise (nobody else can). 0 if there is none to use. */
-static int null_device(char *path, size_t size, const char *name)
+/* The part after the last '/'. */
+static const char *base_of(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* A device like `dev` (/dev/null, /dev/full) of our own as root, who could
+   replace the machine's if the tool regressed; `dev` itself otherwise
+   (nobody else can). 0 if there is none to use. */
+static int own_device(char *path, size_t size, const char *dev, const char *name)
 {
     struct stat st;
+    if (stat(dev, &st) != 0 || !S_ISCHR(st.st_mode)) return 0;
     if (geteuid() != 0) {
-        snprintf(path, size, "/dev/null");
+        snprintf(path, size, "%s", dev);
         return 1;
     }
-    snprintf(path, size, "%s/null-%s", cli_dir, name);
-    return stat("/dev/null", &st) == 0 && mknod(path, S_IFCHR | 0666, st.st_rdev) == 0;
+    snprintf(path, size, "%s/%s-%s", cli_dir, base_of(dev), name);
+    return mknod(path, S_IFCHR | 0666, st.st_rdev) == 0;
 }
+
+static int null_device(char *path, size_t size, const char *name) { return own_device(path, size, "/dev/null", name); }
 
 /* The path of `kind` for output `name`; 0 when this machine has none. */
 static int target_make(target *t, int kind, const char *name)
@@ -626,8 +637,9 @@ static void signals_leave_nothing_behind(void)
 static void every_command_exits_130_on_ctrl_c(void)
 {
     const char *orient[] = {"orient", raised_sphere(), "--dirs", "1000000", NULL};
-    const char *slice[] = {"slice", raised_sphere(), "--orient", "best", "--pixels", "400x400", "--pitch", "0.05", "-o",
-                           cli_path("never"), NULL};
+    /* big enough that Ctrl-C comes during the search or the layers, whichever */
+    const char *slice[] = {"slice", raised_sphere(), "--orient", "best", "--pixels", "3000x3000", "--pitch", "0.004",
+                           "--uniform", "0.01", "-o", cli_path("never"), NULL};
     const char *const *runs[] = {orient, slice};
     size_t i;
     for (i = 0; i < 2; i++) {
@@ -653,26 +665,30 @@ static void a_full_disk_leaves_nothing(void)
 {
     const char *csv = cli_path("full-plan.csv"), *profile = cli_path("full-profile.csv"), *job = cli_path("full-job");
     const char *weights = cli_path("full-weights.csv"), *ply = cli_path("full.ply");
+    char full[400];
+    struct stat st;
     cli_result r;
-    if (!cli_exists("/dev/full")) return;
-    r = cli_run("plan", raised_sphere(), "--out", csv, "--profile-out", profile, "--plot", "/dev/full", NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    if (!own_device(full, sizeof full, "/dev/full", "disk")) return; /* none, or mknod refused */
+    r = cli_run("plan", raised_sphere(), "--out", csv, "--profile-out", profile, "--plot", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
     CHECKF(!cli_exists(csv) && !cli_exists(profile), "plan: plan.csv or profile.csv left after the plot failed");
     cli_free(&r);
-    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", job, "--plot", "/dev/full", NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", job, "--plot", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
     CHECKF(!cli_exists(job), "slice: the directory job is left (%zu files)", entries(job));
     cli_free(&r);
     cli_remove_all(job);
-    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--format", "ctb", "-o", "/dev/full",
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--format", "ctb", "-o", full,
                 "--out", csv, NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
     CHECKF(!cli_exists(csv), "slice: plan.csv left after the job failed");
     cli_free(&r);
-    r = cli_run("saliency", raised_sphere(), "-o", weights, "--ply", ply, "--png", "/dev/full", NULL);
-    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "/dev/full"), "exit %d: %s", r.status, r.err);
+    r = cli_run("saliency", raised_sphere(), "-o", weights, "--ply", ply, "--png", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
     CHECKF(!cli_exists(weights) && !cli_exists(ply), "saliency: the weights or the PLY left after the PNG failed");
     cli_free(&r);
+    CHECKF(stat(full, &st) == 0 && S_ISCHR(st.st_mode), "%s is no longer a device", full);
+    if (strcmp(full, "/dev/full")) remove(full);
 }
 
 /* ------------------------------------------------ a directory job's files */
