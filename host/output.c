@@ -24,6 +24,18 @@ static int names_a_stream(const char *path)
            !strncmp(path, "/dev/fd/", 8) || !strncmp(path, "/proc/self/fd/", 14);
 }
 
+/* The stream the tool has open under that name ("-" is standard output),
+   written through its FILE (an open of /dev/stdout, when the shell sent it to
+   a file, would truncate what was printed and write over it), or NULL. */
+static FILE *stream_named(const char *path)
+{
+    if (!strcmp(path, "-") || !strcmp(path, "/dev/stdout") || !strcmp(path, "/dev/fd/1") ||
+        !strcmp(path, "/proc/self/fd/1"))
+        return stdout;
+    if (!strcmp(path, "/dev/stderr") || !strcmp(path, "/dev/fd/2") || !strcmp(path, "/proc/self/fd/2")) return stderr;
+    return NULL;
+}
+
 int output_kind(const char *path)
 {
     struct stat st;
@@ -210,7 +222,7 @@ int output_open(output *o, const char *path, int seekable)
         o->straight = 1;
         o->copy = seekable; /* a FIFO or a terminal cannot seek: the bytes go there at close */
         errno = 0;
-        o->f = seekable ? tmpfile() : !strcmp(path, "-") ? stdout : fopen(path, "wb");
+        o->f = seekable ? tmpfile() : stream_named(path) ? stream_named(path) : fopen(path, "wb");
         if (!o->f) err = errno ? errno : EIO;
     } else {
         size_t n;
@@ -232,7 +244,7 @@ int output_open(output *o, const char *path, int seekable)
 static int copy_out(output *o)
 {
     char buf[65536];
-    FILE *to = !strcmp(o->path, "-") ? stdout : fopen(o->path, "wb");
+    FILE *to = stream_named(o->path) ? stream_named(o->path) : fopen(o->path, "wb");
     size_t n;
     int err = 0;
     if (!to) return errno ? errno : EIO;
@@ -242,7 +254,7 @@ static int copy_out(output *o)
         if (fwrite(buf, 1, n, to) != n) err = errno ? errno : EIO;
     if (!err && ferror(o->f)) err = errno ? errno : EIO;
     if (fflush(to) != 0 && !err) err = errno ? errno : EIO;
-    if (to != stdout && fclose(to) != 0 && !err) err = errno ? errno : EIO;
+    if (!stream_named(o->path) && fclose(to) != 0 && !err) err = errno ? errno : EIO;
     return err;
 }
 
@@ -253,7 +265,7 @@ int output_close(output *o, int ok, int err)
     if (ok && !err && ferror(o->f)) err = EIO;
     if (ok && !err && fflush(o->f) != 0) err = errno ? errno : EIO;
     if (ok && !err && o->copy) err = copy_out(o);
-    if (o->f != stdout && fclose(o->f) != 0 && ok && !err) err = errno ? errno : EIO;
+    if ((o->copy || !stream_named(o->path)) && fclose(o->f) != 0 && ok && !err) err = errno ? errno : EIO;
     o->f = NULL;
     if (caught) ok = 0;
     if (ok && !err && o->tmp && rename(o->tmp, o->target) != 0) err = errno;

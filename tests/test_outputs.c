@@ -472,6 +472,12 @@ static void no_extension_on_a_path_that_exists(void)
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "not a directory"), "exit %d: %s", r.status, r.err);
     cli_free(&r);
     if (strcmp(dev, "/dev/null")) remove(dev);
+    /* /dev/stdout is standard output, wherever the shell sent it (here a file,
+       which a rename would have taken and an open would have cut) */
+    r = cli_run("plan", raised_sphere(), "--out", "/dev/stdout", NULL);
+    CHECKF(r.status == 0 && !strncmp(r.out, "layer,", 6) && strstr(r.out, "\nmodel "), "exit %d: %.200s %s", r.status,
+           r.out, r.err);
+    cli_free(&r);
 }
 
 /* The index of the last argument. */
