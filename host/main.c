@@ -7,7 +7,10 @@
    be read or written, a malformed mesh, constraints that no plan meets, a print
    the printer stopped); 2 the command line is wrong; 3 a print paused; 4 the
    printer restarted mid-print (Z must be homed again); 5 the printer stopped
-   answering. Every message is one line on stderr that starts with "adaslice: ". */
+   answering; 128 + the signal when SIGINT (130), SIGTERM (143) or SIGHUP (129)
+   interrupted plan, slice, orient or saliency, which then leave nothing they
+   wrote (output.h). Every message is one line on stderr that starts with
+   "adaslice: ". */
 #include "../adaslice.h"
 #include "commands.h"
 #include "output.h"
