@@ -601,8 +601,8 @@ static int dir_close(void *writer, int ok)
            manifest, masks, preview, plan or layer (the caller's included) */
         remove_own(w, "manifest.json");
         own_files(w, remove_own, w);
-        if (w->created) rmdir(w->dir);
     }
+    if (rc && w->created) rmdir(w->dir); /* made by this job: gone with it */
     job_masks_free(&w->masks);
     free(w->masks_path);
     free(w->dir);

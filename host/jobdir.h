@@ -1,7 +1,10 @@
 /* The job directory, written by adaslice slice (JOB_FORMAT_DIR of jobfile.h)
    and read by adaslice print: one PNG per layer named layer_00001.png, a
    shaded preview.png, masks.rle (the masks as a printer takes them) and,
-   written last, manifest.json: a job without one is not complete.
+   written last, manifest.json: a job without one is not complete. The
+   manifest lists every file of the job ("files"), which is all a later slice
+   into the directory removes; a directory of other files and no manifest is
+   refused unless --force.
    Little-endian masks.rle: "ADASMSK2", u32 width, height, bits, layers,
    bin_nm, peel_nm, peel_speed_um_s, return_speed_um_s, settle_ms; then per
    layer u32 bins (its thickness), u32 exposure_ms, u32 CRC-32 of the mask,
