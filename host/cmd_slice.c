@@ -454,6 +454,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc && (a.json || a.compare))
         rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");
     free(rest);
+    if (!rc && s.dir && !*s.dir) rc = complain(RC_USAGE, "-o \"\": an empty name (a job file or directory)");
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
     if (!rc) rc = output_check_dir_or_file(f, extended ? extended : s.dir, s.force);

@@ -521,6 +521,11 @@ static void output_paths_are_checked_before_the_work(void)
         cli_free(&r);
     }
     rmdir(dir);
+    /* an empty -o, with a printer whose extension it would have taken */
+    r = cli_run("slice", nothing, "--printer", "elegoo-mars-3", "-o", "", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "-o \"\"") && !cli_exists(".ctb"), "exit %d: %s",
+           r.status, r.err);
+    cli_free(&r);
 }
 
 /* ------------------------------------------------ signals and full disks */
