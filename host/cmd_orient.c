@@ -233,6 +233,7 @@ int cmd_orient(int argc, char **argv)
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
                                   "exact profiles: drop --method curvature, --saliency, --weights, --weight and "
                                   "--sampler");
+    if ((rc = output_check("--map", o.map))) return rc;
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();
     rc = plan_orient_search(&a, &mesh, o.dirs, o.alpha, &scores, minima, &count);

@@ -273,6 +273,7 @@ int cmd_plan(int argc, char **argv)
     }
     if (t.path && !a.model) return complain(RC_USAGE, "--3mf needs a MODEL, not --profile");
     if (t.path && (rc = threemf_check_bounds(&t, &a))) return rc;
+    if ((rc = check_plan_outputs(&a)) || (rc = output_check("--3mf", t.path))) return rc;
     memset(&j, 0, sizeof j);
     j.args = &a;
     j.keep_mesh = t.path != NULL;

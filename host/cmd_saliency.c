@@ -166,6 +166,8 @@ int cmd_saliency(int argc, char **argv)
         saliency_usage(stdout);
         return RC_OK;
     }
+    if ((rc = output_check("-o", s.out)) || (rc = output_check("--ply", s.ply)) || (rc = output_check("--png", s.png)))
+        return rc;
     t0 = now_ms();
     if ((rc = model_load(s.model, s.scale, &mesh, NULL)) != RC_OK) return rc;
     t1 = now_ms();

@@ -143,12 +143,22 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if (preset && *fmt != &JOB_FORMAT_DIR && *fmt != &JOB_FORMAT_UVJ && strcmp(preset->format, (*fmt)->name))
         return complain(RC_USAGE, "-o %s: the %s reads %s jobs, not %s (leave the extension out for its own)", s->dir,
                         preset->name, preset->format, (*fmt)->name);
-    if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR) {
+    /* an extension is added to a new name (or a directory's), never to a file,
+       a device or a FIFO that exists: -o /dev/null writes /dev/null */
+    if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR &&
+        (output_kind(s->dir) == OUT_NEW || output_kind(s->dir) == OUT_DIRECTORY)) {
         size_t n = strlen(s->dir) + strlen((*fmt)->extension) + 1;
         if (!(*path = (char *)malloc(n))) return complain(RC_FAIL, "out of memory");
         snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
     }
     return RC_OK;
+}
+
+/* -o's path takes the job: before the model is loaded. */
+static int output_check_dir_or_file(const job_format *f, const char *path, int force)
+{
+    int rc = f == &JOB_FORMAT_DIR ? output_check_dir("-o", path) : output_check("-o", path);
+    return !rc && f == &JOB_FORMAT_DIR ? jobdir_check(path, force) : rc;
 }
 
 /* The layers below the top one differ in thickness (the top one is what is
@@ -263,9 +273,6 @@ static int draw_preview(void *ctx, int w, int h, unsigned char *rgb)
     return draw_picture(p->j, w, h, rgb);
 }
 
-static volatile sig_atomic_t interrupted;
-static void on_sigint(int sig) { (void)sig; interrupted = 1; }
-
 
 /* ------------------------------------------------------------- the layers */
 
@@ -286,7 +293,7 @@ static int render_layer(void *ctx, size_t k, unsigned char *image)
     slice_run *r = (slice_run *)ctx;
     layer_masks *m = r->masks;
     int rc;
-    if (interrupted) return complain(RC_FAIL, "interrupted at layer %zu of %zu: %s not written", k + 1, r->d->layer_count, r->path);
+    if (output_interrupted()) return RC_FAIL; /* said once, by outputs_finish */
     if ((rc = layer_masks_render(m, k, image))) return rc;
     r->layers[k].lit_mm2 = m->masker.lit * m->grid.pitch[0] * m->grid.pitch[1];
     r->d->volume_mm3 += r->layers[k].lit_mm2 * r->layers[k].thickness;
@@ -301,7 +308,7 @@ static void layer_done(void *ctx, size_t k)
 
 /* The job's description; every layer rendered once, in order, into the format. */
 static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const job_format *f, const char *path,
-                     job_desc *d, job_summary *sum)
+                     unsigned extras, job_desc *d, job_summary *sum)
 {
     const adaslice_plan *p = &j->plan[a->method];
     size_t k, count = p->layer_count;
@@ -312,9 +319,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     slice_run run;
     pipeline_job pipe;
     previews pv;
-    int rc, odd = s->rotate & 1, empty = 0, existed = 0;
-    struct stat st;
-    void (*was)(int);
+    int rc, odd = s->rotate & 1;
 
     memset(&bar, 0, sizeof bar);
     memset(&out, 0, sizeof out);
@@ -376,10 +381,10 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     memcpy(d->part_mm, m.part, sizeof d->part_mm);
     memcpy(d->place_mm, s->place, sizeof d->place_mm);
     d->rotate = s->rotate;
+    d->dir_extras = extras;
+    d->dir_force = s->force;
 
-    interrupted = 0;
-    was = signal(SIGINT, on_sigint);
-    existed = stat(path, &st) == 0;
+    outputs_hold_signals(); /* from here a signal stops the layers and the job is removed */
     if ((rc = job_open(&out, f, path, d))) goto done;
     if (f == &JOB_FORMAT_DIR) {
         if ((rc = write_outputs(a, j))) goto done;
@@ -403,7 +408,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     rc = pipeline_run(&pipe);
     /* a job that lights nothing prints nothing, silently: said, and removed */
     if (!rc && !(d->volume_mm3 > 0))
-        rc = empty = complain(RC_FAIL, "%s: no pixel is lit in its %zu layer%s: the part (%g x %g mm) is smaller "
+        rc = complain(RC_FAIL, "%s: no pixel is lit in its %zu layer%s: the part (%g x %g mm) is smaller "
                                        "than a pixel (%g x %g mm), misses the pixels' centres or encloses no volume; "
                                        "nothing written", path, count, plural(count), d->part_mm[0], d->part_mm[1],
                               m.grid.pitch[0], m.grid.pitch[1]);
@@ -412,8 +417,6 @@ done:
         int closed = job_close(&out, rc == RC_OK);
         if (!rc) rc = closed;
     }
-    if (empty && f == &JOB_FORMAT_DIR && !jobdir_remove(path) && !existed) rmdir(path);
-    signal(SIGINT, was);
     layer_masks_close(&m);
     previews_free(&pv);
     free(layers);
@@ -451,8 +454,11 @@ int cmd_slice(int argc, char **argv)
     if (!rc && (a.json || a.compare))
         rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");
     free(rest);
+    if (!rc && s.dir && !*s.dir) rc = complain(RC_USAGE, "-o \"\": an empty name (a job file or directory)");
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
+    if (!rc) rc = output_check_dir_or_file(f, extended ? extended : s.dir, s.force);
+    if (!rc) rc = check_plan_outputs(&a);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
     if (!rc) rc = layer_masks_check(&s, pipeline_images(s.threads));
     if (rc) { free(extended); return rc; }
@@ -480,7 +486,10 @@ int cmd_slice(int argc, char **argv)
         if (adaslice_mesh_weld(&j.mesh, NULL, &err) != ADASLICE_OK) rc = library_error(&err);
     }
     if (!rc && f != &JOB_FORMAT_DIR) rc = write_outputs(&a, &j);
-    if (!rc) rc = write_job(&s, &a, &j, f, path, &d, &sum);
+    if (!rc)
+        rc = write_job(&s, &a, &j, f, path,
+                       (a.out == csv ? DIR_PLAN_CSV : 0) | (a.plot == svg ? DIR_PLOT_SVG : 0) | (s.svg ? DIR_LAYER_SVGS : 0),
+                       &d, &sum);
     if (!rc) {
         format_duration(when, sizeof when, d.print_time_s);
         printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,

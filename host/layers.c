@@ -48,6 +48,8 @@ void slice_options_usage(FILE *f)
           "                      inside all through the layer (never oversized) [middle]\n"
           "  --place X,Y         the part's centre, mm from the plate's centre [0,0]\n"
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
+          "  --force             write a job directory into a directory that holds other files\n"
+          "                      and no manifest.json (files of the job's names are written over)\n"
           "  --memory MB         the most the masks may take       [half the machine's memory]\n"
           "  --threads N         layers coded at once (the job is the same bytes) [the cores]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
@@ -120,6 +122,8 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
             s->placed = 1;
         } else if (!strcmp(o, "--svg")) {
             s->svg = 1;
+        } else if (!strcmp(o, "--force")) {
+            s->force = 1;
         } else if (!strcmp(o, "--memory")) {
             rc = number_option(argc, argv, &i, 0, &s->memory_mb);
         } else if (!strcmp(o, "--threads")) {

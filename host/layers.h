@@ -29,6 +29,7 @@ typedef struct slice_args {
     int rotate;                  /* quarter turns of the image, counter-clockwise */
     double display[2];           /* --display WxH in mm, or 0 */
     int svg;                     /* also the contours of each layer as SVG */
+    int force;                   /* --force: a job directory into a directory of other files */
     int geometry_given;          /* --printer, --pixels, --pitch or --display */
     cure_args cure;              /* exposure and motion (cure.h) */
     double memory_mb;            /* --memory: what the masks may take [half the memory] */

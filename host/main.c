@@ -7,9 +7,13 @@
    be read or written, a malformed mesh, constraints that no plan meets, a print
    the printer stopped); 2 the command line is wrong; 3 a print paused; 4 the
    printer restarted mid-print (Z must be homed again); 5 the printer stopped
-   answering. Every message is one line on stderr that starts with "adaslice: ". */
+   answering; 128 + the signal when SIGINT (130), SIGTERM (143) or SIGHUP (129)
+   interrupted plan, slice, orient or saliency, which then leave nothing they
+   wrote (output.h). Every message is one line on stderr that starts with
+   "adaslice: ". */
 #include "../adaslice.h"
 #include "commands.h"
+#include "output.h"
 #include "report.h"
 
 #include <errno.h>
@@ -77,7 +81,10 @@ int main(int argc, char **argv)
         rc = RC_OK;
     } else {
         if (!(c = find_command(argv[1]))) return RC_USAGE;
-        rc = c->run(argc - 1, argv + 1);
+        /* print keeps its own SIGINT (it pauses the printer); the others stop
+           and leave nothing half-written (output.h) */
+        if (c->run != cmd_print) outputs_catch_signals();
+        rc = outputs_finish(c->run(argc - 1, argv + 1));
     }
     /* a full disk or closed pipe on stdout is a failure, not a silent success */
     if (fflush(stdout) != 0 || ferror(stdout)) return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));

@@ -518,6 +518,14 @@ static void write_plot(FILE *f, const void *ctx)
     svg_write_plan(f, &fig);
 }
 
+int check_plan_outputs(const plan_args *a)
+{
+    int rc = output_check("--out", a->out);
+    if (!rc) rc = output_check("--profile-out", a->profile_out);
+    if (!rc) rc = output_check("--plot", a->plot);
+    return rc;
+}
+
 int write_outputs(const plan_args *a, const plan_job *j)
 {
     if (a->out && write_atomic(a->out, write_plan_csv, j)) return RC_FAIL;

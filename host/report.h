@@ -7,7 +7,8 @@
 
 /* 0 done; 1 the work failed; 2 the command line is wrong; 3 a print paused;
    4 the printer restarted mid-print (Z must be homed again); 5 the printer
-   stopped answering (mid-print: Z must be homed again if it restarted) */
+   stopped answering (mid-print: Z must be homed again if it restarted);
+   128 + a signal: interrupted (output.h's outputs_finish) */
 enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3, RC_RESET = 4, RC_LOST = 5 };
 
 /* "adaslice: " + the message on stderr; returns rc. */

@@ -248,10 +248,12 @@ static void empty_jobs_are_refused(void)
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "no pixel is lit"), "exit %d: %s", r.status, r.err);
     CHECKF(nothing_named("empty_job"), "the directory job was left behind");
     cli_free(&r);
-    /* into a directory that was there: it stays, with what else it held */
+    /* into a directory that was there: it stays, with what else it held
+       (--force: a directory of other files and no manifest is refused without) */
     mkdir(cli_path("kept_dir"), 0777);
     cli_write(cli_path("kept_dir/notes.txt"), "mine\n");
-    r = cli_run("slice", cli_path("small.obj"), "--pixels", "64x64", "--pitch", "1e6", "-o", cli_path("kept_dir"), NULL);
+    r = cli_run("slice", cli_path("small.obj"), "--pixels", "64x64", "--pitch", "1e6", "-o", cli_path("kept_dir"),
+                "--force", NULL);
     CHECKF(r.status == 1 && strstr(r.err, "no pixel is lit"), "exit %d: %s", r.status, r.err);
     {
         DIR *d = opendir(cli_path("kept_dir"));

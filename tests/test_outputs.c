@@ -5,15 +5,21 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700 /* mknod of a character device (XSI) */
+#endif
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "meshgen.h"
 #include "../host/report.h"
 
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 /* A 10 mm sphere standing 20 mm above the model's origin, so that heights
    above the part's bottom and the model's z differ. */
@@ -265,11 +271,535 @@ static void compare_gives_the_saving_against_uniform_layers(void)
     cli_remove_all(job);
 }
 
+
+/* ------------------------------------------------ the kinds of output path */
+
+/* What an output option can be given besides a new file (issue 26): a
+   symlink (its target is written, the link stays), a FIFO (a reader gets the
+   bytes, the FIFO stays), a character device like /dev/null (stays one) and
+   "-" (standard output). */
+enum { TO_LINK, TO_FIFO, TO_DEVICE, TO_STDOUT, TO_KINDS };
+static const char *const TO_NAMES[TO_KINDS] = {"a symlink", "a FIFO", "a null device", "-"};
+
+typedef struct target {
+    int kind;
+    char path[400];              /* what the option is given */
+    char real[400];              /* TO_LINK: the link's target; TO_FIFO: what the reader got */
+    pid_t reader;
+} target;
+
+/* The part after the last '/'. */
+static const char *base_of(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* A device like `dev` (/dev/null, /dev/full) of our own as root, who could
+   replace the machine's if the tool regressed; `dev` itself otherwise
+   (nobody else can). 0 if there is none to use. */
+static int own_device(char *path, size_t size, const char *dev, const char *name)
+{
+    struct stat st;
+    if (stat(dev, &st) != 0 || !S_ISCHR(st.st_mode)) return 0;
+    if (geteuid() != 0) {
+        snprintf(path, size, "%s", dev);
+        return 1;
+    }
+    snprintf(path, size, "%s/%s-%s", cli_dir, base_of(dev), name);
+    return mknod(path, S_IFCHR | 0666, st.st_rdev) == 0;
+}
+
+static int null_device(char *path, size_t size, const char *name) { return own_device(path, size, "/dev/null", name); }
+
+/* The path of `kind` for output `name`; 0 when this machine has none. */
+static int target_make(target *t, int kind, const char *name)
+{
+    memset(t, 0, sizeof *t);
+    t->kind = kind;
+    switch (kind) {
+    case TO_LINK:
+        snprintf(t->real, sizeof t->real, "%s/real-%s", cli_dir, name);
+        snprintf(t->path, sizeof t->path, "%s/link-%s", cli_dir, name);
+        cli_write(t->real, "old");
+        {
+            char rel[200];
+            snprintf(rel, sizeof rel, "real-%s", name); /* relative: read from the link's directory */
+            CHECK(symlink(rel, t->path) == 0);
+        }
+        return 1;
+    case TO_FIFO:
+        snprintf(t->path, sizeof t->path, "%s/fifo-%s", cli_dir, name);
+        snprintf(t->real, sizeof t->real, "%s/got-%s", cli_dir, name);
+        CHECK(mkfifo(t->path, 0644) == 0);
+        fflush(NULL);
+        t->reader = fork();
+        if (t->reader == 0) {
+            char buf[65536];
+            ssize_t n;
+            int in, out;
+            alarm(5); /* a FIFO replaced by a file is never opened for writing */
+            in = open(t->path, O_RDONLY);
+            out = open(t->real, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            if (in < 0 || out < 0) _exit(1);
+            while ((n = read(in, buf, sizeof buf)) > 0)
+                if (write(out, buf, (size_t)n) != n) _exit(1);
+            _exit(n < 0);
+        }
+        CHECK(t->reader > 0);
+        return t->reader > 0;
+    case TO_DEVICE: return null_device(t->path, sizeof t->path, name);
+    default: snprintf(t->path, sizeof t->path, "-"); return 1;
+    }
+}
+
+/* The output went where t says, starting with `signature` (NULL: any bytes),
+   and the path is what it was; then it is removed. */
+static void target_check(target *t, const char *what, const cli_result *r, const char *signature)
+{
+    struct stat st;
+    unsigned char *got = NULL;
+    size_t size = 0;
+    const char *kind = TO_NAMES[t->kind];
+    CHECKF(r->status == 0, "%s to %s: exit %d, %s", what, kind, r->status, r->err);
+    switch (t->kind) {
+    case TO_LINK:
+        CHECKF(lstat(t->path, &st) == 0 && S_ISLNK(st.st_mode), "%s: the symlink was replaced", what);
+        got = read_whole_file(t->real, &size);
+        break;
+    case TO_FIFO: {
+        int st2 = 0, fd = open(t->path, O_WRONLY | O_NONBLOCK); /* a reader still waiting gets its end */
+        if (fd >= 0) close(fd);
+        CHECK(waitpid(t->reader, &st2, 0) == t->reader);
+        CHECKF(WIFEXITED(st2) && WEXITSTATUS(st2) == 0, "%s: the FIFO's reader got nothing (status %d)", what, st2);
+        CHECKF(lstat(t->path, &st) == 0 && S_ISFIFO(st.st_mode), "%s: the FIFO was replaced", what);
+        got = read_whole_file(t->real, &size);
+        break;
+    }
+    case TO_DEVICE:
+        CHECKF(stat(t->path, &st) == 0 && S_ISCHR(st.st_mode), "%.100s: %.200s is no longer a device", what, t->path);
+        break;
+    default:
+        got = read_whole_file(cli_path("stdout"), &size);
+        break;
+    }
+    if (t->kind != TO_DEVICE) {
+        CHECKF(got && size > 3 && memcmp(got, "old", 3) != 0, "%s to %s: nothing written there (%zu bytes)", what, kind, size);
+        if (got && signature)
+            CHECKF(size >= strlen(signature) && !memcmp(got, signature, strlen(signature)), "%s to %s: not the output", what,
+                   kind);
+    }
+    free(got);
+    if (t->kind != TO_STDOUT && strcmp(t->path, "/dev/null")) remove(t->path);
+    if (t->kind == TO_LINK || t->kind == TO_FIFO) remove(t->real);
+}
+
+/* Every output option: its command (OUT where the path goes) and how its
+   bytes begin. */
+typedef struct output_option { const char *args[18]; const char *signature; } output_option;
+#define MODEL "MODEL"
+#define PIXELS "--pixels", "120x120", "--pitch", "0.1", "--uniform", "0.1"
+static const output_option OUTPUT_OPTIONS[] = {
+    {{"plan", MODEL, "--out", "OUT"}, "layer,"},
+    {{"plan", MODEL, "--plot", "OUT"}, "<"},
+    {{"plan", MODEL, "--profile-out", "OUT"}, NULL},
+    {{"plan", MODEL, "--3mf", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "ctb", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "ctb-encrypted", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "goo", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "prz", "-o", "OUT"}, NULL},
+    {{"slice", MODEL, PIXELS, "--format", "chitu-zip", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "sl1", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "uvj", "-o", "OUT"}, "PK"},
+    {{"slice", MODEL, PIXELS, "--format", "ctb", "-o", "JOB", "--out", "OUT"}, "layer,"},
+    {{"orient", MODEL, "--dirs", "8", "--map", "OUT"}, "<"},
+    {{"saliency", MODEL, "-o", "OUT"}, NULL},
+    {{"saliency", MODEL, "--ply", "OUT"}, "ply"},
+    {{"saliency", MODEL, "--png", "OUT"}, "\x89PNG"},
+};
+
+static void outputs_never_replace_links_fifos_or_devices(void)
+{
+    size_t i, a;
+    int kind;
+    for (i = 0; i < sizeof OUTPUT_OPTIONS / sizeof OUTPUT_OPTIONS[0]; i++)
+        for (kind = 0; kind < TO_KINDS; kind++) {
+            const output_option *o = &OUTPUT_OPTIONS[i];
+            const char *argv[20] = {NULL};
+            char what[200] = "", name[40];
+            target t;
+            cli_result r;
+            snprintf(name, sizeof name, "out%zu", i);
+            if (!target_make(&t, kind, name)) continue; /* no null device of our own: mknod refused */
+            for (a = 0; o->args[a]; a++) {
+                argv[a] = !strcmp(o->args[a], MODEL) ? raised_sphere()
+                          : !strcmp(o->args[a], "OUT") ? t.path
+                          : !strcmp(o->args[a], "JOB") ? cli_path("job.ctb") : o->args[a];
+                if (strlen(what) + strlen(o->args[a]) + 2 < sizeof what) {
+                    strcat(what, o->args[a]);
+                    strcat(what, " ");
+                }
+            }
+            r = cli_run(argv[0], argv[1], argv[2], argv[3], argv[4], argv[5], argv[6], argv[7], argv[8], argv[9],
+                        argv[10], argv[11], argv[12], argv[13], argv[14], argv[15], argv[16], argv[17], NULL);
+            target_check(&t, what, &r, o->signature);
+            cli_free(&r);
+            remove(cli_path("job.ctb"));
+        }
+    {
+        DIR *d = opendir(cli_dir); /* nothing left under a temporary name */
+        struct dirent *e;
+        while (d && (e = readdir(d)) != NULL) CHECKF(!strstr(e->d_name, ".tmp."), "left behind: %s", e->d_name);
+        if (d) closedir(d);
+    }
+}
+
+/* slice adds its format's extension to a new name only: -o /dev/null with a
+   printer's format writes /dev/null, not /dev/null.ctb; a job directory
+   cannot go to a device. */
+static void no_extension_on_a_path_that_exists(void)
+{
+    char dev[400];
+    cli_result r;
+    if (!null_device(dev, sizeof dev, "ext")) return;
+    r = cli_run("slice", raised_sphere(), "--printer", "elegoo-mars-3", "-o", dev, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, dev) && !strstr(r.out, ".ctb"), "exit %d: %s%s", r.status, r.out, r.err);
+    cli_free(&r);
+    snprintf(dev + strlen(dev), sizeof dev - strlen(dev), ".ctb");
+    CHECKF(!cli_exists(dev), "%s written", dev);
+    dev[strlen(dev) - 4] = 0;
+    r = cli_run("slice", raised_sphere(), "-o", dev, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "not a directory"), "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    if (strcmp(dev, "/dev/null")) remove(dev);
+    /* /dev/stdout is standard output, wherever the shell sent it (here a file,
+       which a rename would have taken and an open would have cut) */
+    r = cli_run("plan", raised_sphere(), "--out", "/dev/stdout", NULL);
+    CHECKF(r.status == 0 && !strncmp(r.out, "layer,", 6) && strstr(r.out, "\nmodel "), "exit %d: %.200s %s", r.status,
+           r.out, r.err);
+    cli_free(&r);
+}
+
+/* The index of the last argument. */
+static size_t argc_last(const char *const *argv)
+{
+    size_t n = 0;
+    while (n < 7 && argv[n + 1]) n++;
+    return n;
+}
+
+/* Every output path is checked before the model is loaded: a model that
+   does not exist is never reached, the output's message wins, exit 2. */
+static void output_paths_are_checked_before_the_work(void)
+{
+    const char *dir = cli_path("a-directory.ctb"), *nothing = cli_path("no-such-model.stl");
+    char in_dir[500], missing[500];
+    cli_result r;
+    size_t i;
+    const char *const cases[][8] = {
+        {"slice", "MODEL", "--pixels", "100x100", "--pitch", "0.1", "-o", "DIR"},
+        {"print", "MODEL", "--port", "/no-such-port", "--report", "DIR"},
+        {"plan", "MODEL", "--out", "DIR"},
+        {"plan", "MODEL", "--plot", "MISSING"},
+        {"plan", "MODEL", "--3mf", "DIR"},
+        {"orient", "MODEL", "--map", "DIR"},
+        {"saliency", "MODEL", "--png", "MISSING"},
+        {"slice", "MODEL", "--pixels", "100x100", "--pitch", "0.1", "-o", "MISSING"},
+    };
+    mkdir(dir, 0755);
+    snprintf(missing, sizeof missing, "%s/no-such-dir/out", cli_dir);
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const char *argv[8];
+        size_t a;
+        for (a = 0; a < 8; a++)
+            argv[a] = !cases[i][a] ? NULL : !strcmp(cases[i][a], "MODEL") ? nothing : !strcmp(cases[i][a], "DIR") ? dir
+                      : !strcmp(cases[i][a], "MISSING") ? missing : cases[i][a];
+        r = cli_run(argv[0], argv[1], argv[2], argv[3], argv[4], argv[5], argv[6], argv[7], NULL);
+        snprintf(in_dir, sizeof in_dir, "%s", strstr(r.err, dir) ? dir : missing);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, in_dir) && !strstr(r.err, "no-such-model"),
+               "%s %s: exit %d, %s", argv[0], argv[argc_last(argv)], r.status, r.err);
+        cli_free(&r);
+    }
+    rmdir(dir);
+    /* an empty -o, with a printer whose extension it would have taken */
+    r = cli_run("slice", nothing, "--printer", "elegoo-mars-3", "-o", "", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "-o \"\"") && !cli_exists(".ctb"), "exit %d: %s",
+           r.status, r.err);
+    cli_free(&r);
+}
+
+/* ------------------------------------------------ signals and full disks */
+
+static void pause_ms(long ms)
+{
+    struct timespec t;
+    t.tv_sec = ms / 1000;
+    t.tv_nsec = ms % 1000 * 1000000L;
+    nanosleep(&t, NULL);
+}
+
+/* The tool on argv (argv[0] its command), stderr into err; its pid. */
+static pid_t spawn(const char *const *argv, const char *err)
+{
+    const char *full[24];
+    size_t n = 0;
+    pid_t pid;
+    full[n++] = cli_tool;
+    while (argv[n - 1] && n < 23) { full[n] = argv[n - 1]; n++; }
+    full[n] = NULL;
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        int null = open("/dev/null", O_RDWR), e = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (null < 0 || e < 0 || dup2(null, 0) < 0 || dup2(null, 1) < 0 || dup2(e, 2) < 0) _exit(126);
+        execv(cli_tool, (char *const *)full);
+        _exit(127);
+    }
+    CHECK(pid > 0);
+    return pid;
+}
+
+/* A file whose name holds `part` in dir (the run's temporary file, its first layer). */
+static int dir_holds(const char *dir, const char *part)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int found = 0;
+    while (d && !found && (e = readdir(d)) != NULL) found = strstr(e->d_name, part) != NULL;
+    if (d) closedir(d);
+    return found;
+}
+
+static size_t entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    size_t n = 0;
+    while (d && (e = readdir(d)) != NULL) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    if (d) closedir(d);
+    return n;
+}
+
+/* Signals `sig` to the run once `part` shows in `watch` (gone: once it has
+   gone from there); it exits 128 + sig saying so in one line. */
+static void interrupt_when(const char *const *argv, const char *watch, const char *part, int gone, int sig,
+                           const char *what)
+{
+    const char *err = cli_path("interrupted.err");
+    char expect[80], *text;
+    int st = 0, waited;
+    pid_t pid = spawn(argv, err);
+    for (waited = 0; waited < 3000 && dir_holds(watch, part) == gone; waited++) pause_ms(10);
+    CHECKF(dir_holds(watch, part) != gone, "%s: %s %s in %s after 30 s", what, part, gone ? "still" : "not", watch);
+    kill(pid, sig);
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 128 + sig, "%s: status %d, not exit %d", what, st, 128 + sig);
+    text = read_whole_text(err);
+    snprintf(expect, sizeof expect, "interrupted by %s", sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP");
+    CHECKF(text && cli_one_message(text) && strstr(text, expect), "%s: stderr '%s'", what, text ? text : "");
+    free(text);
+}
+
+/* SIGTERM, SIGHUP and SIGINT to a slice leave no temporary file and no part
+   of a directory job: the run removes every file it wrote. */
+static void signals_leave_nothing_behind(void)
+{
+    static const int signals[] = {SIGTERM, SIGHUP, SIGINT};
+    char watch[300], job[400], plan[400];
+    size_t i;
+    snprintf(watch, sizeof watch, "%s/signalled", cli_dir);
+    snprintf(job, sizeof job, "%s/job.ctb", watch);
+    snprintf(plan, sizeof plan, "%s/plan.csv", watch);
+    for (i = 0; i < 3; i++) {
+        const char *file_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                  "0.01", "--threads", "1", "-o", job, "--out", plan, NULL};
+        const char *dir_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                 "0.01", "--threads", "2", "-o", job, NULL};
+        char what[80];
+        mkdir(watch, 0755);
+        snprintf(what, sizeof what, "a .ctb job, signal %d", signals[i]);
+        interrupt_when(file_job, watch, ".tmp.", 0, signals[i], what);
+        CHECKF(entries(watch) == 0, "%s: %zu files left in %s (plan.csv, the temporary file)", what, entries(watch), watch);
+        /* a directory job made by the run: gone, with everything in it */
+        snprintf(job, sizeof job, "%s/jobdir", watch);
+        snprintf(what, sizeof what, "a directory job, signal %d", signals[i]);
+        interrupt_when(dir_job, job, "layer_", 0, signals[i], what);
+        CHECKF(!cli_exists(job), "%s: %s left (%zu files in it)", what, job, entries(job));
+        cli_remove_all(job);
+        snprintf(job, sizeof job, "%s/job.ctb", watch);
+        cli_remove_all(watch);
+    }
+    /* an earlier job in the directory, then an interrupted re-slice: it has
+       removed the old job and leaves nothing of its own; the directory stays */
+    {
+        const char *dir_job[] = {"slice", raised_sphere(), "--pixels", "3000x3000", "--pitch", "0.004", "--uniform",
+                                 "0.01", "--threads", "2", "-o", watch, NULL};
+        cli_result r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", watch, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        interrupt_when(dir_job, watch, "manifest.json", 1, SIGTERM, "a re-slice"); /* the old job is going */
+        CHECKF(cli_exists(watch) && entries(watch) == 0, "a re-slice: %zu files left", entries(watch));
+        cli_remove_all(watch);
+    }
+}
+
+/* Ctrl-C while every command works (before anything is written): exit 130
+   and one line, slice --orient best and orient alike. */
+static void every_command_exits_130_on_ctrl_c(void)
+{
+    const char *orient[] = {"orient", raised_sphere(), "--dirs", "1000000", NULL};
+    /* big enough that Ctrl-C comes during the search or the layers, whichever */
+    const char *slice[] = {"slice", raised_sphere(), "--orient", "best", "--pixels", "3000x3000", "--pitch", "0.004",
+                           "--uniform", "0.01", "-o", cli_path("never"), NULL};
+    const char *const *runs[] = {orient, slice};
+    size_t i;
+    for (i = 0; i < 2; i++) {
+        const char *err = cli_path("ctrl-c.err");
+        char *text;
+        int st = 0;
+        pid_t pid = spawn(runs[i], err);
+        pause_ms(700);
+        kill(pid, SIGINT);
+        CHECK(waitpid(pid, &st, 0) == pid);
+        text = read_whole_text(err);
+        CHECKF(WIFEXITED(st) && WEXITSTATUS(st) == 130 && text && cli_one_message(text) &&
+                   strstr(text, "interrupted by SIGINT"),
+               "%s: status %d, '%s'", runs[i][0], st, text ? text : "");
+        free(text);
+    }
+    CHECK(!cli_exists(cli_path("never")));
+}
+
+/* A write that fails (a full disk: /dev/full, written straight) fails the
+   run with one line naming it, and removes what the run had written. */
+static void a_full_disk_leaves_nothing(void)
+{
+    const char *csv = cli_path("full-plan.csv"), *profile = cli_path("full-profile.csv"), *job = cli_path("full-job");
+    const char *weights = cli_path("full-weights.csv"), *ply = cli_path("full.ply");
+    char full[400];
+    struct stat st;
+    cli_result r;
+    if (!own_device(full, sizeof full, "/dev/full", "disk")) return; /* none, or mknod refused */
+    r = cli_run("plan", raised_sphere(), "--out", csv, "--profile-out", profile, "--plot", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(csv) && !cli_exists(profile), "plan: plan.csv or profile.csv left after the plot failed");
+    cli_free(&r);
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", job, "--plot", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(job), "slice: the directory job is left (%zu files)", entries(job));
+    cli_free(&r);
+    cli_remove_all(job);
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--format", "ctb", "-o", full,
+                "--out", csv, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(csv), "slice: plan.csv left after the job failed");
+    cli_free(&r);
+    r = cli_run("saliency", raised_sphere(), "-o", weights, "--ply", ply, "--png", full, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
+    CHECKF(!cli_exists(weights) && !cli_exists(ply), "saliency: the weights or the PLY left after the PNG failed");
+    cli_free(&r);
+    CHECKF(stat(full, &st) == 0 && S_ISCHR(st.st_mode), "%s is no longer a device", full);
+    if (strcmp(full, "/dev/full")) remove(full);
+}
+
+/* ------------------------------------------------ a directory job's files */
+
+static int same_text(const char *path, const char *text)
+{
+    char *got = read_whole_text(path);
+    int same = got && !strcmp(got, text);
+    free(got);
+    return same;
+}
+
+/* A slice into a directory of someone's files is refused unless --force;
+   then, and on every re-slice, only the files an earlier manifest lists go. */
+static void a_directory_job_removes_only_its_own_files(void)
+{
+    static const char *const users[] = {"layer_99999.png", "layer_00070.png", "layer_00001.svg", "notes.txt"};
+    char dir[300], path[400], *manifest;
+    cli_result r;
+    size_t i;
+    snprintf(dir, sizeof dir, "%s/userdir", cli_dir);
+    mkdir(dir, 0755);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        cli_write(path, users[i]);
+    }
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, dir) && strstr(r.err, "--force"), "exit %d: %s",
+           r.status, r.err);
+    cli_free(&r);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        CHECKF(same_text(path, users[i]), "refused, yet %s was touched", users[i]);
+    }
+    CHECK(entries(dir) == 4);
+
+    /* --force: the job among them (its layer 70 written over) */
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "0.1", "-o", dir,
+                "--force", NULL);
+    CHECKF(r.status == 0, "--force: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    manifest = read_whole_text(path);
+    CHECKF(manifest && strstr(manifest, "\"files\": [") && strstr(manifest, "\"masks.rle\"") &&
+               strstr(manifest, "\"layer_00100.png\"") && strstr(manifest, "\"plan.csv\"") &&
+               !strstr(manifest, "\"notes.txt\""),
+           "the manifest does not list the job's files");
+    free(manifest);
+
+    /* a re-slice of fewer layers: the old job's go, the user's stay */
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "0.5", "-o", dir, NULL);
+    CHECKF(r.status == 0, "re-slice: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    for (i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+        /* layer_00070.png: --force wrote the job's layer 70 over it, and the job took it away */
+        CHECKF(i == 1 ? !cli_exists(path) : same_text(path, users[i]), "a re-slice removed, changed or kept %s", users[i]);
+    }
+    snprintf(path, sizeof path, "%s/layer_00050.png", dir);
+    CHECKF(!cli_exists(path), "the earlier job's layer 50 is left");
+    snprintf(path, sizeof path, "%s/layer_00020.png", dir);
+    CHECKF(cli_exists(path), "no layer 20");
+
+    /* a manifest from before the list: its layers' files go, nothing else */
+    snprintf(path, sizeof path, "%s/manifest.json", dir);
+    manifest = read_whole_text(path);
+    if (manifest) {
+        char *list = strstr(manifest, "\"files\": ["), *end = list ? strchr(list, ']') : NULL;
+        if (list && end) {
+            memmove(list, end + 3, strlen(end + 3) + 1); /* "files": [...],\n out */
+            cli_write(path, manifest);
+        }
+        free(manifest);
+    }
+    r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "--uniform", "1", "-o", dir, NULL);
+    CHECKF(r.status == 0, "after an old manifest: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(path, sizeof path, "%s/layer_00020.png", dir);
+    CHECKF(!cli_exists(path), "an old manifest's layer 20 is left");
+    /* (the SVG beside a listed layer goes too: an old job's --svg wrote them unlisted) */
+    for (i = 0; i < 4; i++)
+        if (i != 1 && i != 2) {
+            snprintf(path, sizeof path, "%s/%s", dir, users[i]);
+            CHECKF(same_text(path, users[i]), "after an old manifest, %s was removed or changed", users[i]);
+        }
+    cli_remove_all(dir);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(orient_map_tiles_and_has_a_colour_bar);
     RUN(compare_gives_the_saving_against_uniform_layers);
+    RUN(outputs_never_replace_links_fifos_or_devices);
+    RUN(no_extension_on_a_path_that_exists);
+    RUN(output_paths_are_checked_before_the_work);
+    RUN(signals_leave_nothing_behind);
+    RUN(every_command_exits_130_on_ctrl_c);
+    RUN(a_full_disk_leaves_nothing);
+    RUN(a_directory_job_removes_only_its_own_files);
     cli_end();
 }

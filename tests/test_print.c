@@ -1116,6 +1116,81 @@ static void print_a_sliced_job(void)
     }
 }
 
+/* --report to a symlink (its target written, the link kept), a FIFO (a
+   reader gets the record, the FIFO stays), /dev/null (stays a device) and
+   "-" (standard output) (issue 26). */
+static void report_goes_through_links_fifos_devices_and_stdout(void)
+{
+    char job[300], real[300], link[300], fifo[300], got[300], null_dev[300];
+    const char *targets[] = {link, fifo, "/dev/null", "-"};
+    cli_result r;
+    struct stat null_st;
+    int i;
+    snprintf(job, sizeof job, "%s/reportjob", cli_dir); /* cli_path keeps only eight */
+    snprintf(real, sizeof real, "%s/report-real.json", cli_dir);
+    snprintf(link, sizeof link, "%s/report-link.json", cli_dir);
+    snprintf(fifo, sizeof fifo, "%s/report-fifo.json", cli_dir);
+    snprintf(got, sizeof got, "%s/report-got.json", cli_dir);
+    snprintf(null_dev, sizeof null_dev, "%s/report-null", cli_dir);
+    /* as root, a null device of the test's own: a regression would replace the machine's */
+    if (geteuid() == 0)
+        targets[2] = stat("/dev/null", &null_st) == 0 && mknod(null_dev, S_IFCHR | 0666, null_st.st_rdev) == 0 ? null_dev
+                                                                                                               : NULL;
+    r = cli_run("slice", MODEL, "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "--uniform", "0.5", "-o", job,
+                CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05", NULL);
+    CHECKF(r.status == 0, "slice: %s", r.err);
+    cli_free(&r);
+    cli_write(real, "old");
+    CHECK(symlink("report-real.json", link) == 0);
+    CHECK(mkfifo(fifo, 0644) == 0);
+    for (i = 0; i < 4 && !check_case_failed(); i++) {
+        child sim;
+        pid_t reader = -1;
+        struct stat st;
+        unsigned char *text;
+        size_t size = 0;
+        if (!targets[i]) continue; /* mknod refused */
+        if (!start_sim(&sim, cli_path("simreport.log"), SIM_SPEED)) return;
+        if (i == 1) {
+            fflush(NULL);
+            if ((reader = fork()) == 0) {
+                char buf[4096];
+                ssize_t n;
+                int in, out;
+                alarm(60);
+                in = open(fifo, O_RDONLY);
+                out = open(got, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+                if (in < 0 || out < 0) _exit(1);
+                while ((n = read(in, buf, sizeof buf)) > 0)
+                    if (write(out, buf, (size_t)n) != n) _exit(1);
+                _exit(n < 0);
+            }
+        }
+        r = cli_run("print", job, "--port", sim.line + 4, "--report", targets[i], NULL);
+        CHECKF(r.status == 0, "--report %s: exit %d: %s", targets[i], r.status, r.err);
+        CHECKF(child_stop(&sim) == 0, "the simulator failed");
+        if (reader > 0) {
+            int fd = open(fifo, O_WRONLY | O_NONBLOCK), st2 = 0; /* a reader still waiting gets its end */
+            if (fd >= 0) close(fd);
+            CHECK(waitpid(reader, &st2, 0) == reader && WIFEXITED(st2) && WEXITSTATUS(st2) == 0);
+        }
+        if (i == 0) CHECKF(lstat(link, &st) == 0 && S_ISLNK(st.st_mode), "the symlink was replaced");
+        if (i == 1) CHECKF(lstat(fifo, &st) == 0 && S_ISFIFO(st.st_mode), "the FIFO was replaced");
+        if (i == 2) CHECKF(stat(targets[2], &st) == 0 && S_ISCHR(st.st_mode), "%s is no longer a device", targets[2]);
+        text = i == 2 ? NULL : read_whole_file(i == 0 ? real : i == 1 ? got : cli_path("stdout"), &size);
+        if (i != 2) CHECKF(text && size > 1 && (i == 3 || text[0] == '{') && strstr((char *)text, "\"layers\""), "--report %s: no record there",
+                           targets[i]);
+        free(text);
+        cli_free(&r);
+    }
+    remove(link);
+    remove(real);
+    remove(fifo);
+    remove(got);
+    if (geteuid() == 0) remove(null_dev);
+    cli_remove_all(job);
+}
+
 /* A job sliced for other pixels than the printer's is refused before
    anything moves, naming both pitches and the scale it would print at: 0.1 mm
    pixels on 0.05 mm ones print half size, the 2k-5.5's 47.25 um ones 5.8 %
@@ -1594,6 +1669,7 @@ void test_print(void)
     RUN(aborted_print_resumes);
     RUN(step_late_print_resumes_with_home);
     RUN(print_a_sliced_job);
+    RUN(report_goes_through_links_fifos_devices_and_stdout);
     RUN(other_pitch_is_refused_first);
     RUN(bad_ports_are_named);
     RUN(silent_port_is_named);

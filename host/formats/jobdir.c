@@ -61,7 +61,32 @@ typedef struct dir_writer {
     char *masks_path;
     int has_masks;               /* masks.rle written, its CRC-32 below (the manifest names it) */
     uint32_t masks_crc;
+    int created;                 /* the directory is this job's: removed with it */
+    int writing;                 /* the earlier job is gone: a failure removes this one's files */
 } dir_writer;
+
+/* Every file of the job in the directory but its manifest: the caller's
+   (plan.csv, plot.svg, layer SVGs), masks.rle, preview.png, the layers. */
+static void own_files(const dir_writer *w, void (*fn)(void *ctx, const char *name), void *ctx)
+{
+    const job_desc *d = w->d;
+    char name[40];
+    size_t k;
+    if (d->dir_extras & DIR_PLAN_CSV) fn(ctx, "plan.csv");
+    if (d->dir_extras & DIR_PLOT_SVG) fn(ctx, "plot.svg");
+    if (w->whole_bin) fn(ctx, "masks.rle");
+    if (d->preview) fn(ctx, "preview.png");
+    for (k = 0; k < d->layer_count; k++) {
+        layer_name(name, k, w->digits, "png");
+        fn(ctx, name);
+        if (d->dir_extras & DIR_LAYER_SVGS) {
+            layer_name(name, k, w->digits, "svg");
+            fn(ctx, name);
+        }
+    }
+}
+
+static void list_file(void *ctx, const char *name) { json_string((json_writer *)ctx, NULL, name); }
 
 static void write_manifest(FILE *f, const void *ctx)
 {
@@ -112,6 +137,10 @@ static void write_manifest(FILE *f, const void *ctx)
     json_number(&w, "volume_mm3", d->volume_mm3);
     snprintf(crc, sizeof crc, "%08x", (unsigned)dw->masks_crc);
     json_string(&w, "masks_rle_crc32", dw->has_masks ? crc : NULL);
+    /* what a later slice into this directory removes, and nothing else */
+    json_begin_array(&w, "files", 0);
+    own_files(dw, list_file, &w);
+    json_end(&w);
     json_int(&w, "layer_count", (long long)d->layer_count);
     json_begin_array(&w, "layers", 0);
     for (k = 0; k < d->layer_count; k++) {
@@ -216,15 +245,6 @@ static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
 
 static int dir_close(void *writer, int ok);
 
-/* "layer_" digits ".png" or ".svg": a layer file of a job */
-static int is_layer_file(const char *name)
-{
-    const char *p = name + 6, *dot;
-    if (strncmp(name, "layer_", 6)) return 0;
-    for (dot = p; *dot >= '0' && *dot <= '9'; dot++) {}
-    return dot - p >= 5 && (!strcmp(dot, ".png") || !strcmp(dot, ".svg"));
-}
-
 /* A layer PNG under the very name this job of `layers` gives one of its own
    (`digits` wide, 1 to layers). */
 static int is_own_layer_png(const char *name, size_t layers, int digits)
@@ -232,50 +252,157 @@ static int is_own_layer_png(const char *name, size_t layers, int digits)
     char own[40];
     size_t v = 0;
     int n = 0;
+    if (strncmp(name, "layer_", 6)) return 0;
     for (; name[6 + n] >= '0' && name[6 + n] <= '9' && n <= digits; n++) v = v * 10 + (size_t)(name[6 + n] - '0');
     if (n != digits || v < 1 || v > layers) return 0;
     layer_name(own, v - 1, digits, "png"); /* the name it would write: same digits, same extension */
     return !strcmp(name, own);
 }
 
-/* What an earlier job left in dir: its manifest first (so that an interrupted
-   clean leaves no job that looks whole), then its masks, previews, plan and
-   layer files; nothing else. The layer PNGs this job writes under the same
-   names stay, to be overwritten: creating a file costs the file system an
-   inode, under the directory's lock, so a re-slice that removed and made
-   each again spent a quarter of its time there, and two threads waited on
-   each other for it. Without the manifest they are no job. path is room for
-   a file's path. */
-static int remove_old_job(const char *dir, size_t layers, int digits, char *path, size_t size)
+/* The whole of a small text file, malloc'd; NULL with errno set. */
+static char *read_text(const char *path)
 {
-    static const char *const files[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
-    DIR *d;
+    FILE *f = fopen(path, "rb");
+    char *text = NULL;
+    long size;
+    int err;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (text = (char *)malloc((size_t)size + 1)) != NULL && fread(text, 1, (size_t)size, f) == (size_t)size)
+        text[size] = 0;
+    else {
+        free(text);
+        text = NULL;
+    }
+    err = errno;
+    fclose(f);
+    if (!text) errno = err ? err : EIO;
+    return text;
+}
+
+/* The directory holds something. */
+static int has_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
     struct dirent *e;
+    int found = 0;
+    while (d && !found && (e = readdir(d)) != NULL) found = strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    if (d) closedir(d);
+    return found;
+}
+
+typedef struct old_job {
+    const char *dir;
+    char *path;
+    size_t size, layers;         /* this job's layers, whose PNGs stay to be written over */
+    int digits, rc;
+} old_job;
+
+/* One file an earlier manifest names, removed: a plain name in the
+   directory, never a path out of it. */
+static void remove_named(old_job *o, const char *name, size_t n)
+{
+    char plain[200];
+    if (o->rc || !n || n >= sizeof plain || name[0] == '.' || memchr(name, '/', n) || memchr(name, '\\', n)) return;
+    memcpy(plain, name, n);
+    plain[n] = 0;
+    if (is_own_layer_png(plain, o->layers, o->digits) || strlen(o->dir) + n + 2 > o->size) return;
+    snprintf(o->path, o->size, "%s/%s", o->dir, plain);
+    if (remove(o->path) != 0 && errno != ENOENT) o->rc = complain(RC_FAIL, "cannot remove %s: %s", o->path, strerror(errno));
+}
+
+/* The files an earlier manifest (its text) names: its "files" list, or, in a
+   manifest from before the list, its layers' "file"s, their SVGs and the
+   four files a slice wrote besides. */
+static void remove_listed(old_job *o, const char *text)
+{
+    static const char *const before_the_list[] = {"masks.rle", "preview.png", "plan.csv", "plot.svg"};
+    const char *p = strstr(text, "\"files\": [");
     size_t i;
-    int rc = RC_OK;
-    for (i = 0; i < sizeof files / sizeof files[0]; i++) {
-        snprintf(path, size, "%s/%s", dir, files[i]);
-        if (remove(path) != 0 && errno != ENOENT) return complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
+    if (p) {
+        for (p += 10; *p && *p != ']' && !o->rc; p++) {
+            const char *end;
+            if (*p != '"') continue;
+            for (end = p + 1; *end && *end != '"' && *end != '\\'; end++) {}
+            if (*end != '"') break; /* an escape: not a name this tool writes */
+            remove_named(o, p + 1, (size_t)(end - p - 1));
+            p = end;
+        }
+        return;
     }
-    if (!(d = opendir(dir))) return complain(RC_FAIL, "cannot read %s: %s", dir, strerror(errno));
-    while (!rc && (e = readdir(d)) != NULL) {
-        if (!is_layer_file(e->d_name) || is_own_layer_png(e->d_name, layers, digits) ||
-            strlen(dir) + strlen(e->d_name) + 2 > size)
-            continue;
-        snprintf(path, size, "%s/%s", dir, e->d_name);
-        if (remove(path) != 0 && errno != ENOENT) rc = complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
+    for (i = 0; i < sizeof before_the_list / sizeof before_the_list[0]; i++)
+        remove_named(o, before_the_list[i], strlen(before_the_list[i]));
+    for (p = text; !o->rc && (p = strstr(p, "\"file\": \"")) != NULL;) {
+        const char *name = p + 9, *end = strchr(name, '"');
+        size_t n;
+        if (!end) break;
+        n = (size_t)(end - name);
+        remove_named(o, name, n);
+        if (n > 4 && n < 200 && !memcmp(end - 4, ".png", 4)) {
+            char svg[200];
+            memcpy(svg, name, n - 4);
+            memcpy(svg + n - 4, ".svg", 4);
+            remove_named(o, svg, n);
+        }
+        p = end;
     }
-    closedir(d);
-    return rc;
+}
+
+/* What an earlier job left in dir, as its manifest names it: the manifest
+   first (so that an interrupted clean leaves no job that looks whole), then
+   its files; nothing else. A directory that holds files and no manifest is
+   someone's: refused unless force. The layer PNGs this job writes under the
+   same names stay, to be overwritten: creating a file costs the file system
+   an inode, under the directory's lock, so a re-slice that removed and made
+   each again spent a quarter of its time there, and two threads waited on
+   each other for it. path is room for a file's path. */
+static int remove_old_job(const char *dir, size_t layers, int digits, int force, char *path, size_t size)
+{
+    old_job o;
+    char *text;
+    snprintf(path, size, "%s/manifest.json", dir);
+    if (!(text = read_text(path))) {
+        if (errno != ENOENT) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
+        return jobdir_check(dir, force);
+    }
+    if (remove(path) != 0 && errno != ENOENT) {
+        free(text);
+        return complain(RC_FAIL, "cannot remove %s: %s", path, strerror(errno));
+    }
+    o.dir = dir;
+    o.path = path;
+    o.size = size;
+    o.layers = layers;
+    o.digits = digits;
+    o.rc = RC_OK;
+    remove_listed(&o, text);
+    free(text);
+    return o.rc;
+}
+
+int jobdir_check(const char *dir, int force)
+{
+    size_t n = strlen(dir) + 16;
+    char *manifest = (char *)malloc(n);
+    struct stat st;
+    int ours;
+    if (!manifest) return complain(RC_FAIL, "out of memory");
+    snprintf(manifest, n, "%s/manifest.json", dir);
+    ours = stat(manifest, &st) == 0;
+    free(manifest);
+    if (ours || force || stat(dir, &st) != 0 || !S_ISDIR(st.st_mode) || !has_entries(dir)) return RC_OK;
+    return complain(RC_USAGE, "-o %s: the directory holds files and no manifest.json of an adaslice job; they are "
+                              "left alone: give a new or empty directory, or --force to write the job among them",
+                    dir);
 }
 
 int jobdir_remove(const char *dir)
 {
-    size_t size = strlen(dir) + 64;
+    size_t size = strlen(dir) + 256;
     char *path = (char *)malloc(size);
     int rc;
     if (!path) return complain(RC_FAIL, "out of memory");
-    rc = remove_old_job(dir, 0, layer_digits(0), path, size); /* no layer is this job's own: all go */
+    rc = remove_old_job(dir, 0, layer_digits(0), 1, path, size); /* no layer is this job's own: all go */
     free(path);
     return rc;
 }
@@ -286,17 +413,19 @@ static int dir_open(void **writer, const char *dir, const job_desc *d)
     struct stat st;
     int rc = RC_OK;
     *writer = NULL;
-    if (!w || !(w->dir = (char *)malloc(strlen(dir) + 1)) || !(w->path = (char *)malloc(strlen(dir) + 64))) {
+    if (!w || !(w->dir = (char *)malloc(strlen(dir) + 1)) || !(w->path = (char *)malloc(strlen(dir) + 256))) {
         rc = complain(RC_FAIL, "out of memory");
         goto fail;
     }
     strcpy(w->dir, dir);
     w->d = d;
     w->digits = layer_digits(d->layer_count);
-    w->path_size = strlen(dir) + 64;
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
+    w->path_size = strlen(dir) + 256;
+    if (mkdir(dir, 0777) == 0) w->created = 1;
+    else if (errno != EEXIST) { rc = complain(RC_FAIL, "cannot create %s: %s", dir, strerror(errno)); goto fail; }
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) { rc = complain(RC_FAIL, "%s is not a directory", dir); goto fail; }
-    if ((rc = remove_old_job(dir, d->layer_count, w->digits, w->path, w->path_size))) goto fail;
+    if ((rc = remove_old_job(dir, d->layer_count, w->digits, d->dir_force, w->path, w->path_size))) goto fail;
+    w->writing = 1;
     if ((rc = job_masks_alloc(&w->masks, (uint32_t)d->layer_count))) goto fail;
     w->masks.width = (uint32_t)d->width;
     w->masks.height = (uint32_t)d->height;
@@ -454,12 +583,26 @@ static int dir_finish(dir_writer *w)
     return write_manifest_file(w);
 }
 
+static void remove_own(void *ctx, const char *name)
+{
+    dir_writer *w = (dir_writer *)ctx;
+    snprintf(w->path, w->path_size, "%s/%s", w->dir, name);
+    remove(w->path);
+}
+
 static int dir_close(void *writer, int ok)
 {
     dir_writer *w = (dir_writer *)writer;
     int rc = ok ? dir_finish(w) : RC_FAIL;
     if (w->masks_file) fclose(w->masks_file);
-    if (rc && w->masks_path) remove(w->masks_path); /* a job that failed leaves no masks */
+    w->masks_file = NULL;
+    if (rc && w->writing) {
+        /* a job that failed or was interrupted leaves nothing of its own: no
+           manifest, masks, preview, plan or layer (the caller's included) */
+        remove_own(w, "manifest.json");
+        own_files(w, remove_own, w);
+    }
+    if (rc && w->created) rmdir(w->dir); /* made by this job: gone with it */
     job_masks_free(&w->masks);
     free(w->masks_path);
     free(w->dir);

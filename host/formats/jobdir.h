@@ -1,7 +1,10 @@
 /* The job directory, written by adaslice slice (JOB_FORMAT_DIR of jobfile.h)
    and read by adaslice print: one PNG per layer named layer_00001.png, a
    shaded preview.png, masks.rle (the masks as a printer takes them) and,
-   written last, manifest.json: a job without one is not complete.
+   written last, manifest.json: a job without one is not complete. The
+   manifest lists every file of the job ("files"), which is all a later slice
+   into the directory removes; a directory of other files and no manifest is
+   refused unless --force.
    Little-endian masks.rle: "ADASMSK2", u32 width, height, bits, layers,
    bin_nm, peel_nm, peel_speed_um_s, return_speed_um_s, settle_ms; then per
    layer u32 bins (its thickness), u32 exposure_ms, u32 CRC-32 of the mask,
@@ -18,9 +21,14 @@ void layer_name(char name[40], size_t k, int digits, const char *ext);
 /* "DIR/layer_00001.EXT" */
 void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, const char *ext);
 
-/* Removes the job in DIR (its manifest first, then the files a slice writes:
-   masks, previews, plan, layers), leaving DIR and anything else in it. */
+/* Removes the job in DIR: its manifest first, then the files it names (its
+   "files" list; in a manifest from before the list, its layers' files, their
+   SVGs, masks.rle, preview.png, plan.csv and plot.svg), leaving DIR and
+   anything else in it. */
 int jobdir_remove(const char *dir);
+/* Before the work: a DIR that holds files and no manifest.json is someone
+   else's, refused (RC_USAGE, said) unless force. */
+int jobdir_check(const char *dir, int force);
 
 /* The masks of a job as a printer takes them, with its exposures and motion. */
 typedef struct job_masks {

@@ -112,31 +112,12 @@ time_t job_time(int *fixed)
     return *fixed ? (time_t)v : time(NULL);
 }
 
-/* Frees the names; the file, if any, is the caller's. */
-static void forget(job_file *jf)
-{
-    free(jf->path);
-    free(jf->tmp);
-    memset(jf, 0, sizeof *jf);
-}
-
 int job_file_open(job_file *jf, const char *path)
 {
-    size_t n = strlen(path) + 32;
     memset(jf, 0, sizeof *jf);
-    jf->path = (char *)malloc(strlen(path) + 1);
-    jf->tmp = (char *)malloc(n);
-    if (!jf->path || !jf->tmp) {
-        forget(jf);
-        return complain(RC_FAIL, "cannot write %s: out of memory", path);
-    }
-    strcpy(jf->path, path);
-    snprintf(jf->tmp, n, "%s.tmp.%ld", path, (long)getpid());
-    if (!(jf->f = fopen(jf->tmp, "wb"))) {
-        int e = errno;
-        forget(jf); /* nothing was made to remove */
-        return complain(RC_FAIL, "cannot write %s: %s", path, strerror(e));
-    }
+    if (output_open(&jf->out, path, 1)) return RC_FAIL;
+    jf->f = jf->out.f;
+    jf->path = jf->out.path;
     return RC_OK;
 }
 
@@ -166,29 +147,19 @@ void job_file_write_at(job_file *jf, uint64_t at, const void *src, size_t n)
 
 int job_file_check(const job_file *jf)
 {
-    return jf->err ? complain(RC_FAIL, "cannot write %s: %s", jf->path, strerror(jf->err)) : RC_OK;
+    return jf->err ? output_failed(jf->path, jf->err) : output_interrupted() ? RC_FAIL : RC_OK;
 }
 
 int job_file_commit(job_file *jf)
 {
     /* errno after an earlier failed write may be anyone's: say EIO */
-    int err = jf->err ? jf->err : ferror(jf->f) ? EIO : 0;
-    if (fflush(jf->f) != 0 && !err) err = errno;
-    if (fclose(jf->f) != 0 && !err) err = errno;
-    jf->f = NULL;
-    if (!err && rename(jf->tmp, jf->path) != 0) err = errno;
-    if (err) {
-        int rc = complain(RC_FAIL, "cannot write %s: %s", jf->path, strerror(err));
-        job_file_discard(jf);
-        return rc;
-    }
-    forget(jf);
-    return RC_OK;
+    int rc = output_close(&jf->out, 1, jf->err ? jf->err : jf->f && ferror(jf->f) ? EIO : 0);
+    memset(jf, 0, sizeof *jf);
+    return rc;
 }
 
 void job_file_discard(job_file *jf)
 {
-    if (jf->f) fclose(jf->f);
-    if (jf->tmp) remove(jf->tmp);
-    forget(jf);
+    output_close(&jf->out, 0, 0);
+    memset(jf, 0, sizeof *jf);
 }

@@ -16,7 +16,10 @@
 #include <stdio.h>
 #include <time.h>
 #include "../codec/maskrows.h"
+#include "../output.h"
 #include "../printer.h"
+
+enum { DIR_PLAN_CSV = 1, DIR_PLOT_SVG = 2, DIR_LAYER_SVGS = 4 };
 
 /* One layer as the printer moves and exposes it. */
 typedef struct job_layer {
@@ -67,6 +70,11 @@ typedef struct job_desc {
                                     layer gets S) */
     double part_mm[3], place_mm[2];
     int rotate;                  /* quarter turns, as --rotate */
+    /* The directory format: the files the caller writes into it besides the
+       writer's own (DIR_*), listed in its manifest and removed with it; and
+       dir_force: write into a directory that holds files and no manifest. */
+    unsigned dir_extras;
+    int dir_force;
     /* A shaded picture of the part, w x h pixels, 3 bytes (R, G, B) a pixel,
        rows top first, for the formats' previews; 0 or -1 (out of memory). */
     int (*preview)(void *ctx, int w, int h, unsigned char *rgb);
@@ -177,12 +185,14 @@ static inline double mm_per_min(double mm_per_s) { return mm_per_s * 60.0; }
    bytes), else now. *fixed says which; a fixed time is shown in UTC. */
 time_t job_time(int *fixed);
 
-/* A file written under "PATH.tmp.PID" and renamed into place by
-   job_file_commit; job_file_discard removes it. */
+/* A job file, through output.h: a regular file under "PATH.tmp.PID" renamed
+   into place by job_file_commit (job_file_discard removes it); a device, a
+   FIFO or "-" written straight at the commit. */
 typedef struct job_file {
-    FILE *f;
-    char *path, *tmp;
+    FILE *f;                     /* seekable, whatever the path is */
+    char *path;                  /* as given, for messages */
     int err;                     /* the first failed write's errno (0: none) */
+    output out;
 } job_file;
 int job_file_open(job_file *jf, const char *path);
 /* n bytes (src NULL: zeros) at byte `at`, or (append) where the last write

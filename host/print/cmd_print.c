@@ -815,6 +815,7 @@ int cmd_print(int argc, char **argv)
     memset(&scr, 0, sizeof scr);
     l.fd = scr.fd = scr.guard_fd = -1;
     if ((rc = parse_target(argc, argv, &pa, &s, &a, &jobdir))) return rc < 0 ? RC_OK : rc;
+    if ((rc = output_check("--report", pa.report))) return rc; /* before hours of printing */
     pj.from_model = !jobdir;
     if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
     printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
