@@ -546,7 +546,10 @@ static void wrong_screen_is_refused(void)
             memcpy(at, "\"pitch_mm\": [0.2, 0.1]", 22);
             if ((out = fopen(mpath, "wb")) != NULL) { CHECK(fwrite(m, 1, mn, out) == mn); fclose(out); }
             r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "100", NULL);
-            CHECKF(r.status == 1 && strstr(r.err, "job's pixels are 200 x 100 um; the screen") && strstr(r.err, "are 100 um"),
+            /* the printer's own pitch (IDENTIFY) is checked first: oblong job
+               pixels on square ones are refused there, naming both */
+            CHECKF(r.status == 1 && strstr(r.err, "sliced for pixels of 0.2 x 0.1 mm") && strstr(r.err, "0.1 mm pixels") &&
+                       strstr(r.err, "50 % across and 100 % down"),
                    "%d %s", r.status, r.err);
             cli_free(&r);
             memcpy(at, "\"pitch_mm\": [0.1, 0.1]", 22);
