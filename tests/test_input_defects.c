@@ -419,6 +419,8 @@ static const struct { const char *option, *value; } OPTION_VALUES[] = {
     {"--rotate", "90"}, {"--sampler", "ldi"}, {"--scale", "2"}, {"--settle", "0.5"}, {"--sharp", "0.5"},
     {"--slice-at", "top"}, {"--threads", "2"}, {"--tmax", "0.15"}, {"--tmin", "0.05"}, {"--uniform", "0.05"},
     {"--weight", "box:0,0,0,1,1,1=0.5"}, {"--weights", "@w.txt"}, {"--importance", "0.5,0.3,0.2"}, {"--view", "front"}, {"--png", "@p.png"}, {"--view-count", "8"}, {"--view-res", "64"},
+    {"--screen", "file:fb.bin,240x200,24"}, {"--screen-packing", "rgb"}, {"--screen-rotate", "90"}, {"--screen-mirror", "x"},
+    {"--screen-pitch", "50"}, {"--screen-panel", "2k-5.5"},
 };
 
 static const char *option_value(const char *option, const char *placeholder)
