@@ -431,9 +431,6 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     *writer = NULL;
     if (version != 3 && version != 4)
         return complain(RC_FAIL, "%s: ctb version %u is not one this writer makes (3 or 4)", path, version);
-    if (d->width <= 0 || d->height <= 0 || !d->layer_count || !d->layers || (d->bits != 1 && d->bits != 8))
-        return complain(RC_FAIL, "%s: a ctb job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layer%s, %d-bit)",
-                        path, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
     w = (ctb_writer *)calloc(1, sizeof *w);
     if (w) w->table = (unsigned char *)calloc(d->layer_count, CTB_LAYER_DEF);
     if (!w || !w->table) {

@@ -293,9 +293,6 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     *writer = NULL;
     if (version != 4 && version != 5)
         return complain(RC_FAIL, "%s: encrypted ctb version %u is not one this writer makes (4 or 5)", path, version);
-    if (d->width <= 0 || d->height <= 0 || !d->layer_count || !d->layers || (d->bits != 1 && d->bits != 8))
-        return complain(RC_FAIL, "%s: a ctb job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layer%s, %d-bit)",
-                        path, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
     if (d->layer_count > (CTBE_MAX_FILE - CTBE_HEADER - CTBE_SETTINGS) / (CTBE_POINTER + CTBE_LAYER_DEF + 1))
         return complain(RC_FAIL, "%s: %zu layers cannot fit the 4 GiB an encrypted ctb's 32-bit offsets reach", path,
                         d->layer_count);

@@ -344,12 +344,9 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     unsigned char *header;
     int rc;
     *writer = NULL;
-    if (d->width <= 0 || d->height <= 0 || d->width > 0xFFFF || d->height > 0xFFFF || !d->layer_count ||
-        !d->layers || (d->bits != 1 && d->bits != 8))
-        return complain(RC_FAIL,
-                        "%s: a goo job needs 1 to 65535 pixels across and down, layers and 1- or 8-bit images "
-                        "(%dx%d, %zu layer%s, %d-bit)",
-                        path, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
+    if (d->width > 0xFFFF || d->height > 0xFFFF)
+        return complain(RC_FAIL, "%s: a goo job holds at most 65535 pixels across and down (%dx%d)", path, d->width,
+                        d->height);
     if ((uint64_t)d->layer_count > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: %zu layers are more than a goo file can count", path, d->layer_count);
     w = (goo_writer *)calloc(1, sizeof *w);

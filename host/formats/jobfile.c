@@ -56,6 +56,9 @@ int job_open(job_writer *w, const job_format *f, const char *path, const job_des
     w->format = f;
     w->d = d;
     w->path = path;
+    if (d->width <= 0 || d->height <= 0 || !d->layer_count || !d->layers || (d->bits != 1 && d->bits != 8))
+        return complain(RC_FAIL, "%s: a %s job needs pixels, layers and 1- or 8-bit images (%dx%d, %zu layer%s, %d-bit)",
+                        path, f->name, d->width, d->height, d->layer_count, plural(d->layer_count), d->bits);
     return f->open(&w->state, path, d);
 }
 
