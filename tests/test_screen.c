@@ -690,6 +690,50 @@ static void pause_and_killed_host_leave_it_dark(void)
     free(j.crc);
 }
 
+/* The MCU reset mid-print (SIGUSR1 to the simulator: the state and Z's home
+   lost): the host stops with exit 4 and the screen dark, nothing is lit
+   while the printer has no job, and the print resumed with --home ends with
+   every exposure under its own layer and no step under a lit screen. */
+static void mcu_reset_leaves_it_dark(void)
+{
+    child sim;
+    job_crcs j;
+    seen s;
+    char spec[600], k[16], *out, *at;
+    fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
+    unsigned layer = 0;
+    pid_t pid;
+    int status;
+    cli_result r;
+    if (!slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { CHECK(!"no job"); return; }
+    remove(cli_path("fbr"));
+    if (!start_sim(&sim, cli_path("simr.log"), "10", cli_path("fbr"), NULL)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbr"));
+    pid = print_in_background(cli_path("job"), sim.line + 4, spec, cli_path("r1.out"));
+    CHECK(wait_for_exposures(cli_path("simr.log"), 4));
+    kill(sim.pid, SIGUSR1);
+    status = wait_exit(pid, 30);
+    out = read_whole_text(cli_path("r1.out"));
+    at = out ? strstr(out, "--resume-from ") : NULL;
+    CHECKF(status == 4 && at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "the reset: exit %d: %s", status,
+           out ? out : "");
+    free(out);
+    CHECK(all_zero(cli_path("fbr")));
+    if (check_case_failed()) { stop_sim(&sim); free(j.crc); return; }
+    snprintf(k, sizeof k, "%u", layer);
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, "--home", NULL);
+    CHECKF(r.status == 0, "resume after the reset: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(cli_path("fbr")));
+    CHECK(observe(cli_path("simr.log"), cli_path("fbr"), &f, &j, &s));
+    CHECKF(s.right == s.exposures && !s.wrong && s.exposures >= j.layers, "%u UV-ons for %u layers, %u right: %s",
+           s.exposures, j.layers, s.right, s.first_wrong);
+    CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
+    free(s.layer_of);
+    free(j.crc);
+}
+
 /* A layer the host cannot draw (its code in masks.rle damaged: it does not
    decode to its CRC) pauses the print before that layer: the light never
    comes on over the layer before, the screen is dark, and the message
@@ -1014,6 +1058,7 @@ void test_screen(void)
     RUN(real_framebuffer_if_any);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
+    RUN(mcu_reset_leaves_it_dark);
     RUN(undrawable_layer_pauses);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
     cli_end();
