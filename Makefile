@@ -28,7 +28,7 @@ MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 15
 B        = build
 
-.PHONY: all demo test check check-models bench firmware compile-checks fuzz clean FORCE
+.PHONY: all demo test check check-models bench firmware compile-checks fuzz clean run-groups FORCE
 
 all: $(B)/adaslice
 
@@ -100,17 +100,37 @@ $(B)/avr-run: $(call objs,rel,tests/avr_run.c link/tty.c)
 TEST_PROGRAMS = $(B)/san/run_tests $(B)/san/adaslice $(B)/fw-sim $(B)/relay
 RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 
+# The groups run as parallel jobs, one log each in build/test-logs (a group's
+# cases share its programs and files, so a group is the unit); the slowest,
+# which wait on emulators and serial links, start first. tests/summary.sh adds
+# the logs up and prints "N passed, N failed" last.
+SLOW_GROUPS = avr print screen qemu_timing threemf cli gcode
+GROUPS      = $(filter $(SLOW_GROUPS),$(patsubst tests/test_%.c,%,$(TESTS))) \
+              $(filter-out $(SLOW_GROUPS),$(patsubst tests/test_%.c,%,$(TESTS)))
+GROUP_LOGS  = $(patsubst %,$(B)/test-logs/%.log,$(GROUPS))
+TEST_JOBS  ?= $(shell nproc 2>/dev/null || echo 2)
+$(B)/test-logs/%.log: FORCE
+	@mkdir -p $(@D)
+	@start=$$(date +%s); $(RUN_TESTS) $(RUN_FLAGS) $* > $@.part 2>&1; \
+	    echo "group $* ran $$(( $$(date +%s) - start )) s" >> $@.part; mv $@.part $@; echo "test group $* done"
+run-groups: $(GROUP_LOGS)
+define run_groups
+	@rm -rf $(B)/test-logs
+	@$(MAKE) --no-print-directory -j$(TEST_JOBS) run-groups RUN_FLAGS=$(1) || true
+	@tests/summary.sh $(B)/test-logs
+endef
+
 # gcc alone: cases that need a real client or an emulator are left to make
 # check, and the runner names them.
 test: $(TEST_PROGRAMS)
-	$(RUN_TESTS) --without-tools
+	$(call run_groups,--without-tools)
 
 # The benchmarks are built (not run) too, so that make bench cannot stop linking unseen.
 BENCH_PROGRAMS = $(B)/bench_plan $(B)/bench_png $(B)/bench_saliency $(B)/bench_wire $(B)/bench_mcu_plan $(B)/bench_jobs $(B)/bench_avr \
                  $(B)/bench_screen
 check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mps2-busy.elf $(B)/fw-mps2-trace.elf $(B)/fw-mps2-hang.elf \
        $(B)/fw-ramps-test.elf $(B)/avr-run $(B)/avr-bench.elf $(BENCH_PROGRAMS)
-	$(RUN_TESTS)
+	$(call run_groups,)
 
 # The header as C99 under gcc and clang, as C++ under g++ and clang++, two
 # translation units linked together (plain and ADASLICE_STATIC), every

@@ -9,6 +9,7 @@
 #include "check.h"
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static int passed, failed, left, case_failures, without_tools;
 static const char *only_case;
@@ -24,10 +25,16 @@ int check_case_failed(void) { return case_failures > 0; }
 void check_run(const char *name, check_case_fn fn)
 {
     if (only_case && strcmp(name, only_case)) return;
+    struct timespec t0, t1;
+    double seconds;
     case_failures = 0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
     fn();
-    if (case_failures) { failed++; printf("FAIL %s (%d checks failed)\n", name, case_failures); }
-    else { passed++; printf("ok   %s\n", name); }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    /* shown, never judged: what makes a group long is worth seeing in its log */
+    seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    if (case_failures) { failed++; printf("FAIL %s (%d checks failed, %.1f s)\n", name, case_failures, seconds); }
+    else { passed++; printf("ok   %s (%.1f s)\n", name, seconds); }
     fflush(stdout);
 }
 
