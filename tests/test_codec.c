@@ -5,6 +5,7 @@
 #include "codec_reference.h"
 #include "../host/codec/maskrows.h"
 #include "maskgen.h"
+#include "plan_oracle.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -337,13 +338,15 @@ static void malformed_code_is_refused(void)
     CHECK(adaslice_rle_decoder_init(&dec, 0, 2, 1, row, sizeof row) == ADASLICE_ERR_ARGUMENT);
 }
 
-/* A printer's integers planned by adaslice_dp give adaslice_plan_profile's
-   planes with the same options, bit for bit, with and without the pre-pass;
-   and such a plan never exceeds eps in mm. */
+/* A printer's integers planned by adaslice_dp give the fewest layers and the
+   smallest worst layer that the quadratic oracle finds (tests/plan_oracle.h),
+   in a plan that keeps every rule; adaslice_plan_profile's planes with the
+   same options, bit for bit, with and without the pre-pass; and such a plan
+   never exceeds eps in mm. */
 static void printer_units_plan_like_the_tool(void)
 {
     static uint64_t workspace[4096];
-    int trial, mismatches = 0, over = 0, plans = 0, infeasible = 0;
+    int trial, mismatches = 0, over = 0, plans = 0, infeasible = 0, oracle_misses = 0;
     for (trial = 0; trial < 3000; trial++) {
         double phi[600];
         uint32_t units[600];
@@ -364,6 +367,19 @@ static void printer_units_plan_like_the_tool(void)
         CHECK(adaslice_plan_units(&p, &o, units, forced, NULL) == ADASLICE_OK);
         CHECK(adaslice_dp_init(&dp, workspace, sizeof workspace, (uint32_t)n, 25, 75, o.eps_units, 0, 0) == ADASLICE_OK);
         for (i = 0; i < n; i++) adaslice_dp_push(&dp, units[i], forced[i]);
+        {   /* the oracle: fewest layers, then the smallest worst, and a valid plan that has both */
+            oracle_plan want = oracle_fewest_layers(units, forced, (uint32_t)n, 25, 75, o.eps_units);
+            uint32_t got = adaslice_dp_layers(&dp), lengths[600], at = (uint32_t)n, k;
+            uint64_t worst;
+            if (want.layers == 0) oracle_misses += got != ADASLICE_UNREACHED;
+            else if (got != want.layers) oracle_misses++;
+            else {
+                for (k = got; k > 0; k--) { lengths[k - 1] = adaslice_dp_layer_below(&dp, at); at -= lengths[k - 1]; }
+                if (!oracle_plan_is_valid(units, forced, (uint32_t)n, 25, 75, o.eps_units, lengths, got, &worst) ||
+                    worst != want.worst)
+                    oracle_misses++;
+            }
+        }
         if (adaslice_plan_profile(&p, &o, &plan, NULL) != ADASLICE_OK) {
             infeasible++;
             if (adaslice_dp_layers(&dp) != ADASLICE_UNREACHED) mismatches++;
@@ -385,6 +401,7 @@ static void printer_units_plan_like_the_tool(void)
         }
         adaslice_plan_free(&plan);
     }
+    CHECKF(oracle_misses == 0, "%d of 3000 integer plans differ from the oracle", oracle_misses);
     CHECKF(mismatches == 0 && over == 0 && plans > 1000 && infeasible > 10,
            "%d mismatches, %d layers over eps, %d plans, %d infeasible", mismatches, over, plans, infeasible);
 }

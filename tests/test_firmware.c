@@ -4,6 +4,7 @@
 #include "fakeport.h"
 #include "../adaslice.h"
 #include "check.h"
+#include "plan_oracle.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -11,15 +12,17 @@ static unsigned fw_rng_state = 4242u;
 static unsigned fw_rng(void) { fw_rng_state = fw_rng_state * 1103515245u + 12345u; return (fw_rng_state >> 8) & 0xffffffu; }
 
 /* Thousands of random profiles: the MCU's plan, made from the integers on
-   the wire, equals adaslice_plan_profile's with the same options, layer by
-   layer; where the host finds no plan, neither does the MCU. */
+   the wire, has the fewest layers and the smallest worst layer that the
+   quadratic oracle finds (tests/plan_oracle.h) and keeps every rule; it
+   equals adaslice_plan_profile's with the same options, layer by layer; where
+   the host finds no plan, neither does the MCU. */
 static void mcu_plans_like_the_host(void)
 {
     static fake_printer p;
     static double phi[3000];
     static uint32_t units[3000], lengths[3000];
     static unsigned char forced[3000];
-    int trial, mismatches = 0, plans = 0, infeasible = 0;
+    int trial, mismatches = 0, plans = 0, infeasible = 0, oracle_misses = 0;
     for (trial = 0; trial < 2000; trial++) {
         adaslice_profile prof;
         adaslice_plan_options o;
@@ -40,6 +43,15 @@ static void mcu_plans_like_the_host(void)
         CHECK(adaslice_plan_units(&prof, &o, units, forced, NULL) == ADASLICE_OK);
         feasible = adaslice_plan_profile(&prof, &o, &plan, NULL) == ADASLICE_OK;
         fake_send_profile(&p, units, forced, n, 25, (uint8_t)(o.tmax / bin + 0.5), o.eps_units, 2000, fw_rng);
+        {   /* the oracle: fewest layers, then the smallest worst, and the MCU's plan keeps every rule */
+            oracle_plan want = oracle_fewest_layers(units, forced, n, 25, (uint32_t)(o.tmax / bin + 0.5), o.eps_units);
+            uint32_t got = fake_state(&p) == LINK_STATE_READY ? fake_read_plan(&p, lengths, 3000) : 0;
+            uint64_t worst;
+            if (got != want.layers ||
+                (got && (!oracle_plan_is_valid(units, forced, n, 25, (uint32_t)(o.tmax / bin + 0.5), o.eps_units, lengths,
+                                               got, &worst) || worst != want.worst)))
+                oracle_misses++;
+        }
         if (!feasible) {
             infeasible++;
             if (fake_state(&p) != LINK_STATE_IDLE || p.status.error != LINK_ERR_INFEASIBLE) mismatches++;
@@ -51,6 +63,7 @@ static void mcu_plans_like_the_host(void)
         else for (k = 0; k < layers; k++) if (lengths[k] != plan.planes[k + 1] - plan.planes[k]) { mismatches++; break; }
         adaslice_plan_free(&plan);
     }
+    CHECKF(oracle_misses == 0, "%d of 2000 MCU plans differ from the oracle", oracle_misses);
     CHECKF(mismatches == 0 && plans > 1000 && infeasible > 20, "%d of %d plans differ (%d infeasible)", mismatches,
            plans + infeasible, infeasible);
 }
