@@ -159,6 +159,7 @@ compile-checks:
 	$(B)/plan_model examples/models/hand_closed.obj 88.7 > $(B)/cc/plan_model.out
 	test "$$(wc -l < $(B)/cc/plan_model.out)" -eq 367
 	sed -n '/^```c$$/,/^```$$/p' README.md | sed '1d;$$d' | diff - examples/plan_model.c
+	tests/check_reference.sh adaslice.h adaslice_mcu.h
 	@# README's package list is the one .ci/run installs
 	sed -n '/^for pkg in/,/; do/p' .ci/run | sed 's/for pkg in//; s/; do.*//; s/\\//g' | tr -s ' \n' '\n' | sed '/^$$/d' | sort \
 	    > $(B)/cc/ci_packages

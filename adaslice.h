@@ -1,4 +1,4 @@
-/* adaslice.h v0.1.0 — adaptive slicing for layer-based additive manufacturing
+/* adaslice.h v0.2.0 — adaptive slicing for layer-based additive manufacturing
    (resin SLA/MSLA first). MIT No Attribution or public domain: see the end.
 
    After Mao, Kwok, Chen and Wang, "Adaptive Slicing Based on Efficient
@@ -25,64 +25,131 @@
            printf("%g %g\n", plan.layers[k].z_bottom, plan.layers[k].thickness);
        adaslice_plan_free(&plan); adaslice_profile_free(&profile); adaslice_mesh_free(&mesh);
 
-   REFERENCE, in the order of the data's path (and of this file)
+   REFERENCE, in the order of the data's path (and of this file); every
+   public function, with its signature (make compile-checks holds the list to
+   the declarations)
      conventions
        adaslice_result, adaslice_error  what every call that can fail returns and fills
-       adaslice_result_name             a result's name
+       const char *adaslice_result_name(adaslice_result r);
+           a result's name
        adaslice_allocator               how every call allocates (an options field)
      mesh
-       adaslice_mesh_load               STL, OBJ or PLY from memory
-       adaslice_mesh_load_file          the same from a file (not under ADASLICE_NO_STDIO)
-       adaslice_mesh_free
-       adaslice_mesh_bounds             the box around the vertices triangles use
-       adaslice_mesh_weld               merge equal (or nearby) vertices in place
-       adaslice_mesh_repair             weld, drop, wind and turn shells as a slicer does on load
-       adaslice_rotation_to_z           the rotation turning a direction up
-       adaslice_mesh_rotate             turn every vertex
+       adaslice_result adaslice_mesh_load(const void *data, size_t size, const adaslice_load_options *options,
+                                          adaslice_mesh *mesh, adaslice_error *error);
+           STL, OBJ or PLY from memory
+       adaslice_result adaslice_mesh_load_file(const char *path, const adaslice_load_options *options,
+                                               adaslice_mesh *mesh, adaslice_error *error);
+           the same from a file (not under ADASLICE_NO_STDIO)
+       void adaslice_mesh_free(adaslice_mesh *mesh);
+       void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3]);
+           the box around the vertices triangles use
+       adaslice_result adaslice_mesh_weld(adaslice_mesh *mesh, const adaslice_weld_options *options,
+                                          adaslice_error *error);
+           merge equal (or nearby) vertices in place
+       adaslice_result adaslice_mesh_repair(adaslice_mesh *mesh, const adaslice_repair_options *options,
+                                            adaslice_mesh_report *report, adaslice_error *error);
+           weld, drop, wind and turn shells as a slicer does on load
+       void adaslice_rotation_to_z(const double d[3], double r[9]);
+           the rotation turning a direction up
+       void adaslice_mesh_rotate(adaslice_mesh *mesh, const double r[9]);
+           turn every vertex
      sampling
-       adaslice_grid_fit                a square grid of rays covering the mesh
-       adaslice_ldi_build               a layered depth image: every ray's surface samples
-       adaslice_ldi_free
+       adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice_axis axis, int resolution);
+           a square grid of rays covering the mesh
+       adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const adaslice_grid *grid,
+                                          const adaslice_ldi_options *options, adaslice_ldi *ldi,
+                                          adaslice_error *error);
+           a layered depth image: every ray's surface samples
+       void adaslice_ldi_free(adaslice_ldi *ldi);
      profiles
-       adaslice_profile_exact           phi(z) from the triangles themselves
-       adaslice_profile_sampled         phi(z) from LDIs along x, y, z (the paper's method)
-       adaslice_profile_free
-       adaslice_mean_curvature          |H| per vertex (the weights' raw material)
-       adaslice_saliency                a weight in [0,1] per triangle (Lee et al. 2005)
-       adaslice_curvature_profile       mean |H| of the surface per bin
+       adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                              adaslice_profile *profile, adaslice_error *error);
+           phi(z) from the triangles themselves
+       adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                adaslice_profile *profile, adaslice_error *error);
+           phi(z) from LDIs along x, y, z (the paper's method)
+       void adaslice_profile_free(adaslice_profile *profile);
+       adaslice_result adaslice_mean_curvature(const adaslice_mesh *mesh, double *curvature,
+                                               const adaslice_surface_options *options, adaslice_error *error);
+           |H| per vertex (the weights' raw material)
+       adaslice_result adaslice_saliency(const adaslice_mesh *mesh, float *face_weight,
+                                         const adaslice_surface_options *options, adaslice_error *error);
+           a weight in [0,1] per triangle (Lee et al. 2005)
+       adaslice_result adaslice_view_importance(const adaslice_mesh *mesh, float *importance,
+                                                const adaslice_view_options *options, adaslice_error *error);
+           the fraction of view directions from which each triangle is seen
+       adaslice_result adaslice_curvature_profile(const adaslice_mesh *mesh, const adaslice_profile *profile,
+                                                  const adaslice_surface_options *options, double *kappa,
+                                                  adaslice_error *error);
+           mean |H| of the surface per bin
      plans
-       adaslice_plan_profile            the plan: optimal, greedy, uniform or curvature
-       adaslice_plan_free
-       adaslice_layer_error             one layer's error under the profile's metric
-       adaslice_plan_units              the integers a printer plans on
-       adaslice_dp_*                    the integer planner itself (adaslice_mcu.h)
+       adaslice_result adaslice_plan_profile(const adaslice_profile *profile, const adaslice_plan_options *options,
+                                             adaslice_plan *plan, adaslice_error *error);
+           the plan: optimal, greedy, uniform or curvature
+       void adaslice_plan_free(adaslice_plan *plan);
+       double adaslice_layer_error(const adaslice_profile *profile, size_t first, size_t end);
+           one layer's error under the profile's metric
+       adaslice_result adaslice_plan_units(const adaslice_profile *profile, const adaslice_plan_options *options,
+                                           uint32_t *units, unsigned char *forced, adaslice_error *error);
+           the integers a printer plans on
+       adaslice_dp_*
+           the integer planner itself (adaslice_mcu.h)
      orientation
-       adaslice_fibonacci_directions    n directions spread evenly on the sphere
-       adaslice_orienter_init           the mesh and options, read-only, shared by threads
-       adaslice_profile_along           the profile with a direction turned up
-       adaslice_orienter_score          K and the worst layer error along a direction
-       adaslice_orient_scores           F(O) of eq. 25 over the directions scored
-       adaslice_orient_minima           the directions better than their neighbours
-       adaslice_orienter_free
+       void adaslice_fibonacci_directions(size_t n, double *xyz);
+           n directions spread evenly on the sphere
+       adaslice_result adaslice_orienter_init(adaslice_orienter *orienter, const adaslice_mesh *mesh,
+                                              const adaslice_profile_options *profile,
+                                              const adaslice_plan_options *plan, adaslice_error *error);
+           the mesh and options, read-only, shared by threads
+       adaslice_result adaslice_profile_along(const adaslice_orienter *orienter, const double d[3],
+                                              adaslice_profile *profile, adaslice_error *error);
+           the profile with a direction turned up
+       adaslice_result adaslice_orienter_score(const adaslice_orienter *orienter, const double d[3],
+                                               adaslice_direction_score *score, adaslice_error *error);
+           K and the worst layer error along a direction
+       void adaslice_orient_scores(adaslice_direction_score *scores, size_t n, double alpha);
+           F(O) of eq. 25 over the directions scored
+       size_t adaslice_orient_minima(const adaslice_direction_score *scores, size_t n, double radius, size_t *out,
+                                     size_t max);
+           the directions better than their neighbours
+       void adaslice_orienter_free(adaslice_orienter *orienter);
      masks and contours
-       adaslice_grid_plate              a printer's display as a grid of z rays
-       adaslice_masker_init             layer masks, made bottom-up in one sweep
-       adaslice_masker_slice            the mask at the next height
-       adaslice_masker_layer            the mask of the next layer by a rule: a
-                                        section, envelope (union) or core
-       adaslice_masker_free
-       adaslice_masker_bytes            what a masker will allocate, before it does
-       adaslice_contours_slice          cross-section polygons at sorted heights
-       adaslice_contours_winding        winding number of a point at one height
-       adaslice_contours_distance       distance to the nearest edge at one height
-       adaslice_contours_free
+       adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int width, int height, double pitch_x,
+                                         double pitch_y, const double offset[2]);
+           a printer's display as a grid of z rays
+       adaslice_result adaslice_masker_init(adaslice_masker *masker, const adaslice_mesh *mesh,
+                                            const adaslice_grid *grid, const adaslice_mask_options *options,
+                                            adaslice_error *error);
+           layer masks, made bottom-up in one sweep
+       adaslice_result adaslice_masker_slice(adaslice_masker *masker, double height, adaslice_error *error);
+           the mask at the next height
+       adaslice_result adaslice_masker_layer(adaslice_masker *masker, double z_bottom, double z_top,
+                                             adaslice_error *error);
+           the mask of the next layer by a rule: a section, envelope (union) or core
+       void adaslice_masker_free(adaslice_masker *masker);
+       size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles);
+           what a masker will allocate, before it does
+       adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, const double *heights, size_t count,
+                                               const adaslice_contour_options *options, adaslice_contours *contours,
+                                               adaslice_error *error);
+           cross-section polygons at sorted heights
+       int adaslice_contours_winding(const adaslice_contours *contours, size_t height_index, double x, double y);
+           winding number of a point at one height
+       double adaslice_contours_distance(const adaslice_contours *contours, size_t height_index, double x, double y);
+           distance to the nearest edge at one height
+       void adaslice_contours_free(adaslice_contours *contours);
      job output
-       adaslice_cure_fit                the resin's working curve through two points
-       adaslice_cure_seconds            a layer's exposure for its thickness
-       adaslice_preview                 a shaded picture of the part for a job's preview
-       adaslice_crc32                   CRC-32 as zlib and PNG (adaslice_mcu.h)
-       adaslice_varint_put/_push        LEB128 varints (adaslice_mcu.h)
-       adaslice_rle_encode, adaslice_rle_decode ...   the mask run-length code (adaslice_mcu.h)
+       adaslice_result adaslice_cure_fit(double s1, double t1, double s2, double t2, adaslice_cure *cure,
+                                         adaslice_error *error);
+           the resin's working curve through two points
+       double adaslice_cure_seconds(const adaslice_cure *cure, double thickness);
+           a layer's exposure for its thickness
+       adaslice_result adaslice_preview(const adaslice_mesh *mesh, int width, int height,
+                                        const adaslice_preview_options *options, unsigned char *rgb,
+                                        adaslice_error *error);
+           a shaded picture of the part for a job's preview
+       adaslice_crc32, adaslice_varint_*, adaslice_rle_*
+           CRC-32, varints and the mask run-length code (adaslice_mcu.h)
 
    CONVENTIONS  Every options struct may be NULL or zero-initialised: zero
    means the documented default (the paper's: cusp height, b = 0.002 mm,
@@ -292,6 +359,15 @@
      ADASLICE_NO_CONTOURS     the slice contours
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; 2^32 - 1 vertices;
    grids of at most 2^21 pixels a side.
+
+   HISTORY
+     0.2.0  2026-12-05  adaslice_dp_bins and adaslice_dp_reach, so that the
+                        host plans through the integer planner's public calls
+                        only; the REFERENCE gives every signature
+     0.1.0  2026-11-22  loaders, repair, LDI, the four metrics' profiles, the
+                        optimal planner and its baselines, orientation,
+                        saliency, masks, contours, cure and previews; the
+                        integer planner and mask code in adaslice_mcu.h
 */
 #ifndef ADASLICE_H
 #define ADASLICE_H
@@ -302,7 +378,7 @@
 extern "C" {
 #endif
 
-#define ADASLICE_VERSION "0.1.0"
+#define ADASLICE_VERSION "0.2.0"
 
 /* ============================================================ conventions */
 
@@ -5260,6 +5336,8 @@ typedef struct adaslice__job {
     double quantum;           /* mm (or the metric's unit) per unit */
     unsigned char *forced;    /* per plane, or NULL */
     adaslice_dp dp;
+    void *ring;               /* the planner's workspace */
+    size_t ring_size;
 } adaslice__job;
 
 /* Runs the DP with the given eps in units; returns the layer count or
@@ -5267,12 +5345,10 @@ typedef struct adaslice__job {
 static uint32_t adaslice__job_run(adaslice__job *job, uint64_t eps)
 {
     uint32_t i;
-    job->dp.eps = eps;
-    job->dp.slack = job->slack;
-    adaslice__dp_start(&job->dp);
+    (void)adaslice_dp_init(&job->dp, job->ring, job->ring_size, job->n, job->lo, job->hi, eps, job->volume, job->slack);
     for (i = 0; i < job->n; i++)
         adaslice_dp_push(&job->dp, job->units[i], job->forced && job->forced[i + 1] && i + 1 < job->n);
-    return job->dp.layers[job->n & (job->dp.cap - 1)];
+    return adaslice_dp_layers(&job->dp);
 }
 
 /* The smallest eps (units) whose optimal plan has at most max_layers layers
@@ -5532,9 +5608,10 @@ static void adaslice__layers_above(adaslice__job *job, uint64_t eps, void *ring,
    between), into from_layers[plane]; `dp` carries on from where it stopped. */
 static void adaslice__layers_from(adaslice__job *job, adaslice_dp *dp, uint32_t from, uint32_t to, uint32_t *from_layers)
 {
-    while (from + dp->plane < to) {
-        adaslice_dp_push(dp, job->units[from + dp->plane], 0);
-        from_layers[from + dp->plane] = adaslice_dp_layers(dp);
+    uint32_t at;
+    while ((at = from + adaslice_dp_bins(dp)) < to) {
+        adaslice_dp_push(dp, job->units[at], 0);
+        from_layers[at + 1] = adaslice_dp_layers(dp);
     }
 }
 
@@ -5654,7 +5731,7 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
     layers = adaslice__job_run(job, eps_units);
     if (layers == ADASLICE__UNREACHED) {
-        uint32_t reach = job->dp.reach;
+        uint32_t reach = adaslice_dp_reach(&job->dp);
         uint64_t need;
         /* printer units are capped above eps: search the smallest eps in fine
            units, and allow for the printer's coarser rounding */
@@ -5685,7 +5762,7 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
         uint32_t len;
         planes[k] = i;
         if (!i) break;
-        len = adaslice__dp_back(&job->dp, i);
+        len = adaslice_dp_layer_below(&job->dp, i);
         ADASLICE_ASSERT(len >= job->lo && len <= job->hi && len <= i && k > 0);
         i -= len;
     }
@@ -5843,7 +5920,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
         job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, job.n, sizeof(uint64_t)));
         ring = adaslice__alloc(&al, 1, need);
         if (!job.units || !ring) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
-        (void)adaslice_dp_init(&job.dp, ring, need, job.n, job.lo, job.hi, 0, job.volume, 0);
+        job.ring = ring;
+        job.ring_size = need;
         if (opt.sharp > 0) {
             job.forced = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, (size_t)job.n + 1, 1));
             if (!job.forced) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }

@@ -1,4 +1,4 @@
-/* adaslice_mcu.h v0.1.0 — what a resin printer's microcontroller needs of
+/* adaslice_mcu.h v0.2.0 — what a resin printer's microcontroller needs of
    adaslice: the integer planner, CRC-32, varints and the mask run-length code.
    MIT No Attribution or public domain: see the end of adaslice.h.
 
@@ -12,28 +12,58 @@
    adaslice.h's implementation brings this one with it: a program that builds
    adaslice.h's must not build this one again in another file.
 
-   REFERENCE, in the order of the data's path
+   REFERENCE, in the order of the data's path; every public function, with
+   its signature (make compile-checks holds the list to the declarations)
      results
        adaslice_result                  what every call that can fail returns
      plans: the integer planner (Procedure 1 of the paper, on integers)
-       adaslice_dp_workspace            bytes of workspace for N bins
-       adaslice_dp_init                 a planner in the caller's workspace
-       adaslice_dp_push                 the next bin's error units (and a forced plane)
-       adaslice_dp_layers               fewest layers up to the last bin pushed
-       adaslice_dp_layer_below          read the plan top-down
-       adaslice_dp_reverse              turn it around in place
-       adaslice_dp_reverse_some         the same, at most so many planes a call
-       adaslice_dp_layer_above          read it bottom-up
+       size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume);
+           bytes of workspace for N bins
+       adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
+                                        uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
+                                        uint64_t slack);
+           a planner in the caller's workspace
+       void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
+           the next bin's error units (and a forced plane)
+       uint32_t adaslice_dp_layers(const adaslice_dp *dp);
+           fewest layers up to the last bin pushed
+       uint32_t adaslice_dp_bins(const adaslice_dp *dp);
+           the bins pushed so far
+       uint32_t adaslice_dp_reach(const adaslice_dp *dp);
+           the highest plane some plan reaches
+       uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
+           read the plan top-down
+       uint32_t adaslice_dp_reverse(adaslice_dp *dp);
+           turn it around in place
+       int adaslice_dp_reverse_some(adaslice_dp *dp, uint32_t budget);
+           the same, at most so many planes a call
+       uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t plane);
+           read it bottom-up
      job output: what travels to a printer
-       adaslice_crc32                   CRC-32 (IEEE 802.3, as zlib and PNG)
-       adaslice_varint_put              a LEB128 varint
-       adaslice_varint_push             read one, a byte at a time
-       adaslice_rle_bound               bytes of mask code an image can need
-       adaslice_rle_encode              code a mask
-       adaslice_rle_decoder_init        a streaming decoder
-       adaslice_rle_decode              decode the next bytes, row by row
-       adaslice_rle_decode_rows         the same, at most so many row bytes a call
-       adaslice_rle_finished            every row decoded
+       uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
+           CRC-32 (IEEE 802.3, as zlib and PNG)
+       size_t adaslice_varint_put(unsigned char *out, uint32_t v);
+           a LEB128 varint
+       adaslice_result adaslice_varint_push(adaslice_varint *reader, unsigned char byte, int *done, uint32_t *value);
+           read one, a byte at a time
+       size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits);
+           bytes of mask code an image can need
+       adaslice_result adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width, uint32_t height,
+                                           int bits, unsigned char *out, size_t capacity, size_t *size);
+           code a mask
+       adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height, int bits,
+                                                 unsigned char *row, size_t row_size);
+           a streaming decoder
+       adaslice_result adaslice_rle_decode(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                           void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx);
+           decode the next bytes, row by row
+       adaslice_result adaslice_rle_decode_rows(adaslice_rle_decoder *dec, const unsigned char *data, size_t size,
+                                                uint32_t max_bytes, size_t *used,
+                                                void (*emit)(void *ctx, uint32_t y, const unsigned char *row),
+                                                void *ctx);
+           the same, at most so many row bytes a call
+       int adaslice_rle_finished(const adaslice_rle_decoder *dec);
+           every row decoded
        ADASLICE_RLE_CRC                 CRC-32 of the rows decoded
 
    THE INTEGER PLANNER  Bins arrive one at a time as integer error units
@@ -154,6 +184,11 @@ ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, 
 ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced);
 /* Fewest layers from the bottom to the plane on the last bin pushed, or ADASLICE_UNREACHED. */
 ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp);
+/* The bins pushed so far: the plane adaslice_dp_layers speaks of. */
+ADASLICE_DEF uint32_t adaslice_dp_bins(const adaslice_dp *dp);
+/* The highest plane some plan reaches: where no plan reaches the top, the
+   first height a plan cannot cover. */
+ADASLICE_DEF uint32_t adaslice_dp_reach(const adaslice_dp *dp);
 /* In that best plan, the bins of the layer whose top is `plane` (0 for plane 0
    or a plane no plan reaches): follow it down from the top to read the plan. */
 ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane);
@@ -484,6 +519,10 @@ ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
 {
     return dp->layers[dp->plane & (dp->cap - 1)];
 }
+
+ADASLICE_DEF uint32_t adaslice_dp_bins(const adaslice_dp *dp) { return dp->plane; }
+
+ADASLICE_DEF uint32_t adaslice_dp_reach(const adaslice_dp *dp) { return dp->reach; }
 
 ADASLICE_DEF uint32_t adaslice_dp_layer_below(const adaslice_dp *dp, uint32_t plane)
 {

@@ -16,10 +16,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "../link/messages.h"
 #include "mcu_profile.h"
 #include "timing.h"
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 
@@ -84,7 +83,7 @@ static plan_check host_plan(double *ns_per_bin)
     c.mean_units = 0;
     for (i = 0; i < MCU_BINS; i++) {
         uint32_t u = mcu_gen_next(&g, &forced);
-        v[i] = u << 1 | (uint32_t)forced;
+        v[i] = link_bin_code(u, forced);
         c.units_hash = mcu_hash(c.units_hash, v[i]);
         c.forced += (uint32_t)forced;
         c.mean_units += u / (double)MCU_BINS;
@@ -93,7 +92,7 @@ static plan_check host_plan(double *ns_per_bin)
         double t0 = now();
         if (adaslice_dp_init(&dp, ws, need, MCU_BINS, MCU_BINS_MIN, MCU_BINS_MAX, MCU_EPS_UNITS, 0, 0) != ADASLICE_OK)
             fail("adaslice_dp_init");
-        for (i = 0; i < MCU_BINS; i++) adaslice_dp_push(&dp, v[i] >> 1, (int)(v[i] & 1u) && i + 1 < MCU_BINS);
+        for (i = 0; i < MCU_BINS; i++) adaslice_dp_push(&dp, link_bin_units(v[i]), link_bin_forced(v[i]) && i + 1 < MCU_BINS);
         c.layers = adaslice_dp_reverse(&dp);
         t[r] = now() - t0;
     }

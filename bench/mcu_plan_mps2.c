@@ -137,7 +137,7 @@ int main(void)
     t0 = cm3_ticks();
     for (i = 0; i < MCU_BINS; i++) {
         uint32_t u = mcu_gen_next(&g, &forced);
-        units_hash = mcu_hash(units_hash, u << 1 | (uint32_t)forced);
+        units_hash = mcu_hash(units_hash, link_bin_code(u, forced));
     }
     gen = cm3_ticks() - t0;
 
@@ -153,12 +153,12 @@ int main(void)
         uint32_t m = MCU_BINS - i < CHUNK ? MCU_BINS - i : CHUNK, j;
         for (k = 0; k < m; k++) {
             uint32_t u = mcu_gen_next(&g, &forced);
-            chunk[k] = u << 1 | (uint32_t)forced;
+            chunk[k] = link_bin_code(u, forced);
         }
         t0 = cm3_ticks();
         for (j = 0; j < m; j++) {
             uint32_t v = chunk[j];
-            adaslice_dp_push(&dp, v >> 1, (int)(v & 1u) && i + j + 1 < MCU_BINS);
+            adaslice_dp_push(&dp, link_bin_units(v), link_bin_forced(v) && i + j + 1 < MCU_BINS);
         }
         push += cm3_ticks() - t0;
         t0 = cm3_ticks();

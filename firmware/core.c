@@ -273,7 +273,7 @@ static int profile_work(fw_state *fw)
         if (!done) continue;
         /* a number past the last bin: the profile is not what was announced */
         if (fw->bins_in >= fw->bins) { profile_refuse(fw, LINK_ERR_PROFILE_DATA, seq); return 1; }
-        adaslice_dp_push(&fw->dp, v >> 1, (v & 1u) && fw->bins_in + 1 < fw->bins);
+        adaslice_dp_push(&fw->dp, link_bin_units(v), link_bin_forced(v) && fw->bins_in + 1 < fw->bins);
         fw->bins_in++;
         pushed++;
     }

@@ -97,6 +97,6 @@ size_t link_profile_chunk(uint8_t *out, size_t max, const uint32_t *units, const
 {
     size_t used = 0;
     for (; *at < n && used + 5 <= max; (*at)++)
-        used += adaslice_varint_put(out + used, units[*at] << 1 | (forced && forced[*at] ? 1u : 0u));
+        used += adaslice_varint_put(out + used, link_bin_code(units[*at], forced && forced[*at]));
     return used;
 }

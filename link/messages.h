@@ -226,9 +226,15 @@ static inline void link_put32(uint8_t *p, uint32_t v)
 }
 static inline void link_put16(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
 
-/* PROFILE_DATA's payload: bins from *at on, each the varint of
-   units << 1 | forced, as many whole ones as fit in `max` bytes (>= 5);
-   advances *at and returns the bytes written. forced may be NULL. */
+/* A PROFILE_DATA bin is the varint of units << 1 | forced: these three are
+   the one definition, the host's encoder and the MCU's decoder both use them. */
+static inline uint32_t link_bin_code(uint32_t units, int forced) { return units << 1 | (forced ? 1u : 0u); }
+static inline uint32_t link_bin_units(uint32_t code) { return code >> 1; }
+static inline int link_bin_forced(uint32_t code) { return (int)(code & 1u); }
+
+/* PROFILE_DATA's payload: bins from *at on, each link_bin_code's varint, as
+   many whole ones as fit in `max` bytes (>= 5); advances *at and returns the
+   bytes written. forced may be NULL. */
 size_t link_profile_chunk(uint8_t *out, size_t max, const uint32_t *units, const unsigned char *forced, uint32_t n,
                           uint32_t *at);
 #endif
