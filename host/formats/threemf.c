@@ -290,7 +290,7 @@ int threemf_read(const char *path, threemf_project *p)
     FILE *f = fopen(path, "rb");
     unsigned char *data = NULL, *model = NULL, *profile = NULL;
     size_t size = 0, cap = 0, n;
-    char why[80];
+    char why[128];
     int rc = RC_OK, got;
     memset(p, 0, sizeof *p);
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
