@@ -599,13 +599,12 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
         w->contoured_moves++;
         for (k = 1; k <= pieces; k++) {
             const point *a = q + k - 1, *b = q + k;
-            double za = top + a->dz, zb = top + b->dz, mid[2], base, fill, piece;
+            double za = top + a->dz, zb = top + b->dz, fill, piece;
             double from[3], to[3];
-            mid[0] = (a->x + b->x) / 2;
-            mid[1] = (a->y + b->y) / 2;
-            base = deposit_near(w->s, mid[0], mid[1], 0);
-            if (base < bottom) base = bottom;
-            fill = (za + zb) / 2 - base;
+            /* contoured runs of successive layers do not overlap (the rise
+               stops at the next layer's half), so a piece fills from the
+               layer's bottom */
+            fill = (za + zb) / 2 - bottom;
             if (fill < MIN_BEAD * L->height) fill = MIN_BEAD * L->height;
             piece = de / pieces * fill / L->height;
             e_out += piece;
