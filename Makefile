@@ -154,14 +154,18 @@ $(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h adaslice_mcu.h
 $(B)/fuzz_gcode: tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c $(FW_HDRS)
 	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c -o $@
+$(B)/fuzz_contour: tests/fuzz_contour.c host/gcode.c host/gcode.h host/codec/inflate.c host/codec/inflate.h
+	@mkdir -p $(B)
+	$(FUZZ) tests/fuzz_contour.c host/gcode.c host/codec/inflate.c -o $@ -lm
 $(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_CORE_SRC) $(FW_HDRS)
 	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_firmware.c $(FW_CORE_SRC) -o $@ -lm
 
-# Bounded libFuzzer runs over the loaders, the G-code reader and the
-# firmware's frames and messages; new inputs go to build/, not the repo.
-fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
-	@for t in loaders gcode firmware; do \
+# Bounded libFuzzer runs over the loaders, the firmware's G-code reader, the
+# firmware's frames and messages, and contour's G-code and deflate readers;
+# new inputs go to build/, not the repo.
+fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware $(B)/fuzz_contour
+	@for t in loaders gcode firmware contour; do \
 	    mkdir -p $(B)/fuzz_work/$$t; \
 	    $(B)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
 	        -print_final_stats=1 $(B)/fuzz_work/$$t tests/fuzz_seeds/$$t > $(B)/fuzz_$$t.log 2>&1; \
