@@ -203,7 +203,7 @@ $(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c
 	$(CC) $^ -o $@ -lm
 
 bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-trace.elf $(B)/avr-run $(B)/avr-bench.elf \
-       $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf
+       $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/san/run_tests
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_screen
@@ -213,6 +213,8 @@ bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-tra
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
 	bench/qemu_timing.sh $(B)/fw-mps2-trace.elf $(B)/adaslice
 	$(B)/bench_avr $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/adaslice $(AVR_SIZE)
+	@echo "contoured surfaces (tests/test_contour.c on PrusaSlicer's G-code; needs prusa-slicer):"
+	ADASLICE_BIN=$(B)/adaslice $(B)/san/run_tests contour
 
 clean:
 	rm -rf $(B)
