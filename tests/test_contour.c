@@ -122,6 +122,9 @@ typedef struct printed {
     double unscaled[4096];       /* e of each segment times layer height / the height it fills */
     int layers;
     size_t lines;
+    double low_travel;           /* the most a travel ran under the layer's highest extrusion so far */
+    double steepest;             /* the steepest extrusion segment, dz / length (those over 0.05 mm) */
+    double layer_peak;
 } printed;
 
 /* Every line is a comment, blank, or words of a letter and a number. The
@@ -143,7 +146,11 @@ static int read_printed(const char *path, printed *p)
         next = end ? end + 1 : line + strlen(line);
         if (end) *end = 0;
         p->lines++;
-        if (!strncmp(line, ";Z:", 3) && p->layers + 1 < 4096) { p->top[++p->layers] = atof(line + 3); continue; }
+        if (!strncmp(line, ";Z:", 3) && p->layers + 1 < 4096) {
+            p->top[++p->layers] = atof(line + 3);
+            p->layer_peak = -HUGE_VAL;
+            continue;
+        }
         if (!strncmp(line, ";HEIGHT:", 8) && p->layers >= 0 && !p->height[p->layers]) { p->height[p->layers] = atof(line + 8); continue; }
         if ((c = strchr(line, ';')) != NULL) *c = 0;
         for (w = strtok(line, " \t\r"); w; w = strtok(NULL, " \t\r")) {
@@ -172,6 +179,13 @@ static int read_printed(const char *path, printed *p)
                 p->segs[p->n].e = pos[3] - before[3];
                 p->segs[p->n++].layer = p->layers;
                 p->e[p->layers] += pos[3] - before[3];
+                if (pos[2] > p->layer_peak) p->layer_peak = pos[2];
+                if (before[2] > p->layer_peak) p->layer_peak = before[2];
+                if (hypot(pos[0] - before[0], pos[1] - before[1]) > 0.05 &&
+                    fabs(pos[2] - before[2]) / hypot(pos[0] - before[0], pos[1] - before[1]) > p->steepest)
+                    p->steepest = fabs(pos[2] - before[2]) / hypot(pos[0] - before[0], pos[1] - before[1]);
+            } else if ((has[0] || has[1]) && p->layers >= 0 && p->layer_peak - pos[2] > p->low_travel) {
+                p->low_travel = p->layer_peak - pos[2];
             }
         }
     }
@@ -444,9 +458,11 @@ static void contour_case(const char *model, double scale, int relative_e, double
             }
         printf("    %s: %zu shallow cells: |printed - mesh| mean %.4f -> %.4f mm (%.1fx), 95th percentile %.4f -> %.4f mm "
                "(%.1fx); highest above the mesh %.4f -> %.4f mm; deepest under the deposit %.4f mm; E per layer within "
-               "%+.2f%% of PrusaSlicer's, within %+.2f%% (layer %zu of %d) taken back to the layer's height\n",
+               "%+.2f%% of PrusaSlicer's, within %+.2f%% (layer %zu of %d) taken back to the layer's height; steepest path "
+               "%.1f degrees; travel under the layer's highest extrusion so far by %.4f mm at most\n",
                base_name(model), ea.cells, eb.mean, ea.mean, eb.mean / ea.mean, eb.p95, ea.p95, eb.p95 / ea.p95,
-               eb.worst_above, ea.worst_above, gouge, 100 * worst_e, 100 * worst_flow, worst_layer + 1, before.layers);
+               eb.worst_above, ea.worst_above, gouge, 100 * worst_e, 100 * worst_flow, worst_layer + 1, before.layers,
+               atan(after.steepest) * 180 / M_PI, after.low_travel);
         CHECKF(ea.cells > 100 && eb.cells == ea.cells, "%zu cells measured (%zu before)", ea.cells, eb.cells);
         CHECKF(eb.mean >= min_gain * ea.mean, "mean %.4f -> %.4f mm", eb.mean, ea.mean);
         CHECKF(eb.p95 >= min_gain * ea.p95, "95th percentile %.4f -> %.4f mm", eb.p95, ea.p95);
@@ -455,6 +471,9 @@ static void contour_case(const char *model, double scale, int relative_e, double
         CHECKF(fabs(worst_flow) <= 0.02, "E of layer %zu, taken back to the layer's height, is %+.2f%% off PrusaSlicer's",
                worst_layer + 1, 100 * worst_flow);
         CHECK(kept_byte_for_byte(before_path, after_path));
+        /* the slope a path may take, and what 3 decimals of Z over a 0.05 mm piece add to it */
+        CHECKF(after.steepest <= tan(15 * M_PI / 180) + 2e-3 / 0.05, "a path %.1f degrees steep", atan(after.steepest) * 180 / M_PI);
+        CHECKF(after.low_travel <= 1e-6, "a travel %.4f mm under the layer's highest extrusion so far", after.low_travel);
     }
     free(before.segs);
     free(after.segs);
