@@ -119,25 +119,25 @@ typedef struct gfile {
     int relative_e_seen;
 } gfile;
 
-static const char *const CONTOURED[] = {"External perimeter", "Perimeter", "Overhang perimeter", "Solid infill",
-                                        "Top solid infill", "Gap fill", "Ironing"};
-static const char *const NOT_PART[] = {"Skirt/Brim", "Skirt", "Support material", "Support material interface",
-                                       "Wipe tower", "Custom", "Internal infill", "Unknown"};
+/* PrusaSlicer 2.5's feature labels (ExtrusionEntity.cpp's role names):
+   2 contoured, 1 the part's but left in the plane (sparse infill, bridges
+   over air), 0 not the part. A label not here counts as the part's. */
+static const struct { const char *name; int kind; } FEATURES[] = {
+    {"External perimeter", 2}, {"Perimeter", 2}, {"Overhang perimeter", 2}, {"Solid infill", 2},
+    {"Top solid infill", 2}, {"Gap fill", 2}, {"Ironing", 2}, {"Internal infill", 1}, {"Bridge infill", 1},
+    {"Skirt/Brim", 0}, {"Skirt", 0}, {"Support material", 0}, {"Support material interface", 0},
+    {"Wipe tower", 0}, {"Custom", 0}, {"Unknown", 0}};
 
-/* Which ;TYPE: a line names: 2 contoured, 1 the part's other (sparse
-   infill and anything new), 0 not the part (skirt, support, the wipe
-   tower, custom G-code), -1 not a ;TYPE: line. */
+/* The kind of the feature a ;TYPE: line names, -1 for another line. */
 static int feature_kind(const char *line, size_t len)
 {
-    size_t i, n;
+    size_t i;
     if (!gcode_is_comment(line, len, "TYPE:")) return -1;
     line += 6;
     len -= 6;
     while (len && (line[len - 1] == '\r' || line[len - 1] == ' ')) len--;
-    for (i = 0; i < sizeof CONTOURED / sizeof *CONTOURED; i++)
-        if ((n = strlen(CONTOURED[i])) == len && !memcmp(line, CONTOURED[i], n)) return 2;
-    for (i = 0; i < sizeof NOT_PART / sizeof *NOT_PART; i++)
-        if ((n = strlen(NOT_PART[i])) == len && !memcmp(line, NOT_PART[i], n)) return i == 6 ? 1 : 0;
+    for (i = 0; i < sizeof FEATURES / sizeof *FEATURES; i++)
+        if (strlen(FEATURES[i].name) == len && !memcmp(line, FEATURES[i].name, len)) return FEATURES[i].kind;
     return 1;
 }
 
@@ -450,7 +450,7 @@ typedef struct writer {
     size_t bead_count, bead_cap;
     int failed;
     /* what was done, for the report */
-    size_t moves, contoured_moves, points, raised, lowered;
+    size_t contoured_moves, points, raised, lowered;
     double dz_min, dz_max;
 } writer;
 
@@ -647,8 +647,9 @@ static int inert(const writer *w, size_t i, const gcode_words *g)
 {
     const char *l = w->g->text + w->g->lines[i].at;
     size_t len = w->g->lines[i].len;
+    int kind;
     if (gcode_is_comment(l, len, "Z:") || gcode_is_comment(l, len, "LAYER_CHANGE")) return 0;
-    if (feature_kind(l, len) >= 0) return feature_kind(l, len) == 2;
+    if ((kind = feature_kind(l, len)) >= 0) return kind == 2;
     if (!g->letter) return 1;
     return is_move(g) && g->has == GC_F;
 }
@@ -730,7 +731,6 @@ static int write_all(writer *w)
             }
             w->m = m;
             prev_extrudes = what == 2;
-            w->moves++;
             continue;
         }
         put_line(w, i);
@@ -749,7 +749,7 @@ int cmd_contour(int argc, char **argv)
     output o;
     adaslice_error err;
     adaslice_grid grid;
-    double lo[3], hi[3], worst = 0;
+    double worst = 0;
     int help = 0, rc, k;
     size_t i;
     if ((rc = parse_contour(argc, argv, &a, &help))) return rc;
@@ -766,7 +766,6 @@ int cmd_contour(int argc, char **argv)
     grid = adaslice_grid_fit(&p.mesh, ADASLICE_AXIS_Z, 2048);
     if (adaslice_ldi_build(&p.mesh, &grid, NULL, &s.ldi, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
     /* the deposit map over the part's extrusions and a margin */
-    adaslice_mesh_bounds(&p.mesh, lo, hi);
     for (k = 0; k < 2; k++) s.origin[k] = g.lo[k] - 2;
     s.w = (int)ceil((g.hi[0] - g.lo[0] + 4) / CELL);
     s.h = (int)ceil((g.hi[1] - g.lo[1] + 4) / CELL);
