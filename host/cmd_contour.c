@@ -326,6 +326,7 @@ static int gfile_read(const char *path, gfile *g)
 typedef struct placement {
     double shift[3];             /* G-code = mesh + shift */
     double size_g[2], size_m[2];
+    int bed_centred;             /* 1: the part's centre is the bed's (bed_shape), 0: elsewhere, -1: no bed_shape */
 } placement;
 
 /* PrusaSlicer centres the part's box on the bed and puts its bottom on it;
@@ -334,8 +335,9 @@ typedef struct placement {
 static int place(const contour_args *a, const gfile *g, const threemf_project *p, placement *pl)
 {
     double lo[3], hi[3];
-    size_t i, j = 0;
+    size_t i, j = 0, n;
     int k;
+    memset(pl, 0, sizeof *pl);
     adaslice_mesh_bounds(&p->mesh, lo, hi);
     for (k = 0; k < 2; k++) {
         pl->size_g[k] = g->hi[k] - g->lo[k];
@@ -347,6 +349,30 @@ static int place(const contour_args *a, const gfile *g, const threemf_project *p
                             pl->size_m[1], a->project);
     }
     pl->shift[2] = -lo[2];
+    /* PrusaSlicer centres a lone part on the bed (bed_shape "0x0,250x0,...");
+       an arranged or moved one is elsewhere, and the extents still find it */
+    {
+        const char *v = config_value(g, "bed_shape", &n);
+        double b[2] = {HUGE_VAL, HUGE_VAL}, t[2] = {-HUGE_VAL, -HUGE_VAL}, x, y;
+        char text[256];
+        char *q;
+        pl->bed_centred = -1;
+        if (v && n < sizeof text) {
+            memcpy(text, v, n);
+            text[n] = 0;
+            /* "250x0" would read as a hexadecimal number */
+            for (q = text; (q = strchr(q, 'x')) != NULL;) *q = ' ';
+            for (q = text; q && sscanf(q, "%lf %lf", &x, &y) == 2; q = strchr(q, ',') ? strchr(q, ',') + 1 : NULL) {
+                b[0] = x < b[0] ? x : b[0];
+                b[1] = y < b[1] ? y : b[1];
+                t[0] = x > t[0] ? x : t[0];
+                t[1] = y > t[1] ? y : t[1];
+            }
+            if (b[0] < t[0] && b[1] < t[1])
+                pl->bed_centred = fabs((g->lo[0] + g->hi[0]) / 2 - (b[0] + t[0]) / 2) < 0.05 &&
+                                  fabs((g->lo[1] + g->hi[1]) / 2 - (b[1] + t[1]) / 2) < 0.05;
+        }
+    }
     /* every layer is one the plan made (PrusaSlicer leaves out empty ones) */
     for (i = 0; i < g->layer_count; i++) {
         while (j < p->layers && p->tops[j] < g->layers[i].top - 2e-3) j++;
@@ -786,9 +812,12 @@ int cmd_contour(int argc, char **argv)
     if (rc) goto done;
     for (i = 0; i < g.layer_count; i++)
         if (g.layers[i].e_in > 0 && fabs(g.layers[i].e_out / g.layers[i].e_in - 1) > fabs(worst)) worst = g.layers[i].e_out / g.layers[i].e_in - 1;
-    printf("%s: PrusaSlicer G-code, %zu layers, E %s; the part%s as PrusaSlicer centred it: shifted %.3f, %.3f, %.3f mm "
-           "from the project's mesh (extrusions %.2f x %.2f mm, mesh %.2f x %.2f mm)\n",
-           a.in, g.layer_count, g.relative_e_seen ? "relative" : "absolute", p.transformed ? " (through the 3MF's build transform)" : "",
+    printf("%s: PrusaSlicer G-code, %zu layers, E %s; the part%s %s: shifted %.3f, %.3f, %.3f mm from the project's mesh "
+           "(extrusions %.2f x %.2f mm, mesh %.2f x %.2f mm)\n", a.in, g.layer_count, g.relative_e_seen ? "relative" : "absolute",
+           p.transformed ? " (through the 3MF's build transform)" : "",
+           pl.bed_centred == 1 ? "centred on the bed as PrusaSlicer puts it"
+                               : pl.bed_centred == 0 ? "off the bed's centre (arranged or moved), found by its extrusions"
+                                                     : "found by its extrusions",
            pl.shift[0], pl.shift[1], pl.shift[2], pl.size_g[0], pl.size_g[1], pl.size_m[0], pl.size_m[1]);
     printf("%s: %zu extrusion moves contoured into %zu pieces (%zu raised, %zu lowered, %+.3f to %+.3f mm off the layer "
            "tops); E per layer within %+.2f%%\n", a.out, w.contoured_moves, w.points, w.raised, w.lowered,

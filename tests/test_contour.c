@@ -576,6 +576,20 @@ static void refused_inputs_get_one_line_and_no_file(void)
         CHECKF(!cli_exists(cli_path("out.gcode")), "%s: out.gcode written", cases[c][2]);
         cli_free(&r);
     }
+    {
+        static const char *const usage[][3] = {{"--max-angle", "90", "--max-angle 90"},
+                                                {"--resolution", "0.001", "--resolution 0.001"},
+                                                {"--max-rise", "-1", "--max-rise"}};
+        for (c = 0; c < sizeof usage / sizeof *usage; c++) {
+            r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("out.gcode"), usage[c][0], usage[c][1], NULL);
+            CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, usage[c][2]), "exit %d: %.300s", r.status, r.err);
+            CHECK(!cli_exists(cli_path("out.gcode")));
+            cli_free(&r);
+        }
+        r = cli_run("contour", gcode, "-o", cli_path("out.gcode"), NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--project"), "exit %d: %.300s", r.status, r.err);
+        cli_free(&r);
+    }
     /* another part's project: a box of another size, and the same part
        planned with other layers */
     r = cli_run("plan", cli_path("other.obj"), PRUSA_FDM_ARGS, "--3mf", cli_path("other.3mf"), NULL);
