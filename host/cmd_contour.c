@@ -622,6 +622,20 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
         len = hypot(m.pos[0] - x0, m.pos[1] - y0);
         pieces = (size_t)ceil(len / w->a->resolution);
         if (!pieces) pieces = 1;
+        for (k = 0; k <= pieces && fabs(q[k].dz) <= 5e-4; k++) {}
+        if (k > pieces && fabs(w->nozzle_z - top) <= 5e-4) {
+            /* a move the surface leaves in the plane: the file's own line */
+            double from[3], to[3];
+            if (!m.relative_e && fabs(e_out - e0) > 5e-6) fprintf(w->f, "G92 E%.5f\n", e0);
+            put_line(w, i);
+            e_out = m.pos[3];
+            w->g->layers[layer].e_out += de;
+            from[0] = x0; from[1] = y0; from[2] = top;
+            to[0] = m.pos[0]; to[1] = m.pos[1]; to[2] = top;
+            add_bead(w, from, to, m.width);
+            q += pieces;
+            continue;
+        }
         w->contoured_moves++;
         for (k = 1; k <= pieces; k++) {
             const point *a = q + k - 1, *b = q + k;
@@ -642,6 +656,7 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
             to[0] = b->x; to[1] = b->y; to[2] = zb;
             add_bead(w, from, to, m.width);
             w->nozzle_z = zb;
+            if (za > w->peak) w->peak = za;
             if (zb > w->peak) w->peak = zb;
             if (b->dz > 5e-4) w->raised++;
             if (b->dz < -5e-4) w->lowered++;
