@@ -429,34 +429,53 @@ static int surface_at(const surface *s, double x, double y, double bottom, doubl
     return 0;
 }
 
+/* The cells within r of (x, y) on the map: c[0..1] the columns, c[2..3]
+   the rows (inclusive); 0 when none is (any coordinate a file holds). */
+static int cell_range(const surface *s, double x, double y, double r, int c[4])
+{
+    double v[4];
+    int k;
+    v[0] = floor((x - r - s->origin[0]) / CELL);
+    v[1] = floor((x + r - s->origin[0]) / CELL);
+    v[2] = floor((y - r - s->origin[1]) / CELL);
+    v[3] = floor((y + r - s->origin[1]) / CELL);
+    if (!(v[1] >= 0 && v[0] < s->w && v[3] >= 0 && v[2] < s->h)) return 0;
+    for (k = 0; k < 4; k++) {
+        double most = k < 2 ? s->w - 1 : s->h - 1;
+        c[k] = (int)(v[k] < 0 ? 0 : v[k] > most ? most : v[k]);
+    }
+    return 1;
+}
+
 /* The highest deposit within r of (x, y), or -HUGE_VAL where nothing is. */
 static double deposit_near(const surface *s, double x, double y, double r)
 {
-    int i0 = (int)floor((x - r - s->origin[0]) / CELL), i1 = (int)floor((x + r - s->origin[0]) / CELL);
-    int j0 = (int)floor((y - r - s->origin[1]) / CELL), j1 = (int)floor((y + r - s->origin[1]) / CELL), i, j;
     double best = -HUGE_VAL;
-    for (j = j0 < 0 ? 0 : j0; j <= j1 && j < s->h; j++)
-        for (i = i0 < 0 ? 0 : i0; i <= i1 && i < s->w; i++)
-            if (s->top[(size_t)j * (size_t)s->w + (size_t)i] > best) best = s->top[(size_t)j * (size_t)s->w + (size_t)i];
+    int c[4], i, j;
+    if (cell_range(s, x, y, r, c))
+        for (j = c[2]; j <= c[3]; j++)
+            for (i = c[0]; i <= c[1]; i++)
+                if (s->top[(size_t)j * (size_t)s->w + (size_t)i] > best) best = s->top[(size_t)j * (size_t)s->w + (size_t)i];
     return best;
 }
 
 /* A segment printed: its ends and the bead's width. */
 typedef struct bead { double a[3], b[3], width; } bead;
 
+/* The bead onto the deposit map: a square of its width around every point
+   of its centre line, half a cell apart. */
 static void stamp(surface *s, const bead *d)
 {
-    double len = hypot(d->b[0] - d->a[0], d->b[1] - d->a[1]), r = d->width / 2;
-    int n = (int)ceil(len / (CELL / 2)), q;
+    double len = hypot(d->b[0] - d->a[0], d->b[1] - d->a[1]);
+    int n = len < 1e6 ? (int)ceil(len / (CELL / 2)) : 0, q, c[4], i, j;
     for (q = 0; q <= n; q++) {
         double t = n ? (double)q / n : 0, x = d->a[0] + t * (d->b[0] - d->a[0]), y = d->a[1] + t * (d->b[1] - d->a[1]);
         float z = (float)(d->a[2] + t * (d->b[2] - d->a[2]));
-        int i0 = (int)floor((x - r - s->origin[0]) / CELL), i1 = (int)floor((x + r - s->origin[0]) / CELL);
-        int j0 = (int)floor((y - r - s->origin[1]) / CELL), j1 = (int)floor((y + r - s->origin[1]) / CELL), i, j;
-        for (j = j0 < 0 ? 0 : j0; j <= j1 && j < s->h; j++)
-            for (i = i0 < 0 ? 0 : i0; i <= i1 && i < s->w; i++) {
-                float *c = &s->top[(size_t)j * (size_t)s->w + (size_t)i];
-                if (z > *c) *c = z;
+        if (!cell_range(s, x, y, d->width / 2, c)) continue;
+        for (j = c[2]; j <= c[3]; j++)
+            for (i = c[0]; i <= c[1]; i++) {
+                float *cell = &s->top[(size_t)j * (size_t)s->w + (size_t)i];
+                if (z > *cell) *cell = z;
             }
     }
 }
@@ -496,7 +515,7 @@ static void add_bead(writer *w, const double a[3], const double b[3], double wid
     }
     memcpy(w->beads[w->bead_count].a, a, sizeof w->beads->a);
     memcpy(w->beads[w->bead_count].b, b, sizeof w->beads->b);
-    w->beads[w->bead_count++].width = width > 0 ? width : DEFAULT_WIDTH;
+    w->beads[w->bead_count++].width = width > 0 && width < 10 ? width : DEFAULT_WIDTH;
 }
 
 static void end_layer(writer *w)
