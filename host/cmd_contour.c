@@ -842,7 +842,10 @@ int cmd_contour(int argc, char **argv)
     if ((rc = output_open(&o, a.out, 0))) goto done;
     w.f = o.f;
     rc = write_all(&w);
-    rc = output_close(&o, rc == RC_OK && !ferror(o.f), ferror(o.f) ? errno : 0) ? RC_FAIL : rc;
+    {
+        int closed = output_close(&o, rc == RC_OK, 0); /* says why a write failed */
+        if (!rc) rc = closed;
+    }
     free(w.beads);
     if (rc) goto done;
     for (i = 0; i < g.layer_count; i++)
