@@ -175,14 +175,18 @@ $(B)/fuzz_loaders: tests/fuzz_loaders.c adaslice.h adaslice_mcu.h
 $(B)/fuzz_gcode: tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c $(FW_HDRS)
 	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_gcode.c firmware/gcode.c firmware/motion.c -o $@
+$(B)/fuzz_contour: tests/fuzz_contour.c host/gcode.c host/gcode.h host/codec/inflate.c host/codec/inflate.h
+	@mkdir -p $(B)
+	$(FUZZ) tests/fuzz_contour.c host/gcode.c host/codec/inflate.c -o $@ -lm
 $(B)/fuzz_firmware: tests/fuzz_firmware.c tests/fakeport.h tests/zcheck.h $(FW_CORE_SRC) $(FW_HDRS)
 	@mkdir -p $(B)
 	$(FUZZ) tests/fuzz_firmware.c $(FW_CORE_SRC) -o $@ -lm
 
-# Bounded libFuzzer runs over the loaders, the G-code reader and the
-# firmware's frames and messages; new inputs go to build/, not the repo.
-fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware
-	@for t in loaders gcode firmware; do \
+# Bounded libFuzzer runs over the loaders, the firmware's G-code reader, the
+# firmware's frames and messages, and contour's G-code and deflate readers;
+# new inputs go to build/, not the repo.
+fuzz: $(B)/fuzz_loaders $(B)/fuzz_gcode $(B)/fuzz_firmware $(B)/fuzz_contour
+	@for t in loaders gcode firmware contour; do \
 	    mkdir -p $(B)/fuzz_work/$$t; \
 	    $(B)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
 	        -print_final_stats=1 $(B)/fuzz_work/$$t tests/fuzz_seeds/$$t > $(B)/fuzz_$$t.log 2>&1; \
@@ -220,7 +224,7 @@ $(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c
 	$(CC) $^ -o $@ -lm
 
 bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-trace.elf $(B)/avr-run $(B)/avr-bench.elf \
-       $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf
+       $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/san/run_tests
 	$(B)/bench_plan $(MODELS)
 	$(B)/bench_png
 	$(B)/bench_screen
@@ -230,6 +234,8 @@ bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-tra
 	$(B)/bench_mcu_plan $(B)/bench-plan-mps2.elf $(ARM_SIZE) $(ARM_NM)
 	bench/qemu_timing.sh $(B)/fw-mps2-trace.elf $(B)/adaslice
 	$(B)/bench_avr $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/adaslice $(AVR_SIZE)
+	@echo "contoured surfaces (tests/test_contour.c on PrusaSlicer's G-code; needs prusa-slicer):"
+	ADASLICE_BIN=$(B)/adaslice $(B)/san/run_tests contour
 
 clean:
 	rm -rf $(B)

@@ -61,6 +61,9 @@
                                           adaslice_error *error);
            a layered depth image: every ray's surface samples
        void adaslice_ldi_free(adaslice_ldi *ldi);
+       size_t adaslice_ldi_ray(const adaslice_ldi *ldi, const adaslice_mesh *mesh, double u, double v,
+                               adaslice_crossing *out, size_t max);
+           every crossing of the ray through a point
      profiles
        adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
                                               adaslice_profile *profile, adaslice_error *error);
@@ -566,6 +569,27 @@ ADASLICE_DEF adaslice_result adaslice_ldi_build(const adaslice_mesh *mesh, const
                                                 const adaslice_ldi_options *options, adaslice_ldi *ldi,
                                                 adaslice_error *error);
 ADASLICE_DEF void adaslice_ldi_free(adaslice_ldi *ldi);
+
+/* Where the ray through a point meets the surface: depth in mm along the
+   LDI's axis in the mesh's own coordinates (z for a z LDI), the triangle,
+   and whether the ray leaves the solid there (looking up +z: a surface
+   turned upwards, a top). */
+typedef struct adaslice_crossing {
+    double depth;
+    uint32_t face;
+    int leaves;
+} adaslice_crossing;
+
+/* Every surface crossing along the ray through (u, v) of the LDI's plane
+   ((x, y) for a z LDI), in order along the ray, for rays between the LDI's
+   pixel centres: the nearest pixel's samples, each put on its own
+   triangle's plane at (u, v), so a crossing is exact where (u, v) lies on
+   that triangle and, off it (less than half a pixel away), off by the
+   plane's tilt times that distance. mesh is the one the LDI was built from
+   (NULL: the pixel's depths as stored, to float precision). Fills up to max
+   crossings and returns how many the ray has (0 outside the grid). */
+ADASLICE_DEF size_t adaslice_ldi_ray(const adaslice_ldi *ldi, const adaslice_mesh *mesh, double u, double v,
+                                     adaslice_crossing *out, size_t max);
 /* n directions of a spherical Fibonacci lattice, x y z each, near-uniform on
    the sphere, from near +z down to near -z: the first n/2 are the upper
    hemisphere's. */
@@ -3791,6 +3815,49 @@ ADASLICE_DEF void adaslice_ldi_free(adaslice_ldi *ldi)
     adaslice__free(&ldi->allocator, ldi->first);
     adaslice__free(&ldi->allocator, ldi->samples);
     memset(ldi, 0, sizeof *ldi);
+}
+
+ADASLICE_DEF size_t adaslice_ldi_ray(const adaslice_ldi *ldi, const adaslice_mesh *mesh, double u, double v,
+                                     adaslice_crossing *out, size_t max)
+{
+    const adaslice_grid *g = &ldi->grid;
+    /* the grid's (u, v, depth) as mesh axes: a cyclic turn of (x, y, z) */
+    int au = ((int)g->axis + 1) % 3, av = ((int)g->axis + 2) % 3, ad = (int)g->axis;
+    double fi = floor((u - g->origin[0]) / g->pitch[0]), fj = floor((v - g->origin[1]) / g->pitch[1]);
+    size_t p, a, b, k, n;
+    if (!ldi->first || !(fi >= 0 && fi < g->width && fj >= 0 && fj < g->height)) return 0;
+    p = (size_t)fj * (size_t)g->width + (size_t)fi;
+    a = ldi->first[p];
+    b = ldi->first[p + 1];
+    for (k = a, n = 0; k < b && n < max; k++, n++) {
+        adaslice_sample s = ldi->samples[k];
+        adaslice_crossing c;
+        size_t m;
+        c.depth = ldi->depth_origin + s.depth;
+        c.face = ADASLICE_SAMPLE_FACE(s);
+        c.leaves = (s.face & ADASLICE_SAMPLE_LEAVES) != 0;
+        if (mesh && c.face < mesh->triangle_count) {
+            const uint32_t *t = mesh->triangles + 3 * (size_t)c.face;
+            const float *p0 = mesh->vertices + 3 * (size_t)t[0], *p1 = mesh->vertices + 3 * (size_t)t[1],
+                        *p2 = mesh->vertices + 3 * (size_t)t[2];
+            double e1[3], e2[3], nu, nv, nd;
+            int i;
+            for (i = 0; i < 3; i++) {
+                e1[i] = (double)p1[i] - p0[i];
+                e2[i] = (double)p2[i] - p0[i];
+            }
+            nu = e1[av] * e2[ad] - e1[ad] * e2[av];
+            nv = e1[ad] * e2[au] - e1[au] * e2[ad];
+            nd = e1[au] * e2[av] - e1[av] * e2[au];
+            /* a face along the ray has no one depth: the sample's stays */
+            if (fabs(nd) > 1e-9 * (fabs(nu) + fabs(nv) + fabs(nd)))
+                c.depth = p0[ad] - (nu * (u - p0[au]) + nv * (v - p0[av])) / nd;
+        }
+        /* moved onto their planes, close crossings may swap */
+        for (m = n; m > 0 && out[m - 1].depth > c.depth; m--) out[m] = out[m - 1];
+        out[m] = c;
+    }
+    return b - a;
 }
 
 ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice_axis axis, int resolution)

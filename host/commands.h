@@ -9,4 +9,5 @@ int cmd_saliency(int argc, char **argv);
 int cmd_print(int argc, char **argv);
 int cmd_printers(int argc, char **argv);
 int cmd_show(int argc, char **argv);
+int cmd_contour(int argc, char **argv);
 #endif

@@ -32,6 +32,7 @@ static const command COMMANDS[] = {
     {"saliency", "per-face weights from mesh saliency, and the mesh coloured by them", cmd_saliency},
     {"print", "print a model or a job on a printer running the adaslice firmware", cmd_print},
     {"printers", "the printer presets, and which take each layer's own Z (adaptive layers)", cmd_printers},
+    {"contour", "PrusaSlicer's G-code with the top surface's paths moved onto the mesh in Z", cmd_contour},
     {"show", "a job's layer or a test pattern on a DIY printer's screen (a framebuffer)", cmd_show},
 };
 enum { COMMAND_COUNT = sizeof COMMANDS / sizeof *COMMANDS };

@@ -124,6 +124,73 @@ static inline adaslice_mesh gen_box(double x0, double y0, double z0, double x1, 
     return m;
 }
 
+/* A shallow dome: the cap of a sphere of radius R over a disc of radius a,
+   on a cylinder `base` mm tall; `rings` rings of `slices` vertices on the
+   cap. The cap's slope is asin(r / R) at radius r. */
+static inline adaslice_mesh gen_dome(double a, double R, double base, int rings, int slices)
+{
+    adaslice_mesh m = gen_alloc((size_t)((rings + 1) * slices + 2), (size_t)((2 * rings + 2) * slices));
+    double cap = R - sqrt(R * R - a * a);
+    uint32_t top = gen_vertex(&m, 0, 0, base + cap), centre;
+    int i, k;
+    for (k = 1; k <= rings; k++)
+        for (i = 0; i < slices; i++) {
+            double r = a * k / rings, ph = 2 * M_PI * i / slices;
+            gen_vertex(&m, r * cos(ph), r * sin(ph), base + sqrt(R * R - r * r) - (R - cap));
+        }
+    for (i = 0; i < slices; i++) gen_vertex(&m, a * cos(2 * M_PI * i / slices), a * sin(2 * M_PI * i / slices), 0);
+    centre = gen_vertex(&m, 0, 0, 0);
+#define GEN_RING(k, i) ((uint32_t)(1 + ((k) - 1) * slices + ((i) % slices)))
+    for (i = 0; i < slices; i++) {
+        gen_triangle(&m, top, GEN_RING(1, i), GEN_RING(1, i + 1));
+        for (k = 1; k <= rings; k++) { /* ring rings + 1 is the foot of the wall */
+            gen_triangle(&m, GEN_RING(k, i), GEN_RING(k + 1, i), GEN_RING(k + 1, i + 1));
+            gen_triangle(&m, GEN_RING(k, i), GEN_RING(k + 1, i + 1), GEN_RING(k, i + 1));
+        }
+        gen_triangle(&m, centre, GEN_RING(rings + 1, i + 1), GEN_RING(rings + 1, i));
+    }
+#undef GEN_RING
+    return m;
+}
+
+/* A closed block over [x0,x1] x [y0,y1] from z = 0 up to the height field
+   z = f(x, y) > 0, nx x ny quads on top and on the bottom. */
+static inline adaslice_mesh gen_heightfield(int nx, int ny, double x0, double y0, double x1, double y1,
+                                            double (*f)(double x, double y))
+{
+    size_t per = (size_t)(nx + 1) * (size_t)(ny + 1);
+    adaslice_mesh m = gen_alloc(2 * per, (size_t)(4 * nx * ny + 4 * (nx + ny)));
+    int i, j, side;
+    for (side = 0; side < 2; side++)
+        for (j = 0; j <= ny; j++)
+            for (i = 0; i <= nx; i++) {
+                double x = x0 + (x1 - x0) * i / nx, y = y0 + (y1 - y0) * j / ny;
+                gen_vertex(&m, x, y, side ? 0 : f(x, y));
+            }
+#define GEN_AT(s, i, j) ((uint32_t)((s) * per + (size_t)(j) * (size_t)(nx + 1) + (size_t)(i)))
+    for (j = 0; j < ny; j++)
+        for (i = 0; i < nx; i++) {
+            gen_triangle(&m, GEN_AT(0, i, j), GEN_AT(0, i + 1, j), GEN_AT(0, i + 1, j + 1));
+            gen_triangle(&m, GEN_AT(0, i, j), GEN_AT(0, i + 1, j + 1), GEN_AT(0, i, j + 1));
+            gen_triangle(&m, GEN_AT(1, i, j), GEN_AT(1, i + 1, j + 1), GEN_AT(1, i + 1, j));
+            gen_triangle(&m, GEN_AT(1, i, j), GEN_AT(1, i, j + 1), GEN_AT(1, i + 1, j + 1));
+        }
+    for (i = 0; i < nx; i++) { /* the walls at y0 and y1 */
+        gen_triangle(&m, GEN_AT(1, i, 0), GEN_AT(1, i + 1, 0), GEN_AT(0, i + 1, 0));
+        gen_triangle(&m, GEN_AT(1, i, 0), GEN_AT(0, i + 1, 0), GEN_AT(0, i, 0));
+        gen_triangle(&m, GEN_AT(1, i + 1, ny), GEN_AT(1, i, ny), GEN_AT(0, i, ny));
+        gen_triangle(&m, GEN_AT(1, i + 1, ny), GEN_AT(0, i, ny), GEN_AT(0, i + 1, ny));
+    }
+    for (j = 0; j < ny; j++) { /* at x0 and x1 */
+        gen_triangle(&m, GEN_AT(1, 0, j + 1), GEN_AT(1, 0, j), GEN_AT(0, 0, j));
+        gen_triangle(&m, GEN_AT(1, 0, j + 1), GEN_AT(0, 0, j), GEN_AT(0, 0, j + 1));
+        gen_triangle(&m, GEN_AT(1, nx, j), GEN_AT(1, nx, j + 1), GEN_AT(0, nx, j + 1));
+        gen_triangle(&m, GEN_AT(1, nx, j), GEN_AT(0, nx, j + 1), GEN_AT(0, nx, j));
+    }
+#undef GEN_AT
+    return m;
+}
+
 /* dst gets src's triangles appended (src is left alone). */
 static inline void gen_append(adaslice_mesh *dst, const adaslice_mesh *src)
 {

@@ -39,6 +39,35 @@ static inline int prusa_run(char **argv, const char *log_path, char **log)
     return status;
 }
 
+/* prusa-slicer's command line exporting path3mf's G-code to gcode_path on a
+   250 x 210 mm bed, with the layer heights plan --3mf printed; argv gets
+   them, a NULL after, and the index of path3mf is returned (more arguments
+   may replace it). */
+static inline int prusa_export_argv(char **argv, char *data, char *first, char *lo, char *hi, const char *gcode_path,
+                                    const char *path3mf)
+{
+    int a = 0;
+    argv[a++] = (char *)"prusa-slicer";
+    argv[a++] = (char *)"--datadir";
+    argv[a++] = data;
+    argv[a++] = (char *)"--export-gcode";
+    argv[a++] = (char *)"--first-layer-height";
+    argv[a++] = first;
+    argv[a++] = (char *)"--min-layer-height";
+    argv[a++] = lo;
+    argv[a++] = (char *)"--max-layer-height";
+    argv[a++] = hi;
+    argv[a++] = (char *)"--bed-shape";
+    argv[a++] = (char *)"0x0,250x0,250x210,0x210";
+    argv[a++] = (char *)"--max-print-height";
+    argv[a++] = (char *)"210";
+    argv[a++] = (char *)"-o";
+    argv[a++] = (char *)gcode_path;
+    argv[a] = (char *)path3mf;
+    argv[a + 1] = NULL;
+    return a;
+}
+
 /* Plans `model` at `scale` into a 3MF, slices it with prusa-slicer at the
    first-layer height the tool printed, and holds the G-code's layers against
    the plan's: every ";Z:" is the next planned top (within 1e-3 mm), and a
@@ -76,24 +105,7 @@ static inline int prusa_slices_the_plan(const char *model, double scale, prusa_r
     cli_free(&r);
     if (check_case_failed()) return 0;
     mkdir(data, 0755);
-    argv[a++] = (char *)"prusa-slicer";
-    argv[a++] = (char *)"--datadir";
-    argv[a++] = data;
-    argv[a++] = (char *)"--export-gcode";
-    argv[a++] = (char *)"--first-layer-height";
-    argv[a++] = first;
-    argv[a++] = (char *)"--min-layer-height";
-    argv[a++] = lo;
-    argv[a++] = (char *)"--max-layer-height";
-    argv[a++] = hi;
-    argv[a++] = (char *)"--bed-shape";
-    argv[a++] = (char *)"0x0,250x0,250x210,0x210";
-    argv[a++] = (char *)"--max-print-height";
-    argv[a++] = (char *)"210";
-    argv[a++] = (char *)"-o";
-    argv[a++] = gcode_path;
-    argv[a] = path3mf;
-    argv[a + 1] = NULL;
+    a = prusa_export_argv(argv, data, first, lo, hi, gcode_path, path3mf);
     status = prusa_run(argv, log_path, &log);
     if (status != 0 && strstr(log, "no extrusions in the first layer")) {
         /* the model's own file, scaled, the same way: PrusaSlicer's verdict on the model */

@@ -421,6 +421,7 @@ static const struct { const char *option, *value; } OPTION_VALUES[] = {
     {"--weight", "box:0,0,0,1,1,1=0.5"}, {"--weights", "@w.txt"}, {"--importance", "0.5,0.3,0.2"}, {"--view", "front"}, {"--png", "@p.png"}, {"--view-count", "8"}, {"--view-res", "64"},
     {"--screen", "file:fb.bin,240x200,24"}, {"--screen-packing", "rgb"}, {"--screen-rotate", "90"}, {"--screen-mirror", "x"},
     {"--screen-pitch", "50"}, {"--screen-panel", "2k-5.5"},
+    {"--project", "@x.3mf"}, {"--resolution", "0.2"}, {"--max-rise", "0.05"}, {"--max-angle", "15"},
 };
 
 static const char *option_value(const char *option, const char *placeholder)
@@ -451,6 +452,7 @@ static void expect_accepted(const char *command, const char *option, const char 
     if (!strcmp(command, "slice")) { args[n++] = "-o"; args[n++] = cli_path("job"); }
     if (!strcmp(command, "saliency")) { args[n++] = "-o"; args[n++] = cli_path("w.txt"); }
     if (!strcmp(command, "print")) { args[n++] = "--port"; args[n++] = "/nonexistent/port"; }
+    if (!strcmp(command, "contour")) { args[n++] = "--project"; args[n++] = cli_path("x.3mf"); args[n++] = "-o"; args[n++] = cli_path("c.gcode"); }
     args[n++] = option;
     snprintf(spec, sizeof spec, "%s", value ? value : "");
     for (w = strtok_r(spec, " ", &save); w && k < 4; w = strtok_r(NULL, " ", &save), k++) {
@@ -479,7 +481,7 @@ static int check_listed(const char *command, const char *option, const char *pla
    adaslice saliency does not offer --saliency, which it always does. */
 static void every_option_in_help_is_accepted(void)
 {
-    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print"};
+    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print", "contour"};
     size_t c;
     for (c = 0; c < sizeof commands / sizeof *commands; c++) {
         cli_result h = cli_run(commands[c], "--help", NULL);
@@ -513,7 +515,7 @@ static void every_option_in_help_is_accepted(void)
    COMMAND --help; an unknown COMMAND or a second one is a usage error. */
 static void help_command_shows_help(void)
 {
-    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print"};
+    static const char *const commands[] = {"plan", "slice", "orient", "saliency", "print", "contour"};
     cli_result a = cli_run("help", NULL), b = cli_run("--help", NULL);
     size_t i;
     CHECKF(a.status == 0 && !*a.err && !strcmp(a.out, b.out) && strstr(a.out, "help"), "exit %d: %s", a.status, a.err);

@@ -215,8 +215,71 @@ static void bad_grids_are_refused(void)
     gen_free(&m);
 }
 
+/* The triangle of m over (x, y) whose plane is highest there, by brute
+   force: its index and z; -1 where none is. */
+static long top_triangle(const adaslice_mesh *m, double x, double y, double *z)
+{
+    long best = -1;
+    size_t t;
+    for (t = 0; t < m->triangle_count; t++) {
+        const float *p = m->vertices + 3 * m->triangles[3 * t], *q = m->vertices + 3 * m->triangles[3 * t + 1],
+                    *r = m->vertices + 3 * m->triangles[3 * t + 2];
+        double d = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]), u, v, h;
+        if (fabs(d) < 1e-12) continue;
+        u = ((x - p[0]) * (r[1] - p[1]) - (y - p[1]) * (r[0] - p[0])) / d;
+        v = ((q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0])) / d;
+        if (u < 0 || v < 0 || u + v > 1) continue;
+        h = p[2] + u * (q[2] - p[2]) + v * (r[2] - p[2]);
+        if (best < 0 || h > *z) { best = (long)t; *z = h; }
+    }
+    return best;
+}
+
+/* adaslice_ldi_ray between pixel centres on a dome (a convex solid): two
+   crossings in order, in then out; the top one is the triangle's own plane
+   where the query lies on the triangle the pixel's ray met (to float
+   precision), and elsewhere off by no more than the steepest slope (30
+   degrees here) times half a pixel's diagonal. */
+static void ray_queries_between_pixels_meet_the_triangles(void)
+{
+    adaslice_mesh m = gen_dome(10, 20, 1, 8, 24);
+    adaslice_grid g = adaslice_grid_fit(&m, ADASLICE_AXIS_Z, 96);
+    adaslice_ldi ldi;
+    adaslice_error e;
+    uint32_t seed = 12345;
+    int i, same = 0, queried = 0;
+    CHECK(adaslice_ldi_build(&m, &g, NULL, &ldi, &e) == ADASLICE_OK);
+    for (i = 0; i < 3000; i++) {
+        adaslice_crossing c[8];
+        double x, y, z = 0, bound = tan(M_PI / 6) * hypot(g.pitch[0], g.pitch[1]) / 2;
+        size_t n;
+        long t;
+        seed = seed * 1103515245u + 12345u;
+        x = -9.5 + 19.0 * (double)(seed >> 8) / 16777216.0;
+        seed = seed * 1103515245u + 12345u;
+        y = -9.5 + 19.0 * (double)(seed >> 8) / 16777216.0;
+        if ((t = top_triangle(&m, x, y, &z)) < 0 || hypot(x, y) > 9.4) continue;
+        n = adaslice_ldi_ray(&ldi, &m, x, y, c, 8);
+        queried++;
+        CHECKF(n == 2 && !c[0].leaves && c[1].leaves && c[0].depth < c[1].depth, "(%g, %g): %zu crossings", x, y, n);
+        if (n != 2) continue;
+        if ((long)c[1].face == t) {
+            same++;
+            CHECKF(fabs(c[1].depth - z) < 1e-5, "(%g, %g): %.7g on its own triangle at %.7g", x, y, c[1].depth, z);
+        } else {
+            CHECKF(fabs(c[1].depth - z) <= bound, "(%g, %g): %.7g, the surface at %.7g", x, y, c[1].depth, z);
+        }
+        CHECKF(fabs(c[0].depth) < 1e-5, "(%g, %g): the bottom at %.7g", x, y, c[0].depth);
+    }
+    CHECKF(queried > 2000 && same > queried / 2, "%d of %d queries on the pixel's own triangle", same, queried);
+    CHECK(adaslice_ldi_ray(&ldi, &m, 100, 0, NULL, 0) == 0);
+    adaslice_ldi_free(&ldi);
+    gen_free(&m);
+}
+
 void test_ldi(void)
 {
+    RUN(ray_queries_between_pixels_meet_the_triangles);
     RUN(rays_through_vertices_and_edges_are_watertight);
     RUN(box_rays_meet_the_faces);
     RUN(sampled_sphere_matches_exact);

@@ -6,6 +6,7 @@
 #include "zip.h"
 #include "../bytes.h"
 #include "deflate.h"
+#include "inflate.h"
 #include "png.h"
 #include "../report.h"
 #include "../../adaslice_mcu.h"
@@ -236,4 +237,61 @@ int zip_add_preview_png(zip_writer *z, const char *name, const job_desc *d, int 
         rc = png_encode_rgb(rgb, w, h, &png, &size);
     free(rgb);
     return add_png(z, name, rc, png, size);
+}
+
+int zip_member(const unsigned char *data, size_t size, const char *name, unsigned char **out, size_t *out_size,
+               char why[128])
+{
+    size_t at, end, i, len = strlen(name);
+    *out = NULL;
+    *out_size = 0;
+    if (size < END_RECORD) { snprintf(why, 128, "%zu bytes, too short for a ZIP archive", size); return -1; }
+    /* the end record, behind a comment of up to 65535 bytes */
+    for (end = size - END_RECORD + 1; end-- > 0 && size - end <= END_RECORD + 65535u;)
+        if (get_le32(data + end) == 0x06054b50u) break;
+    if (end == (size_t)-1 || size - end > END_RECORD + 65535u || get_le32(data + end) != 0x06054b50u) {
+        snprintf(why, 128, "no ZIP end record");
+        return -1;
+    }
+    at = get_le32(data + end + 16);
+    for (i = get_le16(data + end + 10); i > 0; i--) {
+        size_t nlen, csize, usize, local, start;
+        unsigned method;
+        if (at > end || end - at < CENTRAL_HEADER || get_le32(data + at) != 0x02014b50u) {
+            snprintf(why, 128, "a broken central directory at byte %zu", at);
+            return -1;
+        }
+        method = get_le16(data + at + 10);
+        csize = get_le32(data + at + 20);
+        usize = get_le32(data + at + 24);
+        nlen = get_le16(data + at + 28);
+        local = get_le32(data + at + 42);
+        if (nlen > end - at - CENTRAL_HEADER) { snprintf(why, 128, "a broken central directory at byte %zu", at); return -1; }
+        if (nlen == len && !memcmp(data + at + CENTRAL_HEADER, name, len)) {
+            if (local > size || size - local < LOCAL_HEADER || get_le32(data + local) != 0x04034b50u ||
+                (start = local + LOCAL_HEADER + get_le16(data + local + 26) + get_le16(data + local + 28)) > size ||
+                csize > size - start) {
+                snprintf(why, 128, "%.40s: a broken local header at byte %zu", name, local);
+                return -1;
+            }
+            if ((method != 0 && method != 8) || (method == 0 && csize != usize)) {
+                snprintf(why, 128, "%.40s: compression method %u (stored or deflated only)", name, method);
+                return -1;
+            }
+            if (!(*out = (unsigned char *)malloc(usize + 1))) { snprintf(why, 128, "out of memory"); return -1; }
+            if (method == 0) memcpy(*out, data + start, usize);
+            if ((method == 8 && inflate_bytes(data + start, csize, *out, usize)) ||
+                adaslice_crc32(0, *out, usize) != get_le32(data + at + 16)) {
+                free(*out);
+                *out = NULL;
+                snprintf(why, 128, "%.40s: its data is corrupt", name);
+                return -1;
+            }
+            (*out)[usize] = 0;
+            *out_size = usize;
+            return 0;
+        }
+        at += CENTRAL_HEADER + nlen + get_le16(data + at + 30) + get_le16(data + at + 32);
+    }
+    return 1;
 }

@@ -29,6 +29,15 @@ int zip_add(zip_writer *z, const char *name, const void *data, size_t size, int 
    and returns RC_FAIL. Frees z either way. */
 int zip_close(zip_writer *z, int ok);
 
+/* ---- reading --------------------------------------------------------- */
+
+/* Member `name` of the archive data[0, size), stored or deflated, its CRC-32
+   checked, into *out (malloc'd, a NUL after its *out_size bytes; the caller
+   frees it). 0; 1 when the archive has no such member; -1 for an archive or
+   member that is malformed (what is wrong in why[0, 128)) or out of memory. */
+int zip_member(const unsigned char *data, size_t size, const char *name, unsigned char **out, size_t *out_size,
+               char why[128]);
+
 /* ---- members the zip job formats share ------------------------------- */
 
 /* v with the fewest decimals, at most `decimals` (16 or less), that read

@@ -7,6 +7,8 @@
 #include "../report.h"
 #include "../codec/zip.h"
 
+#include <errno.h>
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -172,4 +174,153 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
                 t->path, n, plural(n), thinnest, thickest, tops[0], p.tmin, p.tmax, tops[0], p.tmin, p.tmax);
     free(tops);
     return rc;
+}
+
+/* ---- reading it back */
+
+/* The value of attribute `name` in the tag that starts at tag (up to its
+   '>'), or NULL. */
+static const char *attribute(const char *tag, const char *name)
+{
+    size_t n = strlen(name);
+    const char *p;
+    for (p = tag; *p && *p != '>'; p++)
+        if (p[-1] == ' ' && !strncmp(p, name, n) && p[n] == '=' && (p[n + 1] == '"' || p[n + 1] == '\'')) return p + n + 2;
+    return NULL;
+}
+
+static int number_attribute(const char *tag, const char *name, double *v)
+{
+    const char *a = attribute(tag, name);
+    char *end;
+    if (!a) return 0;
+    *v = strtod(a, &end);
+    return end != a && isfinite(*v);
+}
+
+/* The number of tags `<name ` in text. */
+static size_t count_tags(const char *text, const char *name)
+{
+    size_t n = 0;
+    const char *p = text;
+    while ((p = strstr(p, name)) != NULL) { n++; p++; }
+    return n;
+}
+
+static int read_mesh(const char *path, const char *xml, threemf_project *p)
+{
+    size_t nv = count_tags(xml, "<vertex "), nt = count_tags(xml, "<triangle "), i;
+    const char *tag, *item;
+    double m[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    if (count_tags(xml, "<object ") != 1 || count_tags(xml, "<item ") != 1)
+        return complain(RC_FAIL, "%s: 3D/3dmodel.model: %zu objects and %zu build items, not one of each", path,
+                        count_tags(xml, "<object "), count_tags(xml, "<item "));
+    if (!nt || nt > UINT32_MAX / 3 || nv > UINT32_MAX)
+        return complain(RC_FAIL, "%s: 3D/3dmodel.model: %zu vertices and %zu triangles", path, nv, nt);
+    item = strstr(xml, "<item ");
+    if ((tag = attribute(item, "transform")) != NULL) {
+        char *end;
+        for (i = 0; i < 12; i++, tag = end)
+            if (m[i] = strtod(tag, &end), end == tag || !isfinite(m[i]))
+                return complain(RC_FAIL, "%s: the build item's transform is not 12 numbers", path);
+        p->transformed = 1;
+    }
+    p->mesh.vertices = (float *)malloc((nv ? nv : 1) * 3 * sizeof(float));
+    p->mesh.triangles = (uint32_t *)malloc(nt * 3 * sizeof(uint32_t));
+    if (!p->mesh.vertices || !p->mesh.triangles) return complain(RC_FAIL, "out of memory");
+    for (tag = xml, i = 0; i < nv; i++) {
+        double v[3];
+        tag = strstr(tag, "<vertex ") + 1;
+        if (!number_attribute(tag, "x", &v[0]) || !number_attribute(tag, "y", &v[1]) || !number_attribute(tag, "z", &v[2]))
+            return complain(RC_FAIL, "%s: 3D/3dmodel.model: vertex %zu has no x, y and z", path, i);
+        /* 3MF's transform: the row vector (x y z 1) times the 4 x 3 matrix */
+        p->mesh.vertices[3 * i] = (float)(m[0] * v[0] + m[3] * v[1] + m[6] * v[2] + m[9]);
+        p->mesh.vertices[3 * i + 1] = (float)(m[1] * v[0] + m[4] * v[1] + m[7] * v[2] + m[10]);
+        p->mesh.vertices[3 * i + 2] = (float)(m[2] * v[0] + m[5] * v[1] + m[8] * v[2] + m[11]);
+    }
+    for (tag = xml, i = 0; i < nt; i++) {
+        double v[3];
+        int c;
+        tag = strstr(tag, "<triangle ") + 1;
+        if (!number_attribute(tag, "v1", &v[0]) || !number_attribute(tag, "v2", &v[1]) || !number_attribute(tag, "v3", &v[2]))
+            return complain(RC_FAIL, "%s: 3D/3dmodel.model: triangle %zu has no v1, v2 and v3", path, i);
+        for (c = 0; c < 3; c++) {
+            if (!(v[c] >= 0 && v[c] < (double)nv && v[c] == floor(v[c])))
+                return complain(RC_FAIL, "%s: 3D/3dmodel.model: triangle %zu names vertex %g of %zu", path, i, v[c], nv);
+            p->mesh.triangles[3 * i + c] = (uint32_t)v[c];
+        }
+    }
+    p->mesh.vertex_count = nv;
+    p->mesh.triangle_count = nt;
+    return RC_OK;
+}
+
+/* "object_id=1|z;h;z;h;...": the plan's tops are the z that end a layer
+   (every second pair, as threemf_write writes a step per layer). */
+static int read_profile(const char *path, const char *text, threemf_project *p)
+{
+    const char *at = strchr(text, '|');
+    size_t n = 0, cap = 0, pair = 0;
+    if (!at) return complain(RC_FAIL, "%s: the layer height profile has no '|'", path);
+    for (at++; *at && *at != '\n'; pair++) {
+        double z, h;
+        char *end;
+        z = strtod(at, &end);
+        if (end == at || *end != ';') break;
+        h = strtod(end + 1, &end);
+        if (!isfinite(z) || !(h > 0) || (*end && *end != ';' && *end != '\n')) break;
+        at = *end == ';' ? end + 1 : end;
+        if (pair % 2 == 0) continue;
+        if (n == cap) {
+            double *t = (double *)realloc(p->tops, (cap = cap ? 2 * cap : 256) * sizeof *t);
+            if (!t) return complain(RC_FAIL, "out of memory");
+            p->tops = t;
+        }
+        p->tops[n++] = z;
+    }
+    if (*at && *at != '\n')
+        return complain(RC_FAIL, "%s: the layer height profile is not z;h pairs at byte %zu", path, (size_t)(at - text));
+    if (!n) return complain(RC_FAIL, "%s: the layer height profile has no layers", path);
+    p->layers = n;
+    return RC_OK;
+}
+
+int threemf_read(const char *path, threemf_project *p)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *data = NULL, *model = NULL, *profile = NULL;
+    size_t size = 0, cap = 0, n;
+    char why[128];
+    int rc = RC_OK, got;
+    memset(p, 0, sizeof *p);
+    if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
+    do {
+        if (size == cap) {
+            unsigned char *d = (unsigned char *)realloc(data, cap = cap ? 2 * cap : 1 << 16);
+            if (!d) { rc = complain(RC_FAIL, "out of memory"); break; }
+            data = d;
+        }
+        size += n = fread(data + size, 1, cap - size, f);
+    } while (n);
+    if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
+    fclose(f);
+    if (!rc && (got = zip_member(data, size, "3D/3dmodel.model", &model, &n, why)) != 0)
+        rc = complain(RC_FAIL, "%s: %s", path, got > 0 ? "no 3D/3dmodel.model: not a 3MF" : why);
+    if (!rc && (got = zip_member(data, size, "Metadata/Slic3r_PE_layer_heights_profile.txt", &profile, &n, why)) != 0)
+        rc = complain(RC_FAIL, "%s: %s", path, got > 0 ? "no layer height profile (plan --3mf writes one)" : why);
+    if (!rc) rc = read_mesh(path, (const char *)model, p);
+    if (!rc) rc = read_profile(path, (const char *)profile, p);
+    free(data);
+    free(model);
+    free(profile);
+    if (rc) threemf_project_free(p);
+    return rc;
+}
+
+void threemf_project_free(threemf_project *p)
+{
+    free(p->mesh.vertices);
+    free(p->mesh.triangles);
+    free(p->tops);
+    memset(p, 0, sizeof *p);
 }

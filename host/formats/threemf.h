@@ -37,4 +37,18 @@ int threemf_check_bounds(const threemf_args *t, const plan_args *a);
    which first-layer height and layer limits the printer profile needs.
    RC_OK or a complaint made, and no file. */
 int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *note);
+
+/* The project read back (for contour): the mesh as placed by the build
+   item's transform, and the plan's layer tops (mm above the part's bottom). */
+typedef struct threemf_project {
+    adaslice_mesh mesh;
+    double *tops;
+    size_t layers;
+    int transformed;             /* the build item had a transform */
+} threemf_project;
+/* Reads the 3MF at path as threemf_write writes it (any 3MF with one object
+   of one mesh and PrusaSlicer's layer height profile); RC_OK, or a
+   complaint naming the file and what is wrong, and nothing held. */
+int threemf_read(const char *path, threemf_project *p);
+void threemf_project_free(threemf_project *p);
 #endif

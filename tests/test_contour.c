@@ -1,0 +1,623 @@
+/* adaslice contour (issue 25): PrusaSlicer slices our 3MF of a shallow dome,
+   a gently curved aerofoil-like block and the bundled hand, contour moves
+   the surface paths onto the mesh, and the test measures the printed
+   surface against the mesh before and after with its own G-code reader and
+   its own ray casts (brute force over the triangles, no LDI):
+   - in each 0.4 mm cell of the plate whose mesh surface is no steeper than
+     15 degrees, the highest extrusion point's vertical distance to the
+     mesh: mean and 95th percentile at least 4x smaller after;
+   - no printed point in those cells more than 0.03 mm above the mesh;
+   - no point below what earlier layers deposited at it;
+   - E per layer within 2 % of PrusaSlicer's;
+   - every line contour does not rewrite is in the output, in order.
+   And each input contour refuses gets one line, exit 1 and no file. */
+#include "prusa_check.h"
+#include <ctype.h>
+#include "meshgen.h"
+#include "../host/output.h"
+
+#ifndef CELL_MM
+#define CELL_MM 0.8
+#endif
+#define SAMPLE_MM 0.1
+#define COVER_MM 0.05
+/* half a bead: PrusaSlicer's perimeters and solid infill are 0.45 mm wide */
+#define BEAD_HALF 0.2
+#define DEPOSIT_MM 0.1
+
+/* ---- the mesh's top surface, ray against every triangle in a bucket */
+
+typedef struct top_finder {
+    const adaslice_mesh *m;
+    double lo[2], shift[3];      /* G-code = mesh + shift */
+    int w, h;                    /* 1 mm buckets */
+    size_t *first, *list;
+} top_finder;
+
+static void finder_init(top_finder *f, const adaslice_mesh *m, const double shift[3])
+{
+    double lo[3], hi[3];
+    size_t t, n = 0, *fill;
+    int pass;
+    memset(f, 0, sizeof *f);
+    f->m = m;
+    memcpy(f->shift, shift, sizeof f->shift);
+    adaslice_mesh_bounds(m, lo, hi);
+    f->lo[0] = lo[0] - 1;
+    f->lo[1] = lo[1] - 1;
+    f->w = (int)(hi[0] - lo[0]) + 3;
+    f->h = (int)(hi[1] - lo[1]) + 3;
+    f->first = (size_t *)calloc((size_t)(f->w * f->h + 1), sizeof(size_t));
+    fill = (size_t *)calloc((size_t)(f->w * f->h + 1), sizeof(size_t));
+    for (pass = 0; pass < 2; pass++) {
+        for (t = 0; t < m->triangle_count; t++) {
+            double a[2] = {HUGE_VAL, HUGE_VAL}, b[2] = {-HUGE_VAL, -HUGE_VAL};
+            int c, k, i, j;
+            for (c = 0; c < 3; c++)
+                for (k = 0; k < 2; k++) {
+                    double v = m->vertices[3 * m->triangles[3 * t + c] + k];
+                    if (v < a[k]) a[k] = v;
+                    if (v > b[k]) b[k] = v;
+                }
+            for (j = (int)(a[1] - f->lo[1]); j <= (int)(b[1] - f->lo[1]); j++)
+                for (i = (int)(a[0] - f->lo[0]); i <= (int)(b[0] - f->lo[0]); i++) {
+                    size_t cell = (size_t)(j * f->w + i);
+                    if (pass == 0) f->first[cell + 1]++;
+                    else f->list[f->first[cell] + fill[cell]++] = t;
+                }
+        }
+        if (pass == 0) {
+            for (t = 0; t < (size_t)(f->w * f->h); t++) f->first[t + 1] += f->first[t];
+            n = f->first[f->w * f->h];
+            f->list = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
+        }
+    }
+    free(fill);
+}
+
+static void finder_free(top_finder *f)
+{
+    free(f->first);
+    free(f->list);
+}
+
+/* The highest crossing of the vertical line at G-code (x, y) with the mesh,
+   in G-code Z, and the cosine of its face's slope; 0 where none. */
+static int mesh_top(const top_finder *f, double x, double y, double *z, double *cos_slope)
+{
+    double mx = x - f->shift[0], my = y - f->shift[1], best = -HUGE_VAL;
+    int i = (int)(mx - f->lo[0]), j = (int)(my - f->lo[1]);
+    size_t k;
+    if (i < 0 || j < 0 || i >= f->w || j >= f->h) return 0;
+    for (k = f->first[j * f->w + i]; k < f->first[j * f->w + i + 1]; k++) {
+        const uint32_t *t = f->m->triangles + 3 * f->list[k];
+        const float *p = f->m->vertices + 3 * t[0], *q = f->m->vertices + 3 * t[1], *r = f->m->vertices + 3 * t[2];
+        double d = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]), u, v, zz;
+        double nx, ny;
+        if (fabs(d) < 1e-12) continue;
+        u = ((mx - p[0]) * (r[1] - p[1]) - (my - p[1]) * (r[0] - p[0])) / d;
+        v = ((q[0] - p[0]) * (my - p[1]) - (q[1] - p[1]) * (mx - p[0])) / d;
+        if (u < -1e-9 || v < -1e-9 || u + v > 1 + 1e-9) continue;
+        zz = p[2] + u * (q[2] - p[2]) + v * (r[2] - p[2]);
+        if (zz <= best) continue;
+        best = zz;
+        nx = (q[1] - p[1]) * (r[2] - p[2]) - (q[2] - p[2]) * (r[1] - p[1]);
+        ny = (q[2] - p[2]) * (r[0] - p[0]) - (q[0] - p[0]) * (r[2] - p[2]);
+        *cos_slope = fabs(d) / sqrt(nx * nx + ny * ny + d * d);
+    }
+    if (best == -HUGE_VAL) return 0;
+    *z = best + f->shift[2];
+    return 1;
+}
+
+/* ---- a G-code reader of the test's own */
+
+typedef struct seg { double a[3], b[3], e; int layer; } seg;
+
+typedef struct printed {
+    seg *segs;
+    size_t n, cap;
+    double e[4096];              /* filament per layer */
+    double top[4096], height[4096]; /* ;Z: and the first ;HEIGHT: after it */
+    double unscaled[4096];       /* e of each segment times layer height / the height it fills */
+    int layers;
+    size_t lines;
+    double low_travel;           /* the most a travel ran under the layer's highest extrusion so far */
+    double steepest;             /* the steepest extrusion segment, dz / length (those over 0.05 mm) */
+    double layer_peak;
+} printed;
+
+/* Every line is a comment, blank, or words of a letter and a number. The
+   extrusions (XY moves with E forward) in layers (;Z:). 0 with a message
+   for a line it cannot read. */
+static int read_printed(const char *path, printed *p)
+{
+    char *text = read_whole_text(path), *line, *next;
+    double pos[4] = {0, 0, 0, 0};
+    int relative = 0;
+    memset(p, 0, sizeof *p);
+    p->layers = -1;
+    CHECKF(text != NULL, "cannot read %.100s", path);
+    if (!text) return 0;
+    for (line = text; *line; line = next) {
+        char *end = strchr(line, '\n'), *c, *w;
+        double v[4];
+        int has[4] = {0, 0, 0, 0}, g = -1, m = -1, k;
+        next = end ? end + 1 : line + strlen(line);
+        if (end) *end = 0;
+        p->lines++;
+        if (!strncmp(line, ";Z:", 3) && p->layers + 1 < 4096) {
+            p->top[++p->layers] = atof(line + 3);
+            p->layer_peak = -HUGE_VAL;
+            continue;
+        }
+        if (!strncmp(line, ";HEIGHT:", 8) && p->layers >= 0 && !p->height[p->layers]) { p->height[p->layers] = atof(line + 8); continue; }
+        if ((c = strchr(line, ';')) != NULL) *c = 0;
+        for (w = strtok(line, " \t\r"); w; w = strtok(NULL, " \t\r")) {
+            char *after;
+            double x = strtod(w + 1, &after);
+            if (!isalpha((unsigned char)w[0]) || after == w + 1 || *after) {
+                CHECKF(0, "%.100s: line %zu: word %.40s", path, p->lines, w);
+                free(text);
+                return 0;
+            }
+            if (w[0] == 'G' && g < 0 && m < 0) g = (int)x;
+            else if (w[0] == 'M' && g < 0 && m < 0) m = (int)x;
+            else if (strchr("XYZE", w[0])) { k = (int)(strchr("XYZE", w[0]) - "XYZE"); has[k] = 1; v[k] = x; }
+        }
+        if (m == 82 || m == 83) relative = m == 83;
+        if (g == 92 && has[3]) pos[3] = v[3];
+        if (g == 0 || g == 1) {
+            double before[4];
+            memcpy(before, pos, sizeof before);
+            for (k = 0; k < 3; k++) if (has[k]) pos[k] = v[k];
+            if (has[3]) pos[3] = relative ? pos[3] + v[3] : v[3];
+            if ((has[0] || has[1]) && pos[3] > before[3] && p->layers >= 0 && p->layers < 4096) {
+                if (p->n == p->cap) p->segs = (seg *)realloc(p->segs, (p->cap = p->cap ? 2 * p->cap : 65536) * sizeof(seg));
+                memcpy(p->segs[p->n].a, before, sizeof p->segs->a);
+                memcpy(p->segs[p->n].b, pos, sizeof p->segs->b);
+                p->segs[p->n].e = pos[3] - before[3];
+                p->segs[p->n++].layer = p->layers;
+                p->e[p->layers] += pos[3] - before[3];
+                if (pos[2] > p->layer_peak) p->layer_peak = pos[2];
+                if (before[2] > p->layer_peak) p->layer_peak = before[2];
+                if (hypot(pos[0] - before[0], pos[1] - before[1]) > 0.05 &&
+                    fabs(pos[2] - before[2]) / hypot(pos[0] - before[0], pos[1] - before[1]) > p->steepest)
+                    p->steepest = fabs(pos[2] - before[2]) / hypot(pos[0] - before[0], pos[1] - before[1]);
+            } else if ((has[0] || has[1]) && p->layers >= 0 && p->layer_peak - pos[2] > p->low_travel) {
+                p->low_travel = p->layer_peak - pos[2];
+            }
+        }
+    }
+    p->layers++;
+    free(text);
+    return 1;
+}
+
+/* ---- the surface as printed */
+
+typedef struct surface_error { double mean, p95, worst_above; size_t cells, above; } surface_error;
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The plate at COVER_MM, each square the highest bead top over it: a bead
+   is flat across its width, 2 BEAD_HALF. */
+typedef struct cover { float *z; int w, h; double lo[2]; } cover;
+
+static void cover_build(cover *c, const printed *p, const double lo[2], const double hi[2])
+{
+    size_t s;
+    int i;
+    c->lo[0] = lo[0] - 1;
+    c->lo[1] = lo[1] - 1;
+    c->w = (int)((hi[0] - lo[0] + 2) / COVER_MM) + 1;
+    c->h = (int)((hi[1] - lo[1] + 2) / COVER_MM) + 1;
+    c->z = (float *)malloc((size_t)c->w * (size_t)c->h * sizeof *c->z);
+    for (i = 0; i < c->w * c->h; i++) c->z[i] = -1e9f;
+    for (s = 0; s < p->n; s++) {
+        const seg *g = &p->segs[s];
+        double len = hypot(g->b[0] - g->a[0], g->b[1] - g->a[1]);
+        int q, k, steps = (int)(len / (COVER_MM / 2)) + 1, across = (int)(BEAD_HALF / (COVER_MM / 2));
+        if (len <= 0) continue;
+        for (q = 0; q <= steps; q++)
+            for (k = -across; k <= across; k++) {
+                double t = (double)q / steps, off = k * (COVER_MM / 2) / len;
+                double x = g->a[0] + t * (g->b[0] - g->a[0]) - off * (g->b[1] - g->a[1]);
+                double y = g->a[1] + t * (g->b[1] - g->a[1]) + off * (g->b[0] - g->a[0]);
+                float z = (float)(g->a[2] + t * (g->b[2] - g->a[2]));
+                int ci = (int)floor((x - c->lo[0]) / COVER_MM), cj = (int)floor((y - c->lo[1]) / COVER_MM);
+                if (ci >= 0 && cj >= 0 && ci < c->w && cj < c->h && z > c->z[cj * c->w + ci]) c->z[cj * c->w + ci] = z;
+            }
+    }
+}
+
+/* Per CELL_MM cell of the plate over the mesh's box, the highest extrusion
+   point that no other bead covers, against the mesh there, in cells whose
+   surface is shallow (within max_angle at the centre and all four
+   corners). */
+static surface_error measure(const printed *p, const top_finder *f, double max_angle)
+{
+    double lo[3], hi[3], *top, *dist, blo[2], bhi[2];
+    float *px, *py;
+    int w, h, i, j;
+    size_t s, n = 0;
+    surface_error r;
+    cover c;
+    memset(&r, 0, sizeof r);
+    adaslice_mesh_bounds(f->m, lo, hi);
+    for (i = 0; i < 2; i++) {
+        blo[i] = lo[i] + f->shift[i];
+        bhi[i] = hi[i] + f->shift[i];
+    }
+    cover_build(&c, p, blo, bhi);
+    w = (int)((hi[0] - lo[0]) / CELL_MM) + 1;
+    h = (int)((hi[1] - lo[1]) / CELL_MM) + 1;
+    top = (double *)malloc((size_t)(w * h) * sizeof *top);
+    px = (float *)calloc((size_t)(w * h), sizeof *px);
+    py = (float *)calloc((size_t)(w * h), sizeof *py);
+    dist = (double *)malloc((size_t)(w * h) * sizeof *dist);
+    for (i = 0; i < w * h; i++) top[i] = -HUGE_VAL;
+    for (s = 0; s < p->n; s++) {
+        const seg *g = &p->segs[s];
+        double len = hypot(g->b[0] - g->a[0], g->b[1] - g->a[1]);
+        int q, steps = (int)(len / SAMPLE_MM) + 1;
+        for (q = 0; q <= steps; q++) {
+            double t = (double)q / steps, x = g->a[0] + t * (g->b[0] - g->a[0]), y = g->a[1] + t * (g->b[1] - g->a[1]);
+            double z = g->a[2] + t * (g->b[2] - g->a[2]);
+            int ci = (int)floor((x - f->shift[0] - lo[0]) / CELL_MM), cj = (int)floor((y - f->shift[1] - lo[1]) / CELL_MM);
+            int ki = (int)floor((x - c.lo[0]) / COVER_MM), kj = (int)floor((y - c.lo[1]) / COVER_MM);
+            if (ci < 0 || cj < 0 || ci >= w || cj >= h || z <= top[cj * w + ci]) continue;
+            if (z < c.z[kj * c.w + ki] - 1e-4) continue; /* under another bead */
+            top[cj * w + ci] = z;
+            px[cj * w + ci] = (float)x;
+            py[cj * w + ci] = (float)y;
+        }
+    }
+    for (j = 0; j < h; j++)
+        for (i = 0; i < w; i++) {
+            double cx = lo[0] + f->shift[0] + (i + 0.5) * CELL_MM, cy = lo[1] + f->shift[1] + (j + 0.5) * CELL_MM, z, c;
+            int corner, shallow = top[j * w + i] > -HUGE_VAL;
+            for (corner = 0; corner < 5 && shallow; corner++) {
+                double dx = corner == 4 ? 0 : (corner & 1 ? 0.5 : -0.5) * CELL_MM;
+                double dy = corner == 4 ? 0 : (corner & 2 ? 0.5 : -0.5) * CELL_MM;
+                shallow = mesh_top(f, cx + dx, cy + dy, &z, &c) && c >= cos(max_angle * M_PI / 180);
+            }
+            if (!shallow || !mesh_top(f, px[j * w + i], py[j * w + i], &z, &c)) continue;
+            dist[n++] = fabs(top[j * w + i] - z);
+            if (top[j * w + i] - z > r.worst_above) r.worst_above = top[j * w + i] - z;
+            r.mean += fabs(top[j * w + i] - z);
+        }
+    r.cells = n;
+    if (n) {
+        qsort(dist, n, sizeof *dist, by_value);
+        r.mean /= (double)n;
+        r.p95 = dist[(size_t)(0.95 * (double)(n - 1))];
+    }
+    free(top);
+    free(px);
+    free(py);
+    free(dist);
+    free(c.z);
+    return r;
+}
+
+/* The worst depth (mm) by which a point of a layer lies under what earlier
+   layers put in its DEPOSIT_MM cell; and p->unscaled, each layer's E with
+   each segment's taken back to the layer's height from the height it fills
+   (its middle's Z less the layer's bottom; a quarter layer at least). */
+static double worst_gouge(printed *p, const top_finder *f)
+{
+    double lo[3], hi[3], worst = 0;
+    float *dep;
+    int w, h, pass, layer = -1;
+    size_t s, start = 0;
+    adaslice_mesh_bounds(f->m, lo, hi);
+    w = (int)((hi[0] - lo[0]) / DEPOSIT_MM) + 1;
+    h = (int)((hi[1] - lo[1]) / DEPOSIT_MM) + 1;
+    dep = (float *)malloc((size_t)(w * h) * sizeof *dep);
+    for (s = 0; s < (size_t)(w * h); s++) dep[s] = -1e9f;
+    for (s = 0; s <= p->n; s++) {
+        size_t t;
+        if (s < p->n && p->segs[s].layer == layer) continue;
+        /* the layer [start, s): checked against the deposit, then added to it */
+        for (pass = 0; pass < 2; pass++)
+            for (t = start; t < s; t++) {
+                const seg *g = &p->segs[t];
+                if (pass == 0) {
+                    double h = p->height[g->layer], fill = (g->a[2] + g->b[2]) / 2 - (p->top[g->layer] - h);
+                    p->unscaled[g->layer] += fill > 0.25 * h ? g->e * h / fill : 4 * g->e;
+                }
+                double len = hypot(g->b[0] - g->a[0], g->b[1] - g->a[1]);
+                int q, k, steps = (int)(len / (DEPOSIT_MM / 2)) + 1, across = (int)(BEAD_HALF / (DEPOSIT_MM / 2));
+                /* checked along the centre line, deposited over the bead's width */
+                for (q = 0; q <= steps; q++)
+                    for (k = pass ? -across : 0; k <= (pass ? across : 0); k++) {
+                        double u = (double)q / steps, off = len > 0 ? k * (DEPOSIT_MM / 2) / len : 0;
+                        double x = g->a[0] + u * (g->b[0] - g->a[0]) - off * (g->b[1] - g->a[1]) - f->shift[0] - lo[0];
+                        double y = g->a[1] + u * (g->b[1] - g->a[1]) + off * (g->b[0] - g->a[0]) - f->shift[1] - lo[1];
+                        double z = g->a[2] + u * (g->b[2] - g->a[2]);
+                        int i = (int)floor(x / DEPOSIT_MM), j = (int)floor(y / DEPOSIT_MM);
+                        if (i < 0 || j < 0 || i >= w || j >= h) continue;
+                        if (pass == 0 && dep[j * w + i] - z > worst) worst = dep[j * w + i] - z;
+                        if (pass == 1 && z > dep[j * w + i]) dep[j * w + i] = (float)z;
+                    }
+            }
+        start = s;
+        if (s < p->n) layer = p->segs[s].layer;
+    }
+    free(dep);
+    return worst;
+}
+
+/* Every line of `in` but the extrusions contour may rewrite is in `out`, in
+   order, and out's other lines are G1 moves or G92 E. 0 after a failed check. */
+static int kept_byte_for_byte(const char *in_path, const char *out_path)
+{
+    static const char *const rewritten[] = {"External perimeter", "Perimeter", "Overhang perimeter", "Solid infill",
+                                            "Top solid infill", "Gap fill", "Ironing"};
+    char *in = read_whole_text(in_path), *out = read_whole_text(out_path), *a, *b, *na, *nb;
+    int may = 0, ok = in && out;
+    size_t line = 0, k;
+    for (a = in, b = out; ok && *a; a = na) {
+        size_t len;
+        na = strchr(a, '\n') ? strchr(a, '\n') + 1 : a + strlen(a);
+        len = (size_t)(na - a);
+        line++;
+        if (!strncmp(a, ";TYPE:", 6))
+            for (may = 0, k = 0; k < sizeof rewritten / sizeof *rewritten; k++)
+                may |= !strncmp(a + 6, rewritten[k], strlen(rewritten[k])) && a[6 + strlen(rewritten[k])] == '\n';
+        if (may && !strncmp(a, "G1 X", 4) && memchr(a, 'E', len)) continue;
+        for (;; b = nb) {
+            nb = strchr(b, '\n') ? strchr(b, '\n') + 1 : b + strlen(b);
+            if ((size_t)(nb - b) == len && !memcmp(a, b, len)) { b = nb; break; }
+            if (!*b || (strncmp(b, "G1 ", 3) && strncmp(b, "G92 E", 5))) {
+                CHECKF(0, "%.100s: line %zu (%.60s) is not in %.100s where it belongs", in_path, line, a, out_path);
+                ok = 0;
+                break;
+            }
+        }
+    }
+    free(in);
+    free(out);
+    return ok;
+}
+
+/* ---- the cases */
+
+/* Plans model (a file) into a 3MF, slices it with PrusaSlicer (relative E
+   when asked), contours it; the measurements before and after. */
+static void contour_case(const char *model, double scale, int relative_e, double min_gain)
+{
+    char s[32], first[32], lo_h[32], hi_h[32], data[300], path3mf[300], before_path[300], after_path[300], log_path[300];
+    char *argv[24], *log = NULL;
+    double lo[3], hi[3], shift[3];
+    adaslice_load_options o;
+    adaslice_mesh mesh;
+    adaslice_error e;
+    top_finder f;
+    printed before, after;
+    surface_error eb, ea;
+    cli_result r;
+    size_t k, worst_layer = 0;
+    double worst_e = 0, worst_flow = 0, gouge;
+    int a, status;
+    snprintf(s, sizeof s, "%.9g", scale);
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("part.3mf"));
+    snprintf(before_path, sizeof before_path, "%s", cli_path("part.gcode"));
+    snprintf(after_path, sizeof after_path, "%s", cli_path("contoured.gcode"));
+    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
+    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
+    r = cli_run("plan", model, "--scale", s, PRUSA_FDM_ARGS, "--3mf", path3mf, "--out", cli_path("plan.csv"), NULL);
+    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
+               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
+               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h),
+           "%.100s: plan: exit %d: %.200s", model, r.status, r.err);
+    cli_free(&r);
+    if (check_case_failed()) return;
+    mkdir(data, 0755);
+    a = prusa_export_argv(argv, data, first, lo_h, hi_h, before_path, path3mf);
+    if (relative_e) {
+        argv[a++] = (char *)"--use-relative-e-distances";
+        argv[a] = path3mf;
+        argv[a + 1] = NULL;
+    }
+    status = prusa_run(argv, log_path, &log);
+    CHECKF(status == 0, "%.100s: prusa-slicer: %.300s", model, log);
+    free(log);
+    if (status) return;
+    r = cli_run("contour", before_path, "--project", path3mf, "-o", after_path, NULL);
+    CHECKF(r.status == 0 && !r.err[0], "%.100s: contour: exit %d: %.300s", model, r.status, r.err);
+    printf("    %s", r.out);
+    cli_free(&r);
+    if (check_case_failed()) return;
+    /* where PrusaSlicer puts a part: its box centred on the bed, on the bed */
+    memset(&o, 0, sizeof o);
+    o.scale = scale;
+    if (adaslice_mesh_load_file(model, &o, &mesh, &e) != ADASLICE_OK) { CHECKF(0, "%.100s: %.200s", model, e.message); return; }
+    adaslice_mesh_bounds(&mesh, lo, hi);
+    shift[0] = 125 - (lo[0] + hi[0]) / 2;
+    shift[1] = 105 - (lo[1] + hi[1]) / 2;
+    shift[2] = -lo[2];
+    finder_init(&f, &mesh, shift);
+    if (read_printed(before_path, &before) && read_printed(after_path, &after)) {
+        eb = measure(&before, &f, 15);
+        ea = measure(&after, &f, 15);
+        gouge = worst_gouge(&after, &f);
+        CHECKF(before.layers == after.layers, "%d layers before, %d after", before.layers, after.layers);
+        for (k = 0; k < (size_t)before.layers && k < 4096; k++)
+            if (before.e[k] > 0) {
+                if (fabs(after.e[k] / before.e[k] - 1) > fabs(worst_e)) worst_e = after.e[k] / before.e[k] - 1;
+                if (fabs(after.unscaled[k] / before.e[k] - 1) > fabs(worst_flow)) {
+                    worst_flow = after.unscaled[k] / before.e[k] - 1;
+                    worst_layer = k;
+                }
+            }
+        printf("    %s: %zu shallow cells: |printed - mesh| mean %.4f -> %.4f mm (%.1fx), 95th percentile %.4f -> %.4f mm "
+               "(%.1fx); highest above the mesh %.4f -> %.4f mm; deepest under the deposit %.4f mm; E per layer within "
+               "%+.2f%% of PrusaSlicer's, within %+.2f%% (layer %zu of %d) taken back to the layer's height; steepest path "
+               "%.1f degrees; travel under the layer's highest extrusion so far by %.4f mm at most\n",
+               base_name(model), ea.cells, eb.mean, ea.mean, eb.mean / ea.mean, eb.p95, ea.p95, eb.p95 / ea.p95,
+               eb.worst_above, ea.worst_above, gouge, 100 * worst_e, 100 * worst_flow, worst_layer + 1, before.layers,
+               atan(after.steepest) * 180 / M_PI, after.low_travel);
+        CHECKF(ea.cells > 100 && eb.cells == ea.cells, "%zu cells measured (%zu before)", ea.cells, eb.cells);
+        CHECKF(eb.mean >= min_gain * ea.mean, "mean %.4f -> %.4f mm", eb.mean, ea.mean);
+        CHECKF(eb.p95 >= min_gain * ea.p95, "95th percentile %.4f -> %.4f mm", eb.p95, ea.p95);
+        CHECKF(ea.worst_above <= 0.03, "a printed point %.4f mm above the mesh", ea.worst_above);
+        CHECKF(gouge <= 1e-3, "a point %.4f mm under the deposit", gouge);
+        CHECKF(fabs(worst_flow) <= 0.02, "E of layer %zu, taken back to the layer's height, is %+.2f%% off PrusaSlicer's",
+               worst_layer + 1, 100 * worst_flow);
+        CHECK(kept_byte_for_byte(before_path, after_path));
+        /* the slope a path may take, and what 3 decimals of Z over a 0.05 mm piece add to it */
+        CHECKF(after.steepest <= tan(15 * M_PI / 180) + 2e-3 / 0.05, "a path %.1f degrees steep", atan(after.steepest) * 180 / M_PI);
+        CHECKF(after.low_travel <= 1e-6, "a travel %.4f mm under the layer's highest extrusion so far", after.low_travel);
+    }
+    free(before.segs);
+    free(after.segs);
+    finder_free(&f);
+    adaslice_mesh_free(&mesh);
+}
+
+static double aerofoil_top(double x, double y)
+{
+    /* a 60 mm chord, 4 mm of thickness over a 1.5 mm slab, thinning 15 %
+       towards the tips: slopes up to 12 degrees */
+    double t = 1 - 0.15 * (2 * y / 30 - 1) * (2 * y / 30 - 1);
+    return 1.5 + 4 * t * sin(M_PI * x / 60);
+}
+
+static void a_shallow_dome_is_printed_on_its_surface(void)
+{
+    adaslice_mesh m = gen_dome(20, 80, 2, 40, 96);
+    cli_write_obj(cli_path("dome.obj"), &m);
+    gen_free(&m);
+    contour_case(cli_path("dome.obj"), 1, 0, 4);
+}
+
+static void an_aerofoil_is_printed_on_its_surface(void)
+{
+    adaslice_mesh m = gen_heightfield(120, 30, 0, 0, 60, 30, aerofoil_top);
+    cli_write_obj(cli_path("aerofoil.obj"), &m);
+    gen_free(&m);
+    contour_case(cli_path("aerofoil.obj"), 1, 1, 4);
+}
+
+static void the_bundled_hand_is_printed_on_its_surface(void)
+{
+    contour_case("examples/models/hand_closed.obj", 88.7, 0, 4);
+}
+
+/* text with its first `what` replaced by `with` (malloc'd) */
+static char *edited(const char *text, const char *what, const char *with)
+{
+    const char *at = strstr(text, what);
+    size_t n = strlen(text), keep = at ? (size_t)(at - text) : n;
+    char *out = (char *)malloc(n + strlen(with) + 1);
+    memcpy(out, text, keep);
+    strcpy(out + keep, with);
+    strcat(out, at ? at + strlen(what) : "");
+    return out;
+}
+
+static void refused_inputs_get_one_line_and_no_file(void)
+{
+    static const char *const cases[][3] = {
+        /* what, with, the message */
+        {"\n;TYPE:Solid infill", "\nG2 X100 Y100 I1 J0 E0.1\n;TYPE:Solid infill", "arc G2"},
+        {"\n;TYPE:Solid infill", "\nG3 X100 Y100 I1 J0 E0.1\n;TYPE:Solid infill", "arc G3"},
+        {"\nG90 ", "\nG91 ", "G91, relative X Y Z"},
+        {"; generated by PrusaSlicer", "; generated by Cura_SteamEngine", "not PrusaSlicer's G-code"},
+        {"; gcode_flavor = reprap", "; gcode_flavor = makerware", "gcode_flavor makerware"},
+        {"\nG21 ", "\nG20 ", "G20, inches"},
+        {"\nG90 ", "\nG92 X10\nG90 ", "G92 sets X, Y or Z"},
+    };
+    char first[32], lo_h[32], hi_h[32], data[300], path3mf[300], gcode[300], log_path[300], *argv[24], *log = NULL;
+    char *text;
+    adaslice_mesh m = gen_dome(10, 40, 1, 10, 48), other = gen_box(0, 0, 0, 30, 20, 3);
+    cli_result r;
+    size_t c;
+    int status;
+    cli_write_obj(cli_path("small.obj"), &m);
+    cli_write_obj(cli_path("other.obj"), &other);
+    gen_free(&m);
+    gen_free(&other);
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("small.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("small.gcode"));
+    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
+    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
+    r = cli_run("plan", cli_path("small.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL);
+    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
+               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
+               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h), "plan: %d %.200s", r.status, r.err);
+    cli_free(&r);
+    if (check_case_failed()) return;
+    mkdir(data, 0755);
+    prusa_export_argv(argv, data, first, lo_h, hi_h, gcode, path3mf);
+    status = prusa_run(argv, log_path, &log);
+    CHECKF(status == 0, "prusa-slicer: %.300s", log);
+    free(log);
+    if (status) return;
+    text = read_whole_text(gcode);
+    /* the unedited file is taken */
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("ok.gcode"), NULL);
+    CHECKF(r.status == 0 && cli_exists(cli_path("ok.gcode")), "exit %d: %.300s", r.status, r.err);
+    cli_free(&r);
+    for (c = 0; c < sizeof cases / sizeof *cases; c++) {
+        char *bad = edited(text, cases[c][0], cases[c][1]);
+        CHECKF(strcmp(bad, text) != 0, "case %zu: %.40s is not in PrusaSlicer's G-code", c, cases[c][0]);
+        cli_write(cli_path("bad.gcode"), bad);
+        free(bad);
+        r = cli_run("contour", cli_path("bad.gcode"), "--project", path3mf, "-o", cli_path("out.gcode"), NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, cases[c][2]), "%s: exit %d: %.300s", cases[c][2],
+               r.status, r.err);
+        CHECKF(!cli_exists(cli_path("out.gcode")), "%s: out.gcode written", cases[c][2]);
+        cli_free(&r);
+    }
+    {
+        static const char *const usage[][3] = {{"--max-angle", "90", "--max-angle 90"},
+                                                {"--resolution", "0.001", "--resolution 0.001"},
+                                                {"--max-rise", "-1", "--max-rise"}};
+        for (c = 0; c < sizeof usage / sizeof *usage; c++) {
+            r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("out.gcode"), usage[c][0], usage[c][1], NULL);
+            CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, usage[c][2]), "exit %d: %.300s", r.status, r.err);
+            CHECK(!cli_exists(cli_path("out.gcode")));
+            cli_free(&r);
+        }
+        r = cli_run("contour", gcode, "-o", cli_path("out.gcode"), NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--project"), "exit %d: %.300s", r.status, r.err);
+        cli_free(&r);
+    }
+    /* another part's project: a box of another size, and the same part
+       planned with other layers */
+    r = cli_run("plan", cli_path("other.obj"), PRUSA_FDM_ARGS, "--3mf", cli_path("other.3mf"), NULL);
+    CHECKF(r.status == 0, "plan: %.300s", r.err);
+    cli_free(&r);
+    r = cli_run("plan", cli_path("small.obj"), "--tmin", "0.08", "--tmax", "0.28", "--eps", "0.2", "--3mf",
+                cli_path("finer.3mf"), NULL);
+    CHECKF(r.status == 0, "plan: %.300s", r.err);
+    cli_free(&r);
+    r = cli_run("contour", gcode, "--project", cli_path("other.3mf"), "-o", cli_path("out.gcode"), NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "not the part the project holds"), "exit %d: %.300s",
+           r.status, r.err);
+    CHECK(!cli_exists(cli_path("out.gcode")));
+    cli_free(&r);
+    r = cli_run("contour", gcode, "--project", cli_path("finer.3mf"), "-o", cli_path("out.gcode"), NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "not sliced from this project"), "exit %d: %.300s",
+           r.status, r.err);
+    CHECK(!cli_exists(cli_path("out.gcode")));
+    cli_free(&r);
+    free(text);
+}
+
+void test_contour(void)
+{
+    if (!cli_begin("adaslice-contour")) { CHECK(!"no temporary directory"); return; }
+    RUN_NEEDING("prusa-slicer", a_shallow_dome_is_printed_on_its_surface);
+    RUN_NEEDING("prusa-slicer", an_aerofoil_is_printed_on_its_surface);
+    RUN_NEEDING("prusa-slicer", the_bundled_hand_is_printed_on_its_surface);
+    RUN_NEEDING("prusa-slicer", refused_inputs_get_one_line_and_no_file);
+    cli_end();
+}
