@@ -181,8 +181,9 @@
    z ray meets it under another surface, and the mesh nowhere rises above the
    cone over it whose flanks climb at max_angle out to `reach` mm (the
    nozzle's; its own surface, no steeper, never does); z rays `pitch` apart
-   test it, and a face no ray meets is judged by the faces sharing its
-   corners. Residual (mm): max(0, tmax/2 - rise), as planar layers sliced at
+   test it (reach / 8 apart), and a face no ray meets is judged at the ray
+   nearest its centroid: clear if that ray's top is a clear candidate near
+   the face's plane. Residual (mm): max(0, tmax/2 - rise), as planar layers sliced at
    their middle leave the surface within half a layer of their top, plus
    resolution * D / 4, the chord error of a path sampled every `resolution`
    mm across a crease whose gradient changes by D (the largest change to a
@@ -594,8 +595,8 @@ typedef struct adaslice_hybrid_options {
     double rise;         /* mm: the farthest the contour moves Z off a layer's
                             plane; 0: tmax / 2 */
     double tmin, tmax;   /* mm: the plan's layer bounds; 0: the defaults */
-    double pitch;        /* mm between the z rays of the reach test; 0: resolution
-                            / 2, or coarser to keep 2048 rays across */
+    double pitch;        /* mm between the z rays of the reach test; 0: reach / 8,
+                            or coarser to keep 2048 rays across */
     const adaslice_allocator *allocator; /* NULL: default */
 } adaslice_hybrid_options;
 
@@ -4616,6 +4617,24 @@ static adaslice_result adaslice__fan_make(const adaslice_mesh *mesh, const unsig
     return ADASLICE_OK;
 }
 
+/* The surface's gradient (dz/dx, dz/dy) over face t, its unit n_z and its
+   area; 0 for a face with no area. */
+static int adaslice__face_slope(const adaslice_mesh *m, size_t t, double g[2], double *nz, double *area)
+{
+    double a[3], b[3], c[3], n[3], len;
+    adaslice__corner(m, t, 0, a);
+    adaslice__corner(m, t, 1, b);
+    adaslice__corner(m, t, 2, c);
+    adaslice__normal(a, b, c, n);
+    len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0)) return 0;
+    *nz = n[2] / len;
+    *area = len / 2;
+    g[0] = n[2] != 0 ? -n[0] / n[2] : 0;
+    g[1] = n[2] != 0 ? -n[1] / n[2] : 0;
+    return 1;
+}
+
 /* The reach test on a z LDI: blocked[t] = 1 for a candidate face that some
    ray meets below another surface, or where the mesh rises within `reach` of
    it (xy distance d) more than d tan(max_angle) above it; seen[t] = 1 for a
@@ -4627,21 +4646,21 @@ static adaslice_result adaslice__hybrid_reach(const adaslice_mesh *mesh, const a
     adaslice_grid g;
     adaslice_ldi ldi;
     adaslice_ldi_options lo;
-    double b0[3], b1[3], extent, pitch = o->pitch, slope = tan(o->max_angle * 3.14159265358979323846 / 180), slack;
+    double b0[3], b1[3], g0[2], extent, pitch = o->pitch, slope = tan(o->max_angle * 3.14159265358979323846 / 180), slack;
     float *top;
     int m, di, dj, i, j;
-    size_t p, s, pixels;
+    size_t p, s, t, pixels;
     adaslice_result r;
     adaslice_mesh_bounds(mesh, b0, b1);
     extent = b1[0] - b0[0] > b1[1] - b0[1] ? b1[0] - b0[0] : b1[1] - b0[1];
-    if (pitch <= 0) pitch = o->resolution / 2;
+    if (pitch <= 0) pitch = o->reach / 8; /* 200 rays a disc: the cone's cost stays linear */
     if (pitch < extent / 2048) pitch = extent / 2048;
     /* the float depths and the surface between ray centres on a face as steep as max_angle */
     slack = 1e-4 + 1e-6 * (extent + b1[2] - b0[2]);
     memset(&g, 0, sizeof g);
     g.axis = ADASLICE_AXIS_Z;
-    g.origin[0] = b0[0];
-    g.origin[1] = b0[1];
+    g.origin[0] = g0[0] = b0[0];
+    g.origin[1] = g0[1] = b0[1];
     g.pitch[0] = g.pitch[1] = pitch;
     g.width = (int)ceil((b1[0] - b0[0]) / pitch) + 1;
     g.height = (int)ceil((b1[1] - b0[1]) / pitch) + 1;
@@ -4678,27 +4697,34 @@ static adaslice_result adaslice__hybrid_reach(const adaslice_mesh *mesh, const a
                 }
             }
         }
+    /* A face too small for any ray is judged at the ray nearest its centroid:
+       clear if that ray's top is a clear candidate on its plane there (the
+       two faces meet within the ray's reach of each other), else planar. */
+    for (t = 0; t < mesh->triangle_count; t++) {
+        double c[3] = {0, 0, 0}, v[3], grad[2], nz, area, x, y;
+        size_t q, e;
+        int k;
+        if (!candidate[t] || seen[t] || blocked[t]) continue;
+        for (k = 0; k < 3; k++) {
+            adaslice__corner(mesh, t, k, v);
+            c[0] += v[0] / 3; c[1] += v[1] / 3; c[2] += v[2] / 3;
+        }
+        i = (int)floor((c[0] - g0[0]) / pitch);
+        j = (int)floor((c[1] - g0[1]) / pitch);
+        q = (size_t)j * g.width + i;
+        e = ldi.first[q + 1];
+        x = g0[0] + (i + 0.5) * pitch;
+        y = g0[1] + (j + 0.5) * pitch;
+        adaslice__face_slope(mesh, t, grad, &nz, &area);
+        blocked[t] = 2;
+        if (e > ldi.first[q] && candidate[ADASLICE_SAMPLE_FACE(ldi.samples[e - 1])] &&
+            !blocked[ADASLICE_SAMPLE_FACE(ldi.samples[e - 1])] &&
+            fabs(ldi.depth_origin + top[q] - (c[2] + grad[0] * (x - c[0]) + grad[1] * (y - c[1]))) <= 2 * pitch * slope + slack)
+            blocked[t] = 0;
+    }
     adaslice__free(al, top);
     adaslice_ldi_free(&ldi);
     return ADASLICE_OK;
-}
-
-/* The surface's gradient (dz/dx, dz/dy) over face t, its unit n_z and its
-   area; 0 for a face with no area. */
-static int adaslice__face_slope(const adaslice_mesh *m, size_t t, double g[2], double *nz, double *area)
-{
-    double a[3], b[3], c[3], n[3], len;
-    adaslice__corner(m, t, 0, a);
-    adaslice__corner(m, t, 1, b);
-    adaslice__corner(m, t, 2, c);
-    adaslice__normal(a, b, c, n);
-    len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0)) return 0;
-    *nz = n[2] / len;
-    *area = len / 2;
-    g[0] = n[2] != 0 ? -n[0] / n[2] : 0;
-    g[1] = n[2] != 0 ? -n[1] / n[2] : 0;
-    return 1;
 }
 
 ADASLICE_DEF adaslice_result adaslice_hybrid_faces(const adaslice_mesh *mesh, const adaslice_hybrid_options *options,
@@ -4753,20 +4779,6 @@ ADASLICE_DEF adaslice_result adaslice_hybrid_faces(const adaslice_mesh *mesh, co
         adaslice__free(&al, flag);
         adaslice__free(&al, slope);
         return r;
-    }
-    /* A face too small for any ray is judged by the faces around it: blocked
-       if one of them is, planar if none was seen. */
-    for (t = 0; t < n; t++) {
-        int seen_near = 0, blocked_near = 0;
-        if (!flag[t] || flag[2 * n + t] || flag[n + t]) continue;
-        for (k = 0; k < 3; k++) {
-            uint32_t v = fan.corner[3 * t + k];
-            for (x = fan.first[v]; x < fan.first[v + 1]; x++) {
-                seen_near |= flag[2 * n + fan.face[x]];
-                blocked_near |= flag[2 * n + fan.face[x]] && flag[n + fan.face[x]];
-            }
-        }
-        if (blocked_near || !seen_near) flag[n + t] = 2; /* 2: not from a ray, so it judges no other face */
     }
     rep.clamp = o.tmax / 2 > o.rise ? o.tmax / 2 - o.rise : 0;
     for (t = 0; t < n; t++) {

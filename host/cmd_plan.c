@@ -173,8 +173,9 @@ static void print_summary(const plan_args *a, const plan_job *j)
     if (j->fdm_seconds > 0) {
         char when[32];
         format_duration(when, sizeof when, j->fdm_seconds);
-        printf("FDM time   %s (%d perimeters and %g %% of the area at %g mm/s, %g s per layer change)\n", when,
-               FDM_WALLS, 100 * FDM_INFILL, FDM_SPEED, FDM_LAYER_CHANGE_S);
+        printf("FDM time   %s (%d perimeters at %g mm/s, %g %% infill at %g mm/s, %d skin layers at %g mm/s, %g s per layer "
+               "change)\n", when, FDM_WALLS, FDM_WALL_SPEED, 100 * FDM_INFILL, FDM_INFILL_SPEED, FDM_SKIN_LAYERS,
+               FDM_SKIN_SPEED, FDM_LAYER_CHANGE_S);
     }
     if (a->hybrid) print_hybrid(a, j);
     if (a->compare) print_compare(a, j);

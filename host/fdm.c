@@ -5,6 +5,19 @@
 #include <math.h>
 #include <stdlib.h>
 
+/* The area of every face seen from above or below: the skins' footprints. */
+static double footprints(const adaslice_mesh *m)
+{
+    double sum = 0;
+    size_t t;
+    for (t = 0; t < m->triangle_count; t++) {
+        const float *a = m->vertices + 3 * (size_t)m->triangles[3 * t], *b = m->vertices + 3 * (size_t)m->triangles[3 * t + 1],
+                    *c = m->vertices + 3 * (size_t)m->triangles[3 * t + 2];
+        sum += fabs(((double)b[0] - a[0]) * ((double)c[1] - a[1]) - ((double)c[0] - a[0]) * ((double)b[1] - a[1])) / 2;
+    }
+    return sum;
+}
+
 /* Each layer's section at its middle, where the slicers cut it. */
 int fdm_plan_seconds(const adaslice_mesh *mesh, double z0, const adaslice_plan *p, double *seconds)
 {
@@ -31,9 +44,10 @@ int fdm_plan_seconds(const adaslice_mesh *mesh, double z0, const adaslice_plan *
                 area += (a[0] * b[1] - b[0] * a[1]) / 2;
             }
         }
-        total += (FDM_WALLS * length + FDM_INFILL * fabs(area) / FDM_WIDTH) / FDM_SPEED + FDM_LAYER_CHANGE_S;
+        total += FDM_WALLS * length / FDM_WALL_SPEED + FDM_INFILL * fabs(area) / (FDM_WIDTH * FDM_INFILL_SPEED) +
+                 FDM_LAYER_CHANGE_S;
     }
     adaslice_contours_free(&c);
-    *seconds = total;
+    *seconds = total + FDM_SKIN_LAYERS * footprints(mesh) / (FDM_WIDTH * FDM_SKIN_SPEED);
     return RC_OK;
 }
