@@ -322,6 +322,41 @@ static void bad_hybrid_input_is_refused(void)
     }
 }
 
+/* The library refuses what the tool would: an angle outside (0, 45], no
+   residual array, no triangles; and it leaves every face of a box's steep
+   walls and its bottom planar, its flat top contoured with no residual. */
+static void the_library_checks_its_options(void)
+{
+    adaslice_mesh box = gen_box(0, 0, 0, 10, 10, 10), empty;
+    adaslice_hybrid_options o;
+    adaslice_hybrid_report rep;
+    adaslice_error e;
+    float residual[12], weights[12];
+    size_t t, top = 0;
+    memset(&o, 0, sizeof o);
+    memset(&empty, 0, sizeof empty);
+    o.max_angle = 50;
+    CHECK(adaslice_hybrid_faces(&box, &o, residual, NULL, NULL, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "50"));
+    o.max_angle = -1;
+    CHECK(adaslice_hybrid_faces(&box, &o, residual, NULL, NULL, &e) == ADASLICE_ERR_ARGUMENT);
+    o.max_angle = 0;
+    CHECK(adaslice_hybrid_faces(&box, &o, NULL, NULL, NULL, &e) == ADASLICE_ERR_ARGUMENT);
+    CHECK(adaslice_hybrid_faces(&empty, &o, residual, NULL, NULL, &e) == ADASLICE_ERR_EMPTY);
+    for (t = 0; t < 12; t++) weights[t] = 0.5f;
+    CHECKF(adaslice_hybrid_faces(&box, NULL, residual, weights, &rep, &e) == ADASLICE_OK, "%s", e.message);
+    for (t = 0; t < box.triangle_count; t++) {
+        int up = box.vertices[3 * box.triangles[3 * t] + 2] == 10 && box.vertices[3 * box.triangles[3 * t + 1] + 2] == 10 &&
+                 box.vertices[3 * box.triangles[3 * t + 2] + 2] == 10;
+        top += up;
+        CHECKF(up ? residual[t] == 0 && weights[t] == 0 : residual[t] == -1 && weights[t] == 0.5f,
+               "face %zu (%s): residual %g, weight %g", t, up ? "top" : "wall or bottom", residual[t], weights[t]);
+    }
+    CHECKF(top == 2 && rep.contoured == 2 && rep.candidates == 2 && rep.residual == 0 && fabs(rep.area - 100) < 1e-9 &&
+               rep.z_low == 10 && rep.z_high == 10,
+           "%zu contoured of %zu, area %g", rep.contoured, rep.candidates, rep.area);
+    gen_free(&box);
+}
+
 void test_hybrid(void)
 {
     if (!cli_begin("adaslice-hybrid")) { CHECK(!"no temporary directory"); return; }
@@ -330,5 +365,6 @@ void test_hybrid(void)
     RUN(a_shallow_face_under_an_overhang_stays_planar);
     RUN(savings_are_against_an_independent_planar_plan);
     RUN(bad_hybrid_input_is_refused);
+    RUN(the_library_checks_its_options);
     cli_end();
 }

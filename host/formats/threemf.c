@@ -86,6 +86,7 @@ typedef struct project {
     const threemf_args *args;
     const plan_job *job;         /* --hybrid: its residual per face */
     double z0;
+    double (*span)[2];           /* --hybrid: room for a height range per face */
 } project;
 
 static void write_content_types(FILE *f, const void *ctx)
@@ -169,7 +170,7 @@ static void write_contour(FILE *f, const void *ctx)
     const adaslice_hybrid_options *h = &p->args->contour;
     const adaslice_mesh *m = p->mesh;
     size_t t, n = m->triangle_count, run = 0, spans = 0;
-    double (*span)[2] = (double (*)[2])malloc((n ? n : 1) * sizeof *span);
+    double (*span)[2] = p->span;
     fprintf(f, "; adaslice %s hybrid plan for adaslice contour\n; max_angle = %.9g\n; reach = %.9g\n"
                "; max_rise = %.9g\n; resolution = %.9g\n; residual = %.9g\n; contoured_faces =",
             ADASLICE_VERSION, h->max_angle, h->reach ? h->reach : ADASLICE_DEFAULT_REACH,
@@ -182,7 +183,7 @@ static void write_contour(FILE *f, const void *ctx)
         run = 0;
     }
     fputs("\n; contoured_heights =", f);
-    for (t = 0; span && t < n; t++) {
+    for (t = 0; t < n; t++) {
         const uint32_t *c = m->triangles + 3 * t;
         double lo = m->vertices[3 * c[0] + 2], hi = lo;
         int k;
@@ -195,14 +196,14 @@ static void write_contour(FILE *f, const void *ctx)
         span[spans][0] = lo - p->z0;
         span[spans++][1] = hi - p->z0;
     }
-    if (span) qsort(span, spans, sizeof *span, by_low);
+    qsort(span, spans, sizeof *span, by_low);
     for (t = 0; t < spans; t++) {
         double lo = span[t][0], hi = span[t][1];
-        while (t + 1 < spans && span[t + 1][0] <= hi) hi = span[++t][1] > hi ? span[t][1] : hi;
+        for (; t + 1 < spans && span[t + 1][0] <= hi; t++)
+            if (span[t + 1][1] > hi) hi = span[t + 1][1];
         fprintf(f, " %.6g-%.6g", lo, hi);
     }
     fputc('\n', f);
-    free(span);
 }
 
 /* A top as the file will hold it. */
@@ -243,7 +244,12 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
     p.args = t;
     p.job = j;
     p.z0 = lo[2];
-    if ((rc = zip_open(&z, t->path))) { free(tops); return rc; }
+    p.span = NULL;
+    if (j->residual && !(p.span = (double (*)[2])malloc(j->mesh.triangle_count * sizeof *p.span))) {
+        free(tops);
+        return complain(RC_FAIL, "out of memory");
+    }
+    if ((rc = zip_open(&z, t->path))) { free(tops); free(p.span); return rc; }
     if ((rc = zip_add_text(z, "[Content_Types].xml", write_content_types, &p)) ||
         (rc = zip_add_text(z, "_rels/.rels", write_rels, &p)) || (rc = zip_add_text(z, "3D/3dmodel.model", write_model, &p)) ||
         (rc = zip_add_text(z, "Metadata/Slic3r_PE_layer_heights_profile.txt", write_profile, &p)) ||
@@ -252,8 +258,10 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
         (j->residual && (rc = zip_add_text(z, THREEMF_CONTOUR_PART, write_contour, &p)))) {
         zip_close(z, 0);
         free(tops);
+        free(p.span);
         return rc;
     }
+    free(p.span);
     if (!(rc = zip_close(z, 1)))
         fprintf(note,
                 "%s: %zu layer%s of %.9g to %.9g mm for PrusaSlicer, OrcaSlicer and Bambu Studio; the printer profile "
