@@ -136,7 +136,7 @@ check: compile-checks firmware fuzz $(TEST_PROGRAMS) $(B)/fw-mps2.elf $(B)/fw-mp
 # translation units linked together (plain and ADASLICE_STATIC), every
 # ADASLICE_NO_* switch, the README's example, and the integer planner for a
 # Cortex-M3 (under 16 KiB of RAM for 12,000 bins).
-NO_SWITCHES = LOADERS SAMPLED WEIGHTS ORIENT CONTOURS STDIO
+NO_SWITCHES = LOADERS SAMPLED WEIGHTS ORIENT CONTOURS HYBRID STDIO
 compile-checks:
 	@mkdir -p $(B)/cc
 	$(CC) $(CSTD) -c tests/compile/one.c -o $(B)/cc/one_gcc.o

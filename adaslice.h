@@ -85,6 +85,10 @@
                                                   const adaslice_surface_options *options, double *kappa,
                                                   adaslice_error *error);
            mean |H| of the surface per bin
+       adaslice_result adaslice_hybrid_faces(const adaslice_mesh *mesh, const adaslice_hybrid_options *options,
+                                             float *residual, float *weights, adaslice_hybrid_report *report,
+                                             adaslice_error *error);
+           faces an FDM contour pass prints without steps, and the error it leaves them
      plans
        adaslice_result adaslice_plan_profile(const adaslice_profile *profile, const adaslice_plan_options *options,
                                              adaslice_plan *plan, adaslice_error *error);
@@ -241,6 +245,25 @@
    gives k(z), the area-weighted mean |H| of the surface in each bin, for the
    curvature planner.
 
+   HYBRID (FDM)  A contour pass (adaslice contour) moves Z along the top
+   surface paths of planar layers to follow the mesh, so the faces it prints
+   leave no stair step; adaslice_hybrid_faces says which, and what they keep:
+   a face is contoured when it faces up no steeper than max_angle (15 deg),
+   it is reachable and its residual costs less than its cusp. Reachable: no
+   z ray meets it under another surface, and the mesh nowhere rises above the
+   cone over it whose flanks climb at max_angle out to `reach` mm (the
+   nozzle's; its own surface, no steeper, never does); z rays `pitch` apart
+   test it (reach / 8 apart), and a face no ray meets is judged at the ray
+   nearest its centroid: clear if that ray's top is a clear candidate near
+   the face's plane. Residual (mm): max(0, tmax/2 - rise), as planar layers sliced at
+   their middle leave the surface within half a layer of their top, plus
+   resolution * D / 4, the chord error of a path sampled every `resolution`
+   mm across a crease whose gradient changes by D (the largest change to a
+   contoured face sharing a corner; exact for faces wider than a segment).
+   The cusp profile charges a contoured face residual / tmin per mm instead
+   of |n_z|, which bounds it in any layer from tmin up (a face where that is
+   not less than |n_z| is left planar).
+
    PLANS
      optimal   Procedure 1 in O(N) for additive metrics: the feasible
                predecessors of a plane form a window whose ends only move
@@ -360,6 +383,7 @@
      ADASLICE_NO_WEIGHTS      mean curvature, saliency, the curvature profile
      ADASLICE_NO_ORIENT       the build-direction search
      ADASLICE_NO_CONTOURS     the slice contours
+     ADASLICE_NO_HYBRID       the hybrid planar / contoured face classification
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; 2^32 - 1 vertices;
    grids of at most 2^21 pixels a side.
 
@@ -653,6 +677,53 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
                                                       adaslice_profile *profile, adaslice_error *error);
 #endif
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile);
+
+#ifndef ADASLICE_NO_HYBRID
+/* Hybrid planar / contoured slicing for FDM: which faces a contour pass (Z
+   moved along the surface paths to follow the mesh) will print without stair
+   steps, and what error it leaves them, so that the cusp profile can charge
+   them that instead of their cusp. See HYBRID in the manual. */
+#define ADASLICE_DEFAULT_MAX_ANGLE 15.0        /* degrees from horizontal */
+#define ADASLICE_DEFAULT_REACH 2.0             /* mm */
+#define ADASLICE_DEFAULT_PATH_RESOLUTION 0.2   /* mm */
+
+typedef struct adaslice_hybrid_options {
+    double max_angle;    /* the steepest face contoured, degrees from horizontal,
+                            in (0, 45]; 0: ADASLICE_DEFAULT_MAX_ANGLE */
+    double reach;        /* mm: radius of the nozzle cone that must be clear;
+                            0: ADASLICE_DEFAULT_REACH */
+    double resolution;   /* mm: the contour's longest path segment;
+                            0: ADASLICE_DEFAULT_PATH_RESOLUTION */
+    double rise;         /* mm: the farthest the contour moves Z off a layer's
+                            plane; 0: tmax / 2 */
+    double tmin, tmax;   /* mm: the plan's layer bounds; 0: the defaults */
+    double pitch;        /* mm between the z rays of the reach test; 0: reach / 8,
+                            or coarser to keep 2048 rays across */
+    const adaslice_allocator *allocator; /* NULL: default */
+} adaslice_hybrid_options;
+
+typedef struct adaslice_hybrid_report {
+    size_t candidates;   /* faces facing up, no steeper than max_angle */
+    size_t contoured;    /* ... of them reachable and worth it */
+    size_t blocked;      /* candidates with part of the mesh in the nozzle's cone */
+    size_t costly;       /* candidates whose residual costs more than their cusp */
+    double area;         /* mm^2 contoured */
+    double z_low, z_high;/* absolute z (mm) the contoured faces span; 0, 0 if none */
+    double residual;     /* mm: the largest residual bound of a contoured face */
+    double clamp;        /* mm: the part of every residual the rise leaves,
+                            max(0, tmax / 2 - rise) */
+} adaslice_hybrid_report;
+
+/* Classifies every face: residual[t] is -1 for a face printed planar, else
+   the bound (mm) on the vertical distance between the contoured path and the
+   mesh over face t. weights (NULL, or one per face, e.g. saliency, all 1 if
+   you have none) are multiplied, for contoured faces, by
+   residual / (tmin |n_z|), so adaslice_profile_exact or _sampled with them
+   gives the hybrid cusp profile. report may be NULL. */
+ADASLICE_DEF adaslice_result adaslice_hybrid_faces(const adaslice_mesh *mesh, const adaslice_hybrid_options *options,
+                                                   float *residual, float *weights, adaslice_hybrid_report *report,
+                                                   adaslice_error *error);
+#endif
 
 #ifndef ADASLICE_NO_WEIGHTS
 /* How the weights read a surface: vertices within weld_tolerance are one
@@ -4625,6 +4696,284 @@ done:
 }
 
 #endif /* ADASLICE_NO_SAMPLED */
+
+#ifndef ADASLICE_NO_HYBRID
+/* ============================================================== hybrid */
+
+/* Every face's incident faces by shared (welded) corner, as CSR: the faces at
+   vertex v are face[first[v] .. first[v+1]). Only faces with keep[t] set. */
+typedef struct adaslice__fan {
+    size_t *first;
+    uint32_t *face;
+    uint32_t *corner;   /* the welded triangles: 3 per face */
+} adaslice__fan;
+
+static void adaslice__fan_free(adaslice__fan *f, const adaslice_allocator *al)
+{
+    adaslice__free(al, f->first);
+    adaslice__free(al, f->face);
+    adaslice__free(al, f->corner);
+}
+
+static adaslice_result adaslice__fan_make(const adaslice_mesh *mesh, const unsigned char *keep,
+                                          const adaslice_allocator *al, adaslice__fan *f, adaslice_error *err)
+{
+    adaslice_mesh w = *mesh;
+    adaslice_weld_options wo;
+    float *v = ADASLICE__CAST(float *, adaslice__alloc(al, 3 * mesh->vertex_count, sizeof(float)));
+    size_t t, k, n = mesh->triangle_count, nv;
+    adaslice_result r;
+    memset(f, 0, sizeof *f);
+    f->corner = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 3 * n, sizeof(uint32_t)));
+    if (!v || !f->corner) {
+        adaslice__free(al, v);
+        adaslice__fan_free(f, al);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "hybrid: out of memory for %zu faces", n);
+    }
+    /* corners equal bit for bit are one: an STL repeats them per face */
+    memcpy(v, mesh->vertices, 3 * mesh->vertex_count * sizeof(float));
+    memcpy(f->corner, mesh->triangles, 3 * n * sizeof(uint32_t));
+    w.vertices = v;
+    w.triangles = f->corner;
+    memset(&w.allocator, 0, sizeof w.allocator);
+    memset(&wo, 0, sizeof wo);
+    wo.allocator = al;
+    r = adaslice_mesh_weld(&w, &wo, err);
+    adaslice__free(al, v);
+    nv = w.vertex_count;
+    if (r == ADASLICE_OK) {
+        f->first = ADASLICE__CAST(size_t *, adaslice__alloc(al, nv + 1, sizeof(size_t)));
+        f->face = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 3 * n, sizeof(uint32_t)));
+        if (!f->first || !f->face)
+            r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "hybrid: out of memory for %zu faces", n);
+    }
+    if (r != ADASLICE_OK) {
+        adaslice__fan_free(f, al);
+        return r;
+    }
+    memset(f->first, 0, (nv + 1) * sizeof(size_t));
+    for (t = 0; t < n; t++)
+        for (k = 0; keep[t] && k < 3; k++) f->first[f->corner[3 * t + k] + 1]++;
+    for (k = 0; k < nv; k++) f->first[k + 1] += f->first[k];
+    for (t = 0; t < n; t++)
+        for (k = 0; keep[t] && k < 3; k++) f->face[f->first[f->corner[3 * t + k]]++] = (uint32_t)t;
+    for (k = nv; k > 0; k--) f->first[k] = f->first[k - 1];
+    f->first[0] = 0;
+    return ADASLICE_OK;
+}
+
+/* The surface's gradient (dz/dx, dz/dy) over face t, its unit n_z and its
+   area; 0 for a face with no area. */
+static int adaslice__face_slope(const adaslice_mesh *m, size_t t, double g[2], double *nz, double *area)
+{
+    double a[3], b[3], c[3], n[3], len;
+    adaslice__corner(m, t, 0, a);
+    adaslice__corner(m, t, 1, b);
+    adaslice__corner(m, t, 2, c);
+    adaslice__normal(a, b, c, n);
+    len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0)) return 0;
+    *nz = n[2] / len;
+    *area = len / 2;
+    g[0] = n[2] != 0 ? -n[0] / n[2] : 0;
+    g[1] = n[2] != 0 ? -n[1] / n[2] : 0;
+    return 1;
+}
+
+/* The reach test on a z LDI: blocked[t] = 1 for a candidate face that some
+   ray meets below another surface, or where the mesh rises within `reach` of
+   it (xy distance d) more than d tan(max_angle) above it; seen[t] = 1 for a
+   face that is some ray's top. */
+static adaslice_result adaslice__hybrid_reach(const adaslice_mesh *mesh, const adaslice_hybrid_options *o,
+                                              const unsigned char *candidate, unsigned char *blocked,
+                                              unsigned char *seen, const adaslice_allocator *al, adaslice_error *err)
+{
+    adaslice_grid g;
+    adaslice_ldi ldi;
+    adaslice_ldi_options lo;
+    double b0[3], b1[3], g0[2], extent, pitch = o->pitch, slope = tan(o->max_angle * 3.14159265358979323846 / 180), slack;
+    float *top;
+    int m, di, dj, i, j;
+    size_t p, s, t, pixels;
+    adaslice_result r;
+    adaslice_mesh_bounds(mesh, b0, b1);
+    extent = b1[0] - b0[0] > b1[1] - b0[1] ? b1[0] - b0[0] : b1[1] - b0[1];
+    if (pitch <= 0) pitch = o->reach / 8; /* 200 rays a disc: the cone's cost stays linear */
+    if (pitch < extent / 2048) pitch = extent / 2048;
+    /* the float depths and the surface between ray centres on a face as steep as max_angle */
+    slack = 1e-4 + 1e-6 * (extent + b1[2] - b0[2]);
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.origin[0] = g0[0] = b0[0];
+    g.origin[1] = g0[1] = b0[1];
+    g.pitch[0] = g.pitch[1] = pitch;
+    g.width = (int)ceil((b1[0] - b0[0]) / pitch) + 1;
+    g.height = (int)ceil((b1[1] - b0[1]) / pitch) + 1;
+    memset(&lo, 0, sizeof lo);
+    lo.allocator = al;
+    if ((r = adaslice_ldi_build(mesh, &g, &lo, &ldi, err)) != ADASLICE_OK) return r;
+    pixels = (size_t)g.width * (size_t)g.height;
+    top = ADASLICE__CAST(float *, adaslice__alloc(al, pixels, sizeof(float)));
+    if (!top) {
+        adaslice_ldi_free(&ldi);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "hybrid: out of memory for %zu rays", pixels);
+    }
+    for (p = 0; p < pixels; p++) {
+        size_t a = ldi.first[p], e = ldi.first[p + 1];
+        top[p] = a < e ? ldi.samples[e - 1].depth : -FLT_MAX;
+        for (s = a; s + 1 < e; s++) /* under another surface: an overhang, or inside */
+            if (candidate[ADASLICE_SAMPLE_FACE(ldi.samples[s])]) blocked[ADASLICE_SAMPLE_FACE(ldi.samples[s])] = 1;
+    }
+    m = (int)floor(o->reach / pitch);
+    for (j = 0; j < g.height; j++)
+        for (i = 0; i < g.width; i++) {
+            size_t q = (size_t)j * g.width + i;
+            uint32_t t;
+            if (ldi.first[q] == ldi.first[q + 1]) continue;
+            t = ADASLICE_SAMPLE_FACE(ldi.samples[ldi.first[q + 1] - 1]);
+            if (!candidate[t]) continue;
+            seen[t] = 1;
+            for (dj = -m; dj <= m && !blocked[t]; dj++) {
+                if (j + dj < 0 || j + dj >= g.height) continue;
+                for (di = -m; di <= m; di++) {
+                    double d = pitch * sqrt((double)di * di + (double)dj * dj);
+                    if (d > o->reach || i + di < 0 || i + di >= g.width) continue;
+                    if (top[q + (ptrdiff_t)dj * g.width + di] - top[q] > d * slope + slack) { blocked[t] = 1; break; }
+                }
+            }
+        }
+    /* A face too small for any ray is judged at the ray nearest its centroid:
+       clear if that ray's top is a clear candidate on its plane there (the
+       two faces meet within the ray's reach of each other), else planar. */
+    for (t = 0; t < mesh->triangle_count; t++) {
+        double c[3] = {0, 0, 0}, v[3], grad[2], nz, area, x, y;
+        size_t q, e;
+        int k;
+        if (!candidate[t] || seen[t] || blocked[t]) continue;
+        for (k = 0; k < 3; k++) {
+            adaslice__corner(mesh, t, k, v);
+            c[0] += v[0] / 3; c[1] += v[1] / 3; c[2] += v[2] / 3;
+        }
+        i = (int)floor((c[0] - g0[0]) / pitch);
+        j = (int)floor((c[1] - g0[1]) / pitch);
+        q = (size_t)j * g.width + i;
+        e = ldi.first[q + 1];
+        x = g0[0] + (i + 0.5) * pitch;
+        y = g0[1] + (j + 0.5) * pitch;
+        adaslice__face_slope(mesh, t, grad, &nz, &area);
+        blocked[t] = 2;
+        if (e > ldi.first[q] && candidate[ADASLICE_SAMPLE_FACE(ldi.samples[e - 1])] &&
+            !blocked[ADASLICE_SAMPLE_FACE(ldi.samples[e - 1])] &&
+            fabs(ldi.depth_origin + top[q] - (c[2] + grad[0] * (x - c[0]) + grad[1] * (y - c[1]))) <= 2 * pitch * slope + slack)
+            blocked[t] = 0;
+    }
+    adaslice__free(al, top);
+    adaslice_ldi_free(&ldi);
+    return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_hybrid_faces(const adaslice_mesh *mesh, const adaslice_hybrid_options *options,
+                                                   float *residual, float *weights, adaslice_hybrid_report *report,
+                                                   adaslice_error *err)
+{
+    adaslice_hybrid_options o;
+    adaslice_hybrid_report rep;
+    adaslice_allocator al;
+    adaslice__fan fan;
+    unsigned char *flag;
+    double *slope, cos_max;
+    size_t t, n, k, x;
+    adaslice_result r;
+    if (options) o = *options; else memset(&o, 0, sizeof o);
+    if (o.max_angle == 0) o.max_angle = ADASLICE_DEFAULT_MAX_ANGLE;
+    if (o.reach == 0) o.reach = ADASLICE_DEFAULT_REACH;
+    if (o.resolution == 0) o.resolution = ADASLICE_DEFAULT_PATH_RESOLUTION;
+    if (o.tmin == 0) o.tmin = ADASLICE_DEFAULT_TMIN;
+    if (o.tmax == 0) o.tmax = ADASLICE_DEFAULT_TMAX;
+    if (o.rise == 0) o.rise = o.tmax / 2;
+    if (!(o.max_angle > 0 && o.max_angle <= 45))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "hybrid: max angle %g degrees is outside (0, 45]", o.max_angle);
+    if (!(o.reach > 0 && o.resolution > 0 && o.rise > 0 && o.tmin > 0 && o.tmax >= o.tmin && o.pitch >= 0) ||
+        o.reach > 1e6 || o.resolution > 1e6 || o.tmax > 1e6 || o.pitch > 1e6)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "hybrid: reach %g, resolution %g, rise %g, tmin %g, tmax %g and pitch %g mm must be positive "
+                              "(pitch 0: default) and tmin <= tmax", o.reach, o.resolution, o.rise, o.tmin, o.tmax, o.pitch);
+    if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "hybrid: the mesh has no triangles");
+    if (!residual) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "hybrid: no residual array given");
+    n = mesh->triangle_count;
+    al = adaslice__allocator(o.allocator);
+    cos_max = cos(o.max_angle * 3.14159265358979323846 / 180);
+    /* per face: candidate, blocked, seen (flag + 0, n, 2n); gradient and n_z (slope + 3t) */
+    flag = ADASLICE__CAST(unsigned char *, adaslice__alloc(&al, 3, n));
+    slope = ADASLICE__CAST(double *, adaslice__alloc(&al, 3 * n, sizeof(double)));
+    if (!flag || !slope) {
+        adaslice__free(&al, flag);
+        adaslice__free(&al, slope);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "hybrid: out of memory for %zu faces", n);
+    }
+    memset(flag, 0, 3 * n);
+    memset(&rep, 0, sizeof rep);
+    for (t = 0; t < n; t++) {
+        double area;
+        flag[t] = adaslice__face_slope(mesh, t, slope + 3 * t, slope + 3 * t + 2, &area) && slope[3 * t + 2] >= cos_max;
+        rep.candidates += flag[t];
+    }
+    r = adaslice__hybrid_reach(mesh, &o, flag, flag + n, flag + 2 * n, &al, err);
+    if (r == ADASLICE_OK) r = adaslice__fan_make(mesh, flag, &al, &fan, err);
+    if (r != ADASLICE_OK) {
+        adaslice__free(&al, flag);
+        adaslice__free(&al, slope);
+        return r;
+    }
+    rep.clamp = o.tmax / 2 > o.rise ? o.tmax / 2 - o.rise : 0;
+    for (t = 0; t < n; t++) {
+        double change = 0, rt;
+        residual[t] = -1;
+        if (!flag[t]) continue;
+        if (flag[n + t]) { rep.blocked++; continue; }
+        /* Z is exact at path points resolution apart and linear between: a
+           segment over a crease whose slope changes by D is off by at most
+           resolution * D / 4 (at the crease, halfway), for faces wider than a
+           segment; D is the largest gradient change to a reachable candidate
+           sharing a corner. */
+        for (k = 0; k < 3; k++) {
+            uint32_t v = fan.corner[3 * t + k];
+            for (x = fan.first[v]; x < fan.first[v + 1]; x++) {
+                const double *gn = slope + 3 * (size_t)fan.face[x];
+                double dx = slope[3 * t] - gn[0], dy = slope[3 * t + 1] - gn[1];
+                if (flag[n + fan.face[x]]) continue;
+                if (sqrt(dx * dx + dy * dy) > change) change = sqrt(dx * dx + dy * dy);
+            }
+        }
+        rt = rep.clamp + o.resolution * change / 4;
+        /* charged per mm of the thinnest layer, so any layer's charge covers
+           it; not worth it where that is more than the stair step's */
+        if (rt / o.tmin >= slope[3 * t + 2]) { rep.costly++; continue; }
+        residual[t] = (float)rt;
+        rep.contoured++;
+        for (k = 0; k < 3; k++) {
+            double c[3];
+            adaslice__corner(mesh, t, (int)k, c);
+            if (rep.contoured == 1 && k == 0) rep.z_low = rep.z_high = c[2];
+            rep.z_low = c[2] < rep.z_low ? c[2] : rep.z_low;
+            rep.z_high = c[2] > rep.z_high ? c[2] : rep.z_high;
+        }
+        {
+            double g[2], nz, area;
+            adaslice__face_slope(mesh, t, g, &nz, &area);
+            rep.area += area;
+        }
+        if (rt > rep.residual) rep.residual = rt;
+        if (weights) weights[t] *= (float)(rt / (o.tmin * slope[3 * t + 2]));
+    }
+    adaslice__fan_free(&fan, &al);
+    adaslice__free(&al, flag);
+    adaslice__free(&al, slope);
+    if (report) *report = rep;
+    adaslice__ok(err);
+    return ADASLICE_OK;
+}
+#endif /* ADASLICE_NO_HYBRID */
 
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)
 {

@@ -3,6 +3,7 @@
 #include "json.h"
 #include "commands.h"
 #include "cure.h"
+#include "fdm.h"
 #include "model.h"
 #include "output.h"
 #include "plan_job.h"
@@ -100,6 +101,34 @@ static void print_compare(const plan_args *a, const plan_job *j)
     }
 }
 
+/* The hybrid plan against planar layers of the same worst printed error. */
+static void print_hybrid(const plan_args *a, const plan_job *j)
+{
+    const adaslice_hybrid_report *h = &j->hybrid;
+    const adaslice_plan *p = &j->plan[a->method], *q = &j->planar;
+    char when[32], instead[32];
+    printf("hybrid     %zu of %zu face%s facing up within %g degrees contoured (%.6g mm^2, z %.6g to %.6g mm); "
+           "%zu with the part in the nozzle's cone (%g mm), %zu whose residual costs more than their cusp\n",
+           h->contoured, h->candidates, plural(h->candidates), a->hybrid->max_angle, h->area,
+           h->contoured ? h->z_low - j->profile.z0 : 0, h->contoured ? h->z_high - j->profile.z0 : 0, h->blocked,
+           a->hybrid->reach ? a->hybrid->reach : ADASLICE_DEFAULT_REACH, h->costly);
+    printf("           residual after contour at most %.6g mm (rise clamp %.6g mm + chord at %g mm segments)\n",
+           h->residual, h->clamp, a->hybrid->resolution ? a->hybrid->resolution : ADASLICE_DEFAULT_PATH_RESOLUTION);
+    printf("           printed surface: worst error %.6g mm (walls %.6g mm by the plan's cusp, contoured %.6g mm)\n",
+           j->printed_worst, j->walls_worst, h->residual);
+    format_duration(when, sizeof when, j->fdm_seconds);
+    format_duration(instead, sizeof instead, j->planar_fdm_seconds);
+    if (j->planar_finest)
+        printf("           no planar plan reaches it (finer than %g mm); uniform %g mm layers (worst %.6g mm): ",
+               a->tmin, a->tmin, q->worst_error);
+    else
+        printf("           planar optimal at %.6g mm: ", j->printed_worst);
+    printf("%zu layer%s, %s; hybrid %zu, %s: %ld layer%s (%.1f %%) and %.1f %% of the time saved\n", q->layer_count,
+           plural(q->layer_count), instead, p->layer_count, when, (long)q->layer_count - (long)p->layer_count,
+           q->layer_count - p->layer_count == 1 ? "" : "s",
+           100 * (1 - (double)p->layer_count / q->layer_count), 100 * (1 - j->fdm_seconds / j->planar_fdm_seconds));
+}
+
 static void print_summary(const plan_args *a, const plan_job *j)
 {
     const adaslice_plan *p = &j->plan[a->method];
@@ -141,6 +170,14 @@ static void print_summary(const plan_args *a, const plan_job *j)
         printf("           %s\n", line);
     }
     printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
+    if (j->fdm_seconds > 0) {
+        char when[32];
+        format_duration(when, sizeof when, j->fdm_seconds);
+        printf("FDM time   %s (%d perimeters at %g mm/s, %g %% infill at %g mm/s, %d skin layers at %g mm/s, %g s per layer "
+               "change)\n", when, FDM_WALLS, FDM_WALL_SPEED, 100 * FDM_INFILL, FDM_INFILL_SPEED, FDM_SKIN_LAYERS,
+               FDM_SKIN_SPEED, FDM_LAYER_CHANGE_S);
+    }
+    if (a->hybrid) print_hybrid(a, j);
     if (a->compare) print_compare(a, j);
 }
 
@@ -150,6 +187,34 @@ static void json_plan_fields(json_writer *w, const adaslice_plan *p)
     json_number(w, "worst_error", p->worst_error);
     json_number(w, "total_error", p->total_error);
     json_int(w, "over_eps", (long long)p->over_eps);
+}
+
+static void json_hybrid(json_writer *w, const plan_args *a, const plan_job *j)
+{
+    const adaslice_hybrid_report *h = &j->hybrid;
+    const adaslice_plan *p = &j->plan[a->method], *q = &j->planar;
+    json_begin_object(w, "hybrid", 0);
+    json_number(w, "max_angle", a->hybrid->max_angle);
+    json_int(w, "candidate_faces", (long long)h->candidates);
+    json_int(w, "contoured_faces", (long long)h->contoured);
+    json_int(w, "blocked_faces", (long long)h->blocked);
+    json_int(w, "costly_faces", (long long)h->costly);
+    json_number(w, "contoured_area_mm2", h->area);
+    json_number(w, "residual", h->residual);
+    json_number(w, "rise_clamp", h->clamp);
+    json_number(w, "walls_worst_error", j->walls_worst);
+    json_number(w, "printed_worst_error", j->printed_worst);
+    json_string(w, "planar_method", j->planar_finest ? "finest" : "optimal");
+    json_number(w, "planar_eps", j->printed_worst);
+    json_int(w, "planar_layers", (long long)q->layer_count);
+    json_number(w, "planar_worst_error", q->worst_error);
+    json_number(w, "planar_print_time_s", j->planar_fdm_seconds);
+    json_int(w, "layers", (long long)p->layer_count);
+    json_number(w, "print_time_s", j->fdm_seconds);
+    json_int(w, "layers_saved", (long long)q->layer_count - (long long)p->layer_count);
+    json_number(w, "print_time_saved_s", j->planar_fdm_seconds - j->fdm_seconds);
+    json_number(w, "print_time_saved_percent", 100 * (1 - j->fdm_seconds / j->planar_fdm_seconds));
+    json_end(w);
 }
 
 static void print_json(const plan_args *a, const plan_job *j)
@@ -219,6 +284,8 @@ static void print_json(const plan_args *a, const plan_job *j)
         json_end(&w);
     }
     json_end(&w);
+    if (j->fdm_seconds > 0) json_number(&w, "fdm_print_time_s", j->fdm_seconds);
+    if (a->hybrid) json_hybrid(&w, a, j);
     if (a->compare) {
         json_begin_array(&w, "compare", 0);
         for (r = 0; r < TABLE3_ROWS; r++) {
@@ -272,7 +339,9 @@ int cmd_plan(int argc, char **argv)
         return RC_OK;
     }
     if (t.path && !a.model) return complain(RC_USAGE, "--3mf needs a MODEL, not --profile");
+    if ((rc = threemf_check_hybrid(&t, &a))) return rc;
     if (t.path && (rc = threemf_check_bounds(&t, &a))) return rc;
+    a.hybrid = t.hybrid ? &t.contour : NULL;
     if ((rc = check_plan_outputs(&a)) || (rc = output_check("--3mf", t.path))) return rc;
     memset(&j, 0, sizeof j);
     j.args = &a;
@@ -280,6 +349,9 @@ int cmd_plan(int argc, char **argv)
     rc = run_plan(&a, &j);
     if (!rc) rc = write_outputs(&a, &j);
     if (!rc && t.path) rc = threemf_write(&t, &a, &j, a.json ? stderr : stdout);
+    /* after threemf_write, which welds the mesh the contours need */
+    if (!rc && t.path) rc = fdm_plan_seconds(&j.mesh, j.profile.z0, &j.plan[a.method], &j.fdm_seconds);
+    if (!rc && j.planar_found) rc = fdm_plan_seconds(&j.mesh, j.profile.z0, &j.planar, &j.planar_fdm_seconds);
     if (!rc) (a.json ? print_json : print_summary)(&a, &j);
     job_free(&j);
     return rc;

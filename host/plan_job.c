@@ -189,6 +189,50 @@ static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profi
     return RC_OK;
 }
 
+static adaslice_result profile_with(const plan_args *a, const adaslice_mesh *mesh, adaslice_profile_options *po,
+                                    const float *weights, adaslice_profile *out, adaslice_error *err)
+{
+    po->weights = weights;
+    return a->sampler ? adaslice_profile_sampled(mesh, po, out, err) : adaslice_profile_exact(mesh, po, out, err);
+}
+
+/* --hybrid: the planar profile (the user's weights only), then *weights
+   (made all 1 if there were none) turned into the hybrid weights the job's
+   profile is made with, and the walls' profile (contoured faces weighing 0). */
+static int profile_planar_parts(const plan_args *a, plan_job *j, const adaslice_mesh *mesh, adaslice_profile_options *po,
+                                float **weights)
+{
+    adaslice_hybrid_options ho = *a->hybrid;
+    adaslice_error err;
+    float *walls;
+    size_t t, n = mesh->triangle_count;
+    if (!*weights && (*weights = (float *)malloc(n * sizeof **weights)))
+        for (t = 0; t < n; t++) (*weights)[t] = 1;
+    j->residual = (float *)malloc(n * sizeof *j->residual);
+    walls = (float *)malloc(n * sizeof *walls);
+    if (!*weights || !j->residual || !walls) {
+        free(walls);
+        return complain(RC_FAIL, "out of memory for the weights of %zu triangle%s", n, plural(n));
+    }
+    ho.tmin = a->tmin;
+    ho.tmax = a->tmax;
+    if (profile_with(a, mesh, po, *weights, &j->planar_profile, &err) != ADASLICE_OK ||
+        adaslice_hybrid_faces(mesh, &ho, j->residual, *weights, &j->hybrid, &err) != ADASLICE_OK) {
+        free(walls);
+        if (j->planar_profile.phi) adaslice_profile_free(&j->planar_profile);
+        return library_error(&err);
+    }
+    /* faces left planar keep their weights */
+    for (t = 0; t < n; t++) walls[t] = j->residual[t] < 0 ? (*weights)[t] : 0;
+    if (profile_with(a, mesh, po, walls, &j->walls_profile, &err) != ADASLICE_OK) {
+        free(walls);
+        adaslice_profile_free(&j->planar_profile);
+        return library_error(&err);
+    }
+    free(walls);
+    return RC_OK;
+}
+
 static int profile_model(const plan_args *a, plan_job *j)
 {
     adaslice_profile_options po;
@@ -248,8 +292,12 @@ static int profile_model(const plan_args *a, plan_job *j)
     po.resolution = (int)a->resolution;
     po.weights = weights;
     t0 = now_ms();
-    r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
-                   : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
+    if (a->hybrid && (rc = profile_planar_parts(a, j, &mesh, &po, &weights)) != RC_OK) {
+        free(weights);
+        adaslice_mesh_free(&mesh);
+        return rc;
+    }
+    r = profile_with(a, &mesh, &po, weights, &j->profile, &err);
     free(weights);
     if (r == ADASLICE_OK && (a->method == ADASLICE_METHOD_CURVATURE || a->compare))
         rc = curvature_of(&mesh, &j->profile, &j->kappa);
@@ -449,6 +497,40 @@ int plan_uniform_no_worse(const adaslice_profile *profile, const adaslice_plan *
     return 0;
 }
 
+/* --hybrid: the printed surface's worst error (walls by the plan's cusp,
+   contoured faces by their residual) and the optimal planar plan held to it,
+   which may need layers thinner than tmin (then planar_why says so). */
+static int plan_planar_same_error(const plan_args *a, plan_job *j)
+{
+    const adaslice_plan *h = &j->plan[a->method];
+    adaslice_plan_options o;
+    adaslice_result r;
+    size_t k;
+    j->walls_worst = 0;
+    for (k = 0; k < h->layer_count; k++) {
+        double e = adaslice_layer_error(&j->walls_profile, h->planes[k], h->planes[k + 1]);
+        if (e > j->walls_worst) j->walls_worst = e;
+    }
+    j->printed_worst = j->walls_worst > j->hybrid.residual ? j->walls_worst : j->hybrid.residual;
+    plan_options_of(a, ADASLICE_METHOD_OPTIMAL, &o);
+    o.eps = j->printed_worst > 0 ? j->printed_worst : 1e-12; /* 0 would mean the default */
+    o.budget = 0;
+    r = adaslice_plan_profile(&j->planar_profile, &o, &j->planar, &j->planar_why);
+    j->planar_why.result = r;
+    if (r == ADASLICE_ERR_INFEASIBLE) {
+        /* the best planar layers can do, which is still worse */
+        adaslice_error e;
+        o.method = ADASLICE_METHOD_FINEST;
+        r = adaslice_plan_profile(&j->planar_profile, &o, &j->planar, &e);
+        if (r != ADASLICE_OK) return library_error(&e);
+        j->planar_finest = 1;
+    } else if (r != ADASLICE_OK) {
+        return library_error(&j->planar_why);
+    }
+    j->planar_found = 1;
+    return RC_OK;
+}
+
 /* The asked plan must succeed; with --compare the others may be infeasible,
    which their row of the table then says. */
 int run_plan(const plan_args *a, plan_job *j)
@@ -467,7 +549,7 @@ int run_plan(const plan_args *a, plan_job *j)
     }
     if (a->compare && j->planned[ADASLICE_METHOD_OPTIMAL] && j->why[ADASLICE_METHOD_OPTIMAL].result == ADASLICE_OK)
         j->uniform_found = plan_uniform_no_worse(&j->profile, &j->plan[ADASLICE_METHOD_OPTIMAL], &j->uniform);
-    return RC_OK;
+    return a->hybrid ? plan_planar_same_error(a, j) : RC_OK;
 }
 
 void job_free(plan_job *j)
@@ -479,6 +561,10 @@ void job_free(plan_job *j)
     if (j->profiled) adaslice_profile_free(&j->profile);
     else free(j->profile.phi);
     free(j->kappa);
+    free(j->residual);
+    if (j->planar_found) adaslice_plan_free(&j->planar);
+    adaslice_profile_free(&j->planar_profile);
+    adaslice_profile_free(&j->walls_profile);
     adaslice_mesh_free(&j->mesh);
 }
 

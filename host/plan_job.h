@@ -36,6 +36,8 @@ typedef struct plan_args {
     int json, compare, help;
     int mapping;                   /* --mapping, an adaslice_mapping (--method curvature) */
     weight_args weights;           /* --saliency, --weights, --weight (model only) */
+    const adaslice_hybrid_options *hybrid; /* plan --hybrid: contoured faces charged their
+                                      residual (model, cusp only); NULL: planar */
 } plan_args;
 
 typedef struct plan_job {
@@ -54,6 +56,19 @@ typedef struct plan_job {
     adaslice_plan uniform;         /* --compare: plan_uniform_no_worse than the optimal plan */
     int uniform_found;
     double *kappa;                 /* curvature per bin, for the curvature method (model only) */
+    /* --hybrid: the plan is on `profile`, the hybrid one; these say what the
+       contour leaves and what planar layers of the same printed error take */
+    float *residual;               /* per face: -1 planar, else its residual bound (mm) */
+    adaslice_hybrid_report hybrid;
+    adaslice_profile planar_profile; /* the cusp profile without the contour */
+    adaslice_profile walls_profile;  /* ... with the contoured faces weighing 0 */
+    double walls_worst;            /* the plan's worst layer error on walls_profile */
+    double printed_worst;          /* max(walls_worst, hybrid.residual) */
+    adaslice_plan planar;          /* optimal on planar_profile at eps printed_worst */
+    adaslice_error planar_why;     /* its result (infeasible: finer than tmin) */
+    int planar_found;
+    int planar_finest;             /* no plan reaches printed_worst: planar is uniform tmin */
+    double fdm_seconds, planar_fdm_seconds; /* --3mf: fdm.h's times of the plan and of planar */
     double ms_load, ms_profile, ms_plan;
     /* Called with the mesh loaded and turned, before it is profiled: a
        check (the plate's fit) that should stop the job before the work. */

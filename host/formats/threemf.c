@@ -16,14 +16,26 @@
 int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest)
 {
     int i, rc = RC_OK;
-    t->path = NULL;
+    adaslice_hybrid_options *h = &t->contour;
+    memset(t, 0, sizeof *t);
     t->nozzle = 0.4;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
-        if (!strcmp(argv[i], "--3mf")) rc = file_option(argc, argv, &i, &t->path);
-        else if (!strcmp(argv[i], "--nozzle")) rc = number_option(argc, argv, &i, 0, &t->nozzle);
-        else rest[(*rest_argc)++] = argv[i];
+        const char *o = argv[i];
+        if (!strcmp(o, "--3mf")) rc = file_option(argc, argv, &i, &t->path);
+        else if (!strcmp(o, "--nozzle")) rc = number_option(argc, argv, &i, 0, &t->nozzle);
+        else if (!strcmp(o, "--hybrid")) t->hybrid = 1;
+        else if (!strcmp(o, "--max-angle")) rc = number_option(argc, argv, &i, 0, &h->max_angle);
+        else if (!strcmp(o, "--reach")) rc = number_option(argc, argv, &i, 0, &h->reach);
+        else if (!strcmp(o, "--max-rise")) rc = number_option(argc, argv, &i, 0, &h->rise);
+        else if (!strcmp(o, "--resolution")) rc = number_option(argc, argv, &i, 0, &h->resolution);
+        else { rest[(*rest_argc)++] = argv[i]; continue; }
+        if (strcmp(o, "--3mf") && strcmp(o, "--nozzle") && strcmp(o, "--hybrid")) t->contour_given = 1;
     }
+    if (!rc && t->hybrid && h->max_angle == 0) h->max_angle = ADASLICE_DEFAULT_MAX_ANGLE;
+    if (!rc && !(h->max_angle <= 45))
+        rc = complain(RC_USAGE, "--max-angle %g: the contour follows faces up to 45 degrees from horizontal, "
+                                "no steeper (a nozzle's flanks clear no more)", h->max_angle);
     return rc;
 }
 
@@ -33,7 +45,16 @@ void threemf_usage(FILE *f)
           "  --3mf FILE          a 3MF of the model with the plan as PrusaSlicer's and\n"
           "                      OrcaSlicer's variable layer height profile; for a 0.4 mm\n"
           "                      nozzle plan with e.g. --tmin 0.08 --tmax 0.28 --eps 0.1\n"
-          "  --nozzle MM         its nozzle: layers up to 75% of it               [0.4]\n", f);
+          "  --nozzle MM         its nozzle: layers up to 75% of it               [0.4]\n"
+          "  --hybrid            plan for adaslice contour: faces facing up no steeper\n"
+          "                      than --max-angle and reachable print without stair\n"
+          "                      steps, so only the walls set the layers; reports the\n"
+          "                      layers and time saved against planar layers of the\n"
+          "                      same worst printed error (needs --3mf, cusp metric)\n"
+          "  --max-angle DEG     the steepest face contoured, from horizontal, (0, 45] [15]\n"
+          "  --reach MM          the nozzle cone's radius that must be clear of the part [2]\n"
+          "  --max-rise MM       the contour's largest Z offset from a layer [tmax/2]\n"
+          "  --resolution MM     the contour's longest path segment              [0.2]\n", f);
 }
 
 int threemf_check_bounds(const threemf_args *t, const plan_args *a)
@@ -48,11 +69,26 @@ int threemf_check_bounds(const threemf_args *t, const plan_args *a)
     return RC_OK;
 }
 
+int threemf_check_hybrid(const threemf_args *t, const plan_args *a)
+{
+    if (t->contour_given && !t->hybrid)
+        return complain(RC_USAGE, "--max-angle, --reach, --max-rise and --resolution set up --hybrid: add it");
+    if (!t->hybrid) return RC_OK;
+    if (!t->path) return complain(RC_USAGE, "--hybrid needs --3mf FILE: the FDM project adaslice contour reads");
+    if (a->metric != ADASLICE_METRIC_CUSP)
+        return complain(RC_USAGE, "--hybrid charges contoured faces in cusp height, not --metric %s", METRIC_NAMES[a->metric]);
+    return RC_OK;
+}
+
 typedef struct project {
     const adaslice_mesh *mesh;
     const double *tops;          /* K layer tops, mm above the part's bottom, as written */
     size_t layers;
     double tmin, tmax;
+    const threemf_args *args;
+    const plan_job *job;         /* --hybrid: its residual per face */
+    double z0;
+    double (*span)[2];           /* --hybrid: room for a height range per face */
 } project;
 
 static void write_content_types(FILE *f, const void *ctx)
@@ -121,6 +157,57 @@ static void write_config(FILE *f, const void *ctx)
             ADASLICE_VERSION, p->tops[0], p->tmin, p->tmax);
 }
 
+static int by_low(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Ranges "a-b c ..." of the faces the contour may follow, and the heights
+   above the part's bottom they span, merged where they overlap. */
+static void write_contour(FILE *f, const void *ctx)
+{
+    const project *p = (const project *)ctx;
+    const plan_job *j = p->job;
+    const adaslice_hybrid_options *h = &p->args->contour;
+    const adaslice_mesh *m = p->mesh;
+    size_t t, n = m->triangle_count, run = 0, spans = 0;
+    double (*span)[2] = p->span;
+    fprintf(f, "; adaslice %s hybrid plan for adaslice contour\n; max_angle = %.9g\n; reach = %.9g\n"
+               "; max_rise = %.9g\n; resolution = %.9g\n; residual = %.9g\n; contoured_faces =",
+            ADASLICE_VERSION, h->max_angle, h->reach ? h->reach : ADASLICE_DEFAULT_REACH,
+            h->rise ? h->rise : j->args->tmax / 2, h->resolution ? h->resolution : ADASLICE_DEFAULT_PATH_RESOLUTION,
+            j->hybrid.residual);
+    for (t = 0; t <= n; t++) {
+        if (t < n && j->residual[t] >= 0) { run++; continue; }
+        if (run > 1) fprintf(f, " %zu-%zu", t - run, t - 1);
+        else if (run) fprintf(f, " %zu", t - 1);
+        run = 0;
+    }
+    fputs("\n; contoured_heights =", f);
+    for (t = 0; t < n; t++) {
+        const uint32_t *c = m->triangles + 3 * t;
+        double lo = m->vertices[3 * c[0] + 2], hi = lo;
+        int k;
+        if (j->residual[t] < 0) continue;
+        for (k = 1; k < 3; k++) {
+            double z = m->vertices[3 * c[k] + 2];
+            lo = z < lo ? z : lo;
+            hi = z > hi ? z : hi;
+        }
+        span[spans][0] = lo - p->z0;
+        span[spans++][1] = hi - p->z0;
+    }
+    qsort(span, spans, sizeof *span, by_low);
+    for (t = 0; t < spans; t++) {
+        double lo = span[t][0], hi = span[t][1];
+        for (; t + 1 < spans && span[t + 1][0] <= hi; t++)
+            if (span[t + 1][1] > hi) hi = span[t + 1][1];
+        fprintf(f, " %.6g-%.6g", lo, hi);
+    }
+    fputc('\n', f);
+}
+
 /* A top as the file will hold it. */
 static double as_written(double z)
 {
@@ -156,16 +243,27 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
     p.layers = n;
     p.tmin = a->tmin < thinnest ? a->tmin : thinnest;
     p.tmax = a->tmax > thickest ? a->tmax : thickest;
-    if ((rc = zip_open(&z, t->path))) { free(tops); return rc; }
+    p.args = t;
+    p.job = j;
+    p.z0 = lo[2];
+    p.span = NULL;
+    if (j->residual && !(p.span = (double (*)[2])malloc(j->mesh.triangle_count * sizeof *p.span))) {
+        free(tops);
+        return complain(RC_FAIL, "out of memory");
+    }
+    if ((rc = zip_open(&z, t->path))) { free(tops); free(p.span); return rc; }
     if ((rc = zip_add_text(z, "[Content_Types].xml", write_content_types, &p)) ||
         (rc = zip_add_text(z, "_rels/.rels", write_rels, &p)) || (rc = zip_add_text(z, "3D/3dmodel.model", write_model, &p)) ||
         (rc = zip_add_text(z, "Metadata/Slic3r_PE_layer_heights_profile.txt", write_profile, &p)) ||
         (rc = zip_add_text(z, "Metadata/layer_heights_profile.txt", write_profile, &p)) ||
-        (rc = zip_add_text(z, "Metadata/Slic3r_PE.config", write_config, &p))) {
+        (rc = zip_add_text(z, "Metadata/Slic3r_PE.config", write_config, &p)) ||
+        (j->residual && (rc = zip_add_text(z, THREEMF_CONTOUR_PART, write_contour, &p)))) {
         zip_close(z, 0);
         free(tops);
+        free(p.span);
         return rc;
     }
+    free(p.span);
     if (!(rc = zip_close(z, 1)))
         fprintf(note,
                 "%s: %zu layer%s of %.9g to %.9g mm for PrusaSlicer, OrcaSlicer and Bambu Studio; the printer profile "

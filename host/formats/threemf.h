@@ -24,15 +24,26 @@
 typedef struct threemf_args {
     const char *path;            /* --3mf FILE, or NULL */
     double nozzle;               /* --nozzle MM */
+    int hybrid;                  /* --hybrid */
+    adaslice_hybrid_options contour; /* --max-angle, --reach, --max-rise, --resolution */
+    int contour_given;           /* one of those was */
 } threemf_args;
 
-/* Takes --3mf FILE and --nozzle MM out of argv (argv[0] kept); RC_OK or
-   RC_USAGE after a complaint. */
+/* The optional part a hybrid plan adds for adaslice contour: the contour's
+   limits and the faces (0-based, in the model's order) and heights it may
+   contour, "; key = value" lines as Slic3r_PE.config's. */
+#define THREEMF_CONTOUR_PART "Metadata/adaslice_contour.config"
+
+/* Takes --3mf FILE, --nozzle MM and the --hybrid options out of argv
+   (argv[0] kept); RC_OK or RC_USAGE after a complaint. */
 int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest);
 void threemf_usage(FILE *f);
 /* The layer bounds against the nozzle, before planning; RC_OK or RC_USAGE
    after a complaint. */
 int threemf_check_bounds(const threemf_args *t, const plan_args *a);
+/* The --hybrid options against the plan's: RC_OK or RC_USAGE after a
+   complaint. */
+int threemf_check_hybrid(const threemf_args *t, const plan_args *a);
 /* Writes t->path from the job's mesh (welded here) and plan; says on `note`
    which first-layer height and layer limits the printer profile needs.
    RC_OK or a complaint made, and no file. */
