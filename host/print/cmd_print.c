@@ -764,6 +764,25 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+/* Which other slicer's job `path` is, by its extension (slice -o's) or its
+   first bytes (CTB's magic, GOO's, a ZIP's: SL1, ChiTu zip, UVJ); NULL for
+   anything else. Those are for a printer's own firmware (its USB stick),
+   never a model: the loader would take their bytes for a binary STL. */
+static const char *job_file_kind(const char *path)
+{
+    static const unsigned char goo[8] = {0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0x50, 0x00};
+    const job_format *f = job_format_for_path(path);
+    unsigned char b[12] = {0};
+    FILE *in;
+    size_t n = 0;
+    if (f && f->extension) return f->what;
+    if ((in = fopen(path, "rb")) != NULL) { n = fread(b, 1, sizeof b, in); fclose(in); }
+    if (n >= 4 && (get_le32(b) & 0xFFFFFF00u) == 0x12FD0000u) return JOB_FORMAT_CTB.what;
+    if (n >= 12 && !memcmp(b + 4, goo, sizeof goo)) return JOB_FORMAT_GOO.what;
+    if (n >= 4 && !memcmp(b, "PK\3\4", 4)) return "ZIP (an SL1, ChiTu zip or UVJ job)";
+    return NULL;
+}
+
 /* print's own options, then the mask options, then a JOBDIR or a MODEL and
    its plan options; -1 after --help. */
 static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, plan_args *a, const char **jobdir)
@@ -781,8 +800,11 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
         else if (s->cure.given)
             rc = complain(RC_USAGE, "print JOBDIR: the job holds its exposures and motion; slice it again to change them");
     } else if (!rc) {
+        const char *kind;
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
-        if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
+        if (!rc && (kind = job_file_kind(a->model)) != NULL)
+            rc = complain(RC_USAGE, "print %s: a %s job is for a printer's own firmware; adaslice print takes a MODEL (STL, "
+                                    "OBJ or PLY) or a JOBDIR (adaslice slice MODEL -o DIR)", a->model, kind);
         if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
             rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
                                     "--method, --uniform, --out, --plot, --profile-out, --json and --compare");
