@@ -464,6 +464,14 @@ void serial_close(serial_link *l)
     l->fd = -1;
 }
 
+const char *serial_why_not(const serial_link *l)
+{
+    static char why[64];
+    if (l->st.error) return link_error_name(l->st.error);
+    snprintf(why, sizeof why, "it stayed %s, refusing nothing", link_state_name(l->st.state));
+    return why;
+}
+
 int serial_plan_page(serial_link *l, uint32_t first, int *rc)
 {
     uint8_t buf[LINK_SIZE_PLAN_GET];
