@@ -372,6 +372,84 @@ static void print_survives_a_lost_link(void)
     cli_free(&r);
 }
 
+static int second_host_status(const char *port, uint8_t type, link_status *out);
+static void sleep_ms(long ms);
+static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max);
+
+/* UV-on periods in the simulator's log so far. */
+static size_t lit_so_far(const char *log_path)
+{
+    char *log = read_whole_text(log_path), *at;
+    size_t lit = 0;
+    for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
+    free(log);
+    return lit;
+}
+
+/* The host goes deaf mid-print for 6 s (the printer's replies are lost, the
+   host's frames arrive): it hears nothing, resends its window, and gives up
+   (exit 5, ~3.4 s). The printer takes the repeats for no word from the host,
+   so it has paused itself for the lost link before the host says it stopped,
+   and lights nothing after: the layer the host names is where it stood when
+   last heard (it may have gone on as far as its masks, two layers at most),
+   and a resume from there either resumes it in place or is refused naming
+   the layer the printer holds, which then resumes it; every layer gets its
+   light exactly. */
+static void deaf_host_gives_up_after_the_printer_paused(void)
+{
+    child sim, relay;
+    const char *faults[] = {"--outage-after", "12000", "--outage-for", "6", "--outage-way", "down", NULL};
+    cli_result r;
+    sim_log l;
+    link_status st;
+    size_t lit_at_exit;
+    unsigned k = 0;
+    char port[256], from[16];
+    const char *at;
+    int state;
+    if (!start_relayed(&sim, &relay, cli_path("sim21.log"), cli_path("relay21.txt"), faults)) return;
+    snprintf(port, sizeof port, "%s", relay.line + 4);
+    r = run_print(port, cli_path("report21.json"));
+    lit_at_exit = lit_so_far(cli_path("sim21.log"));
+    CHECK(read_sim_log(cli_path("sim21.log"), &l));
+    CHECKF(r.status == 5 && cli_one_message(r.err) && strstr(r.err, "stopped answering"), "deaf: exit %d: %s", r.status, r.err);
+    CHECKF(l.link_pauses == 1, "when the host gave up the printer had paused %zu times for the lost link", l.link_pauses);
+    free(l.ev);
+    at = strstr(r.err, "--resume-from ");
+    CHECKF(at && sscanf(at, "--resume-from %u", &k) == 1 && k > 1, "no layer to resume from: %s", r.err);
+    cli_free(&r);
+    if (check_case_failed()) { child_stop(&relay); child_stop(&sim); return; }
+    sleep_ms(4000); /* the outage's end, and a link timeout more */
+    CHECKF(lit_so_far(cli_path("sim21.log")) == lit_at_exit, "lit %zu times after the host gave up",
+           lit_so_far(cli_path("sim21.log")) - lit_at_exit);
+    state = second_host_status(port, LINK_MSG_STATUS, &st);
+    /* as far as the masks it had: the layer it was at, and the next */
+    CHECKF(state == LINK_STATE_PAUSED && (st.flags & LINK_FLAG_LINK_LOST) && st.exposed + 1 >= k && st.exposed + 1 <= k + 2,
+           "the printer is %d (flags %u), layer %u exposed; the host said resume from %u", state, (unsigned)st.flags,
+           (unsigned)st.exposed, k);
+    if (check_case_failed()) { child_stop(&relay); child_stop(&sim); return; }
+    snprintf(from, sizeof from, "%u", k);
+#define DEAF_ARGS MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", \
+                  "--settle", "0.05", "--home", "--report", cli_path("report21.json"), "--resume-from"
+    r = cli_run("print", DEAF_ARGS, from, NULL);
+    if (st.exposed + 1 != k) {
+        /* the printer went a layer on before it paused: the resume says which */
+        char want[64];
+        snprintf(want, sizeof want, "resume from %u", (unsigned)st.exposed + 1);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, want), "--resume-from %u: exit %d: %s", k, r.status,
+               r.err);
+        cli_free(&r);
+        snprintf(from, sizeof from, "%u", (unsigned)st.exposed + 1);
+        r = cli_run("print", DEAF_ARGS, from, NULL);
+    }
+#undef DEAF_ARGS
+    CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume from %s: exit %d: %s %s", from, r.status, r.out, r.err);
+    cli_free(&r);
+    child_stop(&relay);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_resumed_in_place(cli_path("sim21.log"), cli_path("report21.json"), 0, 1);
+}
+
 /* Starts `adaslice print` in the background (for Ctrl-C). */
 static pid_t print_in_background(char *const extra[], const char *out_path)
 {
@@ -1743,6 +1821,7 @@ void test_print(void)
     RUN(full_print_on_the_simulator);
     RUN(print_through_a_faulty_line);
     RUN(print_survives_a_lost_link);
+    RUN(deaf_host_gives_up_after_the_printer_paused);
     RUN(thousand_layers_on_the_simulator);
     RUN(ctrl_c_pauses_and_resume_finishes);
     RUN(abort_abandons_a_paused_print);
