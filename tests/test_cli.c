@@ -704,10 +704,10 @@ static void messages_name_what_was_run(void)
     /* another slicer's job, by its extension or its magic, is refused as
        such before the port is opened (/dev/null is none) */
     write_all(job, ctb, sizeof ctb);
-    message_is("print job (CTB magic)", cli_run("print", job, "--port", "/dev/null", NULL), "CTB job", "serial port", "STL '");
+    message_is("print job (CTB magic)", cli_run("print", job, "--port", "/dev/null", NULL), "a CTB job file", "serial port", "STL '");
     write_all(cli_path("job.sl1"), "x", 1);
-    message_is("print job.sl1", cli_run("print", cli_path("job.sl1"), "--port", "/dev/null", NULL), "Prusa SL1", "serial port",
-               NULL);
+    message_is("print job.sl1", cli_run("print", cli_path("job.sl1"), "--port", "/dev/null", NULL), "a .sl1 job file",
+               "serial port", NULL);
 }
 
 void test_cli(void)

@@ -443,6 +443,7 @@ static void write_report(FILE *f, const void *ctx)
 static void print_usage(FILE *f)
 {
     fputs("usage: adaslice print MODEL|JOBDIR --port DEV [print options] [masks] [plan options]\n"
+          "       adaslice print --abort --port DEV\n"
           "\n"
           "Prints on a printer running the adaslice firmware (link/PROTOCOL.md). With a\n"
           "MODEL the printer plans from the quantised profile and the host checks that the\n"
@@ -798,11 +799,11 @@ static const char *job_file_kind(const char *path)
     unsigned char b[12] = {0};
     FILE *in;
     size_t n = 0;
-    if (f && f->extension) return f->what;
+    if (f && f->extension) return f->extension;
     if ((in = fopen(path, "rb")) != NULL) { n = fread(b, 1, sizeof b, in); fclose(in); }
-    if (n >= 4 && (get_le32(b) & 0xFFFFFF00u) == 0x12FD0000u) return JOB_FORMAT_CTB.what;
-    if (n >= 12 && !memcmp(b + 4, goo, sizeof goo)) return JOB_FORMAT_GOO.what;
-    if (n >= 4 && !memcmp(b, "PK\3\4", 4)) return "ZIP (an SL1, ChiTu zip or UVJ job)";
+    if (n >= 4 && (get_le32(b) & 0xFFFFFF00u) == 0x12FD0000u) return "CTB";
+    if (n >= 12 && !memcmp(b + 4, goo, sizeof goo)) return "GOO";
+    if (n >= 4 && !memcmp(b, "PK\3\4", 4)) return "ZIP (SL1, ChiTu or UVJ)";
     return NULL;
 }
 
@@ -827,7 +828,7 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
         const char *kind;
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
         if (!rc && (kind = job_file_kind(a->model)) != NULL)
-            rc = complain(RC_USAGE, "print %s: a %s job is for a printer's own firmware; adaslice print takes a MODEL (STL, "
+            rc = complain(RC_USAGE, "print %s: a %s job file is for a printer's own firmware; adaslice print takes a MODEL (STL, "
                                     "OBJ or PLY) or a JOBDIR (adaslice slice MODEL -o DIR)", a->model, kind);
         if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
             rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
