@@ -702,7 +702,6 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     size_t size = n - LINK_FRAME_MIN;
     union { link_profile profile; link_plan_get plan_get; link_plan_set plan_set; link_mask mask; link_screen screen; link_move move;
             link_expose expose; link_print print; link_exit exit; } m;
-    fw->heard = now;
     if (!fw->binary) {
         /* a binary host: what looked like G-code was not, and a light
            G-code left on is nobody's now */
@@ -714,6 +713,7 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
     fw->binary = 1;
     if (type == LINK_MSG_HELLO) {
         /* a host (re)connecting: its numbering starts here */
+        fw->heard = now;
         fw->expect = (uint8_t)(seq + 1);
         send_identify(fw);
         return;
@@ -725,6 +725,10 @@ static FW_NOINLINE void on_frame(fw_state *fw, const uint8_t *f, size_t n, uint6
         send_ack(fw, behind >= 1 && behind <= 128 ? 0 : LINK_NAK | round);
         return;
     }
+    /* Only a frame taken is the host's word: a host that resends its window
+       over and over hears nothing of the printer, and has not heard it go
+       on, so its repeats keep no print going (the link timeout runs). */
+    fw->heard = now;
     fw->expect++;
     if (fw->halted && type != LINK_MSG_STATUS) { fail(fw, LINK_ERR_STACK, seq); send_ack(fw, 0); return; }
     if (!link_payload_fits(type, size)) { fail(fw, LINK_ERR_MESSAGE, seq); send_ack(fw, 0); return; }

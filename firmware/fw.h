@@ -186,7 +186,8 @@ typedef struct fw_state {
     fw_steps steps;
     /* link */
     link_deframer deframer;
-    uint64_t heard;            /* tick of the last good frame; in G-code mode, of the last byte */
+    uint64_t heard;            /* tick of the last frame taken (a HELLO, or the SEQ expected: not a
+                                  repeat); in G-code mode, of the last byte */
     /* planner: the profile streams through the DP, never stored */
     unsigned char *workspace;
     size_t workspace_size;

@@ -205,6 +205,25 @@ static int parse_orient(int argc, char **argv, orient_args *o, int *rest_argc, c
     return rc;
 }
 
+/* The options given that orient's scores cannot take, as "A, B and C". */
+static const char *unscored_options(int argc, char **argv, const plan_args *a)
+{
+    static const char *const names[] = {"--saliency", "--weights", "--weight", "--importance", "--view", "--view-count",
+                                        "--view-res", "--sampler"};
+    static char list[160];
+    const char *given[10];
+    size_t n = 0, k, used = 0;
+    int i;
+    if (a->method == ADASLICE_METHOD_CURVATURE) given[n++] = "--method curvature";
+    for (k = 0; k < sizeof names / sizeof *names; k++)
+        for (i = 1; i < argc; i++)
+            if (!strcmp(argv[i], names[k])) { given[n++] = names[k]; break; }
+    list[0] = 0;
+    for (k = 0; k < n; k++)
+        used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", k == 0 ? "" : k + 1 < n ? ", " : " and ", given[k]);
+    return list;
+}
+
 int cmd_orient(int argc, char **argv)
 {
     orient_args o;
@@ -224,15 +243,13 @@ int cmd_orient(int argc, char **argv)
     free(rest);
     if (rc) return rc;
     if (a.help) { orient_usage(stdout); return RC_OK; }
-    if (!a.model) return complain(RC_USAGE, "orient needs a MODEL");
     if (a.orient) return complain(RC_USAGE, "orient searches the directions itself: drop --orient");
     if (a.out || a.plot || a.profile_out || a.compare)
         return complain(RC_USAGE, "orient prints directions: --out, --plot, --profile-out and --compare belong to adaslice "
                                   "plan MODEL --orient X,Y,Z with the direction orient found");
     if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights) || a.sampler)
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
-                                  "exact profiles: drop --method curvature, --saliency, --weights, --weight and "
-                                  "--sampler");
+                                  "exact profiles: drop %s", unscored_options(argc, argv, &a));
     if ((rc = output_check("--map", o.map))) return rc;
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();

@@ -450,7 +450,6 @@ int cmd_slice(int argc, char **argv)
     if (rc < 0) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
-    if (!rc && a.profile) rc = complain(RC_USAGE, "slice needs a MODEL, not --profile");
     if (!rc && (a.json || a.compare))
         rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");
     free(rest);

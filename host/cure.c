@@ -146,10 +146,14 @@ int cure_finish(cure_args *c, double tmin, double tmax)
     /* E(t) grows with t: its ends are the thinnest and thickest exposures */
     for (k = 0; k < 2; k++) {
         double t = k ? tmax : tmin, e_t = adaslice_cure_seconds(&c->cure, t);
-        if (!(e_t >= MIN_SECONDS && e_t <= MAX_SECONDS))
-            return complain(RC_USAGE, "the working curve (%g s at %g mm, Dp %g mm) gives a %g mm layer %.3g s: exposures "
-                                      "are %g to %g s", c->cure.seconds, c->cure.thickness, c->cure.penetration, t, e_t,
-                            MIN_SECONDS, MAX_SECONDS);
+        if (e_t >= MIN_SECONDS && e_t <= MAX_SECONDS) continue;
+        /* Dp 0: no curve, one exposure for every layer */
+        if (!(c->cure.penetration > 0))
+            return complain(RC_USAGE, "--exposure %g: every layer gets %g s; exposures are %g to %g s", c->cure.seconds,
+                            c->cure.seconds, MIN_SECONDS, MAX_SECONDS);
+        return complain(RC_USAGE, "the working curve (%g s at %g mm, Dp %g mm%s) gives a %g mm layer %.4g s; exposures are %g to "
+                                  "%g s", c->cure.seconds, c->cure.thickness, c->cure.penetration,
+                        c->typical ? ": a typical resin's, --penetration gives yours" : "", t, e_t, MIN_SECONDS, MAX_SECONDS);
     }
     if (c->bottom_layers && c->bottom_exposure_s < MIN_SECONDS)
         return complain(RC_USAGE, "--bottom-exposure %g: exposures are %g to %g s", c->bottom_exposure_s, MIN_SECONDS, MAX_SECONDS);

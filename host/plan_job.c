@@ -104,6 +104,7 @@ static int orient_option(int argc, char **argv, int *i, plan_args *a)
 
 int parse_plan(int argc, char **argv, plan_args *a)
 {
+    const char *cmd = argv[0]; /* the command run: its messages name it */
     int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0;
     double uniform = 0;
     memset(a, 0, sizeof *a);
@@ -143,7 +144,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--mapping"))
             rc = name_option(argc, argv, &i, MAPPING_NAMES, MAPPING_COUNT, "linear, exp or step", &a->mapping);
         else if (weights_option(argc, argv, &i, &a->weights, &rc)) continue;
-        else return complain(RC_USAGE, "unknown option %s (see adaslice plan --help)", o);
+        else return complain(RC_USAGE, "unknown option %s (see adaslice %s --help)", o, cmd);
     }
     if (rc) return rc;
     if (uniform) {
@@ -155,7 +156,11 @@ int parse_plan(int argc, char **argv, plan_args *a)
     a->method = method < 0 ? ADASLICE_METHOD_OPTIMAL : (adaslice_method)method;
     a->sampler = sampler;
     if (a->resolution && !a->sampler) return complain(RC_USAGE, "--res applies to --sampler ldi");
-    if (!a->model && !a->profile) return complain(RC_USAGE, "plan needs a MODEL or --profile FILE");
+    if (strcmp(cmd, "plan") && a->profile)
+        return complain(RC_USAGE, "%s takes a MODEL, not --profile (adaslice plan --profile plans a profile)", cmd);
+    if (!a->model && !a->profile)
+        return complain(RC_USAGE, "%s needs %s", cmd, !strcmp(cmd, "plan") ? "a MODEL or --profile FILE"
+                                                      : !strcmp(cmd, "print") ? "a MODEL or a JOBDIR" : "a MODEL");
     if (a->model && a->profile)
         return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
                         a->model, a->profile);
@@ -175,16 +180,16 @@ int parse_plan(int argc, char **argv, plan_args *a)
 
 /* k per bin of the profile of `mesh`, for the curvature method; RC_OK or a
    complaint made. */
-static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profile, double **kappa)
+static int curvature_of(const char *model, const adaslice_mesh *mesh, const adaslice_profile *profile, double **kappa)
 {
     adaslice_error e;
     *kappa = (double *)malloc(profile->bin_count * sizeof **kappa);
-    if (!*kappa) return complain(RC_FAIL, "out of memory for the curvature of %zu bin%s", profile->bin_count,
+    if (!*kappa) return complain(RC_FAIL, "%s: out of memory for the curvature of %zu bin%s", model, profile->bin_count,
                                  plural(profile->bin_count));
     if (adaslice_curvature_profile(mesh, profile, NULL, *kappa, &e) != ADASLICE_OK) {
         free(*kappa);
         *kappa = NULL;
-        return library_error(&e);
+        return library_error_in(model, &e);
     }
     return RC_OK;
 }
@@ -300,11 +305,11 @@ static int profile_model(const plan_args *a, plan_job *j)
     r = profile_with(a, &mesh, &po, weights, &j->profile, &err);
     free(weights);
     if (r == ADASLICE_OK && (a->method == ADASLICE_METHOD_CURVATURE || a->compare))
-        rc = curvature_of(&mesh, &j->profile, &j->kappa);
+        rc = curvature_of(a->model, &mesh, &j->profile, &j->kappa);
     j->ms_profile = now_ms() - t0 + ms_weights;
     if (j->keep_mesh) j->mesh = mesh;
     else adaslice_mesh_free(&mesh);
-    if (r != ADASLICE_OK) return library_error(&err);
+    if (r != ADASLICE_OK) return library_error_in(a->model, &err);
     j->profiled = 1;
     return rc;
 }
@@ -451,7 +456,7 @@ int plan_orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t cou
     po.metric = a->metric;
     po.bin = a->bin;
     plan_options_of(a, a->method, &pl);
-    return orient_search(mesh, &po, &pl, count, alpha, scores, minima, minima_count);
+    return orient_search(a->model, mesh, &po, &pl, count, alpha, scores, minima, minima_count);
 }
 
 void plan_options_of(const plan_args *a, adaslice_method method, adaslice_plan_options *o)

@@ -26,6 +26,11 @@ int library_error(const adaslice_error *e)
     return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s", e->message);
 }
 
+int library_error_in(const char *file, const adaslice_error *e)
+{
+    return complain(e->result == ADASLICE_ERR_ARGUMENT ? RC_USAGE : RC_FAIL, "%s: %s", file, e->message);
+}
+
 const char *plural(size_t n) { return n == 1 ? "" : "s"; }
 
 const char *quote_text(char out[QUOTE_SIZE], const char *text, size_t n)

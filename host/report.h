@@ -15,6 +15,8 @@ enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3, RC_RESET = 4, RC_LOS
 int complain(int rc, const char *fmt, ...);
 /* The library's message; exit 2 for an argument it rejects, else 1. */
 int library_error(const adaslice_error *e);
+/* The same about `file` (the model the library worked on): "file: message". */
+int library_error_in(const char *file, const adaslice_error *e);
 /* "" or "s" after a count's noun: "%zu layer%s", n, plural(n). */
 const char *plural(size_t n);
 /* Text from an input file as a message quotes it: the first QUOTE_BYTES bytes

@@ -118,7 +118,7 @@ static void *search_worker(void *arg)
 
 /* Scores `count` lattice directions on all the host's cores; the minima come
    best first. Returns RC_OK or a complaint made. */
-int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
+int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
                   size_t count, double alpha, adaslice_direction_score **scores, size_t *minima, size_t *minima_count)
 {
     adaslice_orienter o;
@@ -129,7 +129,7 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int n_threads = cores < 1 ? 1 : cores > 16 ? 16 : (int)cores, t, started = 0;
 
-    if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error(&e);
+    if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error_in(model, &e);
     memset(&s, 0, sizeof s);
     dirs = (double *)malloc(3 * (count + SEARCH_AXES) * sizeof *dirs);
     *scores = (adaslice_direction_score *)calloc(count + SEARCH_AXES, sizeof **scores);
@@ -160,7 +160,7 @@ int orient_search(const adaslice_mesh *mesh, const adaslice_profile_options *po,
     if (s.failed) {
         free(*scores);
         *scores = NULL;
-        return library_error(&s.err);
+        return library_error_in(model, &s.err);
     }
     adaslice_orient_scores(*scores, count, alpha);
     /* neighbours: within 2.5 lattice spacings (the lattice's cells cover 4 pi / n) */

@@ -3,11 +3,14 @@
    random in both directions and, optionally, cutting the line for a while.
 
    usage: relay MCU_PTY [--drop P] [--corrupt P] [--seed N]
-                [--outage-after BYTES --outage-for SECONDS] [--stats FILE]
+                [--outage-after BYTES --outage-for SECONDS [--outage-way up|down]]
+                [--stats FILE]
    Prints "pty /dev/pts/N" for the host, then relays until SIGTERM, when it
    writes what it did to --stats: bytes each way, dropped, corrupted, and the
    outage's start and end (seconds since start). The outage begins once BYTES
-   have gone from the host to the MCU. */
+   have gone from the host to the MCU, and cuts both ways, or only the way
+   --outage-way names (up: host to MCU; down: MCU to host, a host that hears
+   nothing while the MCU hears it). */
 #define _XOPEN_SOURCE 600
 #include "../link/tty.h"
 #include <errno.h>
@@ -74,6 +77,7 @@ int main(int argc, char **argv)
 {
     double drop = 0, corrupt = 0, outage_for = 0, started = now_s(), cut_start = -1, cut_end = -1;
     unsigned long outage_after = 0;
+    int cut_up = 1, cut_down = 1;
     const char *stats = NULL;
     int mcu, master, slave, i;
     direction up = {0, 0, 0}, down = {0, 0, 0};
@@ -85,6 +89,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--seed")) rng_state = strtoull(argv[i + 1], NULL, 10) * 2654435761u + 1;
         else if (!strcmp(argv[i], "--outage-after")) outage_after = strtoul(argv[i + 1], NULL, 10);
         else if (!strcmp(argv[i], "--outage-for")) outage_for = atof(argv[i + 1]);
+        else if (!strcmp(argv[i], "--outage-way")) { cut_up = strcmp(argv[i + 1], "down") != 0; cut_down = strcmp(argv[i + 1], "up") != 0; }
         else if (!strcmp(argv[i], "--stats")) stats = argv[i + 1];
         else { fprintf(stderr, "relay: unknown option %s\n", argv[i]); return 2; }
     }
@@ -111,8 +116,8 @@ int main(int argc, char **argv)
         if (outage_for > 0 && cut_start < 0 && up.bytes >= outage_after && outage_after) { cut_start = t; cut_end = t + outage_for; }
         cut = cut_start >= 0 && t < cut_end;
         if (poll(p, 2, 20) < 0) continue;
-        if (p[0].revents & POLLIN) pass(master, mcu, &up, drop, corrupt, cut);
-        if (p[1].revents & POLLIN) pass(mcu, master, &down, drop, corrupt, cut);
+        if (p[0].revents & POLLIN) pass(master, mcu, &up, drop, corrupt, cut && cut_up);
+        if (p[1].revents & POLLIN) pass(mcu, master, &down, drop, corrupt, cut && cut_down);
         if ((p[0].revents | p[1].revents) & (POLLHUP | POLLERR)) (void)poll(NULL, 0, 10);
     }
     if (stats) {

@@ -653,6 +653,63 @@ static void the_pre_pass_keeps_the_hands_eps_feasible(void)
     cli_free(&json);
 }
 
+/* Each message names the command that was run and what was given: the plan
+   options' parser is shared, its words are not "plan"'s. `has` must be in
+   the one line and `hasnt` (if any) not. */
+static void message_is(const char *what, cli_result r, const char *has, const char *hasnt, const char *hasnt2)
+{
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, has) && (!hasnt || !strstr(r.err, hasnt)) &&
+               (!hasnt2 || !strstr(r.err, hasnt2)),
+           "%s: exit %d, '%s' (wanted '%s'%s%s)", what, r.status, r.err, has, hasnt ? ", not " : "", hasnt ? hasnt : "");
+    cli_free(&r);
+}
+
+static void messages_name_what_was_run(void)
+{
+    const char *model = "examples/models/hand_closed.obj";
+    char flat[512], job[512];
+    /* a CTB's header starts with its magic (0x12FD0086, v3), little-endian */
+    static const unsigned char ctb[16] = {0x86, 0x00, 0xFD, 0x12, 3, 0, 0, 0};
+    static const char *const cmds[] = {"plan", "slice", "orient"};
+    size_t k;
+    snprintf(flat, sizeof flat, "%s", cli_path("flat.stl"));
+    snprintf(job, sizeof job, "%s", cli_path("job"));
+    message_is("slice -o x", cli_run("slice", "-o", cli_path("x"), NULL), "slice needs a MODEL", "plan", NULL);
+    message_is("slice --bogus", cli_run("slice", model, "-o", cli_path("x"), "--bogus", NULL),
+               "unknown option --bogus (see adaslice slice --help)", "plan", NULL);
+    message_is("print --bogus", cli_run("print", model, "--port", "/dev/null", "--bogus", NULL), "see adaslice print --help",
+               "plan", NULL);
+    message_is("orient --profile", cli_run("orient", "--profile", cli_path("p.csv"), NULL), "orient takes a MODEL",
+               "plan takes", NULL);
+    message_is("orient MODEL --profile", cli_run("orient", model, "--profile", cli_path("p.csv"), NULL),
+               "orient takes a MODEL, not --profile", "plan takes", NULL);
+    message_is("orient --view", cli_run("orient", model, "--view", "top", NULL), "drop --view", "--saliency", "--sampler");
+    message_is("orient --saliency --sampler", cli_run("orient", model, "--saliency", "--sampler", "ldi", NULL),
+               "drop --saliency and --sampler", "curvature", "--weights");
+    /* one exposure for every layer is no working curve (no Dp to speak of) */
+    message_is("--exposure 3601", cli_run("slice", model, "-o", cli_path("x"), "--printer", "2k-5.5", "--exposure", "3601", NULL),
+               "--exposure 3601: every layer gets 3601 s", "working curve", "Dp");
+    CHECK(!cli_exists(cli_path("x")));
+    /* a library error about the model names the model */
+    cli_write(flat, "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+                    "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid f\n");
+    for (k = 0; k < sizeof cmds / sizeof *cmds; k++) {
+        cli_result r = k == 1 ? cli_run("slice", flat, "-o", cli_path("x"), "--printer", "2k-5.5", NULL)
+                              : cli_run(cmds[k], flat, "--dirs", "10", NULL);
+        if (k == 0) { cli_free(&r); r = cli_run("plan", flat, NULL); }
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, flat) && strstr(r.err, "flat"), "%s flat.stl: %d '%s'",
+               cmds[k], r.status, r.err);
+        cli_free(&r);
+    }
+    /* another slicer's job, by its extension or its magic, is refused as
+       such before the port is opened (/dev/null is none) */
+    write_all(job, ctb, sizeof ctb);
+    message_is("print job (CTB magic)", cli_run("print", job, "--port", "/dev/null", NULL), "a CTB job file", "serial port", "STL '");
+    write_all(cli_path("job.sl1"), "x", 1);
+    message_is("print job.sl1", cli_run("print", cli_path("job.sl1"), "--port", "/dev/null", NULL), "a .sl1 job file",
+               "serial port", NULL);
+}
+
 void test_cli(void)
 {
     if (!cli_begin("adaslice-cli")) return;
@@ -671,5 +728,6 @@ void test_cli(void)
     RUN(repairs_are_warned_about_and_reported);
     RUN(unwritable_output_fails_cleanly);
     RUN(bad_model_is_named);
+    RUN(messages_name_what_was_run);
     cli_end();
 }

@@ -317,9 +317,16 @@ static void full_print_on_the_simulator(void)
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
     CHECKF(port_hupcl(sim.line + 4, 0) == 0, "HUPCL is %d on the port after the print", port_hupcl(sim.line + 4, 0));
-    CHECKF(child_stop(&sim) == 0, "the simulator failed");
-    if (r.status == 0) check_print(cli_path("sim.log"), cli_path("report.json"), 0, 2000);
+    if (r.status != 0) { cli_free(&r); child_stop(&sim); return; }
     cli_free(&r);
+    /* the job is done: a resume of it says so, and names no layer to resume from */
+    r = cli_run("print", MODEL, "--scale", "15", "--port", sim.line + 4, CURE, "--peel", "2", "--peel-speed", "10",
+                "--return-speed", "10", "--settle", "0.05", "--resume-from", "5", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "finished this job (all ") && !strstr(r.err, "resume from"),
+           "a finished job resumed: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    check_print(cli_path("sim.log"), cli_path("report.json"), 0, 2000);
 }
 
 /* 1 % of the bytes dropped or flipped both ways: the print still completes
@@ -363,6 +370,84 @@ static void print_survives_a_lost_link(void)
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (r.status == 0) check_print(cli_path("sim3.log"), cli_path("report3.json"), 1, 2000);
     cli_free(&r);
+}
+
+static int second_host_status(const char *port, uint8_t type, link_status *out);
+static void sleep_ms(long ms);
+static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max);
+
+/* UV-on periods in the simulator's log so far. */
+static size_t lit_so_far(const char *log_path)
+{
+    char *log = read_whole_text(log_path), *at;
+    size_t lit = 0;
+    for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
+    free(log);
+    return lit;
+}
+
+/* The host goes deaf mid-print for 6 s (the printer's replies are lost, the
+   host's frames arrive): it hears nothing, resends its window, and gives up
+   (exit 5, ~3.4 s). The printer takes the repeats for no word from the host,
+   so it has paused itself for the lost link before the host says it stopped,
+   and lights nothing after: the layer the host names is where it stood when
+   last heard (it may have gone on as far as its masks, two layers at most),
+   and a resume from there either resumes it in place or is refused naming
+   the layer the printer holds, which then resumes it; every layer gets its
+   light exactly. */
+static void deaf_host_gives_up_after_the_printer_paused(void)
+{
+    child sim, relay;
+    const char *faults[] = {"--outage-after", "12000", "--outage-for", "6", "--outage-way", "down", NULL};
+    cli_result r;
+    sim_log l;
+    link_status st;
+    size_t lit_at_exit;
+    unsigned k = 0;
+    char port[256], from[16];
+    const char *at;
+    int state;
+    if (!start_relayed(&sim, &relay, cli_path("sim21.log"), cli_path("relay21.txt"), faults)) return;
+    snprintf(port, sizeof port, "%s", relay.line + 4);
+    r = run_print(port, cli_path("report21.json"));
+    lit_at_exit = lit_so_far(cli_path("sim21.log"));
+    CHECK(read_sim_log(cli_path("sim21.log"), &l));
+    CHECKF(r.status == 5 && cli_one_message(r.err) && strstr(r.err, "stopped answering"), "deaf: exit %d: %s", r.status, r.err);
+    CHECKF(l.link_pauses == 1, "when the host gave up the printer had paused %zu times for the lost link", l.link_pauses);
+    free(l.ev);
+    at = strstr(r.err, "--resume-from ");
+    CHECKF(at && sscanf(at, "--resume-from %u", &k) == 1 && k > 1, "no layer to resume from: %s", r.err);
+    cli_free(&r);
+    if (check_case_failed()) { child_stop(&relay); child_stop(&sim); return; }
+    sleep_ms(4000); /* the outage's end, and a link timeout more */
+    CHECKF(lit_so_far(cli_path("sim21.log")) == lit_at_exit, "lit %zu times after the host gave up",
+           lit_so_far(cli_path("sim21.log")) - lit_at_exit);
+    state = second_host_status(port, LINK_MSG_STATUS, &st);
+    /* as far as the masks it had: the layer it was at, and the next */
+    CHECKF(state == LINK_STATE_PAUSED && (st.flags & LINK_FLAG_LINK_LOST) && st.exposed + 1 >= k && st.exposed + 1 <= k + 2,
+           "the printer is %d (flags %u), layer %u exposed; the host said resume from %u", state, (unsigned)st.flags,
+           (unsigned)st.exposed, k);
+    if (check_case_failed()) { child_stop(&relay); child_stop(&sim); return; }
+    snprintf(from, sizeof from, "%u", k);
+#define DEAF_ARGS MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", \
+                  "--settle", "0.05", "--home", "--report", cli_path("report21.json"), "--resume-from"
+    r = cli_run("print", DEAF_ARGS, from, NULL);
+    if (st.exposed + 1 != k) {
+        /* the printer went a layer on before it paused: the resume says which */
+        char want[64];
+        snprintf(want, sizeof want, "resume from %u", (unsigned)st.exposed + 1);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, want), "--resume-from %u: exit %d: %s", k, r.status,
+               r.err);
+        cli_free(&r);
+        snprintf(from, sizeof from, "%u", (unsigned)st.exposed + 1);
+        r = cli_run("print", DEAF_ARGS, from, NULL);
+    }
+#undef DEAF_ARGS
+    CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume from %s: exit %d: %s %s", from, r.status, r.out, r.err);
+    cli_free(&r);
+    child_stop(&relay);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (!check_case_failed()) check_resumed_in_place(cli_path("sim21.log"), cli_path("report21.json"), 0, 1);
 }
 
 /* Starts `adaslice print` in the background (for Ctrl-C). */
@@ -502,7 +587,9 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     snprintf(k, sizeof k, "%u", layer);
     r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, "--peel", "2", "--peel-speed", "10", "--return-speed",
                 "10", "--settle", "0.05", "--resume-from", k, "--report", cli_path("report5.json"), NULL);
-    CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume: exit %d: %s %s", r.status, r.out, r.err);
+    /* a layer owes some of its light, or gets all of it: never "0 ms left" */
+    CHECKF(r.status == 0 && strstr(r.out, "in place") && !strstr(r.out, " 0 ms of its exposure left"), "resume: exit %d: %s %s",
+           r.status, r.out, r.err);
     cli_free(&r);
     CHECKF(child_stop(&sim) == 0, "the simulator failed");
     if (check_case_failed()) return;
@@ -517,6 +604,78 @@ static void ctrl_c_pauses_and_resume_finishes(void)
     }
     /* the pause split one exposure, or came between two */
     check_resumed_in_place(cli_path("sim5.log"), cli_path("report5.json"), 0, 1);
+}
+
+/* A paused print abandoned (print --abort): a print started over it is
+   refused, naming the paused layer, the one to resume from and --abort;
+   --abort ends the print (the printer READY, its light off, its display
+   dark, and nothing lit after the pause) and lifts the platform to the top
+   of Z's travel (--z-max 30), as the printer itself reports; a second
+   --abort finds nothing to abandon. */
+static int second_host_status(const char *port, uint8_t type, link_status *out);
+
+static void abort_abandons_a_paused_print(void)
+{
+    child sim;
+    char port[256], *out;
+    const char *sim_extra[] = {"--z-max", "30", NULL}, *extra[] = {CURE, NULL};
+    pid_t pid;
+    int status, state;
+    unsigned paused_at = 0, from = 0;
+    link_status st;
+    cli_result r;
+    sim_log l;
+    size_t k;
+    if (!start_sim_with(&sim, cli_path("sim20.log"), "10", sim_extra)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    pid = hand_print_in_background(port, extra, cli_path("print20.out"));
+    CHECK(wait_for_exposures(cli_path("sim20.log"), 4));
+    kill(pid, SIGINT);
+    status = wait_exit(pid, 30);
+    out = read_whole_text(cli_path("print20.out"));
+    CHECKF(status == 3 && out && strstr(out, "paused at layer "), "Ctrl-C: exit %d: %s", status, out ? out : "");
+    if (out && strstr(out, "paused at layer ")) sscanf(strstr(out, "paused at layer ") + 16, "%u", &paused_at);
+    if (out && strstr(out, "--resume-from ")) sscanf(strstr(out, "--resume-from ") + 14, "%u", &from);
+    free(out);
+    if (check_case_failed()) { child_stop(&sim); return; }
+    r = cli_run("print", MODEL, "--scale", "15", "--port", port, CURE, NULL);
+    {
+        char paused[64], resume[64];
+        snprintf(paused, sizeof paused, "paused at layer %u of ", paused_at);
+        snprintf(resume, sizeof resume, "--resume-from %u, or abandon it with adaslice print --abort", from);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, paused) && strstr(r.err, resume) &&
+                   !strstr(r.err, "is printing"), "a print over the paused one: exit %d: %s", r.status, r.err);
+    }
+    cli_free(&r);
+    r = cli_run("print", "--abort", "--port", port, NULL);
+    CHECKF(r.status == 0 && !*r.err && strstr(r.out, "abandoned the print at layer "), "--abort: exit %d: %s %s", r.status,
+           r.out, r.err);
+    cli_free(&r);
+    state = second_host_status(port, LINK_MSG_STATUS, &st);
+    CHECKF(state == LINK_STATE_READY && !(st.flags & (LINK_FLAG_UV | LINK_FLAG_MOVING)) && (st.flags & LINK_FLAG_HOMED) &&
+               st.z_nm == 30000000, "after --abort: state %d, flags %u, z %ld nm", state, (unsigned)st.flags, (long)st.z_nm);
+    r = cli_run("print", "--abort", "--port", port, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "nothing to abandon"), "--abort again: exit %d: %s",
+           r.status, r.err);
+    cli_free(&r);
+    r = cli_run("print", "--abort", "--port", port, MODEL, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, MODEL), "--abort MODEL: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    CHECKF(child_stop(&sim) == 0, "the simulator failed");
+    if (check_case_failed() || !read_sim_log(cli_path("sim20.log"), &l)) return;
+    {
+        int last_uv = -1, last_show = 0;
+        size_t lit_after = 0;
+        for (k = 0; k < l.count; k++) {
+            if (l.ev[k].kind == ZEV_UV) last_uv = l.ev[k].value;
+            if (l.ev[k].kind == ZEV_SHOW) last_show = l.ev[k].value;
+            if (l.ev[k].kind == ZEV_UV && l.ev[k].value && l.ev[k].when > l.pause_begin) lit_after++;
+        }
+        CHECKF(l.user_pauses == 1 && last_uv == 0 && last_show < 0 && !lit_after,
+               "%zu pauses; the light last %d, the display last %d, %zu lit after the pause", l.user_pauses, last_uv,
+               last_show, lit_after);
+    }
+    free(l.ev);
 }
 
 /* The host killed (SIGKILL) while layer 2 exposes: the printer pauses itself
@@ -904,8 +1063,8 @@ static void mcu_halted_while_homing_or_planning(void)
 /* Talks to the printer on `port` as a second host would: HELLO, then `type`
    (a message without a payload), then STATUS, each sent again until its
    answer comes (2 s at most). The state the printer reports, -1 if it does
-   not answer. */
-static int second_host_sends(const char *port, uint8_t type)
+   not answer; its whole STATUS_REPLY in *out (unless NULL). */
+static int second_host_status(const char *port, uint8_t type, link_status *out)
 {
     const uint8_t types[3] = {LINK_MSG_HELLO, type, LINK_MSG_STATUS};
     uint8_t frame[LINK_FRAME_MAX], hello[LINK_SIZE_HELLO];
@@ -932,7 +1091,11 @@ static int second_host_sends(const char *port, uint8_t type)
                 uint8_t t = rx.buf[2];
                 if (step == 0) got = t == LINK_MSG_IDENTIFY;
                 else if (step == 1) got = t == LINK_MSG_ACK && rx.buf[1] == (uint8_t)(seq + 1);
-                else if (t == LINK_MSG_STATUS_REPLY && link_get_status(&st, rx.buf + 3, m - LINK_FRAME_MIN)) got = 1, state = st.state;
+                else if (t == LINK_MSG_STATUS_REPLY && link_get_status(&st, rx.buf + 3, m - LINK_FRAME_MIN)) {
+                    got = 1;
+                    state = st.state;
+                    if (out) *out = st;
+                }
                 link_deframe_consume(&rx);
             }
         }
@@ -941,6 +1104,8 @@ static int second_host_sends(const char *port, uint8_t type)
     close(fd);
     return state;
 }
+
+static int second_host_sends(const char *port, uint8_t type) { return second_host_status(port, type, NULL); }
 
 /* The host's one line when the printer stopped printing (an ABORT, a fault):
    exit 1, the layer, the last fully exposed, and the layer to continue from
@@ -1658,8 +1823,10 @@ void test_print(void)
     RUN(full_print_on_the_simulator);
     RUN(print_through_a_faulty_line);
     RUN(print_survives_a_lost_link);
+    RUN(deaf_host_gives_up_after_the_printer_paused);
     RUN(thousand_layers_on_the_simulator);
     RUN(ctrl_c_pauses_and_resume_finishes);
+    RUN(abort_abandons_a_paused_print);
     RUN(host_killed_mid_exposure_resumes_in_place);
     RUN(mcu_reset_mid_print_on_the_simulator);
     RUN(mcu_reset_mid_exposure_owes_only_the_rest);

@@ -36,6 +36,7 @@ typedef struct print_args {
     int plan_on_host;
     int home;               /* --home: a resumed print may home Z */
     int then_exit;          /* emulators: EXIT after the print */
+    int abort;              /* --abort: abandon the paused print, no job */
     double give_up_s;       /* a printer that answers nothing this long ends the print */
     screen_options screen;  /* --screen: the host shows the masks (print/screen.h) */
 } print_args;
@@ -297,8 +298,14 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
     m.job = pj->job;
     if (in_place) {
         next = l->st.mask_ready + 1;
-        printf("resuming layer %u in place: %u ms of its exposure left, masks from layer %u on\n", first,
-               l->st.exposure_left_ms, next);
+        /* paused before its light came on, or in the peel after it (the
+           layer before is then the one held): the layer gets it all */
+        if (l->st.exposure_left_ms)
+            printf("resuming layer %u in place: %u ms of its exposure left, masks from layer %u on\n", first,
+                   l->st.exposure_left_ms, next);
+        else
+            printf("resuming layer %u in place: its whole exposure (%u ms) to come, masks from layer %u on\n", first,
+                   pj->exposure_ms[first - 1], next);
         fflush(stdout);
         if (l->st.state == LINK_STATE_PAUSED && (rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
         if ((rc = serial_status(l))) return rc;
@@ -313,7 +320,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
     }
     if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_DONE)
         return complain(RC_FAIL, "the printer would not %s layer %u: %s", in_place ? "resume" : "start", first,
-                        link_error_name(l->st.error));
+                        serial_why_not(l));
     refused = l->st.masks_refused;
     for (;;) {
         if (interrupted) {
@@ -436,6 +443,7 @@ static void write_report(FILE *f, const void *ctx)
 static void print_usage(FILE *f)
 {
     fputs("usage: adaslice print MODEL|JOBDIR --port DEV [print options] [masks] [plan options]\n"
+          "       adaslice print --abort --port DEV\n"
           "\n"
           "Prints on a printer running the adaslice firmware (link/PROTOCOL.md). With a\n"
           "MODEL the printer plans from the quantised profile and the host checks that the\n"
@@ -468,6 +476,9 @@ static void print_usage(FILE *f)
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"
+          "  --abort               abandon the print paused on the printer (no MODEL):\n"
+          "                        UV off, the display dark, then the platform lifted\n"
+          "                        to the top of Z's travel at 5 mm/s (if Z is homed)\n"
           "\n"
           "masks (the display's size and pitch come from the printer)\n"
           "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
@@ -499,6 +510,7 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
         else if (!strcmp(o, "--plan-on-host")) pa->plan_on_host = 1;
         else if (!strcmp(o, "--home")) pa->home = 1;
         else if (!strcmp(o, "--then-exit")) pa->then_exit = 1;
+        else if (!strcmp(o, "--abort")) pa->abort = 1;
         else if (screen_option(argc, argv, &i, &pa->screen, &rc)) {}
         else if (!strcmp(o, "--help") || !strcmp(o, "-h")) { print_usage(stdout); return -1; }
         else rest[(*rest_argc)++] = argv[i];
@@ -506,6 +518,10 @@ static int parse_print(int argc, char **argv, print_args *pa, int *rest_argc, ch
     if (rc) return rc;
     if (!pa->port) return complain(RC_USAGE, "print needs --port DEV");
     if (pa->exposure_left && !pa->resume_from) return complain(RC_USAGE, "--exposure-left: the light of the layer --resume-from K names");
+    if (pa->abort && (*rest_argc > 1 || pa->resume_from || pa->home || pa->plan_on_host || pa->report || pa->then_exit ||
+                      pa->screen.device))
+        return complain(RC_USAGE, "--abort %s: --abort abandons the paused print and takes only --port, --baud and --give-up",
+                        *rest_argc > 1 ? rest[1] : "with print options");
     return RC_OK;
 }
 
@@ -691,6 +707,9 @@ static int check_resume(const serial_link *l, const print_args *pa, const print_
                                   "give the same model, options and exposures, or print afresh", k,
                         busy ? "is paused at" : "stopped after", busy ? s->layer : s->exposed, (unsigned)s->job,
                         (unsigned)pj->job);
+    if (s->job && s->state == LINK_STATE_DONE && s->exposed == s->layers)
+        return complain(RC_USAGE, "--resume-from %u: the printer finished this job (all %u layer%s exposed): print it "
+                                  "afresh without --resume-from", k, s->layers, plural(s->layers));
     if (busy) {
         /* paused while it peels, the layer it holds is exposed already */
         if (k != from)
@@ -723,8 +742,13 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
     adaslice_plan_options o;
     int rc;
     if ((rc = serial_status(l))) return rc;
-    if (!pa->resume_from && (l->st.state == LINK_STATE_PRINTING || l->st.state == LINK_STATE_PAUSED))
-        return complain(RC_FAIL, "the printer is printing layer %u; continue it with --resume-from %u", l->st.layer, l->st.layer);
+    if (!pa->resume_from && l->st.state == LINK_STATE_PAUSED)
+        return complain(RC_FAIL, "the printer holds a print paused at layer %u of %u (layer %u the last fully exposed): "
+                                 "continue it with --resume-from %u, or abandon it with adaslice print --abort --port %s",
+                        l->st.layer, l->st.layers, l->st.exposed, l->st.exposed + 1, pa->port);
+    if (!pa->resume_from && l->st.state == LINK_STATE_PRINTING)
+        return complain(RC_FAIL, "the printer is printing layer %u of %u (another host drives it?); Ctrl-C there pauses it",
+                        l->st.layer, l->st.layers);
     if (pa->resume_from && ((rc = check_resume(l, pa, pj, in_place)) || *in_place)) return rc;
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
     l->task = planned_by_printer ? "planning" : "taking the plan";
@@ -764,6 +788,25 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+/* Which other slicer's job `path` is, by its extension (slice -o's) or its
+   first bytes (CTB's magic, GOO's, a ZIP's: SL1, ChiTu zip, UVJ); NULL for
+   anything else. Those are for a printer's own firmware (its USB stick),
+   never a model: the loader would take their bytes for a binary STL. */
+static const char *job_file_kind(const char *path)
+{
+    static const unsigned char goo[8] = {0x07, 0x00, 0x00, 0x00, 0x44, 0x4C, 0x50, 0x00};
+    const job_format *f = job_format_for_path(path);
+    unsigned char b[12] = {0};
+    FILE *in;
+    size_t n = 0;
+    if (f && f->extension) return f->extension;
+    if ((in = fopen(path, "rb")) != NULL) { n = fread(b, 1, sizeof b, in); fclose(in); }
+    if (n >= 4 && (get_le32(b) & 0xFFFFFF00u) == 0x12FD0000u) return "CTB";
+    if (n >= 12 && !memcmp(b + 4, goo, sizeof goo)) return "GOO";
+    if (n >= 4 && !memcmp(b, "PK\3\4", 4)) return "ZIP (SL1, ChiTu or UVJ)";
+    return NULL;
+}
+
 /* print's own options, then the mask options, then a JOBDIR or a MODEL and
    its plan options; -1 after --help. */
 static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, plan_args *a, const char **jobdir)
@@ -773,6 +816,7 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     *jobdir = NULL;
     if (!rest || !rest2) { free(rest); free(rest2); return complain(RC_FAIL, "out of memory"); }
     rc = parse_print(argc, argv, pa, &rest_argc, rest);
+    if (!rc && pa->abort) { free(rest); free(rest2); return RC_OK; }
     if (!rc) rc = parse_slice(rest_argc, rest, s, &rest2_argc, rest2, 0);
     if (!rc && s->geometry_given) rc = complain(RC_USAGE, "print: the printer reports its display; drop --printer/--pixels/--pitch/--display");
     if (!rc && rest2_argc >= 2 && rest2[1][0] != '-' && is_dir(rest2[1])) {
@@ -781,14 +825,83 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
         else if (s->cure.given)
             rc = complain(RC_USAGE, "print JOBDIR: the job holds its exposures and motion; slice it again to change them");
     } else if (!rc) {
+        const char *kind;
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
-        if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
+        if (!rc && (kind = job_file_kind(a->model)) != NULL)
+            rc = complain(RC_USAGE, "print %s: a %s job file is for a printer's own firmware; adaslice print takes a MODEL (STL, "
+                                    "OBJ or PLY) or a JOBDIR (adaslice slice MODEL -o DIR)", a->model, kind);
         if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
             rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
                                     "--method, --uniform, --out, --plot, --profile-out, --json and --compare");
     }
     free(rest);
     free(rest2);
+    return rc;
+}
+
+/* The lift after --abort, um/s: the part may still stick to the vat's
+   film (paused in its exposure), so a peel's pace, not the axis's fastest. */
+#define ABORT_LIFT_UM_S 5000u
+
+static int not_moving(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_MOVING; }
+
+/* --abort: a paused print ends (ABORT: UV off, the display dark; the plan
+   and job are kept), and the platform rises out of the vat to the top of
+   Z's travel, where a printer's own "stop" leaves it for the part to come
+   off. Anything but a paused print is left alone. */
+static int abort_paused(const print_args *pa)
+{
+    serial_link l;
+    uint8_t buf[LINK_PAYLOAD_MAX];
+    link_move m;
+    uint32_t layer, layers, exposed;
+    int rc;
+    char z[96];
+    memset(&l, 0, sizeof l);
+    l.fd = -1;
+    if ((rc = serial_connect(&l, pa->port, pa->baud, pa->give_up_s)) || (rc = serial_status(&l))) goto done;
+    layer = l.st.layer;
+    layers = l.st.layers;
+    exposed = l.st.exposed;
+    if (l.st.state == LINK_STATE_PRINTING) {
+        rc = complain(RC_FAIL, "the printer on %s is printing layer %u of %u, not paused: --abort abandons a paused print "
+                               "(Ctrl-C in the host printing it pauses it)", pa->port, layer, layers);
+        goto done;
+    }
+    if (l.st.state != LINK_STATE_PAUSED) {
+        rc = complain(RC_FAIL, "the printer on %s holds no paused print (it is %s): nothing to abandon", pa->port,
+                      link_state_name(l.st.state));
+        goto done;
+    }
+    if ((rc = serial_send(&l, LINK_MSG_ABORT, NULL, 0)) || (rc = serial_status(&l))) goto done;
+    if (l.st.state == LINK_STATE_PAUSED || (l.st.flags & LINK_FLAG_UV)) {
+        rc = complain(RC_FAIL, "the printer on %s would not abandon the print: %s", pa->port, serial_why_not(&l));
+        goto done;
+    }
+    if (!(l.st.flags & LINK_FLAG_HOMED)) {
+        snprintf(z, sizeof z, "Z stays at %.3f mm (not homed: lifting it could not be trusted)", l.st.z_nm / 1e6);
+    } else if (l.st.screen) {
+        snprintf(z, sizeof z, "Z stays at %.3f mm (the host's screen still shows layer %u)", l.st.z_nm / 1e6, l.st.screen);
+    } else {
+        m.z_nm = (int32_t)(l.id.z_max_nm > INT32_MAX ? INT32_MAX : l.id.z_max_nm);
+        m.speed_um_s = ABORT_LIFT_UM_S;
+        if ((rc = serial_send(&l, LINK_MSG_MOVE, buf, link_put_move(buf, &m))) || (rc = serial_status(&l))) goto done;
+        if (l.st.state != LINK_STATE_MOVING && l.st.z_nm != m.z_nm) {
+            snprintf(z, sizeof z, "Z stays at %.3f mm (the lift was refused: %s)", l.st.z_nm / 1e6, serial_why_not(&l));
+        } else {
+            /* the travel at the lift's speed, twice over, and a minute */
+            double ms = 2e6 * (m.z_nm - l.st.z_nm) / 1e6 / (ABORT_LIFT_UM_S / 1e3) + 60000;
+            l.task = "lifting Z";
+            rc = serial_wait(&l, not_moving, NULL, ms, "lift Z");
+            l.task = NULL;
+            if (rc) goto done;
+            snprintf(z, sizeof z, "Z lifted to %.3f mm, the top of its travel", l.st.z_nm / 1e6);
+        }
+    }
+    printf("abandoned the print at layer %u of %u (layer %u the last fully exposed): UV off, the display dark; %s\n", layer,
+           layers, exposed, z);
+done:
+    serial_close(&l);
     return rc;
 }
 
@@ -815,6 +928,7 @@ int cmd_print(int argc, char **argv)
     memset(&scr, 0, sizeof scr);
     l.fd = scr.fd = scr.guard_fd = -1;
     if ((rc = parse_target(argc, argv, &pa, &s, &a, &jobdir))) return rc < 0 ? RC_OK : rc;
+    if (pa.abort) return abort_paused(&pa);
     if ((rc = output_check("--report", pa.report))) return rc; /* before hours of printing */
     pj.from_model = !jobdir;
     if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;

@@ -95,8 +95,13 @@ static int begin(screen_print *p)
     if ((rc = go_dark(p))) return rc;
     if (p->in_place) {
         if ((rc = serial_status(l))) return rc;
-        printf("resuming layer %u in place: %u ms of its exposure left, shown on %s\n", p->motion.first_layer,
-               l->st.exposure_left_ms, p->scr->name);
+        /* none owed: paused before the light, or in the peel after it */
+        if (l->st.exposure_left_ms)
+            printf("resuming layer %u in place: %u ms of its exposure left, shown on %s\n", p->motion.first_layer,
+                   l->st.exposure_left_ms, p->scr->name);
+        else
+            printf("resuming layer %u in place: its whole exposure (%u ms) to come, shown on %s\n", p->motion.first_layer,
+                   p->exposure_ms[p->motion.first_layer - 1], p->scr->name);
         if (l->st.state == LINK_STATE_PAUSED && (rc = serial_send(l, LINK_MSG_RESUME, NULL, 0))) return rc;
     } else {
         if ((rc = serial_send(l, LINK_MSG_PRINT, buf, link_put_print(buf, &p->motion)))) return rc;
@@ -106,7 +111,7 @@ static int begin(screen_print *p)
     if ((rc = serial_status(l))) return rc;
     if (l->st.state != LINK_STATE_PRINTING && l->st.state != LINK_STATE_DONE)
         return complain(RC_FAIL, "the printer would not %s layer %u: %s", p->in_place ? "resume" : "start",
-                        p->motion.first_layer, link_error_name(l->st.error));
+                        p->motion.first_layer, serial_why_not(l));
     return RC_OK;
 }
 

@@ -61,7 +61,7 @@ static int printing(const link_status *s) { return s->state == LINK_STATE_PRINTI
 int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer, int z_kept)
 {
     const link_status *s = &l->st;
-    char phase[40] = "", owed[96] = "", left[40] = "";
+    char phase[40] = "", owed[96] = "", left[40] = "", heard[200] = "";
     if (!at_layer)
         return complain(rc, "the printer on %s %s while %s, before this run exposed a layer: Z must be homed before "
                             "printing again: clear the platform and print again (a --resume-from needs --home)",
@@ -81,11 +81,18 @@ int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer,
                  s->exposure_left_ms, ceil(since) + 1);
         snprintf(left, sizeof left, " --exposure-left %u", s->exposure_left_ms);
     }
+    /* What the printer said last. One that still runs goes on until its
+       link timeout, as far as the masks it has: the layer it was at and the
+       next (the host sends a mask only one layer ahead of what it heard);
+       --resume-from is checked against where it stands. */
+    if (rc == RC_LOST && printing(s))
+        snprintf(heard, sizeof heard, ", as last heard (a printer still running pauses itself its link timeout after the "
+                                      "host's last frame, perhaps a layer or two on: the resume then names the layer)");
     /* a printer that lost only the line pauses itself and keeps Z homed:
        the same command resumes it in place */
-    return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed%s; Z must be homed before "
+    return complain(rc, "the printer on %s %s at layer %u%s: layer %u was the last fully exposed%s%s; Z must be homed before "
                         "printing again%s: clear the platform, then continue with --resume-from %u --home%s%s",
-                    l->dev, what, s->layer, phase, s->exposed, owed,
+                    l->dev, what, s->layer, phase, s->exposed, owed, heard,
                     rc == RC_LOST ? " (unless the printer kept the print paused)" : "", s->exposed + 1, left,
                     rc == RC_LOST ? ", which resumes a paused print in place" : "");
 }
@@ -462,6 +469,14 @@ void serial_close(serial_link *l)
 {
     if (l->fd >= 0) close(l->fd);
     l->fd = -1;
+}
+
+const char *serial_why_not(const serial_link *l)
+{
+    static char why[64];
+    if (l->st.error) return link_error_name(l->st.error);
+    snprintf(why, sizeof why, "it stayed %s, refusing nothing", link_state_name(l->st.state));
+    return why;
 }
 
 int serial_plan_page(serial_link *l, uint32_t first, int *rc)

@@ -119,6 +119,10 @@ int serial_ask_status(serial_link *l);
    printer did not <what> in N s". */
 int serial_wait(serial_link *l, int (*done)(const link_status *, const void *), const void *ctx, double timeout_ms,
                 const char *what);
+/* Why the printer did not do what was asked, for a message: the last
+   command it refused, or, when it refused none, the state it stayed in
+   ("it stayed ready, refusing nothing"). */
+const char *serial_why_not(const serial_link *l);
 /* Page `first` of the printer's plan into l->plan: 1 if it came. */
 int serial_plan_page(serial_link *l, uint32_t first, int *rc);
 #endif
