@@ -66,15 +66,15 @@ static void contour_usage(FILE *f)
           "  --resolution MM     the longest piece of a contoured path            [0.2]\n"
           "  --max-rise MM       the most a path rises above its layer's top\n"
           "                                                 [half the layer's height]\n"
-          "  --max-angle DEG     the steepest surface followed, and path slope      [15]\n", f);
+          "  --max-angle DEG     the steepest surface followed, and path slope      [15]\n"
+          "A project from plan --hybrid carries the limits its plan was made for: they\n"
+          "replace the defaults (the options given still win).\n", f);
 }
 
 static int parse_contour(int argc, char **argv, contour_args *a, int *help)
 {
     int i, rc = RC_OK;
-    memset(a, 0, sizeof *a);
-    a->resolution = 0.2;
-    a->max_angle = 15;
+    memset(a, 0, sizeof *a); /* 0: the project's hybrid plan's limit, else the default */
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
         if (o[0] != '-' || !o[1]) {
@@ -96,7 +96,7 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
     if (!a->in) return complain(RC_USAGE, "contour needs IN.gcode (see adaslice contour --help)");
     if (!a->project) return complain(RC_USAGE, "contour needs --project PART.3mf, the 3MF PrusaSlicer sliced");
     if (!a->out) return complain(RC_USAGE, "contour needs -o OUT.gcode");
-    if (a->resolution < 0.01) return complain(RC_USAGE, "--resolution %g: 0.01 mm or more", a->resolution);
+    if (a->resolution && a->resolution < 0.01) return complain(RC_USAGE, "--resolution %g: 0.01 mm or more", a->resolution);
     return RC_OK;
 }
 
@@ -811,7 +811,7 @@ int cmd_contour(int argc, char **argv)
     adaslice_error err;
     adaslice_grid grid;
     double worst = 0;
-    int help = 0, rc, k;
+    int help = 0, rc, k, limits_from_plan;
     size_t i;
     if ((rc = parse_contour(argc, argv, &a, &help))) return rc;
     if (help) { contour_usage(stdout); return RC_OK; }
@@ -820,6 +820,12 @@ int cmd_contour(int argc, char **argv)
     memset(&s, 0, sizeof s);
     if ((rc = gfile_read(a.in, &g))) { gfile_free(&g); return rc; }
     if ((rc = threemf_read(a.project, &p))) { gfile_free(&g); return rc; }
+    /* the limits a hybrid plan was made for (it bounded its residual with
+       them), where the command line gives none */
+    limits_from_plan = (!a.max_angle && p.max_angle) || (!a.max_rise && p.max_rise) || (!a.resolution && p.resolution);
+    if (!a.max_angle) a.max_angle = p.max_angle ? p.max_angle : 15;
+    if (!a.max_rise) a.max_rise = p.max_rise;
+    if (!a.resolution) a.resolution = p.resolution ? p.resolution : 0.2;
     if ((rc = place(&a, &g, &p, &pl))) goto done;
     s.mesh = &p.mesh;
     memcpy(s.shift, pl.shift, sizeof s.shift);
@@ -857,6 +863,9 @@ int cmd_contour(int argc, char **argv)
                                : pl.bed_centred == 0 ? "off the bed's centre (arranged or moved), found by its extrusions"
                                                      : "found by its extrusions",
            pl.shift[0], pl.shift[1], pl.shift[2], pl.size_g[0], pl.size_g[1], pl.size_m[0], pl.size_m[1]);
+    if (limits_from_plan)
+        printf("%s: the hybrid plan's limits: --max-angle %g --max-rise %g --resolution %g\n", a.project, a.max_angle,
+               a.max_rise, a.resolution);
     printf("%s: %zu extrusion moves contoured into %zu pieces (%zu raised, %zu lowered, %+.3f to %+.3f mm off the layer "
            "tops); E per layer within %+.2f%%\n", a.out, w.contoured_moves, w.points, w.raised, w.lowered,
            w.points ? w.dz_min : 0.0, w.points ? w.dz_max : 0.0, 100 * worst);

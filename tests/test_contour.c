@@ -497,6 +497,55 @@ static void a_shallow_dome_is_printed_on_its_surface(void)
     contour_case(cli_path("dome.obj"), 1, 0, 4);
 }
 
+/* The largest offset from the layer tops contour reports on its last line. */
+static double reported_rise(const char *out)
+{
+    const char *at = strstr(out, "lowered, ");
+    double lo, hi;
+    return at && sscanf(at, "lowered, %lf to %lf", &lo, &hi) == 2 ? hi : -1;
+}
+
+/* A project from plan --hybrid carries the limits its residual was bounded
+   with: contour takes them where the command line gives none (a smaller
+   --max-rise than its default, half the layer, shows in how far it rises),
+   and an option given still wins. */
+static void a_hybrid_projects_limits_are_taken(void)
+{
+    char first[32], lo_h[32], hi_h[32], data[300], path3mf[300], gcode[300], log_path[300], *argv[24], *log = NULL;
+    cli_result r;
+    int status;
+    double rise;
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("hybrid.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("hybrid.gcode"));
+    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
+    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
+    r = cli_run("plan", "examples/models/shallow_dome.obj", PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid", "--max-rise",
+                "0.02", NULL);
+    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
+               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
+               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h), "plan --hybrid: %d %.200s", r.status, r.err);
+    cli_free(&r);
+    if (check_case_failed()) return;
+    mkdir(data, 0755);
+    prusa_export_argv(argv, data, first, lo_h, hi_h, gcode, path3mf);
+    status = prusa_run(argv, log_path, &log);
+    CHECKF(status == 0, "prusa-slicer: %.300s", log);
+    free(log);
+    if (status) return;
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("taken.gcode"), NULL);
+    rise = reported_rise(r.out);
+    CHECKF(r.status == 0 && strstr(r.out, "the hybrid plan's limits: --max-angle 15 --max-rise 0.02 --resolution 0.2"),
+           "exit %d: %.300s%.200s", r.status, r.out, r.err);
+    CHECKF(rise > 0 && rise <= 0.0205, "rose %.4f mm over a layer top with the plan's --max-rise 0.02: %.300s", rise, r.out);
+    cli_free(&r);
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("given.gcode"), "--max-rise", "0.04", NULL);
+    rise = reported_rise(r.out);
+    CHECKF(r.status == 0 && strstr(r.out, "--max-rise 0.04 --resolution 0.2"), "exit %d: %.300s%.200s", r.status, r.out,
+           r.err);
+    CHECKF(rise > 0.0205 && rise <= 0.0405, "rose %.4f mm with --max-rise 0.04 given", rise);
+    cli_free(&r);
+}
+
 static void an_aerofoil_is_printed_on_its_surface(void)
 {
     adaslice_mesh m = gen_heightfield(120, 30, 0, 0, 60, 30, aerofoil_top);
@@ -619,5 +668,6 @@ void test_contour(void)
     RUN_NEEDING("prusa-slicer", an_aerofoil_is_printed_on_its_surface);
     RUN_NEEDING("prusa-slicer", the_bundled_hand_is_printed_on_its_surface);
     RUN_NEEDING("prusa-slicer", refused_inputs_get_one_line_and_no_file);
+    RUN_NEEDING("prusa-slicer", a_hybrid_projects_limits_are_taken);
     cli_end();
 }

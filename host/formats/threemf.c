@@ -383,6 +383,31 @@ static int read_profile(const char *path, const char *text, threemf_project *p)
     return RC_OK;
 }
 
+/* The contour's limits from THREEMF_CONTOUR_PART's "; key = value" lines;
+   a key missing or not a positive number stays 0 (the contour's default). */
+static void read_contour_limits(const char *text, threemf_project *p)
+{
+    static const char *const keys[] = {"max_angle", "max_rise", "resolution"};
+    double *values[3];
+    size_t k;
+    values[0] = &p->max_angle; values[1] = &p->max_rise; values[2] = &p->resolution;
+    for (k = 0; k < 3; k++) {
+        const char *at = text;
+        size_t len = strlen(keys[k]);
+        while ((at = strstr(at, keys[k])) != NULL) {
+            const char *v = at + len;
+            int line_start = at >= text + 2 && at[-1] == ' ' && at[-2] == ';';
+            at = v;
+            while (*v == ' ') v++;
+            if (line_start && *v == '=') {
+                double x = strtod(v + 1, NULL);
+                if (x > 0 && x < 1e6) *values[k] = x;
+                break;
+            }
+        }
+    }
+}
+
 int threemf_read(const char *path, threemf_project *p)
 {
     FILE *f = fopen(path, "rb");
@@ -408,6 +433,13 @@ int threemf_read(const char *path, threemf_project *p)
         rc = complain(RC_FAIL, "%s: %s", path, got > 0 ? "no layer height profile (plan --3mf writes one)" : why);
     if (!rc) rc = read_mesh(path, (const char *)model, p);
     if (!rc) rc = read_profile(path, (const char *)profile, p);
+    if (!rc) {
+        unsigned char *limits = NULL;
+        if ((got = zip_member(data, size, THREEMF_CONTOUR_PART, &limits, &n, why)) < 0)
+            rc = complain(RC_FAIL, "%s: %s", path, why);
+        else if (!got) read_contour_limits((const char *)limits, p);
+        free(limits);
+    }
     free(data);
     free(model);
     free(profile);

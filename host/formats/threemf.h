@@ -56,10 +56,13 @@ typedef struct threemf_project {
     double *tops;
     size_t layers;
     int transformed;             /* the build item had a transform */
+    /* THREEMF_CONTOUR_PART's limits (a hybrid plan's), each 0 when absent */
+    double max_angle, max_rise, resolution;
 } threemf_project;
 /* Reads the 3MF at path as threemf_write writes it (any 3MF with one object
-   of one mesh and PrusaSlicer's layer height profile); RC_OK, or a
-   complaint naming the file and what is wrong, and nothing held. */
+   of one mesh and PrusaSlicer's layer height profile, and a hybrid plan's
+   THREEMF_CONTOUR_PART if it has one); RC_OK, or a complaint naming the file
+   and what is wrong, and nothing held. */
 int threemf_read(const char *path, threemf_project *p);
 void threemf_project_free(threemf_project *p);
 #endif
