@@ -43,11 +43,12 @@
    between two slices. The host allows two passes of 2.5 ms (62,500
    cycles, fw.h's looser bound on a pass: half the step lead, with Z
    still) a slice: 5 ms for 64 bytes of CRC, and for 8 bins with their
-   planes' share of the reversal (64 a pass). The trace image's worst pass
-   under QEMU, the loop's own work, is a few thousand cycles
-   (tests/test_qemu_timing.c holds it to the pace IDENTIFY states); with
-   its interrupts in it can be longer, as QEMU's UART hands a burst of the
-   host's bytes over at once where a line spreads them over milliseconds. */
+   planes' share of the reversal (64 a pass). tests/test_qemu_timing.c
+   holds two of the trace image's worst passes, the loop's own work, to
+   the slice's allowance its IDENTIFY states (docs/BENCHMARKS.md: the
+   figures); with its interrupts in a pass can be longer, as QEMU's UART
+   hands a burst of the host's bytes over at once where a line spreads
+   them over milliseconds. */
 #define BOARD_CRC_BYTE_NS 78125u   /* 5 ms / 64 bytes */
 #define BOARD_PLAN_BIN_NS 703125u  /* 5 ms / 8 bins + 5 ms / 64 planes */
 /* EXIT ends QEMU with its code (semihosting) */

@@ -109,11 +109,11 @@
    refill of FW_STEP_FILL steps at most every 16,000 cycles at the top
    speed). The host allows two passes of 2 ms (32,000 cycles) a slice: 4 ms
    for 16 bytes of CRC, and for 2 bins with their planes' share of the
-   reversal (32 a pass). The worst pass of a print under simavr, a move's
-   first steps while masks stream, interrupts in, is about three quarters
-   of that (avr-run's worst_pass; tests/test_avr.c holds every binary
-   print's to the pace its IDENTIFY states; a slice of a mask's CRC about
-   14,000 cycles, avr-run --profile-passes). */
+   reversal (32 a pass). The worst pass of a print under simavr is a
+   move's first steps while masks stream, longer than a slice of a mask's
+   CRC (avr-run --profile-passes); tests/test_avr.c holds two of a binary
+   print's worst passes, interrupts in (avr-run's worst_pass), to the
+   slice's allowance its IDENTIFY states (docs/BENCHMARKS.md: the figures). */
 #define BOARD_CRC_BYTE_NS 250000u   /* 4 ms / 16 bytes */
 #define BOARD_PLAN_BIN_NS 2125000u  /* 4 ms / 2 bins + 4 ms / 32 planes */
 
