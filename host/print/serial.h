@@ -27,7 +27,8 @@ typedef struct serial_link {
     double rto_ms, last_progress;
     /* A printer that answers nothing for silent_ms while the host waits for
        it (frames in flight) has stopped: the firmware answers every frame
-       within a loop pass or a few, bar a mask frame decoded over many. */
+       within a loop pass or a few, bar a mask or profile frame worked
+       through over many (work_ms). */
     double silent_ms;
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
