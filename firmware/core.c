@@ -110,6 +110,8 @@ static FW_NOINLINE void send_identify(fw_state *fw)
     m.link_timeout_ms = c->link_timeout_ms;
     m.boot_id = c->boot_id;
     m.max_exposure_ms = FW_EXPOSURE_MAX_MS;
+    m.crc_byte_ns = c->crc_byte_ns;
+    m.plan_bin_ns = c->plan_bin_ns;
     send(fw, LINK_MSG_IDENTIFY, p, link_put_identify(p, &m));
 }
 

@@ -142,6 +142,13 @@ typedef struct fw_config {
                                   first step comes this long after it starts */
     uint32_t boot_id;          /* differs at every start of the MCU (a boot counter
                                   or random): the host sees a reset */
+    /* The port's pace, which IDENTIFY tells the host so that it waits as
+       long as this board needs for a frame's answer: the time, ns, the
+       loop takes at most per byte of a MASK_DATA frame's rows' CRC, and per
+       bin of a PROFILE_DATA frame planned (its plane's reversal included),
+       with what else its passes do meanwhile (steps, replies, interrupts).
+       Each port's board.h gives its figures and how they were measured. */
+    uint32_t crc_byte_ns, plan_bin_ns;
 } fw_config;
 
 /* Layers of up to 127 bins: the planner's rings have 128 entries of 24

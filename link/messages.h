@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LINK_PROTOCOL_VERSION 5
+#define LINK_PROTOCOL_VERSION 6
 
 /* ------------------------------------------------------------- the fields */
 
@@ -45,7 +45,7 @@
 #define LINK_FIELDS_IDENTIFY(F)                                                                                     \
     F(u8, version) F(u8, window) F(u32, max_bins) F(u8, max_layer_bins) F(u32, steps_per_mm) F(u16, width)          \
     F(u16, height) F(u8, bits) F(u32, pitch_nm) F(u32, z_max_nm) F(u32, tick_hz) F(u32, link_timeout_ms)        \
-    F(u32, boot_id) F(u32, max_exposure_ms)
+    F(u32, boot_id) F(u32, max_exposure_ms) F(u32, crc_byte_ns) F(u32, plan_bin_ns)
 #define LINK_FIELDS_STATUS(F)                                                                                       \
     F(u8, state) F(u8, phase) F(u8, error) F(u8, error_seq) F(u8, flags) F(u32, layer) F(u32, layers)               \
     F(u32, mask_ready) F(u32, mask_layer) F(u32, mask_got) F(u16, masks_refused) F(i32, z_nm) F(u32, bins_in)       \

@@ -5,6 +5,7 @@
 #define ADASLICE_PRINT_REPORT_H
 #include "cli_run.h"
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,6 +45,19 @@ static inline int read_print_report(const char *path, print_report *r)
     }
     free(text);
     return r->layers && k == r->layers;
+}
+
+/* The pace the printer's IDENTIFY stated, as adaslice print's first line
+   says it ("its pace X us a byte of rows' CRC, Y us a bin planned"), in
+   ns: 1 if `out` has it. */
+static inline int print_pace(const char *out, double *crc_byte_ns, double *plan_bin_ns)
+{
+    const char *at = out ? strstr(out, "its pace ") : NULL;
+    double crc, bin;
+    if (!at || sscanf(at, "its pace %lf us a byte of rows' CRC, %lf us a bin planned", &crc, &bin) != 2) return 0;
+    *crc_byte_ns = crc * 1e3;
+    *plan_bin_ns = bin * 1e3;
+    return 1;
 }
 
 static inline void print_report_free(print_report *r) { free(r->tops); free(r->crcs); free(r->exposures); }

@@ -704,6 +704,7 @@ static void binary_print_with_masks_streaming(void)
     int32_t peel;
     fw_axis axis;
     char report[256];
+    double crc_ns = 0, bin_ns = 0, pass_ns;
     snprintf(report, sizeof report, "%s", cli_path("avr-report.json"));
     if (!avr_start(&c, "build/test_avr/bprint.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
     close(c.tty);
@@ -713,6 +714,7 @@ static void binary_print_with_masks_streaming(void)
                 "--settle", "0.02", "--report", report, NULL);
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    CHECKF(print_pace(r.out, &crc_ns, &bin_ns), "the host did not say the printer's pace: %s", r.out);
     cli_free(&r);
     check_avr_exit(&c, "build/test_avr/bprint.log");
     if (check_case_failed()) return;
@@ -776,6 +778,19 @@ static void binary_print_with_masks_streaming(void)
        whatever else the loop does. */
     CHECKF(l.pass.worst < PASS_MAX, "a loop pass took %lu cycles (%lu while Z moved), over %lu: the queue covers %lu at the top speed",
            l.pass.worst, l.pass.moving, PASS_MAX, COVER_CYCLES);
+    /* The pace IDENTIFY states, which the host waits by: a slice of a held
+       frame's work (FW_CRC_BYTES of rows' CRC, FW_PLAN_BINS bins) is one
+       pass and another may come between two, so two of the print's worst
+       passes, interrupts in, at the part's 16 MHz, must fit a slice's
+       allowance. */
+    pass_ns = l.pass.worst * 1e9 / BOARD_CPU_HZ;
+    CHECKF(2 * pass_ns <= FW_CRC_BYTES * crc_ns && 2 * pass_ns <= FW_PLAN_BINS * bin_ns,
+           "the worst pass took %.0f us: two do not fit the %.0f us a slice of %u bytes of CRC (%.0f us a bin: %.0f us for %u) "
+           "IDENTIFY states", pass_ns / 1e3, FW_CRC_BYTES * crc_ns / 1e3, (unsigned)FW_CRC_BYTES, bin_ns / 1e3,
+           FW_PLAN_BINS * bin_ns / 1e3, (unsigned)FW_PLAN_BINS);
+    printf("    avr: IDENTIFY's pace %.0f us a byte of rows' CRC, %.0f us a bin; two worst passes %.0f us, a slice's allowance "
+           "%.0f us of CRC, %.0f us of planning\n", crc_ns / 1e3, bin_ns / 1e3, 2 * pass_ns / 1e3, FW_CRC_BYTES * crc_ns / 1e3,
+           FW_PLAN_BINS * bin_ns / 1e3);
     check_stack(&l, "binary print");
     printf("    avr: %u layers, %zu steps, worst step %ld cycles from its tick, every exposure exact to the tick; worst loop pass %lu cycles "
            "(%lu while Z moved; the loop's own work %lu, %lu; the queue covers %lu at the top speed), stack peak %lu bytes of %lu reserved\n",

@@ -11,6 +11,7 @@
 #include "../link/frame.h"
 #include "../link/messages.h"
 #include "../link/tty.h"
+#include "../firmware/ports/sim/board.h"
 #include "meshgen.h"
 #include <errno.h>
 #include <poll.h>
@@ -316,6 +317,15 @@ static void full_print_on_the_simulator(void)
     r = run_print(sim.line + 4, cli_path("report.json"));
     CHECKF(r.status == 0, "print exited %d: %s", r.status, r.err);
     CHECK(strstr(r.out, "planned by the printer, identical to the host's plan") != NULL);
+    {
+        /* the pace the simulator's board.h declares reached the host
+           through IDENTIFY (its time is the host CPU's, which no test may
+           measure; the AVR and QEMU images' are held to their passes) */
+        double crc_ns = 0, bin_ns = 0;
+        CHECKF(print_pace(r.out, &crc_ns, &bin_ns) && crc_ns == BOARD_CRC_BYTE_NS && bin_ns == BOARD_PLAN_BIN_NS,
+               "the host says a pace of %g and %g ns, fw-sim's board.h %u and %u: %s", crc_ns, bin_ns,
+               (unsigned)BOARD_CRC_BYTE_NS, (unsigned)BOARD_PLAN_BIN_NS, r.out);
+    }
     CHECKF(port_hupcl(sim.line + 4, 0) == 0, "HUPCL is %d on the port after the print", port_hupcl(sim.line + 4, 0));
     if (r.status != 0) { cli_free(&r); child_stop(&sim); return; }
     cli_free(&r);

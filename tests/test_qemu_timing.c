@@ -34,6 +34,10 @@
 /* A move's first step comes 5 ms after the pass that starts it (cm3/main.c,
    step_lead), computed in the next pass: two passes fit in the lead. */
 #define QEMU_STEP_LEAD (QEMU_TICK_HZ / 200u)
+/* A slice of a held frame's work, one pass: rows' CRC bytes and profile
+   bins (fw.h's defaults, FW_CRC_BYTES and FW_PLAN_BINS, which the image keeps). */
+#define QEMU_CRC_BYTES 64u
+#define QEMU_PLAN_BINS 8u
 static const char *MODEL = "examples/models/hand_closed.obj";
 
 typedef struct qemu_run { pid_t pid; char port[64]; } qemu_run;
@@ -137,6 +141,7 @@ static void steps_on_time_under_qemu(void)
     size_t n, i, steps = 0, short_emitted = 0, events = 0;
     uint64_t worst_late = 0, last_emitted = 0, shortest = UINT64_MAX;
     long long summary_steps, work, moving_work, cover;
+    double crc_ns = 0, bin_ns = 0, pass_ns;
     int status, have_report;
     char *err, *bin;
     if (!qemu_start(&q, "build/fw-mps2-trace.elf")) {
@@ -148,6 +153,7 @@ static void steps_on_time_under_qemu(void)
                 "--bottom-exposure", "0.1", "--peel", "0.5", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.02",
                 "--report", cli_path("report.json"), "--then-exit", NULL);
     CHECKF(r.status == 0, "print on QEMU exited %d: %s", r.status, r.err);
+    CHECKF(print_pace(r.out, &crc_ns, &bin_ns), "the host did not say the printer's pace: %s", r.out);
     cli_free(&r);
     status = qemu_wait(&q, 10);
     CHECKF(status == 0, "QEMU ended with %d (0: the firmware exited cleanly on EXIT)", status);
@@ -244,6 +250,18 @@ static void steps_on_time_under_qemu(void)
            moving_work, cover);
     CHECKF(work > 0 && work < (long long)QEMU_STEP_LEAD / 2, "the loop's worst pass took %lld cycles, half the step lead is %u",
            work, QEMU_STEP_LEAD / 2);
+    /* The pace IDENTIFY states, which the host waits by: a slice of a held
+       frame's work is one pass and another may come between two, so two of
+       the loop's worst passes (its own work: see above) must fit a slice's
+       allowance. */
+    pass_ns = (double)(work > moving_work ? work : moving_work) * 1e9 / QEMU_TICK_HZ;
+    CHECKF(2 * pass_ns <= QEMU_CRC_BYTES * crc_ns && 2 * pass_ns <= QEMU_PLAN_BINS * bin_ns,
+           "the worst pass took %.0f us: two do not fit the %.0f us a slice of CRC, %.0f us of planning, IDENTIFY states",
+           pass_ns / 1e3, QEMU_CRC_BYTES * crc_ns / 1e3, QEMU_PLAN_BINS * bin_ns / 1e3);
+    if (!check_case_failed())
+        printf("     IDENTIFY's pace %.1f us a byte of rows' CRC, %.1f us a bin: a slice's allowance %.0f us of CRC, %.0f us of "
+               "planning, two worst passes %.0f us\n", crc_ns / 1e3, bin_ns / 1e3, QEMU_CRC_BYTES * crc_ns / 1e3,
+               QEMU_PLAN_BINS * bin_ns / 1e3, 2 * pass_ns / 1e3);
     if (!check_case_failed())
         printf("     %zu steps, worst lateness %llu cycles (%.1f us), shortest interval %llu cycles (limit %u); "
                "worst loop pass %lld cycles, %lld while Z moves (its interrupts in: %lld, %lld; the queue covers %lld); stack %lld bytes\n",

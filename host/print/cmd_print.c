@@ -198,8 +198,9 @@ static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_pla
     hdr.bin_nm = pj->bin_nm;
     if ((rc = serial_send(l, LINK_MSG_PROFILE, buf, link_put_profile(buf, &hdr)))) goto done;
     for (i = 0; i < n;) {
+        uint32_t from = i;
         size_t used = link_profile_chunk(buf, l->data_max, units, forced, n, &i);
-        if ((rc = serial_send(l, LINK_MSG_PROFILE_DATA, buf, used))) goto done;
+        if ((rc = serial_send_profile_data(l, buf, used, i - from + (i == n ? n : 0)))) goto done;
     }
     if ((rc = serial_wait(l, plan_ready, NULL, 600000, "finish planning"))) goto done;
     if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
@@ -470,9 +471,9 @@ static void print_usage(FILE *f)
           "                        the vat and the half-built part: clear it first\n"
           "  --plan-on-host        send the host's plan instead of the profile\n"
           "  --give-up S           a printer that answers nothing this long ends      [3]\n"
-          "                        the print (exit 5); longer while a mask frame\n"
-          "                        decodes (30 us a byte of rows' CRC, 8 bytes for\n"
-          "                        a repeated row) and on slow lines\n"
+          "                        the print (exit 5); longer while a mask or profile\n"
+          "                        frame is worked through (at the pace the printer\n"
+          "                        states) and on slow lines\n"
           "  --report FILE         a JSON record: each layer's mask CRC-32 and code size\n"
           "  --then-exit           end the firmware after the print (emulators and the\n"
           "                        simulator; a real board ignores it)\n"
@@ -932,8 +933,9 @@ int cmd_print(int argc, char **argv)
     if ((rc = output_check("--report", pa.report))) return rc; /* before hours of printing */
     pj.from_model = !jobdir;
     if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
-    printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins\n", pa.port, l.id.width,
-           l.id.height, l.id.pitch_nm / 1e6, l.id.bits, l.id.steps_per_mm, l.id.max_bins);
+    printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins; its pace %g us a byte of "
+           "rows' CRC, %g us a bin planned\n", pa.port, l.id.width, l.id.height, l.id.pitch_nm / 1e6, l.id.bits,
+           l.id.steps_per_mm, l.id.max_bins, l.id.crc_byte_ns / 1e3, l.id.plan_bin_ns / 1e3);
     fflush(stdout);
     if (jobdir && (rc = check_pitch(&pj, jobdir, &l, pa.port))) goto done;
     if (!jobdir && (rc = job_from_model(&pj, &a, &j, &s, &l, &pa, &planned_by_printer))) goto done;

@@ -360,7 +360,12 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
 
 int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t crc_bytes)
 {
-    return serial_send_work(l, LINK_MSG_MASK_DATA, code, size, crc_bytes * (SERIAL_ROW_BYTE_US / 1000.0));
+    return serial_send_work(l, LINK_MSG_MASK_DATA, code, size, crc_bytes * (l->id.crc_byte_ns / 1e6));
+}
+
+int serial_send_profile_data(serial_link *l, const uint8_t *data, size_t size, uint32_t bins)
+{
+    return serial_send_work(l, LINK_MSG_PROFILE_DATA, data, size, bins * (l->id.plan_bin_ns / 1e6));
 }
 
 /* A fresh STATUS: asked again if its reply is lost. */

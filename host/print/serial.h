@@ -19,13 +19,16 @@ typedef struct serial_link {
     uint8_t frames[SERIAL_QUEUE][LINK_FRAME_MAX];
     size_t lens[SERIAL_QUEUE];
     /* what each frame in flight asks of the printer before it answers (a
-       mask frame's rows), ms: the resend and silence timers allow it */
+       mask frame's rows' CRC, a profile frame's bins), ms at the pace the
+       printer's IDENTIFY states (crc_byte_ns, plan_bin_ns): the resend and
+       silence timers allow it */
     double work_ms[SERIAL_QUEUE];
     double sent_ms[SERIAL_QUEUE];   /* when each was first sent */
     double rto_ms, last_progress;
     /* A printer that answers nothing for silent_ms while the host waits for
        it (frames in flight) has stopped: the firmware answers every frame
-       within a loop pass or a few, bar a mask frame decoded over many. */
+       within a loop pass or a few, bar a mask or profile frame worked
+       through over many (work_ms). */
     double silent_ms;
     double waiting_since;       /* the host has waited for a reply since then */
     double last_looked;         /* the host last read or waited on the line */
@@ -62,17 +65,6 @@ typedef struct serial_link {
     int failed;                 /* a resend in a reply's handling failed (and said so): its code */
 } serial_link;
 
-/* A MASK_DATA frame is answered once decoded, a slice a pass, and one frame
-   can hold a whole mask (an empty one is two bytes): the host allows the
-   bytes of rows' CRC a frame asks (serial_send_mask_data) at this pace,
-   microseconds per byte, before it resends the frame or takes the
-   printer's silence for a stop. The slowest port, RAMPS (ATmega2560,
-   16 MHz), puts 16 bytes of rows through the CRC a pass: under simavr
-   (slower than the part), printing the hand at scale 14 on its 2560 x 1440
-   display with masks decoded while Z moves, a frame's answer came up to
-   0.98 of this allowance after the frame before's (line time included),
-   and no frame was sent again. */
-#define SERIAL_ROW_BYTE_US 30
 /* A gap longer than this, ms, between two looks at the line (serial_pump,
    a write waiting for room) is the host's own absence, not time it waited
    for the printer. */
@@ -108,8 +100,14 @@ int serial_send(serial_link *l, uint8_t type, const uint8_t *payload, size_t siz
 /* The same for a MASK_DATA frame whose code asks crc_bytes of rows' CRC
    of the printer's decoder (adaslice_rle_decode_rows' budget: a row's
    bytes, a repeated row's ADASLICE_RLE_REPEAT_COST); the printer answers
-   it once they are done. */
+   it once they are done, and the host allows them IDENTIFY's crc_byte_ns
+   each before it resends the frame or takes the printer's silence for a
+   stop. */
 int serial_send_mask_data(serial_link *l, const uint8_t *code, size_t size, uint32_t crc_bytes);
+/* The same for a PROFILE_DATA frame whose code holds `bins` bins (the
+   last frame also the whole profile's, whose plan the printer turns
+   around before it answers): IDENTIFY's plan_bin_ns each. */
+int serial_send_profile_data(serial_link *l, const uint8_t *data, size_t size, uint32_t bins);
 /* A fresh STATUS in l->st: asked again if its reply is lost. */
 int serial_status(serial_link *l);
 /* A STATUS asked for and not waited for, unless the one asked so before

@@ -102,6 +102,8 @@ int main(void)
        passes with room to spare. */
     config.step_lead = BOARD_CLOCK_HZ / 200u;
     config.boot_id = next_boot_id();
+    config.crc_byte_ns = BOARD_CRC_BYTE_NS;
+    config.plan_bin_ns = BOARD_PLAN_BIN_NS;
     port.ctx = NULL;
     port.write = port_write;
     port.step_arm = port_step_arm;

@@ -37,6 +37,20 @@
    reply of LINK_FRAME_MAX (255) bytes, rounded up to a power of two
    (CM3_TX_SIZE, 1024 by default; board.c checks it). */
 #define BOARD_TX_WORST (BOARD_WINDOW * 255u)
+/* The pace IDENTIFY states (fw.h, fw_config's crc_byte_ns and plan_bin_ns):
+   a slice of a held frame's work is one pass, 64 bytes of rows' CRC
+   (FW_CRC_BYTES) or 8 bins (FW_PLAN_BINS), and a pass of steps may come
+   between two slices. The host allows two passes of 2.5 ms (62,500
+   cycles, fw.h's looser bound on a pass: half the step lead, with Z
+   still) a slice: 5 ms for 64 bytes of CRC, and for 8 bins with their
+   planes' share of the reversal (64 a pass). tests/test_qemu_timing.c
+   holds two of the trace image's worst passes, the loop's own work, to
+   the slice's allowance its IDENTIFY states (docs/BENCHMARKS.md: the
+   figures); with its interrupts in a pass can be longer, as QEMU's UART
+   hands a burst of the host's bytes over at once where a line spreads
+   them over milliseconds. */
+#define BOARD_CRC_BYTE_NS 78125u   /* 5 ms / 64 bytes */
+#define BOARD_PLAN_BIN_NS 703125u  /* 5 ms / 8 bins + 5 ms / 64 planes */
 /* EXIT ends QEMU with its code (semihosting) */
 #define BOARD_CAN_EXIT 1
 /* the carriage's start above the endstop */

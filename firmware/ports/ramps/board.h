@@ -103,6 +103,20 @@
 #define FW_PLAN_BINS 2u
 #define FW_REVERSE_PLANES 32u
 
+/* The pace IDENTIFY states (fw.h, fw_config's crc_byte_ns and plan_bin_ns):
+   a slice of a held frame's work is one pass, FW_CRC_BYTES of rows' CRC or
+   FW_PLAN_BINS bins, and a pass of steps may come between two slices (a
+   refill of FW_STEP_FILL steps at most every 16,000 cycles at the top
+   speed). The host allows two passes of 2 ms (32,000 cycles) a slice: 4 ms
+   for 16 bytes of CRC, and for 2 bins with their planes' share of the
+   reversal (32 a pass). The worst pass of a print under simavr is a
+   move's first steps while masks stream, longer than a slice of a mask's
+   CRC (avr-run --profile-passes); tests/test_avr.c holds two of a binary
+   print's worst passes, interrupts in (avr-run's worst_pass), to the
+   slice's allowance its IDENTIFY states (docs/BENCHMARKS.md: the figures). */
+#define BOARD_CRC_BYTE_NS 250000u   /* 4 ms / 16 bytes */
+#define BOARD_PLAN_BIN_NS 2125000u  /* 4 ms / 2 bins + 4 ms / 32 planes */
+
 /* Test hooks the simavr harness watches (one OUT instruction each): the
    general purpose I/O registers, never read by the firmware. */
 #define BOARD_MARK_LOOP  1u   /* GPIOR0: a loop pass begins */

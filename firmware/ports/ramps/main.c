@@ -85,6 +85,8 @@ static __attribute__((noinline)) void start(void)
     config.watchdog_ms = BOARD_WDT_MS;
     config.step_lead = BOARD_STEP_LEAD;
     config.boot_id = board_boot_count();
+    config.crc_byte_ns = BOARD_CRC_BYTE_NS;
+    config.plan_bin_ns = BOARD_PLAN_BIN_NS;
     port.ctx = NULL;
     port.write = port_write;
     port.step_arm = port_step_arm;

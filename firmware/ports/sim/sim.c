@@ -60,6 +60,7 @@
 /* posix_openpt, grantpt, unlockpt and ptsname are XSI in POSIX.1-2008 */
 #define _XOPEN_SOURCE 700
 #include "../../fw.h"
+#include "board.h"
 #include "../../../link/tty.h"
 #include <errno.h>
 #include <fcntl.h>
@@ -647,6 +648,8 @@ static int make_config(const sim_options *o, fw_config *c)
     /* a real step timer needs time to be armed; the sim's does not, but
        moves start as late as on a board */
     c->step_lead = SIM_TICK_HZ / 5000u;
+    c->crc_byte_ns = BOARD_CRC_BYTE_NS;
+    c->plan_bin_ns = BOARD_PLAN_BIN_NS;
     return 1;
 }
 
