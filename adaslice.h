@@ -774,7 +774,9 @@ ADASLICE_DEF adaslice_result adaslice_orienter_score(const adaslice_orienter *or
    added, rewarding the very layers K counts against); infeasible ones get F = 2. */
 ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *scores, size_t n, double alpha);
 /* Indices of directions whose F is lower than every neighbour's within
-   `radius` radians (ties go to the lower index), best first; returns how many. */
+   `radius` radians, best first; returns how many. Ties go to the direction
+   nearer +z (the part as loaded, which needs no turn), then to the lower
+   index. */
 ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *scores, size_t n, double radius,
                                            size_t *out, size_t max);
 ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
@@ -6065,6 +6067,14 @@ ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *s, size_t n, 
                      (1 - alpha) * (emax > 0 ? s[i].worst_error / emax : 0);
 }
 
+/* Whether direction a goes before b: a lower F, on a tie nearer +z, then the lower index. */
+static int adaslice__orient_before(const adaslice_direction_score *s, size_t a, size_t b)
+{
+    if (s[a].score != s[b].score) return s[a].score < s[b].score;
+    if (s[a].direction[2] != s[b].direction[2]) return s[a].direction[2] > s[b].direction[2];
+    return a < b;
+}
+
 ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, size_t n, double radius,
                                            size_t *out, size_t max)
 {
@@ -6075,11 +6085,11 @@ ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, si
         for (j = 0; j < n && lowest; j++) {
             const double *a = s[i].direction, *b = s[j].direction;
             if (j == i || a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < c) continue;
-            if (s[j].score < s[i].score || (s[j].score == s[i].score && j < i)) lowest = 0;
+            if (adaslice__orient_before(s, j, i)) lowest = 0;
         }
         if (!lowest) continue;
         /* insert by score into the best `max` */
-        for (j = count < max ? count++ : max; j > 0 && s[out[j - 1]].score > s[i].score; j--)
+        for (j = count < max ? count++ : max; j > 0 && adaslice__orient_before(s, i, out[j - 1]); j--)
             if (j < max) out[j] = out[j - 1];
         if (j < max) out[j] = i;
     }

@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest)
 {
@@ -18,7 +19,15 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
     t->nozzle = 0.4;
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
-        if (!strcmp(argv[i], "--3mf")) rc = file_option(argc, argv, &i, &t->path);
+        if (!strcmp(argv[i], "--3mf")) {
+            const char *dot;
+            rc = file_option(argc, argv, &i, &t->path);
+            /* a 3MF named .stl would be read back as an STL; a stream or device has no name to mislead */
+            dot = rc ? NULL : strrchr(t->path, '.');
+            if (!rc && output_kind(t->path) != OUT_STRAIGHT &&
+                (!dot || strchr(dot, '/') || dot[-1] == '/' || dot == t->path || strcasecmp(dot, ".3mf")))
+                rc = complain(RC_USAGE, "--3mf %s: the name must end in .3mf", t->path);
+        }
         else if (!strcmp(argv[i], "--nozzle")) rc = number_option(argc, argv, &i, 0, &t->nozzle);
         else rest[(*rest_argc)++] = argv[i];
     }
