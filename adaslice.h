@@ -3083,8 +3083,8 @@ done:
    filled where its winding number is positive. A section with one gap is
    thereby closed by its chord, which is exactly where the generalized winding
    number (Jacobson, Kavan and Sorkine-Hornung 2013) of the open section is
-   >= 1/2; several gaps are joined end to nearest start. Masks and areas use
-   the same rule. */
+   >= 1/2; several gaps are joined end to nearest start. Masks, areas and
+   the contours' chords (adaslice_polygon.next) use the same rule. */
 typedef struct adaslice__loose_edge {
     uint32_t u, v;  /* u < v */
     int32_t net;    /* facets running u -> v minus those running v -> u */
