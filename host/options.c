@@ -28,7 +28,7 @@ const char *decimal_number(const char *text, double *out)
 {
     const char *p = text;
     size_t digits = 0;
-    char *end;
+    char plain[400], *end;
     if (*p == '+' || *p == '-') p++;
     for (; *p >= '0' && *p <= '9'; p++) digits++;
     if (*p == '.')
@@ -41,8 +41,12 @@ const char *decimal_number(const char *text, double *out)
             p = q;
         }
     }
-    *out = strtod(text, &end);
-    return end == p && isfinite(*out) ? p : NULL;
+    /* strtod reads only the digits checked ("0x10" with 'x' between numbers is 0 and 10, not 16) */
+    if ((size_t)(p - text) >= sizeof plain) return NULL;
+    memcpy(plain, text, (size_t)(p - text));
+    plain[p - text] = 0;
+    *out = strtod(plain, &end);
+    return !*end && isfinite(*out) ? p : NULL;
 }
 
 int number_option(int argc, char **argv, int *i, int zero_ok, double *out)

@@ -574,7 +574,7 @@ static void outputs_never_replace_links_fifos_or_devices(void)
             char what[200] = "", name[40];
             target t;
             cli_result r;
-            snprintf(name, sizeof name, "out%zu", i);
+            snprintf(name, sizeof name, "out%zu%s", i, !strcmp(o->args[2], "--3mf") ? ".3mf" : ""); /* --3mf wants one */
             if (!target_make(&t, kind, name)) continue; /* no null device of our own: mknod refused */
             for (a = 0; o->args[a]; a++) {
                 argv[a] = !strcmp(o->args[a], MODEL) ? raised_sphere()
