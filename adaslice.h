@@ -351,9 +351,10 @@
    Loops turn counter-clockwise seen from +z around material and clockwise around
    holes (from the triangles' winding), so their signed areas add up to the
    section's area. Open meshes and inconsistent winding give open polylines.
-   Chaining needs shared vertices: weld an STL first. adaslice_contours_winding
-   is the exact nonzero-rule winding number of a point (open polylines closed
-   by their chord).
+   Chaining needs shared vertices: weld an STL first. Polylines are joined
+   end to start by the chords the masks close gaps with (`next`);
+   adaslice_contours_winding is the exact winding number of a point about
+   the loops and the polylines so closed.
 
    JOB OUTPUT  A layer of thickness t needs the dose that cures t: Jacobs'
    working curve, cure depth Cd = Dp ln(E / Ec), gives E(t) = S exp((t - T) /
@@ -944,7 +945,9 @@ ADASLICE_DEF adaslice_result adaslice_orienter_score(const adaslice_orienter *or
    added, rewarding the very layers K counts against); infeasible ones get F = 2. */
 ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *scores, size_t n, double alpha);
 /* Indices of directions whose F is lower than every neighbour's within
-   `radius` radians (ties go to the lower index), best first; returns how many. */
+   `radius` radians, best first; returns how many. Ties go to the direction
+   nearer +z (the part as loaded, which needs no turn), then to the lower
+   index. */
 ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *scores, size_t n, double radius,
                                            size_t *out, size_t max);
 ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *orienter);
@@ -1066,6 +1069,11 @@ typedef struct adaslice_polygon {
     size_t first, count;  /* its points: points[2*first .. 2*(first+count)), x then y */
     int closed;           /* 1: a loop, the last point joins the first (never repeated);
                              0: a polyline ending on an open edge of the mesh */
+    size_t next;          /* the polygon (index into polygons) whose first point this
+                             one's last point joins: itself for a loop; for a polyline
+                             the chord the masks close its gap with (see "sections of
+                             open meshes"), so the polylines of a height form cycles,
+                             each stored as a run of consecutive polygons */
 } adaslice_polygon;
 
 typedef struct adaslice_contours {
@@ -1089,8 +1097,8 @@ ADASLICE_DEF adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, 
                                                      adaslice_contours *contours, adaslice_error *error);
 /* Winding number of (x, y) about every polygon at one height, exact for points
    off the edges (a point on an edge goes to one side consistently); open
-   polylines count as closed by the chord between their ends. 0 if
-   height_index is out of range. */
+   polylines count as closed by their chords (`next`), so a point is lit in
+   the masks where this is positive. 0 if height_index is out of range. */
 ADASLICE_DEF int adaslice_contours_winding(const adaslice_contours *contours, size_t height_index,
                                            double x, double y);
 /* Distance from (x, y) to the nearest edge at one height, chords of open
@@ -3246,8 +3254,8 @@ done:
    filled where its winding number is positive. A section with one gap is
    thereby closed by its chord, which is exactly where the generalized winding
    number (Jacobson, Kavan and Sorkine-Hornung 2013) of the open section is
-   >= 1/2; several gaps are joined end to nearest start. Masks and areas use
-   the same rule. */
+   >= 1/2; several gaps are joined end to nearest start. Masks, areas and
+   the contours' chords (adaslice_polygon.next) use the same rule. */
 typedef struct adaslice__loose_edge {
     uint32_t u, v;  /* u < v */
     int32_t net;    /* facets running u -> v minus those running v -> u */
@@ -6553,6 +6561,14 @@ ADASLICE_DEF void adaslice_orient_scores(adaslice_direction_score *s, size_t n, 
                      (1 - alpha) * (emax > 0 ? s[i].worst_error / emax : 0);
 }
 
+/* Whether direction a goes before b: a lower F, on a tie nearer +z, then the lower index. */
+static int adaslice__orient_before(const adaslice_direction_score *s, size_t a, size_t b)
+{
+    if (s[a].score != s[b].score) return s[a].score < s[b].score;
+    if (s[a].direction[2] != s[b].direction[2]) return s[a].direction[2] > s[b].direction[2];
+    return a < b;
+}
+
 ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, size_t n, double radius,
                                            size_t *out, size_t max)
 {
@@ -6563,11 +6579,11 @@ ADASLICE_DEF size_t adaslice_orient_minima(const adaslice_direction_score *s, si
         for (j = 0; j < n && lowest; j++) {
             const double *a = s[i].direction, *b = s[j].direction;
             if (j == i || a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < c) continue;
-            if (s[j].score < s[i].score || (s[j].score == s[i].score && j < i)) lowest = 0;
+            if (adaslice__orient_before(s, j, i)) lowest = 0;
         }
         if (!lowest) continue;
         /* insert by score into the best `max` */
-        for (j = count < max ? count++ : max; j > 0 && s[out[j - 1]].score > s[i].score; j--)
+        for (j = count < max ? count++ : max; j > 0 && adaslice__orient_before(s, i, out[j - 1]); j--)
             if (j < max) out[j] = out[j - 1];
         if (j < max) out[j] = i;
     }
@@ -7183,6 +7199,7 @@ static void adaslice__emit(adaslice_contours *c, const adaslice_mesh *m, double 
     q = c->points + 2 * p->first;
     while (p->closed && p->count > 1 && q[2 * p->count - 2] == q[0] && q[2 * p->count - 1] == q[1]) p->count--;
     if (p->count < (p->closed ? 3u : 2u)) return;
+    p->next = c->polygon_count;
     c->point_count += p->count;
     c->polygon_count++;
 }
@@ -7233,6 +7250,118 @@ static adaslice_result adaslice__chain(adaslice_contours *c, size_t *point_cap, 
     return ADASLICE_OK;
 }
 
+typedef struct adaslice__end { double x, y; size_t index; } adaslice__end;
+
+static int adaslice__end_cmp(const void *a, const void *b)
+{
+    const adaslice__end *p = ADASLICE__CAST(const adaslice__end *, a), *q = ADASLICE__CAST(const adaslice__end *, b);
+    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    return p->y < q->y ? -1 : p->y > q->y;
+}
+
+/* The first entry of sorted e[0 .. n) at (x, y) not taken yet (index
+   SIZE_MAX: taken), or n. */
+static size_t adaslice__end_find(const adaslice__end *e, size_t n, double x, double y)
+{
+    size_t lo = 0, hi = n;
+    adaslice__end key;
+    key.x = x;
+    key.y = y;
+    key.index = 0;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (adaslice__end_cmp(e + mid, &key) < 0) lo = mid + 1; else hi = mid;
+    }
+    while (lo < n && e[lo].x == x && e[lo].y == y && e[lo].index == SIZE_MAX) lo++;
+    return lo < n && e[lo].x == x && e[lo].y == y ? lo : n;
+}
+
+/* Joins the open polylines of height h, polygons [first, first + open) (the
+   chains emitted first), by the chords the masks close gaps with. The loose
+   ends are cut from the same edges by adaslice__cut_point as the polylines'
+   ends, so they are found by value: a polyline's last point among the tails,
+   the head its chord goes to among the polylines' first points. An end not
+   found (a facet of no area leaves loose ends but no polyline) takes its own
+   start if free, else any start left, so that `next` stays a permutation.
+   The cycles are then laid out one after another. */
+static adaslice_result adaslice__contour_chords(adaslice_contours *c, const adaslice_mesh *m, adaslice__gaps **gaps,
+                                                size_t first, double h, adaslice_error *err)
+{
+    adaslice_polygon *poly = c->polygons + first, *cycle;
+    adaslice__end *tail, *start;
+    size_t open = 0, n, k, pos, *place;
+    adaslice__gaps *g;
+    adaslice_result r;
+    while (first + open < c->polygon_count && !poly[open].closed) open++;
+    if (!open) return ADASLICE_OK;
+    if (!*gaps && (r = adaslice__gaps_init(gaps, m, &c->allocator, err)) != ADASLICE_OK) return r;
+    if (!(g = *gaps)) return ADASLICE_OK;
+    if ((r = adaslice__gaps_at(g, m, h, err)) != ADASLICE_OK) return r;
+    n = g->tails;
+    tail = ADASLICE__CAST(adaslice__end *, adaslice__alloc(&c->allocator, n ? n : 1, sizeof *tail));
+    start = ADASLICE__CAST(adaslice__end *, adaslice__alloc(&c->allocator, open, sizeof *start));
+    cycle = ADASLICE__CAST(adaslice_polygon *, adaslice__alloc(&c->allocator, open, sizeof *cycle));
+    place = ADASLICE__CAST(size_t *, adaslice__alloc(&c->allocator, open, sizeof *place));
+    r = tail && start && cycle && place ? ADASLICE_OK
+                                        : adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "contours: out of memory at z = %g", h);
+    if (r == ADASLICE_OK) {
+        for (k = 0; k < n; k++) {
+            tail[k].x = g->tail[2 * k];
+            tail[k].y = g->tail[2 * k + 1];
+            tail[k].index = SIZE_MAX;
+        }
+        for (k = 0; k < g->heads; k++) if (g->taker[k] < n) tail[g->taker[k]].index = k;
+        for (k = 0; k < open; k++) {
+            const double *q = c->points + 2 * poly[k].first;
+            start[k].x = q[0];
+            start[k].y = q[1];
+            start[k].index = k;
+            place[k] = SIZE_MAX; /* the start its chord goes to, for now */
+        }
+        qsort(tail, n, sizeof *tail, adaslice__end_cmp);
+        qsort(start, open, sizeof *start, adaslice__end_cmp);
+        for (k = 0; k < open; k++) {
+            const double *e = c->points + 2 * (poly[k].first + poly[k].count - 1), *head;
+            size_t t = adaslice__end_find(tail, n, e[0], e[1]), s;
+            if (t == n) continue;
+            head = g->head + 2 * tail[t].index;
+            tail[t].index = SIZE_MAX;
+            if ((s = adaslice__end_find(start, open, head[0], head[1])) == open) continue;
+            place[k] = start[s].index;
+            start[s].index = SIZE_MAX;
+        }
+        /* the starts left, by polygon: start[i].index == SIZE_MAX when taken */
+        for (k = 0; k < open; k++) cycle[k].next = 0;
+        for (k = 0; k < open; k++) if (start[k].index != SIZE_MAX) cycle[start[k].index].next = 1;
+        for (k = 0; k < open; k++)
+            if (place[k] == SIZE_MAX && cycle[k].next) { place[k] = k; cycle[k].next = 0; }
+        for (k = 0, pos = 0; k < open; k++) {
+            if (place[k] != SIZE_MAX) continue;
+            while (!cycle[pos].next) pos++;
+            place[k] = pos;
+            cycle[pos].next = 0;
+        }
+        for (k = 0; k < open; k++) poly[k].next = place[k];
+        /* each cycle as a run: place[k] becomes polygon k's new position */
+        for (k = 0; k < open; k++) place[k] = SIZE_MAX;
+        for (k = 0, pos = 0; k < open; k++) {
+            size_t q = k;
+            while (place[q] == SIZE_MAX) {
+                place[q] = pos;
+                cycle[pos++] = poly[q];
+                q = poly[q].next;
+            }
+        }
+        for (k = 0; k < open; k++) cycle[k].next = first + place[cycle[k].next];
+        memcpy(poly, cycle, open * sizeof *poly);
+    }
+    adaslice__free(&c->allocator, tail);
+    adaslice__free(&c->allocator, start);
+    adaslice__free(&c->allocator, cycle);
+    adaslice__free(&c->allocator, place);
+    return r;
+}
+
 static size_t adaslice__first_at_or_above(const double *h, size_t n, double z)
 {
     size_t lo = 0, hi = n;
@@ -7277,6 +7406,7 @@ ADASLICE_DEF adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, 
     uint32_t *order, *active;
     adaslice__segment *seg;
     adaslice__slot *table;
+    adaslice__gaps *gaps = NULL; /* the mesh's unbalanced edges, found at the first open polyline */
     if (!out) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "contours: no output given");
     memset(out, 0, sizeof *out);
     if ((r = adaslice__contour_check(mesh, heights, count, err)) != ADASLICE_OK) return r;
@@ -7333,6 +7463,7 @@ ADASLICE_DEF adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, 
             out->segment_count += s;
             active_count = s;
             r = adaslice__chain(out, &point_cap, &polygon_cap, mesh, h, seg, s, table, err);
+            if (r == ADASLICE_OK) r = adaslice__contour_chords(out, mesh, &gaps, out->first_polygon[j], h, err);
             out->first_polygon[j + 1] = out->polygon_count;
         }
     }
@@ -7341,6 +7472,7 @@ ADASLICE_DEF adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, 
     adaslice__free(&out->allocator, active);
     adaslice__free(&out->allocator, seg);
     adaslice__free(&out->allocator, table);
+    adaslice__gaps_free(gaps);
     if (r != ADASLICE_OK) adaslice_contours_free(out);
     else adaslice__ok(err);
     return r;
@@ -7408,6 +7540,14 @@ static int adaslice__orient(const double a[2], const double b[2], double px, dou
     return adaslice__orient_exact(a, b, px, py);
 }
 
+/* Where polygon p's edge from its point k ends: its next point, or after its
+   last the first point of polygon `next` (its own for a loop). */
+static const double *adaslice__edge_end(const adaslice_contours *c, size_t p, size_t k)
+{
+    const adaslice_polygon *poly = c->polygons + p;
+    return c->points + 2 * (k + 1 < poly->count ? poly->first + k + 1 : c->polygons[poly->next].first);
+}
+
 ADASLICE_DEF int adaslice_contours_winding(const adaslice_contours *c, size_t height_index, double x, double y)
 {
     size_t p, k;
@@ -7415,11 +7555,12 @@ ADASLICE_DEF int adaslice_contours_winding(const adaslice_contours *c, size_t he
     if (!c || height_index >= c->height_count) return 0;
     for (p = c->first_polygon[height_index]; p < c->first_polygon[height_index + 1]; p++) {
         size_t n = c->polygons[p].count;
-        const double *b = c->points + 2 * c->polygons[p].first, *a = b + 2 * (n - 1);
+        const double *a = c->points + 2 * c->polygons[p].first, *b;
         /* an edge counts when it crosses the ray to +x from the point: upward
            with the point on its left, or downward with it on its right; y-ranges
            are half-open, so a ray through a vertex counts it once */
-        for (k = 0; k < n; k++, a = b, b += 2) {
+        for (k = 0; k < n; k++, a = b) {
+            b = adaslice__edge_end(c, p, k);
             if (a[1] <= y) {
                 if (b[1] > y && adaslice__orient(a, b, x, y) > 0) w++;
             } else if (b[1] <= y && adaslice__orient(a, b, x, y) < 0) {
@@ -7438,8 +7579,9 @@ ADASLICE_DEF double adaslice_contours_distance(const adaslice_contours *c, size_
     if (!c || height_index >= c->height_count) return best;
     for (p = c->first_polygon[height_index]; p < c->first_polygon[height_index + 1]; p++) {
         size_t n = c->polygons[p].count;
-        const double *b = c->points + 2 * c->polygons[p].first, *a = b + 2 * (n - 1);
-        for (k = 0; k < n; k++, a = b, b += 2) {
+        const double *a = c->points + 2 * c->polygons[p].first, *b;
+        for (k = 0; k < n; k++, a = b) {
+            b = adaslice__edge_end(c, p, k);
             double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy, t = 0, ex, ey;
             if (len2 > 0) t = ((x - a[0]) * dx + (y - a[1]) * dy) / len2;
             t = t < 0 ? 0 : t > 1 ? 1 : t;

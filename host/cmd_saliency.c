@@ -59,7 +59,7 @@ static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)
         else if (!weights_option(argc, argv, &i, &s->weights, &rc))
             return complain(RC_USAGE, "unknown option %s (see adaslice saliency --help)", o);
     }
-    if (rc) return rc;
+    if (rc || (rc = weights_check(&s->weights))) return rc;
     if (!s->model) return complain(RC_USAGE, "saliency needs a MODEL");
     if (!s->out && !s->ply && !s->png)
         return complain(RC_USAGE, "saliency writes -o WEIGHTS, --ply FILE or --png FILE; none is given");

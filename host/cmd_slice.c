@@ -108,8 +108,11 @@ static void list_formats(char *out, size_t size, int extensions)
     *out = 0;
     for (i = 0; JOB_FORMATS[i]; i++) {
         const char *what = extensions ? JOB_FORMATS[i]->extension : JOB_FORMATS[i]->name;
-        size_t n = strlen(out);
-        if (what) snprintf(out + n, size - n, "%s%s", n ? ", " : "", what);
+        size_t n = strlen(out), k = strlen(what ? what : "");
+        int listed = 0;
+        const char *p;
+        for (p = out; what && (p = strstr(p, what)) != NULL; p += k) listed |= (p[k] == ',' || !p[k]); /* .ctb is two formats */
+        if (what && !listed) snprintf(out + n, size - n, "%s%s", n ? ", " : "", what);
     }
 }
 
@@ -124,10 +127,19 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
         list_formats(list, sizeof list, 0);
         return complain(RC_USAGE, "--format %s: unknown (%s)", s->format, list);
     }
+    {
+        /* ".ctb" alone would be a hidden directory, or get its extension twice */
+        const char *base = strrchr(s->dir, '/') ? strrchr(s->dir, '/') + 1 : s->dir;
+        const job_format *named;
+        char named_x[32];
+        snprintf(named_x, sizeof named_x, "x%.30s", base);
+        if (base[0] == '.' && (named = job_format_for_path(named_x)) != NULL && named != &JOB_FORMAT_DIR)
+            return complain(RC_USAGE, "-o %s: only an extension; give the job a name (job%s)", s->dir, base);
+    }
     if (!s->format && !(*fmt = job_format_for_path(s->dir))) {
         list_formats(list, sizeof list, 1);
-        return complain(RC_USAGE, "-o %s: no job format has the extension %s (%s, or none for a directory)", s->dir,
-                        strrchr(s->dir, '.'), list);
+        return complain(RC_USAGE, "-o %s: %s is no job format's extension (%s, or none for a directory); give "
+                                  "--format NAME to keep the name", s->dir, strrchr(s->dir, '.'), list);
     }
     if (!s->format && *fmt == &JOB_FORMAT_DIR && preset && !(*fmt = job_format_named(preset->format)))
         return complain(RC_FAIL, "--printer %s: its format %s is not built in", preset->name, preset->format);
@@ -348,6 +360,9 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     d->layer_count = count;
     d->layers = layers;
     d->bottom_layers = (unsigned)(s->cure.bottom_layers < count ? s->cure.bottom_layers : count);
+    if (s->cure.bottom_layers > count)
+        fprintf(stderr, "adaslice: warning: --bottom-layers %zu: the job has %zu layer%s, all of them bottom layers of "
+                        "%g s\n", s->cure.bottom_layers, count, plural(count), s->cure.bottom_exposure_s);
     d->bottom_exposure_s = s->cure.bottom_exposure_s;
     d->exposure_s = s->cure.cure.seconds;
     d->layer_height_mm = HUGE_VAL;
@@ -500,9 +515,13 @@ int cmd_slice(int argc, char **argv)
             plan_changes_line(&j.plan[a.method], j.profile.bin, line, sizeof line);
             printf("%s\n", line);
         }
-        printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
-               sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
-        if (d.bottom_layers)
+        if (d.bottom_layers == d.layer_count)
+            printf("exposure %g s per layer (%u bottom layer%s of %g s: every layer)", d.bottom_exposure_s,
+                   d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
+        else
+            printf("exposure %.3g to %.3g s per layer", sum.e_lo <= sum.e_hi ? sum.e_lo : d.exposure_s,
+                   sum.e_lo <= sum.e_hi ? sum.e_hi : d.exposure_s);
+        if (d.bottom_layers && d.bottom_layers < d.layer_count)
             printf(" (%u bottom layer%s of %g s)", d.bottom_layers, plural(d.bottom_layers), d.bottom_exposure_s);
         printf("; about %s to print, %.3g ml of resin\n", when, d.volume_mm3 / 1000);
         if (plan_is_adaptive(&j.plan[a.method])) {

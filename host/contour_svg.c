@@ -9,18 +9,23 @@
 
 static const char *const FILL = "#3a6fb0", *const STROKE = "#14345c", *const OPEN = "#c0392b", *const INK = "#222";
 
-/* The polygons of height i that are loops (closed = 1) or polylines (0) as
-   one path's data, y negated; loops end in Z. */
-static void write_path(FILE *f, const adaslice_contours *c, size_t i, int closed)
+/* The polygons of height i as one path's data, y negated. With `region`,
+   the area the masks light: every loop, and the polylines joined by their
+   chords into the cycles the library lays out one after another (a cycle
+   ends where `next` does not go on to the following polygon); else the
+   polylines alone, as open lines. */
+static void write_path(FILE *f, const adaslice_contours *c, size_t i, int region)
 {
     size_t p, k;
+    int drawing = 0; /* inside a cycle of polylines */
     for (p = c->first_polygon[i]; p < c->first_polygon[i + 1]; p++) {
         const adaslice_polygon *poly = c->polygons + p;
         const double *pt = c->points + 2 * poly->first;
-        if (poly->closed != closed) continue;
+        if (!region && poly->closed) continue;
         for (k = 0; k < poly->count; k++)
-            fprintf(f, "%s%.4f %.4f", k ? " L" : " M", pt[2 * k], 0.0 - pt[2 * k + 1]); /* never "-0" */
-        if (closed) fputs(" Z", f);
+            fprintf(f, "%s%.4f %.4f", k || drawing ? " L" : " M", pt[2 * k], 0.0 - pt[2 * k + 1]); /* never "-0" */
+        drawing = region && !poly->closed && poly->next == p + 1;
+        if (region && !drawing) fputs(" Z", f);
     }
 }
 
@@ -85,12 +90,12 @@ void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const con
     /* the legend: the fill, the open polylines (only when there are any), the scale */
     fprintf(f, "<rect x=\"%.4f\" y=\"%.4f\" width=\"%.4f\" height=\"%.4f\" fill=\"%s\" stroke=\"%s\" "
                "stroke-width=\"%.4f\"/>\n", x, top + line[3] - 0.75 * em, 1.6 * em, 0.8 * em, FILL, STROKE, em / 20);
-    caption_line(f, x + 2.1 * em, top + line[3], em, "", "inside the part (nonzero winding)");
+    caption_line(f, x + 2.1 * em, top + line[3], em, "", "inside the part: what cures");
     if (open) {
         double y = top + line[3] + 1.3 * em;
         fprintf(f, "<path d=\"M%.4f %.4fH%.4f\" stroke=\"%s\" stroke-width=\"%.4f\"/>\n", x, y - 0.35 * em,
                 x + 1.6 * em, OPEN, em / 8);
-        caption_line(f, x + 2.1 * em, y, em, "", "open contour: the mesh has a hole here");
+        caption_line(f, x + 2.1 * em, y, em, "", "open contour: the mesh has a hole here (filled to its chord)");
     }
     {
         double y = top + scale_row - 0.35 * em;

@@ -20,9 +20,13 @@ typedef struct contour_layer {
    (and <title>) name the layer, its heights and thickness; a legend says what
    the fill and the red strokes mean, with a scale bar. The layer's <g>
    (id "layer-N") carries data-layer, data-z-bottom, data-z-top, data-thickness
-   and data-cut; it holds one path of every loop, filled with the nonzero rule
-   so holes and overlaps read as the winding number says, and a second,
-   unfilled path for open polylines, if any. Errors show in ferror(f). */
+   and data-cut; it holds one path of what the layer's mask lights: every
+   loop, and the open polylines of a mesh with holes closed by the chords the
+   masks close them with (adaslice_polygon.next), filled with the nonzero rule
+   so holes and overlaps read as the winding number says (the masks light
+   where it is positive: the same wherever no shell is wound inside out), and
+   a second, unfilled red path of the open polylines, if any. Errors show in
+   ferror(f). */
 void svg_write_contours(FILE *f, const adaslice_contours *c, size_t i, const contour_layer *layer);
 
 #endif

@@ -47,7 +47,8 @@ void cure_usage(FILE *f)
           "  --exposure S1@T1,S2@T2   two calibrated points; Dp is fitted to them\n"
           "  --penetration DP    the resin's penetration depth Dp, mm, with one point;\n"
           "                      --exposure S alone gives every layer S       [0.098]\n"
-          "  --bottom-layers N   layers exposed longer, to stick to the plate     [3]\n"
+          "  --bottom-layers N   layers exposed longer, to stick to the plate (0:\n"
+          "                      none; more than the job has: all of them)    [3]\n"
           "  --bottom-exposure S their seconds                                    [25]\n"
           "motion\n"
           "  --peel MM           lift after each layer                            [5]\n"
@@ -59,9 +60,8 @@ void cure_usage(FILE *f)
 /* "S" or "S@T" */
 static int parse_point(const char *text, double *s, double *t, int *at)
 {
-    char *end;
-    *s = strtod(text, &end);
-    if (end == text || !isfinite(*s)) return 0;
+    const char *end = decimal_number(text, s);
+    if (!end) return 0;
     *at = *end == '@';
     if (!*at) return *end == 0;
     return parse_numbers(end + 1, 0, 1, t);
@@ -98,11 +98,7 @@ static int take(int argc, char **argv, int *i, cure_args *c, int *rc)
     }
     if (!strcmp(o, "--penetration")) { *rc = number_option(argc, argv, i, 0, &c->penetration); return 1; }
     if (!strcmp(o, "--bottom-exposure")) { *rc = number_option(argc, argv, i, 0, &c->bottom_exposure_s); return 1; }
-    if (!strcmp(o, "--bottom-layers")) {
-        if (*i + 1 < argc && !strcmp(argv[*i + 1], "0")) { ++*i; c->bottom_layers = 0; *rc = RC_OK; }
-        else *rc = count_option(argc, argv, i, UINT32_MAX, &c->bottom_layers);
-        return 1;
-    }
+    if (!strcmp(o, "--bottom-layers")) { *rc = whole_option(argc, argv, i, 0, UINT32_MAX, &c->bottom_layers); return 1; }
     if (!strcmp(o, "--peel")) { *rc = number_option(argc, argv, i, 1, &c->motion.lift_mm); c->motion.bottom_lift_mm = c->motion.lift_mm; return 1; }
     if (!strcmp(o, "--peel-speed")) {
         *rc = number_option(argc, argv, i, 0, &c->motion.lift_speed);

@@ -63,5 +63,10 @@ void model_report_json(json_writer *w, const char *key, const adaslice_mesh_repo
     json_int(w, "flipped_facets", (long long)r->flipped_facets);
     json_int(w, "flipped_shells", (long long)r->flipped_shells);
     json_number(w, "volume_mm3", r->volume);
+    /* an open mesh encloses no volume: the repair's figure closes each hole by a
+       cone to its shell's centroid, the masks (and the resin) by chords */
+    json_string(w, "volume_of", r->open_edges ? "the mesh, its holes closed by cones to each shell's centroid: not the "
+                                                "resin (slice's manifest volume_mm3, its holes closed by chords)"
+                                              : "the mesh");
     json_end(w);
 }

@@ -24,14 +24,38 @@ int file_option(int argc, char **argv, int *i, const char **out)
     return *out ? RC_OK : RC_USAGE;
 }
 
+const char *decimal_number(const char *text, double *out)
+{
+    const char *p = text;
+    size_t digits = 0;
+    char plain[400], *end;
+    if (*p == '+' || *p == '-') p++;
+    for (; *p >= '0' && *p <= '9'; p++) digits++;
+    if (*p == '.')
+        for (p++; *p >= '0' && *p <= '9'; p++) digits++;
+    if (!digits) return NULL;
+    if (*p == 'e' || *p == 'E') {
+        const char *q = p + 1 + (p[1] == '+' || p[1] == '-');
+        if (*q >= '0' && *q <= '9') {
+            while (*q >= '0' && *q <= '9') q++;
+            p = q;
+        }
+    }
+    /* strtod reads only the digits checked ("0x10" with 'x' between numbers is 0 and 10, not 16) */
+    if ((size_t)(p - text) >= sizeof plain) return NULL;
+    memcpy(plain, text, (size_t)(p - text));
+    plain[p - text] = 0;
+    *out = strtod(plain, &end);
+    return !*end && isfinite(*out) ? p : NULL;
+}
+
 int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
 {
-    const char *opt = argv[*i], *v = value_of(argc, argv, i);
-    char *end;
-    double d;
+    const char *opt = argv[*i], *v = value_of(argc, argv, i), *end;
+    double d = 0;
     if (!v) return RC_USAGE;
-    d = strtod(v, &end);
-    if (end == v || *end || !isfinite(d) || d < 0 || (d == 0 && !zero_ok))
+    end = decimal_number(v, &d);
+    if (!end || *end || d < 0 || (d == 0 && !zero_ok))
         return complain(RC_USAGE, "%s %s: not a %s finite number", opt, v, zero_ok ? "non-negative" : "positive");
     *out = d;
     return RC_OK;
@@ -39,15 +63,21 @@ int number_option(int argc, char **argv, int *i, int zero_ok, double *out)
 
 int count_option(int argc, char **argv, int *i, size_t max, size_t *out)
 {
+    return whole_option(argc, argv, i, 1, max, out);
+}
+
+int whole_option(int argc, char **argv, int *i, size_t least, size_t max, size_t *out)
+{
     const char *opt = argv[*i], *v = value_of(argc, argv, i);
     char *end;
     unsigned long long n;
     if (!v) return RC_USAGE;
     errno = 0;
     n = strtoull(v, &end, 10);
-    if (*v < '0' || *v > '9' || *end) return complain(RC_USAGE, "%s %s: not a whole number from 1 to %zu", opt, v, max);
+    if (*v < '0' || *v > '9' || *end)
+        return complain(RC_USAGE, "%s %s: not a whole number from %zu to %zu", opt, v, least, max);
     if (errno == ERANGE || n > max) return complain(RC_USAGE, "%s %s: too large, the most is %zu", opt, v, max);
-    if (n == 0) return complain(RC_USAGE, "%s %s: too small, the least is 1", opt, v);
+    if (n < least) return complain(RC_USAGE, "%s %s: too small, the least is %zu", opt, v, least);
     *out = (size_t)n;
     return RC_OK;
 }
@@ -70,10 +100,8 @@ int parse_numbers(const char *text, char sep, int n, double *out)
     const char *p = text;
     int k;
     for (k = 0; k < n; k++) {
-        char *end;
-        if (*p == ' ' || *p == '\t') return 0; /* strtod would skip it */
-        out[k] = strtod(p, &end);
-        if (end == p || !isfinite(out[k]) || *end != (k + 1 < n ? sep : '\0')) return 0;
+        const char *end = decimal_number(p, &out[k]);
+        if (!end || *end != (k + 1 < n ? sep : '\0')) return 0;
         p = end + 1;
     }
     return 1;

@@ -8,10 +8,18 @@
 
 /* Any text (a path), not starting with "--". */
 int file_option(int argc, char **argv, int *i, const char **out);
+/* The one reading of a number, wherever the tool reads one: a plain decimal
+   ([+-]digits[.digits][e[+-]digits], a digit on one side of the point at
+   least) at the start of text, finite, into *out; returns where it ends, or
+   NULL. strtod alone also takes hex (0x10 as 16), inf, nan and leading
+   blanks. */
+const char *decimal_number(const char *text, double *out);
 /* A finite number > 0, or >= 0 when zero_ok. */
 int number_option(int argc, char **argv, int *i, int zero_ok, double *out);
 /* A whole number from 1 to max. */
 int count_option(int argc, char **argv, int *i, size_t max, size_t *out);
+/* A whole number from least to max. */
+int whole_option(int argc, char **argv, int *i, size_t least, size_t max, size_t *out);
 /* One of `count` names; `choices` lists them for the message. */
 int name_option(int argc, char **argv, int *i, const char *const *names, int count, const char *choices, int *out);
 /* Exactly n finite numbers separated by `sep` ("2560x1440" with 'x',

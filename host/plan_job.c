@@ -146,7 +146,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (weights_option(argc, argv, &i, &a->weights, &rc)) continue;
         else return complain(RC_USAGE, "unknown option %s (see adaslice %s --help)", o, cmd);
     }
-    if (rc) return rc;
+    if (rc || (rc = weights_check(&a->weights))) return rc;
     if (uniform) {
         if (method >= 0 || bounds) return complain(RC_USAGE, "--uniform %g sets the method and both bounds: leave out --method, --tmin and --tmax", uniform);
         method = ADASLICE_METHOD_FINEST;
@@ -376,10 +376,9 @@ static double z_column_bin(const z_column *c, size_t n)
 /* A z in the first column, before the first comma: 1 if there is one. */
 static int z_field(const char *s, const char *comma, double *z)
 {
-    char *end;
-    *z = strtod(s, &end);
-    while (end < comma && (*end == ' ' || *end == '\t')) end++;
-    return end != s && end == comma && isfinite(*z);
+    const char *end = decimal_number(s, z);
+    while (end && end < comma && (*end == ' ' || *end == '\t')) end++;
+    return end == comma;
 }
 
 /* One value per line, or CSV with the value last and, in two or more columns, z
@@ -398,13 +397,14 @@ static int read_profile(const plan_args *a, plan_job *j)
 
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     while (!rc && getline(&line, &line_cap, f) != -1) {
-        char *s = trim(line), *comma = strchr(s, ','), *field, *end;
-        double v, z = 0;
+        char *s = trim(line), *comma = strchr(s, ','), *field;
+        const char *end;
+        double v = 0, z = 0;
         lineno++;
         if (!*s || *s == '#') continue;
         field = comma ? trim(strrchr(s, ',') + 1) : s;
-        v = strtod(field, &end);
-        if (end == field || *end || (comma && !z_field(s, comma, &z))) {
+        end = decimal_number(field, &v);
+        if (!end || *end || (comma && !z_field(s, comma, &z))) {
             if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
         } else if (!isfinite(v) || v < 0) {
             rc = complain(RC_FAIL, "%s:%zu: '%s': profile values must be finite and >= 0", path, lineno,

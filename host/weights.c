@@ -79,9 +79,8 @@ static const struct { const char *name, *numbers; int count; } REGION_KINDS[] = 
 /* "box:x0,y0,z0,x1,y1,z1=W" or "sphere:x,y,z,r=W" */
 static int parse_region(const char *spec, weight_region *r)
 {
-    const char *colon = strchr(spec, ':'), *equals = strrchr(spec, '='), *p;
-    double v[6], w;
-    char *end = NULL;
+    const char *colon = strchr(spec, ':'), *equals = strrchr(spec, '='), *p, *end = NULL;
+    double v[6], w = 0;
     int n, want;
     if (!colon || !equals || equals < colon)
         return complain(RC_USAGE, "--weight %s: expected box:X0,Y0,Z0,X1,Y1,Z1=W or sphere:X,Y,Z,R=W", spec);
@@ -92,15 +91,12 @@ static int parse_region(const char *spec, weight_region *r)
     if (r->kind == 2)
         return complain(RC_USAGE, "--weight %s: unknown region %.*s, expected box or sphere", spec, (int)(colon - spec), spec);
     want = REGION_KINDS[r->kind].count;
-    for (n = 0, p = colon + 1; n < want; n++, p = end + 1) {
-        v[n] = strtod(p, &end);
-        if (end == p || !isfinite(v[n]) || *end != (n + 1 < want ? ',' : '=')) break;
-    }
+    for (n = 0, p = colon + 1; n < want; n++, p = end + 1)
+        if (!(end = decimal_number(p, &v[n])) || *end != (n + 1 < want ? ',' : '=')) break;
     if (n < want || end != equals)
         return complain(RC_USAGE, "--weight %s: a %s takes %d numbers %s", spec, REGION_KINDS[r->kind].name, want,
                         REGION_KINDS[r->kind].numbers);
-    w = strtod(equals + 1, &end);
-    if (end == equals + 1 || *end || !(w >= 0 && w <= 1))
+    if (!(end = decimal_number(equals + 1, &w)) || *end || !(w >= 0 && w <= 1))
         return complain(RC_USAGE, "--weight %s: the weight %s is not a number in [0, 1]", spec, equals + 1);
     if (r->kind == WEIGHT_BOX) {
         int k;
@@ -128,8 +124,9 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
     } else if (!strcmp(o, "--importance")) {
         double *c = w->importance;
         if ((*rc = numbers_option(argc, argv, i, ',', 3, "three weights A,B,C", c)) != RC_OK) return 1;
-        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] + c[1] + c[2] <= 0)
-            *rc = complain(RC_USAGE, "--importance %g,%g,%g: each weight must be >= 0 and one above 0", c[0], c[1], c[2]);
+        if (!(c[0] >= 0 && c[0] <= 1 && c[1] >= 0 && c[1] <= 1 && c[2] >= 0 && c[2] <= 1) || c[0] + c[1] + c[2] <= 0)
+            *rc = complain(RC_USAGE, "--importance %g,%g,%g: each weight must be in [0, 1] and one above 0", c[0], c[1],
+                           c[2]);
         w->blend = 2; /* the weights given */
     } else if (!strcmp(o, "--view-count")) {
         *rc = count_option(argc, argv, i, WEIGHT_VIEW_COUNT_MAX, &w->view_lattice);
@@ -150,6 +147,16 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
     return 1;
 }
 
+int weights_check(const weight_args *w)
+{
+    const double *c = w->importance;
+    /* the user term is 0 where no weights are given: the blend would weigh nothing */
+    if (w->blend == 2 && c[0] == 0 && c[1] == 0 && !w->file && !w->region_count)
+        return complain(RC_USAGE, "--importance %g,%g,%g weighs only the user's weights, and no --weights or --weight "
+                        "is given", c[0], c[1], c[2]);
+    return RC_OK;
+}
+
 static char *trim(char *s)
 {
     char *end = s + strlen(s);
@@ -167,12 +174,12 @@ static int read_weights(const char *path, size_t count, float *w)
     int rc = RC_OK;
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     while (!rc && getline(&line, &cap, f) != -1) {
-        char *s = trim(line), *end;
-        double v;
+        char *s = trim(line);
+        const char *end;
+        double v = 0;
         lineno++;
         if (!*s || *s == '#') continue;
-        v = strtod(s, &end);
-        if (end == s || *end)
+        if (!(end = decimal_number(s, &v)) || *end)
             rc = complain(RC_USAGE, "%s:%zu: '%s' is not a number", path, lineno, quote_text(q, s, strlen(s)));
         else if (!(v >= 0 && v <= 1))
             rc = complain(RC_USAGE, "%s:%zu: %s is not a weight in [0, 1]", path, lineno, quote_text(q, s, strlen(s)));

@@ -35,6 +35,9 @@ typedef struct weight_args {
    sets *rc (RC_OK, or RC_USAGE after a complaint) and returns 1; else 0. */
 int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc);
 int weights_given(const weight_args *w);
+/* After every option: RC_OK, or RC_USAGE after a complaint when the options
+   weigh nothing (--importance 0,0,C with no weights given). */
+int weights_check(const weight_args *w);
 /* One weight per triangle of `mesh` in *out (malloc'd), or *out = NULL when
    none are asked for. A bad weight file is RC_USAGE, an unreadable one RC_FAIL;
    the complaint is made. */

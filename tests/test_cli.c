@@ -126,6 +126,23 @@ static void bad_arguments_exit_2(void)
         {{"plan", "m.stl", "--tmin", "0.2", "--tmax", "0.1"}, {"--tmin", "--tmax"}},
         {{"plan", "m.stl", "--method", "greedy", "--budget", "10"}, {"--budget"}},
         {{"plan", "--profile", "p.csv", "--scale", "2"}, {"--scale"}},
+        /* numbers are plain decimals: strtod alone takes hex, inf and nan (issue 26) */
+        {{"plan", "m.stl", "--eps", "0x10"}, {"--eps", "0x10"}},
+        {{"plan", "m.stl", "--eps", " 1"}, {"--eps"}},
+        {{"slice", "m.stl", "-o", "j", "--exposure", "0x10"}, {"--exposure", "0x10"}},
+        {{"slice", "m.stl", "-o", "j", "--exposure", "infinity"}, {"--exposure", "infinity"}},
+        {{"slice", "m.stl", "-o", "j", "--pixels", "0x10x0x10"}, {"--pixels"}},
+        {{"plan", "m.stl", "--weight", "box:0x1,0,0,1,1,1=0.5"}, {"--weight"}},
+        /* the blend's weights are in [0, 1], and weigh something */
+        {{"plan", "m.stl", "--importance", "2,0,0"}, {"--importance", "[0, 1]"}},
+        {{"plan", "m.stl", "--importance", "0x1,0,0"}, {"--importance", "0x1"}},
+        {{"plan", "m.stl", "--importance", "0,0,1"}, {"--importance", "--weights"}},
+        {{"saliency", "m.stl", "-o", "w.txt", "--importance", "0,0,1"}, {"--importance", "--weights"}},
+        {{"slice", "m.stl", "-o", "j", "--bottom-layers", "-1"}, {"--bottom-layers", "from 0"}},
+        /* job names */
+        {{"slice", "m.stl", "-o", ".ctb", "--pixels", "100x100", "--pitch", "0.05"}, {".ctb", "name"}},
+        {{"slice", "m.stl", "-o", "job_v1.2", "--pixels", "100x100", "--pitch", "0.05"}, {".2", "--format"}},
+        {{"plan", "m.stl", "--3mf", "x.stl"}, {"--3mf", ".3mf"}},
     };
     size_t i;
     int k;
@@ -138,6 +155,84 @@ static void bad_arguments_exit_2(void)
                    i, r.err, cases[i].named[k]);
         cli_free(&r);
     }
+}
+
+/* What options that read as nothing say they do: plain decimals taken in
+   every form; --importance 0,0,C with weights given; --bottom-layers 0 (no
+   bottom layers) and more than the job has (all of them, warned, and the
+   summary gives one exposure, not a range of none); .3MF in capitals. */
+static void options_say_what_they_do(void)
+{
+    char job[600], manifest[700], *m;
+    cli_result r;
+    size_t layers;
+    r = cli_run("plan", sphere_stl(), "--eps", ".05", "--tmin", "5e-2", "--tmax", "+0.2", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", sphere_stl(), "--importance", "0,0,1", "--weight", "sphere:0,0,0,100=0.5", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(job, sizeof job, "%s/bottomjob", cli_dir);
+    snprintf(manifest, sizeof manifest, "%s/manifest.json", job);
+    r = cli_run("slice", sphere_stl(), "-o", job, "--pixels", "250x250", "--pitch", "0.05", "--bottom-layers", "0", NULL);
+    m = read_whole_text(manifest);
+    CHECKF(r.status == 0 && m && cli_json_number(m, "bottom_layers") == 0 && !strstr(r.out, "bottom layer"),
+           "exit %d: %s%s", r.status, r.out, r.err);
+    free(m);
+    cli_free(&r);
+    cli_remove_all(job);
+    r = cli_run("slice", sphere_stl(), "-o", job, "--pixels", "250x250", "--pitch", "0.05", "--bottom-layers", "99999", NULL);
+    m = read_whole_text(manifest);
+    layers = m ? (size_t)cli_json_number(m, "layer_count") : 0;
+    CHECKF(r.status == 0 && layers > 3 && cli_json_number(m, "bottom_layers") == (double)layers, "exit %d: %s", r.status,
+           r.err);
+    CHECKF(strstr(r.err, "warning: --bottom-layers 99999") && strstr(r.err, "all of them bottom layers") &&
+               strstr(r.out, "exposure 25 s per layer (") && strstr(r.out, " bottom layers of 25 s: every layer)") &&
+               !strstr(r.out, " to 2.5 s per layer"),
+           "stdout: %s\nstderr: %s", r.out, r.err);
+    free(m);
+    cli_free(&r);
+    cli_remove_all(job);
+    r = cli_run("plan", sphere_stl(), "--3mf", cli_path("plan.3MF"), NULL);
+    CHECKF(r.status == 0 && cli_exists(cli_path("plan.3MF")), "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+}
+
+/* An open mesh's two volumes say which closure each is: plan --json's
+   repair.volume_mm3 (cones to the centroid) says it is not the resin, the
+   manifest's (the masks) that it is; a closed mesh's is just the mesh. */
+static void volumes_say_which_closure(void)
+{
+    adaslice_mesh s = gen_sphere(5, 48, 24, 0), bowl = gen_alloc(s.vertex_count, s.triangle_count);
+    const char *path = cli_path("bowl.obj");
+    char job[600], manifest[700], *m;
+    size_t t;
+    cli_result r;
+    memcpy(bowl.vertices, s.vertices, s.vertex_count * 3 * sizeof(float));
+    bowl.vertex_count = s.vertex_count;
+    for (t = 0; t < s.triangle_count; t++) {
+        const uint32_t *v = s.triangles + 3 * t;
+        if (s.vertices[3 * v[0] + 2] + s.vertices[3 * v[1] + 2] + s.vertices[3 * v[2] + 2] < 3 * 8.0)
+            gen_triangle(&bowl, v[0], v[1], v[2]); /* the cap above z = 8 cut away */
+    }
+    cli_write_obj(path, &bowl);
+    gen_free(&s);
+    gen_free(&bowl);
+    r = cli_run("plan", path, "--json", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "\"volume_of\": \"the mesh, its holes closed by cones") &&
+               strstr(r.out, "not the resin"), "exit %d: %s%s", r.status, r.out, r.err);
+    cli_free(&r);
+    r = cli_run("plan", sphere_stl(), "--json", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "\"volume_of\": \"the mesh\""), "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(job, sizeof job, "%s/bowljob", cli_dir);
+    snprintf(manifest, sizeof manifest, "%s/manifest.json", job);
+    r = cli_run("slice", path, "-o", job, "--pixels", "250x250", "--pitch", "0.05", NULL);
+    m = read_whole_text(manifest);
+    CHECKF(r.status == 0 && m && strstr(m, "\"volume_of\": \"the resin"), "exit %d: %s", r.status, r.err);
+    free(m);
+    cli_free(&r);
+    cli_remove_all(job);
 }
 
 /* The plan of a sphere: the CSV tiles [0, N*b] with layers inside the bounds
@@ -715,6 +810,8 @@ void test_cli(void)
     if (!cli_begin("adaslice-cli")) return;
     RUN(help_and_version);
     RUN(bad_arguments_exit_2);
+    RUN(options_say_what_they_do);
+    RUN(volumes_say_which_closure);
     RUN(plan_of_a_sphere);
     RUN(sampler_choice);
     RUN(profile_input);

@@ -89,7 +89,8 @@ static void weight_file_errors(void)
         {"1\n0.5\n", {"w.txt", "2 weights", "4 triangles"}},
         {"1\n1\n1.5\n1\n", {"w.txt:3", "1.5", "[0, 1]"}},
         {"1\nabc\n1\n1\n", {"w.txt:2", "'abc'", "not a number"}},
-        {"1\n1\nnan\n1\n", {"w.txt:3", "nan", "[0, 1]"}},
+        {"1\n1\nnan\n1\n", {"w.txt:3", "nan", "not a number"}},
+        {"1\n1\n0x1\n1\n", {"w.txt:3", "0x1", "not a number"}}, /* a plain decimal, not hex */
         {"1\n1\n1\n1\n1\n", {"w.txt:5", "more weights", "4 triangles"}},
         {"0.5 junk\n1\n1\n1\n", {"w.txt:1", "0.5 junk", "not a number"}},
     };

@@ -79,7 +79,7 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
 {
     adaslice_grid g = plate();
     adaslice_masker a, b;
-    adaslice_contours c;
+    adaslice_contours c, oc;
     adaslice_profile_options po;
     adaslice_profile pa;
     adaslice_error e;
@@ -93,13 +93,14 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
     CHECKF(a.gaps != NULL, "%s: the open mesh is read by rays", what);
     CHECK(adaslice_masker_init(&b, closed, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0}, &e) == ADASLICE_OK && !b.gaps);
     CHECK(adaslice_contours_slice(&welded, z, (size_t)n, NULL, &c, &e) == ADASLICE_OK);
+    CHECKF(adaslice_contours_slice(open, z, (size_t)n, NULL, &oc, &e) == ADASLICE_OK, "%s: %s", what, e.message);
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
     po.bin = 0.001;
     CHECK(adaslice_profile_exact(open, &po, &pa, &e) == ADASLICE_OK);
     for (k = 0; k < n; k++) {
         int i, j;
-        size_t wrong = 0;
+        size_t wrong = 0, unlike = 0;
         double perimeter = 0, area;
         size_t bin = (size_t)((z[k] - pa.z0) / pa.bin);
         CHECKF(adaslice_masker_slice(&a, z[k], &e) == ADASLICE_OK, "%s: %s", what, e.message);
@@ -110,10 +111,15 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
                 int differs = supersample > 1 ? a.image[(size_t)j * a.stride + (size_t)i] != b.image[(size_t)j * b.stride + (size_t)i]
                                               : bit(a.image, a.stride, i, j) != bit(b.image, b.stride, i, j);
                 int h, at_hole = 0;
+                /* the open mesh's contours, closed by their chords, light what its mask lights */
+                if (supersample == 1 && adaslice_contours_distance(&oc, (size_t)k, x, y) > PITCH * 1.5)
+                    unlike += (adaslice_contours_winding(&oc, (size_t)k, x, y) > 0) != bit(a.image, a.stride, i, j);
                 if (!differs || adaslice_contours_distance(&c, (size_t)k, x, y) <= PITCH * 1.5) continue;
                 for (h = 0; h < hole_count; h++) at_hole |= hypot(x - holes[4 * h], y - holes[4 * h + 1]) <= reach;
                 wrong += !at_hole;
             }
+        CHECKF(unlike == 0, "%s at z %g: %zu pixels lit by the mask and not inside the contours or the other way",
+               what, z[k], unlike);
         perimeter = contour_length(&c, (size_t)k);
         CHECKF(wrong == 0, "%s at z %g: %zu pixels differ from the closed mesh's away from the gap", what, z[k], wrong);
         CHECKF(fabs(a.lit - b.lit) * PITCH * PITCH <= slack + perimeter * PITCH * 1.5, "%s at z %g: lit %g mm^2, closed %g mm^2",
@@ -125,6 +131,7 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
     adaslice_masker_free(&a);
     adaslice_masker_free(&b);
     adaslice_contours_free(&c);
+    adaslice_contours_free(&oc);
     adaslice_profile_free(&pa);
     gen_free(&welded);
 }

@@ -151,6 +151,30 @@ static void minima_are_apart(void)
     gen_free(&m);
 }
 
+/* Equal scores go to the part as loaded (+z: no turn), then to the lower
+   index: among neighbours, +z is the one minimum even listed last (as the
+   tool lists it after the lattice), and among directions apart, +z comes
+   first and the rest keep their order. */
+static void ties_go_to_the_part_as_loaded(void)
+{
+    static const double d[4][3] = {{1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+    adaslice_direction_score s[4];
+    size_t minima[4], count, i;
+    memset(s, 0, sizeof s);
+    for (i = 0; i < 4; i++) {
+        memcpy(s[i].direction, d[i], sizeof d[i]);
+        s[i].score = 0.5;
+    }
+    count = adaslice_orient_minima(s, 4, 2.0, minima, 4); /* 2 rad: every one a neighbour of every other */
+    CHECKF(count == 1 && minima[0] == 3, "%zu minima, the first %zu", count, count ? minima[0] : 99);
+    count = adaslice_orient_minima(s, 4, 0.1, minima, 4); /* none a neighbour */
+    CHECKF(count == 4 && minima[0] == 3 && minima[1] == 0 && minima[2] == 1 && minima[3] == 2,
+           "%zu minima: %zu %zu %zu %zu", count, minima[0], minima[1], minima[2], minima[3]);
+    s[1].score = 0.4; /* a lower score still wins */
+    count = adaslice_orient_minima(s, 4, 2.0, minima, 4);
+    CHECKF(count == 1 && minima[0] == 1, "%zu minima, the first %zu", count, count ? minima[0] : 99);
+}
+
 void test_orient(void)
 {
     RUN(fibonacci_directions_cover_the_sphere);
@@ -158,4 +182,5 @@ void test_orient(void)
     RUN(long_box_lies_down);
     RUN(turning_the_mesh_reproduces_the_search);
     RUN(minima_are_apart);
+    RUN(ties_go_to_the_part_as_loaded);
 }

@@ -11,6 +11,7 @@
 #include "cli_run.h"
 #include "../adaslice.h"
 #include "meshgen.h"
+#include "tool_run.h"
 #include "../host/report.h"
 
 #include <errno.h>
@@ -96,6 +97,150 @@ static void layer_svgs_agree_with_the_manifest(void)
         free(svg);
     }
     free(manifest);
+    cli_remove_all(job);
+}
+
+/* A tube (radii 4 and 8 mm, 10 mm tall, one shell: walls and annular caps)
+   with a hole of radius 3 mm punched in its outer wall at mid-height: its
+   sections there are an open polyline round the outside and a closed loop
+   round the bore. */
+static adaslice_mesh punched_tube(void)
+{
+    enum { SLICES = 64, STACKS = 10 };
+    adaslice_mesh m = gen_alloc(4 * SLICES * (STACKS + 1), 4 * SLICES * STACKS + 4 * SLICES);
+    uint32_t ring[2][STACKS + 1][SLICES];
+    int a, k, side;
+    for (side = 0; side < 2; side++)
+        for (k = 0; k <= STACKS; k++)
+            for (a = 0; a < SLICES; a++) {
+                double t = 2 * M_PI * a / SLICES, r = side ? 4 : 8;
+                ring[side][k][a] = gen_vertex(&m, r * cos(t), r * sin(t), 10.0 * k / STACKS);
+            }
+    for (a = 0; a < SLICES; a++) {
+        int b = (a + 1) % SLICES;
+        double mid = 2 * M_PI * (a + 0.5) / SLICES;
+        for (k = 0; k < STACKS; k++) {
+            double z = 10.0 * (k + 0.5) / STACKS;
+            if (hypot(8 * cos(mid) - 8, hypot(8 * sin(mid), z - 5)) > 3) { /* outside the hole: out of the wall */
+                gen_triangle(&m, ring[0][k][a], ring[0][k][b], ring[0][k + 1][b]);
+                gen_triangle(&m, ring[0][k][a], ring[0][k + 1][b], ring[0][k + 1][a]);
+            }
+            /* the bore faces the axis */
+            gen_triangle(&m, ring[1][k][a], ring[1][k + 1][b], ring[1][k][b]);
+            gen_triangle(&m, ring[1][k][a], ring[1][k + 1][a], ring[1][k + 1][b]);
+        }
+        gen_triangle(&m, ring[0][STACKS][a], ring[0][STACKS][b], ring[1][STACKS][b]); /* top: up */
+        gen_triangle(&m, ring[0][STACKS][a], ring[1][STACKS][b], ring[1][STACKS][a]);
+        gen_triangle(&m, ring[0][0][a], ring[1][0][b], ring[0][0][b]); /* bottom: down */
+        gen_triangle(&m, ring[0][0][a], ring[1][0][a], ring[1][0][b]);
+    }
+    return m;
+}
+
+/* The filled path's points in the layer SVG `svg` (y back up), its subpaths
+   closed: edge k runs from pt[k] to pt[next[k]]; returns the edges. */
+static size_t filled_edges(const char *svg, double (*pt)[2], size_t *next, size_t max)
+{
+    const char *p = strstr(svg, "<path fill-rule=\"nonzero\" d=\"");
+    size_t n = 0, begin = 0;
+    if (!p) return 0;
+    p = strchr(p, 'd') + 3;
+    while (*p && *p != '"' && n < max) {
+        char c, *end;
+        while (*p == ' ') p++;
+        c = *p++;
+        if (c == 'Z') { if (n > begin) next[n - 1] = begin; begin = n; continue; }
+        if (c != 'M' && c != 'L') return 0;
+        if (c == 'M') begin = n;
+        pt[n][0] = strtod(p, &end);
+        pt[n][1] = -strtod(end, &end);
+        p = end;
+        next[n] = n + 1;
+        n++;
+    }
+    return n;
+}
+
+/* The nonzero rule at (x, y) over the edges, and the distance to the nearest. */
+static int filled_at(double (*pt)[2], const size_t *next, size_t n, double x, double y, double *distance)
+{
+    size_t k;
+    int w = 0;
+    *distance = HUGE_VAL;
+    for (k = 0; k < n; k++) {
+        const double *a = pt[k], *b = pt[next[k]];
+        double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy, t = 0, side = dx * (y - a[1]) - dy * (x - a[0]);
+        if (len2 > 0) t = ((x - a[0]) * dx + (y - a[1]) * dy) / len2;
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        if (hypot(a[0] + t * dx - x, a[1] + t * dy - y) < *distance) *distance = hypot(a[0] + t * dx - x, a[1] + t * dy - y);
+        if (a[1] <= y && b[1] > y && side > 0) w++;
+        if (a[1] > y && b[1] <= y && side < 0) w--;
+    }
+    return w != 0;
+}
+
+/* A layer SVG of an open mesh fills what the layer's PNG lights: the tube
+   punched through its outer wall, rasterised from the SVG's filled path at
+   every pixel centre more than 1.5 pixels from its edges, against the PNG
+   decoded by oiiotool, at each layer through the hole (before, the bore was
+   drawn filled and the lit wall as an unfilled line). */
+static void open_layer_svgs_fill_what_the_masks_light(void)
+{
+    enum { W = 400, H = 400, MAX = 4096 };
+    const double pitch = 0.05, centre[2] = {0, 0};
+    const char *tube = cli_path("punched_tube.obj");
+    adaslice_mesh m = punched_tube();
+    adaslice_grid g = adaslice_grid_plate(&m, W, H, pitch, pitch, centre);
+    char job[600], png[700], pgm[700], *manifest;
+    double (*pt)[2] = (double (*)[2])malloc(MAX * sizeof *pt);
+    size_t *next = (size_t *)malloc(MAX * sizeof *next), layers, k, checked = 0, open = 0;
+    cli_result r;
+    cli_write_obj(tube, &m);
+    gen_free(&m);
+    snprintf(job, sizeof job, "%s/tubejob", cli_dir);
+    r = cli_run("slice", tube, "-o", job, "--pixels", "400x400", "--pitch", "0.05", "--svg", NULL);
+    CHECKF(r.status == 0, "exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(png, sizeof png, "%s/manifest.json", job);
+    manifest = read_whole_text(png);
+    layers = manifest ? (size_t)cli_json_number(manifest, "layer_count") : 0;
+    for (k = 1; k <= layers && pt && next; k++) {
+        char path[700], *argv[] = {(char *)"oiiotool", png, (char *)"-d", (char *)"uint8", (char *)"-o", pgm, NULL};
+        char *svg;
+        unsigned char *grey;
+        size_t n, size, wrong = 0, compared = 0;
+        int w, h, maxval, used = 0, i, j;
+        snprintf(path, sizeof path, "%s/layer_%05zu.svg", job, k);
+        svg = read_whole_text(path);
+        /* every third layer with an open contour: oiiotool takes a while to start */
+        if (!svg || !strstr(svg, "fill=\"none\" stroke=\"#c0392b\"") || open++ % 3) { free(svg); continue; }
+        n = filled_edges(svg, pt, next, MAX);
+        free(svg);
+        CHECKF(n > 0, "layer %zu: no filled path", k);
+        snprintf(png, sizeof png, "%s/layer_%05zu.png", job, k);
+        snprintf(pgm, sizeof pgm, "%s/layer.pgm", cli_dir);
+        if (tool_run("openimageio-tools", argv, cli_path("oiiotool.log"), cli_path("oiiotool.log")) != 0) break;
+        grey = read_whole_file(pgm, &size);
+        CHECKF(grey && sscanf((char *)grey, "P5 %d %d %d%n", &w, &h, &maxval, &used) == 3 && w == W && h == H &&
+                   size == (size_t)used + 1 + W * H, "layer %zu: oiiotool gave no %dx%d PGM", k, W, H);
+        for (j = 0; grey && w == W && h == H && j < H; j++)
+            for (i = 0; i < W; i++) {
+                /* PNG row 0 is the top: grid row H - 1 */
+                double x = g.origin[0] + (i + 0.5) * pitch, y = g.origin[1] + (H - 1 - j + 0.5) * pitch, d;
+                int filled = filled_at(pt, next, n, x, y, &d), lit = grey[used + 1 + (size_t)j * W + (size_t)i] > 127;
+                if (d < 1.5 * pitch) continue;
+                compared++;
+                wrong += filled != lit;
+            }
+        CHECKF(wrong == 0 && compared > W * H / 2, "layer %zu: %zu of %zu pixels filled in the SVG and not lit in the "
+               "PNG or the other way", k, wrong, compared);
+        free(grey);
+        checked++;
+    }
+    CHECKF(checked >= 3, "%zu layers with an open contour", checked);
+    free(manifest);
+    free(pt);
+    free(next);
     cli_remove_all(job);
 }
 
@@ -429,7 +574,7 @@ static void outputs_never_replace_links_fifos_or_devices(void)
             char what[200] = "", name[40];
             target t;
             cli_result r;
-            snprintf(name, sizeof name, "out%zu", i);
+            snprintf(name, sizeof name, "out%zu%s", i, !strcmp(o->args[2], "--3mf") ? ".3mf" : ""); /* --3mf wants one */
             if (!target_make(&t, kind, name)) continue; /* no null device of our own: mknod refused */
             for (a = 0; o->args[a]; a++) {
                 argv[a] = !strcmp(o->args[a], MODEL) ? raised_sphere()
@@ -792,6 +937,7 @@ void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(layer_svgs_agree_with_the_manifest);
+    RUN(open_layer_svgs_fill_what_the_masks_light);
     RUN(orient_map_tiles_and_has_a_colour_bar);
     RUN(compare_gives_the_saving_against_uniform_layers);
     RUN(outputs_never_replace_links_fifos_or_devices);

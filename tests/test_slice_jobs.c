@@ -234,7 +234,7 @@ static void refusals_leave_nothing_behind(void)
 {
     char model[256];
     struct { const char *out, *args[10], *says; int status; } cases[] = {
-        {"job.pwmx", {NULL}, "no job format has the extension .pwmx", 2},
+        {"job.pwmx", {NULL}, ".pwmx is no job format's extension", 2},
         {"job.goo", {"--printer", "elegoo-saturn", NULL}, "reads ctb jobs, not goo", 2},
         {"job.ctb", {"--printer", "elegoo-mars-3", "--format", "ctb", NULL}, "reads ctb-encrypted jobs, not ctb", 2},
         {"job.goo", {"--printer", "phrozen-sonic-mini-8k-s", NULL}, "reads prz jobs, not goo", 2},

@@ -135,6 +135,8 @@ static void write_manifest(FILE *f, const void *ctx)
     json_end(&w);
     json_number(&w, "print_time_s", d->print_time_s);
     json_number(&w, "volume_mm3", d->volume_mm3);
+    /* plan --json's repair.volume_mm3 closes an open mesh otherwise: say which this is */
+    json_string(&w, "volume_of", "the resin: each mask's lit area times its layer's thickness");
     snprintf(crc, sizeof crc, "%08x", (unsigned)dw->masks_crc);
     json_string(&w, "masks_rle_crc32", dw->has_masks ? crc : NULL);
     /* what a later slice into this directory removes, and nothing else */

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest)
 {
@@ -22,7 +23,15 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
     rest[(*rest_argc)++] = argv[0];
     for (i = 1; i < argc && !rc; i++) {
         const char *o = argv[i];
-        if (!strcmp(o, "--3mf")) rc = file_option(argc, argv, &i, &t->path);
+        if (!strcmp(o, "--3mf")) {
+            const char *dot;
+            rc = file_option(argc, argv, &i, &t->path);
+            /* a 3MF named .stl would be read back as an STL; a stream or device has no name to mislead */
+            dot = rc ? NULL : strrchr(t->path, '.');
+            if (!rc && output_kind(t->path) != OUT_STRAIGHT &&
+                (!dot || strchr(dot, '/') || dot[-1] == '/' || dot == t->path || strcasecmp(dot, ".3mf")))
+                rc = complain(RC_USAGE, "--3mf %s: the name must end in .3mf", t->path);
+        }
         else if (!strcmp(o, "--nozzle")) rc = number_option(argc, argv, &i, 0, &t->nozzle);
         else if (!strcmp(o, "--hybrid")) t->hybrid = 1;
         else if (!strcmp(o, "--max-angle")) rc = number_option(argc, argv, &i, 0, &h->max_angle);
