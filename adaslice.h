@@ -414,6 +414,8 @@ typedef struct adaslice_mesh_report {
     size_t flipped_shells;       /* shells turned whole to face the way their nesting says */
     double volume;               /* mm^3 enclosed, after repair (open shells: about
                                     their centroid) */
+    size_t edge_steps;           /* half-edges met walking the edges: the repair's work,
+                                    at most 12 per facet however many share an edge */
 } adaslice_mesh_report;
 
 /* Repairs a mesh in place as a slicer does on load: welds equal vertices,
@@ -2730,16 +2732,22 @@ static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adasl
     const uint32_t *tri = m->triangles;
     size_t nt = m->triangle_count, t, head = 0, tail = 0, i;
     uint32_t *mate = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 3 * nt, sizeof(uint32_t)));
-    if (!mate) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+    size_t *uses = ADASLICE__CAST(size_t *, adaslice__alloc(al, e->cap ? e->cap : 1, sizeof(size_t)));
+    if (!mate || !uses) {
+        adaslice__free(al, mate);
+        adaslice__free(al, uses);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+    }
     memset(mate, 0xff, 3 * nt * sizeof(uint32_t));
     for (i = 0; i < e->cap; i++) {
         uint32_t h = e->slot[i];
-        size_t uses;
         long net;
+        uses[i] = 0;
         if (h == ADASLICE__NONE) continue;
-        adaslice__edge_uses(tri, e, h, &uses, &net);
-        if (uses == 1) mate[h] = ADASLICE__OPEN;
-        if (uses == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
+        adaslice__edge_uses(tri, e, h, &uses[i], &net);
+        rep->edge_steps += uses[i];
+        if (uses[i] == 1) mate[h] = ADASLICE__OPEN;
+        if (uses[i] == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
     }
     memset(s->of, 0xff, nt * sizeof(uint32_t));
     s->count = 0;
@@ -2777,20 +2785,25 @@ static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adasl
     s->start[s->count] = tail;
     /* a shell is closed when it has an even number of facets on each of its
        edges: two on most, more where shells meet (two cubes sharing an
-       edge); a piece cut off by edges of three facets has one there */
+       edge); a piece cut off by edges of three facets has one there. The
+       facets of an edge are counted per shell in one walk and judged in a
+       second (which clears the counts), so an edge of k facets costs 2k, not k^2. */
     for (i = 0; i < s->count; i++) s->closed[i] = 1;
+    memset(mate, 0, s->count * sizeof(uint32_t)); /* now the count per shell */
     for (i = 0; i < e->cap; i++) {
-        uint32_t h = e->slot[i], g, k;
-        if (h == ADASLICE__NONE) continue;
-        if (mate[h] == ADASLICE__OPEN) { s->closed[s->of[h / 3]] = 0; continue; }
-        if (mate[h] != ADASLICE__NONE) continue;
+        uint32_t h = e->slot[i], g;
+        if (h == ADASLICE__NONE || uses[i] == 2) continue;
+        if (uses[i] == 1) { s->closed[s->of[h / 3]] = 0; continue; }
+        for (g = h; g != ADASLICE__NONE; g = e->next[g]) mate[s->of[g / 3]]++;
         for (g = h; g != ADASLICE__NONE; g = e->next[g]) {
-            size_t same = 0;
-            for (k = h; k != ADASLICE__NONE; k = e->next[k]) same += s->of[k / 3] == s->of[g / 3];
-            if (same % 2) s->closed[s->of[g / 3]] = 0;
+            uint32_t q = s->of[g / 3];
+            if (mate[q] % 2) s->closed[q] = 0;
+            mate[q] = 0;
         }
+        rep->edge_steps += 2 * uses[i];
     }
     adaslice__free(al, mate);
+    adaslice__free(al, uses);
     return ADASLICE_OK;
 }
 
@@ -3044,6 +3057,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
         long net;
         if (e.slot[i] == ADASLICE__NONE) continue;
         adaslice__edge_uses(m->triangles, &e, e.slot[i], &uses, &net);
+        rep.edge_steps += uses;
         rep.open_edges += uses == 1;
         rep.nonmanifold_edges += uses > 2;
     }
