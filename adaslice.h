@@ -47,6 +47,7 @@
        adaslice_profile_exact           phi(z) from the triangles themselves
        adaslice_profile_sampled         phi(z) from LDIs along x, y, z (the paper's method)
        adaslice_profile_free
+       adaslice_profile_estimate        the bytes and samples a profile will take, before it does
        adaslice_mean_curvature          |H| per vertex (the weights' raw material)
        adaslice_saliency                a weight in [0,1] per triangle (Lee et al. 2005)
        adaslice_curvature_profile       mean |H| of the surface per bin
@@ -555,6 +556,16 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
                                                       adaslice_profile *profile, adaslice_error *error);
 #endif
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile);
+/* What a profile will take, before it is made (exact, or sampled when
+   `sampled`): the most bytes it holds at once, and for the sampled profile
+   its work, the samples its rays take (each a pixel a triangle covers; rays
+   along x one per span), both estimated from above. For a caller's limits. */
+typedef struct adaslice_profile_cost {
+    double bytes;
+    double samples;
+} adaslice_profile_cost;
+ADASLICE_DEF adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                       int sampled, adaslice_profile_cost *cost, adaslice_error *error);
 
 #ifndef ADASLICE_NO_WEIGHTS
 /* How the weights read a surface: vertices within weld_tolerance are one
@@ -4017,19 +4028,15 @@ static double adaslice__area_deviation(const double *area, size_t n, size_t i, d
     return fabs(area[j] - area[i]) / (bin * ref);
 }
 
-/* Checks the options and the mesh, sizes the bins and allocates phi (and the
-   areas for area and volume). */
-/* zrange: the used vertices' lowest and highest z when the caller knows them
-   (and has checked the indices), else NULL. */
-static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
-                                               adaslice_profile *profile, adaslice_profile_options *opt,
-                                               const double *zrange, adaslice_error *err)
+/* The options with their defaults, checked, and the bins: *bin_count of
+   them from *z0 to *z1. zrange: the used vertices' lowest and highest z when
+   the caller knows them (and has checked the indices), else NULL. */
+static adaslice_result adaslice__profile_bins(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                              adaslice_profile_options *opt, const double *zrange, size_t *bin_count,
+                                              double *z0, double *z1, adaslice_error *err)
 {
-    adaslice_allocator al;
     double lo[3], hi[3], bins;
-    size_t n, t;
-    if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
-    memset(profile, 0, sizeof *profile);
+    size_t t;
     if (!mesh || !mesh->triangle_count || !mesh->vertices || !mesh->triangles)
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh has no triangles");
     if (options) *opt = *options; else memset(opt, 0, sizeof *opt);
@@ -4068,7 +4075,24 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     if (bins > 2147483646.0)
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "profile: %g bins of %g mm over %g mm is too many",
                               bins, opt->bin, hi[2] - lo[2]);
-    n = (size_t)bins;
+    *bin_count = (size_t)bins;
+    *z0 = lo[2];
+    *z1 = hi[2];
+    return ADASLICE_OK;
+}
+
+/* The same, then phi (and the areas for area and volume) allocated. */
+static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                               adaslice_profile *profile, adaslice_profile_options *opt,
+                                               const double *zrange, adaslice_error *err)
+{
+    adaslice_allocator al;
+    adaslice_result r;
+    double lo, hi;
+    size_t n;
+    if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
+    memset(profile, 0, sizeof *profile);
+    if ((r = adaslice__profile_bins(mesh, options, opt, zrange, &n, &lo, &hi, err)) != ADASLICE_OK) return r;
     al = adaslice__allocator(opt->allocator);
     profile->phi = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
     if (opt->metric >= ADASLICE_METRIC_AREA)
@@ -4083,8 +4107,8 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     profile->metric = opt->metric;
     profile->bin_count = n;
     profile->bin = opt->bin;
-    profile->z0 = lo[2];
-    profile->height = hi[2] - lo[2];
+    profile->z0 = lo;
+    profile->height = hi - lo;
     profile->allocator = al;
     return ADASLICE_OK;
 }
@@ -4206,6 +4230,88 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     adaslice_profile *profile, adaslice_error *err)
 {
     return adaslice__profile_exact(mesh, options, NULL, profile, err);
+}
+
+/* The pixels of grid g (axis a) that a triangle's spans cover at most, and its rows. */
+static void adaslice__raster_size(const adaslice_mesh *m, size_t t, const adaslice_grid *g, double *pixels, double *rows)
+{
+    double P[3][3], lo = DBL_MAX, hi = -DBL_MAX, cross;
+    int k;
+    for (k = 0; k < 3; k++) {
+        adaslice__project(g->axis, m->vertices + 3 * (size_t)m->triangles[3 * t + (size_t)k], P[k]);
+        P[k][0] /= g->pitch[0];
+        P[k][1] /= g->pitch[1];
+        lo = P[k][1] < lo ? P[k][1] : lo;
+        hi = P[k][1] > hi ? P[k][1] : hi;
+    }
+    cross = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
+    *rows = hi - lo + 1;
+    /* each row's span is within a pixel of the triangle at either end */
+    *pixels = 0.5 * fabs(cross) + 2 * *rows;
+}
+
+ADASLICE_DEF adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                       int sampled, adaslice_profile_cost *cost, adaslice_error *err)
+{
+    adaslice_profile_options opt;
+    adaslice_result r;
+    double lo, hi, n, nt, inverse, longest = 1, bytes;
+    size_t bins, t;
+    int max_type, axis;
+    if (!cost) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
+    memset(cost, 0, sizeof *cost);
+    if ((r = adaslice__profile_bins(mesh, options, &opt, NULL, &bins, &lo, &hi, err)) != ADASLICE_OK) return r;
+    n = (double)bins;
+    nt = (double)mesh->triangle_count;
+    max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
+    inverse = 1.0 / opt.bin;
+    bytes = 8 * n * (max_type ? 1 : 2); /* phi, areas */
+    if (!sampled) {
+        /* the range-maximum table: a level for each doubling of the longest run of bins */
+        if (max_type || opt.weights) {
+            for (t = 0; t < mesh->triangle_count; t++) {
+                const uint32_t *tri = mesh->triangles + 3 * t;
+                double a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
+                       c = mesh->vertices[3 * (size_t)tri[2] + 2];
+                double run = floor((adaslice__max3(a, b, c) - lo) * inverse) - floor((adaslice__min3(a, b, c) - lo) * inverse) + 1;
+                longest = run > longest ? run : longest;
+            }
+            longest = longest < n ? longest : n;
+            bytes += 16 * nt + 8 * n * (floor(log2(longest)) + 1);
+        }
+        /* the areas' accumulators, and the edges that find an open mesh's gaps */
+        if (!max_type) bytes += 8 * (4 * n + 3) + 48 * nt + 4 * ((double)mesh->vertex_count + 1);
+        cost->bytes = bytes;
+        adaslice__ok(err);
+        return ADASLICE_OK;
+    }
+#ifndef ADASLICE_NO_SAMPLED
+    bytes += 8 * nt + n + (max_type ? 0 : 8 * (n + 1) + (opt.weights ? 8 * n : 0) + 48 * nt +
+                           4 * ((double)mesh->vertex_count + 1));
+    for (axis = ADASLICE_AXIS_X; axis <= ADASLICE_AXIS_Z; axis++) {
+        adaslice_grid g = adaslice_grid_fit(mesh, (adaslice_axis)axis, opt.resolution);
+        double pixels = 0, rows = 0;
+        for (t = 0; t < mesh->triangle_count; t++) {
+            double p, w;
+            adaslice__raster_size(mesh, t, &g, &p, &w);
+            pixels += p;
+            rows += w;
+        }
+        /* rays along x take one sample a span, the others one a pixel */
+        cost->samples += axis == ADASLICE_AXIS_X ? rows : pixels;
+        if (!max_type && axis == ADASLICE_AXIS_Z) {
+            /* the stored LDI: a start per pixel, a count per row, its samples a band at a time */
+            double held = pixels * (double)sizeof(adaslice_sample);
+            bytes += 8 * ((double)g.width * g.height + 1) + 8 * (double)g.height +
+                     (held < (double)opt.memory_limit ? held : (double)opt.memory_limit);
+        }
+    }
+#else
+    (void)axis;
+#endif
+    cost->bytes = bytes;
+    adaslice__ok(err);
+    return ADASLICE_OK;
 }
 
 ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)

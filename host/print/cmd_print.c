@@ -782,6 +782,7 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
             rc = complain(RC_USAGE, "print JOBDIR: the job holds its exposures and motion; slice it again to change them");
     } else if (!rc) {
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
+        a->memory_mb = s->memory_mb; /* print's --memory bounds the profile too */
         if (!rc && !a->model) rc = complain(RC_USAGE, "print needs a MODEL or a JOBDIR");
         if (!rc && (a->method != ADASLICE_METHOD_OPTIMAL || a->out || a->plot || a->profile_out || a->json || a->compare))
             rc = complain(RC_USAGE, "print plans the optimal way, as the printer does, and writes no plan files: drop "
