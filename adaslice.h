@@ -105,7 +105,8 @@
    MESH  adaslice_mesh_load reads binary and ASCII STL, OBJ (polygons fan-
    triangulated, negative indices) and PLY (ascii, binary little and big
    endian; faces of any size; triangle strips) from memory. Zero-area
-   triangles are dropped and counted; NaN/Inf, bad numbers, truncation,
+   triangles are kept (every stage skips them; repair collapses or drops
+   them), a strip's joins are not triangles; NaN/Inf, bad numbers, truncation,
    indices out of range and overflowing counts are errors with distinct codes.
    `scale` converts units (scans are often in metres). adaslice_mesh_weld
    merges vertices with equal coordinates, or within a tolerance, in place
@@ -356,7 +357,6 @@ typedef struct adaslice_mesh {
     size_t triangle_count;
     uint32_t *triangles;        /* three vertex indices per triangle */
     adaslice_format format;     /* what the loader read */
-    size_t degenerate_dropped;  /* zero-area triangles dropped while loading */
     adaslice_allocator allocator;
 } adaslice_mesh;
 
@@ -411,6 +411,9 @@ typedef struct adaslice_mesh_report {
                                     (a one-sided surface cannot be wound) */
     size_t welded_nearby;        /* open-edge vertices merged within the tolerance */
     size_t degenerate_dropped;   /* facets of zero area after welding, dropped */
+    size_t slivers_collapsed;    /* facets of zero area sealing a T-junction (three
+                                    points on a line), collapsed onto their long edge:
+                                    the facet across it split at the middle point */
     size_t flipped_facets;       /* facets turned, to agree with their shell or to face out */
     size_t flipped_shells;       /* shells turned whole to face the way their nesting says */
     double volume;               /* mm^3 enclosed, after repair (open shells: about
@@ -419,9 +422,13 @@ typedef struct adaslice_mesh_report {
                                     at most 12 per facet however many share an edge */
 } adaslice_mesh_report;
 
-/* Repairs a mesh in place as a slicer does on load: welds equal vertices,
-   then vertices on open edges within `tolerance` (cracks between patches);
-   drops facets left with zero area; winds every shell consistently by flood
+/* Repairs a mesh in place as a slicer does on load: welds equal vertices;
+   collapses each zero-area facet whose corners lie on a line (a CAD export's
+   seal of a T-junction, where one facet's edge meets two of the other side's)
+   onto its long edge, splitting the one facet across that edge at the middle
+   corner in its place, so the junction stays closed; then welds vertices on
+   open edges within `tolerance` (cracks between patches); drops facets left
+   with zero area; winds every shell consistently by flood
    fill (keeping the winding of most of its facets); then turns each shell
    whole so that it faces the way its nesting says: a shell inside an even
    number of closed shells (none: the outside of a part) encloses positive
@@ -1338,18 +1345,13 @@ static adaslice_result adaslice__triangle(adaslice__build *b, uint32_t i, uint32
     return ADASLICE_OK;
 }
 
-/* Drops zero-area triangles, since no later stage can give them a normal, and hands
-   the arrays over to the mesh. The vertices of dropped triangles stay. */
+/* Hands the arrays over to the mesh. Zero-area triangles stay: every stage
+   skips them, and repair needs the ones that seal T-junctions; a file of
+   nothing else is empty. */
 static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
 {
     size_t i, kept = 0;
-    for (i = 0; i < b->nt; i++) {
-        const uint32_t *t = b->t + 3 * i;
-        uint32_t *to = b->t + 3 * kept;
-        if (adaslice__zero_area(b->v, t)) continue;
-        to[0] = t[0]; to[1] = t[1]; to[2] = t[2];
-        kept++;
-    }
+    for (i = 0; i < b->nt; i++) kept += !adaslice__zero_area(b->v, b->t + 3 * i);
     if (!kept && b->nt == 1)
         return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: its one triangle has zero area", b->name);
     if (!kept && b->nt)
@@ -1358,9 +1360,8 @@ static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
     if (!kept) return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: no triangles", b->name);
     mesh->vertex_count = b->nv;
     mesh->vertices = b->v;
-    mesh->triangle_count = kept;
+    mesh->triangle_count = b->nt;
     mesh->triangles = b->t;
-    mesh->degenerate_dropped = b->nt - kept;
     mesh->allocator = b->a;
     b->v = NULL;
     b->t = NULL;
@@ -1929,7 +1930,8 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
         if (e->kind == ADASLICE__PLY_FACE) {
             if (j == 0) first = cur;
             else if (j >= 2) res = adaslice__triangle(b, first, prev, cur);
-        } else if (run >= 2) { /* odd triangles of a strip run backwards */
+        } else if (run >= 2 && prev != prev2 && cur != prev && cur != prev2) {
+            /* odd triangles of a strip run backwards; a repeated index joins strips */
             res = run % 2 ? adaslice__triangle(b, prev, prev2, cur) : adaslice__triangle(b, prev2, prev, cur);
         }
         if (res) return res;
@@ -2594,6 +2596,119 @@ static size_t adaslice__drop_degenerate(adaslice_mesh *m)
     return t;
 }
 
+/* A half-edge (sliver 0) or a sliver's long edge (sliver 1: `what` is the
+   facet), keyed by its two vertices, lower first. */
+typedef struct adaslice__edge_key {
+    uint64_t key;
+    uint32_t what, sliver;
+} adaslice__edge_key;
+
+static int adaslice__edge_key_cmp(const void *a, const void *b)
+{
+    const adaslice__edge_key *x = ADASLICE__CAST(const adaslice__edge_key *, a), *y = ADASLICE__CAST(const adaslice__edge_key *, b);
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    if (x->sliver != y->sliver) return x->sliver < y->sliver ? -1 : 1;
+    return x->what < y->what ? -1 : x->what > y->what;
+}
+
+static double adaslice__dist2(const float *v, uint32_t a, uint32_t b)
+{
+    double d = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double x = (double)v[3 * (size_t)a + (size_t)k] - v[3 * (size_t)b + (size_t)k];
+        d += x * x;
+    }
+    return d;
+}
+
+#define ADASLICE__SLIVER_PASSES 16 /* slivers stacked on one edge deeper than this are dropped */
+
+/* Collapses zero-area facets with three distinct corners on a line onto
+   their long edge: where exactly one facet with area is across that edge,
+   it is split at the sliver's middle corner and its second half takes the
+   sliver's place, so the edges the sliver sealed stay shared. Slivers stacked
+   on a sliver wait for the next pass (each pass sorts the edges once). */
+static adaslice_result adaslice__collapse_slivers(adaslice_mesh *m, const adaslice_allocator *al, size_t *collapsed,
+                                                  adaslice_error *err)
+{
+    uint32_t *tri = m->triangles;
+    size_t nt = m->triangle_count, t, n, i, j, done;
+    adaslice__edge_key *keys = NULL;
+    unsigned char *split = NULL;
+    int pass;
+    *collapsed = 0;
+    for (pass = 0; pass < ADASLICE__SLIVER_PASSES; pass++) {
+        for (t = 0; t < nt; t++) {
+            const uint32_t *c = tri + 3 * t;
+            if (c[0] != c[1] && c[1] != c[2] && c[0] != c[2] && adaslice__zero_area(m->vertices, c)) break;
+        }
+        if (t == nt) break; /* no sliver left */
+        if (!keys) {
+            keys = ADASLICE__CAST(adaslice__edge_key *, adaslice__alloc(al, 3 * nt, sizeof *keys));
+            split = ADASLICE__CAST(unsigned char *, adaslice__alloc(al, nt, 1));
+            if (!keys || !split) {
+                adaslice__free(al, keys);
+                adaslice__free(al, split);
+                return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+            }
+        }
+        n = 0;
+        for (t = 0; t < nt; t++) {
+            const uint32_t *c = tri + 3 * t;
+            int k, far = 0;
+            if (!adaslice__zero_area(m->vertices, c)) {
+                for (k = 0; k < 3; k++) {
+                    uint32_t a = c[k], b = c[(k + 1) % 3];
+                    keys[n].key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+                    keys[n].what = (uint32_t)(3 * t + (size_t)k);
+                    keys[n++].sliver = 0;
+                }
+                continue;
+            }
+            if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+            /* the long edge is the one opposite the middle corner */
+            for (k = 1; k < 3; k++)
+                if (adaslice__dist2(m->vertices, c[(k + 1) % 3], c[(k + 2) % 3]) >
+                    adaslice__dist2(m->vertices, c[(far + 1) % 3], c[(far + 2) % 3]))
+                    far = k;
+            {
+                uint32_t a = c[(far + 1) % 3], b = c[(far + 2) % 3];
+                keys[n].key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+                keys[n].what = (uint32_t)t;
+                keys[n++].sliver = 1;
+            }
+        }
+        qsort(keys, n, sizeof *keys, adaslice__edge_key_cmp);
+        memset(split, 0, nt);
+        done = 0;
+        for (i = 0; i < n; i = j) {
+            uint32_t h, f, s, p, q, r, mid;
+            for (j = i + 1; j < n && keys[j].key == keys[i].key; j++) {}
+            /* one facet with area and one sliver: sorted, the facet first */
+            if (j - i != 2 || keys[i].sliver || !keys[i + 1].sliver) continue;
+            h = keys[i].what;
+            f = h / 3;
+            s = keys[i + 1].what;
+            if (split[f] || split[s]) continue;
+            p = tri[h];
+            q = adaslice__he_to(tri, h);
+            r = tri[3 * f + (h % 3 + 2) % 3];
+            mid = tri[3 * s] != p && tri[3 * s] != q ? tri[3 * s]
+                : tri[3 * s + 1] != p && tri[3 * s + 1] != q ? tri[3 * s + 1] : tri[3 * s + 2];
+            tri[3 * f] = p; tri[3 * f + 1] = mid; tri[3 * f + 2] = r;
+            tri[3 * s] = mid; tri[3 * s + 1] = q; tri[3 * s + 2] = r;
+            split[f] = split[s] = 1;
+            done++;
+        }
+        *collapsed += done;
+        if (!done) break;
+    }
+    adaslice__free(al, keys);
+    adaslice__free(al, split);
+    return ADASLICE_OK;
+}
+
 /* Welds the vertices of the open edges of e within `tolerance` of each
    other (the lowest index stays, as adaslice_mesh_weld does); *merged counts
    the moved. */
@@ -2988,6 +3103,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
     memset(&wo, 0, sizeof wo);
     wo.allocator = &al;
     if ((r = adaslice_mesh_weld(m, &wo, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__collapse_slivers(m, &al, &rep.slivers_collapsed, err)) != ADASLICE_OK) return r;
     rep.degenerate_dropped = adaslice__drop_degenerate(m);
     if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
     adaslice_mesh_bounds(m, lo, hi);

@@ -275,7 +275,6 @@ static int profile_model(const plan_args *a, plan_job *j)
         adaslice_mesh_rotate(&mesh, r);
     }
     j->triangles = mesh.triangle_count;
-    j->degenerate = mesh.degenerate_dropped;
     j->format = mesh.format;
     if (j->loaded && (rc = j->loaded(j->loaded_ctx, &mesh)) != RC_OK) {
         free(weights);

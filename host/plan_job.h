@@ -41,7 +41,7 @@ typedef struct plan_args {
 
 typedef struct plan_job {
     const plan_args *args;
-    size_t triangles, degenerate;  /* model only */
+    size_t triangles;              /* model only: after repair */
     adaslice_mesh_report repair;   /* model only: what loading repaired */
     adaslice_format format;
     adaslice_profile profile;

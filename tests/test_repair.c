@@ -320,6 +320,24 @@ static void defects_are_counted(void)
     gen_free(&cut);
 }
 
+/* Zero-area facets sealing T-junctions (a CAD export's) are collapsed onto
+   their long edge, a stack of them too, and the box stays closed with its
+   volume: dropping them left three open edges each. */
+static void slivers_sealing_t_junctions_are_collapsed(void)
+{
+    int middles;
+    for (middles = 1; middles <= 3; middles++) {
+        adaslice_mesh m = gen_tjunction_box(middles);
+        size_t facets = m.triangle_count;
+        adaslice_mesh_report r = repaired(&m);
+        CHECKF(r.open_edges == 0 && r.closed_shells == 1 && r.shells == 1 && r.slivers_collapsed == (size_t)middles &&
+               r.degenerate_dropped == 0 && m.triangle_count == facets && fabs(r.volume - 1000) < 1e-6,
+               "%d middle points: %zu open edges, %zu collapsed, %zu dropped, volume %g", middles, r.open_edges,
+               r.slivers_collapsed, r.degenerate_dropped, r.volume);
+        gen_free(&m);
+    }
+}
+
 /* An open scan wound inward: the shell turns to face out by its volume about
    its own centroid. */
 static void an_open_inside_out_scan_faces_out(void)
@@ -397,5 +415,6 @@ void test_repair(void)
     RUN(defects_are_counted);
     RUN(an_open_inside_out_scan_faces_out);
     RUN(many_facets_on_one_edge_cost_linear_work);
+    RUN(slivers_sealing_t_junctions_are_collapsed);
     RUN(bad_repairs_are_refused);
 }
