@@ -532,6 +532,9 @@ typedef struct adaslice_profile_options {
     size_t memory_limit;                 /* sampled only: bytes of LDI held at once (it is
                                             built in bands of rows); 0: the default */
     const adaslice_allocator *allocator; /* NULL: default */
+    void (*progress)(void *user, double done); /* NULL, or told the share done (0 to 1)
+                                            now and then, and 1 at the end */
+    void *progress_user;
 } adaslice_profile_options;
 
 /* phi[i] belongs to bin i = [z0 + i*bin, z0 + (i+1)*bin). A profile you fill
@@ -3540,6 +3543,9 @@ typedef struct adaslice__raster {
     double slab_lo, slab_hi;
     adaslice__span_fn fn;
     void *ctx;
+    void (*progress)(void *user, double done); /* NULL, or told progress_lo + progress_span * */
+    void *progress_user;                       /* the share of triangles done */
+    double progress_lo, progress_span;
 } adaslice__raster;
 
 static void adaslice__project(adaslice_axis axis, const float *p, double out[3])
@@ -3682,10 +3688,13 @@ static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_m
 static adaslice_result adaslice__raster_mesh(const adaslice__raster *r, const adaslice_mesh *m, adaslice_error *err)
 {
     size_t t;
-    for (t = 0; t < m->triangle_count; t++)
+    for (t = 0; t < m->triangle_count; t++) {
+        if (r->progress && t % 256 == 0)
+            r->progress(r->progress_user, r->progress_lo + r->progress_span * (double)t / (double)m->triangle_count);
         if (adaslice__raster_triangle(r, m, (uint32_t)t))
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "LDI: triangle %zu lies more than 2^21 pixels from the grid", t);
+    }
     return ADASLICE_OK;
 }
 
@@ -3921,11 +3930,13 @@ static void adaslice__rmax_update(adaslice__rmax *r, size_t first, size_t last, 
     level[second] = level[second] < v ? v : level[second];
 }
 
-/* Pushes every level down; level 0 then holds each bin's maximum. */
-static double *adaslice__rmax_finish(adaslice__rmax *r)
+/* Pushes every level down; level 0 then holds each bin's maximum. A tall
+   part's levels are most of a profile's work: they are its progress. */
+static double *adaslice__rmax_finish(adaslice__rmax *r, const adaslice_profile_options *opt)
 {
     int k;
     for (k = r->levels - 1; k > 0; k--) {
+        if (opt->progress) opt->progress(opt->progress_user, 0.1 + 0.9 * (double)(r->levels - 1 - k) / r->levels);
         const double *up = r->t + (size_t)k * r->n;
         double *down = r->t + (size_t)(k - 1) * r->n;
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
@@ -4282,6 +4293,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
                c = mesh->vertices[3 * (size_t)tri[2] + 2];
         double lo = a < b ? a : b, hi = a > b ? a : b, f, g;
         size_t run;
+        if (opt->progress && t % 65536 == 0) opt->progress(opt->progress_user, 0.1 * (double)t / (double)mesh->triangle_count);
         value[t] = adaslice__face_value(mesh, t, opt);
         lo = c < lo ? c : lo;
         hi = c > hi ? c : hi;
@@ -4302,7 +4314,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
             if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
     adaslice__free(&p->allocator, span);
     adaslice__free(&p->allocator, value);
-    return rmax->t ? adaslice__rmax_finish(rmax) : NULL;
+    return rmax->t ? adaslice__rmax_finish(rmax, opt) : NULL;
 }
 
 static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
@@ -4337,6 +4349,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
         adaslice__phi_from_area(profile, tree);
     }
     adaslice__free(&profile->allocator, tree);
+    if (opt.progress) opt.progress(opt.progress_user, 1);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
@@ -4348,6 +4361,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
     return adaslice__profile_exact(mesh, options, NULL, profile, err);
 }
 
+#ifndef ADASLICE_NO_SAMPLED
 /* The pixels of grid g (axis a) that a triangle's spans cover at most, and its rows. */
 static void adaslice__raster_size(const adaslice_mesh *m, size_t t, const adaslice_grid *g, double *pixels, double *rows)
 {
@@ -4365,6 +4379,7 @@ static void adaslice__raster_size(const adaslice_mesh *m, size_t t, const adasli
     /* each row's span is within a pixel of the triangle at either end */
     *pixels = 0.5 * fabs(cross) + 2 * *rows;
 }
+#endif
 
 ADASLICE_DEF adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
                                                        int sampled, adaslice_profile_cost *cost, adaslice_error *err)
@@ -4589,6 +4604,10 @@ static adaslice_result adaslice__sample_axis(adaslice__sampling *s, const adasli
         r.row_end = ldi.grid.height;
         r.fn = adaslice__direct_visit;
         r.ctx = &d;
+        r.progress = opt->progress;
+        r.progress_user = opt->progress_user;
+        r.progress_lo = (double)axis / 3;
+        r.progress_span = 1.0 / 3;
         return adaslice__raster_mesh(&r, mesh, err);
     }
     rc.rows = ADASLICE__CAST(size_t *, adaslice__alloc(al, (size_t)ldi.grid.height, sizeof(size_t)));
@@ -4620,6 +4639,7 @@ static adaslice_result adaslice__sample_axis(adaslice__sampling *s, const adasli
         adaslice__free(al, ldi.samples);
         ldi.samples = NULL;
         row = end;
+        if (opt->progress) opt->progress(opt->progress_user, ((double)axis + (double)row / ldi.grid.height) / 3);
     }
 done:
     adaslice__free(al, rc.rows);
@@ -4681,6 +4701,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         s.inside = inside;
         if (r != ADASLICE_OK) goto done;
     }
+    if (opt.progress) opt.progress(opt.progress_user, 1);
     for (i = 0; i < n; i++) profile->unsampled_bins += !s.reached[i];
     if (max_type) {
         adaslice__fill_unreached(profile->phi, s.reached, n);

@@ -230,8 +230,20 @@ static int curvature_of(const adaslice_mesh *mesh, const adaslice_profile *profi
     return RC_OK;
 }
 
+/* The profile's bar, once it has taken a second: a quick one says nothing. */
+typedef struct profile_bar { progress bar; double started; int shown; } profile_bar;
+
+static void profile_progress(void *user, double done)
+{
+    profile_bar *p = (profile_bar *)user;
+    if (!p->shown && now_ms() - p->started < 1000) return;
+    p->shown = 1;
+    progress_show(&p->bar, (size_t)(100 * done), 100, "% of the profile", NULL);
+}
+
 static int profile_model(const plan_args *a, plan_job *j)
 {
+    profile_bar bar;
     adaslice_profile_options po;
     adaslice_mesh mesh;
     adaslice_error err;
@@ -293,6 +305,10 @@ static int profile_model(const plan_args *a, plan_job *j)
         return rc;
     }
     t0 = now_ms();
+    memset(&bar, 0, sizeof bar);
+    bar.started = t0;
+    po.progress = profile_progress;
+    po.progress_user = &bar;
     r = a->sampler ? adaslice_profile_sampled(&mesh, &po, &j->profile, &err)
                    : adaslice_profile_exact(&mesh, &po, &j->profile, &err);
     free(weights);
