@@ -191,8 +191,10 @@ void units_hint(double tall_mm, char *out, size_t size)
 #define LDI_SAMPLES_LIMIT 4e9
 
 /* RC_OK when the profile of `mesh` fits --memory and, sampled, the LDIs'
-   limit of work; else a complaint naming the figures: said before any work. */
-static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const adaslice_profile_options *po)
+   limit of work; else a complaint naming the figures: said before any work.
+   warn_units: a part over a metre tall that fits is warned about here (slice
+   and print check it against the printer). */
+static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const adaslice_profile_options *po, int warn_units)
 {
     adaslice_profile_cost c;
     adaslice_error err;
@@ -211,6 +213,9 @@ static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const ada
                                  "more than %.2g; --sampler exact, or a lower --res",
                         a->model, c.samples, mesh->triangle_count, c.samples / (double)mesh->triangle_count,
                         LDI_SAMPLES_LIMIT);
+    if (warn_units && *hint)
+        fprintf(stderr, "adaslice: warning: %s: the part is %g mm tall, its profile %s%s\n", a->model, hi[2] - lo[2],
+                size_text(c.bytes, need), hint);
     return RC_OK;
 }
 
@@ -299,7 +304,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     po.bin = a->bin;
     po.resolution = (int)a->resolution;
     po.weights = weights;
-    if ((rc = profile_fits(a, &mesh, &po)) != RC_OK) {
+    if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) {
         free(weights);
         adaslice_mesh_free(&mesh);
         return rc;
