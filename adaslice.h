@@ -4328,6 +4328,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
     int max_type;
 
     if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, err)) != ADASLICE_OK) return r;
+    if (opt.progress) opt.progress(opt.progress_user, 0);
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     if (max_type || opt.weights) {

@@ -591,6 +591,41 @@ static void profile_estimates_bound_what_profiles_hold(void)
     gen_free(&tall);
 }
 
+/* What a profile tells its progress: shares in [0, 1] that never go back,
+   the last 1, for both samplers and an area metric's stored LDI. */
+typedef struct told { int calls, backwards; double last; } told;
+static void tell(void *user, double done)
+{
+    told *t = (told *)user;
+    if (done < t->last || done < 0 || done > 1) t->backwards++;
+    t->last = done;
+    t->calls++;
+}
+
+static void profiles_tell_their_progress(void)
+{
+    adaslice_mesh m = gen_sphere(10, 96, 48, 0);
+    int sampled, metric;
+    for (sampled = 0; sampled < 2; sampled++)
+        for (metric = ADASLICE_METRIC_CUSP; metric <= ADASLICE_METRIC_AREA; metric += 2) {
+            told t = {0, 0, 0};
+            adaslice_profile_options o;
+            adaslice_profile p;
+            adaslice_error e;
+            memset(&o, 0, sizeof o);
+            o.metric = (adaslice_metric)metric;
+            o.resolution = 256;
+            o.progress = tell;
+            o.progress_user = &t;
+            CHECKF((sampled ? adaslice_profile_sampled(&m, &o, &p, &e) : adaslice_profile_exact(&m, &o, &p, &e)) ==
+                   ADASLICE_OK, "%s", e.message);
+            CHECKF(t.calls >= 2 && !t.backwards && t.last == 1, "sampled %d, metric %d: %d calls, %d backwards, last %g",
+                   sampled, metric, t.calls, t.backwards, t.last);
+            adaslice_profile_free(&p);
+        }
+    gen_free(&m);
+}
+
 /* A part in micrometres (100 m tall read as mm) is refused before its
    profile is made, naming the memory it would need, --memory and the units. */
 static void a_part_in_micrometres_is_refused_before_profiling(void)
@@ -651,6 +686,7 @@ void test_input_defects(void)
     RUN(every_option_in_help_is_accepted);
     RUN(help_command_shows_help);
     RUN(profile_estimates_bound_what_profiles_hold);
+    RUN(profiles_tell_their_progress);
     RUN(a_part_in_micrometres_is_refused_before_profiling);
     RUN(an_ldi_of_facets_thousands_deep_is_refused);
     cli_end();
