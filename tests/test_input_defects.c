@@ -591,6 +591,30 @@ static void profile_estimates_bound_what_profiles_hold(void)
     gen_free(&tall);
 }
 
+/* A box whose T-junction a sliver seals, with one more facet of a repeated
+   corner: plan --json counts each once, in its repair object (the loader no
+   longer drops and counts apart), and the box stays closed; the warning says
+   the same in one line. */
+static void zero_area_facets_are_counted_once(void)
+{
+    const char *path = cli_path("tjunction.obj");
+    adaslice_mesh m = gen_tjunction_box(1);
+    cli_result r;
+    m.triangles = (uint32_t *)realloc(m.triangles, (m.triangle_count + 1) * 3 * sizeof(uint32_t));
+    if (!m.triangles) abort();
+    gen_triangle(&m, 0, 0, 1);
+    cli_write_obj(path, &m);
+    gen_free(&m);
+    r = cli_run("plan", path, "--json", NULL);
+    CHECKF(r.status == 0 && cli_count(r.out, "degenerate_dropped") == 1 &&
+           cli_json_number(r.out, "degenerate_dropped") == 1 && cli_json_number(r.out, "slivers_collapsed") == 1 &&
+           cli_json_number(r.out, "open_edges") == 0 && cli_json_number(r.out, "closed_shells") == 1,
+           "exit %d, '%s'", r.status, r.out);
+    CHECKF(cli_one_message(r.err) && strstr(r.err, "1 facet of zero area sealing a T-junction collapsed") &&
+           strstr(r.err, "1 facet of zero area dropped") && !strstr(r.err, "open edge"), "'%s'", r.err);
+    cli_free(&r);
+}
+
 /* What a profile tells its progress: shares in [0, 1] that never go back,
    the last 1, for both samplers and an area metric's stored LDI. */
 typedef struct told { int calls, backwards; double last; } told;
@@ -686,6 +710,7 @@ void test_input_defects(void)
     RUN(every_option_in_help_is_accepted);
     RUN(help_command_shows_help);
     RUN(profile_estimates_bound_what_profiles_hold);
+    RUN(zero_area_facets_are_counted_once);
     RUN(profiles_tell_their_progress);
     RUN(a_part_in_micrometres_is_refused_before_profiling);
     RUN(an_ldi_of_facets_thousands_deep_is_refused);
