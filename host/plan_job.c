@@ -74,7 +74,7 @@ static const struct plan_help { unsigned commands; const char *text; } PLAN_HELP
               "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
               "  --plot FILE         SVG figure of the profile and the layer thickness\n"},
     {FOR_PLAN | FOR_ORIENT, "  --json              print a JSON object instead of the summary\n"},
-    {FOR_PLAN | FOR_ORIENT, "  --memory MB         the most the profile may take   [half the machine's memory]\n"},
+    {FOR_PLAN, "  --memory MB         the most the profile may take   [half the machine's memory]\n"},
     {FOR_PLAN, "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
                "                      curvature on the same profile and print them as in\n"
                "                      the paper's Table 3, with print times, and what optimal\n"
