@@ -72,6 +72,9 @@
                                                 adaslice_profile *profile, adaslice_error *error);
            phi(z) from LDIs along x, y, z (the paper's method)
        void adaslice_profile_free(adaslice_profile *profile);
+       adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                 int sampled, adaslice_profile_cost *cost, adaslice_error *error);
+           the bytes and samples a profile will take, before it does
        adaslice_result adaslice_mean_curvature(const adaslice_mesh *mesh, double *curvature,
                                                const adaslice_surface_options *options, adaslice_error *error);
            |H| per vertex (the weights' raw material)
@@ -178,7 +181,8 @@
    MESH  adaslice_mesh_load reads binary and ASCII STL, OBJ (polygons fan-
    triangulated, negative indices) and PLY (ascii, binary little and big
    endian; faces of any size; triangle strips) from memory. Zero-area
-   triangles are dropped and counted; NaN/Inf, bad numbers, truncation,
+   triangles are kept (every stage skips them; repair collapses or drops
+   them), a strip's joins are not triangles; NaN/Inf, bad numbers, truncation,
    indices out of range and overflowing counts are errors with distinct codes.
    `scale` converts units (scans are often in metres). adaslice_mesh_weld
    merges vertices with equal coordinates, or within a tolerance, in place
@@ -459,7 +463,6 @@ typedef struct adaslice_mesh {
     size_t triangle_count;
     uint32_t *triangles;        /* three vertex indices per triangle */
     adaslice_format format;     /* what the loader read */
-    size_t degenerate_dropped;  /* zero-area triangles dropped while loading */
     adaslice_allocator allocator;
 } adaslice_mesh;
 
@@ -514,15 +517,24 @@ typedef struct adaslice_mesh_report {
                                     (a one-sided surface cannot be wound) */
     size_t welded_nearby;        /* open-edge vertices merged within the tolerance */
     size_t degenerate_dropped;   /* facets of zero area after welding, dropped */
+    size_t slivers_collapsed;    /* facets of zero area sealing a T-junction (three
+                                    points on a line), collapsed onto their long edge:
+                                    the facet across it split at the middle point */
     size_t flipped_facets;       /* facets turned, to agree with their shell or to face out */
     size_t flipped_shells;       /* shells turned whole to face the way their nesting says */
     double volume;               /* mm^3 enclosed, after repair (open shells: about
                                     their centroid) */
+    size_t edge_steps;           /* half-edges met walking the edges: the repair's work,
+                                    at most 12 per facet however many share an edge */
 } adaslice_mesh_report;
 
-/* Repairs a mesh in place as a slicer does on load: welds equal vertices,
-   then vertices on open edges within `tolerance` (cracks between patches);
-   drops facets left with zero area; winds every shell consistently by flood
+/* Repairs a mesh in place as a slicer does on load: welds equal vertices;
+   collapses each zero-area facet whose corners lie on a line (a CAD export's
+   seal of a T-junction, where one facet's edge meets two of the other side's)
+   onto its long edge, splitting the one facet across that edge at the middle
+   corner in its place, so the junction stays closed; then welds vertices on
+   open edges within `tolerance` (cracks between patches); drops facets left
+   with zero area; winds every shell consistently by flood
    fill (keeping the winding of most of its facets); then turns each shell
    whole so that it faces the way its nesting says: a shell inside an even
    number of closed shells (none: the outside of a part) encloses positive
@@ -647,6 +659,9 @@ typedef struct adaslice_profile_options {
     size_t memory_limit;                 /* sampled only: bytes of LDI held at once (it is
                                             built in bands of rows); 0: the default */
     const adaslice_allocator *allocator; /* NULL: default */
+    void (*progress)(void *user, double done); /* NULL, or told the share done (0 to 1)
+                                            now and then, and 1 at the end */
+    void *progress_user;
 } adaslice_profile_options;
 
 /* phi[i] belongs to bin i = [z0 + i*bin, z0 + (i+1)*bin). A profile you fill
@@ -678,6 +693,16 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
                                                       adaslice_profile *profile, adaslice_error *error);
 #endif
 ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile);
+/* What a profile will take, before it is made (exact, or sampled when
+   `sampled`): the most bytes it holds at once, and for the sampled profile
+   its work, the samples its rays take (each a pixel a triangle covers; rays
+   along x one per span), both estimated from above. For a caller's limits. */
+typedef struct adaslice_profile_cost {
+    double bytes;
+    double samples;
+} adaslice_profile_cost;
+ADASLICE_DEF adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                       int sampled, adaslice_profile_cost *cost, adaslice_error *error);
 
 #ifndef ADASLICE_NO_HYBRID
 /* Hybrid planar / contoured slicing for FDM: which faces a contour pass (Z
@@ -1504,18 +1529,13 @@ static adaslice_result adaslice__triangle(adaslice__build *b, uint32_t i, uint32
     return ADASLICE_OK;
 }
 
-/* Drops zero-area triangles, since no later stage can give them a normal, and hands
-   the arrays over to the mesh. The vertices of dropped triangles stay. */
+/* Hands the arrays over to the mesh. Zero-area triangles stay: every stage
+   skips them, and repair needs the ones that seal T-junctions; a file of
+   nothing else is empty. */
 static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
 {
     size_t i, kept = 0;
-    for (i = 0; i < b->nt; i++) {
-        const uint32_t *t = b->t + 3 * i;
-        uint32_t *to = b->t + 3 * kept;
-        if (adaslice__zero_area(b->v, t)) continue;
-        to[0] = t[0]; to[1] = t[1]; to[2] = t[2];
-        kept++;
-    }
+    for (i = 0; i < b->nt; i++) kept += !adaslice__zero_area(b->v, b->t + 3 * i);
     if (!kept && b->nt == 1)
         return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: its one triangle has zero area", b->name);
     if (!kept && b->nt)
@@ -1524,9 +1544,8 @@ static adaslice_result adaslice__finish(adaslice__build *b, adaslice_mesh *mesh)
     if (!kept) return adaslice__fail(b->err, ADASLICE_ERR_EMPTY, 0, 0, "%s: no triangles", b->name);
     mesh->vertex_count = b->nv;
     mesh->vertices = b->v;
-    mesh->triangle_count = kept;
+    mesh->triangle_count = b->nt;
     mesh->triangles = b->t;
-    mesh->degenerate_dropped = b->nt - kept;
     mesh->allocator = b->a;
     b->v = NULL;
     b->t = NULL;
@@ -2095,7 +2114,8 @@ static adaslice_result adaslice__ply_list(adaslice__ply_reader *r, const adaslic
         if (e->kind == ADASLICE__PLY_FACE) {
             if (j == 0) first = cur;
             else if (j >= 2) res = adaslice__triangle(b, first, prev, cur);
-        } else if (run >= 2) { /* odd triangles of a strip run backwards */
+        } else if (run >= 2 && prev != prev2 && cur != prev && cur != prev2) {
+            /* odd triangles of a strip run backwards; a repeated index joins strips */
             res = run % 2 ? adaslice__triangle(b, prev, prev2, cur) : adaslice__triangle(b, prev2, prev, cur);
         }
         if (res) return res;
@@ -2760,6 +2780,119 @@ static size_t adaslice__drop_degenerate(adaslice_mesh *m)
     return t;
 }
 
+/* A half-edge (sliver 0) or a sliver's long edge (sliver 1: `what` is the
+   facet), keyed by its two vertices, lower first. */
+typedef struct adaslice__edge_key {
+    uint64_t key;
+    uint32_t what, sliver;
+} adaslice__edge_key;
+
+static int adaslice__edge_key_cmp(const void *a, const void *b)
+{
+    const adaslice__edge_key *x = ADASLICE__CAST(const adaslice__edge_key *, a), *y = ADASLICE__CAST(const adaslice__edge_key *, b);
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    if (x->sliver != y->sliver) return x->sliver < y->sliver ? -1 : 1;
+    return x->what < y->what ? -1 : x->what > y->what;
+}
+
+static double adaslice__dist2(const float *v, uint32_t a, uint32_t b)
+{
+    double d = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double x = (double)v[3 * (size_t)a + (size_t)k] - v[3 * (size_t)b + (size_t)k];
+        d += x * x;
+    }
+    return d;
+}
+
+#define ADASLICE__SLIVER_PASSES 16 /* slivers stacked on one edge deeper than this are dropped */
+
+/* Collapses zero-area facets with three distinct corners on a line onto
+   their long edge: where exactly one facet with area is across that edge,
+   it is split at the sliver's middle corner and its second half takes the
+   sliver's place, so the edges the sliver sealed stay shared. Slivers stacked
+   on a sliver wait for the next pass (each pass sorts the edges once). */
+static adaslice_result adaslice__collapse_slivers(adaslice_mesh *m, const adaslice_allocator *al, size_t *collapsed,
+                                                  adaslice_error *err)
+{
+    uint32_t *tri = m->triangles;
+    size_t nt = m->triangle_count, t, n, i, j, done;
+    adaslice__edge_key *keys = NULL;
+    unsigned char *split = NULL;
+    int pass;
+    *collapsed = 0;
+    for (pass = 0; pass < ADASLICE__SLIVER_PASSES; pass++) {
+        for (t = 0; t < nt; t++) {
+            const uint32_t *c = tri + 3 * t;
+            if (c[0] != c[1] && c[1] != c[2] && c[0] != c[2] && adaslice__zero_area(m->vertices, c)) break;
+        }
+        if (t == nt) break; /* no sliver left */
+        if (!keys) {
+            keys = ADASLICE__CAST(adaslice__edge_key *, adaslice__alloc(al, 3 * nt, sizeof *keys));
+            split = ADASLICE__CAST(unsigned char *, adaslice__alloc(al, nt, 1));
+            if (!keys || !split) {
+                adaslice__free(al, keys);
+                adaslice__free(al, split);
+                return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+            }
+        }
+        n = 0;
+        for (t = 0; t < nt; t++) {
+            const uint32_t *c = tri + 3 * t;
+            int k, far = 0;
+            if (!adaslice__zero_area(m->vertices, c)) {
+                for (k = 0; k < 3; k++) {
+                    uint32_t a = c[k], b = c[(k + 1) % 3];
+                    keys[n].key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+                    keys[n].what = (uint32_t)(3 * t + (size_t)k);
+                    keys[n++].sliver = 0;
+                }
+                continue;
+            }
+            if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+            /* the long edge is the one opposite the middle corner */
+            for (k = 1; k < 3; k++)
+                if (adaslice__dist2(m->vertices, c[(k + 1) % 3], c[(k + 2) % 3]) >
+                    adaslice__dist2(m->vertices, c[(far + 1) % 3], c[(far + 2) % 3]))
+                    far = k;
+            {
+                uint32_t a = c[(far + 1) % 3], b = c[(far + 2) % 3];
+                keys[n].key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+                keys[n].what = (uint32_t)t;
+                keys[n++].sliver = 1;
+            }
+        }
+        qsort(keys, n, sizeof *keys, adaslice__edge_key_cmp);
+        memset(split, 0, nt);
+        done = 0;
+        for (i = 0; i < n; i = j) {
+            uint32_t h, f, s, p, q, r, mid;
+            for (j = i + 1; j < n && keys[j].key == keys[i].key; j++) {}
+            /* one facet with area and one sliver: sorted, the facet first */
+            if (j - i != 2 || keys[i].sliver || !keys[i + 1].sliver) continue;
+            h = keys[i].what;
+            f = h / 3;
+            s = keys[i + 1].what;
+            if (split[f] || split[s]) continue;
+            p = tri[h];
+            q = adaslice__he_to(tri, h);
+            r = tri[3 * f + (h % 3 + 2) % 3];
+            mid = tri[3 * s] != p && tri[3 * s] != q ? tri[3 * s]
+                : tri[3 * s + 1] != p && tri[3 * s + 1] != q ? tri[3 * s + 1] : tri[3 * s + 2];
+            tri[3 * f] = p; tri[3 * f + 1] = mid; tri[3 * f + 2] = r;
+            tri[3 * s] = mid; tri[3 * s + 1] = q; tri[3 * s + 2] = r;
+            split[f] = split[s] = 1;
+            done++;
+        }
+        *collapsed += done;
+        if (!done) break;
+    }
+    adaslice__free(al, keys);
+    adaslice__free(al, split);
+    return ADASLICE_OK;
+}
+
 /* Welds the vertices of the open edges of e within `tolerance` of each
    other (the lowest index stays, as adaslice_mesh_weld does); *merged counts
    the moved. */
@@ -2909,16 +3042,22 @@ static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adasl
     const uint32_t *tri = m->triangles;
     size_t nt = m->triangle_count, t, head = 0, tail = 0, i;
     uint32_t *mate = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 3 * nt, sizeof(uint32_t)));
-    if (!mate) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+    size_t *uses = ADASLICE__CAST(size_t *, adaslice__alloc(al, e->cap ? e->cap : 1, sizeof(size_t)));
+    if (!mate || !uses) {
+        adaslice__free(al, mate);
+        adaslice__free(al, uses);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "repair: out of memory for %zu facets", nt);
+    }
     memset(mate, 0xff, 3 * nt * sizeof(uint32_t));
     for (i = 0; i < e->cap; i++) {
         uint32_t h = e->slot[i];
-        size_t uses;
         long net;
+        uses[i] = 0;
         if (h == ADASLICE__NONE) continue;
-        adaslice__edge_uses(tri, e, h, &uses, &net);
-        if (uses == 1) mate[h] = ADASLICE__OPEN;
-        if (uses == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
+        adaslice__edge_uses(tri, e, h, &uses[i], &net);
+        rep->edge_steps += uses[i];
+        if (uses[i] == 1) mate[h] = ADASLICE__OPEN;
+        if (uses[i] == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
     }
     memset(s->of, 0xff, nt * sizeof(uint32_t));
     s->count = 0;
@@ -2956,20 +3095,25 @@ static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adasl
     s->start[s->count] = tail;
     /* a shell is closed when it has an even number of facets on each of its
        edges: two on most, more where shells meet (two cubes sharing an
-       edge); a piece cut off by edges of three facets has one there */
+       edge); a piece cut off by edges of three facets has one there. The
+       facets of an edge are counted per shell in one walk and judged in a
+       second (which clears the counts), so an edge of k facets costs 2k, not k^2. */
     for (i = 0; i < s->count; i++) s->closed[i] = 1;
+    memset(mate, 0, s->count * sizeof(uint32_t)); /* now the count per shell */
     for (i = 0; i < e->cap; i++) {
-        uint32_t h = e->slot[i], g, k;
-        if (h == ADASLICE__NONE) continue;
-        if (mate[h] == ADASLICE__OPEN) { s->closed[s->of[h / 3]] = 0; continue; }
-        if (mate[h] != ADASLICE__NONE) continue;
+        uint32_t h = e->slot[i], g;
+        if (h == ADASLICE__NONE || uses[i] == 2) continue;
+        if (uses[i] == 1) { s->closed[s->of[h / 3]] = 0; continue; }
+        for (g = h; g != ADASLICE__NONE; g = e->next[g]) mate[s->of[g / 3]]++;
         for (g = h; g != ADASLICE__NONE; g = e->next[g]) {
-            size_t same = 0;
-            for (k = h; k != ADASLICE__NONE; k = e->next[k]) same += s->of[k / 3] == s->of[g / 3];
-            if (same % 2) s->closed[s->of[g / 3]] = 0;
+            uint32_t q = s->of[g / 3];
+            if (mate[q] % 2) s->closed[q] = 0;
+            mate[q] = 0;
         }
+        rep->edge_steps += 2 * uses[i];
     }
     adaslice__free(al, mate);
+    adaslice__free(al, uses);
     return ADASLICE_OK;
 }
 
@@ -3143,6 +3287,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
     memset(&wo, 0, sizeof wo);
     wo.allocator = &al;
     if ((r = adaslice_mesh_weld(m, &wo, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__collapse_slivers(m, &al, &rep.slivers_collapsed, err)) != ADASLICE_OK) return r;
     rep.degenerate_dropped = adaslice__drop_degenerate(m);
     if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
     adaslice_mesh_bounds(m, lo, hi);
@@ -3223,6 +3368,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
         long net;
         if (e.slot[i] == ADASLICE__NONE) continue;
         adaslice__edge_uses(m->triangles, &e, e.slot[i], &uses, &net);
+        rep.edge_steps += uses;
         rep.open_edges += uses == 1;
         rep.nonmanifold_edges += uses > 2;
     }
@@ -3578,6 +3724,9 @@ typedef struct adaslice__raster {
     double slab_lo, slab_hi;
     adaslice__span_fn fn;
     void *ctx;
+    void (*progress)(void *user, double done); /* NULL, or told progress_lo + progress_span * */
+    void *progress_user;                       /* the share of triangles done */
+    double progress_lo, progress_span;
 } adaslice__raster;
 
 static void adaslice__project(adaslice_axis axis, const float *p, double out[3])
@@ -3720,10 +3869,13 @@ static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_m
 static adaslice_result adaslice__raster_mesh(const adaslice__raster *r, const adaslice_mesh *m, adaslice_error *err)
 {
     size_t t;
-    for (t = 0; t < m->triangle_count; t++)
+    for (t = 0; t < m->triangle_count; t++) {
+        if (r->progress && t % 256 == 0)
+            r->progress(r->progress_user, r->progress_lo + r->progress_span * (double)t / (double)m->triangle_count);
         if (adaslice__raster_triangle(r, m, (uint32_t)t))
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "LDI: triangle %zu lies more than 2^21 pixels from the grid", t);
+    }
     return ADASLICE_OK;
 }
 
@@ -4002,11 +4154,13 @@ static void adaslice__rmax_update(adaslice__rmax *r, size_t first, size_t last, 
     level[second] = level[second] < v ? v : level[second];
 }
 
-/* Pushes every level down; level 0 then holds each bin's maximum. */
-static double *adaslice__rmax_finish(adaslice__rmax *r)
+/* Pushes every level down; level 0 then holds each bin's maximum. A tall
+   part's levels are most of a profile's work: they are its progress. */
+static double *adaslice__rmax_finish(adaslice__rmax *r, const adaslice_profile_options *opt)
 {
     int k;
     for (k = r->levels - 1; k > 0; k--) {
+        if (opt->progress) opt->progress(opt->progress_user, 0.1 + 0.9 * (double)(r->levels - 1 - k) / r->levels);
         const double *up = r->t + (size_t)k * r->n;
         double *down = r->t + (size_t)(k - 1) * r->n;
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
@@ -4225,19 +4379,15 @@ static double adaslice__area_deviation(const double *area, size_t n, size_t i, d
     return fabs(area[j] - area[i]) / (bin * ref);
 }
 
-/* Checks the options and the mesh, sizes the bins and allocates phi (and the
-   areas for area and volume). */
-/* zrange: the used vertices' lowest and highest z when the caller knows them
-   (and has checked the indices), else NULL. */
-static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
-                                               adaslice_profile *profile, adaslice_profile_options *opt,
-                                               const double *zrange, adaslice_error *err)
+/* The options with their defaults, checked, and the bins: *bin_count of
+   them from *z0 to *z1. zrange: the used vertices' lowest and highest z when
+   the caller knows them (and has checked the indices), else NULL. */
+static adaslice_result adaslice__profile_bins(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                              adaslice_profile_options *opt, const double *zrange, size_t *bin_count,
+                                              double *z0, double *z1, adaslice_error *err)
 {
-    adaslice_allocator al;
     double lo[3], hi[3], bins;
-    size_t n, t;
-    if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
-    memset(profile, 0, sizeof *profile);
+    size_t t;
     if (!mesh || !mesh->triangle_count || !mesh->vertices || !mesh->triangles)
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh has no triangles");
     if (options) *opt = *options; else memset(opt, 0, sizeof *opt);
@@ -4276,7 +4426,24 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     if (bins > 2147483646.0)
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "profile: %g bins of %g mm over %g mm is too many",
                               bins, opt->bin, hi[2] - lo[2]);
-    n = (size_t)bins;
+    *bin_count = (size_t)bins;
+    *z0 = lo[2];
+    *z1 = hi[2];
+    return ADASLICE_OK;
+}
+
+/* The same, then phi (and the areas for area and volume) allocated. */
+static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                               adaslice_profile *profile, adaslice_profile_options *opt,
+                                               const double *zrange, adaslice_error *err)
+{
+    adaslice_allocator al;
+    adaslice_result r;
+    double lo, hi;
+    size_t n;
+    if (!profile) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
+    memset(profile, 0, sizeof *profile);
+    if ((r = adaslice__profile_bins(mesh, options, opt, zrange, &n, &lo, &hi, err)) != ADASLICE_OK) return r;
     al = adaslice__allocator(opt->allocator);
     profile->phi = ADASLICE__CAST(double *, adaslice__alloc(&al, n, sizeof(double)));
     if (opt->metric >= ADASLICE_METRIC_AREA)
@@ -4291,8 +4458,8 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     profile->metric = opt->metric;
     profile->bin_count = n;
     profile->bin = opt->bin;
-    profile->z0 = lo[2];
-    profile->height = hi[2] - lo[2];
+    profile->z0 = lo;
+    profile->height = hi - lo;
     profile->allocator = al;
     return ADASLICE_OK;
 }
@@ -4350,6 +4517,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
                c = mesh->vertices[3 * (size_t)tri[2] + 2];
         double lo = a < b ? a : b, hi = a > b ? a : b, f, g;
         size_t run;
+        if (opt->progress && t % 65536 == 0) opt->progress(opt->progress_user, 0.1 * (double)t / (double)mesh->triangle_count);
         value[t] = adaslice__face_value(mesh, t, opt);
         lo = c < lo ? c : lo;
         hi = c > hi ? c : hi;
@@ -4370,7 +4538,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
             if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
     adaslice__free(&p->allocator, span);
     adaslice__free(&p->allocator, value);
-    return rmax->t ? adaslice__rmax_finish(rmax) : NULL;
+    return rmax->t ? adaslice__rmax_finish(rmax, opt) : NULL;
 }
 
 static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
@@ -4384,6 +4552,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
     int max_type;
 
     if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, err)) != ADASLICE_OK) return r;
+    if (opt.progress) opt.progress(opt.progress_user, 0);
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     if (max_type || opt.weights) {
@@ -4405,6 +4574,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
         adaslice__phi_from_area(profile, tree);
     }
     adaslice__free(&profile->allocator, tree);
+    if (opt.progress) opt.progress(opt.progress_user, 1);
     adaslice__ok(err);
     return ADASLICE_OK;
 }
@@ -4414,6 +4584,90 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     adaslice_profile *profile, adaslice_error *err)
 {
     return adaslice__profile_exact(mesh, options, NULL, profile, err);
+}
+
+#ifndef ADASLICE_NO_SAMPLED
+/* The pixels of grid g (axis a) that a triangle's spans cover at most, and its rows. */
+static void adaslice__raster_size(const adaslice_mesh *m, size_t t, const adaslice_grid *g, double *pixels, double *rows)
+{
+    double P[3][3], lo = DBL_MAX, hi = -DBL_MAX, cross;
+    int k;
+    for (k = 0; k < 3; k++) {
+        adaslice__project(g->axis, m->vertices + 3 * (size_t)m->triangles[3 * t + (size_t)k], P[k]);
+        P[k][0] /= g->pitch[0];
+        P[k][1] /= g->pitch[1];
+        lo = P[k][1] < lo ? P[k][1] : lo;
+        hi = P[k][1] > hi ? P[k][1] : hi;
+    }
+    cross = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
+    *rows = hi - lo + 1;
+    /* each row's span is within a pixel of the triangle at either end */
+    *pixels = 0.5 * fabs(cross) + 2 * *rows;
+}
+#endif
+
+ADASLICE_DEF adaslice_result adaslice_profile_estimate(const adaslice_mesh *mesh, const adaslice_profile_options *options,
+                                                       int sampled, adaslice_profile_cost *cost, adaslice_error *err)
+{
+    adaslice_profile_options opt;
+    adaslice_result r;
+    double lo, hi, n, nt, inverse, longest = 1, bytes;
+    size_t bins, t;
+    int max_type, axis;
+    if (!cost) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "profile: no output given");
+    memset(cost, 0, sizeof *cost);
+    if ((r = adaslice__profile_bins(mesh, options, &opt, NULL, &bins, &lo, &hi, err)) != ADASLICE_OK) return r;
+    n = (double)bins;
+    nt = (double)mesh->triangle_count;
+    max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
+    inverse = 1.0 / opt.bin;
+    bytes = 8 * n * (max_type ? 1 : 2); /* phi, areas */
+    if (!sampled) {
+        /* the range-maximum table: a level for each doubling of the longest run of bins */
+        if (max_type || opt.weights) {
+            for (t = 0; t < mesh->triangle_count; t++) {
+                const uint32_t *tri = mesh->triangles + 3 * t;
+                double a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
+                       c = mesh->vertices[3 * (size_t)tri[2] + 2];
+                double run = floor((adaslice__max3(a, b, c) - lo) * inverse) - floor((adaslice__min3(a, b, c) - lo) * inverse) + 1;
+                longest = run > longest ? run : longest;
+            }
+            longest = longest < n ? longest : n;
+            bytes += 16 * nt + 8 * n * (floor(log2(longest)) + 1);
+        }
+        /* the areas' accumulators, and the edges that find an open mesh's gaps */
+        if (!max_type) bytes += 8 * (4 * n + 3) + 48 * nt + 4 * ((double)mesh->vertex_count + 1);
+        cost->bytes = bytes;
+        adaslice__ok(err);
+        return ADASLICE_OK;
+    }
+#ifndef ADASLICE_NO_SAMPLED
+    bytes += 8 * nt + n + (max_type ? 0 : 8 * (n + 1) + (opt.weights ? 8 * n : 0) + 48 * nt +
+                           4 * ((double)mesh->vertex_count + 1));
+    for (axis = ADASLICE_AXIS_X; axis <= ADASLICE_AXIS_Z; axis++) {
+        adaslice_grid g = adaslice_grid_fit(mesh, (adaslice_axis)axis, opt.resolution);
+        double pixels = 0, rows = 0;
+        for (t = 0; t < mesh->triangle_count; t++) {
+            double p, w;
+            adaslice__raster_size(mesh, t, &g, &p, &w);
+            pixels += p;
+            rows += w;
+        }
+        /* rays along x take one sample a span, the others one a pixel */
+        cost->samples += axis == ADASLICE_AXIS_X ? rows : pixels;
+        if (!max_type && axis == ADASLICE_AXIS_Z) {
+            /* the stored LDI: a start per pixel, a count per row, its samples a band at a time */
+            double held = pixels * (double)sizeof(adaslice_sample);
+            bytes += 8 * ((double)g.width * g.height + 1) + 8 * (double)g.height +
+                     (held < (double)opt.memory_limit ? held : (double)opt.memory_limit);
+        }
+    }
+#else
+    (void)axis;
+#endif
+    cost->bytes = bytes;
+    adaslice__ok(err);
+    return ADASLICE_OK;
 }
 
 ADASLICE_DEF void adaslice_fibonacci_directions(size_t n, double *xyz)
@@ -4575,6 +4829,10 @@ static adaslice_result adaslice__sample_axis(adaslice__sampling *s, const adasli
         r.row_end = ldi.grid.height;
         r.fn = adaslice__direct_visit;
         r.ctx = &d;
+        r.progress = opt->progress;
+        r.progress_user = opt->progress_user;
+        r.progress_lo = (double)axis / 3;
+        r.progress_span = 1.0 / 3;
         return adaslice__raster_mesh(&r, mesh, err);
     }
     rc.rows = ADASLICE__CAST(size_t *, adaslice__alloc(al, (size_t)ldi.grid.height, sizeof(size_t)));
@@ -4606,6 +4864,7 @@ static adaslice_result adaslice__sample_axis(adaslice__sampling *s, const adasli
         adaslice__free(al, ldi.samples);
         ldi.samples = NULL;
         row = end;
+        if (opt->progress) opt->progress(opt->progress_user, ((double)axis + (double)row / ldi.grid.height) / 3);
     }
 done:
     adaslice__free(al, rc.rows);
@@ -4667,6 +4926,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
         s.inside = inside;
         if (r != ADASLICE_OK) goto done;
     }
+    if (opt.progress) opt.progress(opt.progress_user, 1);
     for (i = 0; i < n; i++) profile->unsampled_bins += !s.reached[i];
     if (max_type) {
         adaslice__fill_unreached(profile->phi, s.reached, n);

@@ -137,7 +137,7 @@ static void print_summary(const plan_args *a, const plan_job *j)
     const char *eu = unit_suffix(METRICS[a->metric].eps_unit, u);
     if (a->model) {
         printf("model      %s: %s, %zu triangle%s", a->model, format_name(j->format), j->triangles, plural(j->triangles));
-        if (j->degenerate) printf(" (%zu degenerate dropped)", j->degenerate);
+        if (j->repair.degenerate_dropped) printf(" (%zu degenerate dropped)", j->repair.degenerate_dropped);
         printf("\n");
     } else {
         printf("profile    %s: %zu value%s\n", a->profile, pr->bin_count, plural(pr->bin_count));
@@ -233,11 +233,9 @@ static void print_json(const plan_args *a, const plan_job *j)
     json_string(&w, "format", a->model ? format_name(j->format) : NULL);
     if (a->model) {
         json_int(&w, "triangles", (long long)j->triangles);
-        json_int(&w, "degenerate_dropped", (long long)j->degenerate);
         model_report_json(&w, "repair", &j->repair);
     } else {
         json_null(&w, "triangles");
-        json_null(&w, "degenerate_dropped");
         json_null(&w, "repair");
     }
     json_string(&w, "metric", METRIC_NAMES[a->metric]);

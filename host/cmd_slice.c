@@ -464,6 +464,7 @@ int cmd_slice(int argc, char **argv)
     rc = parse_slice(argc, argv, &s, &rest_argc, rest, 1);
     if (rc < 0) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc) rc = parse_plan(rest_argc, rest, &a);
+    a.memory_mb = s.memory_mb; /* slice's --memory bounds the profile too */
     if (!rc && a.help) { slice_usage(stdout); free(rest); return RC_OK; }
     if (!rc && (a.json || a.compare))
         rc = complain(RC_USAGE, "slice writes a job, not a summary: --json and --compare belong to adaslice plan");

@@ -50,7 +50,8 @@ void slice_options_usage(FILE *f)
           "  --svg               also each layer's contours: JOBDIR/layer_00001.svg, ...\n"
           "  --force             write a job directory into a directory that holds other files\n"
           "                      and no manifest.json (files of the job's names are written over)\n"
-          "  --memory MB         the most the masks may take       [half the machine's memory]\n"
+          "  --memory MB         the most the masks or the profile may take\n"
+          "                                                    [half the machine's memory]\n"
           "  --threads N         layers coded at once (the job is the same bytes) [the cores]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
@@ -61,16 +62,6 @@ void slice_options_usage(FILE *f)
     }
 }
 
-
-/* Physical memory, MB (10^6 bytes); 4096 where the system does not say. */
-static double machine_memory_mb(void)
-{
-#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
-    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
-    if (pages > 0 && size > 0) return (double)pages * size / 1e6;
-#endif
-    return 4096;
-}
 
 int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **rest, int need_dir)
 {
@@ -248,14 +239,6 @@ double layer_masks_bytes(const slice_args *s, int buffers)
            buffers * (image + coding);
 }
 
-/* "14.3 GB", "512 MB" */
-static const char *size_text(double bytes, char out[32])
-{
-    if (bytes >= 1e9) snprintf(out, 32, "%.3g GB", bytes / 1e9);
-    else snprintf(out, 32, "%.0f MB", bytes / 1e6);
-    return out;
-}
-
 int layer_masks_check(const slice_args *s, int buffers)
 {
     double need = layer_masks_bytes(s, buffers), limit = s->memory_mb * 1e6;
@@ -268,12 +251,6 @@ int layer_masks_check(const slice_args *s, int buffers)
                     buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
-/* Models come in metres or micrometres as well as millimetres, and the file
-   does not say which: a part under a millimetre each way, or over a metre
-   tall, was most likely read in the wrong unit. */
-#define UNITS_SMALL_MM 1.0
-#define UNITS_TALL_MM 1000.0
-
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
 {
     adaslice_grid g;
@@ -283,9 +260,7 @@ int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
     tall = hi[2] - lo[2];
     most = hi[0] - lo[0] > hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
     if (tall > most) most = tall;
-    if (tall > UNITS_TALL_MM)
-        snprintf(hint, sizeof hint, "; a model in micrometres? --scale 0.001 reads it in millimetres, %g mm tall",
-                 tall / 1000);
+    units_hint(tall, hint, sizeof hint);
     /* the default printer's height too: the job is for it, and a part taller
        than it builds would be sliced to the last layer for nothing */
     if (s->preset && tall > s->preset->z_max)

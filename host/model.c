@@ -14,15 +14,16 @@ static void item(char *buf, size_t size, size_t count, const char *one, const ch
     snprintf(buf + used, size - used, "%s%zu %s", used ? ", " : "", count, count == 1 ? one : many);
 }
 
-static void warn_repairs(const char *path, const adaslice_mesh *mesh, const adaslice_mesh_report *r)
+static void warn_repairs(const char *path, const adaslice_mesh_report *r)
 {
     char fixed[512] = "", left[512] = "";
     item(fixed, sizeof fixed, r->flipped_facets, "facet turned", "facets turned");
     item(fixed, sizeof fixed, r->flipped_shells, "shell turned whole to face the way its nesting says",
          "shells turned whole to face the way their nesting says");
     item(fixed, sizeof fixed, r->welded_nearby, "vertex of a crack welded", "vertices of cracks welded");
-    item(fixed, sizeof fixed, r->degenerate_dropped + mesh->degenerate_dropped, "facet of zero area dropped",
-         "facets of zero area dropped");
+    item(fixed, sizeof fixed, r->slivers_collapsed, "facet of zero area sealing a T-junction collapsed onto its long edge",
+         "facets of zero area sealing T-junctions collapsed onto their long edges");
+    item(fixed, sizeof fixed, r->degenerate_dropped, "facet of zero area dropped", "facets of zero area dropped");
     item(left, sizeof left, r->open_edges, "open edge (masks and areas close each layer's gaps)",
          "open edges (masks and areas close each layer's gaps)");
     item(left, sizeof left, r->nonmanifold_edges, "edge of three or more facets", "edges of three or more facets");
@@ -45,7 +46,7 @@ int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mes
         adaslice_mesh_free(mesh);
         return complain(RC_FAIL, "%s: %s", path, err.message);
     }
-    warn_repairs(path, mesh, &r);
+    warn_repairs(path, &r);
     if (report) *report = r;
     return RC_OK;
 }
@@ -60,6 +61,7 @@ void model_report_json(json_writer *w, const char *key, const adaslice_mesh_repo
     json_int(w, "inconsistent_edges", (long long)r->inconsistent_edges);
     json_int(w, "welded_nearby", (long long)r->welded_nearby);
     json_int(w, "degenerate_dropped", (long long)r->degenerate_dropped);
+    json_int(w, "slivers_collapsed", (long long)r->slivers_collapsed);
     json_int(w, "flipped_facets", (long long)r->flipped_facets);
     json_int(w, "flipped_shells", (long long)r->flipped_shells);
     json_number(w, "volume_mm3", r->volume);

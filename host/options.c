@@ -7,6 +7,16 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+
+double machine_memory_mb(void)
+{
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && size > 0) return (double)pages * size / 1e6;
+#endif
+    return 4096;
+}
 
 /* The value after option argv[*i]; NULL, said so, if there is none. */
 static const char *value_of(int argc, char **argv, int *i)

@@ -27,4 +27,7 @@ int name_option(int argc, char **argv, int *i, const char *const *names, int cou
 int numbers_option(int argc, char **argv, int *i, char sep, int n, const char *form, double *out);
 /* The same test without an option around it: 1 if text is n numbers. */
 int parse_numbers(const char *text, char sep, int n, double *out);
+/* Physical memory, MB (10^6 bytes); 4096 where the system does not say:
+   half of it is what --memory allows unless told. */
+double machine_memory_mb(void);
 #endif

@@ -74,6 +74,7 @@ static const struct plan_help { unsigned commands; const char *text; } PLAN_HELP
               "  --profile-out FILE  the profile as CSV: z,phi (z: bin centre)\n"
               "  --plot FILE         SVG figure of the profile and the layer thickness\n"},
     {FOR_PLAN | FOR_ORIENT, "  --json              print a JSON object instead of the summary\n"},
+    {FOR_PLAN, "  --memory MB         the most the profile may take   [half the machine's memory]\n"},
     {FOR_PLAN, "  --compare           plan coarsest, optimal, greedy, finest and (for a MODEL)\n"
                "                      curvature on the same profile and print them as in\n"
                "                      the paper's Table 3, with print times, and what optimal\n"
@@ -134,6 +135,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--sharp")) rc = number_option(argc, argv, &i, 1, &a->sharp);
         else if (!strcmp(o, "--budget")) rc = count_option(argc, argv, &i, UINT32_MAX, &a->budget);
         else if (!strcmp(o, "--res")) rc = count_option(argc, argv, &i, 65536, &a->resolution);
+        else if (!strcmp(o, "--memory")) rc = number_option(argc, argv, &i, 0, &a->memory_mb);
         else if (!strcmp(o, "--orient")) rc = orient_option(argc, argv, &i, a);
         else if (!strcmp(o, "--sampler")) rc = name_option(argc, argv, &i, SAMPLER_NAMES, 2, "exact or ldi", &sampler);
         else if (!strcmp(o, "--metric"))
@@ -147,6 +149,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else return complain(RC_USAGE, "unknown option %s (see adaslice %s --help)", o, cmd);
     }
     if (rc || (rc = weights_check(&a->weights))) return rc;
+    if (!a->memory_mb) a->memory_mb = machine_memory_mb() / 2;
     if (uniform) {
         if (method >= 0 || bounds) return complain(RC_USAGE, "--uniform %g sets the method and both bounds: leave out --method, --tmin and --tmax", uniform);
         method = ADASLICE_METHOD_FINEST;
@@ -177,6 +180,49 @@ int parse_plan(int argc, char **argv, plan_args *a)
     return RC_OK;
 }
 
+
+void units_hint(double tall_mm, char *out, size_t size)
+{
+    *out = 0;
+    if (tall_mm > UNITS_TALL_MM)
+        snprintf(out, size, "; a model in micrometres? --scale 0.001 reads it in millimetres, %g mm tall",
+                 tall_mm / 1000);
+}
+
+/* More samples than this the LDIs do not take: about 12 s of rasterising
+   (3.6e8 samples a second); a mesh of 200,000 facets at the default
+   resolution takes under 1e8, one whose facets lie thousands deep (a fan
+   wound round and round) 1e11. */
+#define LDI_SAMPLES_LIMIT 4e9
+
+/* RC_OK when the profile of `mesh` fits --memory and, sampled, the LDIs'
+   limit of work; else a complaint naming the figures: said before any work.
+   warn_units: a part over a metre tall that fits is warned about here (slice
+   and print check it against the printer). */
+static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const adaslice_profile_options *po, int warn_units)
+{
+    adaslice_profile_cost c;
+    adaslice_error err;
+    double lo[3], hi[3], bin = po->bin ? po->bin : ADASLICE_DEFAULT_BIN;
+    char need[32], limit[32], hint[160];
+    if (adaslice_profile_estimate(mesh, po, a->sampler, &c, &err) != ADASLICE_OK) return library_error(&err);
+    adaslice_mesh_bounds(mesh, lo, hi);
+    units_hint(hi[2] - lo[2], hint, sizeof hint);
+    if (c.bytes > a->memory_mb * 1e6)
+        return complain(RC_FAIL, "%s: its profile needs %s (%.0f bins of %g mm over %g mm), more than --memory %s%s; "
+                                 "or a larger --bin",
+                        a->model, size_text(c.bytes, need), ceil((hi[2] - lo[2]) / bin), bin, hi[2] - lo[2],
+                        size_text(a->memory_mb * 1e6, limit), hint);
+    if (a->sampler && c.samples > LDI_SAMPLES_LIMIT)
+        return complain(RC_FAIL, "%s: its LDIs would take %.2g samples (%zu facets, on average %.0f pixels each), "
+                                 "more than %.2g; --sampler exact, or a lower --res",
+                        a->model, c.samples, mesh->triangle_count, c.samples / (double)mesh->triangle_count,
+                        LDI_SAMPLES_LIMIT);
+    if (warn_units && *hint)
+        fprintf(stderr, "adaslice: warning: %s: the part is %g mm tall, its profile %s%s\n", a->model, hi[2] - lo[2],
+                size_text(c.bytes, need), hint);
+    return RC_OK;
+}
 
 /* k per bin of the profile of `mesh`, for the curvature method; RC_OK or a
    complaint made. */
@@ -238,8 +284,20 @@ static int profile_planar_parts(const plan_args *a, plan_job *j, const adaslice_
     return RC_OK;
 }
 
+/* The profile's bar, once it has taken a second: a quick one says nothing. */
+typedef struct profile_bar { progress bar; double started; int shown; } profile_bar;
+
+static void profile_progress(void *user, double done)
+{
+    profile_bar *p = (profile_bar *)user;
+    if (!p->shown && now_ms() - p->started < 1000) return;
+    p->shown = 1;
+    progress_show(&p->bar, (size_t)(100 * done), 100, "% of the profile", NULL);
+}
+
 static int profile_model(const plan_args *a, plan_job *j)
 {
+    profile_bar bar;
     adaslice_profile_options po;
     adaslice_mesh mesh;
     adaslice_error err;
@@ -283,7 +341,6 @@ static int profile_model(const plan_args *a, plan_job *j)
         adaslice_mesh_rotate(&mesh, r);
     }
     j->triangles = mesh.triangle_count;
-    j->degenerate = mesh.degenerate_dropped;
     j->format = mesh.format;
     if (j->loaded && (rc = j->loaded(j->loaded_ctx, &mesh)) != RC_OK) {
         free(weights);
@@ -296,7 +353,16 @@ static int profile_model(const plan_args *a, plan_job *j)
     po.bin = a->bin;
     po.resolution = (int)a->resolution;
     po.weights = weights;
+    if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) {
+        free(weights);
+        adaslice_mesh_free(&mesh);
+        return rc;
+    }
     t0 = now_ms();
+    memset(&bar, 0, sizeof bar);
+    bar.started = t0;
+    po.progress = profile_progress;
+    po.progress_user = &bar;
     if (a->hybrid && (rc = profile_planar_parts(a, j, &mesh, &po, &weights)) != RC_OK) {
         free(weights);
         adaslice_mesh_free(&mesh);

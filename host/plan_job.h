@@ -30,6 +30,7 @@ typedef struct plan_args {
     uint32_t eps_units;            /* printer units for the optimal plan (print), 0: fine */
     int sampler;                   /* 0: exact, 1: LDI */
     size_t resolution;             /* LDI pixels across the largest extent */
+    double memory_mb;              /* --memory: what the profile may take (slice: and the masks) */
     int orient;                    /* ORIENT_*: --orient X,Y,Z or best */
     double orient_up[3];           /* ORIENT_GIVEN: the direction to turn up */
     const char *out, *profile_out, *plot;
@@ -42,7 +43,7 @@ typedef struct plan_args {
 
 typedef struct plan_job {
     const plan_args *args;
-    size_t triangles, degenerate;  /* model only */
+    size_t triangles;              /* model only: after repair */
     adaslice_mesh_report repair;   /* model only: what loading repaired */
     adaslice_format format;
     adaslice_profile profile;
@@ -103,4 +104,12 @@ int plan_uniform_no_worse(const adaslice_profile *profile, const adaslice_plan *
 int plan_orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t count, double alpha,
                        adaslice_direction_score **scores, size_t *minima, size_t *minima_count);
 void job_free(plan_job *j);
+/* Models come in metres or micrometres as well as millimetres, and the file
+   does not say which: a part under a millimetre each way, or over a metre
+   tall, was most likely read in the wrong unit. */
+#define UNITS_SMALL_MM 1.0
+#define UNITS_TALL_MM 1000.0
+/* "; a model in micrometres? --scale 0.001 ..." for a part over UNITS_TALL_MM
+   tall, else "": the tail of a message. */
+void units_hint(double tall_mm, char *out, size_t size);
 #endif

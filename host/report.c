@@ -61,6 +61,13 @@ void format_duration(char *out, size_t size, double s)
     else snprintf(out, size, "%ld h %02ld min", m / 60, m % 60);
 }
 
+const char *size_text(double bytes, char out[32])
+{
+    if (bytes >= 1e9) snprintf(out, 32, "%.3g GB", bytes / 1e9);
+    else snprintf(out, 32, "%.0f MB", bytes / 1e6);
+    return out;
+}
+
 double now_ms(void)
 {
     struct timespec ts;

@@ -26,6 +26,8 @@ enum { QUOTE_BYTES = 40, QUOTE_SIZE = 4 * QUOTE_BYTES + 4 };
 const char *quote_text(char out[QUOTE_SIZE], const char *text, size_t n);
 /* A print's duration as people say it: "1 h 23 min", "12 min", "40 s". */
 void format_duration(char *out, size_t size, double seconds);
+/* "14.3 GB", "512 MB" */
+const char *size_text(double bytes, char out[32]);
 /* A monotonic clock, ms. */
 double now_ms(void);
 

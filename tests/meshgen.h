@@ -191,6 +191,34 @@ static inline adaslice_mesh gen_heightfield(int nx, int ny, double x0, double y0
     return m;
 }
 
+/* The box [0,10]^3 as a CAD export writes it with a T-junction on top: the
+   top's left half ends in the edge A-B (x = 5), its right half meets that line
+   at `middles` more points M1..Mk, and zero-area slivers (A, M1, B),
+   (M1, M2, B), ... seal the gap, each on the long edge of the one before, the
+   first on A-B. Closed and wound outward only through the slivers. */
+static inline adaslice_mesh gen_tjunction_box(int middles)
+{
+    adaslice_mesh m = gen_alloc((size_t)(11 + middles), (size_t)(18 + 2 * middles));
+    uint32_t b0 = gen_vertex(&m, 0, 0, 0), b1 = gen_vertex(&m, 10, 0, 0), b2 = gen_vertex(&m, 10, 10, 0),
+             b3 = gen_vertex(&m, 0, 10, 0), t0 = gen_vertex(&m, 0, 0, 10), t1 = gen_vertex(&m, 10, 0, 10),
+             t2 = gen_vertex(&m, 10, 10, 10), t3 = gen_vertex(&m, 0, 10, 10), a = gen_vertex(&m, 5, 0, 10),
+             b = gen_vertex(&m, 5, 10, 10), c = gen_vertex(&m, 8, 5, 10), p[34];
+    int i;
+    p[0] = a;
+    for (i = 1; i <= middles && i < 32; i++) p[i] = gen_vertex(&m, 5, 10.0 * i / (middles + 1), 10);
+    p[middles + 1] = b;
+    gen_triangle(&m, b0, b2, b1); gen_triangle(&m, b0, b3, b2);             /* bottom */
+    gen_triangle(&m, b3, b0, t0); gen_triangle(&m, b3, t0, t3);             /* x = 0 */
+    gen_triangle(&m, b1, b2, t2); gen_triangle(&m, b1, t2, t1);             /* x = 10 */
+    gen_triangle(&m, b0, b1, t1); gen_triangle(&m, b0, t1, a); gen_triangle(&m, b0, a, t0); /* y = 0 */
+    gen_triangle(&m, b2, b3, t3); gen_triangle(&m, b2, t3, b); gen_triangle(&m, b2, b, t2); /* y = 10 */
+    gen_triangle(&m, t0, a, b); gen_triangle(&m, t0, b, t3);                /* the top's left half */
+    gen_triangle(&m, a, t1, c); gen_triangle(&m, t1, t2, c); gen_triangle(&m, c, t2, b);
+    for (i = 0; i <= middles; i++) gen_triangle(&m, p[i], c, p[i + 1]);    /* its right half */
+    for (i = 1; i <= middles; i++) gen_triangle(&m, p[i - 1], p[i], b);     /* the slivers */
+    return m;
+}
+
 /* dst gets src's triangles appended (src is left alone). */
 static inline void gen_append(adaslice_mesh *dst, const adaslice_mesh *src)
 {

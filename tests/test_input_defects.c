@@ -537,6 +537,166 @@ static void help_command_shows_help(void)
     cli_free(&a);
 }
 
+/* ------------------------------------------------------------ 3: memory and work before the work */
+
+/* An allocator that keeps the most bytes held at once. */
+typedef struct held { size_t now, most; } held;
+static void *held_alloc(void *user, size_t size)
+{
+    held *h = (held *)user;
+    size_t *p = (size_t *)malloc(size + sizeof(size_t) * 2);
+    if (!p) return NULL;
+    p[0] = size;
+    h->now += size;
+    if (h->now > h->most) h->most = h->now;
+    return p + 2;
+}
+static void held_free(void *user, void *q)
+{
+    size_t *p = q ? (size_t *)q - 2 : NULL;
+    if (!p) return;
+    ((held *)user)->now -= p[0];
+    free(p);
+}
+
+/* adaslice_profile_estimate is an upper bound of what each profile holds at
+   once (as an allocator counts it), and not a loose one: within 4x. */
+static void profile_estimates_bound_what_profiles_hold(void)
+{
+    adaslice_mesh m = gen_sphere(10, 48, 24, 0), tall = gen_box(0, 0, 0, 3, 3, 200);
+    const adaslice_mesh *meshes[2];
+    int k, metric, sampled;
+    meshes[0] = &m;
+    meshes[1] = &tall;
+    for (k = 0; k < 2; k++)
+        for (metric = ADASLICE_METRIC_CUSP; metric <= ADASLICE_METRIC_VOLUME; metric++)
+            for (sampled = 0; sampled < 2; sampled++) {
+                held h = {0, 0};
+                adaslice_allocator al = {held_alloc, held_free, &h};
+                adaslice_profile_options o;
+                adaslice_profile_cost c;
+                adaslice_profile p;
+                adaslice_error e;
+                memset(&o, 0, sizeof o);
+                o.metric = (adaslice_metric)metric;
+                o.resolution = 256;
+                o.allocator = &al;
+                CHECKF(adaslice_profile_estimate(meshes[k], &o, sampled, &c, &e) == ADASLICE_OK, "%s", e.message);
+                CHECKF((sampled ? adaslice_profile_sampled(meshes[k], &o, &p, &e)
+                                : adaslice_profile_exact(meshes[k], &o, &p, &e)) == ADASLICE_OK, "%s", e.message);
+                CHECKF((double)h.most <= c.bytes && c.bytes <= 4.0 * (double)h.most,
+                       "mesh %d, metric %d, sampled %d: held %zu bytes, estimated %.0f", k, metric, sampled, h.most,
+                       c.bytes);
+                adaslice_profile_free(&p);
+            }
+    gen_free(&m);
+    gen_free(&tall);
+}
+
+/* A box whose T-junction a sliver seals, with one more facet of a repeated
+   corner: plan --json counts each once, in its repair object (the loader no
+   longer drops and counts apart), and the box stays closed; the warning says
+   the same in one line. */
+static void zero_area_facets_are_counted_once(void)
+{
+    const char *path = cli_path("tjunction.obj");
+    adaslice_mesh m = gen_tjunction_box(1);
+    cli_result r;
+    m.triangles = (uint32_t *)realloc(m.triangles, (m.triangle_count + 1) * 3 * sizeof(uint32_t));
+    if (!m.triangles) abort();
+    gen_triangle(&m, 0, 0, 1);
+    cli_write_obj(path, &m);
+    gen_free(&m);
+    r = cli_run("plan", path, "--json", NULL);
+    CHECKF(r.status == 0 && cli_count(r.out, "degenerate_dropped") == 1 &&
+           cli_json_number(r.out, "degenerate_dropped") == 1 && cli_json_number(r.out, "slivers_collapsed") == 1 &&
+           cli_json_number(r.out, "open_edges") == 0 && cli_json_number(r.out, "closed_shells") == 1,
+           "exit %d, '%s'", r.status, r.out);
+    CHECKF(cli_one_message(r.err) && strstr(r.err, "1 facet of zero area sealing a T-junction collapsed") &&
+           strstr(r.err, "1 facet of zero area dropped") && !strstr(r.err, "open edge"), "'%s'", r.err);
+    cli_free(&r);
+}
+
+/* What a profile tells its progress: shares in [0, 1] that never go back,
+   the last 1, for both samplers and an area metric's stored LDI. */
+typedef struct told { int calls, backwards; double last; } told;
+static void tell(void *user, double done)
+{
+    told *t = (told *)user;
+    if (done < t->last || done < 0 || done > 1) t->backwards++;
+    t->last = done;
+    t->calls++;
+}
+
+static void profiles_tell_their_progress(void)
+{
+    adaslice_mesh m = gen_sphere(10, 96, 48, 0);
+    int sampled, metric;
+    for (sampled = 0; sampled < 2; sampled++)
+        for (metric = ADASLICE_METRIC_CUSP; metric <= ADASLICE_METRIC_AREA; metric += 2) {
+            told t = {0, 0, 0};
+            adaslice_profile_options o;
+            adaslice_profile p;
+            adaslice_error e;
+            memset(&o, 0, sizeof o);
+            o.metric = (adaslice_metric)metric;
+            o.resolution = 256;
+            o.progress = tell;
+            o.progress_user = &t;
+            CHECKF((sampled ? adaslice_profile_sampled(&m, &o, &p, &e) : adaslice_profile_exact(&m, &o, &p, &e)) ==
+                   ADASLICE_OK, "%s", e.message);
+            CHECKF(t.calls >= 2 && !t.backwards && t.last == 1, "sampled %d, metric %d: %d calls, %d backwards, last %g",
+                   sampled, metric, t.calls, t.backwards, t.last);
+            adaslice_profile_free(&p);
+        }
+    gen_free(&m);
+}
+
+/* A part in micrometres (100 m tall read as mm) is refused before its
+   profile is made, naming the memory it would need, --memory and the units. */
+static void a_part_in_micrometres_is_refused_before_profiling(void)
+{
+    const char *path = cli_path("tall.obj");
+    static const char *const samplers[] = {"exact", "ldi"};
+    int i;
+    cli_write(path, "v 0 0 0\nv 20000 0 0\nv 0 20000 0\nv 0 0 100000\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    for (i = 0; i < 2; i++) {
+        cli_result r = cli_run("plan", path, "--sampler", samplers[i], "--memory", "300", NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, path) && strstr(r.err, "--memory 300 MB") &&
+               strstr(r.err, "50000000 bins") && strstr(r.err, "--scale 0.001") && !*r.out,
+               "%s: exit %d, '%s'", samplers[i], r.status, r.err);
+        cli_free(&r);
+    }
+}
+
+/* One OBJ face of 5,000 references round a pyramid: its fan is facets
+   lying a thousand deep, which rays along x, y and z would meet 1e10 times
+   (tens of seconds, minutes at 50,000); the LDI sampler refuses it, naming
+   the exact sampler and --res, and the exact one profiles it. */
+static void an_ldi_of_facets_thousands_deep_is_refused(void)
+{
+    const char *path = cli_path("fan.obj");
+    char *obj = (char *)malloc(100 + 2 * 5000), *last;
+    size_t n = 0;
+    int i;
+    cli_result r;
+    if (!obj) abort();
+    n += (size_t)sprintf(obj, "v 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\nv 5 5 10\nf 1");
+    for (i = 1; i < 5000; i++) n += (size_t)sprintf(obj + n, " %d", 2 + i % 4);
+    sprintf(obj + n, "\n");
+    cli_write(path, obj);
+    free(obj);
+    r = cli_run("plan", path, "--sampler", "ldi", NULL);
+    last = strrchr(r.err, '\n');
+    while (last && last > r.err && last[-1] != '\n') last--;
+    CHECKF(r.status == 1 && last && strstr(last, path) && strstr(last, "samples") && strstr(last, "--sampler exact") &&
+           strstr(last, "--res") && !*r.out, "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", path, NULL);
+    CHECKF(r.status == 0, "exact: exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+}
+
 void test_input_defects(void)
 {
     if (!cli_begin("adaslice-input")) return;
@@ -551,5 +711,10 @@ void test_input_defects(void)
     RUN(binary_file_content_is_escaped);
     RUN(every_option_in_help_is_accepted);
     RUN(help_command_shows_help);
+    RUN(profile_estimates_bound_what_profiles_hold);
+    RUN(zero_area_facets_are_counted_once);
+    RUN(profiles_tell_their_progress);
+    RUN(a_part_in_micrometres_is_refused_before_profiling);
+    RUN(an_ldi_of_facets_thousands_deep_is_refused);
     cli_end();
 }

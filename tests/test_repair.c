@@ -320,6 +320,24 @@ static void defects_are_counted(void)
     gen_free(&cut);
 }
 
+/* Zero-area facets sealing T-junctions (a CAD export's) are collapsed onto
+   their long edge, a stack of them too, and the box stays closed with its
+   volume: dropping them left three open edges each. */
+static void slivers_sealing_t_junctions_are_collapsed(void)
+{
+    int middles;
+    for (middles = 1; middles <= 3; middles++) {
+        adaslice_mesh m = gen_tjunction_box(middles);
+        size_t facets = m.triangle_count;
+        adaslice_mesh_report r = repaired(&m);
+        CHECKF(r.open_edges == 0 && r.closed_shells == 1 && r.shells == 1 && r.slivers_collapsed == (size_t)middles &&
+               r.degenerate_dropped == 0 && m.triangle_count == facets && fabs(r.volume - 1000) < 1e-6,
+               "%d middle points: %zu open edges, %zu collapsed, %zu dropped, volume %g", middles, r.open_edges,
+               r.slivers_collapsed, r.degenerate_dropped, r.volume);
+        gen_free(&m);
+    }
+}
+
 /* An open scan wound inward: the shell turns to face out by its volume about
    its own centroid. */
 static void an_open_inside_out_scan_faces_out(void)
@@ -332,6 +350,44 @@ static void an_open_inside_out_scan_faces_out(void)
     r = repaired(&s);
     CHECK(r.open_edges > 0 && r.closed_shells == 0 && r.flipped_shells == 1 && r.volume > 0);
     gen_free(&s);
+}
+
+/* Repair's work grows with the facets, not with the square of the facets on
+   one edge: edge_steps counts the facets met walking edges, which a repair
+   judging each facet of an edge against every other made quadratic (an OBJ
+   face of 200,000 references loaded in a minute). */
+static void many_facets_on_one_edge_cost_linear_work(void)
+{
+    enum { PAGES = 20000, REFS = 200000 };
+    adaslice_mesh book = gen_alloc(2 + PAGES, PAGES), fan;
+    adaslice_mesh_report r;
+    adaslice_error e;
+    size_t i, n = 0;
+    char *obj = (char *)malloc(64 + 2 * REFS);
+    uint32_t a = gen_vertex(&book, 0, 0, 0), b = gen_vertex(&book, 0, 0, 1);
+    /* a book: every page a triangle on the spine a-b, each its own shell */
+    for (i = 0; i < PAGES; i++) {
+        double t = 2 * M_PI * (double)i / PAGES;
+        gen_triangle(&book, a, b, gen_vertex(&book, cos(t), sin(t), 0.5));
+    }
+    r = repaired(&book);
+    CHECKF(r.nonmanifold_edges == 1 && r.open_edges == 2 * PAGES && r.shells == PAGES && r.closed_shells == 0,
+           "%zu non-manifold, %zu open edges, %zu shells", r.nonmanifold_edges, r.open_edges, r.shells);
+    CHECKF(r.edge_steps <= 12 * (size_t)PAGES, "%zu steps for %d facets", r.edge_steps, PAGES);
+    gen_free(&book);
+    /* one OBJ face going round a pyramid's five vertices: its fan is four
+       facets over and over, each of its eight edges shared by thousands */
+    if (!obj) abort();
+    n += (size_t)sprintf(obj, "v 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\nv 5 5 10\nf 1");
+    for (i = 1; i < REFS; i++) n += (size_t)sprintf(obj + n, " %d", 2 + (int)(i % 4));
+    CHECKF(adaslice_mesh_load(obj, n, NULL, &fan, &e) == ADASLICE_OK, "%s", e.message);
+    CHECK(fan.triangle_count == REFS - 2);
+    r = repaired(&fan);
+    CHECKF(r.nonmanifold_edges == 8 && r.open_edges == 0, "%zu non-manifold, %zu open edges", r.nonmanifold_edges,
+           r.open_edges);
+    CHECKF(r.edge_steps <= 12 * fan.triangle_count, "%zu steps for %zu facets", r.edge_steps, fan.triangle_count);
+    adaslice_mesh_free(&fan);
+    free(obj);
 }
 
 static void bad_repairs_are_refused(void)
@@ -358,5 +414,7 @@ void test_repair(void)
     RUN(separate_and_intersecting_boxes_face_out);
     RUN(defects_are_counted);
     RUN(an_open_inside_out_scan_faces_out);
+    RUN(many_facets_on_one_edge_cost_linear_work);
+    RUN(slivers_sealing_t_junctions_are_collapsed);
     RUN(bad_repairs_are_refused);
 }

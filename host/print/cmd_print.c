@@ -828,6 +828,7 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     } else if (!rc) {
         const char *kind;
         if (!(rc = parse_plan(rest2_argc, rest2, a)) && a->help) { print_usage(stdout); rc = -1; }
+        a->memory_mb = s->memory_mb; /* print's --memory bounds the profile too */
         if (!rc && (kind = job_file_kind(a->model)) != NULL)
             rc = complain(RC_USAGE, "print %s: a %s job file is for a printer's own firmware; adaslice print takes a MODEL (STL, "
                                     "OBJ or PLY) or a JOBDIR (adaslice slice MODEL -o DIR)", a->model, kind);
