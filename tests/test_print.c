@@ -5,6 +5,7 @@
    log (tests/zcheck.h) and the host's --report. */
 #define _XOPEN_SOURCE 700 /* posix_openpt, ptsname */
 #include "cli_run.h"
+#include "wait.h"
 #include "zcheck.h"
 #include "print_report.h"
 #include "../adaslice.h"
@@ -383,7 +384,6 @@ static void print_survives_a_lost_link(void)
 }
 
 static int second_host_status(const char *port, uint8_t type, link_status *out);
-static void sleep_ms(long ms);
 static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max);
 
 /* UV-on periods in the simulator's log so far. */
@@ -492,44 +492,6 @@ static size_t nth_show_from_end(const sim_log *l, size_t shows_from_end)
         if (l->ev[k].kind == ZEV_SHOW && l->ev[k].value >= 0 && ++seen == shows_from_end) return k;
     }
     return 0;
-}
-
-static void sleep_ms(long ms) { struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L}; nanosleep(&ts, NULL); }
-
-static double seconds_now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + t.tv_nsec / 1e9;
-}
-
-/* Waits (up to 12 s) until the simulator's log shows n exposures begun. */
-static int wait_for_exposures(const char *log_path, int n)
-{
-    int i;
-    for (i = 0; i < 600; i++) {
-        char *log = read_whole_text(log_path), *at;
-        int lit = 0;
-        for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
-        free(log);
-        if (lit >= n) return 1;
-        sleep_ms(20);
-    }
-    return 0;
-}
-
-/* The exit status of pid within `seconds` (killed and -1 if it has not). */
-static int wait_exit(pid_t pid, double seconds)
-{
-    double t0 = seconds_now();
-    int st;
-    while (seconds_now() - t0 < seconds) {
-        if (waitpid(pid, &st, WNOHANG) == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-        sleep_ms(5);
-    }
-    kill(pid, SIGKILL);
-    waitpid(pid, &st, 0);
-    return -1;
 }
 
 /* The print of these tests on `port` and `extra` arguments in the background,

@@ -10,6 +10,7 @@
    masks.rle: the host's own claims take no part. */
 #define _XOPEN_SOURCE 700
 #include "cli_run.h"
+#include "wait.h"
 #include "print_report.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
@@ -303,15 +304,6 @@ static int stop_sim(child *c)
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-static void sleep_ms(long ms) { struct timespec t = {ms / 1000, (ms % 1000) * 1000000L}; nanosleep(&t, NULL); }
-
-static double seconds_now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + t.tv_nsec / 1e9;
-}
-
 /* The CRC-32 of each layer's mask in JOB/masks.rle (the job's own record),
    and the display. */
 typedef struct job_crcs { unsigned w, h, bits, layers; uint32_t *crc; } job_crcs;
@@ -563,22 +555,6 @@ static void wrong_screen_is_refused(void)
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 
-/* Waits (up to 12 s) until the log shows n exposures begun. */
-static int wait_for_exposures(const char *log_path, unsigned n)
-{
-    int i;
-    for (i = 0; i < 600; i++) {
-        size_t m;
-        char *log = (char *)read_whole_file(log_path, &m), *at;
-        unsigned lit = 0;
-        if (log) { log[m] = 0; for (at = log; (at = strstr(at, " uv 1")) != NULL; at++) lit++; }
-        free(log);
-        if (lit >= n) return 1;
-        sleep_ms(20);
-    }
-    return 0;
-}
-
 static pid_t print_in_background(const char *job, const char *port, const char *spec, const char *out_path)
 {
     pid_t pid;
@@ -592,19 +568,6 @@ static pid_t print_in_background(const char *job, const char *port, const char *
         _exit(127);
     }
     return pid;
-}
-
-static int wait_exit(pid_t pid, double seconds)
-{
-    double t0 = seconds_now();
-    int st;
-    while (seconds_now() - t0 < seconds) {
-        if (waitpid(pid, &st, WNOHANG) == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-        sleep_ms(5);
-    }
-    kill(pid, SIGKILL);
-    waitpid(pid, &st, 0);
-    return -1;
 }
 
 /* Ctrl-C mid-print: paused (exit 3), the screen dark, no light after it;
