@@ -244,7 +244,7 @@ double layer_masks_bytes(const slice_args *s, int buffers)
     double image = bits == 8 ? w * h : (w + 7) / 8 * h;
     /* the directory's coding at worst: the mask code's bound and the PNG's filtered rows and output */
     double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h);
-    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0) +
+    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0) +
            buffers * (image + coding);
 }
 
@@ -264,7 +264,7 @@ int layer_masks_check(const slice_args *s, int buffers)
     return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s, %d layer%s in flight), "
                               "more than --memory %s",
                     s->width, s->height, s->supersample, size_text(need, a),
-                    size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0), b),
+                    size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0), b),
                     buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
