@@ -867,6 +867,8 @@ typedef struct adaslice_masker {
                                     differences whose prefix sums are the covered fractions */
     uint32_t *extent;            /* per pixel row: the cells touched [0, 1] and the
                                     image's non-zero bytes [2, 3], as [from, to) */
+    uint32_t *touched;           /* per pixel row, a bit for each cell touched */
+    unsigned char bit_at[32];    /* de Bruijn: a word's lowest bit times 0x077CB531, top 5 bits -> its index */
     float *fractions;            /* the options' */
     unsigned char grey[257];     /* coverage -> grey level */
     long long lit_rays;          /* rays inside: lit * s * s */
@@ -6159,12 +6161,12 @@ ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int s
 {
     /* as adaslice_masker_init allocates: the image; a winding per ray (and
        a bit for envelope and core) and a coverage per pixel when
-       anti-aliased, or for an anti-aliased section the cells and the rows'
-       extents; and three words per triangle */
+       anti-aliased, or for an anti-aliased section the cells, a bit for
+       each and the rows' extents; and three words per triangle */
     double s = supersample > 1 ? supersample : 1, pixels = (double)width * height, bytes;
     int exact = s > 1 && slice_at < ADASLICE_SLICE_ENVELOPE;
     bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
-    if (exact) bytes += ((double)width + 1) * height * sizeof(float) + 4.0 * height * sizeof(uint32_t);
+    if (exact) bytes += ((double)width + 1) * height * sizeof(float) + (4.0 + width / 32 + 1) * height * sizeof(uint32_t);
     else bytes += pixels * s * s * (sizeof(int16_t) + 1.0 / 8) + (s > 1 ? pixels * sizeof(uint16_t) : 0);
     return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
@@ -6181,6 +6183,7 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->coverage);
     adaslice__free(&al, mk->cells);
     adaslice__free(&al, mk->extent);
+    adaslice__free(&al, mk->touched);
     adaslice__free(&al, mk->seg);
     adaslice__free(&al, mk->cross);
     adaslice__free(&al, mk->changed);
@@ -6257,10 +6260,14 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
         /* an anti-aliased section: its exact coverage, from the section's edges */
         mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, pixels + (size_t)grid->height, sizeof(float)));
         mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)grid->height, sizeof(uint32_t)));
+        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, ((size_t)grid->width / 32 + 1) * (size_t)grid->height,
+                                                                 sizeof(uint32_t)));
         mk->fractions = options ? options->fractions : NULL;
-        if (!mk->cells || !mk->extent) goto nomem;
+        if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
         memset(mk->cells, 0, (pixels + (size_t)grid->height) * sizeof(float));
         memset(mk->extent, 0, 4 * (size_t)grid->height * sizeof(uint32_t));
+        memset(mk->touched, 0, ((size_t)grid->width / 32 + 1) * (size_t)grid->height * sizeof(uint32_t));
+        for (k = 0; k < 32; k++) mk->bit_at[(uint32_t)(0x077CB531u << k) >> 27] = (unsigned char)k;
     } else {
         /* sections need no winding per ray */
         if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
@@ -6510,12 +6517,14 @@ static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segmen
    every pixel after. Kept as differences, d[c] += h (1 - f) and
    d[c + 1] += h f, a prefix sum along the row gives every pixel's
    integral; pieces left of the grid count at its left edge. */
-static void adaslice__cover_cell(float *d, uint32_t *ext, long c, double h, double f)
+static void adaslice__cover_cell(float *d, uint32_t *bits, uint32_t *ext, long c, double h, double f)
 {
     if (f < 0) f = 0;
     if (f > 1) f = 1;
     d[c] += (float)(h * (1 - f));
     d[c + 1] += (float)(h * f);
+    bits[c >> 5] |= 1u << (c & 31);
+    bits[(c + 1) >> 5] |= 1u << ((c + 1) & 31);
     if ((uint32_t)c < ext[0] || ext[1] == 0) ext[0] = (uint32_t)c;
     if ((uint32_t)c + 2 > ext[1]) ext[1] = (uint32_t)c + 2;
 }
@@ -6525,25 +6534,25 @@ static void adaslice__cover_piece(adaslice_masker *mk, long r, double xa, double
 {
     long width = mk->grid.width, c;
     float *d = mk->cells + (size_t)r * ((size_t)width + 1);
-    uint32_t *ext = mk->extent + 4 * (size_t)r;
+    uint32_t *ext = mk->extent + 4 * (size_t)r, *bits = mk->touched + (size_t)r * ((size_t)width / 32 + 1);
     double h = ya - yb, x0 = xa < xb ? xa : xb, x1 = xa < xb ? xb : xa, u, v;
     if (h == 0 || x0 >= (double)width) return;
     if (x1 == x0) {
         c = x0 < 0 ? 0 : (long)x0;
-        adaslice__cover_cell(d, ext, c, h, x0 - (double)c);
+        adaslice__cover_cell(d, bits, ext, c, h, x0 - (double)c);
         return;
     }
     /* split where it crosses pixel columns, each part's height in proportion */
     u = x0;
     if (u < 0) {
         v = x1 < 0 ? x1 : 0;
-        adaslice__cover_cell(d, ext, 0, h * (v - u) / (x1 - x0), 0);
+        adaslice__cover_cell(d, bits, ext, 0, h * (v - u) / (x1 - x0), 0);
         u = v;
     }
     while (u < x1 && u < (double)width) {
         c = (long)u;
         v = (double)(c + 1) < x1 ? (double)(c + 1) : x1;
-        adaslice__cover_cell(d, ext, c, h * (v - u) / (x1 - x0), 0.5 * (u + v) - (double)c);
+        adaslice__cover_cell(d, bits, ext, c, h * (v - u) / (x1 - x0), 0.5 * (u + v) - (double)c);
         u = v;
     }
 }
@@ -6572,47 +6581,64 @@ static void adaslice__cover_edge(adaslice_masker *mk, const double *p)
     }
 }
 
-/* The section's edges into grey: each row's prefix sums between the cells
-   it touched, the constant winding after them spread as one run; the rows'
-   previous grey cleared first. The covered fraction is the integral of the
-   winding clamped to [0, 1], rounded to s*s + 1 levels. */
+/* Pixels [from, to) of row r covered `f`, at `level`. */
+static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from, size_t to, double f, int level, size_t *first,
+                                     size_t *end)
+{
+    size_t c;
+    if (mk->fractions)
+        for (c = from; c < to; c++) mk->fractions[r * (size_t)mk->grid.width + c] = (float)f;
+    if (!level || to <= from) return 0;
+    memset(mk->image + r * mk->stride + from, mk->grey[level], to - from);
+    if (from < *first) *first = from;
+    *end = to;
+    return (long long)level * (long long)(to - from);
+}
+
+/* The section's edges into grey: each row's prefix sums at the cells it
+   touched (found a word of bits at a time), the level between them spread
+   as runs; the rows' previous grey cleared first. The covered fraction is
+   the integral of the winding clamped to [0, 1], rounded to s*s + 1 levels. */
 static void adaslice__fill_coverage(adaslice_masker *mk, size_t segments)
 {
-    size_t k, width = (size_t)mk->grid.width, r, rows = (size_t)mk->grid.height;
+    size_t k, width = (size_t)mk->grid.width, words = width / 32 + 1, r, rows = (size_t)mk->grid.height;
     double levels = (double)mk->supersample * mk->supersample;
     long long lit = 0;
     for (k = 0; k < segments; k++) adaslice__cover_edge(mk, mk->seg + 4 * k);
     for (r = 0; r < rows; r++) {
-        uint32_t *ext = mk->extent + 4 * r;
+        uint32_t *ext = mk->extent + 4 * r, *bits = mk->touched + r * words;
         unsigned char *img = mk->image + r * mk->stride;
         float *d = mk->cells + r * (width + 1), *fr = mk->fractions ? mk->fractions + r * width : NULL;
-        size_t c, from = ext[0], to = ext[1] > width ? width : ext[1], first = width, end = 0;
-        double sum = 0, f;
+        size_t w, at = 0, first = width, end = 0;
+        double sum = 0, f = 0;
         int level = 0;
         if (fr) memset(fr, 0, width * sizeof(float));
         if (ext[3] > ext[2]) memset(img + ext[2], 0, ext[3] - ext[2]);
-        if (ext[1] == 0) { ext[2] = ext[3] = 0; continue; }
-        for (c = from; c < to; c++) {
-            sum += d[c];
-            d[c] = 0;
-            f = sum < 0 ? 0 : sum > 1 ? 1 : sum;
-            level = (int)(f * levels + 0.5);
-            if (fr) fr[c] = (float)f;
-            if (!level) continue;
-            img[c] = mk->grey[level];
-            lit += level;
-            if (c < first) first = c;
-            end = c + 1;
+        ext[2] = ext[3] = 0;
+        if (ext[1] == 0) continue;
+        for (w = ext[0] / 32; w <= (ext[1] - 1) / 32; w++) {
+            while (bits[w]) {
+                uint32_t low = bits[w] & (0u - bits[w]);
+                size_t c = w * 32 + mk->bit_at[(uint32_t)(low * 0x077CB531u) >> 27];
+                bits[w] ^= low;
+                /* the pixels since the last cell keep its level */
+                lit += adaslice__cover_run(mk, r, at, c, f, level, &first, &end);
+                sum += d[c];
+                d[c] = 0;
+                if (c == width) { at = width; break; }
+                f = sum < 0 ? 0 : sum > 1 ? 1 : sum;
+                level = (int)(f * levels + 0.5);
+                if (fr) fr[c] = (float)f;
+                if (level) {
+                    img[c] = mk->grey[level];
+                    lit += level;
+                    if (c < first) first = c;
+                    end = c + 1;
+                }
+                at = c + 1;
+            }
         }
-        if (ext[1] > width) d[width] = 0;
-        else if (level && to < width) {
-            /* past the last cell the winding holds: whole pixels */
-            memset(img + to, mk->grey[level], width - to);
-            if (fr) for (c = to; c < width; c++) fr[c] = (float)f;
-            lit += (long long)level * (long long)(width - to);
-            if (to < first) first = to;
-            end = width;
-        }
+        lit += adaslice__cover_run(mk, r, at, width, f, level, &first, &end);
         ext[0] = ext[1] = 0;
         ext[2] = (uint32_t)(first < end ? first : 0);
         ext[3] = (uint32_t)end;
