@@ -863,11 +863,13 @@ typedef struct adaslice_masker {
     size_t active_count;
     int16_t *winding;            /* per ray */
     uint16_t *coverage;          /* per pixel, s > 1, envelope and core */
-    float *cells;                /* s > 1, a section's rule: per pixel row, width + 1
+    uint32_t box[4];             /* the mesh's footprint in pixels (first column, first row,
+                                    columns, rows): only there are cells */
+    float *cells;                /* s > 1, a section's rule: per row of the box, columns + 1
                                     differences whose prefix sums are the covered fractions */
-    uint32_t *extent;            /* per pixel row: the cells touched [0, 1] and the
-                                    image's non-zero bytes [2, 3], as [from, to) */
-    uint32_t *touched;           /* per pixel row, a bit for each cell touched */
+    uint32_t *extent;            /* per row of the box: the cells touched [0, 1] and the
+                                    image's non-zero bytes [2, 3], as [from, to) in it */
+    uint32_t *touched;           /* per row of the box, a bit for each cell touched */
     unsigned char bit_at[32];    /* de Bruijn: a word's lowest bit times 0x077CB531, top 5 bits -> its index */
     float *fractions;            /* the options' */
     unsigned char grey[257];     /* coverage -> grey level */
@@ -6257,16 +6259,34 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
         mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
     if (s > 1 && mk->slice_at < ADASLICE_SLICE_ENVELOPE) {
-        /* an anti-aliased section: its exact coverage, from the section's edges */
-        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, pixels + (size_t)grid->height, sizeof(float)));
-        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)grid->height, sizeof(uint32_t)));
-        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, ((size_t)grid->width / 32 + 1) * (size_t)grid->height,
-                                                                 sizeof(uint32_t)));
+        /* an anti-aliased section: its exact coverage, from the section's
+           edges, which stay within the mesh's box (a large display's cells
+           cost their first touch) */
+        double lo[3], hi[3], box[4];
+        size_t cells, words;
+        adaslice_mesh_bounds(mesh, lo, hi);
+        box[0] = floor((lo[0] - grid->origin[0]) / grid->pitch[0]);
+        box[1] = floor((lo[1] - grid->origin[1]) / grid->pitch[1]);
+        box[2] = ceil((hi[0] - grid->origin[0]) / grid->pitch[0]) + 1;
+        box[3] = ceil((hi[1] - grid->origin[1]) / grid->pitch[1]) + 1;
+        for (k = 0; k < 4; k++) {
+            double most = k & 1 ? grid->height : grid->width;
+            box[k] = box[k] < 0 ? 0 : box[k] > most ? most : box[k];
+        }
+        mk->box[0] = (uint32_t)box[0];
+        mk->box[1] = (uint32_t)box[1];
+        mk->box[2] = (uint32_t)(box[2] - box[0]);
+        mk->box[3] = (uint32_t)(box[3] - box[1]);
+        cells = ((size_t)mk->box[2] + 1) * mk->box[3] + 1;
+        words = ((size_t)mk->box[2] / 32 + 1) * mk->box[3] + 1;
+        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, cells, sizeof(float)));
+        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)mk->box[3] + 1, sizeof(uint32_t)));
+        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, words, sizeof(uint32_t)));
         mk->fractions = options ? options->fractions : NULL;
         if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
-        memset(mk->cells, 0, (pixels + (size_t)grid->height) * sizeof(float));
-        memset(mk->extent, 0, 4 * (size_t)grid->height * sizeof(uint32_t));
-        memset(mk->touched, 0, ((size_t)grid->width / 32 + 1) * (size_t)grid->height * sizeof(uint32_t));
+        memset(mk->cells, 0, cells * sizeof(float));
+        memset(mk->extent, 0, (4 * (size_t)mk->box[3] + 1) * sizeof(uint32_t));
+        memset(mk->touched, 0, words * sizeof(uint32_t));
         for (k = 0; k < 32; k++) mk->bit_at[(uint32_t)(0x077CB531u << k) >> 27] = (unsigned char)k;
     } else {
         /* sections need no winding per ray */
@@ -6532,7 +6552,7 @@ static void adaslice__cover_cell(float *d, uint32_t *bits, uint32_t *ext, long c
 /* The piece of an edge within pixel row r, from (xa, ya) to (xb, yb). */
 static void adaslice__cover_piece(adaslice_masker *mk, long r, double xa, double ya, double xb, double yb)
 {
-    long width = mk->grid.width, c;
+    long width = (long)mk->box[2], c;
     float *d = mk->cells + (size_t)r * ((size_t)width + 1);
     uint32_t *ext = mk->extent + 4 * (size_t)r, *bits = mk->touched + (size_t)r * ((size_t)width / 32 + 1);
     double h = ya - yb, x0 = xa < xb ? xa : xb, x1 = xa < xb ? xb : xa, u, v;
@@ -6557,19 +6577,19 @@ static void adaslice__cover_piece(adaslice_masker *mk, long r, double xa, double
     }
 }
 
-/* An edge from (x0, y0) to (x1, y1), mm, cut at the pixel rows it crosses.
-   Each cut point is computed from the edge's own ends, one expression for
-   both rows that share it. */
+/* An edge from (x0, y0) to (x1, y1), mm, cut at the pixel rows it crosses,
+   in pixels from the box's corner. Each cut point is computed from the
+   edge's own ends, one expression for both rows that share it. */
 static void adaslice__cover_edge(adaslice_masker *mk, const double *p)
 {
     const adaslice_grid *g = &mk->grid;
-    double x0 = (p[0] - g->origin[0]) / g->pitch[0], y0 = (p[1] - g->origin[1]) / g->pitch[1];
-    double x1 = (p[2] - g->origin[0]) / g->pitch[0], y1 = (p[3] - g->origin[1]) / g->pitch[1];
-    double ylo = y0 < y1 ? y0 : y1, yhi = y0 < y1 ? y1 : y0, ya, yb, xa, xb;
+    double x0 = (p[0] - g->origin[0]) / g->pitch[0] - mk->box[0], y0 = (p[1] - g->origin[1]) / g->pitch[1] - mk->box[1];
+    double x1 = (p[2] - g->origin[0]) / g->pitch[0] - mk->box[0], y1 = (p[3] - g->origin[1]) / g->pitch[1] - mk->box[1];
+    double ylo = y0 < y1 ? y0 : y1, yhi = y0 < y1 ? y1 : y0, ya, yb, xa, xb, rows = (double)mk->box[3];
     long r, r0, r1;
-    if (!(yhi > ylo) || yhi <= 0 || ylo >= (double)g->height) return;
+    if (!(yhi > ylo) || yhi <= 0 || ylo >= rows) return;
     r0 = ylo < 0 ? 0 : (long)ylo;
-    r1 = yhi >= (double)g->height ? g->height - 1 : (long)ceil(yhi) - 1;
+    r1 = yhi >= rows ? (long)rows - 1 : (long)ceil(yhi) - 1;
     for (r = r0; r <= r1; r++) {
         double lo = (double)r > ylo ? (double)r : ylo, hi = (double)(r + 1) < yhi ? (double)(r + 1) : yhi;
         if (!(hi > lo)) continue;
@@ -6581,15 +6601,15 @@ static void adaslice__cover_edge(adaslice_masker *mk, const double *p)
     }
 }
 
-/* Pixels [from, to) of row r covered `f`, at `level`. */
+/* Pixels [from, to) of the box's row r covered `f`, at `level`. */
 static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from, size_t to, double f, int level, size_t *first,
                                      size_t *end)
 {
-    size_t c;
+    size_t c, at = (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0];
     if (mk->fractions)
-        for (c = from; c < to; c++) mk->fractions[r * (size_t)mk->grid.width + c] = (float)f;
+        for (c = from; c < to; c++) mk->fractions[at + c] = (float)f;
     if (!level || to <= from) return 0;
-    memset(mk->image + r * mk->stride + from, mk->grey[level], to - from);
+    memset(mk->image + (r + mk->box[1]) * mk->stride + mk->box[0] + from, mk->grey[level], to - from);
     if (from < *first) *first = from;
     *end = to;
     return (long long)level * (long long)(to - from);
@@ -6601,18 +6621,18 @@ static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from,
    the integral of the winding clamped to [0, 1], rounded to s*s + 1 levels. */
 static void adaslice__fill_coverage(adaslice_masker *mk, size_t segments)
 {
-    size_t k, width = (size_t)mk->grid.width, words = width / 32 + 1, r, rows = (size_t)mk->grid.height;
+    size_t k, width = mk->box[2], words = width / 32 + 1, r, rows = mk->box[3];
     double levels = (double)mk->supersample * mk->supersample;
     long long lit = 0;
     for (k = 0; k < segments; k++) adaslice__cover_edge(mk, mk->seg + 4 * k);
+    if (mk->fractions) memset(mk->fractions, 0, (size_t)mk->grid.width * (size_t)mk->grid.height * sizeof(float));
     for (r = 0; r < rows; r++) {
         uint32_t *ext = mk->extent + 4 * r, *bits = mk->touched + r * words;
-        unsigned char *img = mk->image + r * mk->stride;
-        float *d = mk->cells + r * (width + 1), *fr = mk->fractions ? mk->fractions + r * width : NULL;
+        unsigned char *img = mk->image + (r + mk->box[1]) * mk->stride + mk->box[0];
+        float *d = mk->cells + r * (width + 1), *fr = mk->fractions ? mk->fractions + (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0] : NULL;
         size_t w, at = 0, first = width, end = 0;
         double sum = 0, f = 0;
         int level = 0;
-        if (fr) memset(fr, 0, width * sizeof(float));
         if (ext[3] > ext[2]) memset(img + ext[2], 0, ext[3] - ext[2]);
         ext[2] = ext[3] = 0;
         if (ext[1] == 0) continue;
