@@ -148,8 +148,9 @@ static void rays_through_edges_light_exactly_once(void)
     gen_free(&box);
 }
 
-/* 8-bit masks: grey = 255 * covered rays / s^2, so their sum is the covered
-   area; a pixel deep inside is 255, far outside 0. */
+/* 8-bit masks: grey = 255 * k / s^2, k the covered fraction in s^2 levels,
+   so their sum is the covered area to half a level a pixel; a pixel deep
+   inside is 255, far outside 0. */
 static void antialiased_masks_cover_the_area(void)
 {
     adaslice_mesh m = gen_cylinder(5, 4, 256, 0);
