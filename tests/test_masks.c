@@ -302,13 +302,17 @@ static void check_exact_coverage(const char *what, const adaslice_mesh *m, const
 }
 
 /* A UV sphere's section between its rings, on pixels a third and a seventh
-   off centre, at --aa 4 and 2. */
+   off centre, at --aa 4 and 2; then on a display that cuts off its left and
+   top (the winding of the part left of the display still counts). */
 static void exact_coverage_of_a_sphere_section(void)
 {
     adaslice_mesh m = gen_sphere(2, 48, 24, 0);
     adaslice_grid g = plate_around(&m, 0.1, 0.1, 48, 46);
     check_exact_coverage("sphere at z 1.3, aa 4", &m, &g, 1.3, 4, 0);
     check_exact_coverage("sphere at z 3.41, aa 2", &m, &g, 3.41, 2, 0);
+    g.origin[0] += 1.5;
+    g.origin[1] -= 1.2;
+    check_exact_coverage("sphere cut off by the display, aa 4", &m, &g, 2.2, 4, 0);
     gen_free(&m);
 }
 
