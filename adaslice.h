@@ -329,7 +329,10 @@
    below the height is positive (overlapping shells stay lit); where an open or
    badly wound mesh leaves a ray unbalanced it must be positive counted from
    above too, so no column is ever lit above the part. supersample s > 1 gives
-   8-bit masks from s x s rays per pixel. Memory: 2 bytes per ray.
+   8-bit masks of s*s + 1 levels: at a height, each pixel's covered fraction
+   of the section measured exactly (signed area and cover per edge pixel, as
+   font rasterisers do), over a layer's range (envelope, core) s x s rays per
+   pixel. Memory: 2 bytes per ray; 4 per pixel for an anti-aliased section.
    adaslice_masker_layer takes a layer's range and the options' slice_at:
    the section at its middle (default; dimensionally right on average, but a
    layer t thick drops a feature thinner than t/2 and undersizes a face
@@ -1005,6 +1008,10 @@ typedef struct adaslice_mask_options {
     double bin;                          /* bottom and top cut at the centre of the first
                                             and last bin of this size, mm; 0:
                                             ADASLICE_DEFAULT_BIN */
+    float *fractions;                    /* NULL, or width x height floats (rows from the
+                                            grid's row 0): s > 1 and a section's rule, each
+                                            mask also leaves every pixel's covered fraction
+                                            here, before it is rounded to a grey level */
 } adaslice_mask_options;
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -1021,10 +1028,23 @@ typedef struct adaslice_mask_options {
    part's only between each chord and the missing surface. The areas of the
    profiles follow the same rule. Such a mesh costs a sort of its section's
    row crossings per layer instead of the incremental sweep.
-   With supersample s > 1 each pixel holds s*s rays and the mask is 8-bit
-   grey: 255 * (rays lit) / (s*s), rounded. Memory: 2 bytes per ray, plus 2
-   per pixel when s > 1, plus the image; envelope and core a bit per ray
-   more, the spans of a layer's range and a row's crossings. */
+   With s > 1 the mask is 8-bit grey in s*s + 1 levels: 255 * k / (s*s),
+   rounded, k the covered fraction of the pixel times s*s, rounded. A
+   section's rule (middle, bottom, top) measures that fraction exactly, as
+   font rasterisers do: the section's edges, cut from the facets, add their
+   signed area and cover to the pixels they cross, and a prefix sum along
+   each row gives the integral of the winding number over each pixel, clamped
+   to [0, 1]. That is the area where the winding is positive wherever a
+   pixel's winding takes two neighbouring values (any shells that do not
+   overlap, holes, slivers); where the boundaries of overlapping shells cross
+   inside one pixel (0, 1 and 2 in it) it over-counts that pixel by at most
+   the overlap inside it, never under. The cost is the section's edge
+   pixels and a pass over each row the part meets. Envelope and core read
+   s x s rays per pixel by their rule instead: 255 * (rays lit) / (s*s).
+   Memory: 1-bit, envelope and core 2 bytes per ray, plus 2 per pixel when
+   s > 1, plus the image; envelope and core a bit per ray more, the spans of
+   a layer's range and a row's crossings. A section's rule with s > 1: the
+   image and 4 bytes per pixel. */
 typedef struct adaslice_masker {
     const adaslice_mesh *mesh;
     adaslice_grid grid;          /* the printer's pixels; axis must be z */
@@ -1041,7 +1061,16 @@ typedef struct adaslice_masker {
     uint32_t *active;
     size_t active_count;
     int16_t *winding;            /* per ray */
-    uint16_t *coverage;          /* per pixel, s > 1 */
+    uint16_t *coverage;          /* per pixel, s > 1, envelope and core */
+    uint32_t box[4];             /* the mesh's footprint in pixels (first column, first row,
+                                    columns, rows): only there are cells */
+    float *cells;                /* s > 1, a section's rule: per row of the box, columns + 1
+                                    differences whose prefix sums are the covered fractions */
+    uint32_t *extent;            /* per row of the box: the cells touched [0, 1] and the
+                                    image's non-zero bytes [2, 3], as [from, to) in it */
+    uint32_t *touched;           /* per row of the box, a bit for each cell touched */
+    unsigned char bit_at[32];    /* de Bruijn: a word's lowest bit times 0x077CB531, top 5 bits -> its index */
+    float *fractions;            /* the options' */
     unsigned char grey[257];     /* coverage -> grey level */
     long long lit_rays;          /* rays inside: lit * s * s */
     struct adaslice__gaps *gaps; /* a mesh whose edges do not balance: its unbalanced
@@ -1081,9 +1110,10 @@ ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *masker, doub
                                                    adaslice_error *error);
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
 /* The bytes adaslice_masker_init asks for on a width x height grid at
-   `supersample` for a mesh of `triangles`: a caller's limit checked before
-   the work (saturates at SIZE_MAX). */
-ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles);
+   `supersample` and `slice_at` for a mesh of `triangles`: a caller's limit
+   checked before the work (saturates at SIZE_MAX). */
+ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, adaslice_slice_at slice_at,
+                                         size_t triangles);
 
 #ifndef ADASLICE_NO_CONTOURS
 typedef struct adaslice_contour_options {
@@ -6898,14 +6928,18 @@ static float adaslice__tri_z(const adaslice_mesh *m, size_t t, int highest)
     return r;
 }
 
-ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles)
+ADASLICE_DEF size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, adaslice_slice_at slice_at,
+                                         size_t triangles)
 {
-    /* as adaslice_masker_init allocates: the image, a winding per ray (and
-       a bit for envelope and core), a coverage per pixel when anti-aliased,
-       and three words per triangle */
-    double s = supersample > 1 ? supersample : 1, pixels = (double)width * height;
-    double bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + pixels * s * s * (sizeof(int16_t) + 1.0 / 8) +
-                   (s > 1 ? pixels * sizeof(uint16_t) : 0) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
+    /* as adaslice_masker_init allocates: the image; a winding per ray (and
+       a bit for envelope and core) and a coverage per pixel when
+       anti-aliased, or for an anti-aliased section the cells, a bit for
+       each and the rows' extents; and three words per triangle */
+    double s = supersample > 1 ? supersample : 1, pixels = (double)width * height, bytes;
+    int exact = s > 1 && slice_at < ADASLICE_SLICE_ENVELOPE;
+    bytes = (s > 1 ? pixels : (width + 7.0) / 8 * height) + (double)triangles * (2 * sizeof(uint32_t) + 2 * sizeof(adaslice__zkey));
+    if (exact) bytes += ((double)width + 1) * height * sizeof(float) + (4.0 + width / 32 + 1) * height * sizeof(uint32_t);
+    else bytes += pixels * s * s * (sizeof(int16_t) + 1.0 / 8) + (s > 1 ? pixels * sizeof(uint16_t) : 0);
     return bytes >= (double)SIZE_MAX ? SIZE_MAX : (size_t)bytes;
 }
 
@@ -6919,6 +6953,9 @@ ADASLICE_DEF void adaslice_masker_free(adaslice_masker *mk)
     adaslice__free(&al, mk->active);
     adaslice__free(&al, mk->winding);
     adaslice__free(&al, mk->coverage);
+    adaslice__free(&al, mk->cells);
+    adaslice__free(&al, mk->extent);
+    adaslice__free(&al, mk->touched);
     adaslice__free(&al, mk->seg);
     adaslice__free(&al, mk->cross);
     adaslice__free(&al, mk->changed);
@@ -6991,22 +7028,53 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     if (mk->slice_at >= ADASLICE_SLICE_ENVELOPE)
         mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
-    /* sections need no winding per ray */
-    if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
-    if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
+    if (s > 1 && mk->slice_at < ADASLICE_SLICE_ENVELOPE) {
+        /* an anti-aliased section: its exact coverage, from the section's
+           edges, which stay within the mesh's box (a large display's cells
+           cost their first touch) */
+        double lo[3], hi[3], box[4];
+        size_t cells, words;
+        adaslice_mesh_bounds(mesh, lo, hi);
+        box[0] = floor((lo[0] - grid->origin[0]) / grid->pitch[0]);
+        box[1] = floor((lo[1] - grid->origin[1]) / grid->pitch[1]);
+        box[2] = ceil((hi[0] - grid->origin[0]) / grid->pitch[0]) + 1;
+        box[3] = ceil((hi[1] - grid->origin[1]) / grid->pitch[1]) + 1;
+        for (k = 0; k < 4; k++) {
+            double most = k & 1 ? grid->height : grid->width;
+            box[k] = box[k] < 0 ? 0 : box[k] > most ? most : box[k];
+        }
+        mk->box[0] = (uint32_t)box[0];
+        mk->box[1] = (uint32_t)box[1];
+        mk->box[2] = (uint32_t)(box[2] - box[0]);
+        mk->box[3] = (uint32_t)(box[3] - box[1]);
+        cells = ((size_t)mk->box[2] + 1) * mk->box[3] + 1;
+        words = ((size_t)mk->box[2] / 32 + 1) * mk->box[3] + 1;
+        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, cells, sizeof(float)));
+        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)mk->box[3] + 1, sizeof(uint32_t)));
+        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, words, sizeof(uint32_t)));
+        mk->fractions = options ? options->fractions : NULL;
+        if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
+        memset(mk->cells, 0, cells * sizeof(float));
+        memset(mk->extent, 0, (4 * (size_t)mk->box[3] + 1) * sizeof(uint32_t));
+        memset(mk->touched, 0, words * sizeof(uint32_t));
+        for (k = 0; k < 32; k++) mk->bit_at[(uint32_t)(0x077CB531u << k) >> 27] = (unsigned char)k;
+    } else {
+        /* sections need no winding per ray */
+        if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
+        if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
+        if ((!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage)) goto nomem;
+    }
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
     keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, 2 * mesh->triangle_count, sizeof(adaslice__zkey)));
-    if (!mk->image || (!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage) || !mk->order || !mk->active || !keys ||
-        (mk->slice_at >= ADASLICE_SLICE_ENVELOPE && !mk->changed)) {
+    if (!mk->image || !mk->order || !mk->active || !keys || (mk->slice_at >= ADASLICE_SLICE_ENVELOPE && !mk->changed)) {
         adaslice__free(&mk->allocator, keys);
-        adaslice_masker_free(mk);
-        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
+        goto nomem;
     }
     memset(mk->image, 0, mk->stride * (size_t)grid->height);
     if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
     if (mk->changed) memset(mk->changed, 0, rays / 8 + 1);
-    if (s > 1) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
+    if (mk->coverage) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
     for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__zbits(adaslice__tri_z(mesh, t, 0)); keys[t].t = (uint32_t)t; }
     sorted = adaslice__sort_zkeys(keys, keys + mesh->triangle_count, mesh->triangle_count);
     for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = sorted[t].t;
@@ -7014,6 +7082,9 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
     adaslice__ok(err);
     return ADASLICE_OK;
+nomem:
+    adaslice_masker_free(mk);
+    return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
 }
 
 /* Ray i of ray row `row` turns on or off in the image. */
@@ -7189,8 +7260,7 @@ static long adaslice__first_row(const adaslice_grid *g, double y)
 static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segments, double height, adaslice_error *err)
 {
     const adaslice_grid *g = &mk->rays;
-    size_t k, n = 0, c, lo_row = SIZE_MAX, hi_row = 0;
-    int s = mk->supersample;
+    size_t k, n = 0, c;
     for (k = 0; k < segments; k++) {
         const double *p = mk->seg + 4 * k;
         double ylo = p[1] < p[3] ? p[1] : p[3], yhi = p[1] < p[3] ? p[3] : p[1];
@@ -7223,24 +7293,147 @@ static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segmen
             b = c + 1 < n && (size_t)(mk->cross[c + 1] >> 32) == row ? (size_t)((mk->cross[c + 1] >> 1) & 0x7fffffffu) : (size_t)g->width;
             if (w <= 0 || b <= a) continue;
             mk->lit_rays += (long long)(b - a);
-            if (s == 1) {
-                adaslice__set_bits(mk->image + row * mk->stride, a, b);
-            } else {
-                size_t px, base = row / (size_t)s * (size_t)mk->grid.width;
-                for (px = a / (size_t)s; px * (size_t)s < b; px++) {
-                    size_t from = px * (size_t)s > a ? px * (size_t)s : a, to = (px + 1) * (size_t)s < b ? (px + 1) * (size_t)s : b;
-                    mk->coverage[base + px] = (uint16_t)(mk->coverage[base + px] + (to - from));
-                }
-                if (row / (size_t)s < lo_row) lo_row = row / (size_t)s;
-                if (row / (size_t)s > hi_row) hi_row = row / (size_t)s;
-            }
+            adaslice__set_bits(mk->image + row * mk->stride, a, b);
         }
     }
-    if (s > 1 && lo_row <= hi_row) {
-        size_t px, first = lo_row * (size_t)mk->grid.width, end = (hi_row + 1) * (size_t)mk->grid.width;
-        for (px = first; px < end; px++) { mk->image[px] = mk->grey[mk->coverage[px]]; mk->coverage[px] = 0; }
-    }
     return ADASLICE_OK;
+}
+
+/* ---- anti-aliased sections: exact coverage (signed area and cover, as
+   font rasterisers accumulate it). In pixel units, a piece of an edge
+   inside pixel row r and column c, going down by h (the winding to its
+   +x side rises by h) at mean x = c + f, adds to the integral of the
+   winding over pixel c the area h (1 - f) to its right there, and h to
+   every pixel after. Kept as differences, d[c] += h (1 - f) and
+   d[c + 1] += h f, a prefix sum along the row gives every pixel's
+   integral; pieces left of the grid count at its left edge. */
+static void adaslice__cover_cell(float *d, uint32_t *bits, uint32_t *ext, long c, double h, double f)
+{
+    if (f < 0) f = 0;
+    if (f > 1) f = 1;
+    d[c] += (float)(h * (1 - f));
+    d[c + 1] += (float)(h * f);
+    bits[c >> 5] |= 1u << (c & 31);
+    bits[(c + 1) >> 5] |= 1u << ((c + 1) & 31);
+    if ((uint32_t)c < ext[0] || ext[1] == 0) ext[0] = (uint32_t)c;
+    if ((uint32_t)c + 2 > ext[1]) ext[1] = (uint32_t)c + 2;
+}
+
+/* The piece of an edge within pixel row r, from (xa, ya) to (xb, yb). */
+static void adaslice__cover_piece(adaslice_masker *mk, long r, double xa, double ya, double xb, double yb)
+{
+    long width = (long)mk->box[2], c;
+    float *d = mk->cells + (size_t)r * ((size_t)width + 1);
+    uint32_t *ext = mk->extent + 4 * (size_t)r, *bits = mk->touched + (size_t)r * ((size_t)width / 32 + 1);
+    double h = ya - yb, x0 = xa < xb ? xa : xb, x1 = xa < xb ? xb : xa, u, v;
+    if (h == 0 || x0 >= (double)width) return;
+    if (x1 == x0) {
+        c = x0 < 0 ? 0 : (long)x0;
+        adaslice__cover_cell(d, bits, ext, c, h, x0 - (double)c);
+        return;
+    }
+    /* split where it crosses pixel columns, each part's height in proportion */
+    u = x0;
+    if (u < 0) {
+        v = x1 < 0 ? x1 : 0;
+        adaslice__cover_cell(d, bits, ext, 0, h * (v - u) / (x1 - x0), 0);
+        u = v;
+    }
+    while (u < x1 && u < (double)width) {
+        c = (long)u;
+        v = (double)(c + 1) < x1 ? (double)(c + 1) : x1;
+        adaslice__cover_cell(d, bits, ext, c, h * (v - u) / (x1 - x0), 0.5 * (u + v) - (double)c);
+        u = v;
+    }
+}
+
+/* An edge from (x0, y0) to (x1, y1), mm, cut at the pixel rows it crosses,
+   in pixels from the box's corner. Each cut point is computed from the
+   edge's own ends, one expression for both rows that share it. */
+static void adaslice__cover_edge(adaslice_masker *mk, const double *p)
+{
+    const adaslice_grid *g = &mk->grid;
+    double x0 = (p[0] - g->origin[0]) / g->pitch[0] - mk->box[0], y0 = (p[1] - g->origin[1]) / g->pitch[1] - mk->box[1];
+    double x1 = (p[2] - g->origin[0]) / g->pitch[0] - mk->box[0], y1 = (p[3] - g->origin[1]) / g->pitch[1] - mk->box[1];
+    double ylo = y0 < y1 ? y0 : y1, yhi = y0 < y1 ? y1 : y0, ya, yb, xa, xb, rows = (double)mk->box[3];
+    long r, r0, r1;
+    if (!(yhi > ylo) || yhi <= 0 || ylo >= rows) return;
+    r0 = ylo < 0 ? 0 : (long)ylo;
+    r1 = yhi >= rows ? (long)rows - 1 : (long)ceil(yhi) - 1;
+    for (r = r0; r <= r1; r++) {
+        double lo = (double)r > ylo ? (double)r : ylo, hi = (double)(r + 1) < yhi ? (double)(r + 1) : yhi;
+        if (!(hi > lo)) continue;
+        ya = y0 > y1 ? hi : lo; /* in the edge's direction */
+        yb = y0 > y1 ? lo : hi;
+        xa = ya == y0 ? x0 : ya == y1 ? x1 : x0 + (ya - y0) * (x1 - x0) / (y1 - y0);
+        xb = yb == y0 ? x0 : yb == y1 ? x1 : x0 + (yb - y0) * (x1 - x0) / (y1 - y0);
+        adaslice__cover_piece(mk, r, xa, ya, xb, yb);
+    }
+}
+
+/* Pixels [from, to) of the box's row r covered `f`, at `level`. */
+static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from, size_t to, double f, int level, size_t *first,
+                                     size_t *end)
+{
+    size_t c, at = (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0];
+    if (mk->fractions)
+        for (c = from; c < to; c++) mk->fractions[at + c] = (float)f;
+    if (!level || to <= from) return 0;
+    memset(mk->image + (r + mk->box[1]) * mk->stride + mk->box[0] + from, mk->grey[level], to - from);
+    if (from < *first) *first = from;
+    *end = to;
+    return (long long)level * (long long)(to - from);
+}
+
+/* The section's edges into grey: each row's prefix sums at the cells it
+   touched (found a word of bits at a time), the level between them spread
+   as runs; the rows' previous grey cleared first. The covered fraction is
+   the integral of the winding clamped to [0, 1], rounded to s*s + 1 levels. */
+static void adaslice__fill_coverage(adaslice_masker *mk, size_t segments)
+{
+    size_t k, width = mk->box[2], words = width / 32 + 1, r, rows = mk->box[3];
+    double levels = (double)mk->supersample * mk->supersample;
+    long long lit = 0;
+    for (k = 0; k < segments; k++) adaslice__cover_edge(mk, mk->seg + 4 * k);
+    if (mk->fractions) memset(mk->fractions, 0, (size_t)mk->grid.width * (size_t)mk->grid.height * sizeof(float));
+    for (r = 0; r < rows; r++) {
+        uint32_t *ext = mk->extent + 4 * r, *bits = mk->touched + r * words;
+        unsigned char *img = mk->image + (r + mk->box[1]) * mk->stride + mk->box[0];
+        float *d = mk->cells + r * (width + 1), *fr = mk->fractions ? mk->fractions + (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0] : NULL;
+        size_t w, at = 0, first = width, end = 0;
+        double sum = 0, f = 0;
+        int level = 0;
+        if (ext[3] > ext[2]) memset(img + ext[2], 0, ext[3] - ext[2]);
+        ext[2] = ext[3] = 0;
+        if (ext[1] == 0) continue;
+        for (w = ext[0] / 32; w <= (ext[1] - 1) / 32; w++) {
+            while (bits[w]) {
+                uint32_t low = bits[w] & (0u - bits[w]);
+                size_t c = w * 32 + mk->bit_at[(uint32_t)(low * 0x077CB531u) >> 27];
+                bits[w] ^= low;
+                /* the pixels since the last cell keep its level */
+                lit += adaslice__cover_run(mk, r, at, c, f, level, &first, &end);
+                sum += d[c];
+                d[c] = 0;
+                if (c == width) { at = width; break; }
+                f = sum < 0 ? 0 : sum > 1 ? 1 : sum;
+                level = (int)(f * levels + 0.5);
+                if (fr) fr[c] = (float)f;
+                if (level) {
+                    img[c] = mk->grey[level];
+                    lit += level;
+                    if (c < first) first = c;
+                    end = c + 1;
+                }
+                at = c + 1;
+            }
+        }
+        lit += adaslice__cover_run(mk, r, at, width, f, level, &first, &end);
+        ext[0] = ext[1] = 0;
+        ext[2] = (uint32_t)(first < end ? first : 0);
+        ext[3] = (uint32_t)end;
+    }
+    mk->lit_rays = lit;
 }
 
 /* The mask at `height` of a mesh with unbalanced edges: the facets' cuts and
@@ -7273,9 +7466,12 @@ static adaslice_result adaslice__masker_section(adaslice_masker *mk, double heig
         if (!adaslice__push_segment(mk, &segments, from, to)) goto nomem;
     }
     mk->active_count = kept;
-    if ((r = adaslice__gaps_at(mk->gaps, m, height, err)) != ADASLICE_OK) return r;
-    for (j = 0; j < mk->gaps->heads; j++)
-        if (!adaslice__push_segment(mk, &segments, mk->gaps->tail + 2 * (size_t)mk->gaps->taker[j], mk->gaps->head + 2 * j)) goto nomem;
+    if (mk->gaps) {
+        if ((r = adaslice__gaps_at(mk->gaps, m, height, err)) != ADASLICE_OK) return r;
+        for (j = 0; j < mk->gaps->heads; j++)
+            if (!adaslice__push_segment(mk, &segments, mk->gaps->tail + 2 * (size_t)mk->gaps->taker[j], mk->gaps->head + 2 * j)) goto nomem;
+    }
+    if (mk->cells) { adaslice__fill_coverage(mk, segments); return ADASLICE_OK; }
     return adaslice__fill_section(mk, segments, height, err);
 nomem:
     return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
@@ -7292,7 +7488,7 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
     if (past && h >= mk->done && h < DBL_MAX) h = nextafter(h, DBL_MAX);
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
-    if (mk->gaps) {
+    if (mk->gaps || mk->cells) {
         adaslice_result res = adaslice__masker_section(mk, height, err);
         if (res != ADASLICE_OK) return res;
         mk->done = h;

@@ -154,7 +154,7 @@ static void bench_masks(const char *dir, int supersample)
     if (adaslice_profile_exact(&m, NULL, &p, NULL) != ADASLICE_OK || adaslice_plan_profile(&p, NULL, &plan, NULL) != ADASLICE_OK) exit(1);
     g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
     t0 = now();
-    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0}, NULL) != ADASLICE_OK) exit(1);
+    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) != ADASLICE_OK) exit(1);
     t_mask += now() - t0;
     for (k = 0; k < plan.layer_count; k++) {
         unsigned char *png;
@@ -171,10 +171,9 @@ static void bench_masks(const char *dir, int supersample)
     printf("masks   turbine blade x%.2f (%.0f x %.0f x %.0f mm, %zu triangles), %zu layers, %s: %.0f layers/s "
            "(masks %.2f ms, PNG %.2f ms per layer; %.1f KB per PNG); masker memory %.0f MB\n",
            scale, b[0] - a[0], b[1] - a[1], b[2] - a[2], m.triangle_count, plan.layer_count,
-           supersample > 1 ? "8-bit, 4x4 rays per pixel" : "1-bit", plan.layer_count / (t_mask + t_png),
+           supersample > 1 ? "8-bit, exact coverage in 17 levels" : "1-bit", plan.layer_count / (t_mask + t_png),
            t_mask * 1e3 / plan.layer_count, t_png * 1e3 / plan.layer_count, bytes / plan.layer_count / 1024,
-           ((double)mk.rays.width * mk.rays.height * 2 + (supersample > 1 ? (double)g.width * g.height * 2 : 0) +
-            (double)mk.stride * g.height) / 1e6);
+           (double)adaslice_masker_bytes((uint32_t)g.width, (uint32_t)g.height, supersample, ADASLICE_SLICE_MIDDLE, m.triangle_count) / 1e6);
     adaslice_masker_free(&mk);
     adaslice_plan_free(&plan);
     adaslice_profile_free(&p);

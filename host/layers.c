@@ -39,8 +39,9 @@ void slice_options_usage(FILE *f)
           "                      display mounted turned (90, 270: W and H are the image's)\n"
           "                      [the preset's, else 0]\n"
           "masks\n"
-          "  --aa S              anti-aliased 8-bit masks from S x S rays per pixel\n"
-          "                      (1: 1-bit masks)                            [1]\n"
+          "  --aa S              anti-aliased 8-bit masks in S x S + 1 grey levels: each\n"
+          "                      pixel's covered area, exact (envelope, core: S x S\n"
+          "                      rays per pixel); 1: 1-bit masks             [1]\n"
           "  --slice-at WHERE    bottom, middle or top of each layer (the section at the\n"
           "                      centre of its first, middle or last bin); envelope: lit\n"
           "                      where the part is inside anywhere in the layer (never\n"
@@ -235,7 +236,7 @@ double layer_masks_bytes(const slice_args *s, int buffers)
     double image = bits == 8 ? w * h : (w + 7) / 8 * h;
     /* the directory's coding at worst: the mask code's bound and the PNG's filtered rows and output */
     double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h);
-    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0) +
+    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0) +
            buffers * (image + coding);
 }
 
@@ -247,7 +248,7 @@ int layer_masks_check(const slice_args *s, int buffers)
     return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s, %d layer%s in flight), "
                               "more than --memory %s",
                     s->width, s->height, s->supersample, size_text(need, a),
-                    size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, 0), b),
+                    size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0), b),
                     buffers, plural((size_t)buffers), size_text(limit, c));
 }
 

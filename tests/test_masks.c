@@ -41,7 +41,7 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double px
     for (k = 0; k < heights; k++) z[k] = lo[2] + (hi[2] - lo[2]) * (k + 0.37) / heights;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
-    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
     CHECK(adaslice_mesh_weld(m, NULL, &e) == ADASLICE_OK);
     CHECK(adaslice_contours_slice(m, z, (size_t)heights, NULL, &c, &e) == ADASLICE_OK);
     CHECK(adaslice_profile_exact(m, &po, &prof, &e) == ADASLICE_OK);
@@ -134,7 +134,7 @@ static void rays_through_edges_light_exactly_once(void)
     g.pitch[0] = g.pitch[1] = 0.5;
     g.origin[0] = g.origin[1] = -10.25; /* centres at multiples of 0.5 */
     g.width = g.height = 41;
-    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK);
     for (j = 0; j < g.height; j++)
         for (i = 0; i < g.width; i++) {
@@ -148,8 +148,9 @@ static void rays_through_edges_light_exactly_once(void)
     gen_free(&box);
 }
 
-/* 8-bit masks: grey = 255 * covered rays / s^2, so their sum is the covered
-   area; a pixel deep inside is 255, far outside 0. */
+/* 8-bit masks: grey = 255 * k / s^2, k the covered fraction in s^2 levels,
+   so their sum is the covered area to half a level a pixel; a pixel deep
+   inside is 255, far outside 0. */
 static void antialiased_masks_cover_the_area(void)
 {
     adaslice_mesh m = gen_cylinder(5, 4, 256, 0);
@@ -157,7 +158,7 @@ static void antialiased_masks_cover_the_area(void)
     adaslice_masker mk;
     size_t p, sum = 0;
     double poly = 256 / 2.0 * 25 * sin(2 * M_PI / 256);
-    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL, ADASLICE_SLICE_MIDDLE, 0}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 2, NULL) == ADASLICE_OK);
     for (p = 0; p < (size_t)g.width * g.height; p++) sum += mk.image[p];
     /* rays: 0.025 mm apart; the circle's 31.4 mm of edge misjudges at most a ray's diagonal */
@@ -166,6 +167,223 @@ static void antialiased_masks_cover_the_area(void)
     CHECK(mk.image[(size_t)(g.height / 2) * mk.stride + (size_t)(g.width / 2)] == 255 && mk.image[0] == 0);
     adaslice_masker_free(&mk);
     gen_free(&m);
+}
+
+/* ---- exact coverage against a 64 x 64 supersampled reference */
+
+#define REF_SAMPLES 64
+
+typedef struct ref_crossing { double x; int step; } ref_crossing;
+
+static int ref_crossing_cmp(const void *a, const void *b)
+{
+    double x = ((const ref_crossing *)a)->x, y = ((const ref_crossing *)b)->x;
+    return x < y ? -1 : x > y;
+}
+
+/* The section of m at height z as directed segments (x0, y0, x1, y1), cut
+   here from the triangles: a corner at z counts as below, and each cut runs
+   along z x n (material on its left, n the facet's normal). Returns the count. */
+static size_t ref_section(const adaslice_mesh *m, double z, double **out)
+{
+    size_t t, n = 0;
+    double *seg = (double *)malloc((m->triangle_count + 1) * 4 * sizeof(double));
+    if (!seg) abort();
+    for (t = 0; t < m->triangle_count; t++) {
+        const float *v[3];
+        double p[2][2], n3[3], e1[3], e2[3], dx, dy;
+        int k, cuts = 0;
+        for (k = 0; k < 3; k++) v[k] = m->vertices + 3 * (size_t)m->triangles[3 * t + (size_t)k];
+        for (k = 0; k < 3; k++) {
+            const float *a = v[k], *b = v[(k + 1) % 3];
+            double u;
+            if (((double)a[2] <= z) == ((double)b[2] <= z)) continue;
+            u = (z - a[2]) / ((double)b[2] - a[2]);
+            p[cuts][0] = a[0] + u * ((double)b[0] - a[0]);
+            p[cuts][1] = a[1] + u * ((double)b[1] - a[1]);
+            cuts++;
+        }
+        if (cuts != 2) continue;
+        for (k = 0; k < 3; k++) { e1[k] = (double)v[1][k] - v[0][k]; e2[k] = (double)v[2][k] - v[0][k]; }
+        n3[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n3[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        dx = p[1][0] - p[0][0];
+        dy = p[1][1] - p[0][1];
+        if (dx * -n3[1] + dy * n3[0] < 0) { /* against z x n: turn it round */
+            double q[2] = {p[0][0], p[0][1]};
+            p[0][0] = p[1][0]; p[0][1] = p[1][1]; p[1][0] = q[0]; p[1][1] = q[1];
+        }
+        seg[4 * n] = p[0][0]; seg[4 * n + 1] = p[0][1]; seg[4 * n + 2] = p[1][0]; seg[4 * n + 3] = p[1][1];
+        n++;
+    }
+    *out = seg;
+    return n;
+}
+
+/* Each pixel's fraction of 64 x 64 sample points (at their cells' centres)
+   where the segments' winding number is positive: along each sample row the
+   segments it crosses, sorted; a segment going down raises the winding past
+   it. `twice` (or NULL): the fraction where it is 2 or more. */
+static void ref_coverage(const double *seg, size_t n, const adaslice_grid *g, double *ref, double *twice)
+{
+    size_t j, k, cap = n + 1, w = (size_t)g->width, rows = (size_t)g->height * REF_SAMPLES;
+    ref_crossing *cr = (ref_crossing *)malloc(cap * sizeof *cr);
+    if (!cr) abort();
+    memset(ref, 0, w * (size_t)g->height * sizeof *ref);
+    if (twice) memset(twice, 0, w * (size_t)g->height * sizeof *twice);
+    for (j = 0; j < rows; j++) {
+        double y = g->origin[1] + ((double)j + 0.5) / REF_SAMPLES * g->pitch[1];
+        size_t m = 0, c = 0, i;
+        int wind = 0;
+        for (k = 0; k < n; k++) {
+            const double *s = seg + 4 * k;
+            double lo = s[1] < s[3] ? s[1] : s[3], hi = s[1] < s[3] ? s[3] : s[1];
+            if (!(y >= lo && y < hi)) continue;
+            cr[m].x = s[0] + (y - s[1]) * (s[2] - s[0]) / (s[3] - s[1]);
+            cr[m++].step = s[3] < s[1] ? 1 : -1;
+        }
+        qsort(cr, m, sizeof *cr, ref_crossing_cmp);
+        for (i = 0; i < w * REF_SAMPLES; i++) {
+            double x = g->origin[0] + ((double)i + 0.5) / REF_SAMPLES * g->pitch[0];
+            for (; c < m && cr[c].x < x; c++) wind += cr[c].step;
+            if (wind > 0) ref[j / REF_SAMPLES * w + i / REF_SAMPLES] += 1.0 / (REF_SAMPLES * REF_SAMPLES);
+            if (wind > 1 && twice) twice[j / REF_SAMPLES * w + i / REF_SAMPLES] += 1.0 / (REF_SAMPLES * REF_SAMPLES);
+        }
+    }
+    free(cr);
+}
+
+/* The masker's fractions (and its grey, each fraction rounded to s*s + 1
+   levels) against the reference at height z: the mean error over the
+   pixels either calls partly covered under 1 % of a grey level (1/s^2),
+   the worst under half a level. With `overlapping` the reference is the
+   masker's documented rule where shells overlap: the area where the winding
+   is positive plus the area where it is 2 or more, at most 1. */
+static void check_exact_coverage(const char *what, const adaslice_mesh *m, const adaslice_grid *g, double z, int s,
+                                 int overlapping)
+{
+    size_t pixels = (size_t)g->width * g->height, p, n, edge = 0, grey_off = 0, doubled = 0;
+    float *fr = (float *)malloc(pixels * sizeof(float));
+    double *ref = (double *)malloc(pixels * sizeof(double)), *twice = (double *)malloc(pixels * sizeof(double)), *seg;
+    double level = 1.0 / (s * s), sum = 0, worst = 0;
+    adaslice_masker mk;
+    adaslice_mask_options o;
+    adaslice_error e;
+    if (!fr || !ref || !twice) abort();
+    memset(&o, 0, sizeof o);
+    o.supersample = s;
+    o.fractions = fr;
+    CHECKF(adaslice_masker_init(&mk, m, g, &o, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    CHECKF(adaslice_masker_slice(&mk, z, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    n = ref_section(m, z, &seg);
+    ref_coverage(seg, n, g, ref, twice);
+    for (p = 0; p < pixels; p++) {
+        if (twice[p] > 0 && twice[p] < 1 && ref[p] < 1) doubled++;
+        if (overlapping) ref[p] = ref[p] + twice[p] < 1 ? ref[p] + twice[p] : 1;
+        double err = fabs(fr[p] - ref[p]);
+        /* the fraction's level, either way when it lies on a half level (the float fraction rounds) */
+        int k0 = (int)floor(fr[p] / level + 0.5 - 1e-6), k1 = (int)floor(fr[p] / level + 0.5 + 1e-6);
+        grey_off += mk.image[p] != (unsigned char)((255 * k0 + s * s / 2) / (s * s)) &&
+                    mk.image[p] != (unsigned char)((255 * k1 + s * s / 2) / (s * s));
+        if (err > worst) worst = err;
+        if ((fr[p] > 0 && fr[p] < 1) || (ref[p] > 0 && ref[p] < 1)) { edge++; sum += err; }
+    }
+    CHECKF(edge > 0 && sum / (double)edge < 0.01 * level, "%s: mean error %g of a level over %zu edge pixels", what,
+           edge ? sum / (double)edge / level : 0, edge);
+    CHECKF(worst < 0.5 * level, "%s: worst error %g of a level", what, worst / level);
+    CHECKF(grey_off == 0, "%s: %zu pixels' grey is not their fraction's level", what, grey_off);
+    CHECKF(overlapping == (doubled > 0), "%s: %zu partly covered pixels are partly covered twice", what, doubled);
+    printf("  (%s: %zu edge pixels, mean error %.2g, worst %.2g of a level)\n", what, edge, sum / (double)edge / level, worst / level);
+    adaslice_masker_free(&mk);
+    free(seg);
+    free(ref);
+    free(twice);
+    free(fr);
+}
+
+/* A UV sphere's section between its rings, on pixels a third and a seventh
+   off centre, at --aa 4 and 2; then on a display that cuts off its left and
+   top (the winding of the part left of the display still counts). */
+static void exact_coverage_of_a_sphere_section(void)
+{
+    adaslice_mesh m = gen_sphere(2, 48, 24, 0);
+    adaslice_grid g = plate_around(&m, 0.1, 0.1, 48, 46);
+    check_exact_coverage("sphere at z 1.3, aa 4", &m, &g, 1.3, 4, 0);
+    check_exact_coverage("sphere at z 3.41, aa 2", &m, &g, 3.41, 2, 0);
+    g.origin[0] += 1.5;
+    g.origin[1] -= 1.2;
+    check_exact_coverage("sphere cut off by the display, aa 4", &m, &g, 2.2, 4, 0);
+    gen_free(&m);
+}
+
+/* Triangle (a, b, c) (pixel units, 1/8 mm pixels from the origin) as a
+   closed prism from z 0 to 1, wound counter-clockwise seen from outside. */
+static void add_prism(adaslice_mesh *m, double ax, double ay, double bx, double by, double cx, double cy)
+{
+    double p[3][2] = {{ax, ay}, {bx, by}, {cx, cy}}, t;
+    uint32_t v[6];
+    int k;
+    if ((bx - ax) * (cy - ay) - (by - ay) * (cx - ax) < 0) { t = p[1][0]; p[1][0] = p[2][0]; p[2][0] = t; t = p[1][1]; p[1][1] = p[2][1]; p[2][1] = t; }
+    for (k = 0; k < 6; k++) v[k] = gen_vertex(m, p[k % 3][0] / 8, p[k % 3][1] / 8, k / 3);
+    gen_triangle(m, v[0], v[2], v[1]);
+    gen_triangle(m, v[3], v[4], v[5]);
+    for (k = 0; k < 3; k++) {
+        gen_triangle(m, v[k], v[(k + 1) % 3], v[(k + 1) % 3 + 3]);
+        gen_triangle(m, v[k], v[(k + 1) % 3 + 3], v[k + 3]);
+    }
+}
+
+/* A star of 40 spikes, each narrower than a pixel at its root (a fan of
+   thin triangles from a pixel corner, tips on pixel corners), and loose
+   slivers narrower than a pixel with corners on pixel corners and edges,
+   one lying along a row of pixel edges: the section at z 0.5. */
+static void exact_coverage_of_slivers(void)
+{
+    adaslice_mesh m = gen_alloc(6 * 90, 8 * 90);
+    adaslice_grid g;
+    int i, n = 40;
+    for (i = 0; i < n; i++) {
+        double a0 = 2 * M_PI * i / n, a1 = 2 * M_PI * (i + 1) / n, am = 2 * M_PI * (i + 0.5) / n;
+        double tx = floor(24 + 20 * cos(am) + 0.5), ty = floor(24 + 20 * sin(am) + 0.5);
+        add_prism(&m, 24, 24, 24 + 5 * cos(a0), 24 + 5 * sin(a0), tx, ty);
+        add_prism(&m, 24, 24, tx, ty, 24 + 5 * cos(a1), 24 + 5 * sin(a1));
+    }
+    add_prism(&m, 50, 4, 78, 4, 78, 4.5);
+    add_prism(&m, 50, 8, 50.5, 8, 60, 40);
+    add_prism(&m, 62, 20, 79, 20, 79, 20.25);
+    add_prism(&m, 66, 24, 67, 24, 79, 40);
+    add_prism(&m, 54, 44, 79, 45, 54, 44.5);
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.pitch[0] = g.pitch[1] = 0.125;
+    g.width = 80;
+    g.height = 48;
+    check_exact_coverage("slivers, aa 4", &m, &g, 0.5, 4, 0);
+    gen_free(&m);
+}
+
+/* Two slivers and a disc crossing a square inside pixels: where the winding
+   is 2 the pixel counts the overlap again (the integral of the winding,
+   clamped), so it is never darker than the union, and whole pixels inside
+   both stay lit. */
+static void exact_coverage_of_overlapping_shells(void)
+{
+    adaslice_mesh m = gen_alloc(40, 80), disc = gen_cylinder(1.3, 1, 40, 0);
+    adaslice_grid g;
+    int i;
+    add_prism(&m, 10.5, 10.25, 30, 10.25, 30, 30);
+    add_prism(&m, 10.5, 10.25, 30, 30, 10.5, 30);
+    add_prism(&m, 4, 20, 36, 20.5, 4, 20.25);
+    add_prism(&m, 20, 4, 20.3, 4, 21, 36);
+    for (i = 0; i < (int)disc.vertex_count; i++) { disc.vertices[3 * i] += 3.75f; disc.vertices[3 * i + 1] += 1.25f; }
+    gen_append(&m, &disc);
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.pitch[0] = g.pitch[1] = 0.125;
+    g.width = g.height = 40;
+    check_exact_coverage("overlapping shells, aa 4", &m, &g, 0.5, 4, 1);
+    gen_free(&m);
+    gen_free(&disc);
 }
 
 /* ---- masks of a layer's whole range: envelope (union) and core (intersection) */
@@ -394,6 +612,9 @@ void test_masks(void)
     RUN(bundled_hand_masks_match_contours);
     RUN(rays_through_edges_light_exactly_once);
     RUN(antialiased_masks_cover_the_area);
+    RUN(exact_coverage_of_a_sphere_section);
+    RUN(exact_coverage_of_slivers);
+    RUN(exact_coverage_of_overlapping_shells);
     RUN(pin_thinner_than_a_layer_survives_in_the_envelope);
     RUN(sphere_envelope_is_the_largest_section);
     RUN(sphere_envelope_antialiased);
