@@ -137,7 +137,8 @@
                                              adaslice_error *error);
            the mask of the next layer by a rule: a section, envelope (union) or core
        void adaslice_masker_free(adaslice_masker *masker);
-       size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, size_t triangles);
+       size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, adaslice_slice_at slice_at,
+                                    size_t triangles);
            what a masker will allocate, before it does
        adaslice_result adaslice_contours_slice(const adaslice_mesh *mesh, const double *heights, size_t count,
                                                const adaslice_contour_options *options, adaslice_contours *contours,

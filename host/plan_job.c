@@ -205,7 +205,7 @@ static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const ada
     adaslice_error err;
     double lo[3], hi[3], bin = po->bin ? po->bin : ADASLICE_DEFAULT_BIN;
     char need[32], limit[32], hint[160];
-    if (adaslice_profile_estimate(mesh, po, a->sampler, &c, &err) != ADASLICE_OK) return library_error(&err);
+    if (adaslice_profile_estimate(mesh, po, a->sampler, &c, &err) != ADASLICE_OK) return library_error_in(a->model, &err);
     adaslice_mesh_bounds(mesh, lo, hi);
     units_hint(hi[2] - lo[2], hint, sizeof hint);
     if (c.bytes > a->memory_mb * 1e6)

@@ -422,12 +422,19 @@ static const struct { const char *option, *value; } OPTION_VALUES[] = {
     {"--screen", "file:fb.bin,240x200,24"}, {"--screen-packing", "rgb"}, {"--screen-rotate", "90"}, {"--screen-mirror", "x"},
     {"--screen-pitch", "50"}, {"--screen-panel", "2k-5.5"},
     {"--project", "@x.3mf"}, {"--resolution", "0.2"}, {"--max-rise", "0.05"}, {"--max-angle", "15"},
+    /* "COMMAND --option": what it needs there (plan's contour limits set up --hybrid, which needs --3mf) */
+    {"plan --hybrid", "--3mf @x.3mf"}, {"plan --max-angle", "15 --hybrid --3mf @x.3mf"},
+    {"plan --reach", "2 --hybrid --3mf @x.3mf"}, {"plan --max-rise", "0.05 --hybrid --3mf @x.3mf"},
+    {"plan --resolution", "0.2 --hybrid --3mf @x.3mf"},
 };
 
-static const char *option_value(const char *option, const char *placeholder)
+static const char *option_value(const char *command, const char *option, const char *placeholder)
 {
     char key[80];
     size_t i;
+    snprintf(key, sizeof key, "%s %s", command, option);
+    for (i = 0; i < sizeof OPTION_VALUES / sizeof *OPTION_VALUES; i++)
+        if (!strcmp(OPTION_VALUES[i].option, key)) return OPTION_VALUES[i].value;
     snprintf(key, sizeof key, "%s %s", option, placeholder);
     for (i = 0; i < sizeof OPTION_VALUES / sizeof *OPTION_VALUES; i++)
         if (!strcmp(OPTION_VALUES[i].option, key)) return OPTION_VALUES[i].value;
@@ -448,7 +455,8 @@ static void expect_accepted(const char *command, const char *option, const char 
     int n = 0, k = 0;
     cli_result r;
     args[n++] = command;
-    if (strcmp(option, "--profile")) args[n++] = cli_path("no-such-model.stl"); /* --profile replaces it */
+    /* --profile replaces the model; print --abort takes none */
+    if (strcmp(option, "--profile") && strcmp(option, "--abort")) args[n++] = cli_path("no-such-model.stl");
     if (!strcmp(command, "slice")) { args[n++] = "-o"; args[n++] = cli_path("job"); }
     if (!strcmp(command, "saliency")) { args[n++] = "-o"; args[n++] = cli_path("w.txt"); }
     if (!strcmp(command, "print")) { args[n++] = "--port"; args[n++] = "/nonexistent/port"; }
@@ -469,7 +477,7 @@ static void expect_accepted(const char *command, const char *option, const char 
 /* One option of a help line: by name and placeholder, or (in a list) by name. */
 static int check_listed(const char *command, const char *option, const char *placeholder, int takes_value)
 {
-    const char *v = takes_value ? option_value(option, placeholder) : NULL;
+    const char *v = option_value(command, option, placeholder);
     CHECKF(!takes_value || v, "%s --help lists %s %s: give it a value in OPTION_VALUES", command, option, placeholder);
     CHECKF(strcmp(command, "saliency") || strcmp(option, "--saliency"), "saliency --help lists --saliency");
     if (!takes_value || v) expect_accepted(command, option, v);
