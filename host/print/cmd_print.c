@@ -1,21 +1,23 @@
 /* adaslice print: drives a printer running the adaslice firmware over a
    serial port (host/print/serial.h: POSIX termios only), after link/PROTOCOL.md.
-   The printer plans from the quantised profile (or takes the host's plan),
-   then the host streams mask k+1 while layer k exposes. */
+   The printer plans from the quantised profile (or takes the host's plan:
+   plan_upload.h), then the host streams mask k+1 while layer k exposes (the
+   job and its masks: print_job.h), or shows it on its own screen
+   (screen_print.h). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "../bytes.h"
 #include "../commands.h"
-#include "../cure.h"
 #include "../formats/jobdir.h"
 #include "../json.h"
 #include "../layers.h"
-#include "../codec/maskrows.h"
 #include "../options.h"
 #include "../output.h"
 #include "../plan_job.h"
 #include "../report.h"
+#include "plan_upload.h"
+#include "print_job.h"
 #include "serial.h"
 #include "screen_print.h"
 
@@ -40,215 +42,6 @@ typedef struct print_args {
     double give_up_s;       /* a printer that answers nothing this long ends the print */
     screen_options screen;  /* --screen: the host shows the masks (print/screen.h) */
 } print_args;
-
-/* ------------------------------------------------------------- the job */
-
-/* What is printed: a plan (layer lengths in bins, exposures), the motion
-   and a source of masks. */
-typedef struct print_job {
-    uint32_t layers, bin_nm;
-    uint32_t *lengths;             /* bins per layer: the plan's, or the job's */
-    uint32_t *exposure_ms;         /* per layer */
-    link_print motion;             /* PRINT's fields but the first layer */
-    uint32_t width, height, bits;
-    uint32_t job;                  /* the job's hash (job_hash), sent with PRINT */
-    int from_model;
-    layer_masks masks;             /* a MODEL: rendered as they are needed */
-    job_masks file;                /* a JOBDIR: its masks.rle */
-    /* the current mask */
-    unsigned char *code;
-    size_t code_size, code_cap, rendered;
-    uint32_t crc;
-    /* the mask being sent, decoded as it goes: the CRC work each MASK_DATA
-       frame asks of the printer, which it does before it answers */
-    adaslice_rle_decoder sending;
-    unsigned char *sending_row, *sending_prev; /* the row decoded, the one before */
-    uint32_t sending_cost;                     /* the frame's bytes of rows' CRC */
-} print_job;
-
-/* Layer k's (1-based) mask code into pj->code, with its CRC-32. */
-static int job_mask(print_job *pj, uint32_t k)
-{
-    int rc;
-    size_t bound = adaslice_rle_bound(pj->width, pj->height, (int)pj->bits);
-    if (!pj->from_model) {
-        pj->crc = pj->file.crcs[k - 1];
-        pj->code_size = pj->file.sizes[k - 1];
-        pj->code = pj->file.codes[k - 1];
-        return RC_OK;
-    }
-    if (k - 1 < pj->rendered) return complain(RC_FAIL, "layer %u: masks render bottom-up only", k);
-    if (bound > pj->code_cap) {
-        unsigned char *c = (unsigned char *)realloc(pj->code, bound);
-        if (!c) return complain(RC_FAIL, "out of memory for a mask's code");
-        pj->code = c;
-        pj->code_cap = bound;
-    }
-    /* the masker sweeps upwards; layers below k were passed on the way */
-    if ((rc = layer_masks_render(&pj->masks, k - 1, pj->masks.image))) return rc;
-    pj->rendered = k;
-    (void)adaslice_rle_encode(pj->masks.image, pj->masks.stride, pj->width, pj->height, (int)pj->bits, pj->code,
-                              pj->code_cap, &pj->code_size);
-    pj->crc = mask_crc32(pj->masks.image, pj->masks.stride, pj->masks.stride, (int)pj->height);
-    return pj->code_size ? RC_OK : complain(RC_FAIL, "layer %u: the mask did not code", k);
-}
-
-static size_t job_stride(const print_job *pj) { return pj->bits == 8 ? pj->width : (pj->width + 7u) / 8u; }
-
-/* The current mask is about to be sent from its start. */
-static int job_send_begin(print_job *pj)
-{
-    size_t stride = job_stride(pj);
-    if (!pj->sending_row && !(pj->sending_row = (unsigned char *)malloc(2 * stride)))
-        return complain(RC_FAIL, "out of memory for a mask row");
-    pj->sending_prev = pj->sending_row + stride;
-    if (adaslice_rle_decoder_init(&pj->sending, pj->width, pj->height, (int)pj->bits, pj->sending_row, stride))
-        return complain(RC_FAIL, "a %ux%u display of %u bits cannot take masks", pj->width, pj->height, pj->bits);
-    return RC_OK;
-}
-
-/* A row's CRC as the printer's decoder counts it: the row's bytes, or
-   ADASLICE_RLE_REPEAT_COST for a repeat of the row before (our encoder
-   codes every such row as a repeat). */
-static void count_row(void *ctx, uint32_t y, const unsigned char *row)
-{
-    print_job *pj = (print_job *)ctx;
-    size_t stride = job_stride(pj);
-    if (y && stride > ADASLICE_RLE_REPEAT_COST && !memcmp(row, pj->sending_prev, stride)) {
-        pj->sending_cost += ADASLICE_RLE_REPEAT_COST;
-    } else {
-        pj->sending_cost += (uint32_t)stride;
-        memcpy(pj->sending_prev, row, stride);
-    }
-}
-
-/* The bytes of rows' CRC that the current mask's next n code bytes ask of
-   the printer's decoder. */
-static uint32_t job_send_cost(print_job *pj, const unsigned char *code, size_t n)
-{
-    pj->sending_cost = 0;
-    (void)adaslice_rle_decode(&pj->sending, code, n, count_row, pj);
-    return pj->sending_cost;
-}
-
-static void print_job_free(print_job *pj)
-{
-    free(pj->sending_row);
-    if (pj->masks.image) layer_masks_close(&pj->masks);
-    if (pj->from_model) { free(pj->code); free(pj->lengths); free(pj->exposure_ms); }
-    job_masks_free(&pj->file);
-    memset(pj, 0, sizeof *pj);
-}
-
-/* The job's hash, sent with PRINT and kept by the printer, so that a
-   resume can tell this job from another: CRC-32 over the layers' lengths,
-   bin_nm, the display, each layer's exposure and its mask's CRC. A MODEL's
-   masks are rendered only as they are sent, so their CRCs are not known up
-   front: for a MODEL the model's identity stands in for them, the mesh as
-   planned (loaded, scaled and turned) and the options that place and draw it
-   on the display. 0 means no job, so it is never 0. */
-static uint32_t crc_u32(uint32_t crc, uint32_t v)
-{
-    unsigned char b[4];
-    put_le32(b, v);
-    return adaslice_crc32(crc, b, 4);
-}
-
-static uint32_t job_hash(const print_job *pj, const adaslice_mesh *mesh, const slice_args *s)
-{
-    uint32_t crc = crc_u32(crc_u32(0, pj->layers), pj->bin_nm), k;
-    crc = crc_u32(crc_u32(crc_u32(crc, pj->width), pj->height), pj->bits);
-    for (k = 0; k < pj->layers; k++) {
-        crc = crc_u32(crc_u32(crc, pj->lengths[k]), pj->exposure_ms[k]);
-        if (!pj->from_model) crc = crc_u32(crc, pj->file.crcs[k]);
-    }
-    if (mesh) {
-        int v[7];
-        v[0] = s->supersample; v[1] = s->slice_at; v[2] = s->mirror_x; v[3] = s->mirror_y; v[4] = s->rotate;
-        v[5] = s->placed ? (int)lround(s->place[0] * 1e6) : 0;
-        v[6] = s->placed ? (int)lround(s->place[1] * 1e6) : 0;
-        for (k = 0; k < 7; k++) crc = crc_u32(crc, (uint32_t)v[k]);
-        crc = adaslice_crc32(crc, mesh->vertices, mesh->vertex_count * 3 * sizeof *mesh->vertices);
-        crc = adaslice_crc32(crc, mesh->triangles, mesh->triangle_count * 3 * sizeof *mesh->triangles);
-    }
-    return crc ? crc : 1;
-}
-
-/* ------------------------------------------------------------ planning */
-
-static int plan_ready(const link_status *s, const void *ctx) { (void)ctx; return s->state != LINK_STATE_PLANNING; }
-
-/* The profile goes to the printer as varints; its plan must equal ours. */
-static int plan_on_printer(serial_link *l, const plan_job *j, const adaslice_plan_options *o, const print_job *pj)
-{
-    const adaslice_profile *p = &j->profile;
-    uint32_t n = (uint32_t)p->bin_count, i, k;
-    uint32_t *units = (uint32_t *)malloc(n * sizeof *units);
-    unsigned char *forced = (unsigned char *)malloc(n);
-    uint8_t buf[LINK_PAYLOAD_MAX];
-    link_profile hdr;
-    adaslice_error err;
-    int rc = RC_OK;
-    if (!units || !forced) { free(units); free(forced); return complain(RC_FAIL, "out of memory"); }
-    if (adaslice_plan_units(p, o, units, forced, &err) != ADASLICE_OK) { rc = library_error(&err); goto done; }
-    hdr.bins = n;
-    hdr.bins_min = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_min;
-    hdr.bins_max = (uint8_t)j->plan[ADASLICE_METHOD_OPTIMAL].bins_max;
-    hdr.eps_units = o->eps_units;
-    hdr.bin_nm = pj->bin_nm;
-    if ((rc = serial_send(l, LINK_MSG_PROFILE, buf, link_put_profile(buf, &hdr)))) goto done;
-    for (i = 0; i < n;) {
-        uint32_t from = i;
-        size_t used = link_profile_chunk(buf, l->data_max, units, forced, n, &i);
-        if ((rc = serial_send_profile_data(l, buf, used, i - from + (i == n ? n : 0)))) goto done;
-    }
-    if ((rc = serial_wait(l, plan_ready, NULL, 600000, "finish planning"))) goto done;
-    if (l->st.state != LINK_STATE_READY) { rc = complain(RC_FAIL, "the printer could not plan: %s", link_error_name(l->st.error)); goto done; }
-    if (l->st.layers != pj->layers) {
-        rc = complain(RC_FAIL, "the printer planned %u layer%s, the host %u: the planners disagree", l->st.layers,
-                      plural(l->st.layers), pj->layers);
-        goto done;
-    }
-    /* read the plan back, page by page, and compare it layer by layer */
-    for (k = 1; k <= pj->layers;) {
-        size_t m;
-        if (!serial_plan_page(l, k, &rc)) { if (rc) goto done; continue; }
-        for (m = LINK_SIZE_PLAN; m < l->plan_size && k <= pj->layers; m++, k++)
-            if (l->plan[m] != pj->lengths[k - 1]) {
-                rc = complain(RC_FAIL, "layer %u: the printer planned %u bin%s, the host %u", k, l->plan[m],
-                              plural(l->plan[m]), pj->lengths[k - 1]);
-                goto done;
-            }
-    }
-done:
-    free(units);
-    free(forced);
-    return rc;
-}
-
-static int plan_given(serial_link *l, const print_job *pj)
-{
-    uint8_t buf[LINK_PAYLOAD_MAX];
-    link_plan_set m;
-    uint32_t k;
-    size_t used = 0;
-    int rc;
-    for (k = 0; k < pj->layers; k++)
-        if (pj->lengths[k] > 255) return complain(RC_FAIL, "layer %u is %u bins: a printer takes at most 255", k + 1, pj->lengths[k]);
-    m.layers = pj->layers;
-    m.bin_nm = pj->bin_nm;
-    if ((rc = serial_send(l, LINK_MSG_PLAN_SET, buf, link_put_plan_set(buf, &m)))) return rc;
-    for (k = 0; k < pj->layers; k++) {
-        if (used >= l->data_max) { if ((rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc; used = 0; }
-        buf[used++] = (uint8_t)pj->lengths[k];
-    }
-    if (used && (rc = serial_send(l, LINK_MSG_PLAN_DATA, buf, used))) return rc;
-    if ((rc = serial_status(l))) return rc;
-    if (l->st.state != LINK_STATE_READY || l->st.layers != pj->layers)
-        return complain(RC_FAIL, "the printer refused the plan: %s", link_error_name(l->st.error));
-    return RC_OK;
-}
-
 
 /* -------------------------------------------------------------- print */
 
@@ -364,14 +157,14 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
             }
         }
         if (!sending && next <= pj->layers && l->st.mask_ready + 1 == next && next <= l->st.layer + 1) {
-            if (!tries && (rc = job_mask(pj, next))) return rc;
+            if (!tries && (rc = print_job_mask(pj, next))) return rc;
             link_mask mask;
             mask.layer = next;
             mask.code_bytes = (uint32_t)pj->code_size;
             mask.crc32 = pj->crc;
             mask.exposure_ms = !in_place && next == first && pa->exposure_left ? (uint32_t)pa->exposure_left
                                                                                : pj->exposure_ms[next - 1];
-            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask))) || (rc = job_send_begin(pj))) return rc;
+            if ((rc = serial_send(l, LINK_MSG_MASK, buf, link_put_mask(buf, &mask))) || (rc = print_job_send_begin(pj))) return rc;
             rep[next - 1].crc = pj->crc;
             rep[next - 1].code_bytes = (uint32_t)pj->code_size;
             sending = 1;
@@ -379,7 +172,7 @@ static int print_loop(serial_link *l, const print_args *pa, print_job *pj, int i
         }
         if (sending && sent < pj->code_size) {
             size_t chunk = pj->code_size - sent > l->data_max ? l->data_max : pj->code_size - sent;
-            if ((rc = serial_send_mask_data(l, pj->code + sent, chunk, job_send_cost(pj, pj->code + sent, chunk)))) return rc;
+            if ((rc = serial_send_mask_data(l, pj->code + sent, chunk, print_job_send_cost(pj, pj->code + sent, chunk)))) return rc;
             sent += chunk;
             *mask_bytes += chunk;
             continue;
@@ -548,9 +341,9 @@ static int screen_mask(void *ctx, uint32_t k, const unsigned char **image, size_
     print_job *pj = src->pj;
     adaslice_rle_decoder dec;
     int rc;
-    src->stride = job_stride(pj);
+    src->stride = print_job_stride(pj);
     /* a MODEL's layer again (after a pause) is the image rendered last */
-    if (!(pj->from_model && k == pj->rendered) && (rc = job_mask(pj, k))) return rc;
+    if (!(pj->from_model && k == pj->rendered) && (rc = print_job_mask(pj, k))) return rc;
     src->rep[k - 1].crc = pj->crc;
     src->rep[k - 1].code_bytes = 0;
     if (pj->from_model) {
@@ -603,78 +396,6 @@ static int print_on_screen(serial_link *l, const print_args *pa, print_job *pj, 
 }
 
 /* ------------------------------------------------------------ the steps */
-
-/* The printer's display decides the masks; the model is planned in printer
-   units wherever the printer can plan it too. */
-static int job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *s, const serial_link *l,
-                          const print_args *pa, int *planned_by_printer)
-{
-    const adaslice_plan *p;
-    job_layer *layers;
-    uint32_t k;
-    double nm;
-    int rc;
-    s->width = (s->rotate & 1) ? l->id.height : l->id.width;
-    s->height = (s->rotate & 1) ? l->id.width : l->id.height;
-    s->pitch[0] = s->pitch[1] = l->id.pitch_nm / 1e6;
-    if (l->id.bits == 8 && s->supersample < 2) s->supersample = 4;
-    if (l->id.bits == 1 && s->supersample > 1) return complain(RC_USAGE, "--aa: the printer's display is 1-bit");
-    if ((rc = layer_masks_check(s, 1))) return rc;
-    /* printer units wherever the printer can plan, so both plans are one */
-    a->eps_units = a->metric != ADASLICE_METRIC_VOLUME && !a->budget ? ADASLICE_PRINTER_EPS_UNITS : 0;
-    j->args = a;
-    j->keep_mesh = 1;
-    if ((rc = run_plan(a, j))) return rc;
-    p = &j->plan[ADASLICE_METHOD_OPTIMAL];
-    nm = j->profile.bin * 1e6;
-    pj->layers = (uint32_t)p->layer_count;
-    pj->bin_nm = (uint32_t)(nm + 0.5);
-    if (fabs(nm - pj->bin_nm) > 1e-6 * nm) return complain(RC_USAGE, "--bin %g mm: a printer counts whole nanometres", j->profile.bin);
-    if ((rc = cure_finish(&s->cure, a->tmin, a->tmax))) return rc;
-    pj->lengths = (uint32_t *)malloc(pj->layers * sizeof *pj->lengths);
-    pj->exposure_ms = (uint32_t *)malloc(pj->layers * sizeof *pj->exposure_ms);
-    layers = (job_layer *)malloc(pj->layers * sizeof *layers);
-    if (!pj->lengths || !pj->exposure_ms || !layers) { free(layers); return complain(RC_FAIL, "out of memory"); }
-    cure_layers(&s->cure, p, layers);
-    for (k = 0; k < pj->layers; k++) {
-        pj->lengths[k] = p->planes[k + 1] - p->planes[k];
-        pj->exposure_ms[k] = (uint32_t)(layers[k].exposure_s * 1000 + 0.5);
-    }
-    free(layers);
-    pj->motion.peel_nm = (uint32_t)(s->cure.motion.lift_mm * 1e6 + 0.5);
-    pj->motion.peel_speed_um_s = (uint32_t)(s->cure.motion.lift_speed * 1000 + 0.5);
-    pj->motion.return_speed_um_s = (uint32_t)(s->cure.motion.retract_speed * 1000 + 0.5);
-    pj->motion.settle_ms = (uint32_t)(s->cure.motion.wait_before_cure_s * 1000 + 0.5);
-    if ((rc = layer_masks_open(&pj->masks, s, j))) return rc;
-    pj->width = (uint32_t)pj->masks.width;
-    pj->height = (uint32_t)pj->masks.height;
-    pj->bits = (uint32_t)pj->masks.bits;
-    *planned_by_printer = !pa->plan_on_host && a->eps_units && j->profile.bin_count <= l->id.max_bins &&
-                          p->bins_max <= l->id.max_layer_bins;
-    if (!*planned_by_printer && !pa->plan_on_host)
-        fprintf(stderr, "adaslice: the printer plans at most %u bins of layers up to %u bins (this part: %zu, %u%s): "
-                        "the host plans\n", l->id.max_bins, l->id.max_layer_bins, j->profile.bin_count, p->bins_max,
-                a->eps_units ? "" : ", and volume or --budget plans are the host's");
-    return RC_OK;
-}
-
-static int job_from_dir(print_job *pj, const char *dir)
-{
-    int rc = jobdir_read_masks(dir, &pj->file);
-    if (rc) return rc;
-    pj->layers = pj->file.layers;
-    pj->bin_nm = pj->file.bin_nm;
-    pj->lengths = pj->file.lengths;
-    pj->exposure_ms = pj->file.exposure_ms;
-    pj->motion.peel_nm = pj->file.peel_nm;
-    pj->motion.peel_speed_um_s = pj->file.peel_speed_um_s;
-    pj->motion.return_speed_um_s = pj->file.return_speed_um_s;
-    pj->motion.settle_ms = pj->file.settle_ms;
-    pj->width = pj->file.width;
-    pj->height = pj->file.height;
-    pj->bits = pj->file.bits;
-    return RC_OK;
-}
 
 /* A job sliced for other pixels prints scaled by the ratio of the pitches
    (0.1 mm pixels on a 0.05 mm display: half size), so it is refused before
@@ -753,7 +474,7 @@ static int prepare(serial_link *l, const print_args *pa, const plan_job *j, prin
     if (pa->resume_from && ((rc = check_resume(l, pa, pj, in_place)) || *in_place)) return rc;
     if (planned_by_printer) plan_options_of(j->args, ADASLICE_METHOD_OPTIMAL, &o);
     l->task = planned_by_printer ? "planning" : "taking the plan";
-    rc = planned_by_printer ? plan_on_printer(l, j, &o, pj) : plan_given(l, pj);
+    rc = planned_by_printer ? plan_upload_profile(l, j, &o, pj) : plan_upload_plan(l, pj);
     l->task = NULL;
     if (rc) return rc;
     printf("%s: %u layer%s, %s\n", name, pj->layers, plural(pj->layers),
@@ -933,13 +654,13 @@ int cmd_print(int argc, char **argv)
     if (pa.abort) return abort_paused(&pa);
     if ((rc = output_check("--report", pa.report))) return rc; /* before hours of printing */
     pj.from_model = !jobdir;
-    if ((jobdir && (rc = job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
+    if ((jobdir && (rc = print_job_from_dir(&pj, jobdir))) || (rc = serial_connect(&l, pa.port, pa.baud, pa.give_up_s))) goto done;
     printf("printer on %s: %u x %u px of %g mm, %u-bit; %u steps/mm; plans up to %u bins; its pace %g us a byte of "
            "rows' CRC, %g us a bin planned\n", pa.port, l.id.width, l.id.height, l.id.pitch_nm / 1e6, l.id.bits,
            l.id.steps_per_mm, l.id.max_bins, l.id.crc_byte_ns / 1e3, l.id.plan_bin_ns / 1e3);
     fflush(stdout);
     if (jobdir && (rc = check_pitch(&pj, jobdir, &l, pa.port))) goto done;
-    if (!jobdir && (rc = job_from_model(&pj, &a, &j, &s, &l, &pa, &planned_by_printer))) goto done;
+    if (!jobdir && (rc = print_job_from_model(&pj, &a, &j, &s, &l, pa.plan_on_host, &planned_by_printer))) goto done;
     if (pj.width != l.id.width || pj.height != l.id.height || pj.bits != l.id.bits) {
         rc = complain(RC_FAIL, "the masks are %u x %u px, %u-bit; the printer shows %u x %u px, %u-bit", pj.width, pj.height,
                       pj.bits, l.id.width, l.id.height, l.id.bits);
@@ -970,7 +691,7 @@ int cmd_print(int argc, char **argv)
                              (rc = screen_guard(&scr, l.fd)) || (rc = screen_print_said_dark(&l))))
         goto done;
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
-    pj.job = job_hash(&pj, jobdir ? NULL : &j.mesh, &s);
+    pj.job = print_job_hash(&pj, jobdir ? NULL : &j.mesh, &s);
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
     sigemptyset(&sa.sa_mask);
