@@ -3417,10 +3417,8 @@ static double adaslice__turn(const double *row, const float *p)
 /* p turned by r into q (which may be p): the only place a vertex is turned */
 static void adaslice__turn_vertex(const double r[9], const float *p, float *q)
 {
-    float t[3];
-    int k;
-    for (k = 0; k < 3; k++) t[k] = (float)adaslice__turn(r + 3 * k, p);
-    memcpy(q, t, sizeof t);
+    float x = (float)adaslice__turn(r, p), y = (float)adaslice__turn(r + 3, p), z = (float)adaslice__turn(r + 6, p);
+    q[0] = x; q[1] = y; q[2] = z;
 }
 
 /* mesh's vertices turned by r into a copy (triangles shared); 0 when out of memory */
@@ -3889,10 +3887,15 @@ static double *adaslice__rmax_finish(adaslice__rmax *r)
 
 /* Per-triangle value that the max-type profiles take: |n_z| (eq. 4) or
    1/sin(theta) = |n| / |n_xy| clamped at roughness_max (eq. 8), times the weight. */
+static double adaslice__cusp_value(const double n[3])
+{
+    return fabs(n[2]) / sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
 static double adaslice__facet_value(adaslice_metric metric, const double n[3], double roughness_max)
 {
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), xy;
-    if (metric == ADASLICE_METRIC_CUSP) return fabs(n[2]) / len;
+    if (metric == ADASLICE_METRIC_CUSP) return adaslice__cusp_value(n);
     xy = sqrt(n[0] * n[0] + n[1] * n[1]);
     if (xy * roughness_max <= len) return roughness_max;
     return len / xy;
@@ -4166,12 +4169,15 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     return ADASLICE_OK;
 }
 
-/* What a triangle with corners a, b, c contributes to a max-type profile
-   (its value times its weight), or to the max weight per bin (area and
-   volume); -1 if it has no normal. */
-static double adaslice__corner_value(const float *a, const float *b, const float *c, size_t t,
-                                     const adaslice_profile_options *opt)
+#ifndef ADASLICE_NO_SAMPLED
+/* What a triangle contributes to a max-type profile (its value times its
+   weight), or to the max weight per bin (area and volume); -1 if it has no
+   normal. */
+static double adaslice__face_value(const adaslice_mesh *mesh, size_t t, const adaslice_profile_options *opt)
 {
+    const uint32_t *tri = mesh->triangles + 3 * t;
+    const float *a = mesh->vertices + 3 * (size_t)tri[0], *b = mesh->vertices + 3 * (size_t)tri[1],
+                *c = mesh->vertices + 3 * (size_t)tri[2];
     double u0 = (double)b[0] - a[0], u1 = (double)b[1] - a[1], u2 = (double)b[2] - a[2];
     double w0 = (double)c[0] - a[0], w1 = (double)c[1] - a[1], w2 = (double)c[2] - a[2];
     double nrm[3], value = 1;
@@ -4182,13 +4188,7 @@ static double adaslice__corner_value(const float *a, const float *b, const float
     if (opt->metric <= ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(opt->metric, nrm, opt->roughness_max);
     return opt->weights ? value * opt->weights[t] : value;
 }
-
-static double adaslice__face_value(const adaslice_mesh *mesh, size_t t, const adaslice_profile_options *opt)
-{
-    const uint32_t *tri = mesh->triangles + 3 * t;
-    return adaslice__corner_value(mesh->vertices + 3 * (size_t)tri[0], mesh->vertices + 3 * (size_t)tri[1],
-                                  mesh->vertices + 3 * (size_t)tri[2], t, opt);
-}
+#endif
 
 /* Area and volume deviation from the areas (eq. 14, 17), times the largest
    weight in each bin (eq. 23, 24) when there are weights. */
@@ -4222,7 +4222,10 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
                                        const adaslice_profile *p, size_t longest, adaslice__rmax *rmax)
 {
     size_t t, found = 1;
-    double inverse = 1.0 / p->bin, top = (double)(long)(p->bin_count - 1);
+    /* locals, as the table's stores could otherwise be the options' doubles */
+    double inverse = 1.0 / p->bin, top = (double)(long)(p->bin_count - 1), z0 = p->z0, rough = opt->roughness_max;
+    adaslice_metric metric = opt->metric;
+    const float *weights = opt->weights;
     for (t = 0; !longest && t < mesh->triangle_count; t++) {
         const uint32_t *tri = mesh->triangles + 3 * t;
         float a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
@@ -4230,7 +4233,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
         size_t run;
         lo = c < lo ? c : lo;
         hi = c > hi ? c : hi;
-        run = adaslice__bin_of(p->z0, inverse, top, hi) - adaslice__bin_of(p->z0, inverse, top, lo) + 1;
+        run = adaslice__bin_of(z0, inverse, top, hi) - adaslice__bin_of(z0, inverse, top, lo) + 1;
         found = run > found ? run : found;
     }
     if (!longest) longest = found;
@@ -4239,8 +4242,7 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
         const uint32_t *tri = mesh->triangles + 3 * t;
         const float *a = mesh->vertices + 3 * (size_t)tri[0], *b = mesh->vertices + 3 * (size_t)tri[1],
                     *c = mesh->vertices + 3 * (size_t)tri[2];
-        /* adaslice__corner_value, written out: a call per triangle cost a
-           third of the profile */
+        /* adaslice__face_value, written out on the corners at hand */
         double u0 = (double)b[0] - a[0], u1 = (double)b[1] - a[1], u2 = (double)b[2] - a[2];
         double w0 = (double)c[0] - a[0], w1 = (double)c[1] - a[1], w2 = (double)c[2] - a[2];
         double nrm[3], value = 1, lo, hi;
@@ -4248,14 +4250,16 @@ static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice
         nrm[1] = u2 * w0 - u0 * w2;
         nrm[2] = u0 * w1 - u1 * w0;
         if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) continue;
-        if (opt->metric == ADASLICE_METRIC_CUSP) value = fabs(nrm[2]) / sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-        else if (opt->metric == ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(opt->metric, nrm, opt->roughness_max);
-        if (opt->weights) value *= opt->weights[t];
+        /* the cusp metric by itself: the call to adaslice__facet_value cost
+           a tenth of the profile */
+        if (metric == ADASLICE_METRIC_CUSP) value = adaslice__cusp_value(nrm);
+        else if (metric == ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(metric, nrm, rough);
+        if (weights) value *= weights[t];
         lo = a[2] < b[2] ? a[2] : b[2];
         hi = a[2] > b[2] ? a[2] : b[2];
         lo = c[2] < lo ? c[2] : lo;
         hi = c[2] > hi ? c[2] : hi;
-        adaslice__rmax_update(rmax, adaslice__bin_of(p->z0, inverse, top, lo), adaslice__bin_of(p->z0, inverse, top, hi), value);
+        adaslice__rmax_update(rmax, adaslice__bin_of(z0, inverse, top, lo), adaslice__bin_of(z0, inverse, top, hi), value);
     }
     return adaslice__rmax_finish(rmax);
 }
