@@ -54,7 +54,7 @@ typedef struct plan_job {
     adaslice_plan uniform;         /* --compare: plan_uniform_no_worse than the optimal plan */
     int uniform_found;
     double *kappa;                 /* curvature per bin, for the curvature method (model only) */
-    double ms_load, ms_profile, ms_plan;
+    double ms_load, ms_repair, ms_profile, ms_plan;  /* model only: load without the repair, then the repair */
     /* Called with the mesh loaded and turned, before it is profiled: a
        check (the plate's fit) that should stop the job before the work. */
     int (*loaded)(void *ctx, const adaslice_mesh *mesh);
