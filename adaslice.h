@@ -3873,9 +3873,10 @@ static double *adaslice__rmax_finish(adaslice__rmax *r)
     int k;
     for (k = r->levels - 1; k > 0; k--) {
         const double *up = r->t + (size_t)k * r->n;
-        double *down = adaslice__rmax_level(r, k - 1);
+        double *down;
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
         if (!r->zeroed[k]) continue;
+        down = adaslice__rmax_level(r, k - 1);
         for (j = 0; j < end; j++) {
             down[j] = down[j] < up[j] ? up[j] : down[j];
             down[j + half] = down[j + half] < up[j] ? up[j] : down[j + half];
