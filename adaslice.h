@@ -944,6 +944,7 @@ typedef struct adaslice_orienter {
     adaslice_profile_options profile;  /* copies of the options given */
     adaslice_plan_options plan;
     unsigned char *used;               /* per vertex: some triangle uses it (height ranges) */
+    double longest_edge, reach;        /* of any triangle; the farthest used vertex from the origin */
     adaslice_allocator allocator;
 } adaslice_orienter;
 
@@ -3696,10 +3697,8 @@ static double adaslice__turn(const double *row, const float *p)
 /* p turned by r into q (which may be p): the only place a vertex is turned */
 static void adaslice__turn_vertex(const double r[9], const float *p, float *q)
 {
-    float t[3];
-    int k;
-    for (k = 0; k < 3; k++) t[k] = (float)adaslice__turn(r + 3 * k, p);
-    memcpy(q, t, sizeof t);
+    float x = (float)adaslice__turn(r, p), y = (float)adaslice__turn(r + 3, p), z = (float)adaslice__turn(r + 6, p);
+    q[0] = x; q[1] = y; q[2] = z;
 }
 
 /* mesh's vertices turned by r into a copy (triangles shared); 0 when out of memory */
@@ -4148,67 +4147,89 @@ ADASLICE_DEF adaslice_grid adaslice_grid_fit(const adaslice_mesh *mesh, adaslice
 /* Range-maximum updates in O(1) each: a sparse table whose level k holds
    maxima over runs of 2^k bins; a range [l, r] writes two overlapping runs of
    the largest power of two that fits, and one push down, level by level, at
-   the end gives every bin its maximum. Levels stop at the longest range. */
+   the end gives every bin its maximum. Levels stop at the longest range, and
+   a level is zeroed when first written: on large profiles the levels are
+   tens of MB, and clearing the unused ones cost as much as the updates. */
 typedef struct adaslice__rmax {
     size_t n;
     int levels;
+    unsigned char zeroed[64];
     double *t;          /* levels * n */
 } adaslice__rmax;
 
+/* Bins count below 2^31, so a double holds x exactly and its exponent is
+   the answer without a branch. */
 static int adaslice__floor_log2(size_t x) /* x >= 1 */
 {
-    int k = 0;
-    while (x >= ((size_t)1 << 16)) { x >>= 16; k += 16; }
-    if (x >= 256) { x >>= 8; k += 8; }
-    if (x >= 16) { x >>= 4; k += 4; }
-    if (x >= 4) { x >>= 2; k += 2; }
-    return x >= 2 ? k + 1 : k;
+    double d = (double)x;
+    uint64_t bits;
+    memcpy(&bits, &d, sizeof bits);
+    return (int)(bits >> 52) - 1023;
 }
 
 static int adaslice__rmax_init(adaslice__rmax *r, size_t n, size_t longest, const adaslice_allocator *al)
 {
     r->n = n;
-    r->levels = adaslice__floor_log2(longest ? longest : 1) + 1;
+    r->levels = adaslice__floor_log2(longest < n ? (longest ? longest : 1) : n) + 1;
+    memset(r->zeroed, 0, sizeof r->zeroed);
     r->t = ADASLICE__CAST(double *, adaslice__alloc(al, (size_t)r->levels * n, sizeof(double)));
-    if (!r->t) return 0;
-    memset(r->t, 0, (size_t)r->levels * n * sizeof(double));
-    return 1;
+    return r->t != NULL;
+}
+
+static double *adaslice__rmax_level(adaslice__rmax *r, int k)
+{
+    double *level = r->t + (size_t)k * r->n;
+    if (!r->zeroed[k]) {
+        memset(level, 0, r->n * sizeof(double));
+        r->zeroed[k] = 1;
+    }
+    return level;
 }
 
 static void adaslice__rmax_update(adaslice__rmax *r, size_t first, size_t last, double v)
 {
     int k = adaslice__floor_log2(last - first + 1);
-    double *level = r->t + (size_t)k * r->n;
+    double *level;
+    ADASLICE_ASSERT(k < r->levels); /* the table's height came from a bound on the ranges */
+    level = adaslice__rmax_level(r, k);
     size_t second = last + 1 - ((size_t)1 << k);
     /* unconditional stores: the comparisons are unpredictable, a select is not */
     level[first] = level[first] < v ? v : level[first];
     level[second] = level[second] < v ? v : level[second];
 }
 
-/* Pushes every level down; level 0 then holds each bin's maximum. A tall
-   part's levels are most of a profile's work: they are its progress. */
+/* Pushes every written level down; level 0 then holds each bin's maximum. A
+   tall part's levels are most of a profile's work: they are its progress. */
 static double *adaslice__rmax_finish(adaslice__rmax *r, const adaslice_profile_options *opt)
 {
     int k;
     for (k = r->levels - 1; k > 0; k--) {
         if (opt->progress) opt->progress(opt->progress_user, 0.1 + 0.9 * (double)(r->levels - 1 - k) / r->levels);
         const double *up = r->t + (size_t)k * r->n;
-        double *down = r->t + (size_t)(k - 1) * r->n;
+        double *down;
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
+        if (!r->zeroed[k]) continue;
+        down = adaslice__rmax_level(r, k - 1);
         for (j = 0; j < end; j++) {
             down[j] = down[j] < up[j] ? up[j] : down[j];
             down[j + half] = down[j + half] < up[j] ? up[j] : down[j + half];
         }
     }
+    (void)adaslice__rmax_level(r, 0);
     return r->t;
 }
 
 /* Per-triangle value that the max-type profiles take: |n_z| (eq. 4) or
    1/sin(theta) = |n| / |n_xy| clamped at roughness_max (eq. 8), times the weight. */
+static double adaslice__cusp_value(const double n[3])
+{
+    return fabs(n[2]) / sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
 static double adaslice__facet_value(adaslice_metric metric, const double n[3], double roughness_max)
 {
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), xy;
-    if (metric == ADASLICE_METRIC_CUSP) return fabs(n[2]) / len;
+    if (metric == ADASLICE_METRIC_CUSP) return adaslice__cusp_value(n);
     xy = sqrt(n[0] * n[0] + n[1] * n[1]);
     if (xy * roughness_max <= len) return roughness_max;
     return len / xy;
@@ -4495,6 +4516,7 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
     return ADASLICE_OK;
 }
 
+#ifndef ADASLICE_NO_SAMPLED
 /* What a triangle contributes to a max-type profile (its value times its
    weight), or to the max weight per bin (area and volume); -1 if it has no
    normal. */
@@ -4513,6 +4535,7 @@ static double adaslice__face_value(const adaslice_mesh *mesh, size_t t, const ad
     if (opt->metric <= ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(opt->metric, nrm, opt->roughness_max);
     return opt->weights ? value * opt->weights[t] : value;
 }
+#endif
 
 /* Area and volume deviation from the areas (eq. 14, 17), times the largest
    weight in each bin (eq. 23, 24) when there are weights. */
@@ -4526,54 +4549,73 @@ static void adaslice__phi_from_area(adaslice_profile *p, const double *wmax)
     }
 }
 
-/* Each triangle's value (adaslice__face_value) over every bin its z-range
-   meets (eq. 5, 9, 21-24), in two passes: values and bin ranges, which size
-   the table, then the updates. Returns the per-bin maxima (the table, which
-   the caller frees), or NULL when out of memory. */
-static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice_profile_options *opt,
-                                       const adaslice_profile *p, adaslice__rmax *rmax)
+/* The bin that height z falls in, clamped to 0 .. top: selects, not
+   branches, as heights arrive in no useful order. Bins count below 2^31, so
+   a long holds one (one instruction; a size_t takes a branch). */
+static size_t adaslice__bin_of(double z0, double inverse, double top, double z)
 {
-    size_t t, n = p->bin_count, longest = 1;
-    double inverse = 1.0 / p->bin, *value;
-    uint32_t *span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&p->allocator, 2 * mesh->triangle_count, sizeof(uint32_t)));
-    value = ADASLICE__CAST(double *, adaslice__alloc(&p->allocator, mesh->triangle_count, sizeof(double)));
-    if (!span || !value) {
-        adaslice__free(&p->allocator, span);
-        adaslice__free(&p->allocator, value);
-        return NULL;
-    }
-    for (t = 0; t < mesh->triangle_count; t++) {
-        const uint32_t *tri = mesh->triangles + 3 * t;
-        double a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
-               c = mesh->vertices[3 * (size_t)tri[2] + 2];
-        double lo = a < b ? a : b, hi = a > b ? a : b, f, g;
-        size_t run;
-        if (opt->progress && t % 65536 == 0) opt->progress(opt->progress_user, 0.1 * (double)t / (double)mesh->triangle_count);
-        value[t] = adaslice__face_value(mesh, t, opt);
-        lo = c < lo ? c : lo;
-        hi = c > hi ? c : hi;
-        /* selects, not branches: heights arrive in no useful order */
-        f = (lo - p->z0) * inverse;
-        f = f > 0 ? f : 0;
-        f = f < (double)(n - 1) ? f : (double)(n - 1);
-        g = (hi - p->z0) * inverse;
-        g = g > 0 ? g : 0;
-        g = g < (double)(n - 1) ? g : (double)(n - 1);
-        span[2 * t] = (uint32_t)f;
-        span[2 * t + 1] = (uint32_t)g;
-        run = value[t] >= 0 ? span[2 * t + 1] - span[2 * t] + 1 : 1;
-        longest = run > longest ? run : longest;
-    }
-    if (adaslice__rmax_init(rmax, n, longest, &p->allocator))
-        for (t = 0; t < mesh->triangle_count; t++)
-            if (value[t] >= 0) adaslice__rmax_update(rmax, span[2 * t], span[2 * t + 1], value[t]);
-    adaslice__free(&p->allocator, span);
-    adaslice__free(&p->allocator, value);
-    return rmax->t ? adaslice__rmax_finish(rmax, opt) : NULL;
+    double f = (z - z0) * inverse;
+    f = f > 0 ? f : 0;
+    f = f < top ? f : top;
+    return (size_t)(long)f;
 }
 
+/* Each triangle's value (adaslice__face_value) over every bin its z-range
+   meets (eq. 5, 9, 21-24), in one pass. longest: an upper bound on the bins
+   a triangle meets, or 0 to have it found by a pass over the heights (it
+   sizes the table). Returns the per-bin maxima (the table, which the caller
+   frees), or NULL when out of memory. */
+static double *adaslice__max_over_bins(const adaslice_mesh *mesh, const adaslice_profile_options *opt,
+                                       const adaslice_profile *p, size_t longest, adaslice__rmax *rmax)
+{
+    size_t t, found = 1;
+    /* locals, as the table's stores could otherwise be the options' doubles */
+    double inverse = 1.0 / p->bin, top = (double)(long)(p->bin_count - 1), z0 = p->z0, rough = opt->roughness_max;
+    adaslice_metric metric = opt->metric;
+    const float *weights = opt->weights;
+    for (t = 0; !longest && t < mesh->triangle_count; t++) {
+        const uint32_t *tri = mesh->triangles + 3 * t;
+        float a = mesh->vertices[3 * (size_t)tri[0] + 2], b = mesh->vertices[3 * (size_t)tri[1] + 2],
+              c = mesh->vertices[3 * (size_t)tri[2] + 2], lo = a < b ? a : b, hi = a > b ? a : b;
+        size_t run;
+        lo = c < lo ? c : lo;
+        hi = c > hi ? c : hi;
+        run = adaslice__bin_of(z0, inverse, top, hi) - adaslice__bin_of(z0, inverse, top, lo) + 1;
+        found = run > found ? run : found;
+    }
+    if (!longest) longest = found;
+    if (!adaslice__rmax_init(rmax, p->bin_count, longest, &p->allocator)) return NULL;
+    for (t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *tri = mesh->triangles + 3 * t;
+        const float *a = mesh->vertices + 3 * (size_t)tri[0], *b = mesh->vertices + 3 * (size_t)tri[1],
+                    *c = mesh->vertices + 3 * (size_t)tri[2];
+        if (opt->progress && t % 65536 == 0) opt->progress(opt->progress_user, 0.1 * (double)t / (double)mesh->triangle_count);
+        /* adaslice__face_value, written out on the corners at hand */
+        double u0 = (double)b[0] - a[0], u1 = (double)b[1] - a[1], u2 = (double)b[2] - a[2];
+        double w0 = (double)c[0] - a[0], w1 = (double)c[1] - a[1], w2 = (double)c[2] - a[2];
+        double nrm[3], value = 1, lo, hi;
+        nrm[0] = u1 * w2 - u2 * w1;
+        nrm[1] = u2 * w0 - u0 * w2;
+        nrm[2] = u0 * w1 - u1 * w0;
+        if (nrm[0] == 0 && nrm[1] == 0 && nrm[2] == 0) continue;
+        /* the cusp metric by itself: the call to adaslice__facet_value cost
+           a tenth of the profile */
+        if (metric == ADASLICE_METRIC_CUSP) value = adaslice__cusp_value(nrm);
+        else if (metric == ADASLICE_METRIC_ROUGHNESS) value = adaslice__facet_value(metric, nrm, rough);
+        if (weights) value *= weights[t];
+        lo = a[2] < b[2] ? a[2] : b[2];
+        hi = a[2] > b[2] ? a[2] : b[2];
+        lo = c[2] < lo ? c[2] : lo;
+        hi = c[2] > hi ? c[2] : hi;
+        adaslice__rmax_update(rmax, adaslice__bin_of(z0, inverse, top, lo), adaslice__bin_of(z0, inverse, top, hi), value);
+    }
+    return adaslice__rmax_finish(rmax, opt);
+}
+
+/* longest: see adaslice__max_over_bins */
 static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const adaslice_profile_options *options,
-                                               const double *zrange, adaslice_profile *profile, adaslice_error *err)
+                                               const double *zrange, size_t longest, adaslice_profile *profile,
+                                               adaslice_error *err)
 {
     adaslice_profile_options opt;
     adaslice__rmax rmax;
@@ -4587,7 +4629,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     if (max_type || opt.weights) {
-        tree = adaslice__max_over_bins(mesh, &opt, profile, &rmax);
+        tree = adaslice__max_over_bins(mesh, &opt, profile, longest, &rmax);
         if (!tree) {
             adaslice_profile_free(profile);
             return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
@@ -4614,7 +4656,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_exact(const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *options,
                                                     adaslice_profile *profile, adaslice_error *err)
 {
-    return adaslice__profile_exact(mesh, options, NULL, profile, err);
+    return adaslice__profile_exact(mesh, options, NULL, 0, profile, err);
 }
 
 #ifndef ADASLICE_NO_SAMPLED
@@ -6767,8 +6809,28 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
         }
         o->used[mesh->triangles[t]] = 1;
     }
+    for (t = 0; t < 3 * mesh->triangle_count; t++) {
+        const float *p = mesh->vertices + 3 * (size_t)mesh->triangles[t],
+                    *q = mesh->vertices + 3 * (size_t)mesh->triangles[t % 3 == 2 ? t - 2 : t + 1];
+        double dx = (double)q[0] - p[0], dy = (double)q[1] - p[1], dz = (double)q[2] - p[2];
+        double edge = sqrt(dx * dx + dy * dy + dz * dz), r = sqrt((double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2]);
+        o->longest_edge = edge > o->longest_edge ? edge : o->longest_edge;
+        o->reach = r > o->reach ? r : o->reach;
+    }
     adaslice__ok(err);
     return ADASLICE_OK;
+}
+
+/* Bins a triangle meets along any direction, at most (0: unknown): its
+   height is at most its longest edge, plus the turned corners' rounding to
+   float (2^-24 of their distance from the origin each), and its ends fall in
+   bins at most two apart beyond that. Sizes the profile's table without a
+   pass over the heights. */
+static size_t adaslice__longest_run(const adaslice_orienter *o)
+{
+    double bin = o->profile.bin > 0 ? o->profile.bin : ADASLICE_DEFAULT_BIN;
+    double bins = (o->longest_edge + 1e-5 * o->reach) / bin + 3;
+    return bins < 2147483647.0 ? (size_t)bins : 0;
 }
 
 ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
@@ -6805,7 +6867,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
         zrange[0] = o->used[v] && q[2] < zrange[0] ? q[2] : zrange[0];
         zrange[1] = o->used[v] && q[2] > zrange[1] ? q[2] : zrange[1];
     }
-    r = adaslice__profile_exact(&turned, &o->profile, zrange, profile, err);
+    r = adaslice__profile_exact(&turned, &o->profile, zrange, adaslice__longest_run(o), profile, err);
     adaslice__free(&al, turned.vertices);
     return r;
 }

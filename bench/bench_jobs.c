@@ -41,6 +41,7 @@ extern char **environ;
 #define RUNS 3
 
 static char work[64];
+static char stages[512]; /* the last slice's line of stage times ("time load ..."), or "" */
 
 /* Runs argv with stdout into work/out; its wall time, or -1. */
 static double run(char **argv, size_t *layers)
@@ -62,8 +63,11 @@ static double run(char **argv, size_t *layers)
     t = now() - t0;
     posix_spawn_file_actions_destroy(&fa);
     *layers = 0;
+    stages[0] = 0;
     if ((f = fopen(out, "r"))) {
         if (fgets(line, sizeof line, f) && strstr(line, " layers of ")) *layers = strtoul(strstr(line, ": ") + 2, NULL, 10);
+        while (fgets(line, sizeof line, f))
+            if (!strncmp(line, "time load ", 10)) snprintf(stages, sizeof stages, "%s", line + 5);
         fclose(f);
     }
     return t;
@@ -217,7 +221,7 @@ static int against_prusaslicer(const char *tool, const char *dir)
     printf("  %-24s %7s %10s %10s %10s %9s %9s %9s\n", "model", "layers", "ours 1-bit", "ours aa 4", "PrusaSlicer", "1-bit",
            "aa 4", "aa/1-bit");
     for (i = 0; i < sizeof parts / sizeof parts[0]; i++) {
-        char model[4096], stl[128], job[128], sl1[128], data[128], scale[32];
+        char model[4096], stl[128], job[128], sl1[128], data[128], scale[32], ours_stages[512] = "";
         double t[3][RUNS];
         size_t layers = 0, dummy;
         int r, k;
@@ -244,6 +248,7 @@ static int against_prusaslicer(const char *tool, const char *dir)
                                   (char *)"--initial-layer-height", (char *)"0.05", (char *)"--max-print-height",
                                   (char *)"200", (char *)"--no-supports-enable", (char *)"--no-pad-enable", stl, NULL};
                 t[k][r] = run(k < 2 ? ours : theirs, k < 2 ? &layers : &dummy);
+                if (k == 0) memcpy(ours_stages, stages, sizeof stages);
                 if (t[k][r] < 0) {
                     printf("bench_jobs: %s failed on %s\n", k < 2 ? tool : "prusa-slicer", parts[i].file);
                     return 1;
@@ -252,6 +257,7 @@ static int against_prusaslicer(const char *tool, const char *dir)
         {
             double a = median(t[0], RUNS), b = median(t[1], RUNS), p = median(t[2], RUNS);
             printf("  %-24s %7zu %9.2fs %9.2fs %10.2fs %8.2fx %8.2fx %8.2fx\n", parts[i].file, layers, a, b, p, p / a, p / b, b / a);
+            if (ours_stages[0]) printf("    ours 1-bit, last run: %s", ours_stages);
         }
     }
     return 0;

@@ -169,7 +169,8 @@ static void print_summary(const plan_args *a, const plan_job *j)
         plan_changes_line(p, pr->bin, line, sizeof line);
         printf("           %s\n", line);
     }
-    printf("time       load %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_profile, j->ms_plan);
+    printf("time       load %.1f ms, repair %.1f ms, profile %.1f ms, plan %.1f ms\n", j->ms_load, j->ms_repair,
+           j->ms_profile, j->ms_plan);
     if (j->fdm_seconds > 0) {
         char when[32];
         format_duration(when, sizeof when, j->fdm_seconds);
@@ -268,6 +269,7 @@ static void print_json(const plan_args *a, const plan_job *j)
     json_end(&w);
     json_begin_object(&w, "time_ms", 1);
     json_number(&w, "load", j->ms_load);
+    json_number(&w, "repair", j->ms_repair);
     json_number(&w, "profile", j->ms_profile);
     json_number(&w, "plan", j->ms_plan);
     json_end(&w);

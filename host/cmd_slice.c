@@ -320,7 +320,7 @@ static void layer_done(void *ctx, size_t k)
 
 /* The job's description; every layer rendered once, in order, into the format. */
 static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const job_format *f, const char *path,
-                     unsigned extras, job_desc *d, job_summary *sum)
+                     unsigned extras, job_desc *d, job_summary *sum, double stage_ms[3])
 {
     const adaslice_plan *p = &j->plan[a->method];
     size_t k, count = p->layer_count;
@@ -420,6 +420,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     pipe.render = render_layer;
     pipe.done = layer_done;
     pipe.ctx = &run;
+    pipe.stage_ms = stage_ms;
     rc = pipeline_run(&pipe);
     /* a job that lights nothing prints nothing, silently: said, and removed */
     if (!rc && !(d->volume_mm3 > 0))
@@ -450,6 +451,7 @@ int cmd_slice(int argc, char **argv)
     char **rest = (char **)malloc(((size_t)argc + 4) * sizeof *rest), *path = NULL, *extended = NULL, *csv = NULL,
          *svg = NULL, when[32];
     int rest_argc = 0, rc, i;
+    double stage_ms[3] = {0, 0, 0}, t0 = now_ms();
 
     memset(&j, 0, sizeof j);
     memset(&sum, 0, sizeof sum);
@@ -504,7 +506,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc)
         rc = write_job(&s, &a, &j, f, path,
                        (a.out == csv ? DIR_PLAN_CSV : 0) | (a.plot == svg ? DIR_PLOT_SVG : 0) | (s.svg ? DIR_LAYER_SVGS : 0),
-                       &d, &sum);
+                       &d, &sum, stage_ms);
     if (!rc) {
         format_duration(when, sizeof when, d.print_time_s);
         printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
@@ -534,6 +536,11 @@ int cmd_slice(int argc, char **argv)
         if (s.cure.typical)
             printf("exposure by the working curve of a typical resin (%g s at %g mm, Dp %g mm): calibrate yours with "
                    "--exposure S1@T1,S2@T2\n", d.cure[0], d.cure[1], d.cure[2]);
+        /* the layers' stages overlap on the threads: each is its busy time, summed over them */
+        printf("time load %.0f ms, repair %.0f ms, profile %.0f ms, plan %.0f ms, masks %.0f ms, coding %.0f ms, "
+               "writing %.0f ms (the last three summed over %d thread%s); %.0f ms in all\n",
+               j.ms_load, j.ms_repair, j.ms_profile, j.ms_plan, stage_ms[0], stage_ms[1], stage_ms[2], s.threads,
+               plural((size_t)s.threads), now_ms() - t0);
     }
 done:
     job_free(&j);

@@ -36,16 +36,24 @@ static void warn_repairs(const char *path, const adaslice_mesh_report *r)
 
 int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report)
 {
+    return model_load_timed(path, scale, mesh, report, NULL);
+}
+
+int model_load_timed(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report, double *ms_repair)
+{
     adaslice_load_options lo;
     adaslice_mesh_report r;
     adaslice_error err;
+    double t0;
     memset(&lo, 0, sizeof lo);
     lo.scale = scale;
     if (adaslice_mesh_load_file(path, &lo, mesh, &err) != ADASLICE_OK) return library_error(&err);
+    t0 = now_ms();
     if (adaslice_mesh_repair(mesh, NULL, &r, &err) != ADASLICE_OK) {
         adaslice_mesh_free(mesh);
         return complain(RC_FAIL, "%s: %s", path, err.message);
     }
+    if (ms_repair) *ms_repair = now_ms() - t0;
     warn_repairs(path, &r);
     if (report) *report = r;
     return RC_OK;

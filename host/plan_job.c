@@ -304,8 +304,8 @@ static int profile_model(const plan_args *a, plan_job *j)
     float *weights = NULL;
     int rc;
 
-    if ((rc = model_load(a->model, a->scale, &mesh, &j->repair)) != RC_OK) return rc;
-    j->ms_load = now_ms() - t0;
+    if ((rc = model_load_timed(a->model, a->scale, &mesh, &j->repair, &j->ms_repair)) != RC_OK) return rc;
+    j->ms_load = now_ms() - t0 - j->ms_repair;
     /* before any turn, so that regions are in the model's own coordinates */
     t0 = now_ms();
     if ((rc = weights_for_plan(&a->weights, &mesh, &weights)) != RC_OK) {

@@ -70,7 +70,7 @@ typedef struct plan_job {
     int planar_found;
     int planar_finest;             /* no plan reaches printed_worst: planar is uniform tmin */
     double fdm_seconds, planar_fdm_seconds; /* --3mf: fdm.h's times of the plan and of planar */
-    double ms_load, ms_profile, ms_plan;
+    double ms_load, ms_repair, ms_profile, ms_plan;  /* model only: load without the repair, then the repair */
     /* Called with the mesh loaded and turned, before it is profiled: a
        check (the plate's fit) that should stop the job before the work. */
     int (*loaded)(void *ctx, const adaslice_mesh *mesh);

@@ -70,6 +70,8 @@ static void changed(pipeline *p)
 static void take_steps(pipeline *p)
 {
     const pipeline_job *job = p->job;
+    double ms[3] = {0, 0, 0}, t0; /* this thread's, added up under the lock at the end */
+    int i;
     pthread_mutex_lock(&p->lock);
     while (!p->rc && p->next_put < job->layers) {
         slot *s = lowest(p, SLOT_ENCODED);
@@ -80,7 +82,9 @@ static void take_steps(pipeline *p)
             pthread_mutex_unlock(&p->lock);
             rc = s->rc;
             if (!rc) {
+                t0 = now_ms();
                 rc = job_put(job->out, s->k, &s->blob);
+                ms[2] += now_ms() - t0;
                 if (!rc && job->done) job->done(job->ctx, s->k);
             }
             free(s->blob.data);
@@ -95,7 +99,9 @@ static void take_steps(pipeline *p)
             s->k = p->next_render++;
             p->rendering = 1;
             pthread_mutex_unlock(&p->lock);
+            t0 = now_ms();
             rc = job->render(job->ctx, s->k, s->image);
+            ms[0] += now_ms() - t0;
             pthread_mutex_lock(&p->lock);
             s->state = rc ? SLOT_FREE : SLOT_RENDERED;
             p->rendering = 0;
@@ -103,7 +109,9 @@ static void take_steps(pipeline *p)
         } else if ((s = lowest(p, SLOT_RENDERED)) != NULL) {
             s->state = SLOT_BUSY;
             pthread_mutex_unlock(&p->lock);
+            t0 = now_ms();
             s->rc = job->out->format->encode(job->out->state, s->k, s->image, job->stride, &s->blob);
+            ms[1] += now_ms() - t0;
             pthread_mutex_lock(&p->lock);
             s->state = SLOT_ENCODED;
         } else {
@@ -115,6 +123,7 @@ static void take_steps(pipeline *p)
         changed(p);
     }
     changed(p); /* over: the others leave too */
+    for (i = 0; i < 3 && job->stage_ms; i++) job->stage_ms[i] += ms[i];
     pthread_mutex_unlock(&p->lock);
 }
 

@@ -22,6 +22,10 @@ typedef struct pipeline_job {
     /* Layer k is in the job (in turn, on any thread). */
     void (*done)(void *ctx, size_t k);
     void *ctx;
+    /* If not NULL: the milliseconds spent rendering, coding and putting are
+       added to [0], [1] and [2], each summed over the threads (so with more
+       than one they can add up to more than the run took). */
+    double *stage_ms;
 } pipeline_job;
 
 /* Images in flight for `threads` threads (for a memory estimate). */
