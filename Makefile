@@ -104,7 +104,7 @@ RUN_TESTS     = ADASLICE_BIN=$(B)/san/adaslice $(B)/san/run_tests
 # cases share its programs and files, so a group is the unit); the slowest,
 # which wait on emulators and serial links, start first. tests/summary.sh adds
 # the logs up and prints "N passed, N failed" last.
-SLOW_GROUPS = contour avr print screen qemu_timing outputs slice_jobs hybrid threemf cli orient input_defects masks
+SLOW_GROUPS = avr print screen formats_zip contour outputs slice_jobs cli input_defects masks png hybrid orient threemf qemu_timing
 GROUPS      = $(filter $(SLOW_GROUPS),$(patsubst tests/test_%.c,%,$(TESTS))) \
               $(filter-out $(SLOW_GROUPS),$(patsubst tests/test_%.c,%,$(TESTS)))
 GROUP_LOGS  = $(patsubst %,$(B)/test-logs/%.log,$(GROUPS))

@@ -68,6 +68,34 @@ static inline int prusa_export_argv(char **argv, char *data, char *first, char *
     return a;
 }
 
+/* `plan` (a finished plan --3mf path3mf run, freed here) handed on to
+   PrusaSlicer: its G-code of path3mf to gcode_path with the layer limits plan
+   printed, and `extra` (one more option, or NULL) before the 3MF. 1 when
+   both ran; 0 after a failed check that says which did not. */
+static inline int prusa_gcode_after(cli_result plan, const char *path3mf, const char *gcode_path, const char *extra)
+{
+    char first[32], lo[32], hi[32], data[300], log_path[300], *argv[24], *log = NULL;
+    int a, status, ok = plan.status == 0 && prusa_word_after(plan.out, "--first-layer-height", first, sizeof first) &&
+                        prusa_word_after(plan.out, "--min-layer-height", lo, sizeof lo) &&
+                        prusa_word_after(plan.out, "--max-layer-height", hi, sizeof hi);
+    CHECKF(ok, "%.100s: plan: exit %d: %.200s", path3mf, plan.status, plan.err);
+    cli_free(&plan);
+    if (!ok) return 0;
+    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
+    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
+    mkdir(data, 0755);
+    a = prusa_export_argv(argv, data, first, lo, hi, gcode_path, path3mf);
+    if (extra) {
+        argv[a++] = (char *)extra;
+        argv[a] = (char *)path3mf;
+        argv[a + 1] = NULL;
+    }
+    status = prusa_run(argv, log_path, &log);
+    CHECKF(status == 0, "%.100s: prusa-slicer: %.300s", path3mf, log);
+    free(log);
+    return status == 0;
+}
+
 /* Plans `model` at `scale` into a 3MF, slices it with prusa-slicer at the
    first-layer height the tool printed, and holds the G-code's layers against
    the plan's: every ";Z:" is the next planned top (within 1e-3 mm), and a

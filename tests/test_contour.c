@@ -392,8 +392,7 @@ static int kept_byte_for_byte(const char *in_path, const char *out_path)
    when asked), contours it; the measurements before and after. */
 static void contour_case(const char *model, double scale, int relative_e, double min_gain)
 {
-    char s[32], first[32], lo_h[32], hi_h[32], data[300], path3mf[300], before_path[300], after_path[300], log_path[300];
-    char *argv[24], *log = NULL;
+    char s[32], path3mf[300], before_path[300], after_path[300];
     double lo[3], hi[3], shift[3];
     adaslice_load_options o;
     adaslice_mesh mesh;
@@ -404,31 +403,14 @@ static void contour_case(const char *model, double scale, int relative_e, double
     cli_result r;
     size_t k, worst_layer = 0;
     double worst_e = 0, worst_flow = 0, gouge;
-    int a, status;
     snprintf(s, sizeof s, "%.9g", scale);
     snprintf(path3mf, sizeof path3mf, "%s", cli_path("part.3mf"));
     snprintf(before_path, sizeof before_path, "%s", cli_path("part.gcode"));
     snprintf(after_path, sizeof after_path, "%s", cli_path("contoured.gcode"));
-    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
-    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
-    r = cli_run("plan", model, "--scale", s, PRUSA_FDM_ARGS, "--3mf", path3mf, "--out", cli_path("plan.csv"), NULL);
-    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
-               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
-               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h),
-           "%.100s: plan: exit %d: %.200s", model, r.status, r.err);
-    cli_free(&r);
-    if (check_case_failed()) return;
-    mkdir(data, 0755);
-    a = prusa_export_argv(argv, data, first, lo_h, hi_h, before_path, path3mf);
-    if (relative_e) {
-        argv[a++] = (char *)"--use-relative-e-distances";
-        argv[a] = path3mf;
-        argv[a + 1] = NULL;
-    }
-    status = prusa_run(argv, log_path, &log);
-    CHECKF(status == 0, "%.100s: prusa-slicer: %.300s", model, log);
-    free(log);
-    if (status) return;
+    if (!prusa_gcode_after(cli_run("plan", model, "--scale", s, PRUSA_FDM_ARGS, "--3mf", path3mf, "--out", cli_path("plan.csv"),
+                                   NULL),
+                           path3mf, before_path, relative_e ? "--use-relative-e-distances" : NULL))
+        return;
     r = cli_run("contour", before_path, "--project", path3mf, "-o", after_path, NULL);
     CHECKF(r.status == 0 && !r.err[0], "%.100s: contour: exit %d: %.300s", model, r.status, r.err);
     printf("    %s", r.out);
@@ -511,27 +493,15 @@ static double reported_rise(const char *out)
    and an option given still wins. */
 static void a_hybrid_projects_limits_are_taken(void)
 {
-    char first[32], lo_h[32], hi_h[32], data[300], path3mf[300], gcode[300], log_path[300], *argv[24], *log = NULL;
+    char path3mf[300], gcode[300];
     cli_result r;
-    int status;
     double rise;
     snprintf(path3mf, sizeof path3mf, "%s", cli_path("hybrid.3mf"));
     snprintf(gcode, sizeof gcode, "%s", cli_path("hybrid.gcode"));
-    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
-    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
-    r = cli_run("plan", "examples/models/shallow_dome.obj", PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid", "--max-rise",
-                "0.02", NULL);
-    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
-               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
-               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h), "plan --hybrid: %d %.200s", r.status, r.err);
-    cli_free(&r);
-    if (check_case_failed()) return;
-    mkdir(data, 0755);
-    prusa_export_argv(argv, data, first, lo_h, hi_h, gcode, path3mf);
-    status = prusa_run(argv, log_path, &log);
-    CHECKF(status == 0, "prusa-slicer: %.300s", log);
-    free(log);
-    if (status) return;
+    if (!prusa_gcode_after(cli_run("plan", "examples/models/shallow_dome.obj", PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid",
+                                   "--max-rise", "0.02", NULL),
+                           path3mf, gcode, NULL))
+        return;
     r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("taken.gcode"), NULL);
     rise = reported_rise(r.out);
     CHECKF(r.status == 0 && strstr(r.out, "the hybrid plan's limits: --max-angle 15 --max-rise 0.02 --resolution 0.2"),
@@ -583,32 +553,18 @@ static void refused_inputs_get_one_line_and_no_file(void)
         {"\nG21 ", "\nG20 ", "G20, inches"},
         {"\nG90 ", "\nG92 X10\nG90 ", "G92 sets X, Y or Z"},
     };
-    char first[32], lo_h[32], hi_h[32], data[300], path3mf[300], gcode[300], log_path[300], *argv[24], *log = NULL;
-    char *text;
+    char path3mf[300], gcode[300], *text;
     adaslice_mesh m = gen_dome(10, 40, 1, 10, 48), other = gen_box(0, 0, 0, 30, 20, 3);
     cli_result r;
     size_t c;
-    int status;
     cli_write_obj(cli_path("small.obj"), &m);
     cli_write_obj(cli_path("other.obj"), &other);
     gen_free(&m);
     gen_free(&other);
     snprintf(path3mf, sizeof path3mf, "%s", cli_path("small.3mf"));
     snprintf(gcode, sizeof gcode, "%s", cli_path("small.gcode"));
-    snprintf(log_path, sizeof log_path, "%s", cli_path("prusa.log"));
-    snprintf(data, sizeof data, "%s", cli_path("prusa-data"));
-    r = cli_run("plan", cli_path("small.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL);
-    CHECKF(r.status == 0 && prusa_word_after(r.out, "--first-layer-height", first, sizeof first) &&
-               prusa_word_after(r.out, "--min-layer-height", lo_h, sizeof lo_h) &&
-               prusa_word_after(r.out, "--max-layer-height", hi_h, sizeof hi_h), "plan: %d %.200s", r.status, r.err);
-    cli_free(&r);
-    if (check_case_failed()) return;
-    mkdir(data, 0755);
-    prusa_export_argv(argv, data, first, lo_h, hi_h, gcode, path3mf);
-    status = prusa_run(argv, log_path, &log);
-    CHECKF(status == 0, "prusa-slicer: %.300s", log);
-    free(log);
-    if (status) return;
+    if (!prusa_gcode_after(cli_run("plan", cli_path("small.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf, gcode, NULL))
+        return;
     text = read_whole_text(gcode);
     /* the unedited file is taken */
     r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("ok.gcode"), NULL);
