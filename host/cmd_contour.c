@@ -187,23 +187,6 @@ static int split_lines(gfile *g)
     return RC_OK;
 }
 
-/* The value of "; key = value" in the config block PrusaSlicer appends, or
-   NULL; *n its length. */
-static const char *config_value(const gfile *g, const char *key, size_t *n)
-{
-    size_t k = strlen(key), i;
-    for (i = g->count; i-- > 0;) {
-        const char *l = g->text + g->lines[i].at;
-        size_t len = g->lines[i].len;
-        if (len > k + 5 && !memcmp(l, "; ", 2) && !memcmp(l + 2, key, k) && !memcmp(l + 2 + k, " = ", 3)) {
-            *n = len - k - 5;
-            while (*n && l[k + 5 + *n - 1] == '\r') --*n;
-            return l + k + 5;
-        }
-    }
-    return NULL;
-}
-
 /* The machine's state while the file is walked. */
 typedef struct machine {
     double pos[4];               /* X Y Z E as the file has them */
@@ -245,7 +228,7 @@ static int gfile_read(const char *path, gfile *g)
         return complain(RC_FAIL, "%s: line 1: %s: not PrusaSlicer's G-code (contour reads PrusaSlicer 2.5's)", path,
                         quote_text(q, g->text, g->count ? g->lines[0].len : 0));
     }
-    if (!(v = config_value(g, "gcode_flavor", &n)))
+    if (!(v = gcode_config_value(g->text, g->size, "gcode_flavor", &n)))
         return complain(RC_FAIL, "%s: no \"; gcode_flavor = \" in the config at its end: a cut-off file?", path);
     for (f = 0; f < sizeof FLAVOURS / sizeof *FLAVOURS; f++)
         if (strlen(FLAVOURS[f]) == n && !memcmp(v, FLAVOURS[f], n)) break;
@@ -353,7 +336,7 @@ static int place(const contour_args *a, const gfile *g, const threemf_project *p
     /* PrusaSlicer centres a lone part on the bed (bed_shape "0x0,250x0,...");
        an arranged or moved one is elsewhere, and the extents still find it */
     {
-        const char *v = config_value(g, "bed_shape", &n);
+        const char *v = gcode_config_value(g->text, g->size, "bed_shape", &n);
         double b[2] = {HUGE_VAL, HUGE_VAL}, t[2] = {-HUGE_VAL, -HUGE_VAL}, x, y;
         char text[256];
         char *q;

@@ -70,3 +70,22 @@ int gcode_comment_number(const char *line, size_t len, const char *key, double *
     if (!gcode_is_comment(line, len, key)) return 0;
     return number_at(line, len, &at, v) && (at == len || line[at] == '\r' || line[at] == ' ');
 }
+
+const char *gcode_config_value(const char *text, size_t len, const char *key, size_t *n)
+{
+    size_t k = strlen(key), end = len;
+    for (;;) {
+        size_t start = end, m;
+        const char *l;
+        while (start > 0 && text[start - 1] != '\n') start--;
+        l = text + start;
+        m = end - start;
+        while (m && l[m - 1] == '\r') m--;
+        if (m > k + 5 && !memcmp(l, "; ", 2) && !memcmp(l + 2, key, k) && !memcmp(l + 2 + k, " = ", 3)) {
+            *n = m - k - 5;
+            return l + k + 5;
+        }
+        if (!start) return NULL;
+        end = start - 1;
+    }
+}

@@ -25,4 +25,8 @@ int gcode_parse(const char *line, size_t len, gcode_words *w, size_t *bad);
 int gcode_comment_number(const char *line, size_t len, const char *key, double *v);
 /* 1 when line[0, len) is the comment ";key" followed by anything. */
 int gcode_is_comment(const char *line, size_t len, const char *key);
+/* The value of the last "; key = value" line of text[0, len): PrusaSlicer's
+   config, as it ends its G-code and as a 3MF's Metadata/\*.config holds it.
+   NULL when there is none; *n the value's length (a '\r' left out). */
+const char *gcode_config_value(const char *text, size_t len, const char *key, size_t *n);
 #endif

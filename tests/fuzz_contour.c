@@ -43,6 +43,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         free(line);
         start += len + 1;
     }
+    {   /* the config lines, read backwards over a copy of exactly the input's bytes */
+        char *text = (char *)malloc(size ? size : 1);
+        const char *v;
+        size_t n;
+        if (!text) abort();
+        memcpy(text, data, size);
+        if ((v = gcode_config_value(text, size, "bed_shape", &n)) != NULL && (v < text || v + n > text + size)) abort();
+        free(text);
+    }
     for (i = 0; i < sizeof outs / sizeof *outs; i++) {
         unsigned char *out = (unsigned char *)malloc(outs[i] ? outs[i] : 1);
         if (!out) abort();

@@ -6,6 +6,7 @@
 #include "../output.h"
 #include "../report.h"
 #include "../codec/zip.h"
+#include "../gcode.h"
 
 #include <errno.h>
 
@@ -394,26 +395,15 @@ static int read_profile(const char *path, const char *text, threemf_project *p)
 
 /* The contour's limits from THREEMF_CONTOUR_PART's "; key = value" lines;
    a key missing or not a positive number stays 0 (the contour's default). */
-static void read_contour_limits(const char *text, threemf_project *p)
+static void read_contour_limits(const char *text, size_t size, threemf_project *p)
 {
     static const char *const keys[] = {"max_angle", "max_rise", "resolution"};
-    double *values[3];
-    size_t k;
+    double *values[3], x;
+    size_t k, n;
     values[0] = &p->max_angle; values[1] = &p->max_rise; values[2] = &p->resolution;
     for (k = 0; k < 3; k++) {
-        const char *at = text;
-        size_t len = strlen(keys[k]);
-        while ((at = strstr(at, keys[k])) != NULL) {
-            const char *v = at + len;
-            int line_start = at >= text + 2 && at[-1] == ' ' && at[-2] == ';';
-            at = v;
-            while (*v == ' ') v++;
-            if (line_start && *v == '=') {
-                double x = strtod(v + 1, NULL);
-                if (x > 0 && x < 1e6) *values[k] = x;
-                break;
-            }
-        }
+        const char *v = gcode_config_value(text, size, keys[k], &n), *end = v ? decimal_number(v, &x) : NULL;
+        if (end && end == v + n && x > 0 && x < 1e6) *values[k] = x;
     }
 }
 
@@ -446,7 +436,7 @@ int threemf_read(const char *path, threemf_project *p)
         unsigned char *limits = NULL;
         if ((got = zip_member(data, size, THREEMF_CONTOUR_PART, &limits, &n, why)) < 0)
             rc = complain(RC_FAIL, "%s: %s", path, why);
-        else if (!got) read_contour_limits((const char *)limits, p);
+        else if (!got) read_contour_limits((const char *)limits, n, p);
         free(limits);
     }
     free(data);
