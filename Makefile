@@ -117,7 +117,7 @@ run-groups: $(GROUP_LOGS)
 define run_groups
 	@rm -rf $(B)/test-logs
 	@$(MAKE) --no-print-directory -j$(TEST_JOBS) run-groups RUN_FLAGS=$(1) || true
-	@tests/summary.sh $(B)/test-logs
+	@tests/summary.sh $(B)/test-logs $(words $(GROUPS))
 endef
 
 # gcc alone: cases that need a real client or an emulator are left to make
