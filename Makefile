@@ -7,6 +7,7 @@
 #                      and every test, those with real clients and emulators too
 #   make check-models  tests over ../shared/models (MODELS=DIR for another place)
 #   make bench         the benchmarks
+#   make docs          docs/hybrid_path.svg, README's picture of the contour (needs prusa-slicer)
 #   make firmware      the firmware images and their flash and RAM
 # CC and CFLAGS are honoured (the warnings and the C standard are always on).
 
@@ -28,7 +29,7 @@ MODELS  ?= ../shared/models
 FUZZ_SECONDS ?= 15
 B        = build
 
-.PHONY: all demo test check check-models bench firmware compile-checks fuzz clean run-groups FORCE
+.PHONY: all demo test check check-models bench firmware compile-checks fuzz clean run-groups docs FORCE
 
 all: $(B)/adaslice
 
@@ -236,6 +237,18 @@ bench: $(BENCH_PROGRAMS) $(B)/adaslice $(B)/bench-plan-mps2.elf $(B)/fw-mps2-tra
 	$(B)/bench_avr $(B)/avr-run $(B)/avr-bench.elf $(B)/fw-ramps-test.elf $(B)/fw-ramps.elf $(B)/adaslice $(AVR_SIZE)
 	@echo "contoured surfaces (tests/test_contour.c on PrusaSlicer's G-code; needs prusa-slicer):"
 	ADASLICE_BIN=$(B)/adaslice $(B)/san/run_tests contour
+
+# README's picture of the contour (needs prusa-slicer): the shallow dome
+# planned --hybrid, sliced by PrusaSlicer with the layer limits plan prints,
+# and layer 46 (the top infill at 7.822 mm) drawn by contour --svg-path.
+docs: $(B)/adaslice
+	@mkdir -p $(B)/docs/prusa
+	$(B)/adaslice plan examples/models/shallow_dome.obj --tmin 0.08 --tmax 0.28 --eps 0.1 --hybrid \
+	    --3mf $(B)/docs/dome.3mf --out $(B)/docs/dome.csv > /dev/null
+	prusa-slicer --datadir $(B)/docs/prusa --export-gcode --first-layer-height 0.28 --min-layer-height 0.08 \
+	    --max-layer-height 0.28 --bed-shape 0x0,250x0,250x210,0x210 -o $(B)/docs/dome.gcode $(B)/docs/dome.3mf > /dev/null
+	$(B)/adaslice contour $(B)/docs/dome.gcode --project $(B)/docs/dome.3mf -o $(B)/docs/dome-contoured.gcode \
+	    --svg-path 46 docs/hybrid_path.svg
 
 clean:
 	rm -rf $(B)

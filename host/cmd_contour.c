@@ -13,6 +13,7 @@
 #include "gcode.h"
 #include "options.h"
 #include "output.h"
+#include "path_svg.h"
 #include "report.h"
 #include "formats/threemf.h"
 
@@ -38,6 +39,8 @@
 typedef struct contour_args {
     const char *in, *project, *out;
     double resolution, max_rise, max_angle;
+    size_t view_layer;           /* --svg-path: the layer drawn, from 1; 0 none */
+    const char *view_out;
 } contour_args;
 
 static void contour_usage(FILE *f)
@@ -67,6 +70,9 @@ static void contour_usage(FILE *f)
           "  --max-rise MM       the most a path rises above its layer's top\n"
           "                                                 [half the layer's height]\n"
           "  --max-angle DEG     the steepest surface followed, and path slope      [15]\n"
+          "  --svg-path LAYER FILE  also an SVG of the longest contoured move of layer\n"
+          "                      LAYER (from 1, as the ;Z: lines count) from the side: Z\n"
+          "                      along it before, after, and the mesh's surface under it\n"
           "A project from plan --hybrid carries the limits its plan was made for: they\n"
           "replace the defaults (the options given still win).\n", f);
 }
@@ -86,6 +92,12 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
         else if (!strcmp(o, "-o") || !strcmp(o, "--out")) rc = file_option(argc, argv, &i, &a->out);
         else if (!strcmp(o, "--resolution")) rc = number_option(argc, argv, &i, 0, &a->resolution);
         else if (!strcmp(o, "--max-rise")) rc = number_option(argc, argv, &i, 1, &a->max_rise);
+        else if (!strcmp(o, "--svg-path")) {
+            if ((rc = count_option(argc, argv, &i, (size_t)1 << 30, &a->view_layer))) return rc;
+            if (i + 1 >= argc || !strncmp(argv[i + 1], "--", 2))
+                return complain(RC_USAGE, "--svg-path %s needs the SVG's path after the layer", argv[i]);
+            a->view_out = argv[++i];
+        }
         else if (!strcmp(o, "--max-angle")) {
             if (!(rc = number_option(argc, argv, &i, 0, &a->max_angle)) && a->max_angle >= 90)
                 return complain(RC_USAGE, "--max-angle %g: a slope is under 90 degrees", a->max_angle);
@@ -481,6 +493,11 @@ typedef struct writer {
     /* what was done, for the report */
     size_t contoured_moves, points, raised, lowered;
     double dz_min, dz_max;
+    /* --svg-path: the layer's longest contoured move so far, its ends, its
+       Z in the file and its pieces as (s, z) */
+    double view_from[2], view_to[2], view_z, view_length;
+    double *view_sz;
+    size_t view_n;
 } writer;
 
 /* Line i as it is, with its newline (the last line may have none). */
@@ -519,6 +536,26 @@ static void nozzle_to(writer *w, double z)
 /* A point of a contoured run: where it is, its distance along the run, and
    its height over the layer's top (0 where the surface is not followed). */
 typedef struct point { double x, y, s, dz; int fixed; } point;
+
+/* Keeps the move from `from` to `to` at Z z_in, contoured into pieces q[0..pieces]
+   over the layer's top, for --svg-path. */
+static void keep_view(writer *w, const point *q, size_t pieces, double top, const double from[2], const double to[2],
+                      double z_in)
+{
+    double *t = (double *)realloc(w->view_sz, 2 * (pieces + 1) * sizeof *t);
+    size_t k;
+    if (!t) { w->failed = 1; return; }
+    w->view_sz = t;
+    for (k = 0; k <= pieces; k++) {
+        t[2 * k] = hypot(q[k].x - from[0], q[k].y - from[1]);
+        t[2 * k + 1] = top + q[k].dz;
+    }
+    w->view_n = pieces + 1;
+    memcpy(w->view_from, from, sizeof w->view_from);
+    memcpy(w->view_to, to, sizeof w->view_to);
+    w->view_z = z_in;
+    w->view_length = hypot(to[0] - from[0], to[1] - from[1]);
+}
 
 /* Limits |dz| to the slope tan_max along the run, towards 0 only: the
    largest and smallest functions of that slope under and over dz (two
@@ -640,6 +677,11 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
             continue;
         }
         w->contoured_moves++;
+        if (layer + 1 == w->a->view_layer && len > w->view_length) {
+            double from[2], to[2];
+            from[0] = x0; from[1] = y0; to[0] = m.pos[0]; to[1] = m.pos[1];
+            keep_view(w, q, pieces, top, from, to, m.pos[2]);
+        }
         for (k = 1; k <= pieces; k++) {
             const point *a = q + k - 1, *b = q + k;
             double za = top + a->dz, zb = top + b->dz, fill, piece;
@@ -782,6 +824,52 @@ static int write_all(writer *w)
     return w->failed ? complain(RC_FAIL, "out of memory") : RC_OK;
 }
 
+static void put_view(FILE *f, const void *fig) { svg_write_path(f, (const path_figure *)fig); }
+
+/* The --svg-path figure: the kept move before (flat at its Z in the file),
+   after, and the mesh's surface under it every quarter piece, where contour
+   follows it. */
+static int write_view(const contour_args *a, const gfile *g, const surface *s, const writer *w)
+{
+    const layer_info *L = &g->layers[a->view_layer - 1];
+    size_t n, k;
+    double before[4], *mesh;
+    char title[256];
+    path_figure fig;
+    int rc;
+    if (!w->view_n)
+        return complain(RC_FAIL, "--svg-path %zu: layer %zu (;Z:%g) of %s has no contoured move to draw", a->view_layer,
+                        a->view_layer, L->top, a->in);
+    n = (size_t)ceil(w->view_length / (a->resolution / 4)) + 1;
+    if (!(mesh = (double *)malloc(2 * n * sizeof *mesh))) return complain(RC_FAIL, "out of memory");
+    for (k = 0; k < n; k++) {
+        double t = (double)k / (double)(n - 1), z;
+        mesh[2 * k] = t * w->view_length;
+        mesh[2 * k + 1] = surface_at(s, w->view_from[0] + t * (w->view_to[0] - w->view_from[0]),
+                                     w->view_from[1] + t * (w->view_to[1] - w->view_from[1]), L->top - L->height, &z) ? z : NAN;
+    }
+    before[0] = 0;
+    before[1] = before[3] = w->view_z;
+    before[2] = w->view_length;
+    snprintf(title, sizeof title, "%s, layer %zu of %zu at %g mm: its longest contoured move, %.1f mm, from the side",
+             base_name(a->project), a->view_layer, g->layer_count, L->top, w->view_length);
+    memset(&fig, 0, sizeof fig);
+    fig.title = title;
+    fig.layer = a->view_layer;
+    fig.top = L->top;
+    memcpy(fig.from, w->view_from, sizeof fig.from);
+    memcpy(fig.to, w->view_to, sizeof fig.to);
+    fig.mesh.sz = mesh;
+    fig.mesh.count = n;
+    fig.before.sz = before;
+    fig.before.count = 2;
+    fig.after.sz = w->view_sz;
+    fig.after.count = w->view_n;
+    rc = write_atomic(a->view_out, put_view, &fig);
+    free(mesh);
+    return rc;
+}
+
 int cmd_contour(int argc, char **argv)
 {
     contour_args a;
@@ -798,10 +886,15 @@ int cmd_contour(int argc, char **argv)
     size_t i;
     if ((rc = parse_contour(argc, argv, &a, &help))) return rc;
     if (help) { contour_usage(stdout); return RC_OK; }
-    if ((rc = output_check("-o", a.out))) return rc;
+    if ((rc = output_check("-o", a.out)) || (rc = output_check("--svg-path", a.view_out))) return rc;
     memset(&g, 0, sizeof g);
     memset(&s, 0, sizeof s);
     if ((rc = gfile_read(a.in, &g))) { gfile_free(&g); return rc; }
+    if (a.view_layer > g.layer_count) {
+        rc = complain(RC_FAIL, "--svg-path %zu: %s has %zu layers", a.view_layer, a.in, g.layer_count);
+        gfile_free(&g);
+        return rc;
+    }
     if ((rc = threemf_read(a.project, &p))) { gfile_free(&g); return rc; }
     /* the limits a hybrid plan was made for (it bounded its residual with
        them), where the command line gives none */
@@ -831,11 +924,13 @@ int cmd_contour(int argc, char **argv)
     if ((rc = output_open(&o, a.out, 0))) goto done;
     w.f = o.f;
     rc = write_all(&w);
+    if (!rc && a.view_out) rc = write_view(&a, &g, &s, &w);
     {
         int closed = output_close(&o, rc == RC_OK, 0); /* says why a write failed */
         if (!rc) rc = closed;
     }
     free(w.beads);
+    free(w.view_sz);
     if (rc) goto done;
     for (i = 0; i < g.layer_count; i++)
         if (g.layers[i].e_in > 0 && fabs(g.layers[i].e_out / g.layers[i].e_in - 1) > fabs(worst)) worst = g.layers[i].e_out / g.layers[i].e_in - 1;

@@ -529,6 +529,153 @@ static void the_bundled_hand_is_printed_on_its_surface(void)
     contour_case("examples/models/hand_closed.obj", 88.7, 0, 4);
 }
 
+/* ---- contour --svg-path, read back */
+
+/* The numbers of attribute `name` of the first tag of svg that has it, up to n. */
+static int svg_numbers(const char *svg, const char *name, double *v, int n)
+{
+    char key[64];
+    const char *at;
+    int k = 0;
+    snprintf(key, sizeof key, " %s=\"", name);
+    if (!(at = strstr(svg, key))) return 0;
+    for (at += strlen(key); k < n && *at != '"'; k++) {
+        char *end;
+        v[k] = strtod(at, &end);
+        if (end == at) break;
+        for (at = end; *at == ' ' || *at == ','; at++) {}
+    }
+    return k;
+}
+
+/* The (s, z) points (mm) of the polylines with data-role `role`, taken back
+   from pixels by the figure's own scales; the count. */
+static size_t svg_line(const char *svg, const char *role, double *sz, size_t cap)
+{
+    double px0, kx, z0, py0, ky;
+    char key[64];
+    const char *at = svg;
+    size_t n = 0;
+    if (!svg_numbers(svg, "data-px0", &px0, 1) || !svg_numbers(svg, "data-px-per-mm", &kx, 1) ||
+        !svg_numbers(svg, "data-z0", &z0, 1) || !svg_numbers(svg, "data-py0", &py0, 1) ||
+        !svg_numbers(svg, "data-py-per-mm", &ky, 1))
+        return 0;
+    snprintf(key, sizeof key, "data-role=\"%s\"", role);
+    while ((at = strstr(at, key)) != NULL) {
+        char *end;
+        at = strstr(at, "points=\"") + 8;
+        while (*at != '"' && n < cap) {
+            double x = strtod(at, &end), y;
+            if (end == at || *end != ',') break;
+            y = strtod(end + 1, &end);
+            sz[2 * n] = (x - px0) / kx;
+            sz[2 * n + 1] = z0 + (py0 - y) / ky;
+            n++;
+            for (at = end; *at == ' '; at++) {}
+        }
+    }
+    return n;
+}
+
+/* contour --svg-path draws one move of a layer from the side: its ends are
+   an extrusion of PrusaSlicer's G-code in that layer, the line before is
+   that move's Z, the line after is every piece contour wrote for it (the
+   output G-code read by the test's reader, in order), and the mesh line is
+   the mesh's top there by brute force. */
+static void the_svg_path_is_the_gcodes(void)
+{
+    char path3mf[300], gcode[300], out[300], svg_path[300], layer_text[16], *svg;
+    printed before, after;
+    cli_result r;
+    double from[2], to[2], top, *sz = (double *)malloc(2 * 20000 * sizeof *sz), length;
+    size_t n, k, s, found = 0, matched = 0;
+    int layer;
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("view.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("view.gcode"));
+    snprintf(out, sizeof out, "%s", cli_path("view-out.gcode"));
+    snprintf(svg_path, sizeof svg_path, "%s", cli_path("view.svg"));
+    if (!prusa_gcode_after(cli_run("plan", "examples/models/shallow_dome.obj", PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid",
+                                   NULL),
+                           path3mf, gcode, NULL) ||
+        !read_printed(gcode, &before)) {
+        free(sz);
+        return;
+    }
+    /* the layer under the last: a ring of top infill across the dome */
+    layer = before.layers - 1;
+    snprintf(layer_text, sizeof layer_text, "%d", layer);
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", out, "--svg-path", layer_text, svg_path, NULL);
+    CHECKF(r.status == 0, "contour --svg-path: exit %d: %.300s", r.status, r.err);
+    cli_free(&r);
+    svg = read_whole_text(svg_path);
+    if (!svg || !read_printed(out, &after)) { CHECK(svg != NULL); free(svg); free(sz); free(before.segs); return; }
+    CHECK(svg_numbers(svg, "data-from", from, 2) == 2 && svg_numbers(svg, "data-to", to, 2) == 2 &&
+          svg_numbers(svg, "data-z-top", &top, 1) == 1);
+    CHECKF(fabs(top - before.top[layer - 1]) < 1e-9, "data-z-top %g, the layer's ;Z: %g", top, before.top[layer - 1]);
+    length = hypot(to[0] - from[0], to[1] - from[1]);
+    /* before: one of PrusaSlicer's extrusions of that layer, flat at its Z */
+    for (s = 0; s < before.n; s++) {
+        const seg *g = &before.segs[s];
+        if (g->layer == layer - 1 && hypot(g->a[0] - from[0], g->a[1] - from[1]) < 1e-6 &&
+            hypot(g->b[0] - to[0], g->b[1] - to[1]) < 1e-6) {
+            n = svg_line(svg, "before", sz, 20000);
+            CHECKF(n == 2 && fabs(sz[0]) < 1e-3 && fabs(sz[2] - length) < 1e-3 && fabs(sz[1] - g->a[2]) < 1e-5 &&
+                       fabs(sz[3] - g->b[2]) < 1e-5,
+                   "before: %zu points, (%g, %g) to (%g, %g); the move is %g mm at Z %g", n, sz[0], sz[1], sz[2], sz[3],
+                   length, g->a[2]);
+            found++;
+        }
+    }
+    CHECKF(found == 1, "%zu extrusions of layer %d run from (%g, %g) to (%g, %g)", found, layer, from[0], from[1], to[0], to[1]);
+    /* after: the output's extrusions of the layer on that line, from its start to its end */
+    n = svg_line(svg, "after", sz, 20000);
+    for (s = 0; s < after.n && matched + 1 < n; s++) {
+        const seg *g = &after.segs[s];
+        double sa = hypot(g->a[0] - from[0], g->a[1] - from[1]), sb = hypot(g->b[0] - from[0], g->b[1] - from[1]);
+        if (g->layer != layer - 1) continue;
+        if (matched == 0 && !(sa < 2e-3 && fabs(sz[1] - g->a[2]) < 2e-3)) continue;
+        CHECKF(fabs(sa - sz[2 * matched]) < 2e-3 && fabs(g->a[2] - sz[2 * matched + 1]) < 1.5e-3 &&
+                   fabs(sb - sz[2 * matched + 2]) < 2e-3 && fabs(g->b[2] - sz[2 * matched + 3]) < 1.5e-3,
+               "after, piece %zu: the G-code's (%g, %g) to (%g, %g) mm along and up, the SVG's (%g, %g) to (%g, %g)",
+               matched + 1, sa, g->a[2], sb, g->b[2], sz[2 * matched], sz[2 * matched + 1], sz[2 * matched + 2],
+               sz[2 * matched + 3]);
+        if (check_case_failed()) break;
+        matched++;
+    }
+    CHECKF(n > 2 && matched + 1 == n && fabs(sz[2 * n - 2] - length) < 2e-3,
+           "after: %zu of the SVG's %zu points are the output's pieces, in order", matched + 1, n);
+    /* the mesh: its top under the path, by the test's own ray casts */
+    {
+        adaslice_load_options o;
+        adaslice_mesh mesh;
+        adaslice_error e;
+        top_finder f;
+        double lo[3], hi[3], shift[3], worst = 0;
+        memset(&o, 0, sizeof o);
+        if (adaslice_mesh_load_file("examples/models/shallow_dome.obj", &o, &mesh, &e) == ADASLICE_OK) {
+            adaslice_mesh_bounds(&mesh, lo, hi);
+            shift[0] = 125 - (lo[0] + hi[0]) / 2;
+            shift[1] = 105 - (lo[1] + hi[1]) / 2;
+            shift[2] = -lo[2];
+            finder_init(&f, &mesh, shift);
+            n = svg_line(svg, "mesh", sz, 20000);
+            for (k = 0; k < n; k++) {
+                double t = sz[2 * k] / length, z, c;
+                if (mesh_top(&f, from[0] + t * (to[0] - from[0]), from[1] + t * (to[1] - from[1]), &z, &c) &&
+                    fabs(z - sz[2 * k + 1]) > worst)
+                    worst = fabs(z - sz[2 * k + 1]);
+            }
+            CHECKF(n > length / 0.05 && worst < 2e-3, "mesh: %zu points, %.4f mm off the mesh's top at worst", n, worst);
+            finder_free(&f);
+            adaslice_mesh_free(&mesh);
+        }
+    }
+    free(svg);
+    free(sz);
+    free(before.segs);
+    free(after.segs);
+}
+
 /* text with its first `what` replaced by `with` (malloc'd) */
 static char *edited(const char *text, const char *what, const char *with)
 {
@@ -625,5 +772,6 @@ void test_contour(void)
     RUN_NEEDING("prusa-slicer", the_bundled_hand_is_printed_on_its_surface);
     RUN_NEEDING("prusa-slicer", refused_inputs_get_one_line_and_no_file);
     RUN_NEEDING("prusa-slicer", a_hybrid_projects_limits_are_taken);
+    RUN_NEEDING("prusa-slicer", the_svg_path_is_the_gcodes);
     cli_end();
 }
