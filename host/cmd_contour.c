@@ -30,6 +30,8 @@
 #define TRAVEL_CLEARANCE 0.2
 /* the deposit map's cells, mm */
 #define CELL 0.1
+/* the risen skins' map's squares, mm (travels lift over them) */
+#define BLOCK 1.0
 /* a bead's width before any ;WIDTH: */
 #define DEFAULT_WIDTH 0.45
 #ifndef M_PI
@@ -39,6 +41,8 @@
 typedef struct contour_args {
     const char *in, *project, *out;
     double resolution, max_rise, max_angle;
+    int top_skins;               /* --top-skins */
+    double clearance, clearance_angle; /* --nozzle-clearance, --clearance-angle */
     size_t view_layer;           /* --svg-path: the layer drawn, from 1; 0 none */
     const char *view_out;
 } contour_args;
@@ -70,6 +74,12 @@ static void contour_usage(FILE *f)
           "  --max-rise MM       the most a path rises above its layer's top\n"
           "                                                 [half the layer's height]\n"
           "  --max-angle DEG     the steepest surface followed, and path slope      [15]\n"
+          "  --top-skins         let the topmost skins rise above --max-rise, up to\n"
+          "                      --nozzle-clearance, where no later print comes near:\n"
+          "                      true non-planar tops; needs the two options below\n"
+          "  --nozzle-clearance MM  the nozzle's free height under its heater block or fan duct\n"
+          "  --clearance-angle DEG  the nozzle cone's flank, degrees from horizontal: no path\n"
+          "                      is steeper, and no later print's nozzle may meet a risen skin\n"
           "  --svg-path LAYER FILE  also an SVG of the longest contoured move of layer\n"
           "                      LAYER (from 1, as the ;Z: lines count) from the side: Z\n"
           "                      along it before, after, and the mesh's surface under it\n"
@@ -92,6 +102,12 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
         else if (!strcmp(o, "-o") || !strcmp(o, "--out")) rc = file_option(argc, argv, &i, &a->out);
         else if (!strcmp(o, "--resolution")) rc = number_option(argc, argv, &i, 0, &a->resolution);
         else if (!strcmp(o, "--max-rise")) rc = number_option(argc, argv, &i, 1, &a->max_rise);
+        else if (!strcmp(o, "--top-skins")) a->top_skins = 1;
+        else if (!strcmp(o, "--nozzle-clearance")) rc = number_option(argc, argv, &i, 0, &a->clearance);
+        else if (!strcmp(o, "--clearance-angle")) {
+            if (!(rc = number_option(argc, argv, &i, 0, &a->clearance_angle)) && a->clearance_angle >= 90)
+                return complain(RC_USAGE, "--clearance-angle %g: a flank is under 90 degrees", a->clearance_angle);
+        }
         else if (!strcmp(o, "--svg-path")) {
             if ((rc = count_option(argc, argv, &i, (size_t)1 << 30, &a->view_layer))) return rc;
             if (i + 1 >= argc || !strncmp(argv[i + 1], "--", 2))
@@ -109,6 +125,10 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
     if (!a->project) return complain(RC_USAGE, "contour needs --project PART.3mf, the 3MF PrusaSlicer sliced");
     if (!a->out) return complain(RC_USAGE, "contour needs -o OUT.gcode");
     if (a->resolution && a->resolution < 0.01) return complain(RC_USAGE, "--resolution %g: 0.01 mm or more", a->resolution);
+    if (a->top_skins && (!a->clearance || !a->clearance_angle))
+        return complain(RC_USAGE, "--top-skins needs --nozzle-clearance MM and --clearance-angle DEG, your nozzle's");
+    if (!a->top_skins && (a->clearance || a->clearance_angle))
+        return complain(RC_USAGE, "--nozzle-clearance and --clearance-angle are for --top-skins");
     return RC_OK;
 }
 
@@ -118,8 +138,12 @@ typedef struct line_ref { size_t at, len; } line_ref;
 
 typedef struct layer_info {
     double top, height;          /* ;Z: and ;HEIGHT: */
+    size_t first_seg;            /* the layer's extrusions: gfile.segs from here to the next layer's */
     double e_in, e_out;          /* filament extruded, before and after */
 } layer_info;
+
+/* An extrusion move of the file: its ends on the plate, its bead's width, its line. */
+typedef struct path_seg { double a[2], b[2], width; size_t line; } path_seg;
 
 typedef struct gfile {
     char *text;
@@ -129,6 +153,8 @@ typedef struct gfile {
     layer_info *layers;
     size_t layer_count;
     double lo[2], hi[2];         /* the part's extrusions' extents */
+    path_seg *segs;              /* every extrusion, in order */
+    size_t seg_count, seg_cap;
     int relative_e_seen;
 } gfile;
 
@@ -159,6 +185,7 @@ static void gfile_free(gfile *g)
     free(g->text);
     free(g->lines);
     free(g->layers);
+    free(g->segs);
     memset(g, 0, sizeof *g);
 }
 
@@ -269,6 +296,7 @@ static int gfile_read(const char *path, gfile *g)
             }
             memset(&g->layers[g->layer_count], 0, sizeof *g->layers);
             g->layers[g->layer_count].top = z;
+            g->layers[g->layer_count].first_seg = g->seg_count;
             m.layer = (long)g->layer_count++;
             continue;
         }
@@ -280,6 +308,7 @@ static int gfile_read(const char *path, gfile *g)
             if (!(g->layers[m.layer].height > 0)) g->layers[m.layer].height = z;
             continue;
         }
+        if (gcode_comment_number(l, len, "WIDTH:", &z)) { m.width = z; continue; }
         if (gcode_parse(l, len, &w, &bad)) {
             char q[QUOTE_SIZE];
             return complain(RC_FAIL, "%s: line %zu, byte %zu: %s: not a G-code word", path, i + 1, bad + 1,
@@ -297,8 +326,21 @@ static int gfile_read(const char *path, gfile *g)
         if (w.letter == 'M' && (w.code == 82 || w.code == 83)) { m.relative_e = w.code == 83; g->relative_e_seen |= m.relative_e; }
         if (w.letter == 'G' && w.code == 92 && (w.has & GC_E)) m.pos[3] = w.v[3];
         if (is_move(&w)) {
-            double e = m.pos[3];
+            double e = m.pos[3], from[2];
+            from[0] = m.pos[0];
+            from[1] = m.pos[1];
             if (step(&m, &w) == 2 && m.layer >= 0) {
+                path_seg *sg;
+                if (g->seg_count == g->seg_cap) {
+                    path_seg *t = (path_seg *)realloc(g->segs, (g->seg_cap = g->seg_cap ? 2 * g->seg_cap : 4096) * sizeof *t);
+                    if (!t) return complain(RC_FAIL, "out of memory");
+                    g->segs = t;
+                }
+                sg = &g->segs[g->seg_count++];
+                memcpy(sg->a, from, sizeof sg->a);
+                memcpy(sg->b, m.pos, sizeof sg->b);
+                sg->width = m.width > 0 && m.width < 10 ? m.width : DEFAULT_WIDTH;
+                sg->line = i;
                 g->layers[m.layer].e_in += m.pos[3] - e;
                 if (m.kind) {
                     int a;
@@ -390,6 +432,14 @@ typedef struct surface {
     float *top;
     int w, h;
     double origin[2];
+    /* --top-skins, per cell: the lowest a later layer's nozzle may come
+       there (the layer's bottom plus MIN_BEAD, as contour lowers no path
+       further), and 1 + the last line of the layer being written that
+       prints there (0: none); per BLOCK square, the highest risen skin */
+    float *later;
+    size_t *last_line;
+    float *skin;
+    int bw, bh;
 } surface;
 
 /* The mesh's top over the layer's bottom at G-code point (x, y): the first
@@ -476,6 +526,100 @@ static void stamp(surface *s, const bead *d)
     }
 }
 
+/* The cells of a bead from a to b of width `width` (a square of it around
+   every point of its centre line, half a cell apart) to visit(s, cell, v). */
+static void bead_cells(surface *s, const double a[2], const double b[2], double width,
+                       void (*visit)(surface *s, size_t cell, double v), double v)
+{
+    double len = hypot(b[0] - a[0], b[1] - a[1]);
+    int n = len < 1e6 ? (int)ceil(len / (CELL / 2)) : 0, q, c[4], i, j;
+    for (q = 0; q <= n; q++) {
+        double t = n ? (double)q / n : 0;
+        if (!cell_range(s, a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), width / 2, c)) continue;
+        for (j = c[2]; j <= c[3]; j++)
+            for (i = c[0]; i <= c[1]; i++) visit(s, (size_t)j * (size_t)s->w + (size_t)i, v);
+    }
+}
+
+static void lower_later(surface *s, size_t cell, double v)
+{
+    if (v < s->later[cell]) s->later[cell] = (float)v;
+}
+
+static void mark_line(surface *s, size_t cell, double v) { s->last_line[cell] = (size_t)v; }
+
+/* --top-skins: the maps of what prints after layer k's runs: every later
+   layer's extrusions at that layer's lowest, up to the layers that start
+   above the highest a skin of layer k may rise, and the lines of layer k. */
+static void map_later_prints(surface *s, const gfile *g, size_t k, double clearance)
+{
+    size_t i, j, n = (size_t)s->w * (size_t)s->h;
+    for (i = 0; i < n; i++) {
+        s->later[i] = HUGE_VALF;
+        s->last_line[i] = 0;
+    }
+    for (j = k + 1; j < g->layer_count; j++) {
+        const layer_info *L = &g->layers[j];
+        double floor_z = L->top - L->height + MIN_BEAD * L->height;
+        size_t end = j + 1 < g->layer_count ? g->layers[j + 1].first_seg : g->seg_count;
+        if (floor_z > g->layers[k].top + clearance) break;
+        for (i = L->first_seg; i < end; i++) bead_cells(s, g->segs[i].a, g->segs[i].b, g->segs[i].width, lower_later, floor_z);
+    }
+    for (i = g->layers[k].first_seg; i < (k + 1 < g->layer_count ? g->layers[k + 1].first_seg : g->seg_count); i++)
+        bead_cells(s, g->segs[i].a, g->segs[i].b, g->segs[i].width, mark_line, (double)(g->segs[i].line + 1));
+}
+
+/* The highest a topmost skin point at (x, y), bead `width`, of a run that
+   ends before line `end` of layer L may rise: the clearance over the
+   layer's top, and under every later print's nozzle cone. A later print at
+   floor z_q whose bead lies d beyond this one's edge sees it outside its
+   cone while it is under z_q + d tan(angle). */
+static double skin_ceiling(const surface *s, const layer_info *L, double x, double y, double width, size_t end,
+                           double clearance, double tan_clear)
+{
+    double cap = L->top + clearance, own = L->top - L->height + MIN_BEAD * L->height;
+    double reach = (cap - own) / tan_clear + width / 2 + CELL;
+    int c[4], i, j;
+    if (!cell_range(s, x, y, reach, c)) return cap;
+    for (j = c[2]; j <= c[3]; j++)
+        for (i = c[0]; i <= c[1]; i++) {
+            size_t cell = (size_t)j * (size_t)s->w + (size_t)i;
+            double z = s->later[cell], d;
+            if (s->last_line[cell] > end && own < z) z = own;
+            if (z >= cap) continue;
+            d = hypot(s->origin[0] + (i + 0.5) * CELL - x, s->origin[1] + (j + 0.5) * CELL - y) - CELL * 0.7072 - width / 2;
+            if (z + (d > 0 ? d : 0) * tan_clear < cap) cap = z + (d > 0 ? d : 0) * tan_clear;
+        }
+    return cap;
+}
+
+/* The highest risen skin within `reach` of the travel from a to b, or
+   -HUGE_VAL. */
+static double skin_near(const surface *s, const double a[2], const double b[2], double reach)
+{
+    double best = -HUGE_VAL;
+    int i0 = (int)floor(((a[0] < b[0] ? a[0] : b[0]) - reach - s->origin[0]) / BLOCK);
+    int i1 = (int)floor(((a[0] > b[0] ? a[0] : b[0]) + reach - s->origin[0]) / BLOCK);
+    int j0 = (int)floor(((a[1] < b[1] ? a[1] : b[1]) - reach - s->origin[1]) / BLOCK);
+    int j1 = (int)floor(((a[1] > b[1] ? a[1] : b[1]) + reach - s->origin[1]) / BLOCK), i, j;
+    if (!s->skin) return best;
+    if (i0 < 0) i0 = 0;
+    if (j0 < 0) j0 = 0;
+    if (i1 >= s->bw) i1 = s->bw - 1;
+    if (j1 >= s->bh) j1 = s->bh - 1;
+    for (j = j0; j <= j1; j++)
+        for (i = i0; i <= i1; i++)
+            if (s->skin[(size_t)j * (size_t)s->bw + (size_t)i] > best) best = s->skin[(size_t)j * (size_t)s->bw + (size_t)i];
+    return best;
+}
+
+static void note_skin(surface *s, double x, double y, double z)
+{
+    int i = (int)floor((x - s->origin[0]) / BLOCK), j = (int)floor((y - s->origin[1]) / BLOCK);
+    if (i >= 0 && j >= 0 && i < s->bw && j < s->bh && z > s->skin[(size_t)j * (size_t)s->bw + (size_t)i])
+        s->skin[(size_t)j * (size_t)s->bw + (size_t)i] = (float)z;
+}
+
 /* ---- writing */
 
 typedef struct writer {
@@ -493,6 +637,9 @@ typedef struct writer {
     /* what was done, for the report */
     size_t contoured_moves, points, raised, lowered;
     double dz_min, dz_max;
+    size_t skin_points;          /* pieces' ends risen above the rise as top skins */
+    double skin_max;             /* the most one rose over its layer's top */
+    double tan_clear;            /* of --clearance-angle */
     /* --svg-path: the layer's longest contoured move so far, its ends, its
        Z in the file and its pieces as (s, z) */
     double view_from[2], view_to[2], view_z, view_length;
@@ -624,13 +771,22 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
         }
     }
     for (k = 0; k < n; k++) {
-        double z, lo = bottom, dep = deposit_near(w->s, p[k].x, p[k].y, (w->m.width > 0 ? w->m.width : DEFAULT_WIDTH) / 2);
+        double width = w->m.width > 0 ? w->m.width : DEFAULT_WIDTH;
+        double z, lo = bottom, dep = deposit_near(w->s, p[k].x, p[k].y, width / 2), ceiling;
+        int followed;
         if (dep > lo) lo = dep;
         lo += MIN_BEAD * L->height;
+        followed = surface_at(w->s, p[k].x, p[k].y, bottom, &z);
+        ceiling = top + rise;
+        if (followed && z > ceiling + 1e-9 && w->a->top_skins) {
+            /* a topmost skin: on the surface if no later print's nozzle
+               meets it there; a surface out of reach is inside the part */
+            double cap = skin_ceiling(w->s, L, p[k].x, p[k].y, width, end, w->a->clearance, w->tan_clear);
+            if (cap > ceiling) ceiling = cap;
+        }
         /* a point the surface is more than rise above is inside the part:
            a later layer covers it */
-        p[k].fixed = (k == 0 && fixed_start) || (k == n - 1 && fixed_end) ||
-                     !surface_at(w->s, p[k].x, p[k].y, bottom, &z) || z > top + rise + 1e-9;
+        p[k].fixed = (k == 0 && fixed_start) || (k == n - 1 && fixed_end) || !followed || z > ceiling + 1e-9;
         if (p[k].fixed) z = top;
         if (z < lo) z = lo;
         p[k].dz = p[k].fixed ? 0 : z - top;
@@ -704,6 +860,12 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
             if (za > w->peak) w->peak = za;
             if (zb > w->peak) w->peak = zb;
             if (b->dz > 5e-4) w->raised++;
+            if (b->dz > rise + 1e-6) {
+                w->skin_points++;
+                if (b->dz > w->skin_max) w->skin_max = b->dz;
+                note_skin(w->s, a->x, a->y, za);
+                note_skin(w->s, b->x, b->y, zb);
+            }
             if (b->dz < -5e-4) w->lowered++;
             if (b->dz < w->dz_min) w->dz_min = b->dz;
             if (b->dz > w->dz_max) w->dz_max = b->dz;
@@ -755,6 +917,7 @@ static int write_all(writer *w)
         if (gcode_comment_number(l, len, "Z:", &v)) {
             if (w->m.layer >= 0) end_layer(w);
             w->m.layer++;
+            if (w->a->top_skins) map_later_prints(w->s, w->g, (size_t)w->m.layer, w->a->clearance);
         }
         gcode_parse(l, len, &g, &bad);
         if (g.letter == 'M' && (g.code == 82 || g.code == 83)) w->m.relative_e = g.code == 83;
@@ -803,6 +966,8 @@ static int write_all(writer *w)
                 /* a travel: over the layer's raised paths, never through the
                    layer's plane */
                 double want = w->peak > m.pos[2] + 5e-4 ? w->peak + TRAVEL_CLEARANCE : m.pos[2];
+                double skin = skin_near(w->s, before, m.pos, w->a->clearance + 2 * DEFAULT_WIDTH);
+                if (skin + TRAVEL_CLEARANCE > want && skin > m.pos[2] - 5e-4) want = skin + TRAVEL_CLEARANCE;
                 if (w->nozzle_z < want - 5e-4) nozzle_to(w, want);
             } else if (what == 2 && !(g.has & GC_Z) && fabs(w->nozzle_z - m.pos[2]) > 5e-4) {
                 nozzle_to(w, m.pos[2]);
@@ -914,13 +1079,24 @@ int cmd_contour(int argc, char **argv)
     s.h = (int)ceil((g.hi[1] - g.lo[1] + 4) / CELL);
     if (!(s.top = (float *)malloc((size_t)s.w * (size_t)s.h * sizeof *s.top))) { rc = complain(RC_FAIL, "out of memory"); goto done; }
     for (i = 0; i < (size_t)s.w * (size_t)s.h; i++) s.top[i] = -HUGE_VALF;
+    if (a.top_skins) {
+        s.bw = (int)ceil(s.w * CELL / BLOCK);
+        s.bh = (int)ceil(s.h * CELL / BLOCK);
+        s.later = (float *)malloc((size_t)s.w * (size_t)s.h * sizeof *s.later);
+        s.last_line = (size_t *)malloc((size_t)s.w * (size_t)s.h * sizeof *s.last_line);
+        s.skin = (float *)malloc((size_t)s.bw * (size_t)s.bh * sizeof *s.skin);
+        if (!s.later || !s.last_line || !s.skin) { rc = complain(RC_FAIL, "out of memory"); goto done; }
+        for (i = 0; i < (size_t)s.bw * (size_t)s.bh; i++) s.skin[i] = -HUGE_VALF;
+    }
     memset(&w, 0, sizeof w);
     w.a = &a;
     w.g = &g;
     w.s = &s;
     w.m.layer = -1;
     w.peak = -HUGE_VAL;
-    w.tan_max = tan(a.max_angle * M_PI / 180);
+    /* a top skin's path no steeper than the nozzle's flank */
+    w.tan_max = tan((a.top_skins && a.clearance_angle < a.max_angle ? a.clearance_angle : a.max_angle) * M_PI / 180);
+    w.tan_clear = a.top_skins ? tan(a.clearance_angle * M_PI / 180) : 0;
     if ((rc = output_open(&o, a.out, 0))) goto done;
     w.f = o.f;
     rc = write_all(&w);
@@ -947,9 +1123,16 @@ int cmd_contour(int argc, char **argv)
     printf("%s: %zu extrusion moves contoured into %zu pieces (%zu raised, %zu lowered, %+.3f to %+.3f mm off the layer "
            "tops); E per layer within %+.2f%%\n", a.out, w.contoured_moves, w.points, w.raised, w.lowered,
            w.points ? w.dz_min : 0.0, w.points ? w.dz_max : 0.0, 100 * worst);
+    if (a.top_skins)
+        printf("%s: top skins: %zu pieces risen above the layer's rise limit, by up to %.3f mm over the layer's top "
+               "(--nozzle-clearance %g, --clearance-angle %g)\n", a.out, w.skin_points, w.skin_max, a.clearance,
+               a.clearance_angle);
 done:
     adaslice_ldi_free(&s.ldi);
     free(s.top);
+    free(s.later);
+    free(s.last_line);
+    free(s.skin);
     threemf_project_free(&p);
     gfile_free(&g);
     return rc;
