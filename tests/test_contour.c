@@ -529,6 +529,142 @@ static void the_bundled_hand_is_printed_on_its_surface(void)
     contour_case("examples/models/hand_closed.obj", 88.7, 0, 4);
 }
 
+/* ---- --top-skins */
+
+#define SKIN_RISE 0.02          /* --max-rise of the top-skin cases: what modulation alone may do */
+#define CLEARANCE 1.0           /* --nozzle-clearance */
+#define CLEAR_ANGLE 30.0        /* --clearance-angle */
+
+typedef struct spot { double x, y, z; int layer; } spot;
+
+static int by_x(const void *a, const void *b)
+{
+    double x = ((const spot *)a)->x, y = ((const spot *)b)->x;
+    return x < y ? -1 : x > y;
+}
+
+/* Points every SAMPLE_MM along p's extrusions; those risen more than
+   SKIN_RISE over their layer's top when `skins`. */
+static spot *spots(const printed *p, int skins, size_t *count)
+{
+    size_t s, n = 0, cap = 1024;
+    spot *out = (spot *)malloc(cap * sizeof *out);
+    for (s = 0; s < p->n; s++) {
+        const seg *g = &p->segs[s];
+        int q, steps = (int)(hypot(g->b[0] - g->a[0], g->b[1] - g->a[1]) / SAMPLE_MM) + 1;
+        for (q = 0; q <= steps; q++) {
+            double t = (double)q / steps, z = g->a[2] + t * (g->b[2] - g->a[2]);
+            if (skins && z <= p->top[g->layer] + SKIN_RISE + 2e-3) continue;
+            if (n == cap) out = (spot *)realloc(out, (cap *= 2) * sizeof *out);
+            out[n].x = g->a[0] + t * (g->b[0] - g->a[0]);
+            out[n].y = g->a[1] + t * (g->b[1] - g->a[1]);
+            out[n].z = z;
+            out[n++].layer = g->layer;
+        }
+    }
+    *count = n;
+    return out;
+}
+
+/* The most by which a risen skin stands inside the nozzle cone of a print
+   of a later layer: the cone's apex at the later bead's edge (beads
+   2 BEAD_HALF wide, so the edges 2 BEAD_HALF closer than the centres), its
+   flank CLEAR_ANGLE over the horizontal, up to CLEARANCE, where the heater
+   block is. 0 when none does. Later paths of the same layer are left out:
+   contour only promises them its layer's lowest, which this reader cannot
+   tell apart from a path of the same run. */
+static double worst_in_cone(const printed *p, size_t *skin_count)
+{
+    size_t ns, nb, i, k;
+    spot *skin = spots(p, 1, &ns), *all = spots(p, 0, &nb);
+    double worst = 0, t = tan(CLEAR_ANGLE * M_PI / 180), reach = CLEARANCE / t + 2 * BEAD_HALF;
+    qsort(skin, ns, sizeof *skin, by_x);
+    for (k = 0; k < nb; k++) {
+        size_t lo = 0, hi = ns;
+        while (lo < hi) { /* the first skin at x >= all[k].x - reach */
+            size_t mid = (lo + hi) / 2;
+            if (skin[mid].x < all[k].x - reach) lo = mid + 1; else hi = mid;
+        }
+        for (i = lo; i < ns && skin[i].x <= all[k].x + reach; i++) {
+            double d = hypot(skin[i].x - all[k].x, skin[i].y - all[k].y) - 2 * BEAD_HALF, up = skin[i].z - all[k].z, over;
+            if (skin[i].layer >= all[k].layer || up <= 0) continue;
+            over = up - (d > 0 ? d : 0) * t;
+            if (up > CLEARANCE && up - CLEARANCE > over) over = up - CLEARANCE;
+            if (over > worst) worst = over;
+        }
+    }
+    free(skin);
+    free(all);
+    *skin_count = ns;
+    return worst;
+}
+
+/* The shallow dome planned --hybrid and sliced by PrusaSlicer, contoured
+   with modulation held to --max-rise SKIN_RISE, then with --top-skins as
+   well: the skins' surface as printed comes closer to the mesh, no point
+   stands 0.03 mm above it or under the deposit, and no risen skin is
+   inside a later layer's nozzle cone. */
+static void top_skins_follow_the_dome_further(void)
+{
+    char path3mf[300], gcode[300], mod[300], skins[300], rise[16];
+    printed before, mp, sp;
+    surface_error em, es;
+    cli_result r;
+    top_finder f;
+    adaslice_load_options o;
+    adaslice_mesh mesh;
+    adaslice_error e;
+    double lo[3], hi[3], shift[3], gouge, cone;
+    size_t risen;
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("skins.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("skins.gcode"));
+    snprintf(mod, sizeof mod, "%s", cli_path("skins-mod.gcode"));
+    snprintf(skins, sizeof skins, "%s", cli_path("skins-out.gcode"));
+    snprintf(rise, sizeof rise, "%g", SKIN_RISE);
+    if (!prusa_gcode_after(cli_run("plan", "examples/models/shallow_dome.obj", PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid",
+                                   NULL),
+                           path3mf, gcode, NULL))
+        return;
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", mod, "--max-rise", rise, NULL);
+    CHECKF(r.status == 0, "contour: exit %d: %.300s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", skins, "--max-rise", rise, "--top-skins", "--nozzle-clearance",
+                "1", "--clearance-angle", "30", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "top skins: "), "contour --top-skins: exit %d: %.300s", r.status, r.err);
+    printf("    %s", r.out);
+    cli_free(&r);
+    memset(&o, 0, sizeof o);
+    if (check_case_failed() || adaslice_mesh_load_file("examples/models/shallow_dome.obj", &o, &mesh, &e) != ADASLICE_OK)
+        return;
+    adaslice_mesh_bounds(&mesh, lo, hi);
+    shift[0] = 125 - (lo[0] + hi[0]) / 2;
+    shift[1] = 105 - (lo[1] + hi[1]) / 2;
+    shift[2] = -lo[2];
+    finder_init(&f, &mesh, shift);
+    if (read_printed(gcode, &before) && read_printed(mod, &mp) && read_printed(skins, &sp)) {
+        em = measure(&mp, &f, 15);
+        es = measure(&sp, &f, 15);
+        gouge = worst_gouge(&sp, &f);
+        cone = worst_in_cone(&sp, &risen);
+        printf("    shallow dome, --max-rise %g: |printed - mesh| mean %.4f -> %.4f mm with --top-skins, 95th percentile "
+               "%.4f -> %.4f mm; highest above the mesh %.4f mm; %zu points risen past the rise, deepest under the deposit "
+               "%.4f mm, deepest in a later nozzle's cone %.4f mm\n", SKIN_RISE, em.mean, es.mean, em.p95, es.p95,
+               es.worst_above, risen, gouge, cone);
+        CHECKF(es.cells == em.cells && es.cells > 100, "%zu cells, %zu with modulation alone", es.cells, em.cells);
+        CHECKF(es.mean < 0.9 * em.mean && es.p95 <= em.p95, "mean %.4f, 95th percentile %.4f mm; modulation alone %.4f, %.4f",
+               es.mean, es.p95, em.mean, em.p95);
+        CHECKF(risen > 100, "%zu points risen past --max-rise", risen);
+        CHECKF(es.worst_above <= 0.03, "a printed point %.4f mm above the mesh", es.worst_above);
+        CHECKF(gouge <= 1e-3, "a point %.4f mm under the deposit", gouge);
+        CHECKF(cone <= 2e-3, "a risen skin %.4f mm inside a later layer's nozzle cone", cone);
+        free(mp.segs);
+        free(sp.segs);
+    }
+    free(before.segs);
+    finder_free(&f);
+    adaslice_mesh_free(&mesh);
+}
+
 /* ---- contour --svg-path, read back */
 
 /* The numbers of attribute `name` of the first tag of svg that has it, up to n. */
@@ -773,5 +909,6 @@ void test_contour(void)
     RUN_NEEDING("prusa-slicer", refused_inputs_get_one_line_and_no_file);
     RUN_NEEDING("prusa-slicer", a_hybrid_projects_limits_are_taken);
     RUN_NEEDING("prusa-slicer", the_svg_path_is_the_gcodes);
+    RUN_NEEDING("prusa-slicer", top_skins_follow_the_dome_further);
     cli_end();
 }
