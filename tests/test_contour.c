@@ -867,7 +867,11 @@ static void refused_inputs_get_one_line_and_no_file(void)
     {
         static const char *const usage[][3] = {{"--max-angle", "90", "--max-angle 90"},
                                                 {"--resolution", "0.001", "--resolution 0.001"},
-                                                {"--max-rise", "-1", "--max-rise"}};
+                                                {"--max-rise", "-1", "--max-rise"},
+                                                {"--clearance-angle", "90", "--clearance-angle 90"},
+                                                {"--nozzle-clearance", "1", "are for --top-skins"},
+                                                {"--top-skins", "--top-skins", "--top-skins needs --nozzle-clearance"},
+                                                {"--svg-path", "1", "needs the SVG's path after the layer"}};
         for (c = 0; c < sizeof usage / sizeof *usage; c++) {
             r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("out.gcode"), usage[c][0], usage[c][1], NULL);
             CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, usage[c][2]), "exit %d: %.300s", r.status, r.err);
