@@ -81,11 +81,13 @@ static void finder_free(top_finder *f)
     free(f->list);
 }
 
-/* The highest crossing of the vertical line at G-code (x, y) with the mesh,
-   in G-code Z, and the cosine of its face's slope; 0 where none. */
-static int mesh_top(const top_finder *f, double x, double y, double *z, double *cos_slope)
+/* The highest crossing of the vertical line at G-code (x, y) with the mesh
+   (above -HUGE_VAL), or the lowest crossing of an upward face above G-code
+   Z `above` (the top a point of a layer lies under), in G-code Z, and the
+   cosine of its face's slope; 0 where none. */
+static int mesh_cross(const top_finder *f, double x, double y, double above, double *z, double *cos_slope)
 {
-    double mx = x - f->shift[0], my = y - f->shift[1], best = -HUGE_VAL;
+    double mx = x - f->shift[0], my = y - f->shift[1], best = above == -HUGE_VAL ? -HUGE_VAL : HUGE_VAL;
     int i = (int)(mx - f->lo[0]), j = (int)(my - f->lo[1]);
     size_t k;
     if (i < 0 || j < 0 || i >= f->w || j >= f->h) return 0;
@@ -99,15 +101,20 @@ static int mesh_top(const top_finder *f, double x, double y, double *z, double *
         v = ((q[0] - p[0]) * (my - p[1]) - (q[1] - p[1]) * (mx - p[0])) / d;
         if (u < -1e-9 || v < -1e-9 || u + v > 1 + 1e-9) continue;
         zz = p[2] + u * (q[2] - p[2]) + v * (r[2] - p[2]);
-        if (zz <= best) continue;
+        if (above == -HUGE_VAL ? zz <= best : d <= 0 || zz + f->shift[2] <= above || zz >= best) continue;
         best = zz;
         nx = (q[1] - p[1]) * (r[2] - p[2]) - (q[2] - p[2]) * (r[1] - p[1]);
         ny = (q[2] - p[2]) * (r[0] - p[0]) - (q[0] - p[0]) * (r[2] - p[2]);
         *cos_slope = fabs(d) / sqrt(nx * nx + ny * ny + d * d);
     }
-    if (best == -HUGE_VAL) return 0;
+    if (best == -HUGE_VAL || best == HUGE_VAL) return 0;
     *z = best + f->shift[2];
     return 1;
+}
+
+static int mesh_top(const top_finder *f, double x, double y, double *z, double *cos_slope)
+{
+    return mesh_cross(f, x, y, -HUGE_VAL, z, cos_slope);
 }
 
 /* ---- a G-code reader of the test's own */
@@ -353,6 +360,34 @@ static double worst_gouge(printed *p, const top_finder *f)
     return worst;
 }
 
+/* ratio[k]: layer k's filament if each of p's extrusion samples filled the
+   mesh (brute force), over what it has: from the layer's bottom up to the
+   surface over the sample where that is an upward face no steeper than 15
+   degrees within the layer's reach (half the next layer over its top,
+   where PrusaSlicer's slice at the next layer's middle leaves the surface
+   exposed), a full layer elsewhere (inside the part). Where this is not 1
+   the mesh itself asks for more or less than PrusaSlicer's planar layer. */
+static void mesh_filament_ratio(const printed *p, const top_finder *f, double *ratio)
+{
+    size_t s;
+    int k;
+    for (k = 0; k < p->layers; k++) ratio[k] = 0;
+    for (s = 0; s < p->n; s++) {
+        const seg *g = &p->segs[s];
+        double h = p->height[g->layer], bottom = p->top[g->layer] - h;
+        double reach = g->layer + 1 < p->layers ? p->height[g->layer + 1] / 2 : HUGE_VAL;
+        int q, steps = (int)(hypot(g->b[0] - g->a[0], g->b[1] - g->a[1]) / SAMPLE_MM) + 1;
+        for (q = 0; q < steps; q++) {
+            double t = (q + 0.5) / steps, z, c, fill = h;
+            if (mesh_cross(f, g->a[0] + t * (g->b[0] - g->a[0]), g->a[1] + t * (g->b[1] - g->a[1]), bottom, &z, &c) &&
+                c >= cos(15 * M_PI / 180) && z <= p->top[g->layer] + reach)
+                fill = z - bottom > 0.25 * h ? z - bottom : 0.25 * h;
+            ratio[g->layer] += g->e / steps * fill / h;
+        }
+    }
+    for (k = 0; k < p->layers; k++) ratio[k] = p->e[k] > 0 ? ratio[k] / p->e[k] : 1;
+}
+
 /* Every line of `in` but the extrusions contour may rewrite is in `out`, in
    order, and out's other lines are G1 moves or G92 E. 0 after a failed check. */
 static int kept_byte_for_byte(const char *in_path, const char *out_path)
@@ -402,7 +437,9 @@ static void contour_case(const char *model, double scale, int relative_e, double
     surface_error eb, ea;
     cli_result r;
     size_t k, worst_layer = 0;
-    double worst_e = 0, worst_flow = 0, gouge;
+    double worst_e = 0, worst_flow = 0, gouge, *ratio = (double *)malloc(4096 * sizeof *ratio), worst_even = 0;
+    double r_lo = HUGE_VAL, r_hi = -HUGE_VAL;
+    size_t even = 0, uneven = 0, even_layer = 0;
     snprintf(s, sizeof s, "%.9g", scale);
     snprintf(path3mf, sizeof path3mf, "%s", cli_path("part.3mf"));
     snprintf(before_path, sizeof before_path, "%s", cli_path("part.gcode"));
@@ -430,8 +467,23 @@ static void contour_case(const char *model, double scale, int relative_e, double
         ea = measure(&after, &f, 15);
         gouge = worst_gouge(&after, &f);
         CHECKF(before.layers == after.layers, "%d layers before, %d after", before.layers, after.layers);
+        mesh_filament_ratio(&before, &f, ratio);
         for (k = 0; k < (size_t)before.layers && k < 4096; k++)
             if (before.e[k] > 0) {
+                /* the issue's E within 2 % per layer, where following the
+                   mesh keeps the layer's volume; elsewhere E follows the
+                   height the beads fill (worst_flow, every layer) */
+                if (fabs(ratio[k] - 1) <= 0.01) {
+                    even++;
+                    if (fabs(after.e[k] / before.e[k] - 1) > fabs(worst_even)) {
+                        worst_even = after.e[k] / before.e[k] - 1;
+                        even_layer = k;
+                    }
+                } else {
+                    uneven++;
+                    if (ratio[k] < r_lo) r_lo = ratio[k];
+                    if (ratio[k] > r_hi) r_hi = ratio[k];
+                }
                 if (fabs(after.e[k] / before.e[k] - 1) > fabs(worst_e)) worst_e = after.e[k] / before.e[k] - 1;
                 if (fabs(after.unscaled[k] / before.e[k] - 1) > fabs(worst_flow)) {
                     worst_flow = after.unscaled[k] / before.e[k] - 1;
@@ -445,6 +497,11 @@ static void contour_case(const char *model, double scale, int relative_e, double
                base_name(model), ea.cells, eb.mean, ea.mean, eb.mean / ea.mean, eb.p95, ea.p95, eb.p95 / ea.p95,
                eb.worst_above, ea.worst_above, gouge, 100 * worst_e, 100 * worst_flow, worst_layer + 1, before.layers,
                atan(after.steepest) * 180 / M_PI, after.low_travel);
+        printf("    E per layer: %zu layers where the mesh holds PrusaSlicer's volume within 1 %%, E within %+.2f%% (layer %zu); "
+               "%zu where it does not (mesh / planar %.3f to %.3f), E as the beads fill\n", even, 100 * worst_even,
+               even_layer + 1, uneven, uneven ? r_lo : 1.0, uneven ? r_hi : 1.0);
+        CHECKF(fabs(worst_even) <= 0.02, "E of layer %zu is %+.2f%% off PrusaSlicer's, where the mesh holds its volume",
+               even_layer + 1, 100 * worst_even);
         CHECKF(ea.cells > 100 && eb.cells == ea.cells, "%zu cells measured (%zu before)", ea.cells, eb.cells);
         CHECKF(eb.mean >= min_gain * ea.mean, "mean %.4f -> %.4f mm", eb.mean, ea.mean);
         CHECKF(eb.p95 >= min_gain * ea.p95, "95th percentile %.4f -> %.4f mm", eb.p95, ea.p95);
@@ -459,6 +516,7 @@ static void contour_case(const char *model, double scale, int relative_e, double
     }
     free(before.segs);
     free(after.segs);
+    free(ratio);
     finder_free(&f);
     adaslice_mesh_free(&mesh);
 }
