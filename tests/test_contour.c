@@ -592,8 +592,16 @@ static void the_bundled_hand_is_printed_on_its_surface(void)
 #define SKIN_RISE 0.02          /* --max-rise of the top-skin cases: what modulation alone may do */
 #define CLEARANCE 1.0           /* --nozzle-clearance */
 #define CLEAR_ANGLE 30.0        /* --clearance-angle */
+#define SQUAT_ANGLE 10.0        /* ... of a squat nozzle, whose cone reaches out far */
 
 typedef struct spot { double x, y, z; int layer; } spot;
+
+static int by_layer_x(const void *a, const void *b)
+{
+    int p = ((const spot *)a)->layer, q = ((const spot *)b)->layer;
+    double x = ((const spot *)a)->x, y = ((const spot *)b)->x;
+    return p != q ? (p < q ? -1 : 1) : x < y ? -1 : x > y;
+}
 
 static int by_x(const void *a, const void *b)
 {
@@ -627,18 +635,25 @@ static spot *spots(const printed *p, int skins, size_t *count)
 /* The most by which a risen skin stands inside the nozzle cone of a print
    of a later layer: the cone's apex at the later bead's edge (beads
    2 BEAD_HALF wide, so the edges 2 BEAD_HALF closer than the centres), its
-   flank CLEAR_ANGLE over the horizontal, up to CLEARANCE, where the heater
+   flank `angle` degrees over the horizontal, up to CLEARANCE, where the heater
    block is. 0 when none does. Later paths of the same layer are left out:
    contour only promises them its layer's lowest, which this reader cannot
    tell apart from a path of the same run. */
-static double worst_in_cone(const printed *p, size_t *skin_count)
+static double worst_in_cone(const printed *p, double angle, size_t *skin_count)
 {
     size_t ns, nb, i, k;
     spot *skin = spots(p, 1, &ns), *all = spots(p, 0, &nb);
-    double worst = 0, t = tan(CLEAR_ANGLE * M_PI / 180), reach = CLEARANCE / t + 2 * BEAD_HALF;
+    double worst = 0, t = tan(angle * M_PI / 180), reach = CLEARANCE / t + 2 * BEAD_HALF;
+    double top_skin = -HUGE_VAL;
+    int first_layer = 1 << 30;
     qsort(skin, ns, sizeof *skin, by_x);
+    for (i = 0; i < ns; i++) {
+        if (skin[i].z > top_skin) top_skin = skin[i].z;
+        if (skin[i].layer < first_layer) first_layer = skin[i].layer;
+    }
     for (k = 0; k < nb; k++) {
         size_t lo = 0, hi = ns;
+        if (all[k].z >= top_skin || all[k].layer <= first_layer) continue; /* no skin above it, or none earlier */
         while (lo < hi) { /* the first skin at x >= all[k].x - reach */
             size_t mid = (lo + hi) / 2;
             if (skin[mid].x < all[k].x - reach) lo = mid + 1; else hi = mid;
@@ -703,7 +718,7 @@ static void top_skins_follow_the_dome_further(void)
         em = measure(&mp, &f, 15);
         es = measure(&sp, &f, 15);
         gouge = worst_gouge(&sp, &f);
-        cone = worst_in_cone(&sp, &risen);
+        cone = worst_in_cone(&sp, CLEAR_ANGLE, &risen);
         printf("    shallow dome, --max-rise %g: |printed - mesh| mean %.4f -> %.4f mm with --top-skins, 95th percentile "
                "%.4f -> %.4f mm; highest above the mesh %.4f mm; %zu points risen past the rise, deepest under the deposit "
                "%.4f mm, deepest in a later nozzle's cone %.4f mm\n", SKIN_RISE, em.mean, es.mean, em.p95, es.p95,
@@ -721,6 +736,118 @@ static void top_skins_follow_the_dome_further(void)
     free(before.segs);
     finder_free(&f);
     adaslice_mesh_free(&mesh);
+}
+
+/* The shallow dome's cap (R 60 mm, 5 mm high on a 3 mm base) centred at
+   (22, 20), cut by a 12 mm wall from x = WALL_X on, where the cap is still
+   shallow (13.5 degrees). */
+#define WALL_X 36.0
+static double dome_and_wall(double x, double y)
+{
+    double r2 = (x - 22) * (x - 22) + (y - 20) * (y - 20);
+    if (x >= WALL_X) return 12;
+    return r2 < 24 * 24 ? 3 + sqrt(3600 - r2) - 55 : 3;
+}
+
+/* The dome beside a wall 12 mm tall (dome_and_wall), planned --hybrid: the
+   dome's topmost skins would rise past --max-rise, but PrusaSlicer prints
+   the wall's later layers right beside some of them, and contour may lower
+   a later layer's path to a quarter layer over its bottom (README), so a
+   skin risen there would stand in that nozzle's cone. The test finds those
+   points itself: on the output's paths, where the mesh's surface (brute
+   force) lies past the rise and within the clearance, no later layer of
+   PrusaSlicer's G-code prints over the point, and a later layer's print
+   (at its bottom plus a quarter layer) lies closer than the cone allows
+   (as worst_in_cone); and contour must have kept every one of them within
+   --max-rise, the wall forbidding some, while others rise. */
+static void top_skins_keep_clear_of_a_wall_printed_later(void)
+{
+    char path3mf[300], gcode[300], out[300], rise[16];
+    adaslice_mesh m = gen_heightfield(100, 80, 0, 0, 50, 40, dome_and_wall);
+    printed before, after;
+    cli_result r;
+    top_finder f;
+    spot *later = NULL, *on = NULL;
+    size_t nl, no, k, i, refused = 0, must_refuse = 0, by_wall = 0, risen = 0, wrong = 0;
+    double lo[3], hi[3], shift[3], t = tan(SQUAT_ANGLE * M_PI / 180), reach = CLEARANCE / t + 2 * BEAD_HALF, cone;
+    char angle[16];
+    cli_write_obj(cli_path("wall.obj"), &m);
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("wall.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("wall.gcode"));
+    snprintf(out, sizeof out, "%s", cli_path("wall-out.gcode"));
+    snprintf(rise, sizeof rise, "%g", SKIN_RISE);
+    if (!prusa_gcode_after(cli_run("plan", cli_path("wall.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, "--hybrid", NULL), path3mf,
+                           gcode, NULL)) {
+        gen_free(&m);
+        return;
+    }
+    snprintf(angle, sizeof angle, "%g", SQUAT_ANGLE);
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", out, "--max-rise", rise, "--top-skins", "--nozzle-clearance",
+                "1", "--clearance-angle", angle, NULL);
+    CHECKF(r.status == 0, "contour --top-skins: exit %d: %.300s", r.status, r.err);
+    printf("    %s", r.out);
+    cli_free(&r);
+    adaslice_mesh_bounds(&m, lo, hi);
+    shift[0] = 125 - (lo[0] + hi[0]) / 2;
+    shift[1] = 105 - (lo[1] + hi[1]) / 2;
+    shift[2] = -lo[2];
+    finder_init(&f, &m, shift);
+    if (!check_case_failed() && read_printed(gcode, &before) && read_printed(out, &after)) {
+        later = spots(&before, 0, &nl);
+        on = spots(&after, 0, &no);
+        for (k = 0; k < nl; k++) /* the lowest contour may print there */
+            later[k].z = before.top[later[k].layer] - 0.75 * before.height[later[k].layer];
+        qsort(later, nl, sizeof *later, by_layer_x);
+        for (k = 0; k < no; k++) {
+            const spot *a = &on[k];
+            double z, c, top = after.top[a->layer];
+            int blocked = 0, wall = 0, covered = 0, layer;
+            /* on the dome, where the surface is past what modulation reaches but within the clearance */
+            if (!mesh_top(&f, a->x, a->y, &z, &c) || c < cos(15 * M_PI / 180) || z <= top + SKIN_RISE + 5e-3 ||
+                z > top + CLEARANCE)
+                continue;
+            /* the later layers whose lowest lies under the surface: the next one or two */
+            for (layer = a->layer + 1; layer < before.layers && before.top[layer] - 0.75 * before.height[layer] < z &&
+                                       !covered; layer++) {
+                size_t first = 0, last = nl;
+                while (first < last) { /* the first of this layer at x >= a->x - reach */
+                    size_t mid = (first + last) / 2;
+                    if (later[mid].layer < layer || (later[mid].layer == layer && later[mid].x < a->x - reach)) first = mid + 1;
+                    else last = mid;
+                }
+                for (i = first; i < nl && later[i].layer == layer && later[i].x <= a->x + reach && !covered; i++) {
+                    double d = hypot(later[i].x - a->x, later[i].y - a->y);
+                    covered = d < BEAD_HALF;
+                    if (z - later[i].z > (d > 2 * BEAD_HALF ? d - 2 * BEAD_HALF : 0) * t + 1e-3) {
+                        blocked = 1;
+                        wall |= later[i].x - shift[0] >= WALL_X - BEAD_HALF;
+                    }
+                }
+            }
+            if (covered) continue; /* inside the part: a later layer prints over it */
+            if (a->z > top + SKIN_RISE + 2e-3) risen++;
+            if (!blocked) continue;
+            must_refuse++;
+            by_wall += wall;
+            if (a->z <= top + SKIN_RISE + 2e-3) refused++;
+            else if (wrong++ < 3)
+                CHECKF(0, "(%.3f, %.3f) of layer %d: risen to %.4f over the top %.4f, into a later print's nozzle cone "
+                          "(surface %.4f)", a->x, a->y, a->layer + 1, a->z, top, z);
+        }
+        cone = worst_in_cone(&after, SQUAT_ANGLE, &i);
+        printf("    dome beside a wall: %zu topmost skin points a later layer's nozzle cone forbids rising (%zu of them by "
+               "the wall), %zu kept within --max-rise; %zu points risen; deepest in a later nozzle's cone %.4f mm\n",
+               must_refuse, by_wall, refused, risen, cone);
+        CHECKF(by_wall > 20 && refused == must_refuse, "%zu of %zu refused, %zu by the wall", refused, must_refuse, by_wall);
+        CHECKF(risen > 20, "%zu points of the dome risen past --max-rise", risen);
+        CHECKF(cone <= 2e-3, "a risen skin %.4f mm inside a later layer's nozzle cone", cone);
+        free(later);
+        free(on);
+        free(before.segs);
+        free(after.segs);
+    }
+    finder_free(&f);
+    gen_free(&m);
 }
 
 /* ---- contour --svg-path, read back */
@@ -972,5 +1099,6 @@ void test_contour(void)
     RUN_NEEDING("prusa-slicer", a_hybrid_projects_limits_are_taken);
     RUN_NEEDING("prusa-slicer", the_svg_path_is_the_gcodes);
     RUN_NEEDING("prusa-slicer", top_skins_follow_the_dome_further);
+    RUN_NEEDING("prusa-slicer", top_skins_keep_clear_of_a_wall_printed_later);
     cli_end();
 }
