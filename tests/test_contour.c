@@ -8,9 +8,12 @@
      mesh: mean and 95th percentile at least 4x smaller after;
    - no printed point in those cells more than 0.03 mm above the mesh;
    - no point below what earlier layers deposited at it;
-   - E per layer within 2 % of PrusaSlicer's;
+   - E per layer within 2 % of PrusaSlicer's where following the mesh keeps
+     the layer's volume, and everywhere as the height the beads fill;
    - every line contour does not rewrite is in the output, in order.
-   And each input contour refuses gets one line, exit 1 and no file. */
+   And each input contour refuses gets one line, exit 1 and no file;
+   --top-skins rises further than modulation and keeps out of later
+   nozzles' cones; --svg-path's figure is the G-code's. */
 #include "prusa_check.h"
 #include <ctype.h>
 #include "meshgen.h"
