@@ -911,7 +911,7 @@ static void the_svg_path_is_the_gcodes(void)
     char path3mf[300], gcode[300], out[300], svg_path[300], layer_text[16], *svg;
     printed before, after;
     cli_result r;
-    double from[2], to[2], top, *sz = (double *)malloc(2 * 20000 * sizeof *sz), length;
+    double from[2] = {0, 0}, to[2] = {0, 0}, top = 0, *sz = (double *)malloc(2 * 20000 * sizeof *sz), length;
     size_t n, k, s, found = 0, matched = 0;
     int layer;
     snprintf(path3mf, sizeof path3mf, "%s", cli_path("view.3mf"));
