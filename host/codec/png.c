@@ -1,6 +1,7 @@
 /* PNG encoder for layer masks and previews, written from the PNG
-   specification and RFC 1950 (zlib); the deflate inside is deflate.c's, told
-   that the same byte one row up is a row length + 1 back. */
+   specification and RFC 1950 (zlib). Masks go to deflate.c's deflater as the
+   runs of their rows, in time proportional to the runs; other images through
+   its matcher, told that the same byte one row up is a row length + 1 back. */
 #include "png.h"
 #include "../bytes.h"
 #include "deflate.h"
@@ -44,20 +45,18 @@ uint32_t png_adler32(uint32_t adler, const void *data, size_t size)
 
 /* ---- PNG ---------------------------------------------------------------- */
 
-/* Rows of filter byte + data. The matcher codes runs and bytes repeated from
-   one row up, so a row costs little under None where its words are flat (all
+/* Rows of filter byte + data, for 8-bit grey and RGB images (1-bit masks go
+   by their runs, below). The matcher codes runs and bytes repeated from one
+   row up, so a row costs little under None where its words are flat (all
    bytes equal) or equal to the words above; Up only pays on rows whose Up
-   difference has more flat words than that (gradients, say). On masks None
-   wins, which keeps every row matchable against the row above. */
-static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes,
-                        unsigned char last_mask, unsigned char *out)
+   difference has more flat words than that (gradients, say). */
+static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes, unsigned char *out)
 {
     const uint64_t high = 0x8080808080808080u, ones = 0x0101010101010101u;
     for (int y = 0; y < height; y++, out += rowbytes + 1) {
         const unsigned char *cur = pixels + (size_t)y * stride, *prev = cur - (y ? stride : 0);
-        size_t body = rowbytes - 1, flat_none = 0, flat_up = 0;
-        unsigned char last = cur[body] & last_mask;
-        for (size_t x = 0; y > 0 && x + 8 <= body; x += 8) { /* the first row gets None */
+        size_t flat_none = 0, flat_up = 0;
+        for (size_t x = 0; y > 0 && x + 8 <= rowbytes; x += 8) { /* the first row gets None */
             uint64_t c, p, up;
             memcpy(&c, cur + x, 8);
             memcpy(&p, prev + x, 8);
@@ -70,12 +69,10 @@ static void filter_rows(const unsigned char *pixels, int height, size_t stride, 
         }
         if (flat_up > flat_none) {
             out[0] = 2;
-            for (size_t x = 0; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
-            out[rowbytes] = (unsigned char)(last - (prev[body] & last_mask));
+            for (size_t x = 0; x < rowbytes; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
         } else {
             out[0] = 0;
-            memcpy(out + 1, cur, body);
-            out[rowbytes] = last;
+            memcpy(out + 1, cur, rowbytes);
         }
     }
 }
@@ -114,9 +111,9 @@ static int wrap(int width, int height, int bits, int colour, const unsigned char
 }
 
 /* One IDAT holding the filtered rows of rowbytes each; colour is the IHDR
-   colour type, last_mask the bits of a row's last byte that are pixels. */
-static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int bits,
-                  int colour, unsigned char last_mask, unsigned char **out, size_t *out_size)
+   colour type. */
+static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int colour,
+                  unsigned char **out, size_t *out_size)
 {
     /* Up to 2 GB of row data keeps the one IDAT chunk under its 2^31 limit. */
     const size_t max_data = 0x7F000000u;
@@ -130,32 +127,15 @@ static int encode(const unsigned char *pixels, int width, int height, size_t str
         return -1;
     n = (rowbytes + 1) * (size_t)height;
     if (!(filtered = (unsigned char *)malloc(n))) return -1;
-    filter_rows(pixels, height, stride, rowbytes, last_mask, filtered);
+    filter_rows(pixels, height, stride, rowbytes, filtered);
     rc = deflate_bytes(filtered, n, rowbytes + 1, &z, &zsize) ? -1
-         : wrap(width, height, bits, colour, z, zsize, png_adler32(1, filtered, n), out, out_size);
+         : wrap(width, height, 8, colour, z, zsize, png_adler32(1, filtered, n), out, out_size);
     free(filtered);
     free(z);
     return rc;
 }
 
-int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
-                    unsigned char **out, size_t *out_size)
-{
-    if (bits != 1 && bits != 8) {
-        *out = NULL;
-        *out_size = 0;
-        return -1;
-    }
-    return encode(pixels, width, height, stride, bits == 8 ? (size_t)width : ((size_t)width + 7) / 8, bits, 0,
-                  (unsigned char)(bits == 1 && width % 8 ? 0xFF << (8 - width % 8) : 0xFF), out, out_size);
-}
-
-int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size)
-{
-    return encode(rgb, width, height, 3 * (size_t)width, 3 * (size_t)width, 8, 2, 0xFF, out, out_size);
-}
-
-/* ---- 8-bit masks from their runs ------------------------------------------ */
+/* ---- masks from their runs ---------------------------------------------- */
 
 /* The filtered stream (a 0 filter byte, then the row's bytes) goes to the
    deflater as runs of one byte: a literal, then copies from one byte back;
@@ -218,40 +198,53 @@ static int same_row(const unsigned char *a, const unsigned char *b, int width, i
     return !memcmp(a, b, whole) && (bits == 8 || width % 8 == 0 || !((a[whole] ^ b[whole]) & pixels));
 }
 
-int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
-                    size_t *out_size)
+/* The file's rows at `depth` bits from an image's at `bits`: 8 from 1 makes
+   1-bit pixels 0 or 255; 1 from 1 takes the packed bytes as they are, a
+   row's padding bits cleared. A row that repeats the row above (a memcmp:
+   most of a layer is the dark around the part) reuses that row's runs and
+   sums, so only rows that differ are looked at byte by byte. */
+static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
+                       unsigned char **out, size_t *out_size)
 {
     const uint64_t M = 65521;
-    const size_t line = (size_t)width + 1;
+    const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8, line = row_bytes + 1;
+    const size_t whole = depth == 8 ? row_bytes : (size_t)width / 8; /* bytes that go as they are */
+    const unsigned tail = (0xFF << (8 - width % 8)) & 0xFF;         /* the pixels of a 1-bit row's last byte */
     /* a copied row costs a copy per 258 bytes: less than its runs when it has more */
     const size_t runs_worth_a_row = line / 258 + 1;
-    uint64_t s1 = 1, s2 = 0;
+    uint64_t s1 = 1, s2 = 0, r1 = 0, r2 = 0; /* r: the row's own sums, from zero (its 0 filter byte adds nothing) */
     mask_encoder e;
     unsigned char *z = NULL;
     size_t zsize = 0;
     int y, rc = -1;
     *out = NULL;
     *out_size = 0;
-    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || width >= 1 << 24 || !image ||
+    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || row_bytes >= 1 << 24 || !image ||
         stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || line > 0x7F000000u / (size_t)height)
         return -1;
     memset(&e, 0, sizeof e);
     if (!(e.d = deflate_begin())) return -1;
     for (y = 0; y < height && !e.failed; y++) {
         const unsigned char *row = image + (size_t)y * stride;
-        uint64_t r1 = 0, r2 = 0; /* the row's own sums, from zero: the 0 filter byte before it changes neither */
+        int repeats = y > 0 && same_row(row, row - stride, width, bits);
         size_t r;
-        e.run_count = 0;
-        mask_row_runs(row, bits, width, keep_run, &e);
-        for (r = 0; r < e.run_count; r++) {
-            uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
-            r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
-            r1 = (r1 + n * v) % M;
+        if (!repeats) {
+            e.run_count = 0;
+            if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
+            else {
+                mask_row_runs(row, 8, (int)whole, keep_run, &e);
+                if (whole < row_bytes) keep_run(&e, row[whole] & tail, 1);
+            }
+            for (r1 = r2 = 0, r = 0; r < e.run_count; r++) {
+                uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
+                r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
+                r1 = (r1 + n * v) % M;
+            }
         }
         s2 = (s2 + line % M * s1 + r2) % M;
         s1 = (s1 + r1) % M;
         /* a row copy reaches one row back: within deflate's 32 KB window only */
-        if (y > 0 && line <= 32768 && e.run_count > runs_worth_a_row && same_row(row, row - stride, width, bits)) {
+        if (repeats && line <= 32768 && e.run_count > runs_worth_a_row) {
             emit_run(&e);
             e.failed |= deflate_copy(e.d, line, line) != 0;
             e.last = e.runs[e.run_count - 1] >> 24;
@@ -263,7 +256,30 @@ int png_encode_mask(const unsigned char *image, int width, int height, size_t st
     emit_run(&e);
     free(e.runs);
     if (!deflate_end(e.d, !e.failed, &z, &zsize))
-        rc = wrap(width, height, 8, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
+        rc = wrap(width, height, depth, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
     free(z);
     return rc;
+}
+
+int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
+                    size_t *out_size)
+{
+    return encode_runs(image, width, height, stride, bits, 8, out, out_size);
+}
+
+int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
+                    unsigned char **out, size_t *out_size)
+{
+    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, out, out_size);
+    if (bits != 8) {
+        *out = NULL;
+        *out_size = 0;
+        return -1;
+    }
+    return encode(pixels, width, height, stride, (size_t)width, 0, out, out_size);
+}
+
+int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size)
+{
+    return encode(rgb, width, height, 3 * (size_t)width, 3 * (size_t)width, 2, out, out_size);
 }
