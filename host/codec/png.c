@@ -279,6 +279,17 @@ static void push_row(mask_encoder *e, size_t row_bytes, int repeats)
     push_part(e, from, row_bytes, same, runs, last, &r, &rx);
 }
 
+/* k rows that repeat the row above, at once: one copy from a row back where
+   push_row would copy each of them, one run where the row is dark (its
+   filter byte is 0 too), else row by row. */
+static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
+{
+    if (e->line <= 32768 && copy_pays(e, e->line, e->run_count + 1))
+        push_copy(e, k * e->line, e->runs[e->run_count - 1] >> 24);
+    else if (e->run_count == 1 && !(e->runs[0] >> 24)) push_run(e, 0, k * e->line);
+    else while (k--) push_row(e, row_bytes, 1);
+}
+
 /* The file's rows at `depth` bits from an image's at `bits`: 8 from 1 makes
    1-bit pixels 0 or 255; 1 from 1 takes the packed bytes as they are, a
    row's padding bits cleared. A row that repeats the row above (a memcmp:
@@ -306,26 +317,32 @@ static int encode_runs(const unsigned char *image, int width, int height, size_t
     if (!(e.d = deflate_begin())) return -1;
     for (y = 0; y < height && !e.failed; y++) {
         const unsigned char *row = image + (size_t)y * stride;
-        int repeats = y > 0 && same_row(row, row - stride, width, bits);
-        if (!repeats) { /* the row above's runs stay this row's otherwise */
-            uint32_t *t = e.above;
-            size_t r, cap = e.above_cap;
-            e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count;
-            e.runs = t, e.run_cap = cap, e.run_count = 0;
-            if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
-            else {
-                mask_row_runs(row, 8, (int)whole, keep_run, &e);
-                if (whole < row_bytes) keep_run(&e, row[whole] & tail, 1);
-            }
-            for (r1 = r2 = 0, r = 0; r < e.run_count; r++) {
-                uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
-                r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
-                r1 = (r1 + n * v) % M;
-            }
+        uint64_t k = 0, r; /* rows from y on that repeat the row above: the dark around the part, mostly */
+        uint32_t *t = e.above;
+        size_t cap = e.above_cap;
+        while (y > 0 && y + k < (uint64_t)height && same_row(row + k * stride, row + k * stride - stride, width, bits)) k++;
+        if (k) { /* each adds line bytes and the row's sums: s2 += line s1 + r2, s1 += r1, k times */
+            s2 = (s2 + k % M * (line % M) % M * s1 + (k * (k - 1) / 2) % M * (line % M) % M * r1 + k % M * r2) % M;
+            s1 = (s1 + k % M * r1) % M;
+            push_repeats(&e, row_bytes, k);
+            y += (int)k - 1;
+            continue;
+        }
+        e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count;
+        e.runs = t, e.run_cap = cap, e.run_count = 0;
+        if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
+        else {
+            mask_row_runs(row, 8, (int)whole, keep_run, &e);
+            if (whole < row_bytes) keep_run(&e, row[whole] & tail, 1);
+        }
+        for (r1 = r2 = 0, r = 0; r < e.run_count; r++) {
+            uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
+            r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
+            r1 = (r1 + n * v) % M;
         }
         s2 = (s2 + line % M * s1 + r2) % M;
         s1 = (s1 + r1) % M;
-        if (!e.failed) push_row(&e, row_bytes, repeats);
+        if (!e.failed) push_row(&e, row_bytes, 0);
     }
     emit_pending(&e);
     free(e.runs);
