@@ -292,9 +292,9 @@ static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
 
 /* The file's rows at `depth` bits from an image's at `bits`: 8 from 1 makes
    1-bit pixels 0 or 255; 1 from 1 takes the packed bytes as they are, a
-   row's padding bits cleared. A row that repeats the row above (a memcmp:
-   most of a layer is the dark around the part) reuses that row's runs and
-   sums, so only rows that differ are looked at byte by byte. */
+   row's padding bits cleared. Rows that repeat the row above (a memcmp a
+   row: most of a layer is the dark around the part) go at once on that
+   row's runs and sums, so only rows that differ are looked at byte by byte. */
 static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
                        unsigned char **out, size_t *out_size)
 {
@@ -318,8 +318,8 @@ static int encode_runs(const unsigned char *image, int width, int height, size_t
     for (y = 0; y < height && !e.failed; y++) {
         const unsigned char *row = image + (size_t)y * stride;
         uint64_t k = 0, r; /* rows from y on that repeat the row above: the dark around the part, mostly */
-        uint32_t *t = e.above;
-        size_t cap = e.above_cap;
+        uint32_t *swap = e.above;
+        size_t swap_cap = e.above_cap;
         while (y > 0 && y + k < (uint64_t)height && same_row(row + k * stride, row + k * stride - stride, width, bits)) k++;
         if (k) { /* each adds line bytes and the row's sums: s2 += line s1 + r2, s1 += r1, k times */
             s2 = (s2 + k % M * (line % M) % M * s1 + (k * (k - 1) / 2) % M * (line % M) % M * r1 + k % M * r2) % M;
@@ -328,8 +328,8 @@ static int encode_runs(const unsigned char *image, int width, int height, size_t
             y += (int)k - 1;
             continue;
         }
-        e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count;
-        e.runs = t, e.run_cap = cap, e.run_count = 0;
+        e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count; /* a row that differs: new runs */
+        e.runs = swap, e.run_cap = swap_cap, e.run_count = 0;
         if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
         else {
             mask_row_runs(row, 8, (int)whole, keep_run, &e);
