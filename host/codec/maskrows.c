@@ -107,8 +107,8 @@ static uint32_t append_repeats(uint32_t crc, uint32_t row, uint32_t shift, size_
 
 /* Rows go through adaslice_crc32 as a running CRC in as few calls as can be:
    it slices sixteen bytes a step only in calls of 4 KiB or more (it builds
-   its tables each call), so one call a row took the nibble loop, eight times
-   slower. Only a long run of rows that repeat the row above (the dark around
+   its tables each call), so one call a row took the nibble loop, several
+   times slower. Only a long run of rows that repeat the row above (the dark around
    the part) is left out of the calls and added by combination. */
 uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height)
 {
