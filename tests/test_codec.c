@@ -291,6 +291,34 @@ static void mask_crc_by_rows_is_the_crc_of_the_bytes(void)
     CHECKF(bad == 0, "%d masks' row CRCs differ from their bytes'", bad);
 }
 
+/* The same on layers of long runs of repeated rows (dark bands, a lit band,
+   runs just short of and past the length that is combined rather than read),
+   1-bit 3840-pixel rows and odd widths, back to back and padded. */
+static void mask_crc_over_long_repeats_is_the_crc_of_the_bytes(void)
+{
+    static const size_t widths[] = {1, 3, 480, 481, 2000, 8193, 20000};
+    int bad = 0;
+    for (size_t i = 0; i < sizeof widths / sizeof widths[0]; i++) {
+        const size_t w = widths[i], stride = w + i % 2 * 3, h = 300;
+        unsigned char *img = (unsigned char *)malloc(stride * h), *packed = (unsigned char *)malloc(w * h);
+        size_t y = 0;
+        if (!img || !packed) { CHECK(!"out of memory"); free(img); free(packed); return; }
+        memset(img, 0x5A, stride * h); /* padding that must not count */
+        while (y < h) { /* a band of 1 to 120 rows: dark, lit, or one random row repeated */
+            size_t band = 1 + codec_rng() % 120, kind = codec_rng() % 3, x, k;
+            for (x = 0; x < w; x++) img[y * stride + x] = (unsigned char)(kind == 0 ? 0 : kind == 1 ? 0xFF : codec_rng());
+            for (k = 1; k < band && y + k < h; k++) memcpy(img + (y + k) * stride, img + y * stride, w);
+            y += band;
+        }
+        for (y = 0; y < h; y++) memcpy(packed + y * w, img + y * stride, w);
+        if (mask_crc32(img, stride, w, (int)h) != ref_crc32(0, packed, w * h)) bad++;
+        if (mask_crc32(img, stride, w, 1) != ref_crc32(0, packed, w)) bad++;
+        free(img);
+        free(packed);
+    }
+    CHECKF(bad == 0, "%d masks' row CRCs differ from their bytes'", bad);
+}
+
 static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
@@ -443,6 +471,7 @@ void test_codec(void)
     RUN(repeated_rows_crc_by_combination);
     RUN(fast_encoder_writes_the_reference_bytes);
     RUN(mask_crc_by_rows_is_the_crc_of_the_bytes);
+    RUN(mask_crc_over_long_repeats_is_the_crc_of_the_bytes);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);

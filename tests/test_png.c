@@ -9,6 +9,7 @@
 #include "util.h"
 #include "check.h"
 #include "maskgen.h"
+#include "../host/codec/inflate.h"
 #include "../host/codec/png.h"
 #include "../adaslice.h"
 
@@ -497,6 +498,83 @@ static void noise_decodes_in_oiiotool(void)
     round_trip(&b);
 }
 
+/* The IDAT of an image's PNG read back with the project's inflate (written
+   for the 3MF's ZIP members, apart from the encoder): every row filter None
+   or Up, the pixels and the zlib Adler-32 as the definitions say. */
+static void decodes_by_inflate(const unsigned char *png, size_t size, const image *im)
+{
+    size_t row_bytes = im->bits == 8 ? (size_t)im->width : ((size_t)im->width + 7) / 8, n = (row_bytes + 1) * im->height;
+    size_t at = 8 + 25, len = at + 8 <= size ? be32(png + at) : 0;
+    unsigned char *raw = (unsigned char *)malloc(n), *prev = (unsigned char *)calloc(row_bytes, 1);
+    unsigned char last_mask = (unsigned char)(im->bits == 1 && im->width % 8 ? 0xFF << (8 - im->width % 8) : 0xFF);
+    uint32_t a = 1, b = 0;
+    long wrong = -1;
+    CHECKF(len > 6 && at + 12 + len <= size && !memcmp(png + at + 4, "IDAT", 4), "%s: no IDAT after IHDR", im->png);
+    if (!raw || !prev || !(len > 6 && at + 12 + len <= size)) { free(raw); free(prev); return; }
+    CHECKF(inflate_bytes(png + at + 10, len - 6, raw, n) == 0, "%s: inflate refuses the IDAT or ends short of %zu bytes",
+           im->png, n);
+    for (size_t i = 0; i < n; i++) a = (a + raw[i]) % 65521, b = (b + a) % 65521;
+    CHECKF(be32(png + at + 8 + len - 4) == (b << 16 | a), "%s: Adler-32 %08x, the data's %08x", im->png,
+           (unsigned)be32(png + at + 8 + len - 4), (unsigned)(b << 16 | a));
+    for (int y = 0; y < im->height && wrong < 0; y++) {
+        unsigned char *row = raw + (size_t)y * (row_bytes + 1), filter = row[0];
+        const unsigned char *src = im->pixels + (size_t)y * im->stride;
+        for (size_t x = 0; x < row_bytes; x++) {
+            unsigned char v = (unsigned char)(row[1 + x] + (filter == 2 ? prev[x] : 0)), want = src[x];
+            if (x + 1 == row_bytes) v &= last_mask, want &= last_mask;
+            if (filter > 2 || filter == 1 || v != want) { wrong = y; break; }
+            prev[x] = v;
+        }
+    }
+    CHECKF(wrong < 0, "%s: row %ld is not the image's", im->png, wrong);
+    free(raw);
+    free(prev);
+}
+
+static int band_ends(int x, int y) /* lit at both ends, a span between that moves every row */
+{
+    int from = 900 + (y * 37) % 700;
+    return x < 80 || x >= 3760 || (x >= from && x < from + 300 + y % 3) ? 255 : 0;
+}
+static int wide_stripes(int x, int y) { (void)y; return x % 97 < 40 ? 255 : 0; }
+
+/* Layers as the coder meets them, 3840 x 2400 and a width past a byte: all
+   dark (one run through every row boundary), all lit, every row the same
+   (one copy from a row back through the whole image), and rows lit at both
+   ends around a span that moves, whose shared ends go as copies from a row
+   back that run from one row's end into the next row's start. Decoded by
+   inflate and by OpenImageIO, 1-bit and as the 8-bit masks of the ChiTu and
+   Prusa jobs; a dark layer costs about 2 bits a 258-byte copy. */
+static void layers_decode_through_row_boundaries(void)
+{
+    batch b = {0};
+    const int w = 3840, h = 2400;
+    for (int as_mask = 0; as_mask <= 1; as_mask++) {
+        char name[48];
+        snprintf(name, sizeof name, "dark_%d", as_mask);
+        fill(add(&b, name, w, h, 1, 0), black);
+        snprintf(name, sizeof name, "lit_w3839_%d", as_mask);
+        fill(add(&b, name, w - 1, h, 1, 1), white);
+        snprintf(name, sizeof name, "same_rows_%d", as_mask);
+        fill(add(&b, name, w, h, 1, 0), wide_stripes);
+        snprintf(name, sizeof name, "band_ends_%d", as_mask);
+        fill(add(&b, name, w, h, 1, 0), band_ends);
+        snprintf(name, sizeof name, "band_ends_w3837_%d", as_mask);
+        fill(add(&b, name, w - 3, 60, 1, 2), band_ends);
+        for (int i = 0; i < b.count && !as_mask; i++) {
+            unsigned char *png = NULL;
+            size_t size = 0;
+            image *im = &b.im[i];
+            CHECK(im->pixels && png_encode_gray(im->pixels, im->width, im->height, im->stride, 1, &png, &size) == 0);
+            if (png) decodes_by_inflate(png, size, im);
+            if (png && i == 0)
+                CHECKF(size < (size_t)(w / 8 + 1) * h / 258 * 2 / 8 + 200, "a dark layer: %zu bytes", size);
+            free(png);
+        }
+        round_trip_as(&b, as_mask);
+    }
+}
+
 /* ---- RGB, for previews ---------------------------------------------------- */
 
 /* A picture like a preview: a dark background and a shaded ball. */
@@ -714,6 +792,7 @@ void test_png(void)
     RUN_NEEDING("oiiotool", patterns_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", masks_from_runs_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", noise_decodes_in_oiiotool);
+    RUN_NEEDING("oiiotool", layers_decode_through_row_boundaries);
     RUN(rgb_header_says_truecolour);
     RUN_NEEDING("oiiotool", rgb_images_decode_in_oiiotool);
     RUN(compression_stays_within_its_bounds);

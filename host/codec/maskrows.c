@@ -83,30 +83,52 @@ static uint32_t x_to_8n(size_t n)
     return result;
 }
 
-/* crc(A || B) from crc(A), crc(B) and B's length */
-static uint32_t crc_append(uint32_t a, uint32_t b, size_t b_bytes) { return mult_mod_p(x_to_8n(b_bytes), a) ^ b; }
-
-uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height)
+/* crc continued over rows [from, to): in one call when they lie back to back */
+static uint32_t crc_rows(uint32_t crc, const unsigned char *image, size_t stride, size_t row_bytes, int from, int to)
 {
-    uint32_t crc = 0, shift = x_to_8n(row_bytes);
-    int y = 0;
-    while (y < height) {
-        /* rows unlike the row above, in one pass when they lie back to back */
-        int y0 = y++;
-        while (y < height && memcmp(image + (size_t)y * stride, image + (size_t)(y - 1) * stride, row_bytes)) y++;
-        if (stride == row_bytes) {
-            crc = crc_append(crc, adaslice_crc32(0, image + (size_t)y0 * stride, (size_t)(y - y0) * row_bytes),
-                             (size_t)(y - y0) * row_bytes);
-        } else {
-            int r;
-            for (r = y0; r < y; r++) crc = mult_mod_p(shift, crc) ^ adaslice_crc32(0, image + (size_t)r * stride, row_bytes);
-        }
-        /* then the rows that repeat it: one multiplication each */
-        if (y < height) {
-            uint32_t repeated = adaslice_crc32(0, image + (size_t)(y - 1) * stride, row_bytes);
-            for (; y < height && !memcmp(image + (size_t)y * stride, image + (size_t)(y - 1) * stride, row_bytes); y++)
-                crc = mult_mod_p(shift, crc) ^ repeated;
-        }
+    if (stride == row_bytes) return adaslice_crc32(crc, image + (size_t)from * stride, (size_t)(to - from) * row_bytes);
+    for (; from < to; from++) crc = adaslice_crc32(crc, image + (size_t)from * stride, row_bytes);
+    return crc;
+}
+
+/* crc after `times` more copies of a row whose own CRC is `row`: the map
+   c -> c shift + row (shift: x^(8 n) for rows of n bytes) applied `times`
+   times, by squaring (f twice is c -> c shift^2 + row shift + row), so a
+   layer's thousand dark rows cost a few dozen multiplications. */
+static uint32_t append_repeats(uint32_t crc, uint32_t row, uint32_t shift, size_t times)
+{
+    for (; times; times >>= 1) {
+        if (times & 1) crc = mult_mod_p(shift, crc) ^ row;
+        row = mult_mod_p(shift, row) ^ row;
+        shift = mult_mod_p(shift, shift);
     }
     return crc;
+}
+
+/* Rows go through adaslice_crc32 as a running CRC in as few calls as can be:
+   it slices sixteen bytes a step only in calls of 4 KiB or more (it builds
+   its tables each call), so one call a row took the nibble loop, several
+   times slower. Only a long run of rows that repeat the row above (the dark around
+   the part) is left out of the calls and added by combination. */
+uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height)
+{
+    const size_t long_run = row_bytes ? 8192 / row_bytes + 1 : 1; /* shorter runs are cheaper as bytes */
+    uint32_t crc = 0, shift = x_to_8n(row_bytes);
+    int y = 0, from = 0; /* rows [from, y) are not yet in crc */
+    while (y < height) {
+        size_t k = 0;
+        if (y > 0)
+            while (y + (int)k < height &&
+                   !memcmp(image + (size_t)(y + (int)k) * stride, image + (size_t)(y - 1) * stride, row_bytes))
+                k++;
+        if (k < long_run) {
+            y += k ? (int)k : 1;
+            continue;
+        }
+        crc = crc_rows(crc, image, stride, row_bytes, from, y);
+        crc = append_repeats(crc, adaslice_crc32(0, image + (size_t)(y - 1) * stride, row_bytes), shift, k);
+        y += (int)k;
+        from = y;
+    }
+    return crc_rows(crc, image, stride, row_bytes, from, height);
 }

@@ -1,6 +1,7 @@
 /* PNG encoder for layer masks and previews, written from the PNG
-   specification and RFC 1950 (zlib); the deflate inside is deflate.c's, told
-   that the same byte one row up is a row length + 1 back. */
+   specification and RFC 1950 (zlib). Masks go to deflate.c's deflater as the
+   runs of their rows, in time proportional to the runs; other images through
+   its matcher, told that the same byte one row up is a row length + 1 back. */
 #include "png.h"
 #include "../bytes.h"
 #include "deflate.h"
@@ -44,20 +45,18 @@ uint32_t png_adler32(uint32_t adler, const void *data, size_t size)
 
 /* ---- PNG ---------------------------------------------------------------- */
 
-/* Rows of filter byte + data. The matcher codes runs and bytes repeated from
-   one row up, so a row costs little under None where its words are flat (all
+/* Rows of filter byte + data, for 8-bit grey and RGB images (1-bit masks go
+   by their runs, below). The matcher codes runs and bytes repeated from one
+   row up, so a row costs little under None where its words are flat (all
    bytes equal) or equal to the words above; Up only pays on rows whose Up
-   difference has more flat words than that (gradients, say). On masks None
-   wins, which keeps every row matchable against the row above. */
-static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes,
-                        unsigned char last_mask, unsigned char *out)
+   difference has more flat words than that (gradients, say). */
+static void filter_rows(const unsigned char *pixels, int height, size_t stride, size_t rowbytes, unsigned char *out)
 {
     const uint64_t high = 0x8080808080808080u, ones = 0x0101010101010101u;
     for (int y = 0; y < height; y++, out += rowbytes + 1) {
         const unsigned char *cur = pixels + (size_t)y * stride, *prev = cur - (y ? stride : 0);
-        size_t body = rowbytes - 1, flat_none = 0, flat_up = 0;
-        unsigned char last = cur[body] & last_mask;
-        for (size_t x = 0; y > 0 && x + 8 <= body; x += 8) { /* the first row gets None */
+        size_t flat_none = 0, flat_up = 0;
+        for (size_t x = 0; y > 0 && x + 8 <= rowbytes; x += 8) { /* the first row gets None */
             uint64_t c, p, up;
             memcpy(&c, cur + x, 8);
             memcpy(&p, prev + x, 8);
@@ -70,12 +69,10 @@ static void filter_rows(const unsigned char *pixels, int height, size_t stride, 
         }
         if (flat_up > flat_none) {
             out[0] = 2;
-            for (size_t x = 0; x < body; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
-            out[rowbytes] = (unsigned char)(last - (prev[body] & last_mask));
+            for (size_t x = 0; x < rowbytes; x++) out[1 + x] = (unsigned char)(cur[x] - prev[x]);
         } else {
             out[0] = 0;
-            memcpy(out + 1, cur, body);
-            out[rowbytes] = last;
+            memcpy(out + 1, cur, rowbytes);
         }
     }
 }
@@ -114,9 +111,9 @@ static int wrap(int width, int height, int bits, int colour, const unsigned char
 }
 
 /* One IDAT holding the filtered rows of rowbytes each; colour is the IHDR
-   colour type, last_mask the bits of a row's last byte that are pixels. */
-static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int bits,
-                  int colour, unsigned char last_mask, unsigned char **out, size_t *out_size)
+   colour type. */
+static int encode(const unsigned char *pixels, int width, int height, size_t stride, size_t rowbytes, int colour,
+                  unsigned char **out, size_t *out_size)
 {
     /* Up to 2 GB of row data keeps the one IDAT chunk under its 2^31 limit. */
     const size_t max_data = 0x7F000000u;
@@ -130,51 +127,39 @@ static int encode(const unsigned char *pixels, int width, int height, size_t str
         return -1;
     n = (rowbytes + 1) * (size_t)height;
     if (!(filtered = (unsigned char *)malloc(n))) return -1;
-    filter_rows(pixels, height, stride, rowbytes, last_mask, filtered);
+    filter_rows(pixels, height, stride, rowbytes, filtered);
     rc = deflate_bytes(filtered, n, rowbytes + 1, &z, &zsize) ? -1
-         : wrap(width, height, bits, colour, z, zsize, png_adler32(1, filtered, n), out, out_size);
+         : wrap(width, height, 8, colour, z, zsize, png_adler32(1, filtered, n), out, out_size);
     free(filtered);
     free(z);
     return rc;
 }
 
-int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
-                    unsigned char **out, size_t *out_size)
-{
-    if (bits != 1 && bits != 8) {
-        *out = NULL;
-        *out_size = 0;
-        return -1;
-    }
-    return encode(pixels, width, height, stride, bits == 8 ? (size_t)width : ((size_t)width + 7) / 8, bits, 0,
-                  (unsigned char)(bits == 1 && width % 8 ? 0xFF << (8 - width % 8) : 0xFF), out, out_size);
-}
-
-int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size)
-{
-    return encode(rgb, width, height, 3 * (size_t)width, 3 * (size_t)width, 8, 2, 0xFF, out, out_size);
-}
-
-/* ---- 8-bit masks from their runs ------------------------------------------ */
+/* ---- masks from their runs ---------------------------------------------- */
 
 /* The filtered stream (a 0 filter byte, then the row's bytes) goes to the
-   deflater as runs of one byte: a literal, then copies from one byte back;
-   a row of many runs that repeats the row above goes as one copy from a row
-   back. The Adler-32 follows the runs in closed form, so the cost is in the
-   runs, not the pixels. */
+   deflater as runs of one byte (a literal, then copies from one byte back)
+   and as copies from one row back, which the rows that repeat or change
+   little take: the same part lit a row up, its edges moved. The Adler-32
+   follows the runs in closed form, so the cost is in the runs, not the
+   pixels. */
 typedef struct mask_encoder {
     deflater *d;
+    size_t line;                 /* filter byte and row: a row copy's distance */
     int failed, have_last;
-    unsigned last;               /* the byte before the pending run */
+    unsigned last;               /* the byte before the pending run or copy */
     unsigned run_v;              /* the pending run: run_n bytes of run_v */
     uint64_t run_n;
-    uint32_t *runs;              /* the row's runs, grey << 24 | length */
-    size_t run_count, run_cap;
+    uint64_t copy_n;             /* or the pending copy of copy_n bytes from a row back */
+    uint32_t *runs, *above;      /* the runs of the row and of the row above, grey << 24 | length */
+    size_t run_count, above_count, run_cap, above_cap;
 } mask_encoder;
 
-static void emit_run(mask_encoder *e)
+static void emit_pending(mask_encoder *e)
 {
     uint64_t n = e->run_n;
+    if (e->copy_n) e->failed |= deflate_copy(e->d, (size_t)e->copy_n, e->line) != 0;
+    e->copy_n = 0;
     if (!n) return;
     if (!e->have_last || e->last != e->run_v) {
         e->failed |= deflate_literal(e->d, (unsigned char)e->run_v) != 0;
@@ -189,9 +174,18 @@ static void emit_run(mask_encoder *e)
 
 static void push_run(mask_encoder *e, unsigned v, uint64_t n)
 {
-    if (e->run_n && e->run_v != v) emit_run(e);
+    if (e->copy_n || (e->run_n && e->run_v != v)) emit_pending(e);
     e->run_v = v;
     e->run_n += n;
+}
+
+/* n >= 3 bytes from a row back, the last of them `last`: joins a copy just before */
+static void push_copy(mask_encoder *e, uint64_t n, unsigned last)
+{
+    if (e->run_n) emit_pending(e);
+    e->copy_n += n;
+    e->last = last;
+    e->have_last = 1;
 }
 
 static void keep_run(void *ctx, unsigned grey, uint64_t n)
@@ -218,52 +212,166 @@ static int same_row(const unsigned char *a, const unsigned char *b, int width, i
     return !memcmp(a, b, whole) && (bits == 8 || width % 8 == 0 || !((a[whole] ^ b[whole]) & pixels));
 }
 
-int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
-                    size_t *out_size)
+/* Whether a part of a row, `bytes` long over `runs` of its runs, costs less
+   as a copy from a row back than as runs, by what deflate's codes take on
+   masks: about 15 bits a run (a literal and a length; the first joins the
+   run before) against 18 a copied piece of up to 258 bytes (a length and a
+   far distance), a piece fewer where it joins a pending copy. */
+static int copy_pays(const mask_encoder *e, size_t bytes, size_t runs)
+{
+    uint64_t pieces = (e->copy_n + bytes + 257) / 258 - (e->copy_n + 257) / 258; /* joining a pending copy */
+    return bytes >= 3 && 18 * pieces + 15 < 15 * (uint64_t)runs;
+}
+
+/* The row's runs over [from, to) into the stream (emit 0: passed over);
+   *r and *x are the run that holds `from` and where that run starts. */
+static void push_runs(mask_encoder *e, size_t from, size_t to, size_t *r, size_t *x, int emit)
+{
+    while (from < to) {
+        size_t end = *x + (e->runs[*r] & 0xFFFFFF), upto = end < to ? end : to;
+        if (emit) push_run(e, e->runs[*r] >> 24, upto - from);
+        from = upto;
+        if (upto == end) *x = end, ++*r;
+    }
+}
+
+/* A part [from, to) of the row that is (same) or is not the row above's
+   there, spanning `runs` of the row's runs and ending in a byte `last`. */
+static void push_part(mask_encoder *e, size_t from, size_t to, int same, size_t runs, unsigned last, size_t *r,
+                      size_t *x)
+{
+    int copy = same && e->line <= 32768 && copy_pays(e, to - from + !from, runs + !from); /* the filter byte with the first */
+    if (copy) push_copy(e, to - from + !from, last);
+    else if (!from) push_run(e, 0, 1); /* filter None */
+    push_runs(e, from, to, r, x, !copy);
+}
+
+/* A row into the stream: walking its runs beside the row above's, the parts
+   where the two agree go as copies from a row back where that costs less
+   than their runs (all of the row when it repeats the one above; the part
+   lit a row up, its edges moved, when it differs), the rest as runs. */
+static void push_row(mask_encoder *e, size_t row_bytes, int repeats)
+{
+    const uint32_t *above = repeats ? e->runs : e->above;
+    size_t i = 0, j = 0, in_i = 0, in_j = 0, x = 0, from = 0, runs = 0, r = 0, rx = 0;
+    int same = -1;
+    unsigned last = 0;
+    if (!(repeats ? e->run_count : e->above_count)) { /* the first row */
+        push_part(e, 0, row_bytes, 0, e->run_count, 0, &r, &rx);
+        return;
+    }
+    while (x < row_bytes) { /* i, j: the runs of the row and the row above at x, in_i and in_j bytes into them */
+        uint32_t a = e->runs[i], b = above[j];
+        size_t left_a = (a & 0xFFFFFF) - in_i, left_b = (b & 0xFFFFFF) - in_j, step = left_a < left_b ? left_a : left_b;
+        int agree = a >> 24 == b >> 24;
+        if (agree != same && x > 0) {
+            push_part(e, from, x, same, runs, last, &r, &rx);
+            from = x;
+            runs = 0;
+        }
+        same = agree;
+        runs += in_i == 0 || x == from;
+        last = a >> 24;
+        x += step;
+        if ((in_i += step) == (a & 0xFFFFFF)) i++, in_i = 0;
+        if ((in_j += step) == (b & 0xFFFFFF)) j++, in_j = 0;
+    }
+    push_part(e, from, row_bytes, same, runs, last, &r, &rx);
+}
+
+/* k rows that repeat the row above, at once: one copy from a row back where
+   push_row would copy each of them, one run where the row is dark (its
+   filter byte is 0 too), else row by row. */
+static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
+{
+    if (e->line <= 32768 && copy_pays(e, e->line, e->run_count + 1))
+        push_copy(e, k * e->line, e->runs[e->run_count - 1] >> 24);
+    else if (e->run_count == 1 && !(e->runs[0] >> 24)) push_run(e, 0, k * e->line);
+    else while (k--) push_row(e, row_bytes, 1);
+}
+
+/* The file's rows at `depth` bits from an image's at `bits`: 8 from 1 makes
+   1-bit pixels 0 or 255; 1 from 1 takes the packed bytes as they are, a
+   row's padding bits cleared. Rows that repeat the row above (a memcmp a
+   row: most of a layer is the dark around the part) go at once on that
+   row's runs and sums, so only rows that differ are looked at byte by byte. */
+static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
+                       unsigned char **out, size_t *out_size)
 {
     const uint64_t M = 65521;
-    const size_t line = (size_t)width + 1;
-    /* a copied row costs a copy per 258 bytes: less than its runs when it has more */
-    const size_t runs_worth_a_row = line / 258 + 1;
-    uint64_t s1 = 1, s2 = 0;
+    const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8, line = row_bytes + 1;
+    const size_t whole = depth == 8 ? row_bytes : (size_t)width / 8; /* bytes that go as they are */
+    const unsigned tail = (0xFF << (8 - width % 8)) & 0xFF;         /* the pixels of a 1-bit row's last byte */
+    uint64_t s1 = 1, s2 = 0, r1 = 0, r2 = 0; /* r: the row's own sums, from zero (its 0 filter byte adds nothing) */
     mask_encoder e;
     unsigned char *z = NULL;
     size_t zsize = 0;
     int y, rc = -1;
     *out = NULL;
     *out_size = 0;
-    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || width >= 1 << 24 || !image ||
+    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || row_bytes >= 1 << 24 || !image ||
         stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || line > 0x7F000000u / (size_t)height)
         return -1;
     memset(&e, 0, sizeof e);
+    e.line = line;
     if (!(e.d = deflate_begin())) return -1;
     for (y = 0; y < height && !e.failed; y++) {
         const unsigned char *row = image + (size_t)y * stride;
-        uint64_t r1 = 0, r2 = 0; /* the row's own sums, from zero: the 0 filter byte before it changes neither */
-        size_t r;
-        e.run_count = 0;
-        mask_row_runs(row, bits, width, keep_run, &e);
-        for (r = 0; r < e.run_count; r++) {
+        uint64_t k = 0, r; /* rows from y on that repeat the row above: the dark around the part, mostly */
+        uint32_t *swap = e.above;
+        size_t swap_cap = e.above_cap;
+        while (y > 0 && y + k < (uint64_t)height && same_row(row + k * stride, row + k * stride - stride, width, bits)) k++;
+        if (k) { /* each adds line bytes and the row's sums: s2 += line s1 + r2, s1 += r1, k times */
+            s2 = (s2 + k % M * (line % M) % M * s1 + (k * (k - 1) / 2) % M * (line % M) % M * r1 + k % M * r2) % M;
+            s1 = (s1 + k % M * r1) % M;
+            push_repeats(&e, row_bytes, k);
+            y += (int)k - 1;
+            continue;
+        }
+        e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count; /* a row that differs: new runs */
+        e.runs = swap, e.run_cap = swap_cap, e.run_count = 0;
+        if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
+        else {
+            mask_row_runs(row, 8, (int)whole, keep_run, &e);
+            if (whole < row_bytes) keep_run(&e, row[whole] & tail, 1);
+        }
+        for (r1 = r2 = 0, r = 0; r < e.run_count; r++) {
             uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
             r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
             r1 = (r1 + n * v) % M;
         }
         s2 = (s2 + line % M * s1 + r2) % M;
         s1 = (s1 + r1) % M;
-        /* a row copy reaches one row back: within deflate's 32 KB window only */
-        if (y > 0 && line <= 32768 && e.run_count > runs_worth_a_row && same_row(row, row - stride, width, bits)) {
-            emit_run(&e);
-            e.failed |= deflate_copy(e.d, line, line) != 0;
-            e.last = e.runs[e.run_count - 1] >> 24;
-        } else {
-            push_run(&e, 0, 1); /* filter None */
-            for (r = 0; r < e.run_count; r++) push_run(&e, e.runs[r] >> 24, e.runs[r] & 0xFFFFFF);
-        }
+        if (!e.failed) push_row(&e, row_bytes, 0);
     }
-    emit_run(&e);
+    emit_pending(&e);
     free(e.runs);
+    free(e.above);
     if (!deflate_end(e.d, !e.failed, &z, &zsize))
-        rc = wrap(width, height, 8, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
+        rc = wrap(width, height, depth, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
     free(z);
     return rc;
+}
+
+int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
+                    size_t *out_size)
+{
+    return encode_runs(image, width, height, stride, bits, 8, out, out_size);
+}
+
+int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
+                    unsigned char **out, size_t *out_size)
+{
+    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, out, out_size);
+    if (bits != 8) {
+        *out = NULL;
+        *out_size = 0;
+        return -1;
+    }
+    return encode(pixels, width, height, stride, (size_t)width, 0, out, out_size);
+}
+
+int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned char **out, size_t *out_size)
+{
+    return encode(rgb, width, height, 3 * (size_t)width, 3 * (size_t)width, 2, out, out_size);
 }

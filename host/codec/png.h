@@ -10,9 +10,12 @@
    buffer (*out, *out_size; the caller frees *out). bits is 1 or 8. 1-bit rows
    are packed MSB first, 1 = white (lit); bits past the width in a row's last
    byte are ignored. stride is the number of bytes between rows of pixels.
-   Returns 0 on success; -1 when out of memory or for invalid arguments (bits
-   not 1 or 8, width or height < 1, stride shorter than a row, or more than
-   2 GB of row data), with *out = NULL and *out_size = 0. */
+   1-bit images (layer masks) are coded from their rows' runs of bytes, as
+   png_encode_mask does, in time proportional to the runs of the rows that
+   differ from the row above. Returns 0 on success; -1 when out of memory or
+   for invalid arguments (bits not 1 or 8, width or height < 1, stride
+   shorter than a row, 1-bit rows of 2^24 bytes or more, or more than 2 GB
+   of row data), with *out = NULL and *out_size = 0. */
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
                     unsigned char **out, size_t *out_size);
 
