@@ -7,14 +7,15 @@
 #include "../report.h"
 #include "../../link/frame.h"
 #include "../../link/messages.h"
+#include "../../link/tty.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 #include <sys/mman.h>
@@ -442,9 +443,11 @@ int screen_dark(screen *s)
 
 /* ------------------------------------------------------------ the guard */
 
-static void write_all(int fd, const uint8_t *p, size_t n)
+/* The guard's writes give up at `until` (now_ms's clock): a printer that
+   reads nothing (hung, its USB buffers full) must not keep the screen lit. */
+static void write_until(int fd, const uint8_t *p, size_t n, double until)
 {
-    while (n) {
+    while (n && now_ms() < until) {
         ssize_t k = write(fd, p, n);
         if (k > 0) { p += k; n -= (size_t)k; }
         else if (k < 0 && (errno == EINTR || errno == EAGAIN)) wait_us(1000);
@@ -452,24 +455,33 @@ static void write_all(int fd, const uint8_t *p, size_t n)
     }
 }
 
-/* The host is gone: the light out through the printer, then the screen. */
+/* The host is gone: the light out through the printer, then the screen.
+   Nothing here waits on the printer: the frames get 20 ms to leave (not
+   tcdrain, which waits for ever on a line that does not move), then their
+   time on the line and a pass of the MCU's loop or a few, so that the light
+   is out before the screen is (the exposure's rest stays what the printer
+   counts); then page 0 dark and shown before the rest of the mapping. */
 static void guard_stop(screen *s, int port_fd)
 {
+    size_t page = (size_t)s->line_length * s->yres;
     if (port_fd >= 0) {
         uint8_t out[3 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
         size_t n = 0;
+        long rate = tty_rate(port_fd);
         /* twice: a frame the host was cut off in the middle of may take
            the first (the deframer finds frames again after damage) */
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x56, LINK_MSG_PAUSE, NULL, 0);
-        write_all(port_fd, out, n);
-        (void)tcdrain(port_fd);
-        wait_us(10000); /* a pass of the MCU's loop or a few */
+        write_until(port_fd, out, n, now_ms() + 20);
+        wait_us(10000 + (rate ? (uint32_t)(n * 10 * 1000000.0 / rate) : 0));
     }
+    /* the guard's copy of `shown` is as old as the fork: page 0 is made
+       the dark one shown */
     s->shown = 0;
-    memset(s->map, 0, s->map_size);
+    memset(s->map, 0, page);
     (void)pan_to(s, 0);
+    if (s->map_size > page) memset(s->map + page, 0, s->map_size - page);
     wait_shown(s);
     if (port_fd >= 0) {
         /* and the printer told, so that it knows the screen as it is */
@@ -478,8 +490,7 @@ static void guard_stop(screen *s, int port_fd)
         m.layer = 0;
         m.exposure_ms = 0;
         (void)link_put_screen(dark, &m);
-        write_all(port_fd, out, link_frame_build(out, 0x57, LINK_MSG_SCREEN, dark, sizeof dark));
-        (void)tcdrain(port_fd);
+        write_until(port_fd, out, link_frame_build(out, 0x57, LINK_MSG_SCREEN, dark, sizeof dark), now_ms() + 1000);
     }
 }
 
@@ -513,6 +524,18 @@ int screen_guard(screen *s, int port_fd)
     }
     close(fds[0]);
     s->guard_fd = fds[1];
+    {
+        /* the guard is the printer's safety when the host dies: the lowest
+           real-time priority runs it ahead of every ordinary task, so the
+           screen goes dark as soon on a busy board as on an idle one */
+        struct sched_param p;
+        memset(&p, 0, sizeof p);
+        p.sched_priority = sched_get_priority_min(SCHED_FIFO);
+        if (sched_setscheduler(s->guard, SCHED_FIFO, &p) != 0)
+            fprintf(stderr, "adaslice: warning: --screen %s: its guard may not run at real-time priority (%s): if this "
+                            "host dies, the printer pauses and the screen goes dark later on a busy machine; run as root "
+                            "or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep adaslice)\n", s->name, strerror(errno));
+    }
     return RC_OK;
 }
 
@@ -520,7 +543,7 @@ void screen_close(screen *s)
 {
     if (s->map) (void)screen_dark(s);
     if (s->guard_fd >= 0) {
-        write_all(s->guard_fd, (const uint8_t *)"q", 1);
+        write_until(s->guard_fd, (const uint8_t *)"q", 1, now_ms() + 1000);
         close(s->guard_fd);
         (void)waitpid(s->guard, NULL, 0);
     }

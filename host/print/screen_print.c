@@ -150,9 +150,11 @@ static int run(screen_print *p)
         if (s->phase == LINK_PHASE_WAIT_MASK && !(s->flags & LINK_FLAG_MOVING) && s->screen != s->layer) {
             tries = s->layer == last ? tries + 1 : 1;
             last = s->layer;
-            if (tries > 5)
+            if (tries > 5) {
+                (void)screen_dark(p->scr); /* before the message, as every stop */
                 return complain(RC_FAIL, "layer %u: the printer did not take it as shown (%s)", s->layer,
                                 link_error_name(s->error));
+            }
             if ((rc = show_layer(p, s->layer, &failed))) {
                 if (!failed) return rc;
                 return (rc = pause_dark(p)) ? rc : paused(p, "the layer could not be shown");
@@ -163,9 +165,17 @@ static int run(screen_print *p)
     }
 }
 
+static void dark_first(void *scr) { (void)screen_dark((screen *)scr); }
+
 int screen_print_run(screen_print *p)
 {
-    int rc = run(p);
+    int rc;
+    /* a stop the link finds (a restart, silence, the port gone) darkens
+       the screen before its message is said */
+    p->l->stopping = dark_first;
+    p->l->stopping_ctx = p->scr;
+    rc = run(p);
+    p->l->stopping = NULL;
     /* whatever ended it, dark (the caller's screen_close says so again) */
     (void)screen_dark(p->scr);
     return rc;
