@@ -14,6 +14,7 @@
 #include "print_report.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
+#include "../link/messages.h"
 #include <errno.h>
 #include <math.h>
 #include <fcntl.h>
@@ -860,6 +861,98 @@ static void mcu_reset_leaves_it_dark(void)
     free(j.crc);
 }
 
+/* Waits (up to 10 s) until a simulator's log shows the print paused for
+   the lost link (state PAUSED with LINK_LOST). */
+static int wait_for_link_pause(const char *log_path)
+{
+    double t0 = seconds_now();
+    while (seconds_now() - t0 < 10) {
+        char *log = read_whole_text(log_path), *at;
+        unsigned flags;
+        int found = 0;
+        for (at = log; at && !found && (at = strstr(at, " state 6 ")) != NULL; at++)
+            found = sscanf(at + 9, "%u", &flags) == 1 && (flags & LINK_FLAG_LINK_LOST);
+        free(log);
+        if (found) return 1;
+        sleep_ms(20);
+    }
+    return 0;
+}
+
+/* ABORT from a second host during a screen print. The printing host is
+   held still (SIGSTOP: two hosts reading one port take each other's
+   replies) while a layer is lit, until the printer pauses itself for the
+   lost link; adaslice print --abort from a second host then abandons the
+   print, UV off, and leaves Z where it is, since the first host's screen
+   still shows a layer. The first host, let go, finds the printer READY:
+   its screen dark before it says so (its stderr held), exit 1 and the
+   stop's one line ("aborted") with the layer to resume from; the pin log
+   has no UV-on after the abort. The host cannot see the abort while it is
+   held, so the 100 ms run from SIGCONT: its timers ran out meanwhile, so
+   it resends at once, finds the printer's numbering another host's, says
+   HELLO and reads READY, each a round trip it waits for in poll(). */
+static void second_host_abort_leaves_it_dark(void)
+{
+    child sim;
+    char spec[600], fb[512], port[256], *out, *log, *at;
+    const char *extra[] = {"--link-timeout-ms", "1000", NULL};
+    pid_t pid;
+    int status, err;
+    double dark;
+    cli_result r;
+    if (!slice_long_job(cli_path("jobl"))) return;
+    snprintf(fb, sizeof fb, "%s", cli_path("fba"));
+    remove(fb);
+    if (!start_sim(&sim, cli_path("sima.log"), "10", fb, extra)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
+    {
+        char *args[] = {(char *)cli_path("jobl"), (char *)"--port", port, (char *)"--screen", spec, NULL};
+        pid = print_held(args, cli_path("a1.out"), &err);
+    }
+    CHECK(wait_for_exposures(cli_path("sima.log"), 3));
+    if (!observer_realtime(1) || !at_lit_start(fb)) {
+        observer_realtime(0);
+        kill(pid, SIGKILL);
+        free(drain_held(pid, err, &status));
+        stop_sim(&sim);
+        return;
+    }
+    kill(pid, SIGSTOP);
+    observer_realtime(0);
+    CHECKF(wait_for_link_pause(cli_path("sima.log")), "the printer did not pause for the held host");
+    r = cli_run("print", "--abort", "--port", port, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "abandoned the print at layer ") &&
+               strstr(r.out, "the host's screen still shows layer"), "--abort: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(!all_zero(fb), "the held host's screen went dark by itself");
+    if (!observer_realtime(1)) {
+        kill(pid, SIGKILL);
+        kill(pid, SIGCONT);
+        free(drain_held(pid, err, &status));
+        stop_sim(&sim);
+        return;
+    }
+    kill(pid, SIGCONT);
+    dark = ms_until(fb, 0, seconds_now(), 10);
+    observer_realtime(0);
+    out = drain_held(pid, err, &status);
+    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after the host was let go (-1: lit 10 s on, "
+           "the host's message, held, said before the dark)", dark);
+    printf("     (dark %.0f ms after the held host was let go)\n", dark);
+    CHECKF(status == 1 && out && cli_one_message(out) && strstr(out, "stopped printing (aborted)") &&
+               strstr(out, "--resume-from "), "the first host: exit %d: %s", status, out ? out : "");
+    free(out);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(fb));
+    /* READY after the pause is the abort: no light after it */
+    log = read_whole_text(cli_path("sima.log"));
+    at = log ? strstr(log, " state 6 ") : NULL;
+    at = at ? strstr(at, " state 4 ") : NULL;
+    CHECKF(at && !strstr(at, " uv 1"), "the pin log: %s after the abort", at ? "a UV-on" : "no READY");
+    free(log);
+}
+
 /* A layer the host cannot draw (its code in masks.rle damaged: it does not
    decode to its CRC) pauses the print before that layer: the light never
    comes on over the layer before, the screen is dark, and the message
@@ -1105,12 +1198,20 @@ static void real_framebuffer_if_any(void)
     unsigned char *mask;
     uint32_t w, h, x, y, page_bytes, k, lit = 0;
     int fd = open(dev, O_RDWR);
-    if (fd < 0) { printf("     (skipped: %s: %s)\n", dev, strerror(errno)); return; }
+    if (fd < 0) {
+        printf("     (skipped: %s: %s: no framebuffer to check the page flip with FBIOPAN_DISPLAY and the wait with "
+               "FBIO_WAITFORVSYNC on; ADASLICE_TEST_FB names another)\n", dev, strerror(errno));
+        return;
+    }
     close(fd);
     memset(&o, 0, sizeof o);
     o.device = dev;
     o.packing = -1;
-    if (screen_open(&s, &o) != 0) { printf("     (skipped: %s is not a framebuffer adaslice draws on)\n", dev); return; }
+    if (screen_open(&s, &o) != 0) {
+        printf("     (skipped: %s is not a framebuffer adaslice draws on: the page flip with FBIOPAN_DISPLAY and the "
+               "wait with FBIO_WAITFORVSYNC go unchecked)\n", dev);
+        return;
+    }
     w = s.panel_w;
     h = s.panel_h;
     mask = (unsigned char *)calloc((w + 7) / 8, h);
@@ -1185,6 +1286,7 @@ void test_screen(void)
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
     RUN(mcu_reset_leaves_it_dark);
+    RUN(second_host_abort_leaves_it_dark);
     RUN(undrawable_layer_pauses);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
     cli_end();

@@ -73,13 +73,16 @@ static int show_layer(screen_print *p, uint32_t k, int *failed)
 
 static int stopped(serial_link *l)
 {
-    /* READY mid-print is the core's abort: an ABORT (Z stays homed) or a
-       fault, which leaves Z unhomed */
-    int homed = (l->st.flags & LINK_FLAG_HOMED) != 0;
+    /* READY mid-print is the core's abort: an ABORT or a fault of the
+       print (Z stays homed: the error says which) or of the axis, which
+       leaves Z unhomed. STATUS's error is the last refusal, so after an
+       ABORT it may be this host's SCREEN of the layer it had drawn */
+    int homed = (l->st.flags & LINK_FLAG_HOMED) != 0, e = l->st.error;
+    int print_fault = e == LINK_ERR_SCREEN_LIT || e == LINK_ERR_MOVE_FAILED || e == LINK_ERR_WRONG_HEIGHT;
     char what[96];
     snprintf(what, sizeof what, "stopped printing (%s)",
              l->st.state != LINK_STATE_READY ? link_state_name(l->st.state)
-             : homed && l->st.error != LINK_ERR_NONE ? link_error_name(l->st.error)
+             : homed && print_fault ? link_error_name(l->st.error)
              : homed ? "aborted"
              : link_error_name(l->st.error));
     return serial_stopped(l, RC_FAIL, what, 1, homed);
