@@ -1230,6 +1230,36 @@ static void real_framebuffer_if_any(void)
     free(mask);
 }
 
+/* The guard's real-time priority refused (capsh drops CAP_SYS_NICE): the
+   tool says so in one line naming the screen and the capability, and shows
+   all the same; with it (the tests run as root), not a word. */
+static void guard_priority_refused_is_said(void)
+{
+    char cmd[2048], fb[512], *err;
+    pid_t pid;
+    int status;
+    cli_result r;
+    snprintf(fb, sizeof fb, "%s", cli_path("fbn"));
+    snprintf(cmd, sizeof cmd, "'%s' show --pattern white --screen file:%s,80x200,24 --seconds 0.1 >'%s' 2>'%s'", cli_tool,
+             fb, cli_path("n.out"), cli_path("n.err"));
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        execlp("capsh", "capsh", "--drop=cap_sys_nice", "--", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    status = wait_exit(pid, 60);
+    err = read_whole_text(cli_path("n.err"));
+    CHECKF(status == 0 && err && cli_one_message(err) && strstr(err, "adaslice: warning: --screen ") && strstr(err, fb) &&
+               strstr(err, "real-time priority") && strstr(err, "CAP_SYS_NICE"),
+           "show without CAP_SYS_NICE: exit %d: %s", status, err ? err : "");
+    free(err);
+    CHECK(all_zero(fb));
+    snprintf(cmd, sizeof cmd, "file:%s,80x200,24", fb);
+    r = cli_run("show", "--pattern", "white", "--screen", cmd, "--seconds", "0.1", NULL);
+    CHECKF(r.status == 0 && !*r.err, "show as root: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+}
+
 /* The RAMPS image (ATmega2560) under simavr, its display 240 x 200 as the
    simulator's: the same observer in avr-run, at the MOSFET's and the STEP
    pin's edges. */
@@ -1283,6 +1313,7 @@ void test_screen(void)
     RUN(show_layer_and_patterns);
     RUN(white_exposure_test);
     RUN(real_framebuffer_if_any);
+    RUN_NEEDING("capsh (libcap2-bin)", guard_priority_refused_is_said);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
     RUN(mcu_reset_leaves_it_dark);
