@@ -682,6 +682,48 @@ static int at_lit_start(const char *fb)
     return ok;
 }
 
+/* The long job (slice_long_job, in JOBL) printed on the simulator's port
+   with the screen file fb, the host's stderr held (print_held); once the
+   log shows `exposures` UV-ons, the observer is made real-time and waits
+   for a layer's light to begin. 0 if it did not (the host and the
+   simulator then stopped, the observer back to normal). */
+static int held_print_at_lit(child *sim, const char *log, const char *fb, const char *out, unsigned exposures, pid_t *pid,
+                             int *err)
+{
+    char spec[600], port[256], job[512];
+    int status;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
+    snprintf(port, sizeof port, "%s", sim->line + 4);
+    snprintf(job, sizeof job, "%s", cli_path("jobl"));
+    {
+        char *args[] = {job, (char *)"--port", port, (char *)"--screen", spec, NULL};
+        *pid = print_held(args, out, err);
+    }
+    CHECK(wait_for_exposures(log, exposures));
+    if (observer_realtime(1) && at_lit_start(fb)) return 1;
+    observer_realtime(0);
+    kill(*pid, SIGKILL);
+    free(drain_held(*pid, *err, &status));
+    stop_sim(sim);
+    return 0;
+}
+
+/* The stop: `sig` to `to` while the held host's layer is lit (after
+   held_print_at_lit); the ms until the screen is dark, checked against the
+   bound and printed, the observer back to normal. The held host's stderr
+   (drain_held) returned, its exit status in *status. */
+static char *stop_timed(pid_t to, int sig, const char *what, const char *fb, pid_t host, int err, int *status)
+{
+    double dark;
+    kill(to, sig);
+    dark = ms_until(fb, 0, seconds_now(), 5);
+    observer_realtime(0);
+    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after %s (-1: lit 5 s on: the host's message, "
+           "held, said before the dark?)", dark, what);
+    printf("     (dark %.0f ms after %s)\n", dark, what);
+    return drain_held(host, err, status);
+}
+
 /* Ctrl-C mid-print (SIGINT as the terminal sends it, then the printer's
    PAUSE from the host): paused (exit 3), the screen dark within 100 ms and
    before the host says so, no light after it; then a killed host (SIGKILL)
@@ -713,27 +755,8 @@ static void pause_and_killed_host_leave_it_dark(void)
     if (!start_sim(&sim, cli_path("simp.log"), "10", fb, extra)) { free(j.crc); return; }
     snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
     /* Ctrl-C */
-    {
-        char *args[] = {(char *)cli_path("jobl"), (char *)"--port", sim.line + 4, (char *)"--screen", spec, NULL};
-        pid = print_held(args, cli_path("p1.out"), &err);
-    }
-    CHECK(wait_for_exposures(cli_path("simp.log"), 4));
-    if (!observer_realtime(1) || !at_lit_start(fb)) {
-        observer_realtime(0);
-        kill(pid, SIGKILL);
-        free(drain_held(pid, err, &status));
-        stop_sim(&sim);
-        free(j.crc);
-        return;
-    }
-    kill(pid, SIGINT);
-    t0 = seconds_now();
-    dark = ms_until(fb, 0, t0, 5);
-    observer_realtime(0);
-    out = drain_held(pid, err, &status);
-    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "Ctrl-C: the screen dark %.0f ms after it (-1: lit 5 s on, the host's "
-           "message, held, said before the dark)", dark);
-    printf("     (dark %.0f ms after Ctrl-C)\n", dark);
+    if (!held_print_at_lit(&sim, cli_path("simp.log"), fb, cli_path("p1.out"), 4, &pid, &err)) { free(j.crc); return; }
+    out = stop_timed(pid, SIGINT, "Ctrl-C", fb, pid, err, &status);
     CHECKF(status == 3 && out && strstr(out, "the screen dark"), "Ctrl-C: exit %d: %s", status, out ? out : "");
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
@@ -813,34 +836,14 @@ static void mcu_reset_leaves_it_dark(void)
     unsigned layer = 0;
     pid_t pid;
     int status, err;
-    double t0, dark;
     cli_result r;
     if (!slice_long_job(cli_path("jobl")) || !read_job(cli_path("jobl"), &j)) { CHECK(!"no job"); return; }
     snprintf(fb, sizeof fb, "%s", cli_path("fbr"));
     remove(fb);
     if (!start_sim(&sim, cli_path("simr.log"), "10", fb, NULL)) { free(j.crc); return; }
     snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
-    {
-        char *args[] = {(char *)cli_path("jobl"), (char *)"--port", sim.line + 4, (char *)"--screen", spec, NULL};
-        pid = print_held(args, cli_path("r1.out"), &err);
-    }
-    CHECK(wait_for_exposures(cli_path("simr.log"), 4));
-    if (!observer_realtime(1) || !at_lit_start(fb)) {
-        observer_realtime(0);
-        kill(pid, SIGKILL);
-        free(drain_held(pid, err, &status));
-        stop_sim(&sim);
-        free(j.crc);
-        return;
-    }
-    kill(sim.pid, SIGUSR1);
-    t0 = seconds_now();
-    dark = ms_until(fb, 0, t0, 5);
-    observer_realtime(0);
-    out = drain_held(pid, err, &status);
-    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after the reset (-1: lit 5 s on, the host's "
-           "message, held, said before the dark)", dark);
-    printf("     (dark %.0f ms after the reset)\n", dark);
+    if (!held_print_at_lit(&sim, cli_path("simr.log"), fb, cli_path("r1.out"), 4, &pid, &err)) { free(j.crc); return; }
+    out = stop_timed(sim.pid, SIGUSR1, "the reset", fb, pid, err, &status);
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(status == 4 && at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "the reset: exit %d: %s", status,
            out ? out : "");
@@ -894,30 +897,17 @@ static int wait_for_link_pause(const char *log_path)
 static void second_host_abort_leaves_it_dark(void)
 {
     child sim;
-    char spec[600], fb[512], port[256], *out, *log, *at;
+    char fb[512], port[256], *out, *log, *at;
     const char *extra[] = {"--link-timeout-ms", "1000", NULL};
     pid_t pid;
     int status, err;
-    double dark;
     cli_result r;
     if (!slice_long_job(cli_path("jobl"))) return;
     snprintf(fb, sizeof fb, "%s", cli_path("fba"));
     remove(fb);
     if (!start_sim(&sim, cli_path("sima.log"), "10", fb, extra)) return;
     snprintf(port, sizeof port, "%s", sim.line + 4);
-    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
-    {
-        char *args[] = {(char *)cli_path("jobl"), (char *)"--port", port, (char *)"--screen", spec, NULL};
-        pid = print_held(args, cli_path("a1.out"), &err);
-    }
-    CHECK(wait_for_exposures(cli_path("sima.log"), 3));
-    if (!observer_realtime(1) || !at_lit_start(fb)) {
-        observer_realtime(0);
-        kill(pid, SIGKILL);
-        free(drain_held(pid, err, &status));
-        stop_sim(&sim);
-        return;
-    }
+    if (!held_print_at_lit(&sim, cli_path("sima.log"), fb, cli_path("a1.out"), 3, &pid, &err)) return;
     kill(pid, SIGSTOP);
     observer_realtime(0);
     CHECKF(wait_for_link_pause(cli_path("sima.log")), "the printer did not pause for the held host");
@@ -933,13 +923,7 @@ static void second_host_abort_leaves_it_dark(void)
         stop_sim(&sim);
         return;
     }
-    kill(pid, SIGCONT);
-    dark = ms_until(fb, 0, seconds_now(), 10);
-    observer_realtime(0);
-    out = drain_held(pid, err, &status);
-    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after the host was let go (-1: lit 10 s on, "
-           "the host's message, held, said before the dark)", dark);
-    printf("     (dark %.0f ms after the held host was let go)\n", dark);
+    out = stop_timed(pid, SIGCONT, "the held host was let go", fb, pid, err, &status);
     CHECKF(status == 1 && out && cli_one_message(out) && strstr(out, "stopped printing (aborted)") &&
                strstr(out, "--resume-from "), "the first host: exit %d: %s", status, out ? out : "");
     free(out);
