@@ -218,7 +218,7 @@ $(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_screen: $(call objs,bench,bench/bench_screen.c host/print/screen.c host/options.c host/report.c link/tty.c $(LINK_SRC)) $(BENCH_LIB)
+$(B)/bench_screen: $(call objs,bench,bench/bench_screen.c host/print/screen.c host/options.c host/report.c $(LINK_SRC)) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_avr: $(call objs,bench,bench/bench_avr.c firmware/motion.c link/tty.c)
 	$(CC) $^ -o $@ -lm

@@ -19,15 +19,6 @@ static int baud_index(long baud)
 
 int tty_baud_ok(long baud) { return baud_index(baud) >= 0; }
 
-long tty_rate(int fd)
-{
-    struct termios t;
-    int i;
-    if (tcgetattr(fd, &t) != 0) return 0;
-    for (i = 0; i < BAUD_COUNT; i++) if (cfgetospeed(&t) == BAUDS[i].code) return BAUDS[i].baud;
-    return 0;
-}
-
 int tty_raw(int fd, long baud)
 {
     struct termios t;

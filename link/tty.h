@@ -13,6 +13,4 @@
 int tty_raw(int fd, long baud);
 /* 1 if baud is a rate tty_raw takes (9600 ... 230400). */
 int tty_baud_ok(long baud);
-/* The rate fd sends at, if it is one tty_raw takes; else (or not a tty) 0. */
-long tty_rate(int fd);
 #endif

@@ -682,7 +682,7 @@ static int at_lit_start(const char *fb)
     return ok;
 }
 
-/* The long job (slice_long_job, in JOBL) printed on the simulator's port
+/* The long job (slice_long_job, in jobl) printed on the simulator's port
    with the screen file fb, the host's stderr held (print_held); once the
    log shows `exposures` UV-ons, the observer is made real-time and waits
    for a layer's light to begin. 0 if it did not (the host and the

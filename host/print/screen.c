@@ -7,11 +7,11 @@
 #include "../report.h"
 #include "../../link/frame.h"
 #include "../../link/messages.h"
-#include "../../link/tty.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <poll.h>
 #include <sched.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -455,26 +455,63 @@ static void write_until(int fd, const uint8_t *p, size_t n, double until)
     }
 }
 
+/* How long the guard waits for the printer to say its light is out before
+   it darkens the screen all the same (a printer that answers nothing). */
+#define GUARD_WAIT_MS 60
+
+/* After PAUSE, a STATUS (SEQ 0x57): until its reply comes (its
+   acknowledgement 0x58), the light is out, or `until` passes. */
+static void guard_wait_reply(int port_fd, double until)
+{
+    link_deframer rx;
+    link_deframer_init(&rx, link_mcu_to_host_type);
+    for (;;) {
+        uint8_t b[256];
+        ssize_t n, k;
+        double left = until - now_ms();
+        struct pollfd p;
+        if (left <= 0) return;
+        p.fd = port_fd;
+        p.events = POLLIN;
+        p.revents = 0;
+        if (poll(&p, 1, (int)left + 1) <= 0) continue;
+        if ((n = read(port_fd, b, sizeof b)) <= 0) {
+            if (n < 0 && (errno == EAGAIN || errno == EINTR)) continue;
+            return;
+        }
+        for (k = 0; k < n; k++) {
+            size_t m;
+            link_deframe_push(&rx, b[k]);
+            while ((m = link_deframe_next(&rx)) != 0) {
+                int answered = rx.buf[2] == LINK_MSG_STATUS_REPLY && rx.buf[1] == 0x58;
+                link_deframe_consume(&rx);
+                if (answered) return;
+            }
+        }
+    }
+}
+
 /* The host is gone: the light out through the printer, then the screen.
-   Nothing here waits on the printer: the frames get 20 ms to leave (not
-   tcdrain, which waits for ever on a line that does not move), then their
-   time on the line and a pass of the MCU's loop or a few, so that the light
-   is out before the screen is (the exposure's rest stays what the printer
-   counts); then page 0 dark and shown before the rest of the mapping. */
+   The printer's word that the light is out is waited for (so that the
+   exposure's rest it keeps is what the screen showed), but no longer than
+   GUARD_WAIT_MS, and nothing else waits on the printer: the frames get
+   20 ms to leave (not tcdrain, which waits for ever on a line that does
+   not move). Then page 0 dark and shown before the rest of the mapping. */
 static void guard_stop(screen *s, int port_fd)
 {
     size_t page = (size_t)s->line_length * s->yres;
     if (port_fd >= 0) {
-        uint8_t out[3 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
+        uint8_t out[4 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
         size_t n = 0;
-        long rate = tty_rate(port_fd);
+        double start = now_ms();
         /* twice: a frame the host was cut off in the middle of may take
            the first (the deframer finds frames again after damage) */
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x56, LINK_MSG_PAUSE, NULL, 0);
-        write_until(port_fd, out, n, now_ms() + 20);
-        wait_us(10000 + (rate ? (uint32_t)(n * 10 * 1000000.0 / rate) : 0));
+        n += link_frame_build(out + n, 0x57, LINK_MSG_STATUS, NULL, 0);
+        write_until(port_fd, out, n, start + 20);
+        guard_wait_reply(port_fd, start + GUARD_WAIT_MS);
     }
     /* the guard's copy of `shown` is as old as the fork: page 0 is made
        the dark one shown */
@@ -490,7 +527,7 @@ static void guard_stop(screen *s, int port_fd)
         m.layer = 0;
         m.exposure_ms = 0;
         (void)link_put_screen(dark, &m);
-        write_until(port_fd, out, link_frame_build(out, 0x57, LINK_MSG_SCREEN, dark, sizeof dark), now_ms() + 1000);
+        write_until(port_fd, out, link_frame_build(out, 0x58, LINK_MSG_SCREEN, dark, sizeof dark), now_ms() + 1000);
     }
 }
 
