@@ -14,15 +14,19 @@
 #include "print_report.h"
 #include "../adaslice.h"
 #include "../host/print/screen.h"
+#include "../link/messages.h"
 #include <errno.h>
 #include <math.h>
+#include <fcntl.h>
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <time.h>
 
 #define SIM_BIN "build/fw-sim"
-#define JOB_ARGS "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "--exposure", "0.1", "--penetration", "0.1", \
-                 "--bottom-layers", "2", "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05"
+#define JOB_SHAPE "--pixels", "240x200", "--pitch", "0.1", "--penetration", "0.1", "--bottom-layers", "2", "--peel", "2", \
+                  "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05"
+#define JOB_ARGS "--scale", "15", JOB_SHAPE, "--exposure", "0.1"
 
 /* ------------------------------------------------------ the reference */
 
@@ -411,6 +415,118 @@ static int slice_job(const char *dir, const char *aa)
     return ok;
 }
 
+/* The job the stop tests print: each layer lit for 1.5 s of the printer's
+   time, 150 ms of the wall's at fw-sim --speed 10, longer than the 100 ms
+   in which a stop must darken the screen: a screen that goes dark that
+   soon after a stop that came while it was lit was put out by the stop,
+   not by the layer's own end. A smaller part than the others' (34 layers)
+   keeps the time down. */
+static int slice_long_job(const char *dir)
+{
+    cli_result r = cli_run("slice", "examples/models/hand_closed.obj", "--scale", "8", JOB_SHAPE, "--exposure", "1.5",
+                           "--bottom-exposure", "1.5", "-o", dir, NULL);
+    int ok = r.status == 0;
+    CHECKF(ok, "slice: %s", r.err);
+    cli_free(&r);
+    return ok;
+}
+
+/* The bound: the screen dark within this of a stop. */
+#define DARK_WITHIN_MS 100
+
+/* The observer (this thread: it stops the host or the printer and polls
+   the screen file) at the lowest real-time priority while it watches, so
+   that what it measures is the tool's reaction and not its own turn on a
+   loaded machine. Without CAP_SYS_NICE the case fails, saying so. */
+static int observer_realtime(int on)
+{
+    struct sched_param p;
+    memset(&p, 0, sizeof p);
+    if (!on) return sched_setscheduler(0, SCHED_OTHER, &p) == 0;
+    p.sched_priority = sched_get_priority_min(SCHED_FIFO);
+    if (sched_setscheduler(0, SCHED_FIFO, &p) == 0) return 1;
+    CHECKF(0, "the screen's stop tests time the dark screen from a real-time observer (SCHED_FIFO): run them as root "
+              "or give run_tests CAP_SYS_NICE (%s)", strerror(errno));
+    return 0;
+}
+
+/* Polls the screen file every ms until it is lit (want_lit) or dark; the
+   ms that took from t0 (seconds_now), or -1 after limit_s. */
+static double ms_until(const char *fb, int want_lit, double t0, double limit_s)
+{
+    while (seconds_now() - t0 < limit_s) {
+        if (all_zero(fb) != want_lit) return (seconds_now() - t0) * 1000;
+        sleep_ms(1);
+    }
+    return -1;
+}
+
+/* adaslice print in the background, its stdout into out_path and its
+   stderr into a pipe the test filled beforehand: the host's first word on
+   stderr (a stop's message) blocks until the test reads the pipe. A host
+   that said its stop before it put the screen out would then hold the
+   screen lit, so the order (dark first, then the message) is checked, not
+   raced. *err is the pipe's end to drain (drain_held). */
+static pid_t print_held(char *const args[], const char *out_path, int *err)
+{
+    char *argv[32], fill[4096];
+    int fds[2], n = 0, flags;
+    pid_t pid;
+    *err = -1;
+    if (pipe(fds) != 0) return -1;
+    argv[n++] = (char *)cli_tool;
+    argv[n++] = (char *)"print";
+    while (*args && n < 31) argv[n++] = *args++;
+    argv[n] = NULL;
+    memset(fill, '.', sizeof fill);
+    flags = fcntl(fds[1], F_GETFL);
+    fcntl(fds[1], F_SETFL, flags | O_NONBLOCK);
+    while (write(fds[1], fill, sizeof fill) > 0) {}
+    while (write(fds[1], fill, 1) > 0) {}
+    fcntl(fds[1], F_SETFL, flags);
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        int o = open(out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
+        dup2(null, 0);
+        dup2(o, 1);
+        dup2(fds[1], 2);
+        close(fds[0]);
+        close(fds[1]);
+        execv(cli_tool, argv);
+        _exit(127);
+    }
+    close(fds[1]);
+    *err = fds[0];
+    return pid;
+}
+
+/* The held host's stderr past the filler (malloc'd), and its exit status
+   in *status (-1 if it did not exit within 30 s). */
+static char *drain_held(pid_t pid, int err, int *status)
+{
+    size_t n = 0, cap = 1 << 17;
+    char *text = (char *)malloc(cap + 1), *from;
+    double t0 = seconds_now();
+    ssize_t k;
+    *status = -1;
+    fcntl(err, F_SETFL, fcntl(err, F_GETFL) | O_NONBLOCK);
+    while (text && seconds_now() - t0 < 30) {
+        int st;
+        if ((k = read(err, text + n, cap - n)) > 0) { n += (size_t)k; if (n < cap) continue; }
+        if (*status < 0 && waitpid(pid, &st, WNOHANG) == pid) *status = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+        /* the guard holds stderr a little longer: its end is the pipe's */
+        if (k == 0 || n == cap) break;
+        sleep_ms(5);
+    }
+    if (*status < 0) *status = wait_exit(pid, 1);
+    close(err);
+    if (!text) return NULL;
+    text[n] = 0;
+    for (from = text; *from == '.'; from++) {}
+    memmove(text, from, strlen(from) + 1);
+    return text;
+}
+
 /* The job printed with its masks on a file screen, 80 x 200 at 24 bpp, three
    mono pixels a screen pixel (a mono panel): at every UV-on the file held
    exactly the layer's mask, every layer once and in order; not one step
@@ -555,25 +671,70 @@ static void wrong_screen_is_refused(void)
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 
-static pid_t print_in_background(const char *job, const char *port, const char *spec, const char *out_path)
+/* Waits (FIFO, see observer_realtime) for the screen to go from dark to
+   lit, so that a stop sent next comes at the start of a layer's light,
+   the whole settle and exposure (150 ms and more) before its own end. */
+static int at_lit_start(const char *fb)
 {
-    pid_t pid;
-    fflush(NULL);
-    if ((pid = fork()) == 0) {
-        int o = open(out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
-        dup2(null, 0);
-        dup2(o, 1);
-        dup2(o, 2);
-        execl(cli_tool, cli_tool, "print", job, "--port", port, "--screen", spec, (char *)NULL);
-        _exit(127);
-    }
-    return pid;
+    double t0 = seconds_now();
+    int ok = ms_until(fb, 0, t0, 10) >= 0 && ms_until(fb, 1, seconds_now(), 10) >= 0;
+    CHECKF(ok, "the screen was not lit within 10 s");
+    return ok;
 }
 
-/* Ctrl-C mid-print: paused (exit 3), the screen dark, no light after it;
-   then a killed host (SIGKILL) mid-exposure: its guard pauses the printer
-   and darkens the screen; each time the print resumes in place with
-   --screen and ends with every exposure under its own layer. */
+/* The long job (slice_long_job, in jobl) printed on the simulator's port
+   with the screen file fb, the host's stderr held (print_held); once the
+   log shows `exposures` UV-ons, the observer is made real-time and waits
+   for a layer's light to begin. 0 if it did not (the host and the
+   simulator then stopped, the observer back to normal). */
+static int held_print_at_lit(child *sim, const char *log, const char *fb, const char *out, unsigned exposures, pid_t *pid,
+                             int *err)
+{
+    char spec[600], port[256], job[512];
+    int status;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
+    snprintf(port, sizeof port, "%s", sim->line + 4);
+    snprintf(job, sizeof job, "%s", cli_path("jobl"));
+    {
+        char *args[] = {job, (char *)"--port", port, (char *)"--screen", spec, NULL};
+        *pid = print_held(args, out, err);
+    }
+    CHECK(wait_for_exposures(log, exposures));
+    if (observer_realtime(1) && at_lit_start(fb)) return 1;
+    observer_realtime(0);
+    kill(*pid, SIGKILL);
+    free(drain_held(*pid, *err, &status));
+    stop_sim(sim);
+    return 0;
+}
+
+/* The stop: `sig` to `to` while the held host's layer is lit (after
+   held_print_at_lit); the ms until the screen is dark, checked against the
+   bound and printed, the observer back to normal. The held host's stderr
+   (drain_held) returned, its exit status in *status. */
+static char *stop_timed(pid_t to, int sig, const char *what, const char *fb, pid_t host, int err, int *status)
+{
+    double dark;
+    kill(to, sig);
+    dark = ms_until(fb, 0, seconds_now(), 5);
+    observer_realtime(0);
+    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after %s (-1: lit 5 s on: the host's message, "
+           "held, said before the dark?)", dark, what);
+    printf("     (dark %.0f ms after %s)\n", dark, what);
+    return drain_held(host, err, status);
+}
+
+/* Ctrl-C mid-print (SIGINT as the terminal sends it, then the printer's
+   PAUSE from the host): paused (exit 3), the screen dark within 100 ms and
+   before the host says so, no light after it; then a killed host (SIGKILL)
+   mid-exposure: its guard pauses the printer and darkens the screen within
+   100 ms; each time the print resumes in place with --screen and ends with
+   every exposure under its own layer.
+
+   Both hold on a loaded machine by design: the host waits for the
+   printer's replies in poll(), so a stop wakes it at once and it puts the
+   screen out as soon as the printer says the light is out, before anything
+   else; the guard waits in read() on its pipe at real-time priority. */
 static void pause_and_killed_host_leave_it_dark(void)
 {
     child sim;
@@ -581,34 +742,33 @@ static void pause_and_killed_host_leave_it_dark(void)
     seen s;
     char spec[600], k[16], *out, *at;
     const char *extra[] = {"--link-timeout-ms", "3000", NULL};
+    char fb[512];
     fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
     unsigned layer = 0, uv_before;
     pid_t pid;
-    int status;
-    double t0, dark_after = -1;
+    int status, err;
+    double t0, dark;
     cli_result r;
-    if (!slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { CHECK(!"no job"); return; }
-    remove(cli_path("fbp"));
-    if (!start_sim(&sim, cli_path("simp.log"), "10", cli_path("fbp"), extra)) { free(j.crc); return; }
-    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbp"));
+    if (!slice_long_job(cli_path("jobl")) || !read_job(cli_path("jobl"), &j)) { CHECK(!"no job"); return; }
+    snprintf(fb, sizeof fb, "%s", cli_path("fbp")); /* cli_path's own are overwritten eight calls on */
+    remove(fb);
+    if (!start_sim(&sim, cli_path("simp.log"), "10", fb, extra)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
     /* Ctrl-C */
-    pid = print_in_background(cli_path("job"), sim.line + 4, spec, cli_path("p1.out"));
-    CHECK(wait_for_exposures(cli_path("simp.log"), 4));
-    kill(pid, SIGINT);
-    status = wait_exit(pid, 30);
-    out = read_whole_text(cli_path("p1.out"));
+    if (!held_print_at_lit(&sim, cli_path("simp.log"), fb, cli_path("p1.out"), 4, &pid, &err)) { free(j.crc); return; }
+    out = stop_timed(pid, SIGINT, "Ctrl-C", fb, pid, err, &status);
     CHECKF(status == 3 && out && strstr(out, "the screen dark"), "Ctrl-C: exit %d: %s", status, out ? out : "");
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "no layer to resume from in: %s", out ? out : "");
     free(out);
-    CHECK(all_zero(cli_path("fbp")));
-    /* the host killed while a layer exposes */
+    CHECK(all_zero(fb));
+    /* the host killed while a layer is lit */
     snprintf(k, sizeof k, "%u", layer);
     fflush(NULL);
     if ((pid = fork()) == 0) {
         int o = open(cli_path("p2.out"), O_WRONLY | O_CREAT | O_TRUNC, 0644), null = open("/dev/null", O_RDONLY);
         dup2(null, 0); dup2(o, 1); dup2(o, 2);
-        execl(cli_tool, cli_tool, "print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k,
+        execl(cli_tool, cli_tool, "print", cli_path("jobl"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k,
               (char *)NULL);
         _exit(127);
     }
@@ -619,32 +779,36 @@ static void pause_and_killed_host_leave_it_dark(void)
         if (log) { log[m] = 0; for (p = log; (p = strstr(p, " uv 1")) != NULL; p++) uv_before++; }
         free(log);
     }
-    CHECK(wait_for_exposures(cli_path("simp.log"), uv_before + 3));
-    /* mid-exposure: the screen shows a layer */
-    for (t0 = seconds_now(); all_zero(cli_path("fbp")) && seconds_now() - t0 < 10;) sleep_ms(1);
+    CHECK(wait_for_exposures(cli_path("simp.log"), uv_before + 2));
+    if (!observer_realtime(1) || !at_lit_start(fb)) {
+        observer_realtime(0);
+        kill(pid, SIGKILL);
+        waitpid(pid, NULL, 0);
+        stop_sim(&sim);
+        free(j.crc);
+        return;
+    }
     kill(pid, SIGKILL);
     t0 = seconds_now();
+    dark = ms_until(fb, 0, t0, 10);
+    observer_realtime(0);
     (void)wait_exit(pid, 10);
-    while (seconds_now() - t0 < 10) {
-        if (all_zero(cli_path("fbp"))) { dark_after = seconds_now() - t0; break; }
-        sleep_ms(1);
-    }
-    CHECKF(dark_after >= 0, "the screen was still lit %.1f s after the host was killed", seconds_now() - t0);
-    printf("     (dark %.0f ms after the host was killed)\n", dark_after * 1000);
+    CHECKF(dark >= 0 && dark <= DARK_WITHIN_MS, "the screen dark %.0f ms after the host was killed (-1: lit 10 s on)", dark);
+    printf("     (dark %.0f ms after the host was killed)\n", dark);
     sleep_ms(300);
-    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
+    r = cli_run("print", cli_path("jobl"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
     /* the guard's pause kept the layer's rest: resumed in place from the
        layer after the last fully exposed */
     if (r.status == 2 && (at = strstr(r.err, "resume from ")) != NULL && sscanf(at + 12, "%u", &layer) == 1) {
         cli_free(&r);
         snprintf(k, sizeof k, "%u", layer);
-        r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
+        r = cli_run("print", cli_path("jobl"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, NULL);
     }
     CHECKF(r.status == 0 && strstr(r.out, "in place"), "resume after the kill: exit %d: %s %s", r.status, r.out, r.err);
     cli_free(&r);
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
-    CHECK(all_zero(cli_path("fbp")));
-    CHECK(observe(cli_path("simp.log"), cli_path("fbp"), &f, &j, &s));
+    CHECK(all_zero(fb));
+    CHECK(observe(cli_path("simp.log"), fb, &f, &j, &s));
     CHECKF(s.right == s.exposures && !s.wrong && s.exposures >= j.layers, "%u UV-ons for %u layers, %u right: %s",
            s.exposures, j.layers, s.right, s.first_wrong);
     CHECKF(s.user_pauses == 2 && !s.uv_after_pause, "%u pauses, %u lights while paused", s.user_pauses, s.uv_after_pause);
@@ -653,48 +817,124 @@ static void pause_and_killed_host_leave_it_dark(void)
     free(j.crc);
 }
 
-/* The MCU reset mid-print (SIGUSR1 to the simulator: the state and Z's home
-   lost): the host stops with exit 4 and the screen dark, nothing is lit
-   while the printer has no job, and the print resumed with --home ends with
-   every exposure under its own layer and no step under a lit screen. */
+/* The MCU reset mid-exposure (SIGUSR1 to the simulator: the state and Z's
+   home lost): the host stops with exit 4, the screen dark within 100 ms of
+   the reset and before the host says so; nothing is lit while the printer
+   has no job, and the print resumed with --home ends with every exposure
+   under its own layer and no step under a lit screen. The host learns of
+   the reset from the first STATUS the new boot answers: it asks every 5 ms
+   while a layer is lit (screen_print.c), and waits for the answer in
+   poll(), so the path is the same few round trips under load. */
 static void mcu_reset_leaves_it_dark(void)
 {
     child sim;
     job_crcs j;
     seen s;
     char spec[600], k[16], *out, *at;
+    char fb[512];
     fb_layout f = {80, 200, 24, SCREEN_RGB, 0, 0};
     unsigned layer = 0;
     pid_t pid;
-    int status;
+    int status, err;
     cli_result r;
-    if (!slice_job(cli_path("job"), NULL) || !read_job(cli_path("job"), &j)) { CHECK(!"no job"); return; }
-    remove(cli_path("fbr"));
-    if (!start_sim(&sim, cli_path("simr.log"), "10", cli_path("fbr"), NULL)) { free(j.crc); return; }
-    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbr"));
-    pid = print_in_background(cli_path("job"), sim.line + 4, spec, cli_path("r1.out"));
-    CHECK(wait_for_exposures(cli_path("simr.log"), 4));
-    kill(sim.pid, SIGUSR1);
-    status = wait_exit(pid, 30);
-    out = read_whole_text(cli_path("r1.out"));
+    if (!slice_long_job(cli_path("jobl")) || !read_job(cli_path("jobl"), &j)) { CHECK(!"no job"); return; }
+    snprintf(fb, sizeof fb, "%s", cli_path("fbr"));
+    remove(fb);
+    if (!start_sim(&sim, cli_path("simr.log"), "10", fb, NULL)) { free(j.crc); return; }
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", fb);
+    if (!held_print_at_lit(&sim, cli_path("simr.log"), fb, cli_path("r1.out"), 4, &pid, &err)) { free(j.crc); return; }
+    out = stop_timed(sim.pid, SIGUSR1, "the reset", fb, pid, err, &status);
     at = out ? strstr(out, "--resume-from ") : NULL;
     CHECKF(status == 4 && at && sscanf(at + 14, "%u", &layer) == 1 && layer >= 3, "the reset: exit %d: %s", status,
            out ? out : "");
     free(out);
-    CHECK(all_zero(cli_path("fbr")));
+    CHECK(all_zero(fb));
     if (check_case_failed()) { stop_sim(&sim); free(j.crc); return; }
     snprintf(k, sizeof k, "%u", layer);
-    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, "--home", NULL);
+    r = cli_run("print", cli_path("jobl"), "--port", sim.line + 4, "--screen", spec, "--resume-from", k, "--home", NULL);
     CHECKF(r.status == 0, "resume after the reset: exit %d: %s %s", r.status, r.out, r.err);
     cli_free(&r);
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
-    CHECK(all_zero(cli_path("fbr")));
-    CHECK(observe(cli_path("simr.log"), cli_path("fbr"), &f, &j, &s));
+    CHECK(all_zero(fb));
+    CHECK(observe(cli_path("simr.log"), fb, &f, &j, &s));
     CHECKF(s.right == s.exposures && !s.wrong && s.exposures >= j.layers, "%u UV-ons for %u layers, %u right: %s",
            s.exposures, j.layers, s.right, s.first_wrong);
     CHECKF(s.steps > 1000 && !s.lit_steps, "%u step pulses, %u under a lit screen", s.steps, s.lit_steps);
     free(s.layer_of);
     free(j.crc);
+}
+
+/* Waits (up to 10 s) until a simulator's log shows the print paused for
+   the lost link (state PAUSED with LINK_LOST). */
+static int wait_for_link_pause(const char *log_path)
+{
+    double t0 = seconds_now();
+    while (seconds_now() - t0 < 10) {
+        char *log = read_whole_text(log_path), *at;
+        unsigned flags;
+        int found = 0;
+        for (at = log; at && !found && (at = strstr(at, " state 6 ")) != NULL; at++)
+            found = sscanf(at + 9, "%u", &flags) == 1 && (flags & LINK_FLAG_LINK_LOST);
+        free(log);
+        if (found) return 1;
+        sleep_ms(20);
+    }
+    return 0;
+}
+
+/* ABORT from a second host during a screen print. The printing host is
+   held still (SIGSTOP: two hosts reading one port take each other's
+   replies) while a layer is lit, until the printer pauses itself for the
+   lost link; adaslice print --abort from a second host then abandons the
+   print, UV off, and leaves Z where it is, since the first host's screen
+   still shows a layer. The first host, let go, finds the printer READY:
+   its screen dark before it says so (its stderr held), exit 1 and the
+   stop's one line ("aborted") with the layer to resume from; the pin log
+   has no UV-on after the abort. The host cannot see the abort while it is
+   held, so the 100 ms run from SIGCONT: its timers ran out meanwhile, so
+   it resends at once, finds the printer's numbering another host's, says
+   HELLO and reads READY, each a round trip it waits for in poll(). */
+static void second_host_abort_leaves_it_dark(void)
+{
+    child sim;
+    char fb[512], port[256], *out, *log, *at;
+    const char *extra[] = {"--link-timeout-ms", "1000", NULL};
+    pid_t pid;
+    int status, err;
+    cli_result r;
+    if (!slice_long_job(cli_path("jobl"))) return;
+    snprintf(fb, sizeof fb, "%s", cli_path("fba"));
+    remove(fb);
+    if (!start_sim(&sim, cli_path("sima.log"), "10", fb, extra)) return;
+    snprintf(port, sizeof port, "%s", sim.line + 4);
+    if (!held_print_at_lit(&sim, cli_path("sima.log"), fb, cli_path("a1.out"), 3, &pid, &err)) return;
+    kill(pid, SIGSTOP);
+    observer_realtime(0);
+    CHECKF(wait_for_link_pause(cli_path("sima.log")), "the printer did not pause for the held host");
+    r = cli_run("print", "--abort", "--port", port, NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "abandoned the print at layer ") &&
+               strstr(r.out, "the host's screen still shows layer"), "--abort: exit %d: %s %s", r.status, r.out, r.err);
+    cli_free(&r);
+    CHECKF(!all_zero(fb), "the held host's screen went dark by itself");
+    if (!observer_realtime(1)) {
+        kill(pid, SIGKILL);
+        kill(pid, SIGCONT);
+        free(drain_held(pid, err, &status));
+        stop_sim(&sim);
+        return;
+    }
+    out = stop_timed(pid, SIGCONT, "the held host was let go", fb, pid, err, &status);
+    CHECKF(status == 1 && out && cli_one_message(out) && strstr(out, "stopped printing (aborted)") &&
+               strstr(out, "--resume-from "), "the first host: exit %d: %s", status, out ? out : "");
+    free(out);
+    CHECKF(stop_sim(&sim) == 0, "the simulator failed");
+    CHECK(all_zero(fb));
+    /* READY after the pause is the abort: no light after it */
+    log = read_whole_text(cli_path("sima.log"));
+    at = log ? strstr(log, " state 6 ") : NULL;
+    at = at ? strstr(at, " state 4 ") : NULL;
+    CHECKF(at && !strstr(at, " uv 1"), "the pin log: %s after the abort", at ? "a UV-on" : "no READY");
+    free(log);
 }
 
 /* A layer the host cannot draw (its code in masks.rle damaged: it does not
@@ -942,12 +1182,20 @@ static void real_framebuffer_if_any(void)
     unsigned char *mask;
     uint32_t w, h, x, y, page_bytes, k, lit = 0;
     int fd = open(dev, O_RDWR);
-    if (fd < 0) { printf("     (skipped: %s: %s)\n", dev, strerror(errno)); return; }
+    if (fd < 0) {
+        printf("     (skipped: %s: %s: no framebuffer to check the page flip with FBIOPAN_DISPLAY and the wait with "
+               "FBIO_WAITFORVSYNC on; ADASLICE_TEST_FB names another)\n", dev, strerror(errno));
+        return;
+    }
     close(fd);
     memset(&o, 0, sizeof o);
     o.device = dev;
     o.packing = -1;
-    if (screen_open(&s, &o) != 0) { printf("     (skipped: %s is not a framebuffer adaslice draws on)\n", dev); return; }
+    if (screen_open(&s, &o) != 0) {
+        printf("     (skipped: %s is not a framebuffer adaslice draws on: the page flip with FBIOPAN_DISPLAY and the "
+               "wait with FBIO_WAITFORVSYNC go unchecked)\n", dev);
+        return;
+    }
     w = s.panel_w;
     h = s.panel_h;
     mask = (unsigned char *)calloc((w + 7) / 8, h);
@@ -964,6 +1212,36 @@ static void real_framebuffer_if_any(void)
     printf("     %s: %u x %u at %u bpp, %u page%s\n", dev, s.xres, s.yres, s.bpp, s.pages, s.pages > 1 ? "s" : "");
     screen_close(&s);
     free(mask);
+}
+
+/* The guard's real-time priority refused (capsh drops CAP_SYS_NICE): the
+   tool says so in one line naming the screen and the capability, and shows
+   all the same; with it (the tests run as root), not a word. */
+static void guard_priority_refused_is_said(void)
+{
+    char cmd[2048], fb[512], *err;
+    pid_t pid;
+    int status;
+    cli_result r;
+    snprintf(fb, sizeof fb, "%s", cli_path("fbn"));
+    snprintf(cmd, sizeof cmd, "'%s' show --pattern white --screen file:%s,80x200,24 --seconds 0.1 >'%s' 2>'%s'", cli_tool,
+             fb, cli_path("n.out"), cli_path("n.err"));
+    fflush(NULL);
+    if ((pid = fork()) == 0) {
+        execlp("capsh", "capsh", "--drop=cap_sys_nice", "--", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    status = wait_exit(pid, 60);
+    err = read_whole_text(cli_path("n.err"));
+    CHECKF(status == 0 && err && cli_one_message(err) && strstr(err, "adaslice: warning: --screen ") && strstr(err, fb) &&
+               strstr(err, "real-time priority") && strstr(err, "CAP_SYS_NICE"),
+           "show without CAP_SYS_NICE: exit %d: %s", status, err ? err : "");
+    free(err);
+    CHECK(all_zero(fb));
+    snprintf(cmd, sizeof cmd, "file:%s,80x200,24", fb);
+    r = cli_run("show", "--pattern", "white", "--screen", cmd, "--seconds", "0.1", NULL);
+    CHECKF(r.status == 0 && !*r.err, "show as root: exit %d: %s", r.status, r.err);
+    cli_free(&r);
 }
 
 /* The RAMPS image (ATmega2560) under simavr, its display 240 x 200 as the
@@ -1019,9 +1297,11 @@ void test_screen(void)
     RUN(show_layer_and_patterns);
     RUN(white_exposure_test);
     RUN(real_framebuffer_if_any);
+    RUN_NEEDING("capsh (libcap2-bin)", guard_priority_refused_is_said);
     RUN(pause_and_killed_host_leave_it_dark);
     RUN(fault_leaves_it_dark);
     RUN(mcu_reset_leaves_it_dark);
+    RUN(second_host_abort_leaves_it_dark);
     RUN(undrawable_layer_pauses);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", ramps_print_under_simavr);
     cli_end();

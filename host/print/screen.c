@@ -11,10 +11,11 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 #include <sys/mman.h>
@@ -442,9 +443,11 @@ int screen_dark(screen *s)
 
 /* ------------------------------------------------------------ the guard */
 
-static void write_all(int fd, const uint8_t *p, size_t n)
+/* The guard's writes give up at `until` (now_ms's clock): a printer that
+   reads nothing (hung, its USB buffers full) must not keep the screen lit. */
+static void write_until(int fd, const uint8_t *p, size_t n, double until)
 {
-    while (n) {
+    while (n && now_ms() < until) {
         ssize_t k = write(fd, p, n);
         if (k > 0) { p += k; n -= (size_t)k; }
         else if (k < 0 && (errno == EINTR || errno == EAGAIN)) wait_us(1000);
@@ -452,24 +455,70 @@ static void write_all(int fd, const uint8_t *p, size_t n)
     }
 }
 
-/* The host is gone: the light out through the printer, then the screen. */
+/* How long the guard waits for the printer to say its light is out before
+   it darkens the screen all the same (a printer that answers nothing). */
+#define GUARD_WAIT_MS 60
+
+/* After PAUSE, a STATUS (SEQ 0x57): until its reply comes (its
+   acknowledgement 0x58), the light is out, or `until` passes. */
+static void guard_wait_reply(int port_fd, double until)
+{
+    link_deframer rx;
+    link_deframer_init(&rx, link_mcu_to_host_type);
+    for (;;) {
+        uint8_t b[256];
+        ssize_t n, k;
+        double left = until - now_ms();
+        struct pollfd p;
+        if (left <= 0) return;
+        p.fd = port_fd;
+        p.events = POLLIN;
+        p.revents = 0;
+        if (poll(&p, 1, (int)left + 1) <= 0) continue;
+        if ((n = read(port_fd, b, sizeof b)) <= 0) {
+            if (n < 0 && (errno == EAGAIN || errno == EINTR)) continue;
+            return;
+        }
+        for (k = 0; k < n; k++) {
+            size_t m;
+            link_deframe_push(&rx, b[k]);
+            while ((m = link_deframe_next(&rx)) != 0) {
+                int answered = rx.buf[2] == LINK_MSG_STATUS_REPLY && rx.buf[1] == 0x58;
+                link_deframe_consume(&rx);
+                if (answered) return;
+            }
+        }
+    }
+}
+
+/* The host is gone: the light out through the printer, then the screen.
+   The printer's word that the light is out is waited for (so that the
+   exposure's rest it keeps is what the screen showed), but no longer than
+   GUARD_WAIT_MS, and nothing else waits on the printer: the frames get
+   20 ms to leave (not tcdrain, which waits for ever on a line that does
+   not move). Then page 0 dark and shown before the rest of the mapping. */
 static void guard_stop(screen *s, int port_fd)
 {
+    size_t page = (size_t)s->line_length * s->yres;
     if (port_fd >= 0) {
-        uint8_t out[3 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
+        uint8_t out[4 * LINK_FRAME_MAX], hello = LINK_PROTOCOL_VERSION;
         size_t n = 0;
+        double start = now_ms();
         /* twice: a frame the host was cut off in the middle of may take
            the first (the deframer finds frames again after damage) */
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x55, LINK_MSG_HELLO, &hello, 1);
         n += link_frame_build(out + n, 0x56, LINK_MSG_PAUSE, NULL, 0);
-        write_all(port_fd, out, n);
-        (void)tcdrain(port_fd);
-        wait_us(10000); /* a pass of the MCU's loop or a few */
+        n += link_frame_build(out + n, 0x57, LINK_MSG_STATUS, NULL, 0);
+        write_until(port_fd, out, n, start + 20);
+        guard_wait_reply(port_fd, start + GUARD_WAIT_MS);
     }
+    /* the guard's copy of `shown` is as old as the fork: page 0 is made
+       the dark one shown */
     s->shown = 0;
-    memset(s->map, 0, s->map_size);
+    memset(s->map, 0, page);
     (void)pan_to(s, 0);
+    if (s->map_size > page) memset(s->map + page, 0, s->map_size - page);
     wait_shown(s);
     if (port_fd >= 0) {
         /* and the printer told, so that it knows the screen as it is */
@@ -478,8 +527,7 @@ static void guard_stop(screen *s, int port_fd)
         m.layer = 0;
         m.exposure_ms = 0;
         (void)link_put_screen(dark, &m);
-        write_all(port_fd, out, link_frame_build(out, 0x57, LINK_MSG_SCREEN, dark, sizeof dark));
-        (void)tcdrain(port_fd);
+        write_until(port_fd, out, link_frame_build(out, 0x58, LINK_MSG_SCREEN, dark, sizeof dark), now_ms() + 1000);
     }
 }
 
@@ -513,6 +561,18 @@ int screen_guard(screen *s, int port_fd)
     }
     close(fds[0]);
     s->guard_fd = fds[1];
+    {
+        /* the guard is the printer's safety when the host dies: the lowest
+           real-time priority runs it ahead of every ordinary task, so the
+           screen goes dark as soon on a busy board as on an idle one */
+        struct sched_param p;
+        memset(&p, 0, sizeof p);
+        p.sched_priority = sched_get_priority_min(SCHED_FIFO);
+        if (sched_setscheduler(s->guard, SCHED_FIFO, &p) != 0)
+            fprintf(stderr, "adaslice: warning: --screen %s: its guard may not run at real-time priority (%s): if this "
+                            "host dies, the printer pauses and the screen goes dark later on a busy machine; run as root "
+                            "or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep adaslice)\n", s->name, strerror(errno));
+    }
     return RC_OK;
 }
 
@@ -520,7 +580,7 @@ void screen_close(screen *s)
 {
     if (s->map) (void)screen_dark(s);
     if (s->guard_fd >= 0) {
-        write_all(s->guard_fd, (const uint8_t *)"q", 1);
+        write_until(s->guard_fd, (const uint8_t *)"q", 1, now_ms() + 1000);
         close(s->guard_fd);
         (void)waitpid(s->guard, NULL, 0);
     }

@@ -73,13 +73,16 @@ static int show_layer(screen_print *p, uint32_t k, int *failed)
 
 static int stopped(serial_link *l)
 {
-    /* READY mid-print is the core's abort: an ABORT (Z stays homed) or a
-       fault, which leaves Z unhomed */
-    int homed = (l->st.flags & LINK_FLAG_HOMED) != 0;
+    /* READY mid-print is the core's abort: an ABORT or a fault of the
+       print (Z stays homed: the error says which) or of the axis, which
+       leaves Z unhomed. STATUS's error is the last refusal, so after an
+       ABORT it may be this host's SCREEN of the layer it had drawn */
+    int homed = (l->st.flags & LINK_FLAG_HOMED) != 0, e = l->st.error;
+    int print_fault = e == LINK_ERR_SCREEN_LIT || e == LINK_ERR_MOVE_FAILED || e == LINK_ERR_WRONG_HEIGHT;
     char what[96];
     snprintf(what, sizeof what, "stopped printing (%s)",
              l->st.state != LINK_STATE_READY ? link_state_name(l->st.state)
-             : homed && l->st.error != LINK_ERR_NONE ? link_error_name(l->st.error)
+             : homed && print_fault ? link_error_name(l->st.error)
              : homed ? "aborted"
              : link_error_name(l->st.error));
     return serial_stopped(l, RC_FAIL, what, 1, homed);
@@ -150,9 +153,11 @@ static int run(screen_print *p)
         if (s->phase == LINK_PHASE_WAIT_MASK && !(s->flags & LINK_FLAG_MOVING) && s->screen != s->layer) {
             tries = s->layer == last ? tries + 1 : 1;
             last = s->layer;
-            if (tries > 5)
+            if (tries > 5) {
+                (void)screen_dark(p->scr); /* before the message, as every stop */
                 return complain(RC_FAIL, "layer %u: the printer did not take it as shown (%s)", s->layer,
                                 link_error_name(s->error));
+            }
             if ((rc = show_layer(p, s->layer, &failed))) {
                 if (!failed) return rc;
                 return (rc = pause_dark(p)) ? rc : paused(p, "the layer could not be shown");
@@ -163,9 +168,17 @@ static int run(screen_print *p)
     }
 }
 
+static void dark_first(void *scr) { (void)screen_dark((screen *)scr); }
+
 int screen_print_run(screen_print *p)
 {
-    int rc = run(p);
+    int rc;
+    /* a stop the link finds (a restart, silence, the port gone) darkens
+       the screen before its message is said */
+    p->l->stopping = dark_first;
+    p->l->stopping_ctx = p->scr;
+    rc = run(p);
+    p->l->stopping = NULL;
     /* whatever ended it, dark (the caller's screen_close says so again) */
     (void)screen_dark(p->scr);
     return rc;

@@ -62,6 +62,7 @@ int serial_stopped(const serial_link *l, int rc, const char *what, int at_layer,
 {
     const link_status *s = &l->st;
     char phase[40] = "", owed[96] = "", left[40] = "", heard[200] = "";
+    if (l->stopping) l->stopping(l->stopping_ctx);
     if (!at_layer)
         return complain(rc, "the printer on %s %s while %s, before this run exposed a layer: Z must be homed before "
                             "printing again: clear the platform and print again (a --resume-from needs --home)",

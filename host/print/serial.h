@@ -63,6 +63,10 @@ typedef struct serial_link {
     int stray;
     unsigned rehellos;
     int failed;                 /* a resend in a reply's handling failed (and said so): its code */
+    /* called before serial_stopped says a stop, NULL none: a host that shows
+       the layers puts its screen out first, not after the message */
+    void (*stopping)(void *ctx);
+    void *stopping_ctx;
 } serial_link;
 
 /* A gap longer than this, ms, between two looks at the line (serial_pump,
