@@ -3695,7 +3695,7 @@ static double adaslice__turn(const double *row, const float *p)
 }
 
 /* p turned by r into q (which may be p): the only place a vertex is turned */
-static void adaslice__turn_vertex(const double r[9], const float *p, float *q)
+static inline void adaslice__turn_vertex(const double r[9], const float *p, float *q)
 {
     float x = (float)adaslice__turn(r, p), y = (float)adaslice__turn(r + 3, p), z = (float)adaslice__turn(r + 6, p);
     q[0] = x; q[1] = y; q[2] = z;
@@ -6867,16 +6867,18 @@ typedef struct adaslice__run {
     double value;
 } adaslice__run;
 
-/* Doubles in the range-maximum table of a chunk of bins: half a core's L2. */
-#define ADASLICE__CHUNK_TABLE 65536
+/* Doubles in the range-maximum table of a chunk of bins: a core's L2. */
+#define ADASLICE__CHUNK_TABLE 131072
 
 /* The max-type profile (cusp, roughness, or the weights alone) along a
    direction from its turned corners: adaslice__max_over_bins of the turned
-   mesh, bit for bit, as a maximum does not depend on the order of its terms.
-   Along a long part the range-maximum table grows to tens of MB, cleared,
-   updated at random and pushed down for every direction, and memory bounds
-   the search; so the bins are cut into chunks whose table stays in cache,
-   the facets' runs sorted into them by a counting pass. */
+   mesh, bit for bit, as a maximum does not depend on the order of its terms
+   nor on a run being cut in two. Along a long part the range-maximum table
+   grows to tens of MB, cleared, updated at random and pushed down for every
+   direction, and memory bounds the search; so the bins are cut into chunks
+   whose table stays in cache, the facets' runs sorted into them by a
+   counting pass (those crossing a border cut there). A table up to twice a
+   chunk is quicker whole than sorted. */
 static adaslice_result adaslice__max_along(const adaslice_orienter *o, const adaslice__turned_corner *cv,
                                            const adaslice_profile_options *opt, adaslice_profile *p, adaslice_error *err)
 {
@@ -6885,8 +6887,7 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     adaslice_profile_options quiet;
     adaslice__rmax rmax;
     adaslice__run *runs = NULL, *sorted = NULL;
-    size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, window, t, c,
-           count = 0;
+    size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c, count = 0;
     adaslice_metric metric = opt->metric;
     const float *weights = opt->weights;
     double rough = opt->roughness_max;
@@ -6894,24 +6895,22 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
 
     span = longest && longest < n ? longest : n;
     levels = adaslice__floor_log2(span) + 1;
-    /* a power of two at least the longest run, so a shift finds a run's chunk */
+    /* a power of two longer than any run, so a shift finds a run's chunk
+       and a run meets two chunks at most */
     shift = adaslice__floor_log2(ADASLICE__CHUNK_TABLE / (size_t)levels);
     shift = shift >= levels ? shift : levels;
     chunk = (size_t)1 << shift;
-    chunks = n <= chunk + span ? 1 : ((n - 1) >> shift) + 1;
-    /* a run is shorter than 2^levels bins (rmax_update asserts it), so one
-       starting in a chunk ends inside its window */
-    window = chunks == 1 ? n : chunk + ((size_t)1 << levels);
+    chunks = n * (size_t)levels <= 2 * ADASLICE__CHUNK_TABLE ? 1 : ((n - 1) >> shift) + 1;
+    if (chunks == 1) chunk = n;
     memset(&quiet, 0, sizeof quiet);
     memset(&rmax, 0, sizeof rmax);
     if (chunks > 1) {
         runs = ADASLICE__CAST(adaslice__run *, adaslice__alloc(&al, m->triangle_count, sizeof *runs));
-        sorted = ADASLICE__CAST(adaslice__run *, adaslice__alloc(&al, m->triangle_count, sizeof *sorted));
         start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, chunks + 1, sizeof *start));
-        if (!runs || !sorted || !start) goto nomem;
+        if (!runs || !start) goto nomem;
         memset(start, 0, (chunks + 1) * sizeof *start);
     }
-    if (!adaslice__rmax_init(&rmax, window, span, &al)) goto nomem;
+    if (!adaslice__rmax_init(&rmax, chunk, span, &al)) goto nomem;
     for (t = 0; t < m->triangle_count; t++) {
         const uint32_t *tri = m->triangles + 3 * t;
         const adaslice__turned_corner *a = cv + tri[0], *b = cv + tri[1], *cc = cv + tri[2];
@@ -6930,23 +6929,34 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         runs[count].value = value;
         count++;
         start[(first >> shift) + 1]++;
+        start[(last >> shift) + 1] += first >> shift != last >> shift;
     }
-    if (chunks > 1) { /* the runs sorted by chunk: chunk c's from start[c] to start[c + 1] */
+    if (chunks > 1) { /* chunk c's runs from start[c] to start[c + 1] */
         for (c = 1; c <= chunks; c++) start[c] += start[c - 1];
-        for (t = 0; t < count; t++) sorted[start[runs[t].first >> shift]++] = runs[t];
+        sorted = ADASLICE__CAST(adaslice__run *, adaslice__alloc(&al, start[chunks] ? start[chunks] : 1, sizeof *sorted));
+        if (!sorted) goto nomem;
+        for (t = 0; t < count; t++) {
+            adaslice__run piece = runs[t];
+            size_t cf = piece.first >> shift, cl = piece.last >> shift;
+            if (cf != cl) {
+                piece.last = (uint32_t)(cl << shift) - 1;
+                sorted[start[cf]++] = piece;
+                piece.first = piece.last + 1;
+                piece.last = runs[t].last;
+            }
+            sorted[start[cl]++] = piece;
+        }
         for (c = chunks; c > 0; c--) start[c] = start[c - 1];
         start[0] = 0;
     }
     for (c = 0; c < chunks; c++) {
-        size_t c0 = c * chunk, j, end = n - c0 < window ? n - c0 : window;
-        const double *level0;
+        size_t c0 = c * chunk, j;
         if (chunks > 1) {
             memset(rmax.zeroed, 0, sizeof rmax.zeroed);
             for (j = start[c]; j < start[c + 1]; j++)
                 adaslice__rmax_update(&rmax, sorted[j].first - c0, sorted[j].last - c0, sorted[j].value);
         }
-        level0 = adaslice__rmax_finish(&rmax, &quiet);
-        for (j = 0; j < end; j++) p->phi[c0 + j] = p->phi[c0 + j] < level0[j] ? level0[j] : p->phi[c0 + j];
+        memcpy(p->phi + c0, adaslice__rmax_finish(&rmax, &quiet), (n - c0 < chunk ? n - c0 : chunk) * sizeof(double));
     }
     adaslice__free(&al, rmax.t);
     adaslice__free(&al, runs);
