@@ -1,5 +1,7 @@
 /* The build-direction search (§4.3). */
 #include "../adaslice.h"
+#include "../host/report.h"
+#include "../host/search.h"
 #include "check.h"
 #include "meshgen.h"
 #include <math.h>
@@ -247,6 +249,105 @@ static void search_matches_a_brute_force_reference(void)
     free(d);
 }
 
+/* count spheres of radius 2 in a row along x, 5 mm apart: a long part of
+   small facets */
+static adaslice_mesh sphere_row(int count, int slices, int stacks)
+{
+    adaslice_mesh row = gen_sphere(2, slices, stacks, 0);
+    int k;
+    size_t v;
+    for (k = 1; k < count; k++) {
+        adaslice_mesh s = gen_sphere(2, slices, stacks, 0);
+        for (v = 0; v < s.vertex_count; v++) s.vertices[3 * v] += (float)(5 * k);
+        gen_append(&row, &s);
+        gen_free(&s);
+    }
+    return row;
+}
+
+static double ripples(double x, double y) { return 3 + sin(x) * cos(0.7 * y) + 0.3 * sin(5 * x); }
+
+/* The search as the tool runs it (host/search.c: threads share the
+   directions; along a long part each profile is cut into chunks, facets'
+   runs crossing their borders) gives every direction the K and errors of
+   the exhaustive way, one direction at a time on one thread: the mesh turned
+   by adaslice_mesh_rotate and profiled whole by adaslice_profile_exact. So
+   the best direction, its score and the minima are the reference's. The
+   rows of spheres and the ripples run to 30,000-60,000 bins of 1-2 um along
+   x, their facets' runs to a few hundred (many chunks); the box's sides span
+   every bin (one). */
+static void threaded_search_matches_the_turned_meshes(void)
+{
+    static const double axes[SEARCH_AXES][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+    adaslice_mesh meshes[4];
+    adaslice_load_options lo;
+    adaslice_error e;
+    const double bins[4] = {0.001, 0.002, 0.002, 0.002};
+    size_t n = 60, total = n + SEARCH_AXES, c, k, i;
+    double *d = (double *)malloc(3 * total * sizeof(double));
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 88.7;
+    meshes[0] = sphere_row(10, 24, 24);
+    meshes[1] = gen_heightfield(200, 10, 0, 0, 60, 6, ripples);
+    CHECK(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &meshes[2], &e) == ADASLICE_OK);
+    meshes[3] = gen_box(0, 0, 0, 3, 5, 40);
+    adaslice_fibonacci_directions(n, d);
+    memcpy(d + 3 * n, axes, sizeof axes);
+    for (c = 0; c < 4; c++) {
+        adaslice_profile_options po;
+        adaslice_direction_score *fast = NULL, *ref = (adaslice_direction_score *)calloc(total, sizeof *ref);
+        adaslice_mesh t = meshes[c];
+        size_t minima[SEARCH_MINIMA + 1], ref_minima[SEARCH_MINIMA + 1], count = 0, ref_count, longest = 0;
+        memset(&po, 0, sizeof po);
+        po.bin = bins[c];
+        CHECK(orient_search("test", &meshes[c], &po, NULL, n, 0.5, &fast, minima, &count) == RC_OK && fast);
+        t.vertices = (float *)malloc(3 * t.vertex_count * sizeof(float));
+        for (k = 0; k < total; k++) {
+            const double *dk = d + 3 * k;
+            double len = sqrt(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]), u[3], r[9];
+            adaslice_profile p;
+            adaslice_plan plan;
+            u[0] = dk[0] / len; u[1] = dk[1] / len; u[2] = dk[2] / len;
+            memcpy(t.vertices, meshes[c].vertices, 3 * t.vertex_count * sizeof(float));
+            adaslice_rotation_to_z(u, r);
+            adaslice_mesh_rotate(&t, r);
+            CHECK(adaslice_profile_exact(&t, &po, &p, &e) == ADASLICE_OK);
+            longest = p.bin_count > longest ? p.bin_count : longest;
+            memcpy(ref[k].direction, u, sizeof u);
+            ref[k].feasible = adaslice_plan_profile(&p, NULL, &plan, &e) == ADASLICE_OK;
+            if (ref[k].feasible) {
+                ref[k].layers = plan.layer_count;
+                ref[k].worst_error = plan.worst_error;
+                ref[k].mean_error = plan.total_error / (double)plan.layer_count;
+                adaslice_plan_free(&plan);
+            }
+            adaslice_profile_free(&p);
+            CHECKF(fast[k].feasible == ref[k].feasible && fast[k].layers == ref[k].layers &&
+                       fast[k].worst_error == ref[k].worst_error && fast[k].mean_error == ref[k].mean_error,
+                   "mesh %zu, direction %zu: %zu layers, worst %.17g; reference %zu, %.17g", c, k, fast[k].layers,
+                   fast[k].worst_error, ref[k].layers, ref[k].worst_error);
+        }
+        CHECKF(c == 3 || longest > 25000, "mesh %zu: at most %zu bins", c, longest);
+        adaslice_orient_scores(ref, total, 0.5);
+        /* the neighbourhood orient_search takes */
+        ref_count = adaslice_orient_minima(ref, total, 2.5 * sqrt(4 * 3.14159265358979 / (double)n), ref_minima,
+                                           SEARCH_MINIMA + 1);
+        CHECK(count == ref_count && count > 0);
+        for (i = 0; i < count && i < ref_count; i++)
+            CHECKF(minima[i] == ref_minima[i] && fast[minima[i]].score == ref[ref_minima[i]].score,
+                   "mesh %zu: minimum %zu is direction %zu (F %.17g), reference %zu (F %.17g)", c, i, minima[i],
+                   fast[minima[i]].score, ref_minima[i], ref[ref_minima[i]].score);
+        free(t.vertices);
+        free(fast);
+        free(ref);
+    }
+    gen_free(&meshes[0]);
+    gen_free(&meshes[1]);
+    adaslice_mesh_free(&meshes[2]);
+    gen_free(&meshes[3]);
+    free(d);
+}
+
 /* Minima are lower than everything around them, so no two are neighbours. */
 static void minima_are_apart(void)
 {
@@ -300,4 +401,5 @@ void test_orient(void)
     RUN(minima_are_apart);
     RUN(ties_go_to_the_part_as_loaded);
     RUN(search_matches_a_brute_force_reference);
+    RUN(threaded_search_matches_the_turned_meshes);
 }
