@@ -7244,10 +7244,13 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
                               "chords): one masker makes them");
     if (whole->done != -DBL_MAX || whole->rows[0] != 0 || whole->rows[1] != (uint32_t)whole->grid.height)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: bands are split from a whole masker before its first layer");
+    if (rows[count] > (uint32_t)whole->grid.height)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: the bands end at row %u, past the %d-row grid",
+                              (unsigned)rows[count], whole->grid.height);
     for (b = 0; b < count; b++)
-        if (!(rows[b] < rows[b + 1]) || rows[count] > (uint32_t)whole->grid.height)
-            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: band %zu's rows [%u, %u) are not rows after the "
-                                  "last band's within the %d-row grid", b, (unsigned)rows[b], (unsigned)rows[b + 1], whole->grid.height);
+        if (!(rows[b] < rows[b + 1]))
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: band %zu's rows [%u, %u) are none", b,
+                                  (unsigned)rows[b], (unsigned)rows[b + 1]);
     al = whole->allocator;
     kept = ADASLICE__CAST(size_t *, adaslice__alloc(&al, count, sizeof(size_t)));
     if (!kept) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu bands", count);
