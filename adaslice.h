@@ -1113,6 +1113,7 @@ typedef struct adaslice_masker {
     struct adaslice__crossing *crossings; /* one ray row's crossings, sorted */
     size_t crossing_cap;
     int nomem;                   /* the spans could not grow during a sweep */
+    int zeroed;                  /* the sweep's buffers are zeroed (at the first layer) */
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -7076,45 +7077,69 @@ ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int wi
     return g;
 }
 
+/* The sizes of the buffers of the masker's rows: rays, pixels, cells and
+   words of touched bits (anti-aliased sections: of the box's rows among
+   them, which it sets in cell_rows). */
+static void adaslice__masker_sizes(adaslice_masker *mk, size_t size[4])
+{
+    size_t s = (size_t)mk->supersample, rows = mk->rows[1] - mk->rows[0];
+    size[0] = (size_t)mk->rays.width * rows * s;
+    size[1] = (size_t)mk->grid.width * rows;
+    mk->cell_rows[0] = mk->rows[0] > mk->box[1] ? mk->rows[0] - mk->box[1] : 0;
+    mk->cell_rows[1] = mk->rows[1] > mk->box[1] ? mk->rows[1] - mk->box[1] : 0;
+    if (mk->cell_rows[1] > mk->box[3]) mk->cell_rows[1] = mk->box[3];
+    if (mk->cell_rows[0] > mk->cell_rows[1]) mk->cell_rows[0] = mk->cell_rows[1];
+    rows = mk->cell_rows[1] - mk->cell_rows[0];
+    size[2] = ((size_t)mk->box[2] + 1) * rows + 1;
+    size[3] = ((size_t)mk->box[2] / 32 + 1) * rows + 1;
+}
+
+/* The sweep's buffers zeroed, at the first layer rather than at init: a
+   whole masker that is only split into bands never touches them (18 MB of
+   windings at 3840 x 2400), and bands zero theirs on the threads that sweep
+   them. */
+static void adaslice__masker_zero(adaslice_masker *mk)
+{
+    size_t size[4];
+    adaslice__masker_sizes(mk, size);
+    if (mk->changed) memset(mk->changed, 0, size[0] / 8 + 1);
+    if (mk->winding) memset(mk->winding, 0, size[0] * sizeof(int16_t));
+    if (mk->coverage) memset(mk->coverage, 0, size[1] * sizeof(uint16_t));
+    if (mk->cells) {
+        memset(mk->cells, 0, size[2] * sizeof(float));
+        memset(mk->extent, 0, (4 * (size_t)(mk->cell_rows[1] - mk->cell_rows[0]) + 1) * sizeof(uint32_t));
+        memset(mk->touched, 0, size[3] * sizeof(uint32_t));
+    }
+    mk->zeroed = 1;
+}
+
 /* The buffers of the masker's rows (mk->rows), its settings made: the
    image, and a winding per ray (a bit more for envelope and core, a
    coverage per pixel anti-aliased) or an anti-aliased section's cells for
    the box's rows among them; order and active for `triangles`. */
 static adaslice_result adaslice__masker_buffers(adaslice_masker *mk, size_t triangles, adaslice_error *err)
 {
-    size_t s = (size_t)mk->supersample, rows = mk->rows[1] - mk->rows[0];
-    size_t rays = (size_t)mk->rays.width * rows * s, pixels = (size_t)mk->grid.width * rows;
+    size_t size[4], rays, rows = mk->rows[1] - mk->rows[0];
     int range = mk->slice_at >= ADASLICE_SLICE_ENVELOPE;
+    adaslice__masker_sizes(mk, size);
+    rays = size[0];
     if (range) mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
     mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, rows));
     mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, triangles + 1, sizeof(uint32_t)));
     mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, triangles + 1, sizeof(uint32_t)));
     if (!mk->image || !mk->order || !mk->active || (range && !mk->changed)) goto nomem;
     memset(mk->image, 0, mk->stride * rows);
-    if (range) memset(mk->changed, 0, rays / 8 + 1);
-    if (s > 1 && !range) {
-        /* cells only for the box's rows among the masker's */
-        size_t cells, words;
-        mk->cell_rows[0] = mk->rows[0] > mk->box[1] ? mk->rows[0] - mk->box[1] : 0;
-        mk->cell_rows[1] = mk->rows[1] > mk->box[1] ? mk->rows[1] - mk->box[1] : 0;
-        if (mk->cell_rows[1] > mk->box[3]) mk->cell_rows[1] = mk->box[3];
-        if (mk->cell_rows[0] > mk->cell_rows[1]) mk->cell_rows[0] = mk->cell_rows[1];
-        rows = mk->cell_rows[1] - mk->cell_rows[0];
-        cells = ((size_t)mk->box[2] + 1) * rows + 1;
-        words = ((size_t)mk->box[2] / 32 + 1) * rows + 1;
-        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, cells, sizeof(float)));
-        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * rows + 1, sizeof(uint32_t)));
-        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, words, sizeof(uint32_t)));
+    if (mk->supersample > 1 && !range) {
+        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, size[2], sizeof(float)));
+        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)(mk->cell_rows[1] - mk->cell_rows[0]) + 1,
+                                                                sizeof(uint32_t)));
+        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, size[3], sizeof(uint32_t)));
         if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
-        memset(mk->cells, 0, cells * sizeof(float));
-        memset(mk->extent, 0, (4 * rows + 1) * sizeof(uint32_t));
-        memset(mk->touched, 0, words * sizeof(uint32_t));
     } else {
         /* sections need no winding per ray */
         if (!mk->gaps && !(mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t))))) goto nomem;
-        if (s > 1 && !(mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t))))) goto nomem;
-        if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
-        if (mk->coverage) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
+        if (mk->supersample > 1 && !(mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, size[1], sizeof(uint16_t)))))
+            goto nomem;
     }
     return ADASLICE_OK;
 nomem:
@@ -7700,6 +7725,7 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
     if (past && h >= mk->done && h < DBL_MAX) h = nextafter(h, DBL_MAX);
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
+    if (!mk->zeroed) adaslice__masker_zero(mk);
     if (mk->gaps || mk->cells) {
         adaslice_result res = adaslice__masker_section(mk, height, err);
         if (res != ADASLICE_OK) return res;
