@@ -53,7 +53,8 @@ void slice_options_usage(FILE *f)
           "                      and no manifest.json (files of the job's names are written over)\n"
           "  --memory MB         the most the masks or the profile may take\n"
           "                                                    [half the machine's memory]\n"
-          "  --threads N         layers coded at once (the job is the same bytes) [the cores]\n", f);
+          "  --threads N         threads rendering (in row bands) and coding layers at once\n"
+          "                      (the job is the same bytes)                   [the cores]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
@@ -261,11 +262,11 @@ int layer_masks_check(const slice_args *s, int buffers)
     double need = layer_masks_bytes(s, buffers), limit = s->memory_mb * 1e6;
     char a[32], b[32], c[32];
     if (need <= limit) return RC_OK;
-    return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s, %d layer%s in flight), "
+    return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s%s, %d layer%s in flight), "
                               "more than --memory %s",
                     s->width, s->height, s->supersample, size_text(need, a),
                     size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0), b),
-                    buffers, plural((size_t)buffers), size_text(limit, c));
+                    buffers > 1 ? " twice, as it is split into row bands" : "", buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
