@@ -372,7 +372,7 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
             return complain(RC_FAIL, "out of memory for %d bands", bands);
         }
         bands = band_rows(m, bands, rows);
-    }
+    } else bands = 1;
     if (!(m->band = (adaslice_masker *)calloc(bands > 1 ? (size_t)bands : 1, sizeof *m->band))) {
         adaslice_masker_free(&whole);
         free(rows);
