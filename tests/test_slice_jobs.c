@@ -579,6 +579,23 @@ static void threads_write_the_same_job(void)
                 CHECKF(same_directories(one, many, what), "%s --aa %s --threads %s: %s", models[m], aa[a], threads[t], what);
             }
         }
+    /* an open mesh (a box without one side), which keeps one masker: its gaps' chords need whole sections */
+    {
+        char open_box[300];
+        adaslice_mesh box = gen_box(0, 0, 0, 6, 5, 4);
+        cli_result r;
+        snprintf(open_box, sizeof open_box, "%s/open_box.obj", cli_dir);
+        box.triangle_count -= 2; /* gen_box's last two facets: its side at x = 6 */
+        cli_write_obj(open_box, &box);
+        gen_free(&box);
+        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
+        CHECKF(r.status == 0 && strstr(r.err, "open edges"), "%s", r.err);
+        cli_free(&r);
+        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "3", "-o", many, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        CHECKF(same_directories(one, many, what), "an open box: %s", what);
+    }
     /* over the hand's --aa 4 job in `many`: the sphere's 1-bit layers, fewer and smaller */
     {
         cli_result r = cli_run("slice", models[0], "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
