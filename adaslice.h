@@ -136,6 +136,9 @@
        adaslice_result adaslice_masker_layer(adaslice_masker *masker, double z_bottom, double z_top,
                                              adaslice_error *error);
            the mask of the next layer by a rule: a section, envelope (union) or core
+       adaslice_result adaslice_masker_bands(const adaslice_masker *whole, const uint32_t *rows, size_t count,
+                                             adaslice_masker *bands, adaslice_error *error);
+           a masker split into row bands, to be swept on several threads at once
        void adaslice_masker_free(adaslice_masker *masker);
        size_t adaslice_masker_bytes(uint32_t width, uint32_t height, int supersample, adaslice_slice_at slice_at,
                                     size_t triangles);
@@ -1013,7 +1016,8 @@ typedef struct adaslice_mask_options {
     float *fractions;                    /* NULL, or width x height floats (rows from the
                                             grid's row 0): s > 1 and a section's rule, each
                                             mask also leaves every pixel's covered fraction
-                                            here, before it is rounded to a grey level */
+                                            here, before it is rounded to a grey level
+                                            (a band's masker: in its rows) */
 } adaslice_mask_options;
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -1046,7 +1050,16 @@ typedef struct adaslice_mask_options {
    Memory: 1-bit, envelope and core 2 bytes per ray, plus 2 per pixel when
    s > 1, plus the image; envelope and core a bit per ray more, the spans of
    a layer's range and a row's crossings. A section's rule with s > 1: the
-   image and 4 bytes per pixel. */
+   image and 4 bytes per pixel.
+   Row bands (adaslice_masker_bands): a masker split into maskers of some
+   rows each, each keeping the facets that meet its rows and memory for
+   those rows only, so the bands of one layer can be made at once on several
+   threads (they share only the mesh, read-only) and a band need not wait
+   for another. Between them they give the bytes the whole masker gives, bit
+   for bit (each facet's cut and each sum of a pixel's are the same
+   arithmetic in the same order), and their `lit` adds up to its (each a
+   whole number of rays over s*s). An open mesh (`sections`) cannot be
+   split: its gaps' chords join cuts from anywhere in the section. */
 typedef struct adaslice_masker {
     const adaslice_mesh *mesh;
     adaslice_grid grid;          /* the printer's pixels; axis must be z */
@@ -1054,23 +1067,32 @@ typedef struct adaslice_masker {
     unsigned char *image;        /* s = 1: rows of (width + 7) / 8 bytes, MSB first, 1 = lit;
                                     s > 1: rows of width bytes. Row 0 is the grid's row 0 */
     size_t stride;               /* bytes per image row */
-    double lit;                  /* lit pixels (fractions with s > 1) */
+    double lit;                  /* lit pixels (fractions with s > 1), in its rows */
+    uint32_t rows[2];            /* the grid rows [rows[0], rows[1]) it makes (all but a
+                                    band's): the image holds those rows only, rows[0] first */
+    int sections;                /* 1: the mesh's edges do not all balance, so each mask is
+                                    filled from the layer's whole section, its gaps closed
+                                    by chords (and the masker cannot be split into bands) */
     /* private */
     adaslice_grid rays;
     double depth_origin, done;   /* samples below `done` are applied */
-    uint32_t *order;             /* triangles by lowest z */
+    uint32_t *order;             /* triangles by lowest z (those meeting the rows) */
+    size_t count;                /* in order */
     size_t next;                 /* order[next] is the lowest not yet active */
     uint32_t *active;
     size_t active_count;
-    int16_t *winding;            /* per ray */
-    uint16_t *coverage;          /* per pixel, s > 1, envelope and core */
+    int16_t *winding;            /* per ray of its rows */
+    uint16_t *coverage;          /* per pixel of its rows, s > 1, envelope and core */
     uint32_t box[4];             /* the mesh's footprint in pixels (first column, first row,
                                     columns, rows): only there are cells */
-    float *cells;                /* s > 1, a section's rule: per row of the box, columns + 1
+    uint32_t cell_rows[2];       /* the box's rows [0] to [1] within the masker's rows: the
+                                    cells' rows (the box's own rows set the edges' arithmetic,
+                                    the same in every band) */
+    float *cells;                /* s > 1, a section's rule: per cells' row, columns + 1
                                     differences whose prefix sums are the covered fractions */
-    uint32_t *extent;            /* per row of the box: the cells touched [0, 1] and the
+    uint32_t *extent;            /* per cells' row: the cells touched [0, 1] and the
                                     image's non-zero bytes [2, 3], as [from, to) in it */
-    uint32_t *touched;           /* per row of the box, a bit for each cell touched */
+    uint32_t *touched;           /* per cells' row, a bit for each cell touched */
     unsigned char bit_at[32];    /* de Bruijn: a word's lowest bit times 0x077CB531, top 5 bits -> its index */
     float *fractions;            /* the options' */
     unsigned char grey[257];     /* coverage -> grey level */
@@ -1091,6 +1113,7 @@ typedef struct adaslice_masker {
     struct adaslice__crossing *crossings; /* one ray row's crossings, sorted */
     size_t crossing_cap;
     int nomem;                   /* the spans could not grow during a sweep */
+    int zeroed;                  /* the sweep's buffers are zeroed (at the first layer) */
     adaslice_allocator allocator;
 } adaslice_masker;
 
@@ -1110,6 +1133,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_slice(adaslice_masker *masker, doub
    balanced edges (a closed mesh): ADASLICE_ERR_UNSUPPORTED at init otherwise. */
 ADASLICE_DEF adaslice_result adaslice_masker_layer(adaslice_masker *masker, double z_bottom, double z_top,
                                                    adaslice_error *error);
+/* Splits `whole` (from adaslice_masker_init, before its first layer) into
+   `count` maskers, band b over grid rows [rows[b], rows[b + 1]) (rising),
+   each with whole's options, the facets that meet its rows and buffers for
+   them: bands[b].image holds its rows only. Each band is then swept as a
+   masker of its own, layers bottom-up, on any thread; whole is only read
+   and can be freed. ADASLICE_ERR_UNSUPPORTED for an open mesh (whole's
+   `sections`): one masker makes its masks. */
+ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole, const uint32_t *rows, size_t count,
+                                                   adaslice_masker *bands, adaslice_error *error);
 ADASLICE_DEF void adaslice_masker_free(adaslice_masker *masker);
 /* The bytes adaslice_masker_init asks for on a width x height grid at
    `supersample` and `slice_at` for a mesh of `triangles`: a caller's limit
@@ -7209,13 +7241,83 @@ ADASLICE_DEF adaslice_grid adaslice_grid_plate(const adaslice_mesh *mesh, int wi
     return g;
 }
 
+/* The sizes of the buffers of the masker's rows: rays, pixels, cells and
+   words of touched bits (anti-aliased sections: of the box's rows among
+   them, which it sets in cell_rows). */
+static void adaslice__masker_sizes(adaslice_masker *mk, size_t size[4])
+{
+    size_t s = (size_t)mk->supersample, rows = mk->rows[1] - mk->rows[0];
+    size[0] = (size_t)mk->rays.width * rows * s;
+    size[1] = (size_t)mk->grid.width * rows;
+    mk->cell_rows[0] = mk->rows[0] > mk->box[1] ? mk->rows[0] - mk->box[1] : 0;
+    mk->cell_rows[1] = mk->rows[1] > mk->box[1] ? mk->rows[1] - mk->box[1] : 0;
+    if (mk->cell_rows[1] > mk->box[3]) mk->cell_rows[1] = mk->box[3];
+    if (mk->cell_rows[0] > mk->cell_rows[1]) mk->cell_rows[0] = mk->cell_rows[1];
+    rows = mk->cell_rows[1] - mk->cell_rows[0];
+    size[2] = ((size_t)mk->box[2] + 1) * rows + 1;
+    size[3] = ((size_t)mk->box[2] / 32 + 1) * rows + 1;
+}
+
+/* The sweep's buffers zeroed, at the first layer rather than at init: a
+   whole masker that is only split into bands never touches them (18 MB of
+   windings at 3840 x 2400), and bands zero theirs on the threads that sweep
+   them. */
+static void adaslice__masker_zero(adaslice_masker *mk)
+{
+    size_t size[4];
+    adaslice__masker_sizes(mk, size);
+    if (mk->changed) memset(mk->changed, 0, size[0] / 8 + 1);
+    if (mk->winding) memset(mk->winding, 0, size[0] * sizeof(int16_t));
+    if (mk->coverage) memset(mk->coverage, 0, size[1] * sizeof(uint16_t));
+    if (mk->cells) {
+        memset(mk->cells, 0, size[2] * sizeof(float));
+        memset(mk->extent, 0, (4 * (size_t)(mk->cell_rows[1] - mk->cell_rows[0]) + 1) * sizeof(uint32_t));
+        memset(mk->touched, 0, size[3] * sizeof(uint32_t));
+    }
+    mk->zeroed = 1;
+}
+
+/* The buffers of the masker's rows (mk->rows), its settings made: the
+   image, and a winding per ray (a bit more for envelope and core, a
+   coverage per pixel anti-aliased) or an anti-aliased section's cells for
+   the box's rows among them; order and active for `triangles`. */
+static adaslice_result adaslice__masker_buffers(adaslice_masker *mk, size_t triangles, adaslice_error *err)
+{
+    size_t size[4], rays, rows = mk->rows[1] - mk->rows[0];
+    int range = mk->slice_at >= ADASLICE_SLICE_ENVELOPE;
+    adaslice__masker_sizes(mk, size);
+    rays = size[0];
+    if (range) mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
+    mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, rows));
+    mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, triangles + 1, sizeof(uint32_t)));
+    mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, triangles + 1, sizeof(uint32_t)));
+    if (!mk->image || !mk->order || !mk->active || (range && !mk->changed)) goto nomem;
+    memset(mk->image, 0, mk->stride * rows);
+    if (mk->supersample > 1 && !range) {
+        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, size[2], sizeof(float)));
+        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)(mk->cell_rows[1] - mk->cell_rows[0]) + 1,
+                                                                sizeof(uint32_t)));
+        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, size[3], sizeof(uint32_t)));
+        if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
+    } else {
+        /* sections need no winding per ray */
+        if (!mk->gaps && !(mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t))))) goto nomem;
+        if (mk->supersample > 1 && !(mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, size[1], sizeof(uint16_t)))))
+            goto nomem;
+    }
+    return ADASLICE_OK;
+nomem:
+    adaslice_masker_free(mk);
+    return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
+}
+
 ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const adaslice_mesh *mesh,
                                                   const adaslice_grid *grid, const adaslice_mask_options *options,
                                                   adaslice_error *err)
 {
     adaslice_result r, res;
     adaslice__zkey *keys, *sorted;
-    size_t t, rays, pixels;
+    size_t t;
     int k, s = options && options->supersample ? options->supersample : 1;
     if (!mk) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker given");
     memset(mk, 0, sizeof *mk);
@@ -7239,12 +7341,12 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->rays.pitch[1] = grid->pitch[1] / s;
     mk->rays.width = grid->width * s;
     mk->rays.height = grid->height * s;
+    mk->rows[1] = (uint32_t)grid->height;
     mk->depth_origin = adaslice__depth_origin(mesh, ADASLICE_AXIS_Z);
     mk->done = -DBL_MAX;
-    rays = (size_t)mk->rays.width * (size_t)mk->rays.height;
-    pixels = (size_t)grid->width * (size_t)grid->height;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
     if ((res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK) return res;
+    mk->sections = mk->gaps != NULL;
     if (mk->gaps && mk->slice_at >= ADASLICE_SLICE_ENVELOPE) {
         size_t loose = mk->gaps->count;
         adaslice_masker_free(mk);
@@ -7252,15 +7354,11 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
                               "masks: envelope and core masks read the part along rays and need a closed mesh; "
                               "this one has %zu unbalanced edges (repair it, or slice at a height)", loose);
     }
-    if (mk->slice_at >= ADASLICE_SLICE_ENVELOPE)
-        mk->changed = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, rays / 8 + 1, 1));
-    mk->image = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mk->allocator, mk->stride, (size_t)grid->height));
     if (s > 1 && mk->slice_at < ADASLICE_SLICE_ENVELOPE) {
         /* an anti-aliased section: its exact coverage, from the section's
            edges, which stay within the mesh's box (a large display's cells
            cost their first touch) */
         double lo[3], hi[3], box[4];
-        size_t cells, words;
         adaslice_mesh_bounds(mesh, lo, hi);
         box[0] = floor((lo[0] - grid->origin[0]) / grid->pitch[0]);
         box[1] = floor((lo[1] - grid->origin[1]) / grid->pitch[1]);
@@ -7274,50 +7372,121 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
         mk->box[1] = (uint32_t)box[1];
         mk->box[2] = (uint32_t)(box[2] - box[0]);
         mk->box[3] = (uint32_t)(box[3] - box[1]);
-        cells = ((size_t)mk->box[2] + 1) * mk->box[3] + 1;
-        words = ((size_t)mk->box[2] / 32 + 1) * mk->box[3] + 1;
-        mk->cells = ADASLICE__CAST(float *, adaslice__alloc(&mk->allocator, cells, sizeof(float)));
-        mk->extent = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, 4 * (size_t)mk->box[3] + 1, sizeof(uint32_t)));
-        mk->touched = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, words, sizeof(uint32_t)));
         mk->fractions = options ? options->fractions : NULL;
-        if (!mk->cells || !mk->extent || !mk->touched) goto nomem;
-        memset(mk->cells, 0, cells * sizeof(float));
-        memset(mk->extent, 0, (4 * (size_t)mk->box[3] + 1) * sizeof(uint32_t));
-        memset(mk->touched, 0, words * sizeof(uint32_t));
         for (k = 0; k < 32; k++) mk->bit_at[(uint32_t)(0x077CB531u << k) >> 27] = (unsigned char)k;
-    } else {
-        /* sections need no winding per ray */
-        if (!mk->gaps) mk->winding = ADASLICE__CAST(int16_t *, adaslice__alloc(&mk->allocator, rays, sizeof(int16_t)));
-        if (s > 1) mk->coverage = ADASLICE__CAST(uint16_t *, adaslice__alloc(&mk->allocator, pixels, sizeof(uint16_t)));
-        if ((!mk->gaps && !mk->winding) || (s > 1 && !mk->coverage)) goto nomem;
     }
-    mk->order = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
-    mk->active = ADASLICE__CAST(uint32_t *, adaslice__alloc(&mk->allocator, mesh->triangle_count, sizeof(uint32_t)));
+    for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
+    if ((res = adaslice__masker_buffers(mk, mesh->triangle_count, err)) != ADASLICE_OK) return res;
     keys = ADASLICE__CAST(adaslice__zkey *, adaslice__alloc(&mk->allocator, 2 * mesh->triangle_count, sizeof(adaslice__zkey)));
-    if (!mk->image || !mk->order || !mk->active || !keys || (mk->slice_at >= ADASLICE_SLICE_ENVELOPE && !mk->changed)) {
-        adaslice__free(&mk->allocator, keys);
-        goto nomem;
+    if (!keys) {
+        adaslice_masker_free(mk);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu triangles", mesh->triangle_count);
     }
-    memset(mk->image, 0, mk->stride * (size_t)grid->height);
-    if (mk->winding) memset(mk->winding, 0, rays * sizeof(int16_t));
-    if (mk->changed) memset(mk->changed, 0, rays / 8 + 1);
-    if (mk->coverage) memset(mk->coverage, 0, pixels * sizeof(uint16_t));
     for (t = 0; t < mesh->triangle_count; t++) { keys[t].z = adaslice__zbits(adaslice__tri_z(mesh, t, 0)); keys[t].t = (uint32_t)t; }
     sorted = adaslice__sort_zkeys(keys, keys + mesh->triangle_count, mesh->triangle_count);
     for (t = 0; t < mesh->triangle_count; t++) mk->order[t] = sorted[t].t;
+    mk->count = mesh->triangle_count;
     adaslice__free(&mk->allocator, keys);
-    for (k = 0; k <= s * s; k++) mk->grey[k] = (unsigned char)((255 * k + (s * s) / 2) / (s * s));
     adaslice__ok(err);
     return ADASLICE_OK;
-nomem:
-    adaslice_masker_free(mk);
-    return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu rays", rays);
+}
+
+/* The bands [b0, b1] of `rows` (count + 1 bounds) that triangle t can reach:
+   its rows with a pixel to spare either way; every band for one so far off
+   the grid that rasterising it fails, so that every band fails as the whole
+   masker does. 0 when it reaches none. */
+static int adaslice__band_span(const adaslice_masker *mk, const uint32_t *rows, size_t count, uint32_t t, size_t *b0, size_t *b1)
+{
+    const adaslice_grid *g = &mk->grid;
+    const adaslice_mesh *m = mk->mesh;
+    double lo = DBL_MAX, hi = -DBL_MAX, far = ADASLICE__GRID_LIMIT / 2 / mk->supersample;
+    size_t a, b;
+    int k;
+    for (k = 0; k < 3; k++) {
+        const float *p = m->vertices + 3 * (size_t)m->triangles[3 * (size_t)t + k];
+        double u = (p[0] - g->origin[0]) / g->pitch[0], v = (p[1] - g->origin[1]) / g->pitch[1];
+        if (!(fabs(u) < far && fabs(v) < far)) { *b0 = 0; *b1 = count - 1; return 1; }
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+    }
+    lo -= 1;
+    hi += 1;
+    if (hi < (double)rows[0] || lo >= (double)rows[count]) return 0;
+    /* the last band starting at or below lo, and at or below hi */
+    for (a = 0, b = count; a + 1 < b;) { size_t c = (a + b) / 2; if ((double)rows[c] <= lo) a = c; else b = c; }
+    *b0 = a;
+    for (b = count; a + 1 < b;) { size_t c = (a + b) / 2; if ((double)rows[c] <= hi) a = c; else b = c; }
+    *b1 = a;
+    return 1;
+}
+
+ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole, const uint32_t *rows, size_t count,
+                                                   adaslice_masker *bands, adaslice_error *err)
+{
+    size_t b, b0, b1, t, *kept;
+    adaslice_allocator al;
+    adaslice_result r;
+    if (!whole || !rows || !bands || !count) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker or bands given");
+    if (whole->sections)
+        return adaslice__fail(err, ADASLICE_ERR_UNSUPPORTED, 0, 0,
+                              "masks: an open mesh's masks are filled from its whole sections (its gaps closed by "
+                              "chords): one masker makes them");
+    if (whole->done != -DBL_MAX || whole->rows[0] != 0 || whole->rows[1] != (uint32_t)whole->grid.height)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: bands are split from a whole masker before its first layer");
+    if (rows[count] > (uint32_t)whole->grid.height)
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: the bands end at row %u, past the %d-row grid",
+                              (unsigned)rows[count], whole->grid.height);
+    for (b = 0; b < count; b++)
+        if (!(rows[b] < rows[b + 1]))
+            return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: band %zu's rows [%u, %u) are none", b,
+                                  (unsigned)rows[b], (unsigned)rows[b + 1]);
+    al = whole->allocator;
+    kept = ADASLICE__CAST(size_t *, adaslice__alloc(&al, count, sizeof(size_t)));
+    if (!kept) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu bands", count);
+    memset(kept, 0, count * sizeof(size_t));
+    memset(bands, 0, count * sizeof *bands);
+    for (t = 0; t < whole->count; t++)
+        if (adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1))
+            for (b = b0; b <= b1; b++) kept[b]++;
+    for (b = 0; b < count; b++) {
+        adaslice_masker *mk = &bands[b];
+        /* the settings; no buffer, nothing swept */
+        mk->mesh = whole->mesh;
+        mk->grid = whole->grid;
+        mk->supersample = whole->supersample;
+        mk->stride = whole->stride;
+        mk->rays = whole->rays;
+        mk->depth_origin = whole->depth_origin;
+        mk->done = whole->done;
+        memcpy(mk->box, whole->box, sizeof mk->box);
+        memcpy(mk->bit_at, whole->bit_at, sizeof mk->bit_at);
+        mk->fractions = whole->fractions;
+        memcpy(mk->grey, whole->grey, sizeof mk->grey);
+        mk->slice_at = whole->slice_at;
+        mk->bin = whole->bin;
+        mk->allocator = al;
+        mk->rows[0] = rows[b];
+        mk->rows[1] = rows[b + 1];
+        if ((r = adaslice__masker_buffers(mk, kept[b], err)) != ADASLICE_OK) {
+            while (b--) adaslice_masker_free(&bands[b]);
+            adaslice__free(&al, kept);
+            return r;
+        }
+    }
+    /* whole's order filtered keeps its order: the same facets in the same
+       sequence, so each band's sums run as the whole masker's */
+    for (t = 0; t < whole->count; t++)
+        if (adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1))
+            for (b = b0; b <= b1; b++) bands[b].order[bands[b].count++] = whole->order[t];
+    adaslice__free(&al, kept);
+    adaslice__ok(err);
+    return ADASLICE_OK;
 }
 
 /* Ray i of ray row `row` turns on or off in the image. */
 static void adaslice__mask_show(adaslice_masker *mk, size_t row, size_t i, int on)
 {
-    size_t s = (size_t)mk->supersample, r = row / s;
+    size_t s = (size_t)mk->supersample, r = row / s - mk->rows[0];
     mk->lit_rays += on ? 1 : -1;
     if (s == 1) {
         mk->image[r * mk->stride + (i >> 3)] ^= (unsigned char)(0x80u >> (i & 7));
@@ -7338,7 +7507,7 @@ static void adaslice__mask_visit(void *ctx, const adaslice__span *span)
 {
     adaslice_masker *mk = ADASLICE__CAST(adaslice_masker *, ctx);
     int16_t step = (span->face & ADASLICE_SAMPLE_LEAVES) ? -1 : 1;
-    int16_t *w = mk->winding + (size_t)span->row * (size_t)mk->rays.width;
+    int16_t *w = mk->winding + ((size_t)span->row - (size_t)mk->rows[0] * mk->supersample) * (size_t)mk->rays.width;
     int i;
     if (mk->range) {
         if (mk->span_count == mk->span_cap) {
@@ -7386,7 +7555,7 @@ static int adaslice__span_row_cmp(const void *a, const void *b)
    than their inside at the top get a bit, set right before the next sweep. */
 static adaslice_result adaslice__mask_range(adaslice_masker *mk, adaslice_error *err)
 {
-    size_t a = 0, b, k, n, c, width = (size_t)mk->rays.width;
+    size_t a = 0, b, k, n, c, width = (size_t)mk->rays.width, first = (size_t)mk->rows[0] * mk->supersample;
     int envelope = mk->range == ADASLICE_SLICE_ENVELOPE;
     if (mk->span_count) qsort(mk->spans, mk->span_count, sizeof *mk->spans, adaslice__span_row_cmp);
     for (; a < mk->span_count; a = b) {
@@ -7410,7 +7579,7 @@ static adaslice_result adaslice__mask_range(adaslice_masker *mk, adaslice_error 
         }
         qsort(mk->crossings, n, sizeof *mk->crossings, adaslice__crossing_cmp);
         for (c = 0; c < n;) {
-            size_t end = c, ray = row * width + mk->crossings[c].ray;
+            size_t end = c, ray = (row - first) * width + mk->crossings[c].ray;
             long w1 = mk->winding[ray], w, sum = 0;
             int before, lit;
             for (; end < n && mk->crossings[end].ray == mk->crossings[c].ray; end++) sum += mk->crossings[end].step;
@@ -7432,12 +7601,12 @@ static adaslice_result adaslice__mask_range(adaslice_masker *mk, adaslice_error 
    show it again. */
 static void adaslice__mask_settle(adaslice_masker *mk)
 {
-    size_t k, width = (size_t)mk->rays.width;
+    size_t k, width = (size_t)mk->rays.width, first = (size_t)mk->rows[0] * mk->supersample;
     for (k = 0; k < mk->span_count; k++) {
         const adaslice__span *sp = &mk->spans[k];
         size_t row = (size_t)sp->row, i;
         for (i = (size_t)sp->first; i < (size_t)sp->end; i++) {
-            size_t ray = row * width + i;
+            size_t ray = (row - first) * width + i;
             unsigned char bit = (unsigned char)(1u << (ray & 7));
             if (!(mk->changed[ray >> 3] & bit)) continue; /* shown right, or set right through another span */
             mk->changed[ray >> 3] &= (unsigned char)~bit;
@@ -7495,6 +7664,8 @@ static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segmen
         if (!(yhi > ylo)) continue; /* along a row: crosses none */
         j0 = adaslice__first_row(g, ylo);
         j1 = adaslice__first_row(g, yhi);
+        if (j0 < (long)mk->rows[0]) j0 = (long)mk->rows[0]; /* s is 1: ray rows are pixel rows */
+        if (j1 > (long)mk->rows[1]) j1 = (long)mk->rows[1];
         if (j1 > j0 && n + (size_t)(j1 - j0) > mk->cross_cap) {
             uint64_t *more = ADASLICE__CAST(uint64_t *, adaslice__grow(&mk->allocator, mk->cross, n, &mk->cross_cap, n + (size_t)(j1 - j0), sizeof(uint64_t)));
             if (!more) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for the section at %g mm", height);
@@ -7509,7 +7680,7 @@ static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segmen
         }
     }
     if (n) qsort(mk->cross, n, sizeof *mk->cross, adaslice__u64_cmp);
-    memset(mk->image, 0, mk->stride * (size_t)mk->grid.height);
+    memset(mk->image, 0, mk->stride * (size_t)(mk->rows[1] - mk->rows[0]));
     mk->lit_rays = 0;
     for (c = 0; c < n;) {
         size_t row = (size_t)(mk->cross[c] >> 32);
@@ -7520,7 +7691,7 @@ static adaslice_result adaslice__fill_section(adaslice_masker *mk, size_t segmen
             b = c + 1 < n && (size_t)(mk->cross[c + 1] >> 32) == row ? (size_t)((mk->cross[c + 1] >> 1) & 0x7fffffffu) : (size_t)g->width;
             if (w <= 0 || b <= a) continue;
             mk->lit_rays += (long long)(b - a);
-            adaslice__set_bits(mk->image + row * mk->stride, a, b);
+            adaslice__set_bits(mk->image + (row - mk->rows[0]) * mk->stride, a, b);
         }
     }
     return ADASLICE_OK;
@@ -7550,8 +7721,9 @@ static void adaslice__cover_cell(float *d, uint32_t *bits, uint32_t *ext, long c
 static void adaslice__cover_piece(adaslice_masker *mk, long r, double xa, double ya, double xb, double yb)
 {
     long width = (long)mk->box[2], c;
-    float *d = mk->cells + (size_t)r * ((size_t)width + 1);
-    uint32_t *ext = mk->extent + 4 * (size_t)r, *bits = mk->touched + (size_t)r * ((size_t)width / 32 + 1);
+    size_t at = (size_t)(r - (long)mk->cell_rows[0]);
+    float *d = mk->cells + at * ((size_t)width + 1);
+    uint32_t *ext = mk->extent + 4 * at, *bits = mk->touched + at * ((size_t)width / 32 + 1);
     double h = ya - yb, x0 = xa < xb ? xa : xb, x1 = xa < xb ? xb : xa, u, v;
     if (h == 0 || x0 >= (double)width) return;
     if (x1 == x0) {
@@ -7582,10 +7754,10 @@ static void adaslice__cover_edge(adaslice_masker *mk, const double *p)
     const adaslice_grid *g = &mk->grid;
     double x0 = (p[0] - g->origin[0]) / g->pitch[0] - mk->box[0], y0 = (p[1] - g->origin[1]) / g->pitch[1] - mk->box[1];
     double x1 = (p[2] - g->origin[0]) / g->pitch[0] - mk->box[0], y1 = (p[3] - g->origin[1]) / g->pitch[1] - mk->box[1];
-    double ylo = y0 < y1 ? y0 : y1, yhi = y0 < y1 ? y1 : y0, ya, yb, xa, xb, rows = (double)mk->box[3];
+    double ylo = y0 < y1 ? y0 : y1, yhi = y0 < y1 ? y1 : y0, ya, yb, xa, xb, rows = (double)mk->cell_rows[1];
     long r, r0, r1;
-    if (!(yhi > ylo) || yhi <= 0 || ylo >= rows) return;
-    r0 = ylo < 0 ? 0 : (long)ylo;
+    if (!(yhi > ylo) || yhi <= (double)mk->cell_rows[0] || ylo >= rows) return;
+    r0 = ylo < (double)mk->cell_rows[0] ? (long)mk->cell_rows[0] : (long)ylo;
     r1 = yhi >= rows ? (long)rows - 1 : (long)ceil(yhi) - 1;
     for (r = r0; r <= r1; r++) {
         double lo = (double)r > ylo ? (double)r : ylo, hi = (double)(r + 1) < yhi ? (double)(r + 1) : yhi;
@@ -7606,7 +7778,7 @@ static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from,
     if (mk->fractions)
         for (c = from; c < to; c++) mk->fractions[at + c] = (float)f;
     if (!level || to <= from) return 0;
-    memset(mk->image + (r + mk->box[1]) * mk->stride + mk->box[0] + from, mk->grey[level], to - from);
+    memset(mk->image + (r + mk->box[1] - mk->rows[0]) * mk->stride + mk->box[0] + from, mk->grey[level], to - from);
     if (from < *first) *first = from;
     *end = to;
     return (long long)level * (long long)(to - from);
@@ -7618,15 +7790,17 @@ static long long adaslice__cover_run(adaslice_masker *mk, size_t r, size_t from,
    the integral of the winding clamped to [0, 1], rounded to s*s + 1 levels. */
 static void adaslice__fill_coverage(adaslice_masker *mk, size_t segments)
 {
-    size_t k, width = mk->box[2], words = width / 32 + 1, r, rows = mk->box[3];
+    size_t k, width = mk->box[2], words = width / 32 + 1, r, rows = mk->cell_rows[1], r0 = mk->cell_rows[0];
     double levels = (double)mk->supersample * mk->supersample;
     long long lit = 0;
     for (k = 0; k < segments; k++) adaslice__cover_edge(mk, mk->seg + 4 * k);
-    if (mk->fractions) memset(mk->fractions, 0, (size_t)mk->grid.width * (size_t)mk->grid.height * sizeof(float));
-    for (r = 0; r < rows; r++) {
-        uint32_t *ext = mk->extent + 4 * r, *bits = mk->touched + r * words;
-        unsigned char *img = mk->image + (r + mk->box[1]) * mk->stride + mk->box[0];
-        float *d = mk->cells + r * (width + 1), *fr = mk->fractions ? mk->fractions + (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0] : NULL;
+    if (mk->fractions)
+        memset(mk->fractions + (size_t)mk->rows[0] * (size_t)mk->grid.width, 0,
+               (size_t)mk->grid.width * (size_t)(mk->rows[1] - mk->rows[0]) * sizeof(float));
+    for (r = r0; r < rows; r++) {
+        uint32_t *ext = mk->extent + 4 * (r - r0), *bits = mk->touched + (r - r0) * words;
+        unsigned char *img = mk->image + (r + mk->box[1] - mk->rows[0]) * mk->stride + mk->box[0];
+        float *d = mk->cells + (r - r0) * (width + 1), *fr = mk->fractions ? mk->fractions + (r + mk->box[1]) * (size_t)mk->grid.width + mk->box[0] : NULL;
         size_t w, at = 0, first = width, end = 0;
         double sum = 0, f = 0;
         int level = 0;
@@ -7672,7 +7846,7 @@ static adaslice_result adaslice__masker_section(adaslice_masker *mk, double heig
     adaslice_result r;
     /* facets whose lowest corner is at or below the plane join; those whose
        highest is at or below it are done */
-    while (mk->next < m->triangle_count && (double)adaslice__tri_z(m, mk->order[mk->next], 0) <= height)
+    while (mk->next < mk->count && (double)adaslice__tri_z(m, mk->order[mk->next], 0) <= height)
         mk->active[mk->active_count++] = mk->order[mk->next++];
     for (k = 0; k < mk->active_count; k++) {
         uint32_t t = mk->active[k];
@@ -7715,6 +7889,7 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
     if (past && h >= mk->done && h < DBL_MAX) h = nextafter(h, DBL_MAX);
     if (!(h >= mk->done) || h > DBL_MAX)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: height %g mm is below the previous one", height);
+    if (!mk->zeroed) adaslice__masker_zero(mk);
     if (mk->gaps || mk->cells) {
         adaslice_result res = adaslice__masker_section(mk, height, err);
         if (res != ADASLICE_OK) return res;
@@ -7725,7 +7900,7 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
     }
     /* triangles starting below the new height join; those ending below the
        previous height (whose samples are all applied) leave */
-    while (mk->next < m->triangle_count && adaslice__tri_z(m, mk->order[mk->next], 0) - mk->depth_origin < h)
+    while (mk->next < mk->count && adaslice__tri_z(m, mk->order[mk->next], 0) - mk->depth_origin < h)
         mk->active[mk->active_count++] = mk->order[mk->next++];
     for (k = 0; k < mk->active_count; k++)
         if (adaslice__tri_z(m, mk->active[k], 1) - mk->depth_origin >= mk->done) mk->active[kept++] = mk->active[k];
@@ -7733,7 +7908,8 @@ static adaslice_result adaslice__masker_sweep(adaslice_masker *mk, double height
     memset(&r, 0, sizeof r);
     r.grid = &mk->rays;
     r.depth_origin = mk->depth_origin;
-    r.row_end = mk->rays.height;
+    r.row_first = (int)mk->rows[0] * mk->supersample;
+    r.row_end = (int)mk->rows[1] * mk->supersample;
     r.slab = 1;
     r.slab_lo = mk->done;
     r.slab_hi = h;

@@ -295,21 +295,34 @@ typedef struct slice_run {
     layer_masks *masks;
     job_desc *d;
     job_layer *layers;
+    long long *rays;             /* lit rays of layer k's band b at [k * bands + b] */
     const char *path;
     progress *bar;
 } slice_run;
 
-/* The masker's next layer, its lit area and its resin. */
-static int render_layer(void *ctx, size_t k, unsigned char *image)
+/* A band's next layer, and its lit rays. */
+static int render_band(void *ctx, int b, size_t k, unsigned char *image)
 {
     slice_run *r = (slice_run *)ctx;
     layer_masks *m = r->masks;
     int rc;
     if (output_interrupted()) return RC_FAIL; /* said once, by outputs_finish */
-    if ((rc = layer_masks_render(m, k, image))) return rc;
-    r->layers[k].lit_mm2 = m->masker.lit * m->grid.pitch[0] * m->grid.pitch[1];
-    r->d->volume_mm3 += r->layers[k].lit_mm2 * r->layers[k].thickness;
+    if ((rc = layer_masks_render_band(m, b, k, image))) return rc;
+    r->rays[k * (size_t)m->bands + (size_t)b] = layer_masks_rays(m, b);
     return RC_OK;
+}
+
+/* Layer k's lit area from its bands' (whole numbers of rays, so the sum is
+   one masker's), and its resin, added in layer order as one thread did. */
+static void layer_ready(void *ctx, size_t k)
+{
+    slice_run *r = (slice_run *)ctx;
+    const layer_masks *m = r->masks;
+    long long rays = 0;
+    int b;
+    for (b = 0; b < m->bands; b++) rays += r->rays[k * (size_t)m->bands + (size_t)b];
+    r->layers[k].lit_mm2 = (double)rays / ((double)m->s->supersample * m->s->supersample) * m->grid.pitch[0] * m->grid.pitch[1];
+    r->d->volume_mm3 += r->layers[k].lit_mm2 * r->layers[k].thickness;
 }
 
 static void layer_done(void *ctx, size_t k)
@@ -326,6 +339,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     size_t k, count = p->layer_count;
     layer_masks m;
     job_layer *layers;
+    long long *rays;
     job_writer out;
     progress bar;
     slice_run run;
@@ -336,8 +350,12 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     memset(&bar, 0, sizeof bar);
     memset(&out, 0, sizeof out);
     previews_start(&pv, j, f, s->threads);
-    if ((rc = layer_masks_open(&m, s, j))) { previews_free(&pv); return rc; }
-    if (!(layers = (job_layer *)calloc(count ? count : 1, sizeof *layers))) {
+    if ((rc = layer_masks_open(&m, s, j, pipeline_bands(s->threads)))) { previews_free(&pv); return rc; }
+    layers = (job_layer *)calloc(count ? count : 1, sizeof *layers);
+    rays = (long long *)calloc((count ? count : 1) * (size_t)m.bands, sizeof *rays);
+    if (!layers || !rays) {
+        free(layers);
+        free(rays);
         layer_masks_close(&m);
         previews_free(&pv);
         return complain(RC_FAIL, "out of memory for %zu layer%s", count, plural(count));
@@ -409,6 +427,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     run.masks = &m;
     run.d = d;
     run.layers = layers;
+    run.rays = rays;
     run.path = path;
     run.bar = &bar;
     memset(&pipe, 0, sizeof pipe);
@@ -417,7 +436,9 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     pipe.image_bytes = m.stride * (size_t)m.height;
     pipe.stride = m.stride;
     pipe.threads = s->threads;
-    pipe.render = render_layer;
+    pipe.bands = m.bands;
+    pipe.render = render_band;
+    pipe.ready = layer_ready;
     pipe.done = layer_done;
     pipe.ctx = &run;
     pipe.stage_ms = stage_ms;
@@ -436,6 +457,7 @@ done:
     layer_masks_close(&m);
     previews_free(&pv);
     free(layers);
+    free(rays);
     d->layers = NULL;
     return rc;
 }

@@ -53,7 +53,8 @@ void slice_options_usage(FILE *f)
           "                      and no manifest.json (files of the job's names are written over)\n"
           "  --memory MB         the most the masks or the profile may take\n"
           "                                                    [half the machine's memory]\n"
-          "  --threads N         layers coded at once (the job is the same bytes) [the cores]\n", f);
+          "  --threads N         threads rendering (in row bands) and coding layers at once\n"
+          "                      (the job is the same bytes)                   [the cores]\n", f);
     fputs("printer presets (each writes the job its printer reads; README cites the figures)\n", f);
     for (i = 0; i < PRINTER_COUNT; i++) {
         const printer *p = &PRINTERS[i];
@@ -163,34 +164,45 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
 }
 
 
-/* The masker's image (row 0 at the lowest y) as the display shows it: PNG
+/* A band's image (its row 0 at its lowest y) as the display shows it: PNG
    row 0 is the top, so +y points up unless mirrored; columns flip with x;
-   then the image turns by quarter turns. out holds out_w x out_h pixels. */
+   then the image turns by quarter turns. out holds the whole display's
+   pixels; only those of the band's rows are written. */
 static int mask_pixel(const adaslice_masker *mk, int x, int y)
 {
-    const unsigned char *row = mk->image + (size_t)y * mk->stride;
+    const unsigned char *row = mk->image + (size_t)(y - (int)mk->rows[0]) * mk->stride;
     return mk->supersample > 1 ? row[x] : (row[x >> 3] >> (7 - (x & 7))) & 1;
 }
 
-static void orient_image(const layer_masks *m, const slice_args *s, unsigned char *out, size_t out_stride)
+static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsigned char *out, size_t out_stride)
 {
-    const adaslice_masker *mk = &m->masker;
-    int w = mk->grid.width, h = mk->grid.height, r, i;
-    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h;
+    const slice_args *s = m->s;
+    int w = mk->grid.width, h = mk->grid.height, y0 = (int)mk->rows[0], y1 = (int)mk->rows[1], r, i;
+    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h, r0 = 0, r1 = out_h, i0 = 0, i1 = out_w;
     if (!s->rotate && !s->mirror_x) {
         /* the common case: rows as they are, and only the part's band of
            each (out is zero elsewhere): the copy was the one pass over the
            whole image on the masker's thread, and the slowest to share the
            memory with threads coding other layers */
-        for (r = m->row_lo; r < m->row_hi; r++)
+        for (r = y0 > m->row_lo ? y0 : m->row_lo; r < y1 && r < m->row_hi; r++)
             memcpy(out + (size_t)(s->mirror_y ? r : h - 1 - r) * out_stride + m->byte_lo,
-                   mk->image + (size_t)r * mk->stride + m->byte_lo, m->byte_hi - m->byte_lo);
+                   mk->image + (size_t)(r - y0) * mk->stride + m->byte_lo, m->byte_hi - m->byte_lo);
         return;
     }
-    memset(out, 0, out_stride * (size_t)out_h);
-    for (r = 0; r < out_h; r++) {
+    /* the band's rows are out's columns (a quarter turn) or rows, perhaps
+       counted from the other end */
+    if (s->rotate & 1) {
+        int flip = (s->rotate == 1) != s->mirror_y;
+        i0 = flip ? h - y1 : y0;
+        i1 = flip ? h - y0 : y1;
+    } else {
+        int flip = (s->rotate == 0) != s->mirror_y;
+        r0 = flip ? h - y1 : y0;
+        r1 = flip ? h - y0 : y1;
+    }
+    for (r = r0; r < r1; r++) {
         unsigned char *dst = out + (size_t)r * out_stride;
-        for (i = 0; i < out_w; i++) {
+        for (i = i0; i < i1; i++) {
             /* (i, r) in the turned picture back to (x, y) of the upright picture, then to the grid */
             int x, y, v;
             switch (s->rotate) {
@@ -201,8 +213,10 @@ static void orient_image(const layer_masks *m, const slice_args *s, unsigned cha
             }
             if (s->mirror_x) x = w - 1 - x;
             v = mask_pixel(mk, x, s->mirror_y ? y : h - 1 - y);
+            /* out holds an earlier mask: every pixel is written */
             if (mk->supersample > 1) dst[i] = (unsigned char)v;
             else if (v) dst[i >> 3] |= (unsigned char)(0x80u >> (i & 7));
+            else dst[i >> 3] &= (unsigned char)~(0x80u >> (i & 7));
         }
     }
 }
@@ -236,7 +250,10 @@ double layer_masks_bytes(const slice_args *s, int buffers)
     double image = bits == 8 ? w * h : (w + 7) / 8 * h;
     /* the directory's coding at worst: the mask code's bound and the PNG's filtered rows and output */
     double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h);
-    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0) +
+    /* the masker twice with more than one layer in flight (more than one
+       thread): the whole one lives until its row bands are made */
+    return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0) *
+               (buffers > 1 ? 2 : 1) +
            buffers * (image + coding);
 }
 
@@ -245,11 +262,11 @@ int layer_masks_check(const slice_args *s, int buffers)
     double need = layer_masks_bytes(s, buffers), limit = s->memory_mb * 1e6;
     char a[32], b[32], c[32];
     if (need <= limit) return RC_OK;
-    return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s, %d layer%s in flight), "
+    return complain(RC_USAGE, "a %d x %d px grid at --aa %d needs %s for its masks (the masker %s%s, %d layer%s in flight), "
                               "more than --memory %s",
                     s->width, s->height, s->supersample, size_text(need, a),
                     size_text((double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0), b),
-                    buffers, plural((size_t)buffers), size_text(limit, c));
+                    buffers > 1 ? " twice, as it is split into row bands" : "", buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
@@ -308,10 +325,31 @@ static void part_band(layer_masks *m, const adaslice_mesh *mesh)
     m->byte_hi = m->bits == 8 ? (size_t)x1 : ((size_t)x1 + 7) / 8;
 }
 
-int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
+/* The bands' rows: the part's rows cut into about `wanted` bands of whole
+   bytes of the displayed image (a quarter-turned 1-bit image packs 8 grid
+   rows into a byte, counted from the grid's top or bottom), so no two bands
+   write one byte. Returns the count of bands; rows holds count + 1. */
+static int band_rows(const layer_masks *m, int wanted, uint32_t *rows)
+{
+    const slice_args *s = m->s;
+    int h = m->grid.height, n = 0, step = ((m->row_hi - m->row_lo) / wanted + 7) / 8 * 8, at;
+    int align = (s->rotate & 1) && m->bits == 1 && ((s->rotate == 1) != s->mirror_y) ? h % 8 : 0;
+    rows[n++] = (uint32_t)m->row_lo;
+    for (at = m->row_lo + step; step && n < wanted; at += step) {
+        int cut = at - ((at - align) % 8 + 8) % 8;
+        if (cut >= m->row_hi) break;
+        if (cut > (int)rows[n - 1]) rows[n++] = (uint32_t)cut;
+    }
+    rows[n] = (uint32_t)m->row_hi;
+    return n;
+}
+
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int bands)
 {
     adaslice_mask_options mo;
     adaslice_error err;
+    adaslice_masker whole;
+    uint32_t *rows = NULL;
     int rc;
     memset(m, 0, sizeof *m);
     m->s = s;
@@ -321,34 +359,70 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j)
     mo.supersample = s->supersample;
     mo.slice_at = SLICE_RULES[s->slice_at];
     mo.bin = j->profile.bin;
-    if (adaslice_masker_init(&m->masker, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK)
-        return library_error(&err);
+    if (adaslice_masker_init(&whole, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK) return library_error(&err);
     m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
     m->bits = s->supersample > 1 ? 8 : 1;
     m->stride = m->bits == 8 ? (size_t)m->width : ((size_t)m->width + 7) / 8;
     part_band(m, &j->mesh);
-    if (!(m->image = (unsigned char *)calloc(m->stride * (size_t)m->height, 1))) {
-        adaslice_masker_free(&m->masker);
-        return complain(RC_FAIL, "out of memory for a %d x %d mask", m->width, m->height);
+    /* an open mesh's sections are whole: one masker */
+    if (bands > 1 && !whole.sections && m->row_hi > m->row_lo) {
+        if (!(rows = (uint32_t *)malloc(((size_t)bands + 1) * sizeof *rows))) {
+            adaslice_masker_free(&whole);
+            return complain(RC_FAIL, "out of memory for %d bands", bands);
+        }
+        bands = band_rows(m, bands, rows);
+    } else bands = 1;
+    if (!(m->band = (adaslice_masker *)calloc(bands > 1 ? (size_t)bands : 1, sizeof *m->band))) {
+        adaslice_masker_free(&whole);
+        free(rows);
+        return complain(RC_FAIL, "out of memory for %d bands", bands);
     }
+    if (bands <= 1) {
+        m->band[0] = whole; /* the masker is the one band */
+        m->bands = 1;
+    } else {
+        if (adaslice_masker_bands(&whole, rows, (size_t)bands, m->band, &err) != ADASLICE_OK) rc = library_error(&err);
+        else m->bands = bands;
+        adaslice_masker_free(&whole);
+    }
+    free(rows);
+    if (!rc && !(m->image = (unsigned char *)calloc(m->stride * (size_t)m->height, 1)))
+        rc = complain(RC_FAIL, "out of memory for a %d x %d mask", m->width, m->height);
+    if (rc) layer_masks_close(m);
+    return rc;
+}
+
+int layer_masks_render_band(layer_masks *m, int b, size_t k, unsigned char *out)
+{
+    adaslice_error err;
+    const adaslice_layer *l = &m->j->plan[m->j->args->method].layers[k];
+    if (adaslice_masker_layer(&m->band[b], m->j->profile.z0 + l->z_bottom, m->j->profile.z0 + l->z_top, &err) != ADASLICE_OK)
+        return library_error(&err);
+    orient_image(m, &m->band[b], out, m->stride);
     return RC_OK;
 }
 
 int layer_masks_render(layer_masks *m, size_t k, unsigned char *out)
 {
-    adaslice_error err;
-    const adaslice_layer *l = &m->j->plan[m->j->args->method].layers[k];
-    if (adaslice_masker_layer(&m->masker, m->j->profile.z0 + l->z_bottom, m->j->profile.z0 + l->z_top, &err) != ADASLICE_OK)
-        return library_error(&err);
-    orient_image(m, m->s, out, m->stride);
-    return RC_OK;
+    int b, rc = RC_OK;
+    for (b = 0; b < m->bands && !rc; b++) rc = layer_masks_render_band(m, b, k, out);
+    return rc;
+}
+
+long long layer_masks_rays(const layer_masks *m, int b)
+{
+    double ss = (double)m->band[b].supersample * m->band[b].supersample;
+    return llround(m->band[b].lit * ss);
 }
 
 void layer_masks_close(layer_masks *m)
 {
-    adaslice_masker_free(&m->masker);
+    int b;
+    for (b = 0; b < m->bands; b++) adaslice_masker_free(&m->band[b]);
+    free(m->band);
     free(m->image);
+    m->band = NULL;
     m->image = NULL;
+    m->bands = 0;
 }
-

@@ -45,7 +45,8 @@ void slice_options_usage(FILE *f);
 typedef struct layer_masks {
     const slice_args *s;
     const plan_job *j;
-    adaslice_masker masker;
+    adaslice_masker *band;         /* bands maskers, each of some of the part's rows, or one of all */
+    int bands;
     adaslice_grid grid;
     unsigned char *image;          /* width x height, rows of `stride` bytes */
     size_t stride;
@@ -64,12 +65,20 @@ int layer_masks_check(const slice_args *s, int buffers);
    saying by how much it does not. */
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
-   the masker. */
-int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j);
-/* Layer k's (0-based; k never decreasing) mask into out (m->image or
-   another buffer of m->stride * m->height bytes), which holds zeros or an
-   earlier mask of m: where the part cannot reach, out is left as it is. */
+   the masker, split into about `bands` row bands (one for an open mesh,
+   whose sections are cut whole), each rendered on its own. */
+int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int bands);
+/* Band b's rows of layer k's (0-based; k never decreasing for a band) mask
+   into out (m->image or another buffer of m->stride * m->height bytes),
+   which holds zeros or an earlier mask of m: where the part cannot reach,
+   out is left as it is. Bands write bytes of their own: different bands
+   can render into one out at once on different threads. */
+int layer_masks_render_band(layer_masks *m, int b, size_t k, unsigned char *out);
+/* Every band of layer k into out. */
 int layer_masks_render(layer_masks *m, size_t k, unsigned char *out);
+/* Band b's lit rays in its last layer (lit pixels times s*s): whole
+   numbers, so the bands' add up to the whole layer's exactly. */
+long long layer_masks_rays(const layer_masks *m, int b);
 /* Where layer k is sliced, mm above the part's bottom. */
 double layer_slice_height(const slice_args *s, const plan_job *j, size_t k);
 void layer_masks_close(layer_masks *m);

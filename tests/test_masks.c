@@ -599,6 +599,109 @@ static void envelope_needs_a_closed_mesh(void)
     gen_free(&m);
 }
 
+/* ---- row bands: a masker split by rows makes the whole masker's bytes */
+
+/* Each rule (1-bit and anti-aliased sections, envelope, core) on a mesh
+   over grid rows cut into bands of odd sizes (one-row bands at either end),
+   swept layer by layer in turn, the bands in reverse order: each band's
+   rows are the whole masker's, byte for byte, and the bands' lit rays add
+   up to its. The mesh overhangs the grid's first and last rows (checked
+   lit), and on the two boxes one band lies in the gap between them, with no
+   facet. */
+static void check_bands(const char *what, const adaslice_mesh *m, const adaslice_grid *g, const uint32_t *rows,
+                        size_t count, int empty_band)
+{
+    static const struct { adaslice_slice_at rule; int s; } kinds[] = {{ADASLICE_SLICE_MIDDLE, 1}, {ADASLICE_SLICE_MIDDLE, 4},
+                                                                      {ADASLICE_SLICE_BOTTOM, 3}, {ADASLICE_SLICE_ENVELOPE, 1},
+                                                                      {ADASLICE_SLICE_CORE, 2}};
+    adaslice_masker whole, split, bands[16];
+    double lo[3], hi[3], zb;
+    size_t k, b;
+    adaslice_mesh_bounds(m, lo, hi);
+    for (k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        long layers = 0, differ = 0, first = 0, last = 0; /* bytes lit in the grid's first and last rows */
+        double ss = (double)kinds[k].s * kinds[k].s;
+        CHECK(layer_masker(&whole, m, g, kinds[k].s, kinds[k].rule) == ADASLICE_OK);
+        CHECK(layer_masker(&split, m, g, kinds[k].s, kinds[k].rule) == ADASLICE_OK);
+        CHECK(adaslice_masker_bands(&split, rows, count, bands, NULL) == ADASLICE_OK);
+        adaslice_masker_free(&split); /* the bands keep nothing of it */
+        if (empty_band >= 0) CHECKF(bands[empty_band].count == 0, "%s: band %d holds %zu facets", what, empty_band, bands[empty_band].count);
+        for (zb = lo[2] - 0.05; zb < hi[2] + 0.1; zb += 0.37) {
+            long long rays = 0;
+            CHECK(adaslice_masker_layer(&whole, zb, zb + 0.37, NULL) == ADASLICE_OK);
+            for (b = count; b-- > 0;) {
+                size_t n = (size_t)(rows[b + 1] - rows[b]) * whole.stride;
+                CHECK(adaslice_masker_layer(&bands[b], zb, zb + 0.37, NULL) == ADASLICE_OK);
+                if (memcmp(bands[b].image, whole.image + (size_t)rows[b] * whole.stride, n) && !differ++)
+                    printf("  %s, rule %d, s %d: band %zu differs at %g mm\n", what, (int)kinds[k].rule, kinds[k].s, b, zb);
+                rays += llround(bands[b].lit * ss);
+            }
+            CHECKF(rays == llround(whole.lit * ss), "%s: the bands light %lld rays, the whole %g", what, rays, whole.lit * ss);
+            /* the part meets the grid's first and last rows */
+            for (b = 0; b < whole.stride; b++) {
+                first += whole.image[b] != 0;
+                last += whole.image[(size_t)(g->height - 1) * whole.stride + b] != 0;
+            }
+            layers++;
+        }
+        CHECKF(differ == 0, "%s, rule %d, s %d: %ld of %ld layers differ", what, (int)kinds[k].rule, kinds[k].s, differ, layers);
+        CHECKF(first > 0 && last > 0, "%s: %ld bytes lit in the grid's first row, %ld in its last", what, first, last);
+        for (b = 0; b < count; b++) adaslice_masker_free(&bands[b]);
+        adaslice_masker_free(&whole);
+    }
+}
+
+static void bands_make_the_whole_maskers_bytes(void)
+{
+    adaslice_mesh boxes = gen_box(0, 0, 0, 10, 4, 2), upper = gen_box(0, 6, 0.5, 10, 10, 3), hand;
+    adaslice_load_options lo;
+    adaslice_error e;
+    adaslice_grid g;
+    /* the boxes: rows 0.35 to 9.65 mm, the gap 4 to 6 mm in rows 12.2 to 18.8 */
+    static const uint32_t box_rows[] = {0, 1, 7, 14, 17, 18, 30, 31};
+    static const uint32_t hand_rows[] = {0, 1, 2, 50, 51, 99, 150, 200, 201};
+    gen_append(&boxes, &upper);
+    memset(&g, 0, sizeof g);
+    g.axis = ADASLICE_AXIS_Z;
+    g.pitch[0] = g.pitch[1] = 0.3;
+    g.width = 37;
+    g.height = 31;
+    g.origin[0] = -0.4;
+    g.origin[1] = 0.35;
+    check_bands("two boxes", &boxes, &g, box_rows, 7, 3);
+    memset(&lo, 0, sizeof lo);
+    lo.scale = 88.7;
+    CHECKF(adaslice_mesh_load_file("examples/models/hand_closed.obj", &lo, &hand, &e) == ADASLICE_OK, "%s", e.message);
+    g = plate_around(&hand, 0.3, 0.3, 157, 201); /* 60 mm of the hand's 88 */
+    check_bands("the hand", &hand, &g, hand_rows, 8, -1);
+    adaslice_mesh_free(&hand);
+    gen_free(&boxes);
+    gen_free(&upper);
+}
+
+/* What cannot be split is refused: an open mesh (its sections need every
+   facet), bands that do not rise within the grid, a masker already swept. */
+static void bands_refuse_what_cannot_be_split(void)
+{
+    adaslice_mesh m = gen_box(0, 0, 0, 4, 4, 2);
+    adaslice_grid g = plate_around(&m, 0.1, 0.1, 60, 60);
+    adaslice_masker mk, bands[3];
+    adaslice_error e;
+    static const uint32_t flat[] = {0, 20, 20, 60}, tall[] = {0, 20, 40, 61}, good[] = {0, 20, 40, 60};
+    CHECK(layer_masker(&mk, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+    CHECK(adaslice_masker_bands(&mk, flat, 3, bands, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "band 1"));
+    CHECK(adaslice_masker_bands(&mk, tall, 3, bands, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "61"));
+    CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_bands(&mk, good, 3, bands, &e) == ADASLICE_ERR_ARGUMENT && strstr(e.message, "first layer"));
+    adaslice_masker_free(&mk);
+    m.triangle_count -= 2; /* a face gone */
+    CHECK(layer_masker(&mk, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+    CHECK(mk.sections && adaslice_masker_bands(&mk, good, 3, bands, &e) == ADASLICE_ERR_UNSUPPORTED && strstr(e.message, "open mesh"));
+    adaslice_masker_free(&mk);
+    m.triangle_count += 2;
+    gen_free(&m);
+}
+
 /* An open box (its top face removed): every ray enters through the bottom
    and never leaves. Counted from above it is outside, so nothing is lit, and
    above the top nothing is lit either; the closed box lights its whole
@@ -620,4 +723,6 @@ void test_masks(void)
     RUN(sphere_envelope_antialiased);
     RUN(hand_envelope_holds_every_section_of_its_layer);
     RUN(envelope_needs_a_closed_mesh);
+    RUN(bands_make_the_whole_maskers_bytes);
+    RUN(bands_refuse_what_cannot_be_split);
 }

@@ -547,15 +547,16 @@ static int same_directories(const char *a, const char *b, char what[300])
 }
 
 /* Any number of threads writes the same job as one, byte for byte: each step
-   of the pipeline (render, code, put) may run on any thread. Two models (the
-   sphere and the bundled hand), 1-bit and --aa 4 masks on a grid of odd
-   width and height, 2 and 3 threads, a job
+   of the pipeline (a row band of a layer, coding, putting) may run on any
+   thread. Two models (the sphere and the bundled hand), 1-bit and --aa 4
+   masks on a grid of odd width and height, 2, 3 and 8 threads (16, 24 and
+   64 bands; bands of a few rows at 8), a job
    directory (every file) and a ctb; the directory re-sliced over a job with
    more and larger layers (its layer files are written over in place) is the
    same as well. */
 static void threads_write_the_same_job(void)
 {
-    static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3"};
+    static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3", "8"};
     char models[2][256], one[300], many[300], what[300];
     int m, a, t;
     snprintf(models[0], sizeof models[0], "%s", sphere_obj());
@@ -570,7 +571,7 @@ static void threads_write_the_same_job(void)
                                    "--aa", aa[a], "--threads", "1", "-o", one, NULL);
             CHECKF(r.status == 0, "%s: %s", models[m], r.err);
             cli_free(&r);
-            for (t = 0; t < 2; t++) {
+            for (t = 0; t < 3; t++) {
                 r = cli_run("slice", models[m], "--scale", scale, "--pixels", "301x253", "--pitch", "0.05", "--aa", aa[a],
                             "--threads", threads[t], "-o", many, NULL);
                 CHECKF(r.status == 0, "%s: %s", models[m], r.err);
@@ -578,6 +579,23 @@ static void threads_write_the_same_job(void)
                 CHECKF(same_directories(one, many, what), "%s --aa %s --threads %s: %s", models[m], aa[a], threads[t], what);
             }
         }
+    /* an open mesh (a box without one side), which keeps one masker: its gaps' chords need whole sections */
+    {
+        char open_box[300];
+        adaslice_mesh box = gen_box(0, 0, 0, 6, 5, 4);
+        cli_result r;
+        snprintf(open_box, sizeof open_box, "%s/open_box.obj", cli_dir);
+        box.triangle_count -= 2; /* gen_box's last two facets: its side at x = 6 */
+        cli_write_obj(open_box, &box);
+        gen_free(&box);
+        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
+        CHECKF(r.status == 0 && strstr(r.err, "open edges"), "%s", r.err);
+        cli_free(&r);
+        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "3", "-o", many, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        CHECKF(same_directories(one, many, what), "an open box: %s", what);
+    }
     /* over the hand's --aa 4 job in `many`: the sphere's 1-bit layers, fewer and smaller */
     {
         cli_result r = cli_run("slice", models[0], "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
@@ -609,6 +627,38 @@ static void threads_write_the_same_job(void)
         free(p);
         free(q);
     }
+    unsetenv("SOURCE_DATE_EPOCH");
+}
+
+/* Turned and mirrored images on 8 threads are one thread's, byte for byte:
+   a quarter-turned 1-bit image packs 8 grid rows into each byte, counted
+   from the grid's top or bottom (253 or, turned, 301 rows: not multiples
+   of 8), so the bands must part where the bytes do. The sphere placed
+   against the grid's last rows (its box 10 mm across, the grid 12.65 mm
+   tall, or 15.05 mm turned), 1-bit and --aa 4, a quarter turn each way and
+   a half turn, with mirrors. */
+static void turned_jobs_are_the_same_on_many_threads(void)
+{
+    static const char *const turns[][3] = {{"90", "none", "0,2.52"}, {"270", "y", "0,2.52"}, {"90", "y", "0,2.52"}, {"180", "x", "0,1.32"}};
+    static const char *const aa[] = {"1", "4"};
+    char one[300], many[300], what[300];
+    int t, a;
+    snprintf(one, sizeof one, "%s/turned_one", cli_dir);
+    snprintf(many, sizeof many, "%s/turned_many", cli_dir);
+    setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
+    for (t = 0; t < 4; t++)
+        for (a = 0; a < 2; a++) {
+            cli_result r = cli_run("slice", sphere_obj(), "--pixels", "301x253", "--pitch", "0.05", "--place", turns[t][2],
+                                   "--rotate", turns[t][0], "--mirror", turns[t][1], "--aa", aa[a], "--threads", "1",
+                                   "-o", one, NULL);
+            CHECKF(r.status == 0, "%s", r.err);
+            cli_free(&r);
+            r = cli_run("slice", sphere_obj(), "--pixels", "301x253", "--pitch", "0.05", "--place", turns[t][2], "--rotate",
+                        turns[t][0], "--mirror", turns[t][1], "--aa", aa[a], "--threads", "8", "-o", many, NULL);
+            CHECKF(r.status == 0, "%s", r.err);
+            cli_free(&r);
+            CHECKF(same_directories(one, many, what), "--rotate %s --mirror %s --aa %s: %s", turns[t][0], turns[t][1], aa[a], what);
+        }
     unsetenv("SOURCE_DATE_EPOCH");
 }
 
@@ -798,6 +848,7 @@ void test_slice_jobs(void)
     RUN(ctb_for_an_encrypted_ctb_printer);
     RUN(jobs_are_reproducible);
     RUN(threads_write_the_same_job);
+    RUN(turned_jobs_are_the_same_on_many_threads);
     RUN(headers_hold_the_regular_layers);
     RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);

@@ -1,7 +1,8 @@
 /* Job files: what adaslice slice writes for the printers and slicers people
    own (a ChiTuBox .ctb, an Elegoo .goo, a Phrozen .prz, a ChiTu G-code .zip, a
    Prusa .sl1, UVtools' .uvj, or the job directory of jobdir.h). Every format is written through one layer
-   loop (pipeline.h): the masker renders each layer once, bottom-up, the
+   loop (pipeline.h): the masker renders each layer once, bottom-up (in
+   row bands on several threads), the
    format's `encode` codes it (on any thread) and its `put` puts it into the
    job (in order); what the format needs besides the
    images (every layer's Z and exposure, the printer, the motion, previews) is

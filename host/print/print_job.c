@@ -159,7 +159,7 @@ int print_job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *s
     pj->motion.peel_speed_um_s = (uint32_t)(s->cure.motion.lift_speed * 1000 + 0.5);
     pj->motion.return_speed_um_s = (uint32_t)(s->cure.motion.retract_speed * 1000 + 0.5);
     pj->motion.settle_ms = (uint32_t)(s->cure.motion.wait_before_cure_s * 1000 + 0.5);
-    if ((rc = layer_masks_open(&pj->masks, s, j))) return rc;
+    if ((rc = layer_masks_open(&pj->masks, s, j, 1))) return rc;
     pj->width = (uint32_t)pj->masks.width;
     pj->height = (uint32_t)pj->masks.height;
     pj->bits = (uint32_t)pj->masks.bits;
