@@ -128,7 +128,7 @@ static void linear_table(uint32_t t[256])
 static int crc_runs_init(crc_runs *c, size_t longest)
 {
     uint32_t inverse = (uint32_t)1 << 31, a = 0x80800000u, power = (uint32_t)1 << 23; /* 1, x^8 + 1, x^8 */
-    unsigned long long e = 0xFFFFFFFEull; /* a^(2^32 - 2) is a's inverse in the field of 2^32 */
+    unsigned long long e = 0xFFFFFFFEull; /* a^(2^32 - 2) is a's inverse in the field of 2^32 elements */
     int k, j, i;
     for (c->powers = 1; c->powers < 64 && longest >> c->powers; c->powers++) {}
     if (!(c->times = (uint32_t(*)[4][256])malloc((size_t)c->powers * sizeof *c->times))) return -1;
