@@ -319,6 +319,33 @@ static void mask_crc_over_long_repeats_is_the_crc_of_the_bytes(void)
     CHECKF(bad == 0, "%d masks' row CRCs differ from their bytes'", bad);
 }
 
+/* The same on anti-aliased rows: runs of dark, lit and one grey of every
+   length from 1 to past 4096 (so each power of two of a run's length is
+   used), greys alone at the edges, rows that differ and rows that repeat. */
+static void mask_crc_over_grey_runs_is_the_crc_of_the_bytes(void)
+{
+    static const size_t widths[] = {1, 7, 3840, 5001};
+    int bad = 0;
+    for (size_t i = 0; i < sizeof widths / sizeof widths[0]; i++) {
+        const size_t w = widths[i], h = 64;
+        unsigned char *img = (unsigned char *)malloc(w * h);
+        if (!img) { CHECK(!"out of memory"); return; }
+        for (size_t y = 0; y < h; y++) {
+            size_t x = 0;
+            if (y && codec_rng() % 4 == 0) { memcpy(img + y * w, img + (y - 1) * w, w); continue; }
+            while (x < w) {
+                size_t n = codec_rng() % 3 ? 1 + codec_rng() % 5000 : 1 + codec_rng() % 3, kind = codec_rng() % 3;
+                unsigned char v = (unsigned char)(kind == 0 ? 0 : kind == 1 ? 255 : codec_rng());
+                for (; n-- && x < w; x++) img[y * w + x] = v;
+            }
+        }
+        for (size_t hh = 1; hh <= h; hh += 21)
+            if (mask_crc32(img, w, w, (int)hh) != ref_crc32(0, img, w * hh)) bad++;
+        free(img);
+    }
+    CHECKF(bad == 0, "%d grey masks' row CRCs differ from their bytes'", bad);
+}
+
 static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
@@ -472,6 +499,7 @@ void test_codec(void)
     RUN(fast_encoder_writes_the_reference_bytes);
     RUN(mask_crc_by_rows_is_the_crc_of_the_bytes);
     RUN(mask_crc_over_long_repeats_is_the_crc_of_the_bytes);
+    RUN(mask_crc_over_grey_runs_is_the_crc_of_the_bytes);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);

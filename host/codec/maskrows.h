@@ -16,7 +16,8 @@ typedef void (*mask_run_fn)(void *ctx, unsigned grey, uint64_t n);
 void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn run, void *ctx);
 
 /* CRC-32 (adaslice_crc32's) of height rows of row_bytes, stride apart, as
-   one stream; a long run of rows that repeat the row above costs a few
-   multiplications in GF(2) (CRC combination) instead of its bytes. */
+   one stream, in time proportional to the rows' runs of equal bytes (each
+   run a few table lookups, not its bytes); a long run of rows that repeat
+   the row above costs a few multiplications in GF(2) (CRC combination). */
 uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height);
 #endif
