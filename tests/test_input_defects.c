@@ -425,7 +425,11 @@ static const struct { const char *option, *value; } OPTION_VALUES[] = {
     /* "COMMAND --option": what it needs there (plan's contour limits set up --hybrid, which needs --3mf) */
     {"plan --hybrid", "--3mf @x.3mf"}, {"plan --max-angle", "15 --hybrid --3mf @x.3mf"},
     {"plan --reach", "2 --hybrid --3mf @x.3mf"}, {"plan --max-rise", "0.05 --hybrid --3mf @x.3mf"},
-    {"plan --resolution", "0.2 --hybrid --3mf @x.3mf"},
+    {"plan --resolution", "0.2 --hybrid --3mf @x.3mf"}, {"--svg-path", "1 @path.svg"},
+    /* contour's top skins take the nozzle's two figures together */
+    {"contour --top-skins", "--nozzle-clearance 1 --clearance-angle 30"},
+    {"contour --nozzle-clearance", "1 --top-skins --clearance-angle 30"},
+    {"contour --clearance-angle", "30 --top-skins --nozzle-clearance 1"},
 };
 
 static const char *option_value(const char *command, const char *option, const char *placeholder)
