@@ -42,6 +42,8 @@
      job output: what travels to a printer
        uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
            CRC-32 (IEEE 802.3, as zlib and PNG)
+       uint32_t adaslice_crc32_mul(uint32_t a, uint32_t b);
+           a * b modulo its polynomial: CRCs combined, as zlib's crc32_combine
        size_t adaslice_varint_put(unsigned char *out, uint32_t v);
            a LEB128 varint
        adaslice_result adaslice_varint_push(adaslice_varint *reader, unsigned char byte, int *done, uint32_t *value);
@@ -212,6 +214,11 @@ ADASLICE_DEF uint32_t adaslice_dp_layer_above(const adaslice_dp *dp, uint32_t pl
    sixteen bytes with 16 KiB of tables on the stack; define ADASLICE_CRC32_SMALL
    for a microcontroller, which then goes a nibble at a time (64 bytes of table). */
 ADASLICE_DEF uint32_t adaslice_crc32(uint32_t crc, const void *data, size_t size);
+
+/* a * b over GF(2) modulo CRC-32's polynomial, both bit-reflected (bit 31 is
+   x^0): crc(A B) = adaslice_crc32_mul(crc(A), x^(8 |B|)) ^ crc(B) with B's
+   CRC begun at 0 and not inverted, as zlib's crc32_combine. */
+ADASLICE_DEF uint32_t adaslice_crc32_mul(uint32_t a, uint32_t b);
 
 /* A LEB128 varint: 7 bits a byte, low bits first, at most 5 bytes. */
 typedef struct adaslice_varint { uint32_t value; int shift; } adaslice_varint; /* a reader: zero it */
@@ -816,8 +823,7 @@ static void adaslice__rle_fill(adaslice_rle_decoder *dec, uint32_t len)
     while (x < end) { dec->row[x >> 3] |= (unsigned char)(0x80u >> (x & 7u)); x++; }
 }
 
-/* a * b over GF(2) modulo CRC-32's polynomial, both bit-reflected */
-static uint32_t adaslice__crc32_mul(uint32_t a, uint32_t b)
+ADASLICE_DEF uint32_t adaslice_crc32_mul(uint32_t a, uint32_t b)
 {
     uint32_t p = 0;
     for (; a; a <<= 1) {
@@ -846,15 +852,15 @@ static void adaslice__rle_flush(adaslice_rle_decoder *dec, uint32_t *budget, uin
             if (dec->shift_bits) {
                 /* x^(8 stride), stride's bits from the top: square, times x^8 for a 1 */
                 dec->shift_bits--;
-                dec->row_shift = adaslice__crc32_mul(dec->row_shift, dec->row_shift);
-                if (dec->stride >> dec->shift_bits & 1u) dec->row_shift = adaslice__crc32_mul(0x00800000u, dec->row_shift);
+                dec->row_shift = adaslice_crc32_mul(dec->row_shift, dec->row_shift);
+                if (dec->stride >> dec->shift_bits & 1u) dec->row_shift = adaslice_crc32_mul(0x00800000u, dec->row_shift);
             } else {
                 if (!dec->row_alone) {
                     /* its own: crc(before, row) - crc(before) * x^(8 stride) */
-                    dec->row_crc = dec->crc ^ adaslice__crc32_mul(dec->row_crc, dec->row_shift);
+                    dec->row_crc = dec->crc ^ adaslice_crc32_mul(dec->row_crc, dec->row_shift);
                     dec->row_alone = 1;
                 }
-                dec->crc = adaslice__crc32_mul(dec->crc, dec->row_shift) ^ dec->row_crc;
+                dec->crc = adaslice_crc32_mul(dec->crc, dec->row_shift) ^ dec->row_crc;
                 dec->repeat--;
                 if (emit) emit(ctx, dec->rows, dec->row);
                 dec->rows++;

@@ -63,27 +63,14 @@ void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn ru
 }
 
 
-/* a * b modulo the CRC's polynomial, both as reflected polynomials (bit 31
-   is x^0): what combining two CRCs needs (zlib's crc32_combine does the same). */
-static uint32_t mult_mod_p(uint32_t a, uint32_t b)
-{
-    uint32_t m = (uint32_t)1 << 31, p = 0;
-    while (m) {
-        if (a & m) p ^= b;
-        m >>= 1;
-        b = b & 1u ? (b >> 1) ^ 0xedb88320u : b >> 1;
-    }
-    return p;
-}
-
 /* x^(8 n) modulo the polynomial: appending n bytes shifts a CRC by that. */
 static uint32_t x_to_8n(size_t n)
 {
     uint32_t result = (uint32_t)1 << 31, power = (uint32_t)1 << 30; /* x^0, x^1 */
     unsigned long long e = 8ull * n;
     while (e) {
-        if (e & 1u) result = mult_mod_p(power, result);
-        power = mult_mod_p(power, power);
+        if (e & 1u) result = adaslice_crc32_mul(power, result);
+        power = adaslice_crc32_mul(power, power);
         e >>= 1;
     }
     return result;
@@ -96,9 +83,9 @@ static uint32_t x_to_8n(size_t n)
 static uint32_t append_repeats(uint32_t crc, uint32_t row, uint32_t shift, size_t times)
 {
     for (; times; times >>= 1) {
-        if (times & 1) crc = mult_mod_p(shift, crc) ^ row;
-        row = mult_mod_p(shift, row) ^ row;
-        shift = mult_mod_p(shift, shift);
+        if (times & 1) crc = adaslice_crc32_mul(shift, crc) ^ row;
+        row = adaslice_crc32_mul(shift, row) ^ row;
+        shift = adaslice_crc32_mul(shift, shift);
     }
     return crc;
 }
@@ -132,17 +119,17 @@ static int crc_runs_init(crc_runs *c, size_t longest)
     int k, j, i;
     for (c->powers = 1; c->powers < 64 && longest >> c->powers; c->powers++) {}
     if (!(c->times = (uint32_t(*)[4][256])malloc((size_t)c->powers * sizeof *c->times))) return -1;
-    for (; e; e >>= 1, a = mult_mod_p(a, a))
-        if (e & 1u) inverse = mult_mod_p(a, inverse);
+    for (; e; e >>= 1, a = adaslice_crc32_mul(a, a))
+        if (e & 1u) inverse = adaslice_crc32_mul(a, inverse);
     for (i = 0; i < 8; i++) {
         uint32_t t = (uint32_t)1 << i;
         for (k = 0; k < 8; k++) t = t & 1u ? (t >> 1) ^ 0xedb88320u : t >> 1; /* T(2^i) */
-        c->fixed[1u << i] = mult_mod_p(t, inverse);
+        c->fixed[1u << i] = adaslice_crc32_mul(t, inverse);
     }
     linear_table(c->fixed);
-    for (k = 0; k < c->powers; k++, power = mult_mod_p(power, power))
+    for (k = 0; k < c->powers; k++, power = adaslice_crc32_mul(power, power))
         for (j = 0; j < 4; j++) {
-            for (i = 0; i < 8; i++) c->times[k][j][1u << i] = mult_mod_p((uint32_t)1 << (8 * j + i), power);
+            for (i = 0; i < 8; i++) c->times[k][j][1u << i] = adaslice_crc32_mul((uint32_t)1 << (8 * j + i), power);
             linear_table(c->times[k][j]);
         }
     return 0;
