@@ -535,6 +535,22 @@ int screen_guard(screen *s, int port_fd)
 {
     int fds[2];
     if (pipe(fds) != 0) return complain(RC_FAIL, "--screen %s: no pipe for its guard: %s", s->name, strerror(errno));
+    {
+        /* a stop (the printer's reset, Ctrl-C, this host's death) must put
+           the screen out within 100 ms on a busy board as on an idle one:
+           this host, which finds the reset from its STATUS round trips, and
+           the guard it forks (which inherits this) run at the lowest
+           real-time priority, ahead of every ordinary task; both block
+           between layers, so they take little from the others */
+        struct sched_param p;
+        memset(&p, 0, sizeof p);
+        p.sched_priority = sched_get_priority_min(SCHED_FIFO);
+        if (sched_getscheduler(0) != SCHED_FIFO && sched_setscheduler(0, SCHED_FIFO, &p) != 0)
+            fprintf(stderr, "adaslice: warning: --screen %s: this host and its guard may not run at real-time priority "
+                            "(%s): on a busy machine the screen goes dark later after a stop (the printer's reset, "
+                            "this host's death); run as root or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep "
+                            "adaslice)\n", s->name, strerror(errno));
+    }
     fflush(NULL);
     s->guard = fork();
     if (s->guard < 0) {
@@ -561,18 +577,6 @@ int screen_guard(screen *s, int port_fd)
     }
     close(fds[0]);
     s->guard_fd = fds[1];
-    {
-        /* the guard is the printer's safety when the host dies: the lowest
-           real-time priority runs it ahead of every ordinary task, so the
-           screen goes dark as soon on a busy board as on an idle one */
-        struct sched_param p;
-        memset(&p, 0, sizeof p);
-        p.sched_priority = sched_get_priority_min(SCHED_FIFO);
-        if (sched_setscheduler(s->guard, SCHED_FIFO, &p) != 0)
-            fprintf(stderr, "adaslice: warning: --screen %s: its guard may not run at real-time priority (%s): if this "
-                            "host dies, the printer pauses and the screen goes dark later on a busy machine; run as root "
-                            "or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep adaslice)\n", s->name, strerror(errno));
-    }
     return RC_OK;
 }
 
