@@ -477,13 +477,13 @@ static double ms_until(const char *fb, int want_lit, double t0, double limit_s)
     return -1;
 }
 
-/* adaslice print in the background, its stdout into out_path and its
+/* adaslice (args: the command and its arguments) in the background, its stdout into out_path and its
    stderr into a pipe the test filled beforehand: the host's first word on
    stderr (a stop's message) blocks until the test reads the pipe. A host
    that said its stop before it put the screen out would then hold the
    screen lit, so the order (dark first, then the message) is checked, not
    raced. *err is the pipe's end to drain (drain_held). */
-static pid_t print_held(char *const args[], const char *out_path, int *err)
+static pid_t run_held(char *const args[], const char *out_path, int *err)
 {
     char *argv[32], fill[4096];
     int fds[2], n = 0, flags;
@@ -491,7 +491,6 @@ static pid_t print_held(char *const args[], const char *out_path, int *err)
     *err = -1;
     if (pipe(fds) != 0) return -1;
     argv[n++] = (char *)cli_tool;
-    argv[n++] = (char *)"print";
     while (*args && n < 31) argv[n++] = *args++;
     argv[n] = NULL;
     memset(fill, '.', sizeof fill);
@@ -699,7 +698,7 @@ static int at_lit_start(const char *fb)
 }
 
 /* The long job (slice_long_job, in jobl) printed on the simulator's port
-   with the screen file fb, the host's stderr held (print_held); once the
+   with the screen file fb, the host's stderr held (run_held); once the
    log shows `exposures` UV-ons, the observer is made real-time and waits
    for a layer's light to begin. 0 if it did not (the host and the
    simulator then stopped, the observer back to normal). */
@@ -716,8 +715,8 @@ static int held_print_at_lit(child *sim, const char *log, const char *fb, const 
         return 0;
     }
     {
-        char *args[] = {job, (char *)"--port", port, (char *)"--screen", spec, NULL};
-        *pid = print_held(args, out, err);
+        char *args[] = {(char *)"print", job, (char *)"--port", port, (char *)"--screen", spec, NULL};
+        *pid = run_held(args, out, err);
     }
     CHECK(wait_for_exposures(log, exposures));
     if (observer_realtime(1) && at_lit_start(fb)) return 1;
@@ -1159,6 +1158,37 @@ static void white_exposure_test(void)
     r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "100000", NULL);
     CHECKF(r.status == 2 && strstr(r.err, "lights 0.001 to"), "show --expose too long: exit %d: %s", r.status, r.err);
     cli_free(&r);
+    {
+        /* Ctrl-C in a long exposure test: the screen dark within 100 ms,
+           the printer told so (its light out) and only then said (stderr
+           held: a message said first would keep the screen lit) */
+        char port[256], *out;
+        char *args[] = {(char *)"show", (char *)"--pattern", (char *)"white", (char *)"--screen", spec, (char *)"--port",
+                        port, (char *)"--expose", (char *)"20", NULL};
+        pid_t pid;
+        int err, status;
+        snprintf(port, sizeof port, "%s", sim.line + 4);
+        pid = run_held(args, cli_path("x2.out"), &err);
+        CHECK(wait_for_exposures(cli_path("simx.log"), 2));
+        if (observer_realtime(1) && simulator_realtime(&sim) && ms_until(cli_path("fbx"), 1, seconds_now(), 10) >= 0) {
+            out = stop_timed(pid, SIGINT, "Ctrl-C in the exposure test", cli_path("fbx"), pid, err, &status);
+            CHECKF(status == 0 && out && cli_one_message(out) && strstr(out, "interrupted: the light put out"),
+                   "show --expose, Ctrl-C: exit %d: %s", status, out ? out : "");
+            free(out);
+        } else {
+            observer_realtime(0);
+            kill(pid, SIGKILL);
+            free(drain_held(pid, err, &status));
+        }
+        /* the pin log's last light edge: off */
+        log = read_whole_text(cli_path("simx.log"));
+        {
+            char *last = NULL;
+            for (at = log; at && (at = strstr(at, " uv ")) != NULL; at++) last = at;
+            CHECKF(last && last[4] == '0', "the light's last edge in the pin log after Ctrl-C: %.12s", last ? last : "none");
+        }
+        free(log);
+    }
     if (slice_job(cli_path("job"), NULL)) {
         r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
         CHECKF(r.status == 0, "a print after the exposure test: exit %d: %s", r.status, r.err);

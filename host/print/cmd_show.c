@@ -221,7 +221,6 @@ static int expose(serial_link *l, const show_args *a)
         if (l->st.flags & LINK_FLAG_UV) lit = 1;
         else if (lit || now_ms() - t0 > em.ms) break;
     }
-    if (stop) fprintf(stderr, "adaslice: interrupted: the light put out\n");
     return RC_OK;
 }
 
@@ -269,6 +268,8 @@ done:
     if (l.fd >= 0) {
         if (screen_print_said_dark(&l) == RC_OK) (void)serial_status(&l);
         serial_close(&l);
+        /* said once the screen is dark and the printer told so, not before */
+        if (stop && rc == RC_OK) fprintf(stderr, "adaslice: interrupted: the light put out\n");
     }
     free(m.px);
     return rc;
