@@ -149,28 +149,16 @@ void mask_scan_free(mask_scan *s)
 
 /* ---- masks.rle's code --------------------------------------------------- */
 
-static int rle_reserve(mask_rle *r, size_t more)
-{
-    size_t cap = r->cap ? r->cap : 4096;
-    unsigned char *p;
-    if (r->size + more <= r->cap) return 0;
-    while (cap < r->size + more) cap *= 2;
-    if (!(p = (unsigned char *)realloc(r->code, cap))) return r->failed = -1;
-    r->code = p;
-    r->cap = cap;
-    return 0;
-}
-
 void mask_rle_begin(mask_rle *r, int width, int bits)
 {
     r->width = width;
     r->bits = bits;
-    r->failed = 0;
     r->repeat = 0;
-    r->size = 0;
+    r->code.size = 0;
+    r->code.failed = 0;
     if (bits == 1 && r->lengths_cap < (size_t)width + 1) { /* a row has at most width + 1 runs, the first empty */
         uint32_t *p = (uint32_t *)realloc(r->lengths, ((size_t)width + 1) * sizeof *p);
-        if (!p) r->failed = -1;
+        if (!p) r->code.failed = 1;
         else r->lengths = p, r->lengths_cap = (size_t)width + 1;
     }
 }
@@ -186,8 +174,9 @@ static void rle_length(void *ctx, unsigned grey, uint64_t n)
 
 static void rle_repeats(mask_rle *r)
 {
-    if (!r->repeat || rle_reserve(r, 5)) return;
-    r->size += adaslice_varint_put(r->code + r->size, (r->repeat - 1) << 1 | 1u);
+    unsigned char *p;
+    if (!r->repeat || !(p = bytebuf_room(&r->code, 5))) return;
+    r->code.size += adaslice_varint_put(p, (r->repeat - 1) << 1 | 1u);
     r->repeat = 0;
 }
 
@@ -196,9 +185,10 @@ static void rle_repeats(mask_rle *r)
    runs: 1-bit ones from the runs of bytes, 8-bit ones are those. */
 void mask_rle_step(mask_rle *r, const mask_scan *s)
 {
-    size_t runs, i;
+    unsigned char *p;
+    size_t runs, i, n;
     int dark;
-    if (r->failed) return;
+    if (r->code.failed) return;
     if (s->repeat || s->same_pixels) {
         r->repeat += (uint32_t)s->rows;
         return;
@@ -218,23 +208,24 @@ void mask_rle_step(mask_rle *r, const mask_scan *s)
         return;
     }
     rle_repeats(r);
-    if (rle_reserve(r, 5 + 5 * runs)) return; /* lengths under 2^24: 4 bytes each at most */
-    r->size += adaslice_varint_put(r->code + r->size, (uint32_t)runs << 1);
+    if (!(p = bytebuf_room(&r->code, 5 + 5 * runs))) return; /* lengths under 2^24: 4 bytes each at most */
+    n = adaslice_varint_put(p, (uint32_t)runs << 1);
     for (i = 0; i < runs; i++) {
-        if (r->bits == 8) r->code[r->size++] = (unsigned char)(s->runs[i] >> 24);
-        r->size += adaslice_varint_put(r->code + r->size, r->bits == 8 ? s->runs[i] & 0xFFFFFF : r->lengths[i]);
+        if (r->bits == 8) p[n++] = (unsigned char)(s->runs[i] >> 24);
+        n += adaslice_varint_put(p + n, r->bits == 8 ? s->runs[i] & 0xFFFFFF : r->lengths[i]);
     }
+    r->code.size += n;
 }
 
 int mask_rle_end(mask_rle *r)
 {
     rle_repeats(r);
-    return r->failed ? -1 : 0;
+    return r->code.failed ? -1 : 0;
 }
 
 void mask_rle_free(mask_rle *r)
 {
-    free(r->code);
+    bytebuf_free(&r->code);
     free(r->lengths);
     memset(r, 0, sizeof *r);
 }

@@ -2,6 +2,7 @@
    significant bit first (1 = lit) or 8-bit grey rows. */
 #ifndef ADASLICE_HOST_MASKROWS_H
 #define ADASLICE_HOST_MASKROWS_H
+#include "../bytes.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -48,14 +49,15 @@ int mask_scan_next(mask_scan *s);
 void mask_scan_runs(const mask_scan *s, int pixels, mask_run_fn run, void *ctx);
 void mask_scan_free(mask_scan *s);
 
-/* masks.rle's code of a layer (adaslice_rle_encode's bytes) from its scan,
-   the 1-bit runs of pixels taken from the runs of bytes. The code grows in
-   code[0, size) (malloc'd, kept by mask_rle_begin for the next layer). */
+/* masks.rle's code of a layer, adaslice_rle_encode's bytes, from its scan:
+   the printer's encoder (adaslice_mcu.h) reads the rows itself, which on
+   the host would be a layer's megabytes from memory once more. 1-bit runs
+   of pixels come from the runs of bytes. The code grows in `code` (kept by
+   mask_rle_begin for the next layer; code.failed: out of memory). */
 typedef struct mask_rle {
-    int width, bits, failed;
+    int width, bits;
     uint32_t repeat;                 /* rows owed to a repeat record */
-    unsigned char *code;
-    size_t size, cap;
+    bytebuf code;
     uint32_t *lengths;               /* a 1-bit row's runs of dark and lit, dark first */
     size_t count, lengths_cap;
 } mask_rle;

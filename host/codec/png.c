@@ -288,13 +288,14 @@ static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
 }
 
 /* What a layer's coding keeps for the next: the runs of the scan and the
-   encoder, masks.rle's code, the deflater's symbols and stream, most of a
-   megabyte. Freed and taken again layer after layer, glibc gave such
-   memory back to the system off the main thread and the next layer
-   faulted it in again (two threads took 94,000 page faults on the turbine
-   blade's directory job against 12,000 on one, and a third more CPU), so
-   each coder goes back to a pool, to be taken by the next layer's thread:
-   there are as many as layers are coded at once. */
+   encoder, masks.rle's code, the deflater's 256 KB of symbols and its
+   stream. Freed and taken again layer after layer, off the main thread
+   glibc gave such memory back to the system and the next layer faulted it
+   in again (two threads took 94,000 page faults on the turbine blade's
+   directory job against 12,000 on one, and a third more CPU; the pipeline
+   set glibc's malloc thresholds against it), so each coder goes back to a
+   pool for the next layer, on whichever thread: there are as many as
+   layers are coded at once. */
 typedef struct coder {
     struct coder *next;
     mask_scan scan;
@@ -423,9 +424,9 @@ static int encode_runs(const unsigned char *image, int width, int height, size_t
     }
     if ((rc = png_end(&c->png, width, height, out, out_size)) || !layer) goto done;
     rc = -1;
-    if (!mask_rle_end(&c->rle) && (layer->rle = (unsigned char *)malloc(c->rle.size ? c->rle.size : 1)) != NULL) {
-        memcpy(layer->rle, c->rle.code, c->rle.size);
-        layer->rle_size = c->rle.size;
+    if (!mask_rle_end(&c->rle) && (layer->rle = (unsigned char *)malloc(c->rle.code.size ? c->rle.code.size : 1)) != NULL) {
+        memcpy(layer->rle, c->rle.code.data, c->rle.code.size);
+        layer->rle_size = c->rle.code.size;
         layer->crc = crc.crc;
         rc = 0;
     }
