@@ -4,8 +4,10 @@
 #include "check.h"
 #include "codec_reference.h"
 #include "../host/codec/maskrows.h"
+#include "../host/codec/png.h"
 #include "maskgen.h"
 #include "plan_oracle.h"
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -346,6 +348,99 @@ static void mask_crc_over_grey_runs_is_the_crc_of_the_bytes(void)
     CHECKF(bad == 0, "%d grey masks' row CRCs differ from their bytes'", bad);
 }
 
+/* A job directory's layer as png_encode_layer codes it, from one reading of
+   each row for the PNG, masks.rle and the CRC, on threads that share its
+   coders: masks.rle's code and the CRC of each layer's rows. */
+enum { LAYERS = 48, LAYER_THREADS = 4 };
+typedef struct coded_layer {
+    unsigned char *image;
+    uint32_t w, h;
+    size_t stride;
+    int bits, rc;
+    png_layer out;
+} coded_layer;
+
+static void *code_layers(void *arg)
+{
+    coded_layer *l = (coded_layer *)arg;
+    int i;
+    for (i = 0; i < LAYERS / LAYER_THREADS; i++, l += LAYER_THREADS)
+        l->rc = png_encode_layer(l->image, (int)l->w, (int)l->h, l->stride, l->bits, &l->out);
+    return NULL;
+}
+
+/* Rows of every kind a layer has: dark, lit, lit from the first pixel,
+   runs, rows that repeat the row above, and (1-bit, widths past a byte)
+   rows that repeat its pixels but not the padding bits of its last byte. */
+static void layer_rows(coded_layer *l, int kind)
+{
+    const size_t rs = l->bits == 1 ? (l->w + 7) / 8 : l->w;
+    uint32_t y, x;
+    for (y = 0; y < l->h; y++) {
+        unsigned char *row = l->image + (size_t)y * l->stride;
+        int what = kind == 0 ? 0 : kind == 1 ? 1 : (int)(codec_rng() % 6);
+        if (y && (what == 3 || what == 4)) {
+            memcpy(row, row - l->stride, rs);
+            if (what == 4 && l->bits == 1 && l->w % 8) row[rs - 1] ^= (unsigned char)(codec_rng() & (0xFFu >> (l->w % 8)));
+            continue;
+        }
+        for (x = 0; x < rs;) {
+            uint32_t len = 1 + codec_rng() % (codec_rng() % 4 ? 300 : 3);
+            unsigned char v = (unsigned char)(what == 0   ? 0u
+                                              : what == 1 ? 0xFFu
+                                              : codec_rng() % 3 == 0 ? codec_rng()
+                                              : codec_rng() % 2 ? 0xFFu : 0u);
+            if (what == 2 && x == 0) v = 0xff; /* lit from the first pixel: a 1-bit row's first run is empty */
+            while (len-- && x < rs) row[x++] = v;
+        }
+    }
+}
+
+/* png_encode_layer's masks.rle code is the reference encoder's bytes
+   (codec_reference.h, a pixel at a time), its CRC the CRC of the rows'
+   bytes, and its PNG is there: dark, lit and mixed layers at 1 and 8 bits,
+   odd widths and padded strides, coded on four threads at once. */
+static void layer_code_is_the_reference_encoders(void)
+{
+    coded_layer l[LAYERS];
+    pthread_t threads[LAYER_THREADS];
+    int i, started = 0, bad_code = 0, bad_crc = 0;
+    memset(l, 0, sizeof l);
+    for (i = 0; i < LAYERS; i++) {
+        l[i].bits = i % 2 ? 8 : 1;
+        l[i].w = i < 8 ? 3840 : 1 + codec_rng() % 2000;
+        l[i].h = i < 8 ? 2400 : 1 + codec_rng() % 300;
+        l[i].stride = (l[i].bits == 1 ? (l[i].w + 7) / 8 : l[i].w) + (size_t)(i % 3);
+        if (!(l[i].image = (unsigned char *)malloc(l[i].stride * l[i].h))) { CHECK(!"out of memory"); goto done; }
+        memset(l[i].image, 0x5A, l[i].stride * l[i].h); /* padding bytes that must not count */
+        layer_rows(&l[i], i < 8 ? i / 2 % 3 : i % 5);
+    }
+    for (; started < LAYER_THREADS; started++)
+        if (pthread_create(&threads[started], NULL, code_layers, &l[started])) break;
+    CHECK(started == LAYER_THREADS);
+    for (i = 0; i < started; i++) pthread_join(threads[i], NULL);
+    for (i = 0; i < LAYERS && started == LAYER_THREADS; i++) {
+        const size_t rs = l[i].bits == 1 ? (l[i].w + 7) / 8 : l[i].w, cap = adaslice_rle_bound(l[i].w, l[i].h, l[i].bits);
+        unsigned char *want = (unsigned char *)malloc(cap), *rows = (unsigned char *)malloc(rs * l[i].h);
+        size_t n = 0, y;
+        CHECKF(l[i].rc == 0 && l[i].out.png && l[i].out.png_size > 8 && l[i].out.rle, "layer %d: not coded", i);
+        CHECK(want && rows && ref_rle_encode(l[i].image, l[i].stride, l[i].w, l[i].h, l[i].bits, want, cap, &n) == ADASLICE_OK);
+        if (want && (n != l[i].out.rle_size || (n && memcmp(want, l[i].out.rle, n)))) bad_code++;
+        for (y = 0; rows && y < l[i].h; y++) memcpy(rows + y * rs, l[i].image + y * l[i].stride, rs);
+        if (rows && l[i].out.crc != ref_crc32(0, rows, rs * l[i].h)) bad_crc++;
+        free(want);
+        free(rows);
+    }
+    CHECKF(bad_code == 0, "%d of %d layers' masks.rle code differs from the reference encoder's", bad_code, LAYERS);
+    CHECKF(bad_crc == 0, "%d of %d layers' CRC differs from the CRC of their rows' bytes", bad_crc, LAYERS);
+done:
+    for (i = 0; i < LAYERS; i++) {
+        free(l[i].image);
+        free(l[i].out.png);
+        free(l[i].out.rle);
+    }
+}
+
 static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
@@ -500,6 +595,7 @@ void test_codec(void)
     RUN(mask_crc_by_rows_is_the_crc_of_the_bytes);
     RUN(mask_crc_over_long_repeats_is_the_crc_of_the_bytes);
     RUN(mask_crc_over_grey_runs_is_the_crc_of_the_bytes);
+    RUN(layer_code_is_the_reference_encoders);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);

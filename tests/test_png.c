@@ -159,10 +159,25 @@ static unsigned char *read_pnm(const char *path, int w, int h, int channels)
     return pixels;
 }
 
-/* Encodes every image (as_mask: with png_encode_mask, 8-bit whatever came
-   in), has oiiotool decode them all in one run and compares every pixel;
-   frees the images. */
-static void round_trip_as(batch *b, int as_mask)
+/* How an image is coded: png_encode_gray; png_encode_mask (8-bit whatever
+   came in); png_encode_layer (the PNG of a job directory's layer). */
+enum { AS_GRAY, AS_MASK, AS_LAYER };
+
+static int encode_as(const image *im, int as, unsigned char **png, size_t *size)
+{
+    png_layer layer;
+    if (as != AS_LAYER) return (as == AS_MASK ? png_encode_mask : png_encode_gray)(im->pixels, im->width, im->height,
+                                                                                  im->stride, im->bits, png, size);
+    if (png_encode_layer(im->pixels, im->width, im->height, im->stride, im->bits, &layer)) return -1;
+    free(layer.rle);
+    *png = layer.png;
+    *size = layer.png_size;
+    return 0;
+}
+
+/* Encodes every image `as` given, has oiiotool decode them all in one run
+   and compares every pixel; frees the images. */
+static void round_trip_as(batch *b, int as)
 {
     char *args[2 + 5 * MAX_IMAGES] = {(char *)"oiiotool"};
     int n = 1, encoded = 1;
@@ -170,9 +185,7 @@ static void round_trip_as(batch *b, int as_mask)
         image *im = &b->im[i];
         unsigned char *png = NULL;
         size_t size = 0;
-        if (!im->pixels ||
-            (as_mask ? png_encode_mask : png_encode_gray)(im->pixels, im->width, im->height, im->stride, im->bits, &png, &size) ||
-            !write_file(im->png, png, size)) {
+        if (!im->pixels || encode_as(im, as, &png, &size) || !write_file(im->png, png, size)) {
             CHECKF(0, "cannot encode or write %s", im->png);
             encoded = 0;
         }
@@ -209,7 +222,7 @@ static void round_trip_as(batch *b, int as_mask)
     b->count = 0;
 }
 
-static void round_trip(batch *b) { round_trip_as(b, 0); }
+static void round_trip(batch *b) { round_trip_as(b, AS_GRAY); }
 
 /* A disc of the given share of a w x h image, centred, anti-aliased. */
 static unsigned char *disc_coverage(int w, int h, double share)
@@ -476,7 +489,7 @@ static void masks_from_runs_decode_in_oiiotool(void)
     fill(add(&b, "run_window8", 32767, 3, 8, 0), vstripes);
     fill(add(&b, "run_wide1", 40000, 4, 1, 0), hstripes); /* rows past deflate's window: no row copies */
     fill(add(&b, "run_wide8", 33000, 3, 8, 0), vstripes);
-    round_trip_as(&b, 1);
+    round_trip_as(&b, AS_MASK);
     free(disc);
     free(scene);
 }
@@ -571,8 +584,46 @@ static void layers_decode_through_row_boundaries(void)
                 CHECKF(size < (size_t)(w / 8 + 1) * h / 258 * 2 / 8 + 200, "a dark layer: %zu bytes", size);
             free(png);
         }
-        round_trip_as(&b, as_mask);
+        round_trip_as(&b, as_mask ? AS_MASK : AS_GRAY);
     }
+}
+
+/* A job directory's layers (png_encode_layer, whose PNG comes from the
+   same one reading of each row as masks.rle's code and the CRC), 3840 x
+   2400 and widths past a byte, at 1 and 8 bits: all dark, all lit, every
+   row the same, rows that repeat the row above in pixels and not in the
+   padding bits of their last byte, a span that moves every row, an
+   anti-aliased disc. Decoded by inflate and by OpenImageIO. */
+static void job_layers_decode_by_inflate_and_in_oiiotool(void)
+{
+    const int w = 3840, h = 2400;
+    unsigned char *disc = disc_coverage(w, h, 0.25);
+    batch b = {0};
+    CHECK(disc != NULL);
+    for (int bits = 1; bits <= 8; bits += 7) {
+        char name[48];
+        snprintf(name, sizeof name, "layer_dark%d", bits);
+        fill(add(&b, name, w, h, bits, 0), black);
+        snprintf(name, sizeof name, "layer_lit_w3839_%d", bits);
+        fill(add(&b, name, w - 1, h, bits, 1), white);
+        snprintf(name, sizeof name, "layer_same_rows%d", bits);
+        fill(add(&b, name, w, h, bits, 0), wide_stripes);
+        snprintf(name, sizeof name, "layer_padding_differs_w3837_%d", bits); /* add() leaves the padding random */
+        fill(add(&b, name, w - 3, 300, bits, 2), wide_stripes);
+        snprintf(name, sizeof name, "layer_band_ends%d", bits);
+        fill(add(&b, name, w, h, bits, 0), band_ends);
+        snprintf(name, sizeof name, "layer_disc%d", bits);
+        if (disc) from_coverage(add(&b, name, w, h, bits, 0), disc);
+    }
+    for (int i = 0; i < b.count; i++) {
+        unsigned char *png = NULL;
+        size_t size = 0;
+        CHECKF(b.im[i].pixels && encode_as(&b.im[i], AS_LAYER, &png, &size) == 0, "%s: not coded", b.im[i].png);
+        if (png) decodes_by_inflate(png, size, &b.im[i]);
+        free(png);
+    }
+    round_trip_as(&b, AS_LAYER);
+    free(disc);
 }
 
 /* ---- RGB, for previews ---------------------------------------------------- */
@@ -793,6 +844,7 @@ void test_png(void)
     RUN_NEEDING("oiiotool", masks_from_runs_decode_in_oiiotool);
     RUN_NEEDING("oiiotool", noise_decodes_in_oiiotool);
     RUN_NEEDING("oiiotool", layers_decode_through_row_boundaries);
+    RUN_NEEDING("oiiotool", job_layers_decode_by_inflate_and_in_oiiotool);
     RUN(rgb_header_says_truecolour);
     RUN_NEEDING("oiiotool", rgb_images_decode_in_oiiotool);
     RUN(compression_stays_within_its_bounds);

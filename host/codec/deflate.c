@@ -449,20 +449,35 @@ int deflate_copy(deflater *d, size_t length, size_t distance)
     return 0;
 }
 
-int deflate_end(deflater *d, int ok, unsigned char **out, size_t *out_size)
+int deflate_finish(deflater *d, const unsigned char **out, size_t *out_size)
 {
-    int rc = -1;
     *out = NULL;
     *out_size = 0;
-    if (ok && !d->failed && !flush_block(d, 0, 0, 1) && !reserve(d, 8)) {
-        align_byte(d);
-        *out = d->out;
-        *out_size = d->size;
-        d->out = NULL;
-        rc = 0;
+    if (d->failed || flush_block(d, 0, 0, 1) || reserve(d, 8)) {
+        d->failed = 1;
+        return -1;
     }
+    align_byte(d);
+    *out = d->out;
+    *out_size = d->size;
+    return 0;
+}
+
+void deflate_reset(deflater *d)
+{
+    d->size = 0;
+    d->acc = 0;
+    d->nacc = 0;
+    d->nsyms = 0;
+    d->failed = 0;
+    memset(d->lfreq, 0, sizeof d->lfreq); /* a failed stream leaves its counts */
+    memset(d->dfreq, 0, sizeof d->dfreq);
+}
+
+void deflate_free(deflater *d)
+{
+    if (!d) return;
     free(d->out);
     free(d->syms);
     free(d);
-    return rc;
 }

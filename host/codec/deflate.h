@@ -18,13 +18,19 @@ int deflate_bytes(const unsigned char *data, size_t n, size_t row, unsigned char
    and copies of `length` bytes (3 or more; longer ones are split) from
    `distance` bytes back (1 to 32768). The blocks are dynamic or fixed
    Huffman. deflate_begin: NULL when out of memory. deflate_literal and
-   deflate_copy: 0, or -1 when out of memory, after which only deflate_end
-   is called. deflate_end finishes into *out (malloc'd) as deflate_bytes
-   does, or frees everything when ok is 0; it frees d either way. */
+   deflate_copy: 0, or -1 when out of memory, after which only
+   deflate_finish, deflate_reset or deflate_free is called. deflate_finish
+   ends the stream: *out and *out_size are its bytes, which d keeps until
+   it is reset or freed; -1 when out of memory (or after a failure). A
+   deflater is reused stream after stream (deflate_reset), so that a layer's
+   PNG takes its buffers (256 KB of symbols, the stream) from the layer
+   before, not from malloc. */
 typedef struct deflater deflater;
 deflater *deflate_begin(void);
 int deflate_literal(deflater *d, unsigned char byte);
 int deflate_copy(deflater *d, size_t length, size_t distance);
-int deflate_end(deflater *d, int ok, unsigned char **out, size_t *out_size);
+int deflate_finish(deflater *d, const unsigned char **out, size_t *out_size);
+void deflate_reset(deflater *d);
+void deflate_free(deflater *d);
 
 #endif

@@ -2,6 +2,7 @@
    significant bit first (1 = lit) or 8-bit grey rows. */
 #ifndef ADASLICE_HOST_MASKROWS_H
 #define ADASLICE_HOST_MASKROWS_H
+#include "../bytes.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -15,9 +16,65 @@ void mask_row_grey(const unsigned char *image, size_t stride, int bits, int widt
 typedef void (*mask_run_fn)(void *ctx, unsigned grey, uint64_t n);
 void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn run, void *ctx);
 
-/* CRC-32 (adaslice_crc32's) of height rows of row_bytes, stride apart, as
-   one stream, in time proportional to the rows' runs of equal bytes (each
-   run a few table lookups, not its bytes); a long run of rows that repeat
-   the row above costs a few multiplications in GF(2) (CRC combination). */
+/* A layer's rows read once for all of its coders (the PNG, masks.rle's code
+   and the CRC), so that a layer's megabytes come from memory once after the
+   masker wrote them rather than once a coder. Each step (mask_scan_next) is
+   a run of rows that repeat the row above byte for byte, or one row that
+   does not, with its runs of equal bytes: the coders work from the runs. */
+typedef struct mask_scan {
+    const unsigned char *image;
+    int width, bits;
+    size_t stride, row_bytes, whole; /* whole: bytes of eight pixels (8-bit: all) */
+    unsigned tail;                   /* the pixels' bits of a 1-bit row's last byte when it is part padding */
+    int height;
+    /* the step */
+    int y, rows;                     /* rows y to y + rows - 1 */
+    int repeat;                      /* they repeat the row above byte for byte; runs are its */
+    int same_pixels;                 /* !repeat: the row's pixels are the row above's (its padding differs) */
+    const unsigned char *row;        /* row y */
+    uint32_t *runs;                  /* row y's runs of equal bytes, value << 24 | length, each as long as it goes */
+    size_t count;
+    uint32_t *spare;                 /* the other row's runs */
+    size_t cap;
+} mask_scan;
+/* Starts a scan of height rows of width pixels at bits (1 or 8; rows of
+   fewer than 2^24 bytes), stride bytes apart. The run buffers of a scan
+   begun before are kept (zero it the first time). -1 when out of memory. */
+int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height);
+/* The next step, or 0 after the last row. */
+int mask_scan_next(mask_scan *s);
+/* The step's row as runs, run(ctx, value, n), from its runs of bytes: of
+   pixels (1-bit ones as 0 or 255) when pixels, else of bytes, a 1-bit
+   row's padding bits cleared. Neighbouring runs may share a value. */
+void mask_scan_runs(const mask_scan *s, int pixels, mask_run_fn run, void *ctx);
+void mask_scan_free(mask_scan *s);
+
+/* masks.rle's code of a layer, adaslice_rle_encode's bytes, from its scan:
+   the printer's encoder (adaslice_mcu.h) reads the rows itself, which on
+   the host would be a layer's megabytes from memory once more. 1-bit runs
+   of pixels come from the runs of bytes. The code grows in `code` (kept by
+   mask_rle_begin for the next layer; code.failed: out of memory). */
+typedef struct mask_rle {
+    int width, bits;
+    uint32_t repeat;                 /* rows owed to a repeat record */
+    bytebuf code;
+    uint32_t *lengths;               /* a 1-bit row's runs of dark and lit, dark first */
+    size_t count, lengths_cap;
+} mask_rle;
+void mask_rle_begin(mask_rle *r, int width, int bits);
+void mask_rle_step(mask_rle *r, const mask_scan *s);
+/* The last repeat record: 0, or -1 when out of memory. */
+int mask_rle_end(mask_rle *r);
+void mask_rle_free(mask_rle *r);
+
+/* CRC-32 (adaslice_crc32's) of a scan's rows as one stream, in time
+   proportional to the rows' runs of equal bytes (each run a few table
+   lookups, not its bytes); a long run of rows that repeat the row above
+   costs a few multiplications in GF(2) (CRC combination). */
+typedef struct mask_crc { uint32_t crc, shift; size_t long_run; } mask_crc;
+void mask_crc_begin(mask_crc *c, size_t row_bytes);
+void mask_crc_step(mask_crc *c, const mask_scan *s);
+
+/* The same over an image: height rows of row_bytes, stride apart. */
 uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes, int height);
 #endif

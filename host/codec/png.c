@@ -7,6 +7,7 @@
 #include "deflate.h"
 #include "maskrows.h"
 #include "../../adaslice.h"
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -145,7 +146,10 @@ static int encode(const unsigned char *pixels, int width, int height, size_t str
    pixels. */
 typedef struct mask_encoder {
     deflater *d;
-    size_t line;                 /* filter byte and row: a row copy's distance */
+    int depth;                   /* of the file's pixels: 1, or 8 (1-bit ones as 0 or 255) */
+    size_t row_bytes, line;      /* a row; with its filter byte: a row copy's distance */
+    uint64_t s1, s2, r1, r2;     /* the Adler-32's sums; r: the last row's own, from zero */
+    uint64_t repeats;            /* rows that repeat the row above, not yet coded */
     int failed, have_last;
     unsigned last;               /* the byte before the pending run or copy */
     unsigned run_v;              /* the pending run: run_n bytes of run_v */
@@ -203,13 +207,6 @@ static void keep_run(void *ctx, unsigned grey, uint64_t n)
         e->run_cap = cap;
     }
     e->runs[e->run_count++] = grey << 24 | (uint32_t)n;
-}
-
-static int same_row(const unsigned char *a, const unsigned char *b, int width, int bits)
-{
-    size_t whole = bits == 8 ? (size_t)width : (size_t)width / 8;
-    unsigned char pixels = (unsigned char)(0xFF << (8 - width % 8));
-    return !memcmp(a, b, whole) && (bits == 8 || width % 8 == 0 || !((a[whole] ^ b[whole]) & pixels));
 }
 
 /* Whether a part of a row, `bytes` long over `runs` of its runs, costs less
@@ -290,79 +287,175 @@ static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
     else while (k--) push_row(e, row_bytes, 1);
 }
 
+/* What a layer's coding keeps for the next: the runs of the scan and the
+   encoder, masks.rle's code, the deflater's 256 KB of symbols and its
+   stream. Freed and taken again layer after layer, off the main thread
+   glibc gave such memory back to the system and the next layer faulted it
+   in again (two threads took 94,000 page faults on the turbine blade's
+   directory job against 12,000 on one, and a third more CPU; the pipeline
+   set glibc's malloc thresholds against it), so each coder goes back to a
+   pool for the next layer, on whichever thread: there are as many as
+   layers are coded at once. */
+typedef struct coder {
+    struct coder *next;
+    mask_scan scan;
+    mask_encoder png;
+    mask_rle rle;
+} coder;
+
+static pthread_mutex_t pool_lock = PTHREAD_MUTEX_INITIALIZER;
+static coder *pool;
+
+static coder *take_coder(void)
+{
+    coder *c;
+    pthread_mutex_lock(&pool_lock);
+    if ((c = pool) != NULL) pool = c->next;
+    pthread_mutex_unlock(&pool_lock);
+    if (!c && (c = (coder *)calloc(1, sizeof *c)) != NULL && !(c->png.d = deflate_begin())) {
+        free(c);
+        c = NULL;
+    }
+    return c;
+}
+
+static void give_coder(coder *c)
+{
+    pthread_mutex_lock(&pool_lock);
+    c->next = pool;
+    pool = c;
+    pthread_mutex_unlock(&pool_lock);
+}
+
 /* The file's rows at `depth` bits from an image's at `bits`: 8 from 1 makes
    1-bit pixels 0 or 255; 1 from 1 takes the packed bytes as they are, a
-   row's padding bits cleared. Rows that repeat the row above (a memcmp a
-   row: most of a layer is the dark around the part) go at once on that
-   row's runs and sums, so only rows that differ are looked at byte by byte. */
-static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
-                       unsigned char **out, size_t *out_size)
+   row's padding bits cleared. */
+static void png_begin(mask_encoder *e, int width, int depth)
+{
+    deflater *d = e->d;
+    uint32_t *runs = e->runs, *above = e->above;
+    size_t run_cap = e->run_cap, above_cap = e->above_cap;
+    memset(e, 0, sizeof *e);
+    deflate_reset(d);
+    e->d = d;
+    e->runs = runs, e->run_cap = run_cap;
+    e->above = above, e->above_cap = above_cap;
+    e->depth = depth;
+    e->row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8;
+    e->line = e->row_bytes + 1;
+    e->s1 = 1;
+}
+
+/* Rows that repeat the row above go at once on that row's runs and sums
+   (each adds line bytes and the row's sums: s2 += line s1 + r2, s1 += r1,
+   k times). */
+static void png_repeats(mask_encoder *e)
+{
+    const uint64_t M = 65521, k = e->repeats, line = e->line % M;
+    if (!k) return;
+    e->s2 = (e->s2 + k % M * line % M * e->s1 + (k * (k - 1) / 2) % M * line % M * e->r1 + k % M * e->r2) % M;
+    e->s1 = (e->s1 + k % M * e->r1) % M;
+    push_repeats(e, e->row_bytes, k);
+    e->repeats = 0;
+}
+
+/* A step of the scan: rows that repeat the row above in the file's pixels
+   wait to go at once; a row that differs goes by its runs. */
+static void png_step(mask_encoder *e, const mask_scan *s)
 {
     const uint64_t M = 65521;
-    const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8, line = row_bytes + 1;
-    const size_t whole = depth == 8 ? row_bytes : (size_t)width / 8; /* bytes that go as they are */
-    const unsigned tail = (0xFF << (8 - width % 8)) & 0xFF;         /* the pixels of a 1-bit row's last byte */
-    uint64_t s1 = 1, s2 = 0, r1 = 0, r2 = 0; /* r: the row's own sums, from zero (its 0 filter byte adds nothing) */
-    mask_encoder e;
-    unsigned char *z = NULL;
-    size_t zsize = 0;
-    int y, rc = -1;
+    uint32_t *swap = e->above;
+    size_t swap_cap = e->above_cap, r;
+    if (s->repeat || s->same_pixels) {
+        e->repeats += (uint64_t)s->rows;
+        return;
+    }
+    png_repeats(e);
+    e->above = e->runs, e->above_cap = e->run_cap, e->above_count = e->run_count;
+    e->runs = swap, e->run_cap = swap_cap, e->run_count = 0;
+    mask_scan_runs(s, e->depth == 8, keep_run, e);
+    for (e->r1 = e->r2 = 0, r = 0; r < e->run_count; r++) {
+        uint64_t v = e->runs[r] >> 24, n = e->runs[r] & 0xFFFFFF;
+        e->r2 = (e->r2 + n * e->r1 + v * (n * (n + 1) / 2 % M)) % M;
+        e->r1 = (e->r1 + n * v) % M;
+    }
+    e->s2 = (e->s2 + e->line % M * e->s1 + e->r2) % M;
+    e->s1 = (e->s1 + e->r1) % M;
+    if (!e->failed) push_row(e, e->row_bytes, 0);
+}
+
+static int png_end(mask_encoder *e, int width, int height, unsigned char **out, size_t *out_size)
+{
+    const unsigned char *z;
+    size_t zsize;
+    png_repeats(e);
+    emit_pending(e);
+    if (e->failed || deflate_finish(e->d, &z, &zsize)) return -1;
+    return wrap(width, height, e->depth, 0, z, zsize, (uint32_t)(e->s2 << 16 | e->s1), out, out_size);
+}
+
+/* A mask's PNG at `depth` from its runs and, if layer, masks.rle's code and
+   the CRC from the same steps of the scan. */
+static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
+                       unsigned char **out, size_t *out_size, png_layer *layer)
+{
+    const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8;
+    mask_crc crc;
+    coder *c;
+    int rc = -1;
     *out = NULL;
     *out_size = 0;
     if ((bits != 1 && bits != 8) || width < 1 || height < 1 || row_bytes >= 1 << 24 || !image ||
-        stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || line > 0x7F000000u / (size_t)height)
+        stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || row_bytes + 1 > 0x7F000000u / (size_t)height ||
+        (layer && (width >= 1 << 24 || height >= 1 << 24)) || !(c = take_coder()))
         return -1;
-    memset(&e, 0, sizeof e);
-    e.line = line;
-    if (!(e.d = deflate_begin())) return -1;
-    for (y = 0; y < height && !e.failed; y++) {
-        const unsigned char *row = image + (size_t)y * stride;
-        uint64_t k = 0, r; /* rows from y on that repeat the row above: the dark around the part, mostly */
-        uint32_t *swap = e.above;
-        size_t swap_cap = e.above_cap;
-        while (y > 0 && y + k < (uint64_t)height && same_row(row + k * stride, row + k * stride - stride, width, bits)) k++;
-        if (k) { /* each adds line bytes and the row's sums: s2 += line s1 + r2, s1 += r1, k times */
-            s2 = (s2 + k % M * (line % M) % M * s1 + (k * (k - 1) / 2) % M * (line % M) % M * r1 + k % M * r2) % M;
-            s1 = (s1 + k % M * r1) % M;
-            push_repeats(&e, row_bytes, k);
-            y += (int)k - 1;
-            continue;
-        }
-        e.above = e.runs, e.above_cap = e.run_cap, e.above_count = e.run_count; /* a row that differs: new runs */
-        e.runs = swap, e.run_cap = swap_cap, e.run_count = 0;
-        if (depth == 8) mask_row_runs(row, bits, width, keep_run, &e);
-        else {
-            mask_row_runs(row, 8, (int)whole, keep_run, &e);
-            if (whole < row_bytes) keep_run(&e, row[whole] & tail, 1);
-        }
-        for (r1 = r2 = 0, r = 0; r < e.run_count; r++) {
-            uint64_t v = e.runs[r] >> 24, n = e.runs[r] & 0xFFFFFF;
-            r2 = (r2 + n * r1 + v * (n * (n + 1) / 2 % M)) % M;
-            r1 = (r1 + n * v) % M;
-        }
-        s2 = (s2 + line % M * s1 + r2) % M;
-        s1 = (s1 + r1) % M;
-        if (!e.failed) push_row(&e, row_bytes, 0);
+    if (mask_scan_begin(&c->scan, image, stride, width, bits, height)) goto done;
+    png_begin(&c->png, width, depth);
+    if (layer) {
+        mask_rle_begin(&c->rle, width, bits);
+        mask_crc_begin(&crc, c->scan.row_bytes);
     }
-    emit_pending(&e);
-    free(e.runs);
-    free(e.above);
-    if (!deflate_end(e.d, !e.failed, &z, &zsize))
-        rc = wrap(width, height, depth, 0, z, zsize, (uint32_t)(s2 << 16 | s1), out, out_size);
-    free(z);
+    while (!c->png.failed && mask_scan_next(&c->scan)) {
+        png_step(&c->png, &c->scan);
+        if (layer) {
+            mask_rle_step(&c->rle, &c->scan);
+            mask_crc_step(&crc, &c->scan);
+        }
+    }
+    if ((rc = png_end(&c->png, width, height, out, out_size)) || !layer) goto done;
+    rc = -1;
+    if (!mask_rle_end(&c->rle) && (layer->rle = (unsigned char *)malloc(c->rle.code.size ? c->rle.code.size : 1)) != NULL) {
+        memcpy(layer->rle, c->rle.code.data, c->rle.code.size);
+        layer->rle_size = c->rle.code.size;
+        layer->crc = crc.crc;
+        rc = 0;
+    }
+    if (rc) {
+        free(*out);
+        *out = NULL;
+        *out_size = 0;
+    }
+done:
+    give_coder(c);
     return rc;
+}
+
+int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, png_layer *layer)
+{
+    memset(layer, 0, sizeof *layer);
+    return encode_runs(image, width, height, stride, bits, bits, &layer->png, &layer->png_size, layer);
 }
 
 int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
                     size_t *out_size)
 {
-    return encode_runs(image, width, height, stride, bits, 8, out, out_size);
+    return encode_runs(image, width, height, stride, bits, 8, out, out_size, NULL);
 }
 
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
                     unsigned char **out, size_t *out_size)
 {
-    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, out, out_size);
+    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, out, out_size, NULL);
     if (bits != 8) {
         *out = NULL;
         *out_size = 0;

@@ -32,6 +32,19 @@ int png_encode_rgb(const unsigned char *rgb, int width, int height, unsigned cha
 int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
                     size_t *out_size);
 
+/* A layer of a job directory: its PNG (1-bit as png_encode_gray codes it,
+   8-bit as png_encode_mask) and, from the same one reading of its rows
+   (mask_scan: the coders share each row's runs), masks.rle's code of it
+   (adaslice_rle_encode's bytes) and the CRC-32 of its rows' bytes. png and
+   rle are malloc'd (the caller frees them). -1 as png_encode_mask, and for
+   a height of 2^24 or more, with nothing allocated. */
+typedef struct png_layer {
+    unsigned char *png, *rle;
+    size_t png_size, rle_size;
+    uint32_t crc;
+} png_layer;
+int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, png_layer *layer);
+
 /* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
    result back in continues it over more data. (CRC-32 is adaslice_crc32.) */
 uint32_t png_adler32(uint32_t adler, const void *data, size_t size);

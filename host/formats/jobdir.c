@@ -6,7 +6,6 @@
 #include "../json.h"
 #include "jobdir.h"
 #include "jobfile.h"
-#include "../codec/maskrows.h"
 #include "../layers.h"
 #include "../output.h"
 #include "../codec/png.h"
@@ -505,30 +504,26 @@ static int write_layer_png(const char *path, unsigned char *png, size_t size)
 }
 
 /* The layer's PNG goes straight to its own file; the blob is its mask code
-   and CRC for masks.rle. */
+   and CRC for masks.rle, all three from one reading of the layer's rows. */
 static int dir_encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
 {
     const dir_writer *w = (const dir_writer *)writer;
     const job_masks *m = &w->masks;
-    size_t bound = adaslice_rle_bound(m->width, m->height, (int)m->bits), size;
-    unsigned char *png = NULL;
     char *path = (char *)malloc(w->path_size);
+    png_layer coded;
     int rc;
-    /* 8-bit masks code fastest from their runs; 1-bit ones stay 1-bit PNGs */
-    if (!path || (m->bits == 8 ? png_encode_mask : png_encode_gray)(image, (int)m->width, (int)m->height, stride,
-                                                                   (int)m->bits, &png, &size)) {
+    if (!path || png_encode_layer(image, (int)m->width, (int)m->height, stride, (int)m->bits, &coded)) {
         free(path);
         return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
     }
     layer_path(path, w->path_size, w->dir, k, w->digits, "png");
-    rc = write_layer_png(path, png, size);
+    rc = write_layer_png(path, coded.png, coded.png_size);
     free(path);
-    if (rc) return rc;
-    if (job_blob_reserve(blob, bound)) return complain(RC_FAIL, "out of memory coding layer %zu", k + 1);
-    if (adaslice_rle_encode(image, stride, m->width, m->height, (int)m->bits, blob->data, bound, &blob->size) != ADASLICE_OK)
-        return complain(RC_FAIL, "layer %zu: its mask does not code", k + 1);
-    blob->crc = mask_crc32(image, stride, stride, (int)m->height);
-    return RC_OK;
+    free(blob->data);
+    blob->data = coded.rle;
+    blob->size = blob->cap = coded.rle_size;
+    blob->crc = coded.crc;
+    return rc;
 }
 
 static int dir_put(void *writer, size_t k, job_blob *blob)

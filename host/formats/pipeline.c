@@ -17,9 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
 enum { SLOT_FREE, SLOT_RENDERING, SLOT_BUSY, SLOT_RENDERED, SLOT_ENCODED };
 
@@ -180,17 +177,6 @@ int pipeline_run(const pipeline_job *job)
     pthread_t threads[64];
     int helpers = job->threads > 1 ? job->threads - 1 : 0, started = 0, i, rc = RC_OK;
     if (helpers > 63) helpers = 63;
-#ifdef __GLIBC__
-    /* Every layer's coding takes buffers of megabytes (a PNG's filtered
-       rows) and frees them. Off the main thread glibc hands such memory back
-       to the system as it is freed, and the next layer faults it in again
-       page by page: two threads took 94,000 page faults on the turbine
-       blade's directory job against 12,000 on one, and a third more CPU in
-       all. Fixed thresholds keep freed memory (up to what the layers in
-       flight held at once) for the next layer. */
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);
-    mallopt(M_TRIM_THRESHOLD, 256 << 20);
-#endif
     memset(&p, 0, sizeof p);
     p.job = job;
     p.count = pipeline_images(helpers + 1);
