@@ -53,6 +53,10 @@
        adaslice_result adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width, uint32_t height,
                                            int bits, unsigned char *out, size_t capacity, size_t *size);
            code a mask
+       size_t adaslice_rle_put_repeat(unsigned char *out, uint32_t rows);
+       size_t adaslice_rle_put_row(unsigned char *out, uint32_t runs);
+       size_t adaslice_rle_put_run(unsigned char *out, int bits, unsigned value, uint32_t length);
+           the code's records, for an encoder that finds the runs itself
        adaslice_result adaslice_rle_decoder_init(adaslice_rle_decoder *dec, uint32_t width, uint32_t height, int bits,
                                                  unsigned char *row, size_t row_size);
            a streaming decoder
@@ -240,6 +244,15 @@ ADASLICE_DEF size_t adaslice_rle_bound(uint32_t width, uint32_t height, int bits
 ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, size_t stride, uint32_t width,
                                                  uint32_t height, int bits, unsigned char *out, size_t capacity,
                                                  size_t *size);
+
+/* The code's records into out (NULL: only counted), each returning its
+   bytes (5 at most; a run of 8-bit pixels 6): `rows` (>= 1) rows the same
+   as the row above (before the first row: dark), a row of `runs` runs that
+   follow, one run of `length` pixels (8-bit: of grey `value`; 1-bit: dark
+   and lit in turn, dark first). adaslice_rle_encode writes with these. */
+ADASLICE_DEF size_t adaslice_rle_put_repeat(unsigned char *out, uint32_t rows);
+ADASLICE_DEF size_t adaslice_rle_put_row(unsigned char *out, uint32_t runs);
+ADASLICE_DEF size_t adaslice_rle_put_run(unsigned char *out, int bits, unsigned value, uint32_t length);
 
 typedef struct adaslice_rle_decoder { /* its fields are private */
     uint32_t width, height, stride;
@@ -713,6 +726,23 @@ static int adaslice__rows_equal(const unsigned char *a, const unsigned char *b, 
     return adaslice__fill_end(a, 0, whole, 0) == whole && (!tail || !(a[whole] & pixels));
 }
 
+ADASLICE_DEF size_t adaslice_rle_put_repeat(unsigned char *out, uint32_t rows)
+{
+    return adaslice_varint_put(out, (rows - 1u) << 1 | 1u);
+}
+
+ADASLICE_DEF size_t adaslice_rle_put_row(unsigned char *out, uint32_t runs)
+{
+    return adaslice_varint_put(out, runs << 1);
+}
+
+ADASLICE_DEF size_t adaslice_rle_put_run(unsigned char *out, int bits, unsigned value, uint32_t length)
+{
+    if (bits != 8) return adaslice_varint_put(out, length);
+    if (out) *out++ = (unsigned char)value;
+    return 1 + adaslice_varint_put(out, length);
+}
+
 /* The runs of one row into out (NULL: only counted); returns the runs. */
 static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int bits, unsigned char *out, size_t *size)
 {
@@ -722,9 +752,7 @@ static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int
         while (x < width) {
             uint32_t start = x;
             x = adaslice__fill_end(row, x, width, row[x]);
-            if (out) out[n] = row[start];
-            n++;
-            n += adaslice_varint_put(out ? out + n : NULL, x - start);
+            n += adaslice_rle_put_run(out ? out + n : NULL, 8, row[start], x - start);
             runs++;
         }
     } else {
@@ -732,7 +760,7 @@ static uint32_t adaslice__rle_runs(const unsigned char *row, uint32_t width, int
         while (x < width) {
             uint32_t start = x;
             x = adaslice__run_end_1(row, x, width, lit);
-            n += adaslice_varint_put(out ? out + n : NULL, x - start);
+            n += adaslice_rle_put_run(out ? out + n : NULL, 1, lit, x - start);
             runs++;
             lit ^= 1u;
         }
@@ -760,7 +788,7 @@ ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, siz
         const unsigned char *row = y < height ? image + (size_t)y * stride : NULL;
         if (row && adaslice__rows_equal(row, prev, width, bits)) { repeat++; prev = row; continue; }
         if (repeat) {
-            size_t h = adaslice_varint_put(spill, ((repeat - 1u) << 1) | 1u);
+            size_t h = adaslice_rle_put_repeat(spill, repeat);
             if (capacity - n < h) return ADASLICE_ERR_OVERFLOW;
             memcpy(out + n, spill, h);
             n += h;
@@ -772,12 +800,12 @@ ADASLICE_DEF adaslice_result adaslice_rle_encode(const unsigned char *image, siz
             uint32_t runs;
             if (capacity - n >= worst_row) {
                 runs = adaslice__rle_runs(row, width, bits, out + n + 5, &row_bytes);
-                h = adaslice_varint_put(spill, runs << 1);
+                h = adaslice_rle_put_row(spill, runs);
                 memmove(out + n + h, out + n + 5, row_bytes);
                 memcpy(out + n, spill, h);
             } else { /* near the end of a small buffer: counted first */
                 runs = adaslice__rle_runs(row, width, bits, NULL, &row_bytes);
-                h = adaslice_varint_put(spill, runs << 1);
+                h = adaslice_rle_put_row(spill, runs);
                 if (capacity - n < h + row_bytes) return ADASLICE_ERR_OVERFLOW;
                 memcpy(out + n, spill, h);
                 (void)adaslice__rle_runs(row, width, bits, out + n + h, &row_bytes);

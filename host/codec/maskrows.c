@@ -176,7 +176,7 @@ static void rle_repeats(mask_rle *r)
 {
     unsigned char *p;
     if (!r->repeat || !(p = bytebuf_room(&r->code, 5))) return;
-    r->code.size += adaslice_varint_put(p, (r->repeat - 1) << 1 | 1u);
+    r->code.size += adaslice_rle_put_repeat(p, r->repeat);
     r->repeat = 0;
 }
 
@@ -209,10 +209,10 @@ void mask_rle_step(mask_rle *r, const mask_scan *s)
     }
     rle_repeats(r);
     if (!(p = bytebuf_room(&r->code, 5 + 5 * runs))) return; /* lengths under 2^24: 4 bytes each at most */
-    n = adaslice_varint_put(p, (uint32_t)runs << 1);
+    n = adaslice_rle_put_row(p, (uint32_t)runs);
     for (i = 0; i < runs; i++) {
-        if (r->bits == 8) p[n++] = (unsigned char)(s->runs[i] >> 24);
-        n += adaslice_varint_put(p + n, r->bits == 8 ? s->runs[i] & 0xFFFFFF : r->lengths[i]);
+        if (r->bits == 8) n += adaslice_rle_put_run(p + n, 8, s->runs[i] >> 24, s->runs[i] & 0xFFFFFF);
+        else n += adaslice_rle_put_run(p + n, 1, (unsigned)(i & 1), r->lengths[i]);
     }
     r->code.size += n;
 }

@@ -49,11 +49,12 @@ int mask_scan_next(mask_scan *s);
 void mask_scan_runs(const mask_scan *s, int pixels, mask_run_fn run, void *ctx);
 void mask_scan_free(mask_scan *s);
 
-/* masks.rle's code of a layer, adaslice_rle_encode's bytes, from its scan:
-   the printer's encoder (adaslice_mcu.h) reads the rows itself, which on
-   the host would be a layer's megabytes from memory once more. 1-bit runs
-   of pixels come from the runs of bytes. The code grows in `code` (kept by
-   mask_rle_begin for the next layer; code.failed: out of memory). */
+/* masks.rle's code of a layer, adaslice_rle_encode's bytes, from its scan,
+   its records written by the same adaslice_rle_put_*: the printer's
+   encoder (adaslice_mcu.h) reads the rows itself, which on the host would
+   be a layer's megabytes from memory once more. 1-bit runs of pixels come
+   from the runs of bytes. The code grows in `code` (kept by mask_rle_begin
+   for the next layer; code.failed: out of memory). */
 typedef struct mask_rle {
     int width, bits;
     uint32_t repeat;                 /* rows owed to a repeat record */
