@@ -6853,7 +6853,7 @@ static uint64_t adaslice__spread10(uint32_t x)
    writes the table in cache instead of across a whole model's worth of
    memory. A maximum does not depend on the order of its terms, so the
    profiles are as before, bit for bit. */
-static int adaslice__orienter_sort(adaslice_orienter *o)
+static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], const double hi[3])
 {
     const adaslice_mesh *m = o->mesh;
     const adaslice_allocator *al = &o->allocator;
@@ -6862,21 +6862,20 @@ static int adaslice__orienter_sort(adaslice_orienter *o)
     uint32_t *order = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 2 * n, sizeof *order));
     uint32_t *number = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof *number));
     adaslice_mesh *s = &o->sorted;
-    double lo[3], hi[3], scale[3];
+    double scale[3];
     int k, ok = 0;
     s->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, m->vertex_count, 3 * sizeof(float)));
     s->triangles = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, 3 * sizeof(uint32_t)));
     if (o->profile.weights) o->weights = ADASLICE__CAST(float *, adaslice__alloc(al, n, sizeof(float)));
     if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
-    adaslice_mesh_bounds(m, lo, hi);
     for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
     for (t = 0; t < n; t++) {
         const uint32_t *tri = m->triangles + 3 * t;
         uint64_t code = 0;
         for (k = 0; k < 3; k++) {
-            double sum = (double)m->vertices[3 * (size_t)tri[0] + k] + m->vertices[3 * (size_t)tri[1] + k] +
-                         m->vertices[3 * (size_t)tri[2] + k] - 3 * lo[k];
-            code |= adaslice__spread10((uint32_t)(sum * scale[k])) << k;
+            double q = ((double)m->vertices[3 * (size_t)tri[0] + k] + m->vertices[3 * (size_t)tri[1] + k] +
+                        m->vertices[3 * (size_t)tri[2] + k] - 3 * lo[k]) * scale[k];
+            code |= adaslice__spread10(q >= 0 && q <= 1023 ? (uint32_t)q : 0) << k;
         }
         key[t] = code;
         order[t] = (uint32_t)t;
@@ -6909,7 +6908,8 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
                                                     const adaslice_plan_options *plan, adaslice_error *err)
 {
     size_t t;
-    double edge2 = 0, reach2 = 0;
+    double edge2 = 0, reach2 = 0, lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    int k;
     if (!o) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: no orienter given");
     memset(o, 0, sizeof *o);
     if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "orient: the mesh has no triangles");
@@ -6930,10 +6930,14 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
         double e2 = dx * dx + dy * dy + dz * dz, r2 = (double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2];
         edge2 = e2 > edge2 ? e2 : edge2;
         reach2 = r2 > reach2 ? r2 : reach2;
+        for (k = 0; k < 3; k++) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
     }
     o->longest_edge = sqrt(edge2);
     o->reach = sqrt(reach2);
-    if (o->profile.metric < ADASLICE_METRIC_AREA && !adaslice__orienter_sort(o)) {
+    if (o->profile.metric < ADASLICE_METRIC_AREA && !adaslice__orienter_sort(o, lo, hi)) {
         adaslice_orienter_free(o);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
     }
