@@ -3,6 +3,7 @@
 #include "../host/report.h"
 #include "../host/search.h"
 #include "check.h"
+#include "failing_alloc.h"
 #include "meshgen.h"
 #include <math.h>
 #include <string.h>
@@ -411,6 +412,48 @@ static void sorted_copy_keeps_weights_and_heights(void)
     free(d);
 }
 
+/* Out of memory at any allocation, the orienter's set-up (its sorted copy,
+   the weights in that order) or a profile along a direction whole or in
+   chunks: ADASLICE_ERR_NOMEM and no block left behind. */
+static void out_of_memory_leaks_nothing(void)
+{
+    static const double d[2][3] = {{1, 0, 0}, {0, 0, 1}}; /* in chunks (49,000 bins), whole */
+    adaslice_mesh m = sphere_row(10, 16, 12);
+    adaslice_allocator al = {0, 0, 0};
+    adaslice_error e;
+    failing f;
+    float *w = (float *)malloc(m.triangle_count * sizeof *w);
+    size_t i;
+    int fail_at, done = 0;
+    for (i = 0; i < m.triangle_count; i++) w[i] = (float)(i % 5) / 4;
+    al = failing_allocator(&f);
+    for (fail_at = 0; !done && fail_at < 100; fail_at++) {
+        adaslice_orienter o;
+        adaslice_profile_options po;
+        adaslice_result r;
+        int k;
+        memset(&po, 0, sizeof po);
+        po.bin = 0.001;
+        po.weights = w;
+        po.allocator = &al;
+        f.left = fail_at;
+        f.live = 0;
+        r = adaslice_orienter_init(&o, &m, &po, NULL, &e);
+        for (k = 0; k < 2 && r == ADASLICE_OK; k++) {
+            adaslice_direction_score s;
+            r = adaslice_orienter_score(&o, d[k], &s, &e);
+            CHECK(r != ADASLICE_OK || s.feasible);
+        }
+        adaslice_orienter_free(&o); /* a failed set-up leaves it zeroed */
+        CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "failing at allocation %d: %s", fail_at, e.message);
+        CHECKF(f.live == 0, "failing at allocation %d: %ld blocks left", fail_at, f.live);
+        done = r == ADASLICE_OK;
+    }
+    CHECKF(done && fail_at > 8, "succeeded at allocation %d", fail_at);
+    gen_free(&m);
+    free(w);
+}
+
 /* Minima are lower than everything around them, so no two are neighbours. */
 static void minima_are_apart(void)
 {
@@ -466,4 +509,5 @@ void test_orient(void)
     RUN(search_matches_a_brute_force_reference);
     RUN(threaded_search_matches_the_turned_meshes);
     RUN(sorted_copy_keeps_weights_and_heights);
+    RUN(out_of_memory_leaks_nothing);
 }
