@@ -946,7 +946,9 @@ typedef struct adaslice_orienter {
     const adaslice_mesh *mesh;
     adaslice_profile_options profile;  /* copies of the options given */
     adaslice_plan_options plan;
-    unsigned char *used;               /* per vertex: some triangle uses it (height ranges) */
+    adaslice_mesh sorted;              /* max-type metrics: the triangles in space-filling-curve
+                                          order and the vertices they use, renumbered */
+    float *weights;                    /* the profile's weights in that order, or NULL */
     double longest_edge, reach;        /* of any triangle; the farthest used vertex from the origin */
     adaslice_allocator allocator;
 } adaslice_orienter;
@@ -5369,9 +5371,7 @@ ADASLICE_DEF void adaslice_profile_free(adaslice_profile *profile)
 }
 
 
-#ifndef ADASLICE_NO_WEIGHTS
-/* ---- weights: mean curvature */
-
+#if !defined(ADASLICE_NO_WEIGHTS) || !defined(ADASLICE_NO_ORIENT)
 /* LSD radix sort of keys by bytes, carrying a payload each and skipping the
    bytes all keys share; tmp and tmp_payload are scratch. */
 static void adaslice__sort_keys(uint64_t *key, uint32_t *payload, uint64_t *tmp, uint32_t *tmp_payload, size_t n)
@@ -5399,6 +5399,10 @@ static void adaslice__sort_keys(uint64_t *key, uint32_t *payload, uint64_t *tmp,
         memcpy(payload, pfrom, n * sizeof *payload);
     }
 }
+#endif
+
+#ifndef ADASLICE_NO_WEIGHTS
+/* ---- weights: mean curvature */
 
 /* Twice the area of triangle t and the cotangents of its angles; 0 when it
    has no area (repeated corners included), which callers skip. */
@@ -6829,11 +6833,83 @@ ADASLICE_DEF void adaslice_plan_free(adaslice_plan *plan)
 
 /* =========================================================== orientation */
 #ifndef ADASLICE_NO_ORIENT
+/* x's low 10 bits spread out to every third bit: a coordinate's share of a
+   30-bit Morton code. */
+static uint64_t adaslice__spread10(uint32_t x)
+{
+    uint64_t v = x & 1023u;
+    v = (v | v << 16) & 0x030000ffu;
+    v = (v | v << 8) & 0x0300f00fu;
+    v = (v | v << 4) & 0x030c30c3u;
+    v = (v | v << 2) & 0x09249249u;
+    return v;
+}
+
+/* The triangles sorted along a Morton curve through their centroids, their
+   vertices numbered in the order the sorted triangles first use them (the
+   unused ones left out), a facet's corners kept in their order. Triangles
+   near in space are then near in memory whatever the direction, and so are
+   the bins of the profile they update: the search gathers corners and
+   writes the table in cache instead of across a whole model's worth of
+   memory. A maximum does not depend on the order of its terms, so the
+   profiles are as before, bit for bit. */
+static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], const double hi[3])
+{
+    const adaslice_mesh *m = o->mesh;
+    const adaslice_allocator *al = &o->allocator;
+    size_t n = m->triangle_count, t, used = 0;
+    uint64_t *key = ADASLICE__CAST(uint64_t *, adaslice__alloc(al, 2 * n, sizeof *key));
+    uint32_t *order = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 2 * n, sizeof *order));
+    uint32_t *number = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof *number));
+    adaslice_mesh *s = &o->sorted;
+    double scale[3];
+    int k, ok = 0;
+    s->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, m->vertex_count, 3 * sizeof(float)));
+    s->triangles = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, 3 * sizeof(uint32_t)));
+    if (o->profile.weights) o->weights = ADASLICE__CAST(float *, adaslice__alloc(al, n, sizeof(float)));
+    if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
+    for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
+    for (t = 0; t < n; t++) {
+        const uint32_t *tri = m->triangles + 3 * t;
+        uint64_t code = 0;
+        for (k = 0; k < 3; k++) {
+            double q = ((double)m->vertices[3 * (size_t)tri[0] + k] + m->vertices[3 * (size_t)tri[1] + k] +
+                        m->vertices[3 * (size_t)tri[2] + k] - 3 * lo[k]) * scale[k];
+            code |= adaslice__spread10(q >= 0 && q <= 1023 ? (uint32_t)q : 0) << k;
+        }
+        key[t] = code;
+        order[t] = (uint32_t)t;
+    }
+    adaslice__sort_keys(key, order, key + n, order + n, n);
+    memset(number, 0xff, m->vertex_count * sizeof *number);
+    for (t = 0; t < n; t++) {
+        for (k = 0; k < 3; k++) {
+            uint32_t v = m->triangles[3 * (size_t)order[t] + k];
+            if (number[v] == 0xffffffffu) {
+                memcpy(s->vertices + 3 * used, m->vertices + 3 * (size_t)v, 3 * sizeof(float));
+                number[v] = (uint32_t)used++;
+            }
+            s->triangles[3 * t + k] = number[v];
+        }
+        if (o->weights) o->weights[t] = o->profile.weights[order[t]];
+    }
+    s->vertex_count = used;
+    s->triangle_count = n;
+    ok = 1;
+done:
+    adaslice__free(al, key);
+    adaslice__free(al, order);
+    adaslice__free(al, number);
+    return ok;
+}
+
 ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const adaslice_mesh *mesh,
                                                     const adaslice_profile_options *profile,
                                                     const adaslice_plan_options *plan, adaslice_error *err)
 {
     size_t t;
+    double edge2 = 0, reach2 = 0, lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    int k;
     if (!o) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "orient: no orienter given");
     memset(o, 0, sizeof *o);
     if (!mesh || !mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "orient: the mesh has no triangles");
@@ -6842,24 +6918,28 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
     if (plan) o->plan = *plan;
     o->allocator = adaslice__allocator(profile ? profile->allocator : NULL);
     /* indices are checked here once, not for every direction */
-    o->used = ADASLICE__CAST(unsigned char *, adaslice__alloc(&o->allocator, mesh->vertex_count ? mesh->vertex_count : 1, 1));
-    if (!o->used) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
-    memset(o->used, 0, mesh->vertex_count);
-    for (t = 0; t < 3 * mesh->triangle_count; t++) {
-        if (mesh->triangles[t] >= mesh->vertex_count) {
-            adaslice_orienter_free(o);
+    for (t = 0; t < 3 * mesh->triangle_count; t++)
+        if (mesh->triangles[t] >= mesh->vertex_count)
             return adaslice__fail(err, ADASLICE_ERR_INDEX, 0, 0, "orient: triangle %zu uses vertex %u of %zu", t / 3,
                                   (unsigned)mesh->triangles[t], mesh->vertex_count);
-        }
-        o->used[mesh->triangles[t]] = 1;
-    }
+    /* the square roots of the largest squares: sqrt keeps the order */
     for (t = 0; t < 3 * mesh->triangle_count; t++) {
         const float *p = mesh->vertices + 3 * (size_t)mesh->triangles[t],
                     *q = mesh->vertices + 3 * (size_t)mesh->triangles[t % 3 == 2 ? t - 2 : t + 1];
         double dx = (double)q[0] - p[0], dy = (double)q[1] - p[1], dz = (double)q[2] - p[2];
-        double edge = sqrt(dx * dx + dy * dy + dz * dz), r = sqrt((double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2]);
-        o->longest_edge = edge > o->longest_edge ? edge : o->longest_edge;
-        o->reach = r > o->reach ? r : o->reach;
+        double e2 = dx * dx + dy * dy + dz * dz, r2 = (double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2];
+        edge2 = e2 > edge2 ? e2 : edge2;
+        reach2 = r2 > reach2 ? r2 : reach2;
+        for (k = 0; k < 3; k++) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+    }
+    o->longest_edge = sqrt(edge2);
+    o->reach = sqrt(reach2);
+    if (o->profile.metric < ADASLICE_METRIC_AREA && !adaslice__orienter_sort(o, lo, hi)) {
+        adaslice_orienter_free(o);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
     }
     adaslice__ok(err);
     return ADASLICE_OK;
@@ -6880,7 +6960,9 @@ static size_t adaslice__longest_run(const adaslice_orienter *o)
 ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
 {
     if (!o) return;
-    adaslice__free(&o->allocator, o->used);
+    adaslice__free(&o->allocator, o->sorted.vertices);
+    adaslice__free(&o->allocator, o->sorted.triangles);
+    adaslice__free(&o->allocator, o->weights);
     memset(o, 0, sizeof *o);
 }
 
@@ -6918,14 +7000,14 @@ typedef struct adaslice__run {
 static adaslice_result adaslice__max_along(const adaslice_orienter *o, const adaslice__turned_corner *cv,
                                            const adaslice_profile_options *opt, adaslice_profile *p, adaslice_error *err)
 {
-    const adaslice_mesh *m = o->mesh;
+    const adaslice_mesh *m = &o->sorted;
     adaslice_allocator al = p->allocator;
     adaslice_profile_options quiet;
     adaslice__rmax rmax;
     adaslice__run *sorted = NULL;
     size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c;
     adaslice_metric metric = opt->metric;
-    const float *weights = opt->weights;
+    const float *weights = o->weights;
     double rough = opt->roughness_max;
     int levels, shift;
 
@@ -7018,7 +7100,7 @@ nomem:
 ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, const double d[3],
                                                     adaslice_profile *profile, adaslice_error *err)
 {
-    const adaslice_mesh *m = o->mesh;
+    const adaslice_mesh *m = &o->sorted;
     adaslice_allocator al = o->allocator;
     adaslice_profile_options opt;
     adaslice__turned_corner *cv;
@@ -7034,7 +7116,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
            makes it, so that planning the turned mesh later gives this very
            profile */
         adaslice_mesh turned;
-        if (!adaslice__turned_copy(m, rot, &al, &turned))
+        if (!adaslice__turned_copy(o->mesh, rot, &al, &turned))
             return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
         r = adaslice__profile_exact(&turned, &o->profile, NULL, 0, profile, err);
         adaslice__free(&al, turned.vertices);
@@ -7042,15 +7124,15 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
     }
     /* the corners turned as adaslice_mesh_rotate turns them, so that planning
        the turned mesh later gives this very profile */
-    cv = ADASLICE__CAST(adaslice__turned_corner *, adaslice__alloc(&al, m->vertex_count ? m->vertex_count : 1, sizeof *cv));
+    cv = ADASLICE__CAST(adaslice__turned_corner *, adaslice__alloc(&al, m->vertex_count, sizeof *cv));
     if (!cv) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
     zrange[0] = DBL_MAX;
     zrange[1] = -DBL_MAX;
-    for (v = 0; v < m->vertex_count; v++) {
+    for (v = 0; v < m->vertex_count; v++) { /* every one used */
         float *q = cv[v].p;
         adaslice__turn_vertex(rot, m->vertices + 3 * v, q);
-        zrange[0] = o->used[v] && q[2] < zrange[0] ? q[2] : zrange[0];
-        zrange[1] = o->used[v] && q[2] > zrange[1] ? q[2] : zrange[1];
+        zrange[0] = q[2] < zrange[0] ? q[2] : zrange[0];
+        zrange[1] = q[2] > zrange[1] ? q[2] : zrange[1];
     }
     if ((r = adaslice__profile_begin(m, &o->profile, profile, &opt, zrange, err)) != ADASLICE_OK) {
         adaslice__free(&al, cv);

@@ -339,11 +339,6 @@ ADASLICE_DEF int adaslice_rle_finished(const adaslice_rle_decoder *dec);
 
 #define ADASLICE__UNREACHED ADASLICE_UNREACHED
 
-static uint32_t adaslice__dp_queue_at(const adaslice_dp *dp, uint32_t k)
-{
-    return dp->queue[(dp->head + k) & (dp->cap - 1)];
-}
-
 static void adaslice__dp_set_back(adaslice_dp *dp, uint32_t plane, uint32_t len)
 {
     if (dp->width == 1) dp->back[plane] = (unsigned char)len;
@@ -367,13 +362,6 @@ static uint64_t adaslice__dp_error(const adaslice_dp *dp, uint32_t l)
     return dp->volume ? dp->run[l & (dp->cap - 1)] : adaslice__dp_sum(dp, l);
 }
 
-/* (layers, worst) of plane a is at least that of plane b, lexicographically */
-static int adaslice__dp_no_better(const adaslice_dp *dp, uint32_t a, uint32_t b)
-{
-    uint32_t ka = dp->layers[a & (dp->cap - 1)], kb = dp->layers[b & (dp->cap - 1)];
-    return ka != kb ? ka > kb : dp->worst[a & (dp->cap - 1)] >= dp->worst[b & (dp->cap - 1)];
-}
-
 static void adaslice__dp_start(adaslice_dp *dp)
 {
     dp->plane = 0;
@@ -394,44 +382,56 @@ static void adaslice__dp_start(adaslice_dp *dp)
    larger worst error beats an older one for good, its layer being shorter.
    The front block (fewest layers) has worst[] increasing and layer error
    decreasing along the queue, so the best max(worst, error) sits where the two
-   cross; `scan` finds that point and only moves forward: O(1) amortised. */
-static void adaslice__dp_choose_additive(adaslice_dp *dp, uint32_t *best)
+   cross; `scan` finds that point and only moves forward: O(1) amortised.
+   The queue's state is held in locals: a store into the rings could be a
+   store into the planner's own fields as far as the compiler knows, which
+   would reload them after each store. */
+static uint32_t adaslice__dp_choose_additive(adaslice_dp *dp)
 {
-    uint32_t i = dp->plane, kf, a, b, pos;
-    uint64_t va, vb;
+    uint32_t i = dp->plane, m = dp->cap - 1, head = dp->head, count = dp->count, scan = dp->scan, bottom = dp->floor;
+    uint32_t kf, a, b, best = ADASLICE__UNREACHED;
+    const uint32_t *layers = dp->layers;
+    const uint64_t *worst = dp->worst, *prefix = dp->prefix;
+    uint32_t *queue = dp->queue;
+    uint64_t top = prefix[i & m], va, vb;
     if (i >= dp->lo) {
-        uint32_t l = i - dp->lo;
-        if (l >= dp->floor && dp->layers[l & (dp->cap - 1)] != ADASLICE__UNREACHED) {
-            while (dp->count && adaslice__dp_no_better(dp, adaslice__dp_queue_at(dp, dp->count - 1), l)) dp->count--;
-            if (dp->scan > dp->count) dp->scan = dp->count;
-            ADASLICE_ASSERT(dp->count < dp->cap);
-            dp->queue[(dp->head + dp->count++) & (dp->cap - 1)] = l;
+        uint32_t l = i - dp->lo, kl = layers[l & m];
+        if (l >= bottom && kl != ADASLICE__UNREACHED) {
+            uint64_t wl = worst[l & m];
+            for (; count; count--) { /* drop those (layers, worst) no better than l's */
+                uint32_t q = queue[(head + count - 1) & m], kq = layers[q & m];
+                if (kq != kl ? kq < kl : worst[q & m] < wl) break;
+            }
+            if (scan > count) scan = count;
+            ADASLICE_ASSERT(count < dp->cap);
+            queue[(head + count++) & m] = l;
         }
     }
-    while (dp->count) {
-        uint32_t f = adaslice__dp_queue_at(dp, 0);
-        if (f + dp->hi >= i && f >= dp->floor && adaslice__dp_sum(dp, f) <= dp->eps) break;
-        dp->head = (dp->head + 1) & (dp->cap - 1);
-        dp->count--;
-        if (dp->scan) dp->scan--;
+    for (; count; count--) {
+        uint32_t f = queue[head];
+        if (f + dp->hi >= i && f >= bottom && top - prefix[f & m] <= dp->eps) break;
+        head = (head + 1) & m;
+        if (scan) scan--;
     }
-    *best = ADASLICE__UNREACHED;
-    if (!dp->count) return;
-    kf = dp->layers[adaslice__dp_queue_at(dp, 0) & (dp->cap - 1)];
-    while (dp->scan < dp->count) {
-        uint32_t l = adaslice__dp_queue_at(dp, dp->scan);
-        if (dp->layers[l & (dp->cap - 1)] != kf || dp->worst[l & (dp->cap - 1)] >= adaslice__dp_sum(dp, l)) break;
-        dp->scan++;
+    if (count) {
+        kf = layers[queue[head] & m];
+        for (; scan < count; scan++) {
+            uint32_t l = queue[(head + scan) & m];
+            if (layers[l & m] != kf || worst[l & m] >= top - prefix[l & m]) break;
+        }
+        /* candidate before the crossing: its layer error dominates */
+        a = scan > 0 ? queue[(head + scan - 1) & m] : ADASLICE__UNREACHED;
+        va = a != ADASLICE__UNREACHED ? top - prefix[a & m] : UINT64_MAX;
+        /* candidate at the crossing: its worst so far dominates */
+        b = scan < count ? queue[(head + scan) & m] : ADASLICE__UNREACHED;
+        if (b != ADASLICE__UNREACHED && layers[b & m] != kf) b = ADASLICE__UNREACHED;
+        vb = b != ADASLICE__UNREACHED ? worst[b & m] : UINT64_MAX;
+        best = va <= vb ? a : b;
     }
-    pos = dp->scan;
-    /* candidate before the crossing: its layer error dominates */
-    a = pos > 0 ? adaslice__dp_queue_at(dp, pos - 1) : ADASLICE__UNREACHED;
-    va = a != ADASLICE__UNREACHED ? adaslice__dp_sum(dp, a) : UINT64_MAX;
-    /* candidate at the crossing: its worst so far dominates */
-    b = pos < dp->count ? adaslice__dp_queue_at(dp, pos) : ADASLICE__UNREACHED;
-    if (b != ADASLICE__UNREACHED && dp->layers[b & (dp->cap - 1)] != kf) b = ADASLICE__UNREACHED;
-    vb = b != ADASLICE__UNREACHED ? dp->worst[b & (dp->cap - 1)] : UINT64_MAX;
-    *best = va <= vb ? a : b;
+    dp->head = head;
+    dp->count = count;
+    dp->scan = scan;
+    return best;
 }
 
 /* Volume deviation (eq. 20) is not additive: every plane in the window is
@@ -472,7 +472,7 @@ ADASLICE_DEF void adaslice_dp_push(adaslice_dp *dp, uint64_t units, int forced)
         adaslice__dp_choose_volume(dp, &best);
     } else {
         dp->prefix[i & (c - 1)] = dp->prefix[(i - 1) & (c - 1)] + units;
-        adaslice__dp_choose_additive(dp, &best);
+        best = adaslice__dp_choose_additive(dp);
     }
     if (best == ADASLICE__UNREACHED) {
         dp->layers[i & (c - 1)] = ADASLICE__UNREACHED;

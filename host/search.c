@@ -75,7 +75,9 @@ static void cache_clear(block_cache *c)
         if (c->block[i]) free((block_head *)c->block[i] - 1);
 }
 
-/* Workers take directions in small batches until none are left. */
+/* Workers take directions in small batches until none are left, the batches
+   shrinking to one as the end nears, so that the threads finish together (a
+   last batch of 8 directions on the plate is 0.2 s that one thread works alone). */
 static void *search_worker(void *arg)
 {
     search *s = (search *)arg;
@@ -90,10 +92,12 @@ static void *search_worker(void *arg)
     mine.profile.allocator = &al;
     mine.plan.allocator = &al;
     for (;;) {
-        size_t first, end, i;
+        size_t first, end, i, take;
         pthread_mutex_lock(&s->lock);
         first = s->next;
-        end = s->failed ? first : (first + 8 < s->count ? first + 8 : s->count);
+        take = (s->count - first) / 16;
+        take = take < 1 ? 1 : take > 8 ? 8 : take;
+        end = s->failed || first == s->count ? first : first + take;
         s->next = end;
         pthread_mutex_unlock(&s->lock);
         if (first == end) break;

@@ -3,6 +3,7 @@
 #include "../host/report.h"
 #include "../host/search.h"
 #include "check.h"
+#include "failing_alloc.h"
 #include "meshgen.h"
 #include <math.h>
 #include <string.h>
@@ -348,6 +349,111 @@ static void threaded_search_matches_the_turned_meshes(void)
     free(d);
 }
 
+/* The orienter profiles its own copy of the mesh, the triangles sorted in
+   space and the vertices renumbered: with weights (which must follow their
+   triangles into the new order) and vertices no triangle uses (far above and
+   below the part, which must not stretch its height), every profile along
+   every direction is adaslice_profile_exact's of the turned mesh, bit for
+   bit, the row of spheres cut into chunks along x and kept whole along z. */
+static void sorted_copy_keeps_weights_and_heights(void)
+{
+    static const double axes[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+    adaslice_mesh row = sphere_row(10, 16, 12), m = row, t;
+    adaslice_error e;
+    size_t n = 24, k, v, i, chunked = 0;
+    float *w = (float *)malloc(row.triangle_count * sizeof *w);
+    double *d = (double *)malloc(3 * (n + 6) * sizeof(double));
+    int metric;
+    m.vertex_count = row.vertex_count + 2;
+    m.vertices = (float *)calloc(3 * m.vertex_count, sizeof(float));
+    m.triangles = (uint32_t *)malloc(3 * m.triangle_count * sizeof(uint32_t));
+    memcpy(m.vertices + 3, row.vertices, 3 * row.vertex_count * sizeof(float));
+    m.vertices[2] = 100;                         /* vertex 0, unused */
+    m.vertices[3 * (m.vertex_count - 1) + 2] = -100; /* the last, unused */
+    for (i = 0; i < 3 * m.triangle_count; i++) m.triangles[i] = row.triangles[i] + 1;
+    for (i = 0; i < m.triangle_count; i++) w[i] = (float)((i * 37) % 11) / 10;
+    t = m;
+    t.vertices = (float *)malloc(3 * m.vertex_count * sizeof(float));
+    adaslice_fibonacci_directions(n, d);
+    memcpy(d + 3 * n, axes, sizeof axes);
+    for (metric = ADASLICE_METRIC_CUSP; metric <= ADASLICE_METRIC_ROUGHNESS; metric++) {
+        adaslice_orienter o;
+        adaslice_profile_options po;
+        memset(&po, 0, sizeof po);
+        po.bin = 0.001;
+        po.metric = (adaslice_metric)metric;
+        po.weights = w;
+        CHECK(adaslice_orienter_init(&o, &m, &po, NULL, &e) == ADASLICE_OK);
+        for (k = 0; k < n + 6; k++) {
+            adaslice_profile p, ref;
+            double r[9];
+            CHECK(adaslice_profile_along(&o, d + 3 * k, &p, &e) == ADASLICE_OK);
+            memcpy(t.vertices, m.vertices, 3 * m.vertex_count * sizeof(float));
+            adaslice_rotation_to_z(d + 3 * k, r);
+            adaslice_mesh_rotate(&t, r);
+            CHECK(adaslice_profile_exact(&t, &po, &ref, &e) == ADASLICE_OK);
+            CHECKF(p.z0 == ref.z0 && p.bin_count == ref.bin_count, "metric %d, direction %zu: %zu bins from %g, reference %zu from %g",
+                   metric, k, p.bin_count, p.z0, ref.bin_count, ref.z0);
+            for (v = 0; v < p.bin_count && v < ref.bin_count && p.phi[v] == ref.phi[v]; v++) {}
+            CHECKF(v == p.bin_count, "metric %d, direction %zu: bin %zu is %.17g, reference %.17g", metric, k, v,
+                   v < p.bin_count ? p.phi[v] : 0, v < ref.bin_count ? ref.phi[v] : 0);
+            chunked += p.bin_count > 40000; /* times 9 levels or more: over 262,144 */
+            adaslice_profile_free(&p);
+            adaslice_profile_free(&ref);
+        }
+        adaslice_orienter_free(&o);
+    }
+    CHECKF(chunked >= 4, "%zu profiles long enough to be cut into chunks", chunked);
+    free(t.vertices);
+    free(m.vertices);
+    free(m.triangles);
+    gen_free(&row);
+    free(w);
+    free(d);
+}
+
+/* Out of memory at any allocation, the orienter's set-up (its sorted copy,
+   the weights in that order) or a profile along a direction whole or in
+   chunks: ADASLICE_ERR_NOMEM and no block left behind. */
+static void out_of_memory_leaks_nothing(void)
+{
+    static const double d[2][3] = {{1, 0, 0}, {0, 0, 1}}; /* in chunks (49,000 bins), whole */
+    adaslice_mesh m = sphere_row(10, 16, 12);
+    adaslice_allocator al = {0, 0, 0};
+    adaslice_error e;
+    failing f;
+    float *w = (float *)malloc(m.triangle_count * sizeof *w);
+    size_t i;
+    int fail_at, done = 0;
+    for (i = 0; i < m.triangle_count; i++) w[i] = (float)(i % 5) / 4;
+    al = failing_allocator(&f);
+    for (fail_at = 0; !done && fail_at < 100; fail_at++) {
+        adaslice_orienter o;
+        adaslice_profile_options po;
+        adaslice_result r;
+        int k;
+        memset(&po, 0, sizeof po);
+        po.bin = 0.001;
+        po.weights = w;
+        po.allocator = &al;
+        f.left = fail_at;
+        f.live = 0;
+        r = adaslice_orienter_init(&o, &m, &po, NULL, &e);
+        for (k = 0; k < 2 && r == ADASLICE_OK; k++) {
+            adaslice_direction_score s;
+            r = adaslice_orienter_score(&o, d[k], &s, &e);
+            CHECK(r != ADASLICE_OK || s.feasible);
+        }
+        adaslice_orienter_free(&o); /* a failed set-up leaves it zeroed */
+        CHECKF(r == ADASLICE_OK || r == ADASLICE_ERR_NOMEM, "failing at allocation %d: %s", fail_at, e.message);
+        CHECKF(f.live == 0, "failing at allocation %d: %ld blocks left", fail_at, f.live);
+        done = r == ADASLICE_OK;
+    }
+    CHECKF(done && fail_at > 8, "succeeded at allocation %d", fail_at);
+    gen_free(&m);
+    free(w);
+}
+
 /* Minima are lower than everything around them, so no two are neighbours. */
 static void minima_are_apart(void)
 {
@@ -402,4 +508,6 @@ void test_orient(void)
     RUN(ties_go_to_the_part_as_loaded);
     RUN(search_matches_a_brute_force_reference);
     RUN(threaded_search_matches_the_turned_meshes);
+    RUN(sorted_copy_keeps_weights_and_heights);
+    RUN(out_of_memory_leaks_nothing);
 }
