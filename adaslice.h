@@ -3512,6 +3512,31 @@ static void adaslice__gaps_free(adaslice__gaps *g)
     adaslice__free(&al, g);
 }
 
+/* 1 when every edge of m (zero-area facets left out, as the edges leave
+   them) is run as often one way as the other, which a closed mesh wound one
+   way always is: each half-edge adds a hash of its edge, signed by its
+   direction, and a balanced edge's cancel. An unbalanced edge leaves its net
+   times its hash, and the sum is 0 only by a coincidence of 64-bit hashes
+   (odds of 2^-64). One pass with no memory, where grouping the edges
+   (adaslice__edges_build) took a masker's set-up 12 ms and 8 MB of new pages
+   on a part of 200,000 facets. */
+static int adaslice__edges_balance(const adaslice_mesh *m)
+{
+    const uint32_t *tri = m->triangles;
+    uint64_t sum = 0;
+    size_t h;
+    int k;
+    for (h = 0; h < 3 * m->triangle_count; h += 3) {
+        if (adaslice__zero_area(m->vertices, tri + h)) continue;
+        for (k = 0; k < 3; k++) {
+            uint32_t a = tri[h + (size_t)k], b = adaslice__he_to(tri, h + (size_t)k);
+            uint64_t x = adaslice__mix(a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a);
+            sum += a < b ? x : 0 - x;
+        }
+    }
+    return sum == 0;
+}
+
 /* The unbalanced edges of m, or *gaps = NULL when every edge balances (a
    closed mesh wound one way: rays are exact). */
 static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice_mesh *m, const adaslice_allocator *al,
@@ -3522,6 +3547,7 @@ static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice
     adaslice_result r;
     size_t i, n = 0;
     *gaps = NULL;
+    if (adaslice__edges_balance(m)) return ADASLICE_OK;
     if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
     for (i = 0; i < e.cap; i++) {
         size_t uses;
@@ -7506,6 +7532,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
                                                    adaslice_masker *bands, adaslice_error *err)
 {
     size_t b, b0, b1, t, *kept;
+    uint32_t *span;
     adaslice_allocator al;
     adaslice_result r;
     if (!whole || !rows || !bands || !count) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker or bands given");
@@ -7524,12 +7551,24 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
                                   (unsigned)rows[b], (unsigned)rows[b + 1]);
     al = whole->allocator;
     kept = ADASLICE__CAST(size_t *, adaslice__alloc(&al, count, sizeof(size_t)));
-    if (!kept) return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu bands", count);
+    /* each facet's first and last band, found once: finding them again to
+       fill the bands took a third of the split */
+    span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, 2 * whole->count + 1, sizeof(uint32_t)));
+    if (!kept || !span) {
+        adaslice__free(&al, kept);
+        adaslice__free(&al, span);
+        return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "masks: out of memory for %zu bands", count);
+    }
     memset(kept, 0, count * sizeof(size_t));
     memset(bands, 0, count * sizeof *bands);
-    for (t = 0; t < whole->count; t++)
-        if (adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1))
-            for (b = b0; b <= b1; b++) kept[b]++;
+    for (t = 0; t < whole->count; t++) {
+        span[2 * t] = 1;
+        span[2 * t + 1] = 0; /* none */
+        if (!adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1)) continue;
+        span[2 * t] = (uint32_t)b0;
+        span[2 * t + 1] = (uint32_t)b1;
+        for (b = b0; b <= b1; b++) kept[b]++;
+    }
     for (b = 0; b < count; b++) {
         adaslice_masker *mk = &bands[b];
         /* the settings; no buffer, nothing swept */
@@ -7552,15 +7591,16 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
         if ((r = adaslice__masker_buffers(mk, kept[b], err)) != ADASLICE_OK) {
             while (b--) adaslice_masker_free(&bands[b]);
             adaslice__free(&al, kept);
+            adaslice__free(&al, span);
             return r;
         }
     }
     /* whole's order filtered keeps its order: the same facets in the same
        sequence, so each band's sums run as the whole masker's */
     for (t = 0; t < whole->count; t++)
-        if (adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1))
-            for (b = b0; b <= b1; b++) bands[b].order[bands[b].count++] = whole->order[t];
+        for (b = span[2 * t]; b <= span[2 * t + 1]; b++) bands[b].order[bands[b].count++] = whole->order[t];
     adaslice__free(&al, kept);
+    adaslice__free(&al, span);
     adaslice__ok(err);
     return ADASLICE_OK;
 }

@@ -358,7 +358,7 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     memset(&mo, 0, sizeof mo);
     mo.supersample = s->supersample;
     mo.slice_at = SLICE_RULES[s->slice_at];
-    mo.bin = j->profile.bin;
+    mo.bin = j->args->bin; /* the profile's (0: the library's default for both), which may be in the making */
     if (adaslice_masker_init(&whole, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK) return library_error(&err);
     m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;

@@ -66,7 +66,8 @@ int layer_masks_check(const slice_args *s, int buffers);
 int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
    the masker, split into about `bands` row bands (one for an open mesh,
-   whose sections are cut whole), each rendered on its own. */
+   whose sections are cut whole), each rendered on its own. Reads only
+   j->mesh and j->args, so it may run while the profile and the plan are made. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int bands);
 /* Band b's rows of layer k's (0-based; k never decreasing for a band) mask
    into out (m->image or another buffer of m->stride * m->height bytes),

@@ -293,6 +293,38 @@ static void profile_progress(void *user, double done)
     progress_show(&p->bar, (size_t)(100 * done), 100, "% of the profile", NULL);
 }
 
+static void *run_beside(void *arg)
+{
+    plan_job *j = (plan_job *)arg;
+    j->beside_rc = j->beside(j->beside_ctx);
+    return NULL;
+}
+
+/* j->beside started, or run here when no thread is to be had. */
+static void beside_start(plan_job *j)
+{
+    if (!j->beside || !j->keep_mesh) return;
+    j->beside_running = pthread_create(&j->beside_thread, NULL, run_beside, j) == 0;
+    if (!j->beside_running) run_beside(j);
+}
+
+static int beside_join(plan_job *j)
+{
+    if (j->beside_running) pthread_join(j->beside_thread, NULL);
+    j->beside_running = 0;
+    return j->beside_rc;
+}
+
+/* The mesh dropped on a failure once beside may have started on it. */
+static int drop_mesh(plan_job *j, adaslice_mesh *mesh, float *weights, int rc)
+{
+    beside_join(j);
+    if (j->keep_mesh) memset(&j->mesh, 0, sizeof j->mesh);
+    free(weights);
+    adaslice_mesh_free(mesh);
+    return rc;
+}
+
 static int profile_model(const plan_args *a, plan_job *j)
 {
     profile_bar bar;
@@ -345,34 +377,28 @@ static int profile_model(const plan_args *a, plan_job *j)
         adaslice_mesh_free(&mesh);
         return rc;
     }
+    if (j->keep_mesh) j->mesh = mesh; /* where it stays: beside keeps pointers to it */
+    beside_start(j);
 
     memset(&po, 0, sizeof po);
     po.metric = a->metric;
     po.bin = a->bin;
     po.resolution = (int)a->resolution;
     po.weights = weights;
-    if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) {
-        free(weights);
-        adaslice_mesh_free(&mesh);
-        return rc;
-    }
+    if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) return drop_mesh(j, &mesh, weights, rc);
     t0 = now_ms();
     memset(&bar, 0, sizeof bar);
     bar.started = t0;
     po.progress = profile_progress;
     po.progress_user = &bar;
-    if (a->hybrid && (rc = profile_planar_parts(a, j, &mesh, &po, &weights)) != RC_OK) {
-        free(weights);
-        adaslice_mesh_free(&mesh);
-        return rc;
-    }
+    if (a->hybrid && (rc = profile_planar_parts(a, j, &mesh, &po, &weights)) != RC_OK)
+        return drop_mesh(j, &mesh, weights, rc);
     r = profile_with(a, &mesh, &po, weights, &j->profile, &err);
     free(weights);
     if (r == ADASLICE_OK && (a->method == ADASLICE_METHOD_CURVATURE || a->compare))
         rc = curvature_of(a->model, &mesh, &j->profile, &j->kappa);
     j->ms_profile = now_ms() - t0 + ms_weights;
-    if (j->keep_mesh) j->mesh = mesh;
-    else adaslice_mesh_free(&mesh);
+    if (!j->keep_mesh) adaslice_mesh_free(&mesh); /* else j->mesh already */
     if (r != ADASLICE_OK) return library_error_in(a->model, &err);
     j->profiled = 1;
     return rc;
@@ -478,7 +504,7 @@ static int plan_planar_same_error(const plan_args *a, plan_job *j)
 
 /* The asked plan must succeed; with --compare the others may be infeasible,
    which their row of the table then says. */
-int run_plan(const plan_args *a, plan_job *j)
+static int plan_steps(const plan_args *a, plan_job *j)
 {
     double t0;
     int rc = a->model ? profile_model(a, j) : read_profile(a, j), m;
@@ -495,6 +521,12 @@ int run_plan(const plan_args *a, plan_job *j)
     if (a->compare && j->planned[ADASLICE_METHOD_OPTIMAL] && j->why[ADASLICE_METHOD_OPTIMAL].result == ADASLICE_OK)
         j->uniform_found = plan_uniform_no_worse(&j->profile, &j->plan[ADASLICE_METHOD_OPTIMAL], &j->uniform);
     return a->hybrid ? plan_planar_same_error(a, j) : RC_OK;
+}
+
+int run_plan(const plan_args *a, plan_job *j)
+{
+    int rc = plan_steps(a, j), beside = beside_join(j);
+    return rc ? rc : beside;
 }
 
 void job_free(plan_job *j)

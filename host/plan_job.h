@@ -3,6 +3,7 @@
    a profile; then plan), with its outputs (plan.csv, profile.csv, plot.svg). */
 #ifndef ADASLICE_HOST_PLAN_JOB_H
 #define ADASLICE_HOST_PLAN_JOB_H
+#include <pthread.h>
 #include <stdio.h>
 #include "../adaslice.h"
 #include "weights.h"
@@ -75,6 +76,15 @@ typedef struct plan_job {
        check (the plate's fit) that should stop the job before the work. */
     int (*loaded)(void *ctx, const adaslice_mesh *mesh);
     void *loaded_ctx;
+    /* If not NULL (with keep_mesh): called on a thread of its own beside
+       the profile and the plan once the mesh is loaded, turned and checked,
+       for what needs only j->mesh (slice sets up its masker there), which
+       neither touches. Joined before run_plan returns, whose result it is
+       when the rest succeeded. */
+    int (*beside)(void *ctx);
+    void *beside_ctx;
+    pthread_t beside_thread;
+    int beside_running, beside_rc;
 } plan_job;
 
 /* The plan options of `plan` (argv[0] is the command's name); RC_OK or a

@@ -679,6 +679,85 @@ static void bands_make_the_whole_maskers_bytes(void)
     gen_free(&upper);
 }
 
+static int zero_area_facet(const adaslice_mesh *m, size_t t)
+{
+    const float *p = m->vertices + 3 * (size_t)m->triangles[3 * t], *q = m->vertices + 3 * (size_t)m->triangles[3 * t + 1],
+                *r = m->vertices + 3 * (size_t)m->triangles[3 * t + 2];
+    double u[3], w[3];
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = (double)q[k] - p[k]; w[k] = (double)r[k] - p[k]; }
+    return u[1] * w[2] - u[2] * w[1] == 0 && u[2] * w[0] - u[0] * w[2] == 0 && u[0] * w[1] - u[1] * w[0] == 0;
+}
+
+/* Brute force: every edge (zero-area facets left out) run as often one way
+   as the other, the half-edges compared all against all. */
+static int every_edge_balances(const adaslice_mesh *m)
+{
+    size_t h, g, n = 3 * m->triangle_count;
+    for (h = 0; h < n; h++) {
+        uint32_t a = m->triangles[h], b = m->triangles[h % 3 == 2 ? h - 2 : h + 1];
+        long net = 0;
+        if (zero_area_facet(m, h / 3)) continue;
+        for (g = 0; g < n; g++) {
+            uint32_t c = m->triangles[g], d = m->triangles[g % 3 == 2 ? g - 2 : g + 1];
+            if (zero_area_facet(m, g / 3)) continue;
+            net += (c == a && d == b) - (c == b && d == a);
+        }
+        if (net) return 0;
+    }
+    return 1;
+}
+
+static void turn_facet(adaslice_mesh *m, size_t t)
+{
+    uint32_t x = m->triangles[3 * t + 1];
+    m->triangles[3 * t + 1] = m->triangles[3 * t + 2];
+    m->triangles[3 * t + 2] = x;
+}
+
+/* Facet t again at the end, turned or not. */
+static void repeat_facet(adaslice_mesh *m, size_t t, int turned)
+{
+    uint32_t *more = (uint32_t *)realloc(m->triangles, (3 * m->triangle_count + 3) * sizeof *more);
+    if (!more) abort();
+    m->triangles = more;
+    memcpy(more + 3 * m->triangle_count, more + 3 * t, 3 * sizeof *more);
+    if (turned) turn_facet(m, m->triangle_count);
+    m->triangle_count++;
+}
+
+/* A masker reads rays exactly when every edge balances and takes whole
+   sections otherwise (a hole, a facet turned, a facet twice): its one-pass
+   test of the balance (hashes of the edges, signed by direction) against the
+   brute force, on a sphere changed one way at a time. */
+static void sections_exactly_where_an_edge_does_not_balance(void)
+{
+    static const struct { const char *what; int balanced; } cases[] = {
+        {"closed", 1}, {"a facet turned", 0}, {"two facets turned", 0}, {"a facet gone", 0},
+        {"a facet and its reverse added", 1}, {"a facet added again", 0}, {"a zero-area facet added", 1},
+        {"every facet turned", 1}};
+    size_t c, t;
+    for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        adaslice_mesh m = gen_sphere(5, 24, 12, 0);
+        adaslice_grid g = plate_around(&m, 0.2, 0.2, 60, 60);
+        adaslice_masker mk;
+        int balanced;
+        if (c == 1 || c == 2) turn_facet(&m, 33);
+        if (c == 2) turn_facet(&m, 34);
+        if (c == 3) m.triangle_count--;
+        if (c == 4) { repeat_facet(&m, 50, 0); repeat_facet(&m, 50, 1); }
+        if (c == 5) repeat_facet(&m, 50, 0);
+        if (c == 6) { repeat_facet(&m, 50, 0); m.triangles[3 * m.triangle_count - 1] = m.triangles[3 * m.triangle_count - 2]; }
+        for (t = 0; c == 7 && t < m.triangle_count; t++) turn_facet(&m, t);
+        balanced = every_edge_balances(&m);
+        CHECKF(balanced == cases[c].balanced, "%s: the brute force says %d", cases[c].what, balanced);
+        CHECK(layer_masker(&mk, &m, &g, 1, ADASLICE_SLICE_MIDDLE) == ADASLICE_OK);
+        CHECKF((mk.sections == 0) == balanced, "%s: sections %d, every edge balances %d", cases[c].what, mk.sections, balanced);
+        adaslice_masker_free(&mk);
+        gen_free(&m);
+    }
+}
+
 /* What cannot be split is refused: an open mesh (its sections need every
    facet), bands that do not rise within the grid, a masker already swept. */
 static void bands_refuse_what_cannot_be_split(void)
@@ -725,4 +804,5 @@ void test_masks(void)
     RUN(envelope_needs_a_closed_mesh);
     RUN(bands_make_the_whole_maskers_bytes);
     RUN(bands_refuse_what_cannot_be_split);
+    RUN(sections_exactly_where_an_edge_does_not_balance);
 }
