@@ -3512,31 +3512,6 @@ static void adaslice__gaps_free(adaslice__gaps *g)
     adaslice__free(&al, g);
 }
 
-/* 1 when every edge of m (zero-area facets left out, as the edges leave
-   them) is run as often one way as the other, which a closed mesh wound one
-   way always is: each half-edge adds a hash of its edge, signed by its
-   direction, and a balanced edge's cancel. An unbalanced edge leaves its net
-   times its hash, and the sum is 0 only by a coincidence of 64-bit hashes
-   (odds of 2^-64). One pass with no memory, where grouping the edges
-   (adaslice__edges_build) took a masker's set-up 12 ms and 8 MB of new pages
-   on a part of 200,000 facets. */
-static int adaslice__edges_balance(const adaslice_mesh *m)
-{
-    const uint32_t *tri = m->triangles;
-    uint64_t sum = 0;
-    size_t h;
-    int k;
-    for (h = 0; h < 3 * m->triangle_count; h += 3) {
-        if (adaslice__zero_area(m->vertices, tri + h)) continue;
-        for (k = 0; k < 3; k++) {
-            uint32_t a = tri[h + (size_t)k], b = adaslice__he_to(tri, h + (size_t)k);
-            uint64_t x = adaslice__mix(a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a);
-            sum += a < b ? x : 0 - x;
-        }
-    }
-    return sum == 0;
-}
-
 /* The unbalanced edges of m, or *gaps = NULL when every edge balances (a
    closed mesh wound one way: rays are exact). */
 static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice_mesh *m, const adaslice_allocator *al,
@@ -3547,7 +3522,6 @@ static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice
     adaslice_result r;
     size_t i, n = 0;
     *gaps = NULL;
-    if (adaslice__edges_balance(m)) return ADASLICE_OK;
     if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
     for (i = 0; i < e.cap; i++) {
         size_t uses;

@@ -727,8 +727,7 @@ static void repeat_facet(adaslice_mesh *m, size_t t, int turned)
 }
 
 /* A masker reads rays exactly when every edge balances and takes whole
-   sections otherwise (a hole, a facet turned, a facet twice): its one-pass
-   test of the balance (hashes of the edges, signed by direction) against the
+   sections otherwise (a hole, a facet turned, a facet twice): against the
    brute force, on a sphere changed one way at a time. */
 static void sections_exactly_where_an_edge_does_not_balance(void)
 {
