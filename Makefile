@@ -206,9 +206,9 @@ check-models: $(B)/check_models $(B)/adaslice
 
 # ---- make bench -----------------------------------------------------------
 BENCH_LIB = $(call objs,bench,$(LIB_SRC))
-$(B)/bench_plan: $(call objs,bench,bench/bench.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c) $(BENCH_LIB)
+$(B)/bench_plan: $(call objs,bench,bench/bench.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c host/bytes.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c) $(BENCH_LIB)
+$(B)/bench_png: $(call objs,bench,bench/bench_png.c host/codec/png.c host/codec/deflate.c host/codec/maskrows.c host/bytes.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
