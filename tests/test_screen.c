@@ -434,36 +434,39 @@ static int slice_long_job(const char *dir)
 /* The bound: the screen dark within this of a stop. */
 #define DARK_WITHIN_MS 100
 
+/* pid (0: this thread) at the lowest real-time priority, or the case
+   fails saying why (without CAP_SYS_NICE), naming `who`. */
+static int realtime(pid_t pid, const char *who)
+{
+    struct sched_param p;
+    memset(&p, 0, sizeof p);
+    p.sched_priority = sched_get_priority_min(SCHED_FIFO);
+    if (sched_setscheduler(pid, SCHED_FIFO, &p) == 0) return 1;
+    CHECKF(0, "the screen's stop tests run %s at real-time priority (SCHED_FIFO): run them as root or give run_tests "
+              "CAP_SYS_NICE (%s)", who, strerror(errno));
+    return 0;
+}
+
 /* The observer (this thread: it stops the host or the printer and polls
-   the screen file) at the lowest real-time priority while it watches, so
-   that what it measures is the tool's reaction and not its own turn on a
-   loaded machine. Without CAP_SYS_NICE the case fails, saying so. */
+   the screen file) at real-time priority while it watches, so that what
+   it measures is the tool's reaction and not its own turn on a loaded
+   machine; back to normal after. */
 static int observer_realtime(int on)
 {
     struct sched_param p;
     memset(&p, 0, sizeof p);
     if (!on) return sched_setscheduler(0, SCHED_OTHER, &p) == 0;
-    p.sched_priority = sched_get_priority_min(SCHED_FIFO);
-    if (sched_setscheduler(0, SCHED_FIFO, &p) == 0) return 1;
-    CHECKF(0, "the screen's stop tests time the dark screen from a real-time observer (SCHED_FIFO): run them as root "
-              "or give run_tests CAP_SYS_NICE (%s)", strerror(errno));
-    return 0;
+    return realtime(0, "the observer that times the dark screen");
 }
 
 /* The simulator stands for the printer's MCU, a processor of its own: at
-   the lowest real-time priority (it blocks in poll between events) it
-   answers the host's STATUS and HELLO as promptly on a loaded machine as
-   an MCU would, so that a stop's time measures the host (itself real-time
-   when it prints on a screen) and not the simulator's turn. */
+   real-time priority (it blocks in poll between events) it answers the
+   host's STATUS and HELLO as promptly on a loaded machine as an MCU would,
+   so that a stop's time measures the host (itself real-time when it
+   prints on a screen) and not the simulator's turn. */
 static int simulator_realtime(const child *sim)
 {
-    struct sched_param p;
-    memset(&p, 0, sizeof p);
-    p.sched_priority = sched_get_priority_min(SCHED_FIFO);
-    if (sched_setscheduler(sim->pid, SCHED_FIFO, &p) == 0) return 1;
-    CHECKF(0, "the screen's stop tests run the simulator at real-time priority (SCHED_FIFO) as an MCU of its own: run "
-              "them as root or give run_tests CAP_SYS_NICE (%s)", strerror(errno));
-    return 0;
+    return realtime(sim->pid, "the simulator, an MCU of its own,");
 }
 
 /* Polls the screen file every ms until it is lit (want_lit) or dark; the
