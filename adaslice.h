@@ -949,6 +949,12 @@ typedef struct adaslice_orienter {
     adaslice_mesh sorted;              /* max-type metrics: the triangles in space-filling-curve
                                           order and the vertices they use, renumbered */
     float *weights;                    /* the profile's weights in that order, or NULL */
+    int16_t *normals;                  /* cusp: each sorted triangle's unit normal in 32767ths and a
+                                          bound on how far its value along any direction can be
+                                          from it in 32768ths (32767: any) */
+    float *boxes;                      /* each ADASLICE__BOX_TRIANGLES sorted triangles' bounding box
+                                          (least x, y, z, then largest) and the cone of their normals
+                                          (axis, cosine and sine of its angle, their largest bound) */
     double longest_edge, reach;        /* of any triangle; the farthest used vertex from the origin */
     adaslice_allocator allocator;
 } adaslice_orienter;
@@ -6845,6 +6851,102 @@ static uint64_t adaslice__spread10(uint32_t x)
     return v;
 }
 
+/* Sorted triangles to a box: few enough that a box is little larger than
+   its triangles, many enough that boxes are few against the triangles. */
+#define ADASLICE__BOX_TRIANGLES 16
+
+static size_t adaslice__box_count(size_t triangles)
+{
+    return (triangles + ADASLICE__BOX_TRIANGLES - 1) / ADASLICE__BOX_TRIANGLES;
+}
+
+/* What the cusp profile along a direction may skip by (adaslice__prune):
+   each sorted triangle's unit normal n and a bound e on how far the value
+   the profile computes for it, from its corners turned and rounded to float,
+   can be from |n . d| along any d; and the boxes around runs of triangles.
+   The turned corners are off by at most r = sqrt(3) 2^-24 of the farthest
+   corner's distance each (plus the double sums' rounding, far less), so its
+   edges u, w by 2r, its normal u x w by 2r (|u| + |w|) + 4r^2, and the
+   normal's unit vector, whose z is the value, by twice that over |u x w|.
+   e is that doubled, plus 10^-6 for the sums' rounding and 2.7 10^-5 for n
+   kept in 32767ths (sqrt(3) / 2 of one at most), rounded up to 32768ths; a
+   facet without a normal (skipped by the profile) or a sliver whose bound
+   nears 1 gets 32767, which keeps it in every profile. Eight bytes a facet:
+   the search reads them all for every direction. */
+/* A facet's bound of adaslice__orienter_bounds as a number (32767: any). */
+static double adaslice__value_bound(int16_t e)
+{
+    return e * (1.0 / 32768) + (e == 32767) * 2.0;
+}
+
+/* The cone of the normals of sorted triangles first..end-1 (each taken
+   either way: a value is |n . d|) into cone: its axis, the cosine and sine of
+   an angle a little over its own (10^-5, for the floats' rounding), and the
+   largest of their bounds. */
+static void adaslice__box_cone(const adaslice_orienter *o, size_t first, size_t end, float *cone)
+{
+    const int16_t *ref = o->normals + 4 * first;
+    double axis[3] = {0, 0, 0}, len, least = 1, bound = 0, angle;
+    size_t t;
+    int k;
+    for (t = first; t < end; t++) {
+        const int16_t *nn = o->normals + 4 * t;
+        double side = (double)nn[0] * ref[0] + (double)nn[1] * ref[1] + (double)nn[2] * ref[2] < 0 ? -1 : 1;
+        double e = adaslice__value_bound(nn[3]);
+        for (k = 0; k < 3; k++) axis[k] += side * nn[k];
+        bound = e > bound ? e : bound;
+    }
+    len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    for (k = 0; k < 3; k++) axis[k] = len > 0 ? axis[k] / len : k == 2;
+    for (t = first; t < end; t++) {
+        const int16_t *nn = o->normals + 4 * t;
+        double l = sqrt((double)nn[0] * nn[0] + (double)nn[1] * nn[1] + (double)nn[2] * nn[2]);
+        double c = l > 0 ? fabs(axis[0] * nn[0] + axis[1] * nn[1] + axis[2] * nn[2]) / l : 0;
+        least = c < least ? c : least;
+    }
+    angle = acos(least < 1 ? least : 1) + 1e-5;
+    for (k = 0; k < 3; k++) cone[k] = (float)axis[k];
+    cone[3] = angle < 1.5707963267948966 ? (float)cos(angle) : 0;
+    cone[4] = angle < 1.5707963267948966 ? (float)sin(angle) : 1;
+    cone[5] = (float)(bound * (1 + 1e-6));
+}
+
+static void adaslice__orienter_bounds(adaslice_orienter *o)
+{
+    const adaslice_mesh *m = &o->sorted;
+    double r = 1.7320508075688772 / 16777216.0 * o->reach * 1.01;
+    size_t t;
+    int k, c;
+    for (t = 0; t < m->triangle_count; t++) {
+        const uint32_t *tri = m->triangles + 3 * t;
+        const float *a = m->vertices + 3 * (size_t)tri[0], *b = m->vertices + 3 * (size_t)tri[1],
+                    *cc = m->vertices + 3 * (size_t)tri[2];
+        float *box = o->boxes + 12 * (t / ADASLICE__BOX_TRIANGLES);
+        int16_t *out = o->normals + 4 * t;
+        double u[3], w[3], n[3], len, lu, lw, e;
+        for (k = 0; k < 3; k++) { u[k] = (double)b[k] - a[k]; w[k] = (double)cc[k] - a[k]; }
+        n[0] = u[1] * w[2] - u[2] * w[1];
+        n[1] = u[2] * w[0] - u[0] * w[2];
+        n[2] = u[0] * w[1] - u[1] * w[0];
+        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        lw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        e = len > 0 ? 2 * 2 * (2 * r * (lu + lw) + 4 * r * r) / len + 1e-6 + 2.7e-5 : 1;
+        for (k = 0; k < 3; k++) out[k] = (int16_t)(len > 0 ? floor(n[k] / len * 32767 + 0.5) : 0);
+        out[3] = (int16_t)(e < 32766.0 / 32768 ? ceil(e * 32768) : 32767);
+        for (c = 0; c < 3; c++) {
+            const float *q = m->vertices + 3 * (size_t)tri[c];
+            int first = t % ADASLICE__BOX_TRIANGLES == 0 && c == 0;
+            for (k = 0; k < 3; k++) {
+                box[k] = first || q[k] < box[k] ? q[k] : box[k];
+                box[3 + k] = first || q[k] > box[3 + k] ? q[k] : box[3 + k];
+            }
+        }
+        if (t % ADASLICE__BOX_TRIANGLES == ADASLICE__BOX_TRIANGLES - 1 || t + 1 == m->triangle_count)
+            adaslice__box_cone(o, t - t % ADASLICE__BOX_TRIANGLES, t + 1, box + 6);
+    }
+}
+
 /* The triangles sorted along a Morton curve through their centroids, their
    vertices numbered in the order the sorted triangles first use them (the
    unused ones left out), a facet's corners kept in their order. Triangles
@@ -6867,6 +6969,11 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     s->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, m->vertex_count, 3 * sizeof(float)));
     s->triangles = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, 3 * sizeof(uint32_t)));
     if (o->profile.weights) o->weights = ADASLICE__CAST(float *, adaslice__alloc(al, n, sizeof(float)));
+    if (o->profile.metric == ADASLICE_METRIC_CUSP && !o->profile.weights) {
+        o->normals = ADASLICE__CAST(int16_t *, adaslice__alloc(al, n, 4 * sizeof(int16_t)));
+        o->boxes = ADASLICE__CAST(float *, adaslice__alloc(al, adaslice__box_count(n), 12 * sizeof(float)));
+        if (!o->normals || !o->boxes) goto done;
+    }
     if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
     for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
     for (t = 0; t < n; t++) {
@@ -6895,6 +7002,7 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     }
     s->vertex_count = used;
     s->triangle_count = n;
+    if (o->normals) adaslice__orienter_bounds(o);
     ok = 1;
 done:
     adaslice__free(al, key);
@@ -6963,6 +7071,8 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
     adaslice__free(&o->allocator, o->sorted.vertices);
     adaslice__free(&o->allocator, o->sorted.triangles);
     adaslice__free(&o->allocator, o->weights);
+    adaslice__free(&o->allocator, o->normals);
+    adaslice__free(&o->allocator, o->boxes);
     memset(o, 0, sizeof *o);
 }
 
@@ -6989,6 +7099,84 @@ typedef struct adaslice__run {
 #define ADASLICE__CHUNK_TABLE 65536
 #define ADASLICE__WHOLE_TABLE 262144
 
+/* Bins to a block of the lower bound adaslice__prune keeps. */
+#define ADASLICE__BOUND_BINS 64
+
+/* The cusp profile's facets that can raise it, into keep in order (their
+   count returned), the others left out: a facet whose value is at most the
+   profile's over all its bins cannot change a maximum. Of the plate of
+   bench's, along any direction, 99 % are such. The profile is bounded below
+   per block of bins by each box's first facet, computed exactly as the
+   profile does and always kept: a block within that facet's bins is at least
+   its value. A facet is left out when |n . d| plus its bound
+   (adaslice__orienter_bounds) is at most the least such block bound over its
+   box's bins, and a whole box when its cone of normals bounds them all so:
+   their values cannot pass the profile there. The box's bins come from its
+   corners' heights along d with the margin of adaslice__longest_run's
+   rounding. `lower`: levels x blocks doubles, the bound's range-minimum
+   table. */
+static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned_corner *cv, const double up[3],
+                              const adaslice_profile *p, double *lower, int levels, uint32_t *keep)
+{
+    const adaslice_mesh *m = &o->sorted;
+    size_t n = p->bin_count, blocks = (n - 1) / ADASLICE__BOUND_BINS + 1, boxes = adaslice__box_count(m->triangle_count);
+    size_t b, t, g, kept = 0;
+    double inverse = 1.0 / p->bin, top = (double)(long)(n - 1), margin = 1e-5 * o->reach;
+    double s[3]; /* d over 32767, for the normals in 32767ths */
+    int k;
+    for (k = 0; k < 3; k++) s[k] = up[k] / 32767;
+    memset(lower, 0, blocks * sizeof *lower);
+    for (b = 0; b < boxes; b++) {
+        const uint32_t *tri = m->triangles + 3 * b * ADASLICE__BOX_TRIANGLES;
+        const adaslice__turned_corner *c0 = cv + tri[0], *c1 = cv + tri[1], *c2 = cv + tri[2];
+        double value = adaslice__corner_value(c0->p, c1->p, c2->p, ADASLICE_METRIC_CUSP, 0);
+        size_t lo = c0->bin < c1->bin ? c0->bin : c1->bin, hi = c0->bin > c1->bin ? c0->bin : c1->bin;
+        lo = c2->bin < lo ? c2->bin : lo;
+        hi = c2->bin > hi ? c2->bin : hi;
+        /* the blocks wholly within lo..hi */
+        for (g = (lo + ADASLICE__BOUND_BINS - 1) / ADASLICE__BOUND_BINS; (g + 1) * ADASLICE__BOUND_BINS <= hi + 1; g++)
+            lower[g] = lower[g] < value ? value : lower[g];
+    }
+    for (k = 1; k < levels; k++) { /* level k: the least of 2^k blocks from each */
+        const double *below = lower + (size_t)(k - 1) * blocks;
+        double *level = lower + (size_t)k * blocks;
+        size_t half = (size_t)1 << (k - 1);
+        for (g = 0; g + 2 * half <= blocks; g++) level[g] = below[g] < below[g + half] ? below[g] : below[g + half];
+    }
+    for (b = 0; b < boxes; b++) {
+        const float *box = o->boxes + 12 * b, *cone = box + 6;
+        size_t first = b * ADASLICE__BOX_TRIANGLES, end = first + ADASLICE__BOX_TRIANGLES, g0, g1;
+        double zlo = 0, zhi = 0, least, cos_d, sin_d, most;
+        for (k = 0; k < 3; k++) {
+            zlo += up[k] * (up[k] >= 0 ? box[k] : box[3 + k]);
+            zhi += up[k] * (up[k] >= 0 ? box[3 + k] : box[k]);
+        }
+        g0 = adaslice__bin_of(p->z0, inverse, top, zlo - margin) / ADASLICE__BOUND_BINS;
+        g1 = adaslice__bin_of(p->z0, inverse, top, zhi + margin) / ADASLICE__BOUND_BINS;
+        k = adaslice__floor_log2(g1 - g0 + 1);
+        least = lower[(size_t)k * blocks + g0];
+        g = g1 + 1 - ((size_t)1 << k);
+        least = lower[(size_t)k * blocks + g] < least ? lower[(size_t)k * blocks + g] : least;
+        keep[kept++] = (uint32_t)first;
+        /* the largest |n . d| in the cone: the cosine of d's angle to the
+           axis less the cone's, or 1 within it (normals in 32767ths are up
+           to 3 10^-5 longer than 1) */
+        cos_d = fabs(cone[0] * up[0] + cone[1] * up[1] + cone[2] * up[2]);
+        cos_d = cos_d < 1 ? cos_d : 1;
+        sin_d = sqrt(1 - cos_d * cos_d);
+        most = cos_d >= cone[3] ? 1 : cos_d * cone[3] + sin_d * cone[4];
+        if (most * (1 + 3e-5) + 1e-6 + cone[5] <= least) continue;
+        end = end < m->triangle_count ? end : m->triangle_count;
+        for (t = first + 1; t < end; t++) {
+            const int16_t *nn = o->normals + 4 * t;
+            double a = fabs(nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]);
+            keep[kept] = (uint32_t)t; /* a store and a count: whether it stays is unpredictable */
+            kept += a + adaslice__value_bound(nn[3]) > least;
+        }
+    }
+    return kept;
+}
+
 /* The max-type profile (cusp, roughness, or the weights alone) along a
    direction from its turned corners: adaslice__max_over_bins of the turned
    mesh, bit for bit, as a maximum does not depend on the order of its terms
@@ -6998,14 +7186,17 @@ typedef struct adaslice__run {
    whose table stays in cache, the facets' runs sorted into them by a
    counting pass over the corners' bins (those crossing a border cut there). */
 static adaslice_result adaslice__max_along(const adaslice_orienter *o, const adaslice__turned_corner *cv,
-                                           const adaslice_profile_options *opt, adaslice_profile *p, adaslice_error *err)
+                                           const double up[3], const adaslice_profile_options *opt,
+                                           adaslice_profile *p, adaslice_error *err)
 {
     const adaslice_mesh *m = &o->sorted;
     adaslice_allocator al = p->allocator;
     adaslice_profile_options quiet;
     adaslice__rmax rmax;
     adaslice__run *sorted = NULL;
-    size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c;
+    uint32_t *keep = NULL;
+    size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c, i;
+    size_t count = m->triangle_count;
     adaslice_metric metric = opt->metric;
     const float *weights = o->weights;
     double rough = opt->roughness_max;
@@ -7022,6 +7213,15 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     if (chunks == 1) chunk = n;
     memset(&quiet, 0, sizeof quiet);
     memset(&rmax, 0, sizeof rmax);
+    if (o->normals) {
+        size_t blocks = (n - 1) / ADASLICE__BOUND_BINS + 1;
+        int bound_levels = adaslice__floor_log2(blocks) + 1;
+        double *lower = ADASLICE__CAST(double *, adaslice__alloc(&al, blocks * (size_t)bound_levels, sizeof(double)));
+        keep = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, count, sizeof *keep));
+        if (lower && keep) count = adaslice__prune(o, cv, up, p, lower, bound_levels, keep);
+        adaslice__free(&al, lower);
+        if (!lower || !keep) goto nomem;
+    }
     if (chunks > 1) {
         /* two runs a facet at most: the same size for every direction, so
            a search's allocator can keep it */
@@ -7029,8 +7229,8 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, chunks + 1, sizeof *start));
         if (!sorted || !start) goto nomem;
         memset(start, 0, (chunks + 1) * sizeof *start);
-        for (t = 0; t < m->triangle_count; t++) {
-            const uint32_t *tri = m->triangles + 3 * t;
+        for (i = 0; i < count; i++) {
+            const uint32_t *tri = m->triangles + 3 * (keep ? keep[i] : i);
             uint32_t a = cv[tri[0]].bin, b = cv[tri[1]].bin, cc = cv[tri[2]].bin;
             uint32_t first = a < b ? a : b, last = a > b ? a : b;
             first = cc < first ? cc : first;
@@ -7041,8 +7241,8 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         for (c = 1; c <= chunks; c++) start[c] += start[c - 1]; /* chunk c's runs go from start[c] */
     }
     if (!adaslice__rmax_init(&rmax, chunk, span, &al)) goto nomem;
-    for (t = 0; t < m->triangle_count; t++) {
-        const uint32_t *tri = m->triangles + 3 * t;
+    for (i = 0; i < count; i++) {
+        const uint32_t *tri = m->triangles + 3 * (t = keep ? keep[i] : i);
         const adaslice__turned_corner *a = cv + tri[0], *b = cv + tri[1], *cc = cv + tri[2];
         double value = adaslice__corner_value(a->p, b->p, cc->p, metric, rough);
         uint32_t first = a->bin < b->bin ? a->bin : b->bin, last = a->bin > b->bin ? a->bin : b->bin;
@@ -7088,11 +7288,13 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     adaslice__free(&al, rmax.t);
     adaslice__free(&al, sorted);
     adaslice__free(&al, start);
+    adaslice__free(&al, keep);
     return ADASLICE_OK;
 nomem:
     adaslice__free(&al, rmax.t);
     adaslice__free(&al, sorted);
     adaslice__free(&al, start);
+    adaslice__free(&al, keep);
     adaslice_profile_free(p);
     return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory for %zu bins", n);
 }
@@ -7142,7 +7344,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
     inverse = 1.0 / profile->bin;
     top = (double)(long)(profile->bin_count - 1);
     for (v = 0; v < m->vertex_count; v++) cv[v].bin = (uint32_t)adaslice__bin_of(profile->z0, inverse, top, cv[v].p[2]);
-    r = adaslice__max_along(o, cv, &opt, profile, err);
+    r = adaslice__max_along(o, cv, rot + 6, &opt, profile, err);
     adaslice__free(&al, cv);
     if (r != ADASLICE_OK) return r;
     if (opt.progress) opt.progress(opt.progress_user, 1);

@@ -412,6 +412,73 @@ static void sorted_copy_keeps_weights_and_heights(void)
     free(d);
 }
 
+/* The cusp profile along a direction leaves out the facets whose values
+   cannot pass it (adaslice__prune), by bounds on how far a facet's value,
+   from its corners turned and rounded to float, can be from its normal's:
+   far from the origin, where the rounding is coarse, and with slivers,
+   whose normals the rounding turns most, every profile is still
+   adaslice_profile_exact's of the turned mesh, bit for bit, in chunks along
+   x and whole along z. Spheres of fine facets at 3,000 mm, and beside them
+   slivers: fans of facets 4 mm long and 10^-4 to 10^-7 mm wide, tilted a
+   little from level, which along most directions the spheres' facets
+   outweigh only by a hair. */
+static void pruned_profiles_match_far_away_and_with_slivers(void)
+{
+    static const double axes[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+    adaslice_mesh m = sphere_row(10, 24, 16), t;
+    adaslice_error e;
+    adaslice_orienter o;
+    adaslice_profile_options po;
+    size_t n = 40, k, v, i, base, chunked = 0;
+    double *d = (double *)malloc(3 * (n + 6) * sizeof(double));
+    base = m.vertex_count;
+    m.vertices = (float *)realloc(m.vertices, 3 * (m.vertex_count + 4 * 60) * sizeof(float));
+    m.triangles = (uint32_t *)realloc(m.triangles, 3 * (m.triangle_count + 2 * 60) * sizeof(uint32_t));
+    for (i = 0; i < 60; i++) { /* a sliver pair: two facets sharing a long edge, 10^-4.. wide */
+        float x = (float)(2 * (i % 20)), y = 6 + (float)(i / 20), wide = (float)pow(10, -4 - (double)(i % 4));
+        float *q = m.vertices + 3 * (base + 4 * i);
+        uint32_t *f = m.triangles + 3 * (m.triangle_count + 2 * i), c = (uint32_t)(base + 4 * i);
+        q[0] = x;     q[1] = y;        q[2] = (float)(i % 7) * 0.3f;
+        q[3] = x + 4; q[4] = y;        q[5] = q[2] + 0.01f * (float)(i % 3);
+        q[6] = x + 2; q[7] = y + wide; q[8] = q[2] + 0.002f;
+        q[9] = x + 2; q[10] = y - wide; q[11] = q[2] - 0.002f;
+        f[0] = c; f[1] = c + 1; f[2] = c + 2;
+        f[3] = c + 1; f[4] = c; f[5] = c + 3;
+    }
+    m.vertex_count += 4 * 60;
+    m.triangle_count += 2 * 60;
+    for (v = 0; v < m.vertex_count; v++) { m.vertices[3 * v] += 3000; m.vertices[3 * v + 1] += 3000; }
+    t = m;
+    t.vertices = (float *)malloc(3 * m.vertex_count * sizeof(float));
+    adaslice_fibonacci_directions(n, d);
+    memcpy(d + 3 * n, axes, sizeof axes);
+    memset(&po, 0, sizeof po);
+    po.bin = 0.001;
+    CHECK(adaslice_orienter_init(&o, &m, &po, NULL, &e) == ADASLICE_OK);
+    for (k = 0; k < n + 6; k++) {
+        adaslice_profile p, ref;
+        double r[9];
+        CHECK(adaslice_profile_along(&o, d + 3 * k, &p, &e) == ADASLICE_OK);
+        memcpy(t.vertices, m.vertices, 3 * m.vertex_count * sizeof(float));
+        adaslice_rotation_to_z(d + 3 * k, r);
+        adaslice_mesh_rotate(&t, r);
+        CHECK(adaslice_profile_exact(&t, &po, &ref, &e) == ADASLICE_OK);
+        CHECKF(p.z0 == ref.z0 && p.bin_count == ref.bin_count, "direction %zu: %zu bins from %g, reference %zu from %g",
+               k, p.bin_count, p.z0, ref.bin_count, ref.z0);
+        for (v = 0; v < p.bin_count && v < ref.bin_count && p.phi[v] == ref.phi[v]; v++) {}
+        CHECKF(v == p.bin_count, "direction %zu: bin %zu is %.17g, reference %.17g", k, v,
+               v < p.bin_count ? p.phi[v] : 0, v < ref.bin_count ? ref.phi[v] : 0);
+        chunked += p.bin_count > 40000;
+        adaslice_profile_free(&p);
+        adaslice_profile_free(&ref);
+    }
+    CHECKF(chunked >= 4, "%zu profiles long enough to be cut into chunks", chunked);
+    adaslice_orienter_free(&o);
+    free(t.vertices);
+    gen_free(&m);
+    free(d);
+}
+
 /* Out of memory at any allocation, the orienter's set-up (its sorted copy,
    the weights in that order) or a profile along a direction whole or in
    chunks: ADASLICE_ERR_NOMEM and no block left behind. */
@@ -509,5 +576,6 @@ void test_orient(void)
     RUN(search_matches_a_brute_force_reference);
     RUN(threaded_search_matches_the_turned_meshes);
     RUN(sorted_copy_keeps_weights_and_heights);
+    RUN(pruned_profiles_match_far_away_and_with_slivers);
     RUN(out_of_memory_leaks_nothing);
 }
