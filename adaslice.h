@@ -955,6 +955,7 @@ typedef struct adaslice_orienter {
     float *boxes;                      /* each ADASLICE__BOX_TRIANGLES sorted triangles' bounding box
                                           (least x, y, z, then largest) and the cone of their normals
                                           (axis, cosine and sine of its angle, their largest bound) */
+    uint32_t *firsts;                  /* the corners of each box's first triangle, in a row */
     double longest_edge, reach;        /* of any triangle; the farthest used vertex from the origin */
     adaslice_allocator allocator;
 } adaslice_orienter;
@@ -6942,6 +6943,7 @@ static void adaslice__orienter_bounds(adaslice_orienter *o)
                 box[3 + k] = first || q[k] > box[3 + k] ? q[k] : box[3 + k];
             }
         }
+        if (t % ADASLICE__BOX_TRIANGLES == 0) memcpy(o->firsts + 3 * (t / ADASLICE__BOX_TRIANGLES), tri, 3 * sizeof *tri);
         if (t % ADASLICE__BOX_TRIANGLES == ADASLICE__BOX_TRIANGLES - 1 || t + 1 == m->triangle_count)
             adaslice__box_cone(o, t - t % ADASLICE__BOX_TRIANGLES, t + 1, box + 6);
     }
@@ -6972,7 +6974,8 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     if (o->profile.metric == ADASLICE_METRIC_CUSP && !o->profile.weights) {
         o->normals = ADASLICE__CAST(int16_t *, adaslice__alloc(al, n, 4 * sizeof(int16_t)));
         o->boxes = ADASLICE__CAST(float *, adaslice__alloc(al, adaslice__box_count(n), 12 * sizeof(float)));
-        if (!o->normals || !o->boxes) goto done;
+        o->firsts = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, adaslice__box_count(n), 3 * sizeof(uint32_t)));
+        if (!o->normals || !o->boxes || !o->firsts) goto done;
     }
     if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
     for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
@@ -7073,6 +7076,7 @@ ADASLICE_DEF void adaslice_orienter_free(adaslice_orienter *o)
     adaslice__free(&o->allocator, o->weights);
     adaslice__free(&o->allocator, o->normals);
     adaslice__free(&o->allocator, o->boxes);
+    adaslice__free(&o->allocator, o->firsts);
     memset(o, 0, sizeof *o);
 }
 
@@ -7127,7 +7131,7 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
     for (k = 0; k < 3; k++) s[k] = up[k] / 32767;
     memset(lower, 0, blocks * sizeof *lower);
     for (b = 0; b < boxes; b++) {
-        const uint32_t *tri = m->triangles + 3 * b * ADASLICE__BOX_TRIANGLES;
+        const uint32_t *tri = o->firsts + 3 * b; /* not m->triangles: a line read for 12 bytes */
         const adaslice__turned_corner *c0 = cv + tri[0], *c1 = cv + tri[1], *c2 = cv + tri[2];
         double value = adaslice__corner_value(c0->p, c1->p, c2->p, ADASLICE_METRIC_CUSP, 0);
         size_t lo = c0->bin < c1->bin ? c0->bin : c1->bin, hi = c0->bin > c1->bin ? c0->bin : c1->bin;
