@@ -4251,10 +4251,14 @@ static double *adaslice__rmax_finish(adaslice__rmax *r, const adaslice_profile_o
         size_t half = (size_t)1 << (k - 1), j, end = r->n - ((size_t)1 << k) + 1;
         if (!r->zeroed[k]) continue;
         down = adaslice__rmax_level(r, k - 1);
-        for (j = 0; j < end; j++) {
-            down[j] = down[j] < up[j] ? up[j] : down[j];
-            down[j + half] = down[j + half] < up[j] ? up[j] : down[j + half];
+        /* each bin below takes the larger of the two above that cover it:
+           one store a bin and no bin read after it is stored */
+        for (j = 0; j < half && j < end; j++) down[j] = down[j] < up[j] ? up[j] : down[j];
+        for (; j < end; j++) {
+            double a = up[j] > up[j - half] ? up[j] : up[j - half];
+            down[j] = down[j] < a ? a : down[j];
         }
+        for (j = j > half ? j : half; j < end + half; j++) down[j] = down[j] < up[j - half] ? up[j - half] : down[j];
     }
     (void)adaslice__rmax_level(r, 0);
     return r->t;
