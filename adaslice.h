@@ -6213,7 +6213,14 @@ static void adaslice__quantise(adaslice__job *job)
             job->units[i] = (uint64_t)r;
         }
     } else {
-        for (i = 0; i < job->n; i++) job->units[i] = (uint64_t)ceil(p->phi[i] * per_unit);
+        /* ceil without a call (x86-64 has no rounding instruction before
+           SSE4.1, and a plan along each of a search's directions takes it
+           per bin): x is at most 2^40, so its truncation is exact */
+        for (i = 0; i < job->n; i++) {
+            double x = p->phi[i] * per_unit;
+            uint64_t whole = (uint64_t)x;
+            job->units[i] = whole + ((double)whole < x);
+        }
     }
 }
 
