@@ -349,6 +349,38 @@ static void threaded_search_matches_the_turned_meshes(void)
     free(d);
 }
 
+/* Every profile the orienter gives along d[0..count-1] against
+   adaslice_profile_exact of m turned by adaslice_mesh_rotate, bit for bit;
+   returns how many were long enough to be cut into chunks (times 9 levels or
+   more: over 262,144). */
+static size_t profiles_along_match(const adaslice_orienter *o, const adaslice_mesh *m, const adaslice_profile_options *po,
+                                   const double *d, size_t count)
+{
+    adaslice_mesh t = *m;
+    adaslice_error e;
+    size_t k, v, chunked = 0;
+    t.vertices = (float *)malloc(3 * m->vertex_count * sizeof(float));
+    for (k = 0; k < count; k++) {
+        adaslice_profile p, ref;
+        double r[9];
+        CHECK(adaslice_profile_along(o, d + 3 * k, &p, &e) == ADASLICE_OK);
+        memcpy(t.vertices, m->vertices, 3 * m->vertex_count * sizeof(float));
+        adaslice_rotation_to_z(d + 3 * k, r);
+        adaslice_mesh_rotate(&t, r);
+        CHECK(adaslice_profile_exact(&t, po, &ref, &e) == ADASLICE_OK);
+        CHECKF(p.z0 == ref.z0 && p.bin_count == ref.bin_count, "metric %d, direction %zu: %zu bins from %g, reference %zu from %g",
+               (int)po->metric, k, p.bin_count, p.z0, ref.bin_count, ref.z0);
+        for (v = 0; v < p.bin_count && v < ref.bin_count && p.phi[v] == ref.phi[v]; v++) {}
+        CHECKF(v == p.bin_count, "metric %d, direction %zu: bin %zu is %.17g, reference %.17g", (int)po->metric, k, v,
+               v < p.bin_count ? p.phi[v] : 0, v < ref.bin_count ? ref.phi[v] : 0);
+        chunked += p.bin_count > 40000;
+        adaslice_profile_free(&p);
+        adaslice_profile_free(&ref);
+    }
+    free(t.vertices);
+    return chunked;
+}
+
 /* The orienter profiles its own copy of the mesh, the triangles sorted in
    space and the vertices renumbered: with weights (which must follow their
    triangles into the new order) and vertices no triangle uses (far above and
@@ -358,9 +390,9 @@ static void threaded_search_matches_the_turned_meshes(void)
 static void sorted_copy_keeps_weights_and_heights(void)
 {
     static const double axes[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
-    adaslice_mesh row = sphere_row(10, 16, 12), m = row, t;
+    adaslice_mesh row = sphere_row(10, 16, 12), m = row;
     adaslice_error e;
-    size_t n = 24, k, v, i, chunked = 0;
+    size_t n = 24, i, chunked = 0;
     float *w = (float *)malloc(row.triangle_count * sizeof *w);
     double *d = (double *)malloc(3 * (n + 6) * sizeof(double));
     int metric;
@@ -372,8 +404,6 @@ static void sorted_copy_keeps_weights_and_heights(void)
     m.vertices[3 * (m.vertex_count - 1) + 2] = -100; /* the last, unused */
     for (i = 0; i < 3 * m.triangle_count; i++) m.triangles[i] = row.triangles[i] + 1;
     for (i = 0; i < m.triangle_count; i++) w[i] = (float)((i * 37) % 11) / 10;
-    t = m;
-    t.vertices = (float *)malloc(3 * m.vertex_count * sizeof(float));
     adaslice_fibonacci_directions(n, d);
     memcpy(d + 3 * n, axes, sizeof axes);
     for (metric = ADASLICE_METRIC_CUSP; metric <= ADASLICE_METRIC_ROUGHNESS; metric++) {
@@ -384,27 +414,10 @@ static void sorted_copy_keeps_weights_and_heights(void)
         po.metric = (adaslice_metric)metric;
         po.weights = w;
         CHECK(adaslice_orienter_init(&o, &m, &po, NULL, &e) == ADASLICE_OK);
-        for (k = 0; k < n + 6; k++) {
-            adaslice_profile p, ref;
-            double r[9];
-            CHECK(adaslice_profile_along(&o, d + 3 * k, &p, &e) == ADASLICE_OK);
-            memcpy(t.vertices, m.vertices, 3 * m.vertex_count * sizeof(float));
-            adaslice_rotation_to_z(d + 3 * k, r);
-            adaslice_mesh_rotate(&t, r);
-            CHECK(adaslice_profile_exact(&t, &po, &ref, &e) == ADASLICE_OK);
-            CHECKF(p.z0 == ref.z0 && p.bin_count == ref.bin_count, "metric %d, direction %zu: %zu bins from %g, reference %zu from %g",
-                   metric, k, p.bin_count, p.z0, ref.bin_count, ref.z0);
-            for (v = 0; v < p.bin_count && v < ref.bin_count && p.phi[v] == ref.phi[v]; v++) {}
-            CHECKF(v == p.bin_count, "metric %d, direction %zu: bin %zu is %.17g, reference %.17g", metric, k, v,
-                   v < p.bin_count ? p.phi[v] : 0, v < ref.bin_count ? ref.phi[v] : 0);
-            chunked += p.bin_count > 40000; /* times 9 levels or more: over 262,144 */
-            adaslice_profile_free(&p);
-            adaslice_profile_free(&ref);
-        }
+        chunked += profiles_along_match(&o, &m, &po, d, n + 6);
         adaslice_orienter_free(&o);
     }
     CHECKF(chunked >= 4, "%zu profiles long enough to be cut into chunks", chunked);
-    free(t.vertices);
     free(m.vertices);
     free(m.triangles);
     gen_free(&row);
@@ -425,11 +438,11 @@ static void sorted_copy_keeps_weights_and_heights(void)
 static void pruned_profiles_match_far_away_and_with_slivers(void)
 {
     static const double axes[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
-    adaslice_mesh m = sphere_row(10, 24, 16), t;
+    adaslice_mesh m = sphere_row(10, 24, 16);
     adaslice_error e;
     adaslice_orienter o;
     adaslice_profile_options po;
-    size_t n = 40, k, v, i, base, chunked = 0;
+    size_t n = 40, v, i, base, chunked;
     double *d = (double *)malloc(3 * (n + 6) * sizeof(double));
     base = m.vertex_count;
     m.vertices = (float *)realloc(m.vertices, 3 * (m.vertex_count + 4 * 60) * sizeof(float));
@@ -448,33 +461,14 @@ static void pruned_profiles_match_far_away_and_with_slivers(void)
     m.vertex_count += 4 * 60;
     m.triangle_count += 2 * 60;
     for (v = 0; v < m.vertex_count; v++) { m.vertices[3 * v] += 3000; m.vertices[3 * v + 1] += 3000; }
-    t = m;
-    t.vertices = (float *)malloc(3 * m.vertex_count * sizeof(float));
     adaslice_fibonacci_directions(n, d);
     memcpy(d + 3 * n, axes, sizeof axes);
     memset(&po, 0, sizeof po);
     po.bin = 0.001;
     CHECK(adaslice_orienter_init(&o, &m, &po, NULL, &e) == ADASLICE_OK);
-    for (k = 0; k < n + 6; k++) {
-        adaslice_profile p, ref;
-        double r[9];
-        CHECK(adaslice_profile_along(&o, d + 3 * k, &p, &e) == ADASLICE_OK);
-        memcpy(t.vertices, m.vertices, 3 * m.vertex_count * sizeof(float));
-        adaslice_rotation_to_z(d + 3 * k, r);
-        adaslice_mesh_rotate(&t, r);
-        CHECK(adaslice_profile_exact(&t, &po, &ref, &e) == ADASLICE_OK);
-        CHECKF(p.z0 == ref.z0 && p.bin_count == ref.bin_count, "direction %zu: %zu bins from %g, reference %zu from %g",
-               k, p.bin_count, p.z0, ref.bin_count, ref.z0);
-        for (v = 0; v < p.bin_count && v < ref.bin_count && p.phi[v] == ref.phi[v]; v++) {}
-        CHECKF(v == p.bin_count, "direction %zu: bin %zu is %.17g, reference %.17g", k, v,
-               v < p.bin_count ? p.phi[v] : 0, v < ref.bin_count ? ref.phi[v] : 0);
-        chunked += p.bin_count > 40000;
-        adaslice_profile_free(&p);
-        adaslice_profile_free(&ref);
-    }
+    chunked = profiles_along_match(&o, &m, &po, d, n + 6);
     CHECKF(chunked >= 4, "%zu profiles long enough to be cut into chunks", chunked);
     adaslice_orienter_free(&o);
-    free(t.vertices);
     gen_free(&m);
     free(d);
 }
