@@ -226,9 +226,11 @@ static int draw_picture(const plan_job *j, int w, int h, unsigned char *rgb)
 }
 
 /* The format's previews, drawn ahead on a thread of their own (with
-   --threads 2 or more) while the masker is set up and the layers are made:
-   on the calling thread they held up the job before or after its layers,
-   alone on one core (the directory's took a fortieth of the job). */
+   --threads 2 or more) while the masker is set up beside the profile and
+   the plan, where a core is idle (else while the layers are made, where
+   they took a core from them): on the calling thread they held up the job
+   before or after its layers, alone on one core (the directory's took a
+   fortieth of the job). */
 typedef struct previews {
     const plan_job *j;
     const job_format *f;
@@ -236,6 +238,7 @@ typedef struct previews {
     int rc[2];
     pthread_t thread;
     int drawing;                 /* the thread is started and not yet joined */
+    int started;                 /* previews_start was called */
 } previews;
 
 static void *draw_previews(void *arg)
@@ -255,6 +258,7 @@ static void previews_start(previews *p, const plan_job *j, const job_format *f, 
     memset(p, 0, sizeof *p);
     p->j = j;
     p->f = f;
+    p->started = 1;
     p->drawing = threads > 1 && f->previews[0][0] > 0 && pthread_create(&p->thread, NULL, draw_previews, p) == 0;
 }
 
@@ -338,8 +342,10 @@ static void layer_done(void *ctx, size_t k)
 typedef struct masks_setup {
     const slice_args *s;
     const plan_job *j;
+    const job_format *f;
     layer_masks m;
     int open;
+    previews pv;                 /* the format's, drawn meanwhile */
 } masks_setup;
 
 static int open_masks(void *ctx)
@@ -350,9 +356,22 @@ static int open_masks(void *ctx)
     return rc;
 }
 
+/* plan_job's beside: the previews' thread is joined before it returns, so
+   that a plan that fails and drops the mesh (joining beside) leaves no
+   thread reading it. */
+static int open_masks_and_previews(void *ctx)
+{
+    masks_setup *ms = (masks_setup *)ctx;
+    int rc;
+    previews_start(&ms->pv, ms->j, ms->f, ms->s->threads);
+    rc = open_masks(ctx);
+    previews_join(&ms->pv);
+    return rc;
+}
+
 /* The job's description; every layer rendered once, in order, into the format. */
 static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const job_format *f, const char *path,
-                     unsigned extras, layer_masks *m, job_desc *d, job_summary *sum, double stage_ms[3])
+                     unsigned extras, layer_masks *m, previews *pv, job_desc *d, job_summary *sum, double stage_ms[3])
 {
     const adaslice_plan *p = &j->plan[a->method];
     size_t k, count = p->layer_count;
@@ -362,18 +381,16 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     progress bar;
     slice_run run;
     pipeline_job pipe;
-    previews pv;
     int rc, odd = s->rotate & 1;
 
     memset(&bar, 0, sizeof bar);
     memset(&out, 0, sizeof out);
-    previews_start(&pv, j, f, s->threads);
+    if (!pv->started) previews_start(pv, j, f, s->threads);
     layers = (job_layer *)calloc(count ? count : 1, sizeof *layers);
     rays = (long long *)calloc((count ? count : 1) * (size_t)m->bands, sizeof *rays);
     if (!layers || !rays) {
         free(layers);
         free(rays);
-        previews_free(&pv);
         return complain(RC_FAIL, "out of memory for %zu layer%s", count, plural(count));
     }
     cure_layers(&s->cure, p, layers);
@@ -418,7 +435,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     d->motion = s->cure.motion;
     d->print_time_s = cure_print_time(&d->motion, layers, count);
     d->preview = draw_preview;
-    d->preview_ctx = &pv;
+    d->preview_ctx = pv;
     d->metric = METRIC_NAMES[a->metric];
     d->method = METHOD_NAMES[a->method];
     d->slice_at = SLICE_AT[s->slice_at];
@@ -470,7 +487,6 @@ done:
         int closed = job_close(&out, rc == RC_OK);
         if (!rc) rc = closed;
     }
-    previews_free(&pv);
     free(layers);
     free(rays);
     d->layers = NULL;
@@ -536,10 +552,11 @@ int cmd_slice(int argc, char **argv)
     j.loaded_ctx = &s;
     ms.s = &s;
     ms.j = &j;
+    ms.f = f;
     /* not with --svg, whose weld comes first; nor for envelope and core
        masks, whose complaint about an open mesh comes in its turn */
     if (s.threads > 1 && !s.svg && s.slice_at <= 2) {
-        j.beside = open_masks;
+        j.beside = open_masks_and_previews;
         j.beside_ctx = &ms;
     }
     rc = run_plan(&a, &j);
@@ -555,7 +572,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc)
         rc = write_job(&s, &a, &j, f, path,
                        (a.out == csv ? DIR_PLAN_CSV : 0) | (a.plot == svg ? DIR_PLOT_SVG : 0) | (s.svg ? DIR_LAYER_SVGS : 0),
-                       &ms.m, &d, &sum, stage_ms);
+                       &ms.m, &ms.pv, &d, &sum, stage_ms);
     if (!rc) {
         format_duration(when, sizeof when, d.print_time_s);
         printf("%s: %zu layer%s of %g to %g mm for %s on %s, %d x %d px of %g x %g um (%s)\n", path, d.layer_count,
@@ -592,6 +609,7 @@ int cmd_slice(int argc, char **argv)
                plural((size_t)s.threads), now_ms() - t0);
     }
 done:
+    previews_free(&ms.pv);
     if (ms.open) layer_masks_close(&ms.m);
     job_free(&j);
     free(extended);

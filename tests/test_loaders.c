@@ -459,6 +459,46 @@ static void ply_polygons_are_fanned(void)
     free(b.p);
 }
 
+/* Binary faces that are mostly triangles with a polygon among them (the
+   loader reads plain little-endian triangles on a path of their own and
+   leaves the rest to the general one): the fans and the triangles after the
+   polygon as written, either byte order, signed and unsigned indices. */
+static void ply_binary_triangles_around_a_polygon(void)
+{
+    static const int faces[] = {3, 0, 1, 2, 4, 0, 2, 3, 4, 3, 1, 2, 3, 3, 4, 3, 1};
+    static const char *const index[2] = {"int", "uint"};
+    adaslice_mesh want = gen_alloc(5, 5), m;
+    adaslice_error e;
+    buf b = {0, 0, 0};
+    int enc, t, i;
+    gen_vertex(&want, 0, 0, 0);
+    gen_vertex(&want, 2, 0, 0);
+    gen_vertex(&want, 3, 1, 0);
+    gen_vertex(&want, 1, 2, 1);
+    gen_vertex(&want, -1, 1, 0);
+    gen_triangle(&want, 0, 1, 2);
+    gen_triangle(&want, 0, 2, 3); /* the quad 0 2 3 4, fanned */
+    gen_triangle(&want, 0, 3, 4);
+    gen_triangle(&want, 1, 2, 3);
+    gen_triangle(&want, 4, 3, 1);
+    for (enc = 1; enc < 3; enc++)
+        for (t = 0; t < 2; t++) {
+            b.n = 0;
+            putf(&b, "ply\nformat %s 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element face 4\nproperty list uchar %s vertex_indices\nend_header\n",
+                 enc == 1 ? "binary_little_endian" : "binary_big_endian", index[t]);
+            for (i = 0; i < 15; i++) put_ply_value(&b, enc, "float", want.vertices[i]);
+            for (i = 0; i < (int)(sizeof faces / sizeof *faces); i++)
+                put_ply_value(&b, enc, i == 0 || i == 4 || i == 9 || i == 13 ? "uchar" : index[t], faces[i]);
+            CHECKF(load(&b, ADASLICE_FORMAT_AUTO, 0, &m, &e) == ADASLICE_OK, "%s", e.message);
+            expect_same(enc == 1 ? "PLY little endian, a quad among triangles" : "PLY big endian, a quad among triangles",
+                        &want, &m, 1);
+            adaslice_mesh_free(&m);
+        }
+    gen_free(&want);
+    free(b.p);
+}
+
 /* Two strips: 0 1 2 3 and, after a -1 restart, 2 3 4 5; the second triangle of each
    runs backwards so that all face the same way. The repeated last index makes a
    degenerate stitching triangle, which is dropped. */
@@ -880,6 +920,7 @@ void test_loaders(void)
     RUN(ply_integer_coordinates_load);
     RUN(ply_polygons_are_fanned);
     RUN(ply_triangle_strips_load);
+    RUN(ply_binary_triangles_around_a_polygon);
     RUN(scale_multiplies_coordinates);
     RUN(degenerate_triangles_are_kept);
     RUN(free_and_bounds);

@@ -11,6 +11,9 @@
 #include "job_readers.h"
 #include "meshgen.h"
 #include "../adaslice_mcu.h"
+#include "../host/formats/pipeline.h"
+#include "../host/report.h"
+#include <pthread.h>
 
 /* A sphere 10 mm across: its layers are of every thickness from tmin to tmax. */
 static const char *sphere_obj(void)
@@ -559,6 +562,108 @@ static int same_directories(const char *a, const char *b, char what[300])
    directory (every file) and a ctb; the directory re-sliced over a job with
    more and larger layers (its layer files are written over in place) is the
    same as well. */
+/* The layer loop's promise (pipeline.c): a thread held inside a band, as a
+   descheduled one is, holds up only that band. Band 0 of layer 0 is held
+   until the other thread has rendered every other band of as many layers as
+   there are images (a layer keeps its image until all its bands are in):
+   were the other waiting on it, the hold would time out (after a minute,
+   where the renders take microseconds). Then the job goes on to the end:
+   each band's layers in turn, each layer once, put in order. */
+enum { HOLD_LAYERS = 24, HOLD_BANDS_MAX = 64 };
+
+typedef struct hold_run {
+    pthread_mutex_t lock;
+    pthread_cond_t change;
+    int bands, others, reached, target;
+    size_t next[HOLD_BANDS_MAX], put;
+    int in_order;
+} hold_run;
+
+static int hold_render(void *ctx, int b, size_t k, unsigned char *image)
+{
+    hold_run *h = (hold_run *)ctx;
+    pthread_mutex_lock(&h->lock);
+    if (b < 0 || b >= h->bands || h->next[b] != k) h->in_order = 0;
+    if (b >= 0 && b < h->bands) h->next[b] = k + 1;
+    if (b == 0 && k == 0) {
+        struct timespec until;
+        clock_gettime(CLOCK_REALTIME, &until);
+        until.tv_sec += 60;
+        while (h->others < h->target)
+            if (pthread_cond_timedwait(&h->change, &h->lock, &until) != 0) break;
+        h->reached = h->others;
+    } else {
+        h->others++;
+        pthread_cond_broadcast(&h->change);
+    }
+    pthread_mutex_unlock(&h->lock);
+    image[0] = (unsigned char)k;
+    return RC_OK;
+}
+
+static int hold_encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
+{
+    (void)writer;
+    (void)stride;
+    if (!(blob->data = (unsigned char *)malloc(1))) return RC_FAIL;
+    blob->data[0] = (unsigned char)(image[0] == (unsigned char)k);
+    blob->size = 1;
+    return RC_OK;
+}
+
+static int hold_put(void *writer, size_t k, job_blob *blob)
+{
+    hold_run *h = (hold_run *)writer;
+    if (k != h->put++ || !blob->data[0]) h->in_order = 0;
+    free(blob->data);
+    blob->data = NULL;
+    return RC_OK;
+}
+
+static void a_held_band_holds_up_only_itself(void)
+{
+    job_format format;
+    job_desc d;
+    job_writer out;
+    pipeline_job job;
+    hold_run h;
+    int b;
+    memset(&format, 0, sizeof format);
+    memset(&d, 0, sizeof d);
+    memset(&out, 0, sizeof out);
+    memset(&job, 0, sizeof job);
+    memset(&h, 0, sizeof h);
+    format.name = "held";
+    format.encode = hold_encode;
+    format.put = hold_put;
+    d.layer_count = HOLD_LAYERS;
+    out.format = &format;
+    out.state = &h;
+    out.d = &d;
+    out.path = "held";
+    pthread_mutex_init(&h.lock, NULL);
+    pthread_cond_init(&h.change, NULL);
+    h.bands = pipeline_bands(2);
+    h.target = pipeline_images(2) * (h.bands - 1);
+    h.in_order = 1;
+    CHECK(h.bands > 2 && h.bands <= HOLD_BANDS_MAX && pipeline_images(2) < HOLD_LAYERS);
+    job.out = &out;
+    job.layers = HOLD_LAYERS;
+    job.image_bytes = job.stride = 1;
+    job.threads = 2;
+    job.bands = h.bands;
+    job.render = hold_render;
+    job.ctx = &h;
+    CHECK(pipeline_run(&job) == RC_OK);
+    CHECKF(h.reached == h.target, "the other thread rendered %d bands while band 0 of layer 0 was held, not %d",
+           h.reached, h.target);
+    CHECK(h.in_order);
+    CHECK(h.put == HOLD_LAYERS && out.layers_put == HOLD_LAYERS);
+    for (b = 0; b < h.bands; b++) CHECK(h.next[b] == HOLD_LAYERS);
+    pthread_cond_destroy(&h.change);
+    pthread_mutex_destroy(&h.lock);
+}
+
 static void threads_write_the_same_job(void)
 {
     static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3", "8"};
@@ -858,5 +963,6 @@ void test_slice_jobs(void)
     RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);
     RUN(an_interrupted_reslice_cannot_be_printed);
+    RUN(a_held_band_holds_up_only_itself);
     cli_end();
 }
