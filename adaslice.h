@@ -1749,11 +1749,21 @@ static const unsigned char adaslice__type_size[9] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
 
 /* One value of a PLY scalar type (binary STL uses U32 and F32), assembled byte by
    byte so that the host's byte order and alignment do not matter. */
-static double adaslice__scalar(const unsigned char *p, int type, int big_endian)
+/* n bytes at p as an unsigned integer in the given byte order. */
+static inline uint64_t adaslice__bits(const unsigned char *p, unsigned n, int big_endian)
 {
-    unsigned n = adaslice__type_size[type], i;
     uint64_t u = 0;
+    unsigned i;
+    if (n == 4 && !big_endian) /* the common case without the loop: most of a binary file's load */
+        return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
     for (i = 0; i < n; i++) u |= (uint64_t)p[big_endian ? n - 1 - i : i] << (8 * i);
+    return u;
+}
+
+static inline double adaslice__scalar(const unsigned char *p, int type, int big_endian)
+{
+    unsigned n = adaslice__type_size[type];
+    uint64_t u = adaslice__bits(p, n, big_endian);
     if (type == ADASLICE__F32) {
         uint32_t bits = (uint32_t)u;
         float f;
@@ -2221,11 +2231,6 @@ static adaslice_result adaslice__ply_fits(adaslice__ply_reader *r, const adaslic
     return ADASLICE_OK;
 }
 
-static uint32_t adaslice__le32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
 /* The common binary records, read without the general path's value by
    value decoding (a fifth of the turbine blade's load, 200,000 facets): little
    endian, vertices of x, y and z floats only, faces of a one-byte count and
@@ -2247,10 +2252,8 @@ static size_t adaslice__ply_plain(adaslice__ply_reader *r, const adaslice__ply_e
         for (; i < e->count && b->size - r->pos >= 12; i++) {
             float xyz[3];
             for (k = 0; k < 3; k++) {
-                uint32_t bits = adaslice__le32(b->bytes + r->pos);
-                float f;
-                memcpy(&f, &bits, 4);
-                if ((*res = adaslice__coord(b, f, r->pos, 0, &xyz[k])) != ADASLICE_OK) return i;
+                *res = adaslice__coord(b, adaslice__scalar(b->bytes + r->pos, ADASLICE__F32, 0), r->pos, 0, &xyz[k]);
+                if (*res != ADASLICE_OK) return i;
                 r->pos += 4;
             }
             if ((*res = adaslice__vertex(b, xyz)) != ADASLICE_OK) return i;
@@ -2262,7 +2265,8 @@ static size_t adaslice__ply_plain(adaslice__ply_reader *r, const adaslice__ply_e
         return 0;
     for (; i < e->count && b->size - r->pos >= 13; i++) {
         const unsigned char *q = b->bytes + r->pos;
-        uint32_t u = adaslice__le32(q + 1), v = adaslice__le32(q + 5), w = adaslice__le32(q + 9);
+        uint32_t u = (uint32_t)adaslice__bits(q + 1, 4, 0), v = (uint32_t)adaslice__bits(q + 5, 4, 0),
+                 w = (uint32_t)adaslice__bits(q + 9, 4, 0);
         if (q[0] != 3 || u >= limit || v >= limit || w >= limit) break;
         if ((*res = adaslice__triangle(b, u, v, w)) != ADASLICE_OK) break;
         r->pos += 13;
