@@ -6927,19 +6927,6 @@ static size_t adaslice__box_count(size_t triangles)
     return (triangles + ADASLICE__BOX_TRIANGLES - 1) / ADASLICE__BOX_TRIANGLES;
 }
 
-/* What the cusp profile along a direction may skip by (adaslice__prune):
-   each sorted triangle's unit normal n and a bound e on how far the value
-   the profile computes for it, from its corners turned and rounded to float,
-   can be from |n . d| along any d; and the boxes around runs of triangles.
-   The turned corners are off by at most r = sqrt(3) 2^-24 of the farthest
-   corner's distance each (plus the double sums' rounding, far less), so its
-   edges u, w by 2r, its normal u x w by 2r (|u| + |w|) + 4r^2, and the
-   normal's unit vector, whose z is the value, by twice that over |u x w|.
-   e is that doubled, plus 10^-6 for the sums' rounding and 2.7 10^-5 for n
-   kept in 32767ths (sqrt(3) / 2 of one at most), rounded up to 32768ths; a
-   facet without a normal (skipped by the profile) or a sliver whose bound
-   nears 1 gets 32767, which keeps it in every profile. Eight bytes a facet:
-   the search reads them all for every direction. */
 /* A facet's bound of adaslice__orienter_bounds as a number (32767: any). */
 static double adaslice__value_bound(int16_t e)
 {
@@ -6978,12 +6965,30 @@ static void adaslice__box_cone(const adaslice_orienter *o, size_t first, size_t 
     cone[5] = (float)(bound * (1 + 1e-6));
 }
 
-static void adaslice__orienter_bounds(adaslice_orienter *o)
+/* What the cusp profile along a direction may skip by (adaslice__prune):
+   each sorted triangle's unit normal n and a bound e on how far the value
+   the profile computes for it, from its corners turned and rounded to float,
+   can be from |n . d| along any d; and the boxes around runs of triangles.
+   The turned corners are off by at most r = sqrt(3) 2^-24 of the farthest
+   corner's distance each (plus the double sums' rounding, far less), so its
+   edges u, w by 2r, its normal u x w by 2r (|u| + |w|) + 4r^2, and the
+   normal's unit vector, whose z is the value, by twice that over |u x w|.
+   e is that doubled, plus 10^-6 for the sums' rounding and 2.7 10^-5 for n
+   kept in 32767ths (sqrt(3) / 2 of one at most), rounded up to 32768ths; a
+   facet without a normal (skipped by the profile) or a sliver whose bound
+   nears 1 gets 32767, which keeps it in every profile. Eight bytes a facet:
+   the search reads them all for every direction. 0 when out of memory. */
+static int adaslice__orienter_bounds(adaslice_orienter *o)
 {
     const adaslice_mesh *m = &o->sorted;
+    const adaslice_allocator *al = &o->allocator;
     double r = 1.7320508075688772 / 16777216.0 * o->reach * 1.01;
-    size_t t;
+    size_t t, boxes = adaslice__box_count(m->triangle_count);
     int k, c;
+    o->normals = ADASLICE__CAST(int16_t *, adaslice__alloc(al, m->triangle_count, 4 * sizeof(int16_t)));
+    o->boxes = ADASLICE__CAST(float *, adaslice__alloc(al, boxes, 12 * sizeof(float)));
+    o->firsts = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, boxes, 3 * sizeof(uint32_t)));
+    if (!o->normals || !o->boxes || !o->firsts) return 0;
     for (t = 0; t < m->triangle_count; t++) {
         const uint32_t *tri = m->triangles + 3 * t;
         const float *a = m->vertices + 3 * (size_t)tri[0], *b = m->vertices + 3 * (size_t)tri[1],
@@ -7013,6 +7018,7 @@ static void adaslice__orienter_bounds(adaslice_orienter *o)
         if (t % ADASLICE__BOX_TRIANGLES == ADASLICE__BOX_TRIANGLES - 1 || t + 1 == m->triangle_count)
             adaslice__box_cone(o, t - t % ADASLICE__BOX_TRIANGLES, t + 1, box + 6);
     }
+    return 1;
 }
 
 /* The triangles sorted along a Morton curve through their centroids, their
@@ -7037,12 +7043,6 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     s->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, m->vertex_count, 3 * sizeof(float)));
     s->triangles = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, 3 * sizeof(uint32_t)));
     if (o->profile.weights) o->weights = ADASLICE__CAST(float *, adaslice__alloc(al, n, sizeof(float)));
-    if (o->profile.metric == ADASLICE_METRIC_CUSP && !o->profile.weights) {
-        o->normals = ADASLICE__CAST(int16_t *, adaslice__alloc(al, n, 4 * sizeof(int16_t)));
-        o->boxes = ADASLICE__CAST(float *, adaslice__alloc(al, adaslice__box_count(n), 12 * sizeof(float)));
-        o->firsts = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, adaslice__box_count(n), 3 * sizeof(uint32_t)));
-        if (!o->normals || !o->boxes || !o->firsts) goto done;
-    }
     if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
     for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
     for (t = 0; t < n; t++) {
@@ -7071,7 +7071,6 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     }
     s->vertex_count = used;
     s->triangle_count = n;
-    if (o->normals) adaslice__orienter_bounds(o);
     ok = 1;
 done:
     adaslice__free(al, key);
@@ -7114,7 +7113,8 @@ ADASLICE_DEF adaslice_result adaslice_orienter_init(adaslice_orienter *o, const 
     }
     o->longest_edge = sqrt(edge2);
     o->reach = sqrt(reach2);
-    if (o->profile.metric < ADASLICE_METRIC_AREA && !adaslice__orienter_sort(o, lo, hi)) {
+    if ((o->profile.metric < ADASLICE_METRIC_AREA && !adaslice__orienter_sort(o, lo, hi)) ||
+        (o->profile.metric == ADASLICE_METRIC_CUSP && !o->profile.weights && !adaslice__orienter_bounds(o))) {
         adaslice_orienter_free(o);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "orient: out of memory");
     }
@@ -7254,7 +7254,8 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
    grows to tens of MB, cleared, updated at random and pushed down for every
    direction, and memory bounds the search; so the bins are cut into chunks
    whose table stays in cache, the facets' runs sorted into them by a
-   counting pass over the corners' bins (those crossing a border cut there). */
+   counting pass over the corners' bins (those crossing a border cut there).
+   For the cusp metric unweighted, only the facets adaslice__prune keeps. */
 static adaslice_result adaslice__max_along(const adaslice_orienter *o, const adaslice__turned_corner *cv,
                                            const double up[3], const adaslice_profile_options *opt,
                                            adaslice_profile *p, adaslice_error *err)
