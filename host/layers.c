@@ -4,6 +4,7 @@
 /* The display and mask options and the layer masks: see layers.h. */
 #include "layers.h"
 #include "options.h"
+#include "pages.h"
 #include "formats/pipeline.h"
 #include "report.h"
 
@@ -357,6 +358,7 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
     memset(&mo, 0, sizeof mo);
     mo.supersample = s->supersample;
+    mo.allocator = pages_allocator();
     mo.slice_at = SLICE_RULES[s->slice_at];
     mo.bin = j->args->bin; /* the profile's (0: the library's default for both), which may be in the making */
     if (adaslice_masker_init(&whole, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK) return library_error(&err);

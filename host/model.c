@@ -3,6 +3,7 @@
 #include "json.h"
 #include "model.h"
 #include "output.h"
+#include "pages.h"
 #include "report.h"
 #include <string.h>
 
@@ -42,14 +43,18 @@ int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mes
 int model_load_timed(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report, double *ms_repair)
 {
     adaslice_load_options lo;
+    adaslice_repair_options ro;
     adaslice_mesh_report r;
     adaslice_error err;
     double t0;
     memset(&lo, 0, sizeof lo);
     lo.scale = scale;
+    lo.allocator = pages_allocator();
+    memset(&ro, 0, sizeof ro);
+    ro.allocator = pages_allocator();
     if (adaslice_mesh_load_file(path, &lo, mesh, &err) != ADASLICE_OK) return library_error(&err);
     t0 = now_ms();
-    if (adaslice_mesh_repair(mesh, NULL, &r, &err) != ADASLICE_OK) {
+    if (adaslice_mesh_repair(mesh, &ro, &r, &err) != ADASLICE_OK) {
         adaslice_mesh_free(mesh);
         return complain(RC_FAIL, "%s: %s", path, err.message);
     }

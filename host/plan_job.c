@@ -4,6 +4,7 @@
 #include "profile_csv.h"
 #include "options.h"
 #include "output.h"
+#include "pages.h"
 #include "report.h"
 #include "search.h"
 #include "svg.h"
@@ -383,6 +384,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     memset(&po, 0, sizeof po);
     po.metric = a->metric;
     po.bin = a->bin;
+    po.allocator = pages_allocator();
     po.resolution = (int)a->resolution;
     po.weights = weights;
     if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) return drop_mesh(j, &mesh, weights, rc);

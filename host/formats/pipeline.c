@@ -15,6 +15,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "pipeline.h"
+#include "../pages.h"
 #include "../report.h"
 
 #include <pthread.h>
@@ -216,6 +217,7 @@ int pipeline_run(const pipeline_job *job)
     pipeline p;
     pthread_t threads[64];
     worker workers[64];
+    unsigned char *images = NULL;
     int helpers = job->threads > 1 ? job->threads - 1 : 0, started = 0, i, rc = RC_OK;
     if (helpers > 63) helpers = 63;
     memset(&p, 0, sizeof p);
@@ -229,12 +231,16 @@ int pipeline_run(const pipeline_job *job)
         free(p.bands);
         return complain(RC_FAIL, "out of memory");
     }
-    for (i = 0; i < p.count; i++)
-        if (!(p.slots[i].image = (unsigned char *)calloc(job->image_bytes ? job->image_bytes : 1, 1))) {
-            rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
-                          job->image_bytes);
-            goto done;
-        }
+    /* one block, in huge pages where there are any: eight 1-bit images of
+       3840 x 2400 took 2,250 first touches, 4-7 ms before the first layer */
+    if (job->image_bytes > ((size_t)-1) / (size_t)p.count ||
+        !(images = (unsigned char *)pages_alloc((size_t)p.count * job->image_bytes))) {
+        rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
+                      job->image_bytes);
+        goto done;
+    }
+    memset(images, 0, (size_t)p.count * job->image_bytes);
+    for (i = 0; i < p.count; i++) p.slots[i].image = images + (size_t)i * job->image_bytes;
     pthread_mutex_init(&p.lock, NULL);
     pthread_cond_init(&p.change, NULL);
     p.threads = helpers + 1;
@@ -249,10 +255,8 @@ int pipeline_run(const pipeline_job *job)
     pthread_cond_destroy(&p.change);
     pthread_mutex_destroy(&p.lock);
 done:
-    for (i = 0; i < p.count; i++) {
-        free(p.slots[i].blob.data);
-        free(p.slots[i].image);
-    }
+    for (i = 0; i < p.count; i++) free(p.slots[i].blob.data);
+    free(images);
     free(p.slots);
     free(p.bands);
     return rc;
