@@ -214,7 +214,7 @@ $(B)/bench_saliency: $(call objs,bench,bench/bench_saliency.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_wire: $(call objs,bench,bench/bench_wire.c $(LINK_SRC)) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
-$(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c host/report.c host/plan_job.c host/profile_csv.c host/model.c host/output.c \
+$(B)/bench_jobs: $(call objs,bench,bench/bench_jobs.c host/cure.c host/options.c host/report.c host/plan_job.c host/profile_csv.c host/model.c host/output.c host/pages.c \
                   host/search.c host/svg.c host/weights.c host/json.c) $(BENCH_LIB)
 	$(CC) $^ -o $@ -lm
 $(B)/bench_mcu_plan: $(call objs,bench,bench/bench_mcu_plan.c) $(BENCH_LIB)

@@ -3,7 +3,11 @@
       turbine blade x4.3 on a 3840 x 2400 display of 50 um, in layers per
       second against the same command writing the PNG directory, each the
       median of RUNS runs taken in turn, and the directory on one thread
-      against all the cores. SL1 holds one layer height, so it is timed,
+      against all the cores; and the directory on one thread held to each
+      core in turn, as the cores of a virtual machine need not run alike (a
+      busy neighbour on the host's other half of one core slows it by a
+      third): what all the cores could do at best is each its share of the
+      work at its own speed. SL1 holds one layer height, so it is timed,
       with the directory beside it, on a uniform plan.
    2. Print time saved: every shared model's estimated print time (each
       layer's exposure by the working curve, settle, peel and return at the
@@ -18,6 +22,9 @@
       its anti-aliased export, and what --aa 4 costs against 1-bit, on the
       hand x60 and the turbine blade x4.3.
    usage: bench_jobs TOOL MODELS_DIR */
+#ifdef __linux__
+#define _GNU_SOURCE /* sched_setaffinity: a run held to one core */
+#endif
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
@@ -28,6 +35,10 @@
 #include "timing.h"
 
 #include <fcntl.h>
+#include <math.h>
+#ifdef __linux__
+#include <sched.h>
+#endif
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,6 +50,7 @@
 extern char **environ;
 
 #define RUNS 3
+#define CORES 8 /* held to each of the first CORES cores */
 
 static char work[64];
 static char stages[512]; /* the last slice's line of stage times ("time load ..."), or "" */
@@ -73,6 +85,28 @@ static double run(char **argv, size_t *layers)
     return t;
 }
 
+/* Runs argv as run() does, on core `core` alone (the child inherits this
+   process's affinity); -1 where the cores cannot be chosen. */
+static double run_on_core(char **argv, size_t *layers, int core)
+{
+#ifdef __linux__
+    cpu_set_t all, one;
+    double t;
+    if (sched_getaffinity(0, sizeof all, &all) != 0) return -1;
+    CPU_ZERO(&one);
+    CPU_SET(core, &one);
+    if (sched_setaffinity(0, sizeof one, &one) != 0) return -1;
+    t = run(argv, layers);
+    sched_setaffinity(0, sizeof all, &all);
+    return t;
+#else
+    (void)argv;
+    (void)layers;
+    (void)core;
+    return -1;
+#endif
+}
+
 /* uniform: 1 on --uniform 0.1 (against the uniform directory), 2 on one thread */
 typedef struct job { const char *name, *out; int uniform; } job;
 
@@ -83,10 +117,13 @@ static int time_formats(const char *tool, const char *dir)
         {"directory, --threads 1", "one", 2},
         {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
     enum { JOBS = sizeof jobs / sizeof jobs[0] };
-    char model[4096], out[JOBS][128];
-    double t[JOBS][RUNS], rate[JOBS], ratio[RUNS];
-    size_t layers[JOBS] = {0};
-    int r, k;
+    char model[4096], out[JOBS][128], one_out[128];
+    double t[JOBS][RUNS], rate[JOBS], ratio[RUNS], on_core[CORES][RUNS], best[RUNS], bound[RUNS], ideal[RUNS];
+    size_t layers[JOBS] = {0}, one_layers = 0;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int r, k, c;
+    if (cores > CORES) cores = 0; /* too many to take in turn */
+    snprintf(one_out, sizeof one_out, "%s/one", work);
     snprintf(model, sizeof model, "%s/turbineblade.ply", dir);
     for (k = 0; k < JOBS; k++) snprintf(out[k], sizeof out[k], "%s/%s", work, jobs[k].out);
     for (r = 0; r < RUNS; r++)
@@ -111,8 +148,23 @@ static int time_formats(const char *tool, const char *dir)
                 printf("bench_jobs: %s slice %s -o %s failed\n", tool, model, out[k]);
                 return 1;
             }
+            /* after the directory on one thread, the same held to each core */
+            for (c = 0; jobs[k].uniform == 2 && c < cores; c++)
+                if ((on_core[c][r] = run_on_core(argv, &one_layers, c)) < 0) cores = 0; /* not measured */
         }
-    for (r = 0; r < RUNS; r++) ratio[r] = t[4][r] / t[0][r]; /* before median sorts the times */
+    for (r = 0; r < RUNS; r++) { /* before median sorts the times */
+        double speed = 0;
+        ratio[r] = t[4][r] / t[0][r];
+        best[r] = HUGE_VAL;
+        for (c = 0; c < cores; c++) {
+            speed += 1 / on_core[c][r];
+            if (on_core[c][r] < best[r]) best[r] = on_core[c][r];
+        }
+        ideal[r] = cores ? 1 / speed : 0;  /* every core its share at its own speed */
+        bound[r] = best[r] / ideal[r];     /* what that is against the fastest core alone */
+        best[r] /= t[0][r];                /* all the cores against the fastest alone */
+        ideal[r] = t[0][r] / ideal[r];     /* all the cores against that ideal */
+    }
     printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", RUNS);
     printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
     for (k = 0; k < JOBS; k++) {
@@ -128,6 +180,20 @@ static int time_formats(const char *tool, const char *dir)
     median(ratio, RUNS); /* sorts */
     printf("  all %ld cores against --threads 1, the directory: %.2fx (median of each run's ratio; %.2f-%.2fx)\n",
            sysconf(_SC_NPROCESSORS_ONLN), ratio[RUNS / 2], ratio[0], ratio[RUNS - 1]);
+    if (!cores) {
+        printf("  --threads 1 held to each core: not measured (more than %d cores, or they cannot be chosen here)\n", CORES);
+        return 0;
+    }
+    printf("  --threads 1 held to each core, the directory:");
+    for (c = 0; c < cores; c++) printf(" core %d %.2f s%s", c, median(on_core[c], RUNS), c + 1 < cores ? "," : "\n");
+    /* each a median of its runs' ratios, each run's jobs taken in one round */
+    median(best, RUNS);
+    median(bound, RUNS);
+    median(ideal, RUNS);
+    printf("  all %ld cores against the fastest core alone: %.2fx (%.2f-%.2fx); at best %.2fx (%.2f-%.2fx), each core\n"
+           "    its share of the whole command at its own speed; all cores took %.2fx (%.2f-%.2fx) that best time\n",
+           sysconf(_SC_NPROCESSORS_ONLN), best[RUNS / 2], best[0], best[RUNS - 1], bound[RUNS / 2], bound[0], bound[RUNS - 1],
+           ideal[RUNS / 2], ideal[0], ideal[RUNS - 1]);
     return 0;
 }
 
