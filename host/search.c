@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "search.h"
+#include "pages.h"
 #include "report.h"
 
 #include <math.h>
@@ -44,7 +45,7 @@ static void *cache_alloc(void *user, size_t size)
         c->block[best] = NULL;
         return p;
     }
-    h = (block_head *)malloc(sizeof *h + size);
+    h = (block_head *)pages_alloc(sizeof *h + size);
     if (!h) return NULL;
     h->size = size;
     return h + 1;
