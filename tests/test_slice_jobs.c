@@ -12,6 +12,7 @@
 #include "meshgen.h"
 #include "../adaslice_mcu.h"
 #include "../host/formats/pipeline.h"
+#include "../host/pages.h"
 #include "../host/report.h"
 #include <pthread.h>
 
@@ -620,6 +621,26 @@ static int hold_put(void *writer, size_t k, job_blob *blob)
     return RC_OK;
 }
 
+/* The host's large blocks (the masker's, the repair's, the layer images)
+   start on a 2 MB boundary from 1 MB up, so that their pages can be huge
+   ones; smaller blocks are malloc's. Each holds its bytes (under
+   AddressSanitizer a short block fails here). */
+static void large_blocks_start_on_huge_pages(void)
+{
+    static const size_t sizes[] = {0, 1, 4096, (1u << 20) - 1, 1u << 20, (2u << 20) + 1, 5u << 20};
+    size_t i;
+    for (i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        unsigned char *p = (unsigned char *)pages_alloc(sizes[i]);
+        CHECKF(p != NULL, "pages_alloc(%zu) failed", sizes[i]);
+        if (!p) continue;
+        memset(p, 0xa5, sizes[i]);
+        if (sizes[i] >= 1u << 20) CHECKF((uintptr_t)p % (2u << 20) == 0, "a block of %zu bytes at %p", sizes[i], (void *)p);
+        if (sizes[i]) CHECK(p[sizes[i] - 1] == 0xa5);
+        free(p);
+    }
+    CHECK(pages_allocator()->alloc && pages_allocator()->free && !pages_allocator()->user);
+}
+
 static void a_held_band_holds_up_only_itself(void)
 {
     job_format format;
@@ -964,5 +985,6 @@ void test_slice_jobs(void)
     RUN(job_directories_cannot_go_stale);
     RUN(an_interrupted_reslice_cannot_be_printed);
     RUN(a_held_band_holds_up_only_itself);
+    RUN(large_blocks_start_on_huge_pages);
     cli_end();
 }
