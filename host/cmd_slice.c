@@ -217,7 +217,11 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
 }
 
 /* The plate's fit, checked before the part is profiled and planned. */
-static int fits_the_plate(void *ctx, const adaslice_mesh *mesh) { return layer_masks_fit((const slice_args *)ctx, mesh); }
+static int fits_the_plate(void *ctx, const adaslice_mesh *mesh, const double lo[3], const double hi[3])
+{
+    (void)mesh;
+    return layer_masks_fit((const slice_args *)ctx, lo, hi);
+}
 
 static int draw_picture(const plan_job *j, int w, int h, unsigned char *rgb)
 {

@@ -222,13 +222,12 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
     }
 }
 
-/* Where the grid's pixel (0, 0) lies in the model's coordinates, after
-   checking that the part fits on the plate. */
-static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_grid *g, double size[3])
+/* Whether the part, its box lo to hi, fits on the plate where it is placed:
+   its size, or a complaint. */
+static int part_fits(const slice_args *s, const double lo[3], const double hi[3], double size[3])
 {
-    double lo[3], hi[3], plate[2], over[2];
+    double plate[2], over[2];
     int k;
-    adaslice_mesh_bounds(mesh, lo, hi);
     plate[0] = s->width * s->pitch[0];
     plate[1] = s->height * s->pitch[1];
     for (k = 0; k < 3; k++) size[k] = hi[k] - lo[k];
@@ -241,7 +240,6 @@ static int place_part(const slice_args *s, const adaslice_mesh *mesh, adaslice_g
         return complain(RC_FAIL, "the part (%g x %g mm), placed at %g, %g mm, overhangs the %g x %g mm plate by %g mm along %s",
                         size[0], size[1], s->place[0], s->place[1], plate[0], plate[1], over[axis], axis ? "y" : "x");
     }
-    *g = adaslice_grid_plate(mesh, s->width, s->height, s->pitch[0], s->pitch[1], s->place);
     return RC_OK;
 }
 
@@ -270,12 +268,10 @@ int layer_masks_check(const slice_args *s, int buffers)
                     buffers > 1 ? " twice, as it is split into row bands" : "", buffers, plural((size_t)buffers), size_text(limit, c));
 }
 
-int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
+int layer_masks_fit(const slice_args *s, const double lo[3], const double hi[3])
 {
-    adaslice_grid g;
-    double size[3], lo[3], hi[3], tall, most;
+    double size[3], tall, most;
     char hint[160] = "";
-    adaslice_mesh_bounds(mesh, lo, hi);
     tall = hi[2] - lo[2];
     most = hi[0] - lo[0] > hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
     if (tall > most) most = tall;
@@ -290,7 +286,7 @@ int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh)
     else if (most < UNITS_SMALL_MM)
         fprintf(stderr, "adaslice: warning: the part is %g x %g x %g mm; a model in metres? --scale 1000 reads it in "
                         "millimetres, %g mm tall\n", hi[0] - lo[0], hi[1] - lo[1], tall, tall * 1000);
-    return place_part(s, mesh, &g, size);
+    return part_fits(s, lo, hi, size);
 }
 
 /* Where layer k is sliced, mm above the part's bottom (as adaslice_masker_layer
@@ -309,11 +305,10 @@ double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
    round its box: a pixel is lit only where a ray inside the part's section
    runs, and an open mesh's section is closed by chords between its own
    points, so no lit pixel lies outside the box. */
-static void part_band(layer_masks *m, const adaslice_mesh *mesh)
+static void part_band(layer_masks *m, const double lo[3], const double hi[3])
 {
     const adaslice_grid *g = &m->grid;
-    double lo[3], hi[3], x0, x1, y0, y1;
-    adaslice_mesh_bounds(mesh, lo, hi);
+    double x0, x1, y0, y1;
     x0 = floor((lo[0] - g->origin[0]) / g->pitch[0]) - 1;
     x1 = floor((hi[0] - g->origin[0]) / g->pitch[0]) + 2;
     y0 = floor((lo[1] - g->origin[1]) / g->pitch[1]) - 1;
@@ -355,7 +350,8 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     memset(m, 0, sizeof *m);
     m->s = s;
     m->j = j;
-    if ((rc = place_part(s, &j->mesh, &m->grid, m->part))) return rc;
+    if ((rc = part_fits(s, j->lo, j->hi, m->part))) return rc;
+    m->grid = adaslice_grid_plate(&j->mesh, s->width, s->height, s->pitch[0], s->pitch[1], s->place);
     memset(&mo, 0, sizeof mo);
     mo.supersample = s->supersample;
     mo.allocator = pages_allocator();
@@ -366,7 +362,7 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;
     m->bits = s->supersample > 1 ? 8 : 1;
     m->stride = m->bits == 8 ? (size_t)m->width : ((size_t)m->width + 7) / 8;
-    part_band(m, &j->mesh);
+    part_band(m, j->lo, j->hi);
     /* an open mesh's sections are whole: one masker */
     if (bands > 1 && !whole.sections && m->row_hi > m->row_lo) {
         if (!(rows = (uint32_t *)malloc(((size_t)bands + 1) * sizeof *rows))) {

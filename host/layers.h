@@ -61,13 +61,14 @@ double layer_masks_bytes(const slice_args *s, int buffers);
 /* RC_OK, or RC_USAGE after a complaint naming the grid and the bytes when
    they pass --memory: said before any work. */
 int layer_masks_check(const slice_args *s, int buffers);
-/* RC_OK when the part fits s's plate where it is placed, else a complaint
-   saying by how much it does not. */
-int layer_masks_fit(const slice_args *s, const adaslice_mesh *mesh);
+/* RC_OK when the part, its box lo to hi, fits s's plate where it is
+   placed, else a complaint saying by how much it does not. */
+int layer_masks_fit(const slice_args *s, const double lo[3], const double hi[3]);
 /* Places the part on the plate (a complaint if it does not fit) and sets up
    the masker, split into about `bands` row bands (one for an open mesh,
    whose sections are cut whole), each rendered on its own. Reads only
-   j->mesh and j->args, so it may run while the profile and the plan are made. */
+   j->mesh, its box and j->args, so it may run while the profile and the
+   plan are made. */
 int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int bands);
 /* Band b's rows of layer k's (0-based; k never decreasing for a band) mask
    into out (m->image or another buffer of m->stride * m->height bytes),

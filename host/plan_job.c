@@ -198,14 +198,14 @@ void units_hint(double tall_mm, char *out, size_t size)
    limit of work; else a complaint naming the figures: said before any work.
    warn_units: a part over a metre tall that fits is warned about here (slice
    and print check it against the printer). */
-static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const adaslice_profile_options *po, int warn_units)
+static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const double lo[3], const double hi[3],
+                        const adaslice_profile_options *po, int warn_units)
 {
     adaslice_profile_cost c;
     adaslice_error err;
-    double lo[3], hi[3], bin = po->bin ? po->bin : ADASLICE_DEFAULT_BIN;
+    double bin = po->bin ? po->bin : ADASLICE_DEFAULT_BIN;
     char need[32], limit[32], hint[160];
     if (adaslice_profile_estimate(mesh, po, a->sampler, &c, &err) != ADASLICE_OK) return library_error_in(a->model, &err);
-    adaslice_mesh_bounds(mesh, lo, hi);
     units_hint(hi[2] - lo[2], hint, sizeof hint);
     if (c.bytes > a->memory_mb * 1e6)
         return complain(RC_FAIL, "%s: its profile needs %s (%.0f bins of %g mm over %g mm), more than --memory %s%s; "
@@ -373,7 +373,8 @@ static int profile_model(const plan_args *a, plan_job *j)
     }
     j->triangles = mesh.triangle_count;
     j->format = mesh.format;
-    if (j->loaded && (rc = j->loaded(j->loaded_ctx, &mesh)) != RC_OK) {
+    adaslice_mesh_bounds(&mesh, j->lo, j->hi);
+    if (j->loaded && (rc = j->loaded(j->loaded_ctx, &mesh, j->lo, j->hi)) != RC_OK) {
         free(weights);
         adaslice_mesh_free(&mesh);
         return rc;
@@ -387,7 +388,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     po.allocator = pages_allocator();
     po.resolution = (int)a->resolution;
     po.weights = weights;
-    if ((rc = profile_fits(a, &mesh, &po, !j->loaded)) != RC_OK) return drop_mesh(j, &mesh, weights, rc);
+    if ((rc = profile_fits(a, &mesh, j->lo, j->hi, &po, !j->loaded)) != RC_OK) return drop_mesh(j, &mesh, weights, rc);
     t0 = now_ms();
     memset(&bar, 0, sizeof bar);
     bar.started = t0;

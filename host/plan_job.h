@@ -51,6 +51,7 @@ typedef struct plan_job {
     int profiled;                  /* profile came from the library and needs freeing */
     int keep_mesh;                 /* keep the model loaded (slice needs it) */
     adaslice_mesh mesh;
+    double lo[3], hi[3];           /* model only: the turned mesh's box, taken once (1.8M facets: 2 ms a time) */
     double up[3];                  /* --orient: the direction turned up; else 0, 0, 1 */
     adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all of them with --compare */
     adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
@@ -72,9 +73,10 @@ typedef struct plan_job {
     int planar_finest;             /* no plan reaches printed_worst: planar is uniform tmin */
     double fdm_seconds, planar_fdm_seconds; /* --3mf: fdm.h's times of the plan and of planar */
     double ms_load, ms_repair, ms_profile, ms_plan;  /* model only: load without the repair, then the repair */
-    /* Called with the mesh loaded and turned, before it is profiled: a
-       check (the plate's fit) that should stop the job before the work. */
-    int (*loaded)(void *ctx, const adaslice_mesh *mesh);
+    /* Called with the mesh loaded and turned, and its box, before it is
+       profiled: a check (the plate's fit) that should stop the job before
+       the work. */
+    int (*loaded)(void *ctx, const adaslice_mesh *mesh, const double lo[3], const double hi[3]);
     void *loaded_ctx;
     /* If not NULL (with keep_mesh): called on a thread of its own beside
        the profile and the plan once the mesh is loaded, turned and checked,

@@ -169,7 +169,7 @@ typedef struct hand_rows { double wrist, fingers; size_t wrist_pixels, finger_pi
 /* plan_job's `loaded`: the part as the job turned it, drawn with the faces of
    its lowest tenth of z in red, of its highest tenth in green, the rest
    grey; the mean picture row of each. Stops the job there. */
-static int draw_hand(void *ctx, const adaslice_mesh *m)
+static int draw_hand(void *ctx, const adaslice_mesh *m, const double box_lo[3], const double box_hi[3])
 {
     hand_rows *rows = (hand_rows *)ctx;
     unsigned char *colours = (unsigned char *)malloc(3 * m->triangle_count);
@@ -179,6 +179,8 @@ static int draw_hand(void *ctx, const adaslice_mesh *m)
     size_t t, p;
     if (!colours || !rgb) { free(colours); free(rgb); CHECK(0); return HAND_DRAWN; }
     adaslice_mesh_bounds(m, lo, hi);
+    /* the box the hook is given is the turned mesh's */
+    CHECK(!memcmp(lo, box_lo, sizeof lo) && !memcmp(hi, box_hi, sizeof hi));
     for (t = 0; t < m->triangle_count; t++) {
         double z = 0;
         int c;
