@@ -412,6 +412,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     d->supersample = s->supersample;
     d->mirror_x = s->mirror_x;
     d->mirror_y = s->mirror_y;
+    memcpy(d->lit_rows, m->lit_rows, sizeof d->lit_rows);
     d->layer_count = count;
     d->layers = layers;
     d->bottom_layers = (unsigned)(s->cure.bottom_layers < count ? s->cure.bottom_layers : count);

@@ -301,6 +301,27 @@ double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
     return 0.5 * (l->z_bottom + l->z_top);
 }
 
+/* The rows of the stored image that the grid's columns [c0, c1) and rows
+   [row_lo, row_hi) reach, as orient_image turns and mirrors them: the stored
+   row r shows grid row h - 1 - r upright (the grid's row 0 is the display's
+   bottom), and a quarter turn shows a grid column in each row. */
+static void stored_rows(layer_masks *m, int c0, int c1)
+{
+    const slice_args *s = m->s;
+    int w = m->grid.width, h = m->grid.height, lo, hi, flip;
+    if (s->rotate & 1) {
+        lo = c0, hi = c1;
+        flip = (s->rotate == 1) != s->mirror_x; /* stored row r shows column w - 1 - r */
+        if (flip) lo = w - c1, hi = w - c0;
+    } else {
+        lo = m->row_lo, hi = m->row_hi;
+        flip = (s->rotate == 0) != s->mirror_y; /* stored row r shows grid row h - 1 - r */
+        if (flip) lo = h - m->row_hi, hi = h - m->row_lo;
+    }
+    m->lit_rows[0] = lo;
+    m->lit_rows[1] = hi;
+}
+
 /* The masker's rows and row bytes the part can light, a pixel of margin
    round its box: a pixel is lit only where a ray inside the part's section
    runs, and an open mesh's section is closed by chords between its own
@@ -319,6 +340,7 @@ static void part_band(layer_masks *m, const double lo[3], const double hi[3])
     m->row_hi = (int)(y1 < m->row_lo ? m->row_lo : y1 > g->height ? g->height : y1);
     m->byte_lo = m->bits == 8 ? (size_t)x0 : (size_t)x0 / 8;
     m->byte_hi = m->bits == 8 ? (size_t)x1 : ((size_t)x1 + 7) / 8;
+    stored_rows(m, (int)x0, (int)x1);
 }
 
 /* The bands' rows: the part's rows cut into about `wanted` bands of whole

@@ -53,6 +53,8 @@ typedef struct layer_masks {
     int width, height, bits;
     int row_lo, row_hi;            /* the masker's rows [lo, hi) and bytes of a row */
     size_t byte_lo, byte_hi;       /* [lo, hi) the part can light: zero outside, always */
+    int lit_rows[2];               /* the rows [0, 1) of the stored (turned) image the part can
+                                      light: the others are dark in every layer */
     double part[3];                /* the part's size, mm */
 } layer_masks;
 /* The bytes the masks of s's grid take with `buffers` layers in flight: the

@@ -365,7 +365,7 @@ static void *code_layers(void *arg)
     coded_layer *l = (coded_layer *)arg;
     int i;
     for (i = 0; i < LAYERS / LAYER_THREADS; i++, l += LAYER_THREADS)
-        l->rc = png_encode_layer(l->image, (int)l->w, (int)l->h, l->stride, l->bits, &l->out);
+        l->rc = png_encode_layer(l->image, (int)l->w, (int)l->h, l->stride, l->bits, NULL, &l->out);
     return NULL;
 }
 
@@ -439,6 +439,56 @@ done:
         free(l[i].out.png);
         free(l[i].out.rle);
     }
+}
+
+/* With lit rows given, png_encode_layer codes the layer as it codes the same
+   image dark outside them, and does not read the rows outside: they hold
+   garbage here, and the code (PNG, masks.rle, CRC) is still that of dark
+   rows. Lit ranges at the top, the bottom, inside, of one row and empty;
+   1 and 8 bits, odd widths, padded strides. */
+static void dark_rows_outside_the_lit_ones_are_not_read(void)
+{
+    int i, bad = 0;
+    for (i = 0; i < 40; i++) {
+        coded_layer l, dark;
+        const uint32_t h = 1 + codec_rng() % 200;
+        int lit[2], y;
+        memset(&l, 0, sizeof l);
+        l.bits = i % 2 ? 8 : 1;
+        l.w = 1 + codec_rng() % 900;
+        l.h = h;
+        l.stride = (l.bits == 1 ? (l.w + 7) / 8 : l.w) + (size_t)(i % 3);
+        lit[0] = i % 5 == 0 ? 0 : (int)(codec_rng() % h);
+        lit[1] = i % 5 == 1 ? (int)h : i % 5 == 2 ? lit[0] : i % 5 == 3 ? lit[0] + 1 : lit[0] + (int)(codec_rng() % (h - (uint32_t)lit[0] + 1));
+        if (lit[1] > (int)h) lit[1] = (int)h;
+        dark = l;
+        l.image = (unsigned char *)malloc(l.stride * h);
+        dark.image = (unsigned char *)malloc(l.stride * h);
+        if (!l.image || !dark.image) { free(l.image); free(dark.image); CHECK(!"out of memory"); return; }
+        memset(l.image, 0, l.stride * h);
+        layer_rows(&l, 2 + i % 3);
+        memcpy(dark.image, l.image, l.stride * h);
+        for (y = 0; y < (int)h; y++) {
+            int outside = y < lit[0] || y >= lit[1];
+            if (!outside) continue;
+            memset(dark.image + (size_t)y * l.stride, 0, l.stride);
+            memset(l.image + (size_t)y * l.stride, 0xA7, l.stride); /* never to be read */
+        }
+        if (png_encode_layer(l.image, (int)l.w, (int)h, l.stride, l.bits, lit, &l.out) ||
+            png_encode_layer(dark.image, (int)l.w, (int)h, l.stride, l.bits, NULL, &dark.out))
+            bad++;
+        else if (l.out.png_size != dark.out.png_size || memcmp(l.out.png, dark.out.png, l.out.png_size) ||
+                 l.out.rle_size != dark.out.rle_size || memcmp(l.out.rle, dark.out.rle, l.out.rle_size) ||
+                 l.out.crc != dark.out.crc)
+            bad++;
+        free(l.image);
+        free(dark.image);
+        free(l.out.png);
+        free(l.out.rle);
+        free(dark.out.png);
+        free(dark.out.rle);
+    }
+    CHECKF(bad == 0, "%d of 40 layers coded with their lit rows differ from the same layers dark outside them", bad);
 }
 
 static void empty_and_full_masks_are_tiny(void)
@@ -596,6 +646,7 @@ void test_codec(void)
     RUN(mask_crc_over_long_repeats_is_the_crc_of_the_bytes);
     RUN(mask_crc_over_grey_runs_is_the_crc_of_the_bytes);
     RUN(layer_code_is_the_reference_encoders);
+    RUN(dark_rows_outside_the_lit_ones_are_not_read);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);

@@ -168,7 +168,7 @@ static int encode_as(const image *im, int as, unsigned char **png, size_t *size)
     png_layer layer;
     if (as != AS_LAYER) return (as == AS_MASK ? png_encode_mask : png_encode_gray)(im->pixels, im->width, im->height,
                                                                                   im->stride, im->bits, png, size);
-    if (png_encode_layer(im->pixels, im->width, im->height, im->stride, im->bits, &layer)) return -1;
+    if (png_encode_layer(im->pixels, im->width, im->height, im->stride, im->bits, NULL, &layer)) return -1;
     free(layer.rle);
     *png = layer.png;
     *size = layer.png_size;

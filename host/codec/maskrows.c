@@ -80,9 +80,13 @@ int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int
     const size_t n = bits == 8 ? (size_t)width : ((size_t)width + 7) / 8;
     if (n > s->cap) { /* a row has at most n runs */
         uint32_t *a = (uint32_t *)realloc(s->runs, n * sizeof *a), *b;
+        unsigned char *z;
         if (a) s->runs = a;
         if (!a || !(b = (uint32_t *)realloc(s->spare, n * sizeof *b))) return -1;
         s->spare = b;
+        if (!(z = (unsigned char *)realloc(s->dark, n))) return -1;
+        memset(z, 0, n);
+        s->dark = z;
         s->cap = n;
     }
     s->image = image;
@@ -93,10 +97,18 @@ int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int
     s->whole = bits == 8 ? n : (size_t)width / 8;
     s->tail = bits == 1 && width % 8 ? (0xFFu << (8 - width % 8)) & 0xFF : 0;
     s->height = height;
+    s->lit[0] = 0;
+    s->lit[1] = height;
     s->y = s->rows = 0;
     s->row = image;
     s->count = 0;
     return 0;
+}
+
+/* Row r of the image, or a dark row in place of one outside the lit rows. */
+static const unsigned char *scan_row(const mask_scan *s, int r)
+{
+    return r < s->lit[0] || r >= s->lit[1] ? s->dark : s->image + (size_t)r * s->stride;
 }
 
 /* A row that differs from the one above (the edges of a part) is read twice:
@@ -104,21 +116,28 @@ int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int
 int mask_scan_next(mask_scan *s)
 {
     const int y = s->y + s->rows;
-    const unsigned char *row = s->image + (size_t)y * s->stride;
+    const unsigned char *row, *above;
     uint32_t *runs = s->spare;
     int k = 0;
     size_t x = 0, n = 0;
     if (y >= s->height) return 0;
     s->y = y;
-    s->row = row;
+    s->row = row = scan_row(s, y);
     if (y > 0)
-        while (y + k < s->height && !memcmp(row + (size_t)k * s->stride, row + (size_t)k * s->stride - s->stride, s->row_bytes))
+        while (y + k < s->height) {
+            const int r = y + k;
+            if (r - 1 >= s->lit[1] || r < s->lit[0]) { /* it and the row above are dark */
+                k = (r < s->lit[0] ? s->lit[0] : s->height) - y;
+                continue;
+            }
+            if (memcmp(scan_row(s, r), scan_row(s, r - 1), s->row_bytes)) break;
             k++;
+        }
     s->repeat = k > 0;
     s->rows = k ? k : 1;
     if (k) return 1;
-    s->same_pixels = y > 0 && s->tail && !memcmp(row, row - s->stride, s->whole) &&
-                     !((row[s->whole] ^ row[s->whole - s->stride]) & s->tail);
+    above = y > 0 ? scan_row(s, y - 1) : NULL;
+    s->same_pixels = above && s->tail && !memcmp(row, above, s->whole) && !((row[s->whole] ^ above[s->whole]) & s->tail);
     while (x < s->row_bytes) {
         size_t end = same_bytes_end(row, x, s->row_bytes);
         runs[n++] = (uint32_t)row[x] << 24 | (uint32_t)(end - x);
@@ -144,6 +163,7 @@ void mask_scan_free(mask_scan *s)
 {
     free(s->runs);
     free(s->spare);
+    free(s->dark);
     memset(s, 0, sizeof *s);
 }
 

@@ -27,6 +27,8 @@ typedef struct mask_scan {
     size_t stride, row_bytes, whole; /* whole: bytes of eight pixels (8-bit: all) */
     unsigned tail;                   /* the pixels' bits of a 1-bit row's last byte when it is part padding */
     int height;
+    int lit[2];                      /* rows outside [lit[0], lit[1]) are dark and never
+                                        read (begin: all rows) */
     /* the step */
     int y, rows;                     /* rows y to y + rows - 1 */
     int repeat;                      /* they repeat the row above byte for byte; runs are its */
@@ -35,11 +37,16 @@ typedef struct mask_scan {
     uint32_t *runs;                  /* row y's runs of equal bytes, value << 24 | length, each as long as it goes */
     size_t count;
     uint32_t *spare;                 /* the other row's runs */
+    unsigned char *dark;             /* a dark row, read in place of those outside lit */
     size_t cap;
 } mask_scan;
 /* Starts a scan of height rows of width pixels at bits (1 or 8; rows of
    fewer than 2^24 bytes), stride bytes apart. The run buffers of a scan
-   begun before are kept (zero it the first time). -1 when out of memory. */
+   begun before are kept (zero it the first time). -1 when out of memory.
+   Its lit rows are all rows; a caller who knows that rows outside some
+   [lo, hi) are dark (all bytes 0) sets s->lit to them after: a layer's
+   rows away from the part are half of a large display's megabyte, and
+   reading them was a third of coding it. */
 int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height);
 /* The next step, or 0 after the last row. */
 int mask_scan_next(mask_scan *s);

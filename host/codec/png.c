@@ -397,7 +397,7 @@ static int png_end(mask_encoder *e, int width, int height, unsigned char **out, 
 /* A mask's PNG at `depth` from its runs and, if layer, masks.rle's code and
    the CRC from the same steps of the scan. */
 static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
-                       unsigned char **out, size_t *out_size, png_layer *layer)
+                       const int *lit, unsigned char **out, size_t *out_size, png_layer *layer)
 {
     const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8;
     mask_crc crc;
@@ -410,6 +410,10 @@ static int encode_runs(const unsigned char *image, int width, int height, size_t
         (layer && (width >= 1 << 24 || height >= 1 << 24)) || !(c = take_coder()))
         return -1;
     if (mask_scan_begin(&c->scan, image, stride, width, bits, height)) goto done;
+    if (lit) {
+        c->scan.lit[0] = lit[0] < 0 ? 0 : lit[0] > height ? height : lit[0];
+        c->scan.lit[1] = lit[1] < c->scan.lit[0] ? c->scan.lit[0] : lit[1] > height ? height : lit[1];
+    }
     png_begin(&c->png, width, depth);
     if (layer) {
         mask_rle_begin(&c->rle, width, bits);
@@ -440,22 +444,23 @@ done:
     return rc;
 }
 
-int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, png_layer *layer)
+int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, const int lit_rows[2],
+                     png_layer *layer)
 {
     memset(layer, 0, sizeof *layer);
-    return encode_runs(image, width, height, stride, bits, bits, &layer->png, &layer->png_size, layer);
+    return encode_runs(image, width, height, stride, bits, bits, lit_rows, &layer->png, &layer->png_size, layer);
 }
 
 int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,
                     size_t *out_size)
 {
-    return encode_runs(image, width, height, stride, bits, 8, out, out_size, NULL);
+    return encode_runs(image, width, height, stride, bits, 8, NULL, out, out_size, NULL);
 }
 
 int png_encode_gray(const unsigned char *pixels, int width, int height, size_t stride, int bits,
                     unsigned char **out, size_t *out_size)
 {
-    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, out, out_size, NULL);
+    if (bits == 1) return encode_runs(pixels, width, height, stride, 1, 1, NULL, out, out_size, NULL);
     if (bits != 8) {
         *out = NULL;
         *out_size = 0;

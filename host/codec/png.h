@@ -37,13 +37,16 @@ int png_encode_mask(const unsigned char *image, int width, int height, size_t st
    (mask_scan: the coders share each row's runs), masks.rle's code of it
    (adaslice_rle_encode's bytes) and the CRC-32 of its rows' bytes. png and
    rle are malloc'd (the caller frees them). -1 as png_encode_mask, and for
-   a height of 2^24 or more, with nothing allocated. */
+   a height of 2^24 or more, with nothing allocated. lit_rows (NULL: every
+   row) says that the rows outside [lit_rows[0], lit_rows[1]) are dark: they
+   are not read. */
 typedef struct png_layer {
     unsigned char *png, *rle;
     size_t png_size, rle_size;
     uint32_t crc;
 } png_layer;
-int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, png_layer *layer);
+int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, const int lit_rows[2],
+                     png_layer *layer);
 
 /* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
    result back in continues it over more data. (CRC-32 is adaslice_crc32.) */

@@ -512,7 +512,8 @@ static int dir_encode(const void *writer, size_t k, const unsigned char *image, 
     char *path = (char *)malloc(w->path_size);
     png_layer coded;
     int rc;
-    if (!path || png_encode_layer(image, (int)m->width, (int)m->height, stride, (int)m->bits, &coded)) {
+    if (!path || png_encode_layer(image, (int)m->width, (int)m->height, stride, (int)m->bits,
+                                       w->d->lit_rows[1] > 0 ? w->d->lit_rows : NULL, &coded)) {
         free(path);
         return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
     }

@@ -52,6 +52,8 @@ typedef struct job_desc {
     int bits;                    /* of the images handed to `layer`: 1 or 8 */
     int supersample;             /* 1: 1-bit masks; s: 8-bit from s x s rays */
     int mirror_x, mirror_y;      /* the images are flipped so for this display */
+    int lit_rows[2];             /* the images' rows outside [0, 1) are dark in every layer, and
+                                    coders need not read them ({0, 0}: any row may be lit) */
     size_t layer_count;
     const job_layer *layers;     /* all layer_count, bottom first */
     double exposure_s;           /* the normal layers' exposure for headers that hold
