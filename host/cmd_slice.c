@@ -512,7 +512,6 @@ int cmd_slice(int argc, char **argv)
     int rest_argc = 0, rc, i;
     double stage_ms[3] = {0, 0, 0}, t0 = now_ms();
 
-    pipeline_keep_memory(); /* before the model's arrays: each stage reuses the last one's pages */
     memset(&j, 0, sizeof j);
     memset(&ms, 0, sizeof ms);
     memset(&sum, 0, sizeof sum);

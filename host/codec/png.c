@@ -292,10 +292,9 @@ static void push_repeats(mask_encoder *e, size_t row_bytes, uint64_t k)
    stream. Freed and taken again layer after layer, off the main thread
    glibc gave such memory back to the system and the next layer faulted it
    in again (two threads took 94,000 page faults on the turbine blade's
-   directory job against 12,000 on one, and a third more CPU; the pipeline
-   set glibc's malloc thresholds against it), so each coder goes back to a
-   pool for the next layer, on whichever thread: there are as many as
-   layers are coded at once. */
+   directory job against 12,000 on one, and a third more CPU), so each
+   coder goes back to a pool for the next layer, on whichever thread: there
+   are as many as layers are coded at once. */
 typedef struct coder {
     struct coder *next;
     mask_scan scan;

@@ -19,9 +19,6 @@
 #include "../report.h"
 
 #include <pthread.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -195,21 +192,6 @@ static void *work(void *arg)
     worker *w = (worker *)arg;
     take_steps(w->p, w->me);
     return NULL;
-}
-
-void pipeline_keep_memory(void)
-{
-#ifdef __GLIBC__
-    /* The repair's, the profile's and the masker's arrays were each new
-       memory, first touched page by page, as glibc hands large freed blocks
-       back to the system, and a first touch costs as much as sweeping the
-       page many times over (64 MB: 0.2 s against 3 ms here): the turbine
-       blade's profile took 31 ms in new pages, 7 ms in the repair's freed
-       ones. Fixed thresholds keep freed memory for the next stage. (The
-       layers' coders keep their own buffers: png.c's pool.) */
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);
-    mallopt(M_TRIM_THRESHOLD, 256 << 20);
-#endif
 }
 
 int pipeline_run(const pipeline_job *job)

@@ -44,10 +44,6 @@ int pipeline_bands(int threads);
 /* Every layer through render, encode and put; RC_OK or the first failure,
    complained about. Leaves the writer to the caller's close. */
 int pipeline_run(const pipeline_job *job);
-/* Keeps freed memory for the next allocations rather than handing it
-   back to the system (glibc only): from the start of a command, so that
-   each stage reuses the last one's pages. */
-void pipeline_keep_memory(void);
 /* The cores online, at least 1. */
 int pipeline_cores(void);
 #endif
