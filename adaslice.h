@@ -1747,9 +1747,8 @@ enum { ADASLICE__I8 = 1, ADASLICE__U8, ADASLICE__I16, ADASLICE__U16, ADASLICE__I
        ADASLICE__F32, ADASLICE__F64 };
 static const unsigned char adaslice__type_size[9] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
 
-/* One value of a PLY scalar type (binary STL uses U32 and F32), assembled byte by
-   byte so that the host's byte order and alignment do not matter. */
-/* n bytes at p as an unsigned integer in the given byte order. */
+/* n bytes at p as an unsigned integer in the given byte order, assembled
+   byte by byte so that the host's byte order and alignment do not matter. */
 static inline uint64_t adaslice__bits(const unsigned char *p, unsigned n, int big_endian)
 {
     uint64_t u = 0;
@@ -1760,6 +1759,7 @@ static inline uint64_t adaslice__bits(const unsigned char *p, unsigned n, int bi
     return u;
 }
 
+/* One value of a PLY scalar type (binary STL uses U32 and F32). */
 static inline double adaslice__scalar(const unsigned char *p, int type, int big_endian)
 {
     unsigned n = adaslice__type_size[type];

@@ -175,11 +175,19 @@ static int mask_pixel(const adaslice_masker *mk, int x, int y)
     return mk->supersample > 1 ? row[x] : (row[x >> 3] >> (7 - (x & 7))) & 1;
 }
 
+/* Where the grid's lines (rows or columns) [lo, hi) land among the n lines
+   of the stored image: counted from the other end when flip. */
+static void landing(int flip, int n, int lo, int hi, int out[2])
+{
+    out[0] = flip ? n - hi : lo;
+    out[1] = flip ? n - lo : hi;
+}
+
 static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsigned char *out, size_t out_stride)
 {
     const slice_args *s = m->s;
     int w = mk->grid.width, h = mk->grid.height, y0 = (int)mk->rows[0], y1 = (int)mk->rows[1], r, i;
-    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h, r0 = 0, r1 = out_h, i0 = 0, i1 = out_w;
+    int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h, rows[2] = {0, out_h}, cols[2] = {0, out_w};
     if (!s->rotate && !s->mirror_x) {
         /* the common case: rows as they are, and only the part's band of
            each (out is zero elsewhere): the copy was the one pass over the
@@ -192,18 +200,11 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
     }
     /* the band's rows are out's columns (a quarter turn) or rows, perhaps
        counted from the other end */
-    if (s->rotate & 1) {
-        int flip = (s->rotate == 1) != s->mirror_y;
-        i0 = flip ? h - y1 : y0;
-        i1 = flip ? h - y0 : y1;
-    } else {
-        int flip = (s->rotate == 0) != s->mirror_y;
-        r0 = flip ? h - y1 : y0;
-        r1 = flip ? h - y0 : y1;
-    }
-    for (r = r0; r < r1; r++) {
+    if (s->rotate & 1) landing((s->rotate == 1) != s->mirror_y, h, y0, y1, cols);
+    else landing((s->rotate == 0) != s->mirror_y, h, y0, y1, rows);
+    for (r = rows[0]; r < rows[1]; r++) {
         unsigned char *dst = out + (size_t)r * out_stride;
-        for (i = i0; i < i1; i++) {
+        for (i = cols[0]; i < cols[1]; i++) {
             /* (i, r) in the turned picture back to (x, y) of the upright picture, then to the grid */
             int x, y, v;
             switch (s->rotate) {
@@ -308,18 +309,10 @@ double layer_slice_height(const slice_args *s, const plan_job *j, size_t k)
 static void stored_rows(layer_masks *m, int c0, int c1)
 {
     const slice_args *s = m->s;
-    int w = m->grid.width, h = m->grid.height, lo, hi, flip;
-    if (s->rotate & 1) {
-        lo = c0, hi = c1;
-        flip = (s->rotate == 1) != s->mirror_x; /* stored row r shows column w - 1 - r */
-        if (flip) lo = w - c1, hi = w - c0;
-    } else {
-        lo = m->row_lo, hi = m->row_hi;
-        flip = (s->rotate == 0) != s->mirror_y; /* stored row r shows grid row h - 1 - r */
-        if (flip) lo = h - m->row_hi, hi = h - m->row_lo;
-    }
-    m->lit_rows[0] = lo;
-    m->lit_rows[1] = hi;
+    if (s->rotate & 1) /* flipped: stored row r shows column w - 1 - r */
+        landing((s->rotate == 1) != s->mirror_x, m->grid.width, c0, c1, m->lit_rows);
+    else /* flipped: stored row r shows grid row h - 1 - r, as orient_image lands the bands' rows */
+        landing((s->rotate == 0) != s->mirror_y, m->grid.height, m->row_lo, m->row_hi, m->lit_rows);
 }
 
 /* The masker's rows and row bytes the part can light, a pixel of margin
