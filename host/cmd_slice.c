@@ -308,14 +308,14 @@ typedef struct slice_run {
     progress *bar;
 } slice_run;
 
-/* A band's next layer, and its lit rays. */
-static int render_band(void *ctx, int b, size_t k, unsigned char *image)
+/* A band's next layer (or its rows read), and its lit rays. */
+static int render_band(void *ctx, int b, size_t k, unsigned char *image, mask_band *rows)
 {
     slice_run *r = (slice_run *)ctx;
     layer_masks *m = r->masks;
     int rc;
     if (output_interrupted()) return RC_FAIL; /* said once, by outputs_finish */
-    if ((rc = layer_masks_render_band(m, b, k, image))) return rc;
+    if ((rc = rows ? layer_masks_scan_band(m, b, k, rows) : layer_masks_render_band(m, b, k, image))) return rc;
     r->rays[k * (size_t)m->bands + (size_t)b] = layer_masks_rays(m, b);
     return RC_OK;
 }
@@ -476,6 +476,7 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     pipe.threads = s->threads;
     pipe.bands = m->bands;
     pipe.render = render_band;
+    pipe.by_bands = f->encode_bands && layer_masks_band_is_rows(m);
     pipe.ready = layer_ready;
     pipe.done = layer_done;
     pipe.ctx = &run;

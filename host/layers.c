@@ -406,13 +406,42 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     return rc;
 }
 
-int layer_masks_render_band(layer_masks *m, int b, size_t k, unsigned char *out)
+/* Band b's masker on to layer k. */
+static int sweep_band(layer_masks *m, int b, size_t k)
 {
     adaslice_error err;
     const adaslice_layer *l = &m->j->plan[m->j->args->method].layers[k];
     if (adaslice_masker_layer(&m->band[b], m->j->profile.z0 + l->z_bottom, m->j->profile.z0 + l->z_top, &err) != ADASLICE_OK)
         return library_error(&err);
-    orient_image(m, &m->band[b], out, m->stride);
+    return RC_OK;
+}
+
+int layer_masks_render_band(layer_masks *m, int b, size_t k, unsigned char *out)
+{
+    int rc = sweep_band(m, b, k);
+    if (!rc) orient_image(m, &m->band[b], out, m->stride);
+    return rc;
+}
+
+int layer_masks_band_is_rows(const layer_masks *m)
+{
+    return !m->s->rotate && !m->s->mirror_x;
+}
+
+int layer_masks_scan_band(layer_masks *m, int b, size_t k, mask_band *rows)
+{
+    const adaslice_masker *mk = &m->band[b];
+    const int y0 = (int)mk->rows[0], r0 = y0 > m->row_lo ? y0 : m->row_lo;
+    int r1 = (int)mk->rows[1] < m->row_hi ? (int)mk->rows[1] : m->row_hi, rc = sweep_band(m, b, k);
+    const unsigned char *first = mk->image;
+    if (rc) return rc;
+    if (r1 < r0) r1 = r0;
+    /* stored top first: grid row h - 1 - r, so the band's top row first,
+       unless mirrored in y (as orient_image lands them) */
+    if (r1 > r0) first += (size_t)((m->s->mirror_y ? r0 : r1 - 1) - y0) * mk->stride;
+    if (mask_band_scan(rows, first, m->s->mirror_y ? (ptrdiff_t)mk->stride : -(ptrdiff_t)mk->stride,
+                       m->s->mirror_y ? r0 : m->grid.height - r1, r1 - r0, m->stride, m->byte_lo, m->byte_hi))
+        return complain(RC_FAIL, "out of memory reading the rows of layer %zu", k + 1);
     return RC_OK;
 }
 

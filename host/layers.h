@@ -9,6 +9,7 @@
 #include "cure.h"
 #include "plan_job.h"
 #include "printer.h"
+#include "codec/maskrows.h"
 
 extern const char *const SLICE_AT[];   /* bottom, middle, top, envelope, core */
 extern const char *const SLICE_AT_MEANING[]; /* what each gives, for the summary */
@@ -78,6 +79,13 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
    out is left as it is. Bands write bytes of their own: different bands
    can render into one out at once on different threads. */
 int layer_masks_render_band(layer_masks *m, int b, size_t k, unsigned char *out);
+/* Whether each band is whole rows of the stored image (neither turned nor
+   flipped across), so that it can be read where it is made: */
+int layer_masks_band_is_rows(const layer_masks *m);
+/* band b's rows of layer k read (mask_band_scan) into rows, in place of
+   render_band's image: the stored image's rows the part can light among
+   the band's. */
+int layer_masks_scan_band(layer_masks *m, int b, size_t k, mask_band *rows);
 /* Every band of layer k into out. */
 int layer_masks_render(layer_masks *m, size_t k, unsigned char *out);
 /* Band b's lit rays in its last layer (lit pixels times s*s): whole

@@ -491,6 +491,75 @@ static void dark_rows_outside_the_lit_ones_are_not_read(void)
     CHECKF(bad == 0, "%d of 40 layers coded with their lit rows differ from the same layers dark outside them", bad);
 }
 
+/* A layer read band by band where it was made (mask_band_scan: its rows
+   bottom-up or top-down in the masker's own buffer, garbage outside the
+   bytes the part can light) codes to the same PNG, masks.rle code and CRC
+   as the image those bands make, dark outside them: 1 to 9 bands (some
+   empty) in any order, rows outside every band, band edges between rows
+   that repeat or differ only in their padding bits, 1 and 8 bits. */
+static void bands_code_as_their_image(void)
+{
+    int i, bad = 0;
+    for (i = 0; i < 60; i++) {
+        coded_layer l;
+        mask_band bands[9];
+        png_layer want, got;
+        const uint32_t h = 1 + codec_rng() % 200;
+        const int flip = i % 2, count = 1 + (int)(codec_rng() % 9);
+        int lit[2], cuts[10], b, k;
+        size_t rs, lo, hi, sstride, y;
+        unsigned char *source;
+        memset(&l, 0, sizeof l);
+        memset(bands, 0, sizeof bands);
+        l.bits = i % 4 < 2 ? 1 : 8;
+        l.w = 1 + codec_rng() % 900;
+        l.h = h;
+        rs = l.bits == 1 ? (l.w + 7) / 8 : l.w;
+        l.stride = rs + (size_t)(i % 3);
+        sstride = rs + 3;
+        lo = i % 3 ? codec_rng() % (rs + 1) : 0;
+        hi = i % 3 == 2 ? rs : lo + codec_rng() % (rs - lo + 1);
+        lit[0] = (int)(codec_rng() % (h + 1));
+        lit[1] = lit[0] + (int)(codec_rng() % (h - (uint32_t)lit[0] + 1));
+        l.image = (unsigned char *)calloc(l.stride, h);
+        source = (unsigned char *)malloc(sstride * h);
+        if (!l.image || !source) { free(l.image); free(source); CHECK(!"out of memory"); return; }
+        layer_rows(&l, 2 + i % 3);
+        memset(source, 0xA7, sstride * h);
+        for (y = 0; y < h; y++) {
+            unsigned char *row = l.image + y * l.stride;
+            memcpy(source + (flip ? h - 1 - y : y) * sstride + lo, row + lo, hi - lo);
+            if ((int)y < lit[0] || (int)y >= lit[1]) memset(row, 0, rs);
+            else memset(row, 0, lo), memset(row + hi, 0, rs - hi);
+        }
+        for (k = 0; k <= count; k++) cuts[k] = lit[0] + (int)(codec_rng() % ((uint32_t)(lit[1] - lit[0]) + 1));
+        cuts[0] = lit[0];
+        cuts[count] = lit[1];
+        for (k = 1; k < count; k++) /* in order */
+            for (b = k; b > 1 && cuts[b] < cuts[b - 1]; b--) { int t = cuts[b]; cuts[b] = cuts[b - 1]; cuts[b - 1] = t; }
+        for (k = 0; k < count; k++) {
+            mask_band *into = &bands[k];
+            const int first = cuts[k], n = cuts[k + 1] - first;
+            const unsigned char *top = n <= 0 ? source : source + (flip ? h - 1 - (size_t)first : (size_t)first) * sstride;
+            if (mask_band_scan(into, top, flip ? -(ptrdiff_t)sstride : (ptrdiff_t)sstride, first, n, rs, lo, hi)) bad++;
+        }
+        if (i % 3 == 1) /* any order */
+            for (k = 0; k < count / 2; k++) { mask_band t = bands[k]; bands[k] = bands[count - 1 - k]; bands[count - 1 - k] = t; }
+        if (png_encode_layer(l.image, (int)l.w, (int)h, l.stride, l.bits, NULL, &want)) bad++;
+        else if (png_encode_bands(bands, count, (int)l.w, (int)h, l.bits, &got)) bad++, free(want.png), free(want.rle);
+        else {
+            if (got.png_size != want.png_size || memcmp(got.png, want.png, got.png_size) || got.rle_size != want.rle_size ||
+                memcmp(got.rle, want.rle, got.rle_size) || got.crc != want.crc)
+                bad++;
+            free(want.png), free(want.rle), free(got.png), free(got.rle);
+        }
+        for (k = 0; k < count; k++) mask_band_free(&bands[k]);
+        free(l.image);
+        free(source);
+    }
+    CHECKF(bad == 0, "%d of 60 layers coded from their bands differ from their images' code", bad);
+}
+
 static void empty_and_full_masks_are_tiny(void)
 {
     static unsigned char image[1440][320];
@@ -647,6 +716,7 @@ void test_codec(void)
     RUN(mask_crc_over_grey_runs_is_the_crc_of_the_bytes);
     RUN(layer_code_is_the_reference_encoders);
     RUN(dark_rows_outside_the_lit_ones_are_not_read);
+    RUN(bands_code_as_their_image);
     RUN(empty_and_full_masks_are_tiny);
     RUN(malformed_code_is_refused);
     RUN(printer_units_plan_like_the_tool);

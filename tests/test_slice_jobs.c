@@ -580,7 +580,7 @@ typedef struct hold_run {
     int in_order;
 } hold_run;
 
-static int hold_render(void *ctx, int b, size_t k, unsigned char *image)
+static int hold_render(void *ctx, int b, size_t k, unsigned char *image, mask_band *rows)
 {
     hold_run *h = (hold_run *)ctx;
     pthread_mutex_lock(&h->lock);
@@ -599,6 +599,7 @@ static int hold_render(void *ctx, int b, size_t k, unsigned char *image)
     }
     pthread_mutex_unlock(&h->lock);
     image[0] = (unsigned char)k;
+    if (rows) h->in_order = 0; /* not asked for */
     return RC_OK;
 }
 

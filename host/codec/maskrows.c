@@ -52,8 +52,10 @@ static void byte_pixels(unsigned v, size_t n, mask_run_fn run, void *ctx)
 }
 
 /* A row's runs of pixels, from its runs of bytes (runs, as mask_scan's) or,
-   runs NULL, found here: each run of whole bytes at once. */
-static void pixel_runs(const unsigned char *row, const uint32_t *runs, int bits, int width, mask_run_fn run, void *ctx)
+   runs NULL, found here in row: each run of whole bytes at once; `last` is
+   a 1-bit row's last byte. */
+static void pixel_runs(const unsigned char *row, const uint32_t *runs, unsigned last, int bits, int width,
+                       mask_run_fn run, void *ctx)
 {
     const size_t whole = bits == 8 ? (size_t)width : (size_t)width >> 3;
     size_t x = 0, n;
@@ -65,105 +67,214 @@ static void pixel_runs(const unsigned char *row, const uint32_t *runs, int bits,
         else byte_pixels(v, n, run, ctx);
         x += n;
     }
-    for (x *= 8; bits == 1 && x < (size_t)width; x++) run(ctx, (row[x >> 3] >> (7 - (x & 7)) & 1) ? 255 : 0, 1);
+    for (x *= 8; bits == 1 && x < (size_t)width; x++) run(ctx, (last >> (7 - (x & 7)) & 1) ? 255 : 0, 1);
 }
 
 void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn run, void *ctx)
 {
-    pixel_runs(row, NULL, bits, width, run, ctx);
+    pixel_runs(row, NULL, bits == 1 && width % 8 ? row[width / 8] : 0, bits, width, run, ctx);
 }
 
 /* ---- one reading of a layer's rows -------------------------------------- */
 
-int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height)
+/* Room for one more step and `runs` more runs. */
+static int band_room(mask_band *b, size_t runs)
 {
-    const size_t n = bits == 8 ? (size_t)width : ((size_t)width + 7) / 8;
-    if (n > s->cap) { /* a row has at most n runs */
-        uint32_t *a = (uint32_t *)realloc(s->runs, n * sizeof *a), *b;
-        unsigned char *z;
-        if (a) s->runs = a;
-        if (!a || !(b = (uint32_t *)realloc(s->spare, n * sizeof *b))) return -1;
-        s->spare = b;
-        if (!(z = (unsigned char *)realloc(s->dark, n))) return -1;
-        memset(z, 0, n);
-        s->dark = z;
-        s->cap = n;
+    if (b->step_count == b->step_cap) {
+        size_t cap = b->step_cap ? 2 * b->step_cap : 64;
+        mask_band_step *p = (mask_band_step *)realloc(b->steps, cap * sizeof *p);
+        if (!p) return -1;
+        b->steps = p;
+        b->step_cap = cap;
     }
-    s->image = image;
-    s->width = width;
-    s->bits = bits;
-    s->stride = stride;
-    s->row_bytes = n;
-    s->whole = bits == 8 ? n : (size_t)width / 8;
-    s->tail = bits == 1 && width % 8 ? (0xFFu << (8 - width % 8)) & 0xFF : 0;
-    s->height = height;
-    s->lit[0] = 0;
-    s->lit[1] = height;
-    s->y = s->rows = 0;
-    s->row = image;
-    s->count = 0;
+    if (b->run_cap - b->run_count < runs) {
+        size_t cap = b->run_cap ? 2 * b->run_cap : 1024;
+        uint32_t *p;
+        while (cap - b->run_count < runs) cap *= 2;
+        if (!(p = (uint32_t *)realloc(b->runs, cap * sizeof *p))) return -1;
+        b->runs = p;
+        b->run_cap = cap;
+    }
     return 0;
 }
 
-/* Row r of the image, or a dark row in place of one outside the lit rows. */
-static const unsigned char *scan_row(const mask_scan *s, int r)
+/* n bytes of v after the row's runs so far (from runs[first]), joining the
+   last when it is of v: runs go as long as they go. */
+static void band_put(mask_band *b, size_t first, unsigned v, size_t n)
 {
-    return r < s->lit[0] || r >= s->lit[1] ? s->dark : s->image + (size_t)r * s->stride;
+    if (!n) return;
+    if (b->run_count > first && b->runs[b->run_count - 1] >> 24 == v) b->runs[b->run_count - 1] += (uint32_t)n;
+    else b->runs[b->run_count++] = (uint32_t)v << 24 | (uint32_t)n;
 }
 
 /* A row that differs from the one above (the edges of a part) is read twice:
    by memcmp, which brings it into the cache, and for its runs there. */
+int mask_band_scan(mask_band *b, const unsigned char *rows, ptrdiff_t step, int first, int count, size_t row_bytes,
+                   size_t lo, size_t hi)
+{
+    int i;
+    b->first = first;
+    b->count = count;
+    b->step_count = b->run_count = 0;
+    for (i = 0; i < count; i++) {
+        const unsigned char *row = rows + (ptrdiff_t)i * step;
+        mask_band_step *st = b->step_count ? &b->steps[b->step_count - 1] : NULL;
+        size_t x = lo, start;
+        if (i > 0 && !memcmp(row + lo, row - step + lo, hi - lo)) {
+            if (st->repeat) st->rows++;
+            else {
+                if (band_room(b, 0)) return -1;
+                st = &b->steps[b->step_count++];
+                st->rows = st->repeat = 1;
+                st->run = st->count = 0;
+            }
+            continue;
+        }
+        if (band_room(b, hi - lo + 2)) return -1;
+        st = &b->steps[b->step_count++];
+        st->rows = 1;
+        st->repeat = 0;
+        st->run = start = b->run_count;
+        band_put(b, start, 0, lo);
+        while (x < hi) {
+            size_t end = same_bytes_end(row, x, hi);
+            band_put(b, start, row[x], end - x);
+            x = end;
+        }
+        band_put(b, start, 0, row_bytes - hi);
+        st->count = b->run_count - start;
+    }
+    return 0;
+}
+
+void mask_band_free(mask_band *b)
+{
+    free(b->steps);
+    free(b->runs);
+    memset(b, 0, sizeof *b);
+}
+
+void mask_scan_bands(mask_scan *s, const mask_band *bands, int count, int width, int bits, int height)
+{
+    s->width = width;
+    s->bits = bits;
+    s->height = height;
+    s->row_bytes = bits == 8 ? (size_t)width : ((size_t)width + 7) / 8;
+    s->whole = bits == 8 ? s->row_bytes : (size_t)width / 8;
+    s->tail = bits == 1 && width % 8 ? (0xFFu << (8 - width % 8)) & 0xFF : 0;
+    s->bands = bands;
+    s->band_count = count;
+    s->in = NULL;
+    s->until = 0;
+    s->dark = (uint32_t)s->row_bytes;
+    s->y = s->rows = 0;
+    s->runs = NULL;
+    s->count = 0;
+}
+
+int mask_scan_image(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height,
+                    const int lit[2])
+{
+    const size_t n = bits == 8 ? (size_t)width : ((size_t)width + 7) / 8;
+    int lo = lit ? (lit[0] < 0 ? 0 : lit[0] > height ? height : lit[0]) : 0;
+    int hi = lit ? (lit[1] < lo ? lo : lit[1] > height ? height : lit[1]) : height;
+    if (mask_band_scan(&s->own, image + (size_t)lo * stride, (ptrdiff_t)stride, lo, hi - lo, n, 0, n)) return -1;
+    mask_scan_bands(s, &s->own, 1, width, bits, height);
+    return 0;
+}
+
+/* Steps row y on into: the band that holds it, else the dark rows up to
+   the next band. */
+static void enter(mask_scan *s, int y)
+{
+    int i;
+    s->in = NULL;
+    s->until = s->height;
+    s->next = 0;
+    for (i = 0; i < s->band_count; i++) {
+        const mask_band *b = &s->bands[i];
+        if (b->count <= 0) continue;
+        if (b->first <= y && y < b->first + b->count) {
+            s->in = b;
+            s->until = b->first + b->count;
+            return;
+        }
+        if (b->first > y && b->first < s->until) s->until = b->first;
+    }
+}
+
+/* Whether two rows, as their runs, hold the same bytes before `upto`
+   (less than the rows' length). */
+static int runs_agree(const uint32_t *a, const uint32_t *b, size_t upto)
+{
+    size_t x = 0, end_a = *a & 0xFFFFFF, end_b = *b & 0xFFFFFF;
+    while (x < upto) {
+        if (*a >> 24 != *b >> 24) return 0;
+        x = end_a < end_b ? end_a : end_b;
+        if (x >= upto) break;
+        if (x == end_a) end_a += *++a & 0xFFFFFF;
+        if (x == end_b) end_b += *++b & 0xFFFFFF;
+    }
+    return 1;
+}
+
+/* Where a band or the dark rows begin, the row is checked against the row
+   above (the end of another band), by their runs: runs that go as long as
+   they go are the same runs for the same bytes. */
 int mask_scan_next(mask_scan *s)
 {
     const int y = s->y + s->rows;
-    const unsigned char *row, *above;
-    uint32_t *runs = s->spare;
-    int k = 0;
-    size_t x = 0, n = 0;
+    const uint32_t *runs;
+    size_t count;
+    int begins = y >= s->until;
     if (y >= s->height) return 0;
+    if (begins) enter(s, y);
     s->y = y;
-    s->row = row = scan_row(s, y);
-    if (y > 0)
-        while (y + k < s->height) {
-            const int r = y + k;
-            if (r - 1 >= s->lit[1] || r < s->lit[0]) { /* it and the row above are dark */
-                k = (r < s->lit[0] ? s->lit[0] : s->height) - y;
-                continue;
-            }
-            if (memcmp(scan_row(s, r), scan_row(s, r - 1), s->row_bytes)) break;
-            k++;
+    s->rows = 1;
+    s->repeat = s->same_pixels = 0;
+    if (s->in) {
+        const mask_band_step *st = &s->in->steps[s->next++];
+        if (st->repeat) {
+            s->repeat = 1;
+            s->rows = st->rows;
+            return 1;
         }
-    s->repeat = k > 0;
-    s->rows = k ? k : 1;
-    if (k) return 1;
-    above = y > 0 ? scan_row(s, y - 1) : NULL;
-    s->same_pixels = above && s->tail && !memcmp(row, above, s->whole) && !((row[s->whole] ^ above[s->whole]) & s->tail);
-    while (x < s->row_bytes) {
-        size_t end = same_bytes_end(row, x, s->row_bytes);
-        runs[n++] = (uint32_t)row[x] << 24 | (uint32_t)(end - x);
-        x = end;
+        runs = s->in->runs + st->run;
+        count = st->count;
+    } else if (!begins) { /* the rest of the dark rows, the first of them done */
+        s->repeat = 1;
+        s->rows = s->until - y;
+        return 1;
+    } else {
+        runs = &s->dark;
+        count = 1;
     }
-    s->spare = s->runs;
+    if (begins && y > 0 && count == s->count && !memcmp(runs, s->runs, count * sizeof *runs)) {
+        s->repeat = 1;
+        s->rows = s->in ? 1 : s->until - y;
+        return 1;
+    }
+    s->same_pixels = y > 0 && s->tail && runs_agree(runs, s->runs, s->whole) &&
+                     !(((runs[count - 1] ^ s->runs[s->count - 1]) >> 24) & s->tail);
     s->runs = runs;
-    s->count = n;
+    s->count = count;
     return 1;
 }
 
 void mask_scan_runs(const mask_scan *s, int pixels, mask_run_fn run, void *ctx)
 {
+    const unsigned last = s->runs[s->count - 1] >> 24;
     if (pixels) {
-        pixel_runs(s->row, s->runs, s->bits, s->width, run, ctx);
+        pixel_runs(NULL, s->runs, last, s->bits, s->width, run, ctx);
         return;
     }
-    pixel_runs(s->row, s->runs, 8, (int)s->whole, run, ctx);
-    if (s->whole < s->row_bytes) run(ctx, s->row[s->whole] & s->tail, 1);
+    pixel_runs(NULL, s->runs, last, 8, (int)s->whole, run, ctx);
+    if (s->whole < s->row_bytes) run(ctx, last & s->tail, 1);
 }
 
 void mask_scan_free(mask_scan *s)
 {
-    free(s->runs);
-    free(s->spare);
-    free(s->dark);
+    mask_band_free(&s->own);
     memset(s, 0, sizeof *s);
 }
 
@@ -371,7 +482,7 @@ uint32_t mask_crc32(const unsigned char *image, size_t stride, size_t row_bytes,
     uint32_t crc = 0;
     int y;
     memset(&s, 0, sizeof s);
-    if (row_bytes >= (size_t)1 << RUN_BITS || mask_scan_begin(&s, image, stride, (int)row_bytes, 8, height)) {
+    if (row_bytes >= (size_t)1 << RUN_BITS || mask_scan_image(&s, image, stride, (int)row_bytes, 8, height, NULL)) {
         for (y = 0; y < height; y++) crc = adaslice_crc32(crc, image + (size_t)y * stride, row_bytes);
         mask_scan_free(&s);
         return crc;

@@ -18,36 +18,66 @@ void mask_row_runs(const unsigned char *row, int bits, int width, mask_run_fn ru
 
 /* A layer's rows read once for all of its coders (the PNG, masks.rle's code
    and the CRC), so that a layer's megabytes come from memory once after the
-   masker wrote them rather than once a coder. Each step (mask_scan_next) is
-   a run of rows that repeat the row above byte for byte, or one row that
-   does not, with its runs of equal bytes: the coders work from the runs. */
+   masker wrote them rather than once a coder. The reading (mask_band_scan)
+   keeps each row that differs from the row above as its runs of equal bytes
+   and the rows that repeat it as a count; the coders step through that
+   (mask_scan_next) and work from the runs. A layer made in row bands on
+   several threads is read band by band on the thread that made each, while
+   its rows are in that core's cache: the coder on another core then reads
+   the bands' runs, not the megabyte (reading it there, and copying the
+   bands into one image for it, cost two threads a tenth more work than
+   one). */
+typedef struct mask_band_step {
+    int rows;                        /* the step's rows */
+    int repeat;                      /* they repeat the row above byte for byte */
+    size_t run, count;               /* !repeat (one row): its runs, runs[run] on */
+} mask_band_step;
+typedef struct mask_band {
+    int first, count;                /* the layer's rows [first, first + count) */
+    mask_band_step *steps;           /* the first row is never a repeat (the row above is
+                                        another band's): the scan of the layer tells */
+    size_t step_count, step_cap;
+    uint32_t *runs;                  /* value << 24 | length, each as long as it goes */
+    size_t run_count, run_cap;
+} mask_band;
+/* Reads `count` rows of row_bytes (under 2^24) into b as the layer's rows
+   from `first` on: the first at `rows`, each next `step` bytes on (negative:
+   the rows are stored bottom-up). Only bytes [lo, hi) of a row are read;
+   the rest are 0. b's buffers are kept from its last scan (zero it the
+   first time). 0, or -1 when out of memory. */
+int mask_band_scan(mask_band *b, const unsigned char *rows, ptrdiff_t step, int first, int count, size_t row_bytes,
+                   size_t lo, size_t hi);
+void mask_band_free(mask_band *b);
+
 typedef struct mask_scan {
-    const unsigned char *image;
-    int width, bits;
-    size_t stride, row_bytes, whole; /* whole: bytes of eight pixels (8-bit: all) */
+    int width, bits, height;
+    size_t row_bytes, whole;         /* whole: bytes of eight pixels (8-bit: all) */
     unsigned tail;                   /* the pixels' bits of a 1-bit row's last byte when it is part padding */
-    int height;
-    int lit[2];                      /* rows outside [lit[0], lit[1]) are dark and never
-                                        read (begin: all rows) */
+    const mask_band *bands;          /* the layer's, apart; rows in none are dark */
+    int band_count;
+    const mask_band *in;             /* the band of the step's row, or NULL: a dark row */
+    int until;                       /* where `in` (or the dark rows) ends */
+    size_t next;                     /* in's next step */
+    uint32_t dark;                   /* a dark row's runs */
+    mask_band own;                   /* mask_scan_image's */
     /* the step */
     int y, rows;                     /* rows y to y + rows - 1 */
     int repeat;                      /* they repeat the row above byte for byte; runs are its */
     int same_pixels;                 /* !repeat: the row's pixels are the row above's (its padding differs) */
-    const unsigned char *row;        /* row y */
-    uint32_t *runs;                  /* row y's runs of equal bytes, value << 24 | length, each as long as it goes */
+    const uint32_t *runs;            /* row y's runs of equal bytes, value << 24 | length, each as long as it goes */
     size_t count;
-    uint32_t *spare;                 /* the other row's runs */
-    unsigned char *dark;             /* a dark row, read in place of those outside lit */
-    size_t cap;
 } mask_scan;
-/* Starts a scan of height rows of width pixels at bits (1 or 8; rows of
-   fewer than 2^24 bytes), stride bytes apart. The run buffers of a scan
-   begun before are kept (zero it the first time). -1 when out of memory.
-   Its lit rows are all rows; a caller who knows that rows outside some
-   [lo, hi) are dark (all bytes 0) sets s->lit to them after: a layer's
-   rows away from the part are half of a large display's megabyte, and
-   reading them was a third of coding it. */
-int mask_scan_begin(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height);
+/* A scan of a layer of height rows of width pixels at bits (1 or 8; rows of
+   fewer than 2^24 bytes) from its bands (count of them, not overlapping, in
+   any order), which it points to: rows in none are dark. */
+void mask_scan_bands(mask_scan *s, const mask_band *bands, int count, int width, int bits, int height);
+/* The same from an image, rows stride bytes apart, read here: all of its
+   rows, or when lit is not NULL only [lit[0], lit[1]) (a caller who knows
+   that the others are dark: a layer's rows away from the part are half of
+   a large display's megabyte). The buffers of a scan begun before are kept
+   (zero it the first time). -1 when out of memory. */
+int mask_scan_image(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height,
+                    const int lit[2]);
 /* The next step, or 0 after the last row. */
 int mask_scan_next(mask_scan *s);
 /* The step's row as runs, run(ctx, value, n), from its runs of bytes: of

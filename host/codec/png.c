@@ -393,26 +393,23 @@ static int png_end(mask_encoder *e, int width, int height, unsigned char **out, 
     return wrap(width, height, e->depth, 0, z, zsize, (uint32_t)(e->s2 << 16 | e->s1), out, out_size);
 }
 
-/* A mask's PNG at `depth` from its runs and, if layer, masks.rle's code and
-   the CRC from the same steps of the scan. */
-static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
-                       const int *lit, unsigned char **out, size_t *out_size, png_layer *layer)
+/* Whether a mask of width x height at bits can go to a PNG at depth and,
+   for a layer, to masks.rle: rows under 2^24 bytes, and a layer's sizes
+   under 2^24 pixels. */
+static int codable(int width, int height, int bits, int depth, int layer)
 {
     const size_t row_bytes = depth == 8 ? (size_t)width : ((size_t)width + 7) / 8;
+    return (bits == 1 || bits == 8) && width >= 1 && height >= 1 && row_bytes < 1 << 24 &&
+           row_bytes + 1 <= 0x7F000000u / (size_t)height && (!layer || (width < 1 << 24 && height < 1 << 24));
+}
+
+/* A mask's PNG at `depth` from the scan begun on c->scan and, if layer,
+   masks.rle's code and the CRC from the same steps of it. Gives c back. */
+static int encode_scan(coder *c, int width, int height, int bits, int depth, unsigned char **out, size_t *out_size,
+                       png_layer *layer)
+{
     mask_crc crc;
-    coder *c;
-    int rc = -1;
-    *out = NULL;
-    *out_size = 0;
-    if ((bits != 1 && bits != 8) || width < 1 || height < 1 || row_bytes >= 1 << 24 || !image ||
-        stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || row_bytes + 1 > 0x7F000000u / (size_t)height ||
-        (layer && (width >= 1 << 24 || height >= 1 << 24)) || !(c = take_coder()))
-        return -1;
-    if (mask_scan_begin(&c->scan, image, stride, width, bits, height)) goto done;
-    if (lit) {
-        c->scan.lit[0] = lit[0] < 0 ? 0 : lit[0] > height ? height : lit[0];
-        c->scan.lit[1] = lit[1] < c->scan.lit[0] ? c->scan.lit[0] : lit[1] > height ? height : lit[1];
-    }
+    int rc;
     png_begin(&c->png, width, depth);
     if (layer) {
         mask_rle_begin(&c->rle, width, bits);
@@ -443,11 +440,37 @@ done:
     return rc;
 }
 
+/* The same from an image, its rows read here (only the lit ones if lit). */
+static int encode_runs(const unsigned char *image, int width, int height, size_t stride, int bits, int depth,
+                       const int *lit, unsigned char **out, size_t *out_size, png_layer *layer)
+{
+    coder *c;
+    *out = NULL;
+    *out_size = 0;
+    if (!codable(width, height, bits, depth, layer != NULL) || !image ||
+        stride < (bits == 8 ? (size_t)width : ((size_t)width + 7) / 8) || !(c = take_coder()))
+        return -1;
+    if (mask_scan_image(&c->scan, image, stride, width, bits, height, lit)) {
+        give_coder(c);
+        return -1;
+    }
+    return encode_scan(c, width, height, bits, depth, out, out_size, layer);
+}
+
 int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, const int lit_rows[2],
                      png_layer *layer)
 {
     memset(layer, 0, sizeof *layer);
     return encode_runs(image, width, height, stride, bits, bits, lit_rows, &layer->png, &layer->png_size, layer);
+}
+
+int png_encode_bands(const mask_band *bands, int count, int width, int height, int bits, png_layer *layer)
+{
+    coder *c;
+    memset(layer, 0, sizeof *layer);
+    if (!codable(width, height, bits, bits, 1) || !(c = take_coder())) return -1;
+    mask_scan_bands(&c->scan, bands, count, width, bits, height);
+    return encode_scan(c, width, height, bits, bits, &layer->png, &layer->png_size, layer);
 }
 
 int png_encode_mask(const unsigned char *image, int width, int height, size_t stride, int bits, unsigned char **out,

@@ -5,6 +5,7 @@
 #define ADASLICE_HOST_PNG_H
 #include <stddef.h>
 #include <stdint.h>
+#include "maskrows.h"
 
 /* Encodes a width x height grayscale image as a PNG file image in a malloc'd
    buffer (*out, *out_size; the caller frees *out). bits is 1 or 8. 1-bit rows
@@ -47,6 +48,10 @@ typedef struct png_layer {
 } png_layer;
 int png_encode_layer(const unsigned char *image, int width, int height, size_t stride, int bits, const int lit_rows[2],
                      png_layer *layer);
+/* The same from the layer's rows read band by band where they were made
+   (mask_band_scan; rows in none of the bands are dark): the same bytes as
+   from the image they make. */
+int png_encode_bands(const mask_band *bands, int count, int width, int height, int bits, png_layer *layer);
 
 /* Adler-32 as zlib uses it: adler = png_adler32(1, data, n); feeding the
    result back in continues it over more data. (CRC-32 is adaslice_crc32.) */

@@ -505,26 +505,44 @@ static int write_layer_png(const char *path, unsigned char *png, size_t size)
 
 /* The layer's PNG goes straight to its own file; the blob is its mask code
    and CRC for masks.rle, all three from one reading of the layer's rows. */
+/* A layer's PNG written, its masks.rle code and CRC into blob, or a
+   complaint when it could not be coded (failed). */
+static int dir_coded(const dir_writer *w, size_t k, int failed, png_layer *coded, job_blob *blob)
+{
+    char *path = failed ? NULL : (char *)malloc(w->path_size);
+    int rc;
+    if (!path) {
+        free(coded->png);
+        free(coded->rle);
+        return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
+    }
+    layer_path(path, w->path_size, w->dir, k, w->digits, "png");
+    rc = write_layer_png(path, coded->png, coded->png_size);
+    free(path);
+    free(blob->data);
+    blob->data = coded->rle;
+    blob->size = blob->cap = coded->rle_size;
+    blob->crc = coded->crc;
+    return rc;
+}
+
 static int dir_encode(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob)
 {
     const dir_writer *w = (const dir_writer *)writer;
     const job_masks *m = &w->masks;
-    char *path = (char *)malloc(w->path_size);
     png_layer coded;
-    int rc;
-    if (!path || png_encode_layer(image, (int)m->width, (int)m->height, stride, (int)m->bits,
-                                       w->d->lit_rows[1] > 0 ? w->d->lit_rows : NULL, &coded)) {
-        free(path);
-        return complain(RC_FAIL, "out of memory encoding layer %zu", k + 1);
-    }
-    layer_path(path, w->path_size, w->dir, k, w->digits, "png");
-    rc = write_layer_png(path, coded.png, coded.png_size);
-    free(path);
-    free(blob->data);
-    blob->data = coded.rle;
-    blob->size = blob->cap = coded.rle_size;
-    blob->crc = coded.crc;
-    return rc;
+    int failed = png_encode_layer(image, (int)m->width, (int)m->height, stride, (int)m->bits,
+                                  w->d->lit_rows[1] > 0 ? w->d->lit_rows : NULL, &coded);
+    return dir_coded(w, k, failed, &coded, blob);
+}
+
+static int dir_encode_bands(const void *writer, size_t k, const mask_band *bands, int count, job_blob *blob)
+{
+    const dir_writer *w = (const dir_writer *)writer;
+    const job_masks *m = &w->masks;
+    png_layer coded;
+    int failed = png_encode_bands(bands, count, (int)m->width, (int)m->height, (int)m->bits, &coded);
+    return dir_coded(w, k, failed, &coded, blob);
 }
 
 static int dir_put(void *writer, size_t k, job_blob *blob)
@@ -617,6 +635,7 @@ const job_format JOB_FORMAT_DIR = {
     .adaptive = 1,
     .open = dir_open,
     .encode = dir_encode,
+    .encode_bands = dir_encode_bands,
     .put = dir_put,
     .close = dir_close,
     .previews = {{DIR_PREVIEW_W, DIR_PREVIEW_H}},

@@ -111,6 +111,9 @@ typedef struct job_format {
        (pipeline.h), so it reads the writer and the desc and changes nothing
        shared. RC_OK or a complaint made. */
     int (*encode)(const void *writer, size_t k, const unsigned char *image, size_t stride, job_blob *blob);
+    /* If not NULL: the same from the layer's rows read in count bands
+       where they were made (mask_band_scan), in place of its image. */
+    int (*encode_bands)(const void *writer, size_t k, const mask_band *bands, int count, job_blob *blob);
     /* The coded layers into the file, in order of k, one at a time (on any
        thread; job_put keeps the order); takes the blob's data (and frees it)
        either way. */

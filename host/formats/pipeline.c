@@ -26,7 +26,8 @@
 enum { SLOT_FREE, SLOT_RENDERING, SLOT_BUSY, SLOT_RENDERED, SLOT_ENCODED };
 
 typedef struct slot {
-    unsigned char *image;
+    unsigned char *image;        /* or, by_bands, its bands' rows: */
+    mask_band *rows;
     size_t k;
     int state, rc;
     int unrendered;              /* SLOT_RENDERING: its bands not yet rendered */
@@ -157,7 +158,7 @@ static void take_steps(pipeline *p, int me)
             p->bands[b].busy = 1;
             pthread_mutex_unlock(&p->lock);
             t0 = now_ms();
-            rc = job->render(job->ctx, b, k, s->image);
+            rc = job->render(job->ctx, b, k, s->image, s->rows ? &s->rows[b] : NULL);
             ms[0] += now_ms() - t0;
             pthread_mutex_lock(&p->lock);
             p->bands[b].busy = 0;
@@ -168,7 +169,8 @@ static void take_steps(pipeline *p, int me)
             s->state = SLOT_BUSY;
             pthread_mutex_unlock(&p->lock);
             t0 = now_ms();
-            s->rc = job->out->format->encode(job->out->state, s->k, s->image, job->stride, &s->blob);
+            s->rc = s->rows ? job->out->format->encode_bands(job->out->state, s->k, s->rows, p->band_count, &s->blob)
+                            : job->out->format->encode(job->out->state, s->k, s->image, job->stride, &s->blob);
             ms[1] += now_ms() - t0;
             pthread_mutex_lock(&p->lock);
             s->state = SLOT_ENCODED;
@@ -200,7 +202,7 @@ int pipeline_run(const pipeline_job *job)
     pthread_t threads[64];
     worker workers[64];
     unsigned char *images = NULL;
-    int helpers = job->threads > 1 ? job->threads - 1 : 0, started = 0, i, rc = RC_OK;
+    int helpers = job->threads > 1 ? job->threads - 1 : 0, started = 0, i, b, rc = RC_OK;
     if (helpers > 63) helpers = 63;
     memset(&p, 0, sizeof p);
     p.job = job;
@@ -213,16 +215,24 @@ int pipeline_run(const pipeline_job *job)
         free(p.bands);
         return complain(RC_FAIL, "out of memory");
     }
-    /* one block, in huge pages where there are any: eight 1-bit images of
-       3840 x 2400 took 2,250 first touches, 4-7 ms before the first layer */
-    if (job->image_bytes > ((size_t)-1) / (size_t)p.count ||
-        !(images = (unsigned char *)pages_alloc((size_t)p.count * job->image_bytes))) {
-        rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
-                      job->image_bytes);
-        goto done;
+    if (job->by_bands) {
+        for (i = 0; i < p.count; i++)
+            if (!(p.slots[i].rows = (mask_band *)calloc((size_t)p.band_count, sizeof(mask_band)))) {
+                rc = complain(RC_FAIL, "out of memory");
+                goto done;
+            }
+    } else {
+        /* one block, in huge pages where there are any: eight 1-bit images of
+           3840 x 2400 took 2,250 first touches, 4-7 ms before the first layer */
+        if (job->image_bytes > ((size_t)-1) / (size_t)p.count ||
+            !(images = (unsigned char *)pages_alloc((size_t)p.count * job->image_bytes))) {
+            rc = complain(RC_FAIL, "out of memory for %d layer image%s of %zu bytes", p.count, plural((size_t)p.count),
+                          job->image_bytes);
+            goto done;
+        }
+        memset(images, 0, (size_t)p.count * job->image_bytes);
+        for (i = 0; i < p.count; i++) p.slots[i].image = images + (size_t)i * job->image_bytes;
     }
-    memset(images, 0, (size_t)p.count * job->image_bytes);
-    for (i = 0; i < p.count; i++) p.slots[i].image = images + (size_t)i * job->image_bytes;
     pthread_mutex_init(&p.lock, NULL);
     pthread_cond_init(&p.change, NULL);
     p.threads = helpers + 1;
@@ -237,7 +247,11 @@ int pipeline_run(const pipeline_job *job)
     pthread_cond_destroy(&p.change);
     pthread_mutex_destroy(&p.lock);
 done:
-    for (i = 0; i < p.count; i++) free(p.slots[i].blob.data);
+    for (i = 0; i < p.count; i++) {
+        free(p.slots[i].blob.data);
+        for (b = 0; p.slots[i].rows && b < p.band_count; b++) mask_band_free(&p.slots[i].rows[b]);
+        free(p.slots[i].rows);
+    }
     free(images);
     free(p.slots);
     free(p.bands);

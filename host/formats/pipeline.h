@@ -16,13 +16,17 @@ typedef struct pipeline_job {
     size_t image_bytes, stride;  /* of each layer's image */
     int threads;                 /* the calling one and threads - 1 more; 1: all on the calling one */
     int bands;                   /* render's bands of each layer, at least 1 */
-    /* Band b of layer k into image; RC_OK or a complaint made (which stops
-       the job). Called for each band with k = 0, 1, ... in turn, on any
-       thread; two bands at once on different threads (each must write
-       bytes of its own), never one band twice at once. The images start
-       zeroed and keep what render leaves in them (the coding only reads
-       them), so it need write only where a layer can differ. */
-    int (*render)(void *ctx, int b, size_t k, unsigned char *image);
+    /* Band b of layer k into image, or with by_bands read into rows (image
+       NULL); RC_OK or a complaint made (which stops the job). Called for
+       each band with k = 0, 1, ... in turn, on any thread; two bands at
+       once on different threads (each must write bytes of its own), never
+       one band twice at once. The images start zeroed and keep what render
+       leaves in them (the coding only reads them), so it need write only
+       where a layer can differ. */
+    int (*render)(void *ctx, int b, size_t k, unsigned char *image, mask_band *rows);
+    /* Each band read where it is made, and the layer coded from the bands'
+       rows (the format's encode_bands): no images. */
+    int by_bands;
     /* If not NULL: layer k, every band rendered and coded, goes into the
        job next (in turn, on any thread). */
     void (*ready)(void *ctx, size_t k);
