@@ -1027,6 +1027,15 @@ typedef struct adaslice_mask_options {
                                             mask also leaves every pixel's covered fraction
                                             here, before it is rounded to a grey level
                                             (a band's masker: in its rows) */
+    int edges_balance;                   /* 1: the caller knows that every edge of the mesh
+                                            is run as often one way as the other (the
+                                            repair's report: no open, non-manifold or
+                                            inconsistent edge), so the masker need not
+                                            group the edges again to look for one that
+                                            does not (the repair's work twice). If that
+                                            is wrong, an open mesh is masked by rays,
+                                            which cannot tell inside from outside at its
+                                            holes, instead of by its closed sections. */
 } adaslice_mask_options;
 
 /* Layer masks on a printer's pixel grid (§3.4), made bottom-up in one sweep:
@@ -7700,7 +7709,8 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->depth_origin = adaslice__depth_origin(mesh, ADASLICE_AXIS_Z);
     mk->done = -DBL_MAX;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
-    if ((res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK) return res;
+    if (!(options && options->edges_balance) && (res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK)
+        return res;
     mk->sections = mk->gaps != NULL;
     if (mk->gaps && mk->slice_at >= ADASLICE_SLICE_ENVELOPE) {
         size_t loose = mk->gaps->count;

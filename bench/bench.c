@@ -154,7 +154,7 @@ static void bench_masks(const char *dir, int supersample)
     if (adaslice_profile_exact(&m, NULL, &p, NULL) != ADASLICE_OK || adaslice_plan_profile(&p, NULL, &plan, NULL) != ADASLICE_OK) exit(1);
     g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
     t0 = now();
-    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) != ADASLICE_OK) exit(1);
+    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, NULL) != ADASLICE_OK) exit(1);
     t_mask += now() - t0;
     for (k = 0; k < plan.layer_count; k++) {
         unsigned char *png;

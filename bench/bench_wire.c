@@ -183,7 +183,7 @@ static void bench_model(const char *dir, const char *name, row *r)
 
     /* every layer's mask, coded */
     g = adaslice_grid_plate(&m, PX_W, PX_H, PITCH, PITCH, NULL);
-    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) != ADASLICE_OK) fail(name, "masker", &e);
+    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) != ADASLICE_OK) fail(name, "masker", &e);
     if (mk.stride != STRIDE) fail(name, "unexpected mask stride", NULL);
     top = (unsigned char *)malloc(RAW);
     copy = (unsigned char *)malloc(RAW);

@@ -372,6 +372,8 @@ int layer_masks_open(layer_masks *m, const slice_args *s, const plan_job *j, int
     mo.allocator = pages_allocator();
     mo.slice_at = SLICE_RULES[s->slice_at];
     mo.bin = j->args->bin; /* the profile's (0: the library's default for both), which may be in the making */
+    mo.edges_balance = j->repair.shells && !j->repair.open_edges && !j->repair.nonmanifold_edges &&
+                       !j->repair.inconsistent_edges;
     if (adaslice_masker_init(&whole, &j->mesh, &m->grid, &mo, &err) != ADASLICE_OK) return library_error(&err);
     m->width = (s->rotate & 1) ? m->grid.height : m->grid.width;
     m->height = (s->rotate & 1) ? m->grid.width : m->grid.height;

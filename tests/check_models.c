@@ -372,7 +372,7 @@ static int check_masks(const char *dir, const char *name)
     for (k = 0; k < 16; k++) z[k] = a[2] + (b[2] - a[2]) * (k + 0.5) / 16;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
-    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) != ADASLICE_OK || adaslice_mesh_weld(&m, NULL, &e) != ADASLICE_OK ||
+    if (adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) != ADASLICE_OK || adaslice_mesh_weld(&m, NULL, &e) != ADASLICE_OK ||
         adaslice_contours_slice(&m, z, 16, NULL, &c, &e) != ADASLICE_OK ||
         adaslice_profile_exact(&m, &po, &prof, &e) != ADASLICE_OK) {
         printf("FAIL masks %s: %s\n", name, e.message);

@@ -41,7 +41,7 @@ static void check_against_contours(const char *what, adaslice_mesh *m, double px
     for (k = 0; k < heights; k++) z[k] = lo[2] + (hi[2] - lo[2]) * (k + 0.37) / heights;
     memset(&po, 0, sizeof po);
     po.metric = ADASLICE_METRIC_VOLUME;
-    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
+    CHECKF(adaslice_masker_init(&mk, m, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) == ADASLICE_OK, "%s: %s", what, e.message);
     CHECK(adaslice_mesh_weld(m, NULL, &e) == ADASLICE_OK);
     CHECK(adaslice_contours_slice(m, z, (size_t)heights, NULL, &c, &e) == ADASLICE_OK);
     CHECK(adaslice_profile_exact(m, &po, &prof, &e) == ADASLICE_OK);
@@ -134,7 +134,7 @@ static void rays_through_edges_light_exactly_once(void)
     g.pitch[0] = g.pitch[1] = 0.5;
     g.origin[0] = g.origin[1] = -10.25; /* centres at multiples of 0.5 */
     g.width = g.height = 41;
-    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &box, &g, &(adaslice_mask_options){1, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 1, NULL) == ADASLICE_OK);
     for (j = 0; j < g.height; j++)
         for (i = 0; i < g.width; i++) {
@@ -158,7 +158,7 @@ static void antialiased_masks_cover_the_area(void)
     adaslice_masker mk;
     size_t p, sum = 0;
     double poly = 256 / 2.0 * 25 * sin(2 * M_PI / 256);
-    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, NULL) == ADASLICE_OK);
+    CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){4, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, NULL) == ADASLICE_OK);
     CHECK(adaslice_masker_slice(&mk, 2, NULL) == ADASLICE_OK);
     for (p = 0; p < (size_t)g.width * g.height; p++) sum += mk.image[p];
     /* rays: 0.025 mm apart; the circle's 31.4 mm of edge misjudges at most a ray's diagonal */

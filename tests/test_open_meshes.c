@@ -89,9 +89,9 @@ static void compare(const char *what, const adaslice_mesh *open, const adaslice_
     memcpy(welded.triangles, closed->triangles, closed->triangle_count * 3 * sizeof(uint32_t));
     welded.vertex_count = closed->vertex_count;
     welded.triangle_count = closed->triangle_count;
-    CHECKF(adaslice_masker_init(&a, open, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) == ADASLICE_OK, "%s", e.message);
+    CHECKF(adaslice_masker_init(&a, open, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) == ADASLICE_OK, "%s", e.message);
     CHECKF(a.gaps != NULL, "%s: the open mesh is read by rays", what);
-    CHECK(adaslice_masker_init(&b, closed, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) == ADASLICE_OK && !b.gaps);
+    CHECK(adaslice_masker_init(&b, closed, &g, &(adaslice_mask_options){supersample, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) == ADASLICE_OK && !b.gaps);
     CHECK(adaslice_contours_slice(&welded, z, (size_t)n, NULL, &c, &e) == ADASLICE_OK);
     CHECKF(adaslice_contours_slice(open, z, (size_t)n, NULL, &oc, &e) == ADASLICE_OK, "%s: %s", what, e.message);
     memset(&po, 0, sizeof po);

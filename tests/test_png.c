@@ -810,7 +810,7 @@ static void the_maskers_images_decode_in_oiiotool(void)
         batch bt;
         g = adaslice_grid_plate(&m, 2560, 1440, 0.04725, 0.04725, NULL);
         bt.count = 0;
-        CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){s, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL}, &e) == ADASLICE_OK);
+        CHECK(adaslice_masker_init(&mk, &m, &g, &(adaslice_mask_options){s, NULL, ADASLICE_SLICE_MIDDLE, 0, NULL, 0}, &e) == ADASLICE_OK);
         for (k = 0; k < 4; k++) {
             char name[32];
             image *im;

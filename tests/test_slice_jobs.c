@@ -686,6 +686,55 @@ static void a_held_band_holds_up_only_itself(void)
     pthread_mutex_destroy(&h.lock);
 }
 
+/* A mesh whose edges do not all balance is masked by its sections, whose
+   gaps the masker closes, not by rays, which cannot tell inside from
+   outside there (the host tells the masker that edges balance only when the
+   repair found none open): a box without its bottom, whose rays meet only
+   its top, gives the closed box's masks. */
+static void an_open_mesh_is_masked_by_its_sections(void)
+{
+    static const char *const threads[] = {"1", "2"};
+    char path[2][300], job[2][300], what[400];
+    adaslice_mesh box[2];
+    int k, t;
+    for (k = 0; k < 2; k++) {
+        box[k] = gen_box(0, 0, 0, 6.013, 5.021, 4); /* no edge through a pixel's centre */
+        snprintf(path[k], sizeof path[k], "%s/%s.obj", cli_dir, k ? "bottomless" : "box");
+        snprintf(job[k], sizeof job[k], "%s/%s_job", cli_dir, k ? "bottomless" : "box");
+    }
+    /* gen_box's first two facets are its bottom */
+    memmove(box[1].triangles, box[1].triangles + 6, (box[1].triangle_count - 2) * 3 * sizeof *box[1].triangles);
+    box[1].triangle_count -= 2;
+    for (k = 0; k < 2; k++) {
+        cli_write_obj(path[k], &box[k]);
+        gen_free(&box[k]);
+    }
+    for (t = 0; t < 2; t++) {
+        for (k = 0; k < 2; k++) {
+            cli_result r = cli_run("slice", path[k], "--uniform", "0.5", "--pixels", "301x253", "--pitch", "0.05",
+                                   "--threads", threads[t], "-o", job[k], NULL);
+            CHECKF(r.status == 0 && (!k || strstr(r.err, "open edges")), "%s: %s", path[k], r.err);
+            cli_free(&r);
+        }
+        for (k = 1; k <= 8; k++) {
+            char name[40], a[400], b[400];
+            unsigned char *p, *q;
+            size_t np = 0, nq = 0;
+            snprintf(name, sizeof name, "layer_%05d.png", k);
+            snprintf(a, sizeof a, "%s/%s", job[0], name);
+            snprintf(b, sizeof b, "%s/%s", job[1], name);
+            p = read_whole_file(a, &np);
+            q = read_whole_file(b, &nq);
+            CHECKF(p && q && np == nq && !memcmp(p, q, np), "--threads %s: %s of the bottomless box differs from the box's",
+                   threads[t], name);
+            free(p);
+            free(q);
+        }
+        snprintf(what, sizeof what, "%s/layer_00009.png", job[1]);
+        CHECKF(access(what, F_OK) != 0, "%s: more layers than the box's 8", what);
+    }
+}
+
 static void threads_write_the_same_job(void)
 {
     static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3", "8"};
@@ -979,6 +1028,7 @@ void test_slice_jobs(void)
     RUN(resin_files_hold_the_directory_jobs_masks);
     RUN(ctb_for_an_encrypted_ctb_printer);
     RUN(jobs_are_reproducible);
+    RUN(an_open_mesh_is_masked_by_its_sections);
     RUN(threads_write_the_same_job);
     RUN(turned_jobs_are_the_same_on_many_threads);
     RUN(headers_hold_the_regular_layers);
