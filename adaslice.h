@@ -3476,6 +3476,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
         for (j = s.start[i]; j < s.start[i + 1]; j++) {
             double a[3], b[3], d[3], nv[3];
             v += adaslice__cone(m, s.facets[j], s.turn[s.facets[j]], c);
+            if (s.closed[i]) continue; /* the area decides for open shells only */
             adaslice__corner(m, s.facets[j], 0, a);
             adaslice__corner(m, s.facets[j], 1, b);
             adaslice__corner(m, s.facets[j], 2, d);
