@@ -12,6 +12,7 @@
 #include "../adaslice.h"
 #include "meshgen.h"
 #include "tool_run.h"
+#include "../host/json.h"
 #include "../host/report.h"
 
 #include <errno.h>
@@ -933,9 +934,35 @@ static void a_directory_job_removes_only_its_own_files(void)
     cli_remove_all(dir);
 }
 
+/* JSON strings escape what RFC 8259 says they must (the quote, the
+   backslash, control characters) and nothing else: a model's name with
+   quotes, backslashes, a tab, a newline and UTF-8 in it reads back. */
+static void json_strings_escape_what_they_must(void)
+{
+    static const char name[] = "a \"b\" c\\d\te\nf\x01 \xc3\xa9 g";
+    static const char want[] = "{\"model\": \"a \\\"b\\\" c\\\\d\\u0009e\\u000af\\u0001 \xc3\xa9 g\", \"\": \"\"}\n";
+    char got[200];
+    size_t n;
+    json_writer w;
+    FILE *f = tmpfile();
+    CHECK(f != NULL);
+    if (!f) return;
+    json_init(&w, f);
+    json_begin_object(&w, NULL, 1);
+    json_string(&w, "model", name);
+    json_string(&w, "", "");
+    json_end(&w);
+    rewind(f);
+    n = fread(got, 1, sizeof got - 1, f);
+    got[n] = 0;
+    fclose(f);
+    CHECKF(!strcmp(got, want), "wrote %s", got);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
+    RUN(json_strings_escape_what_they_must);
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(open_layer_svgs_fill_what_the_masks_light);
     RUN(orient_map_tiles_and_has_a_colour_bar);
