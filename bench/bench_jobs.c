@@ -2,7 +2,7 @@
    1. Writing each job format: the whole `adaslice slice` command on the
       turbine blade x4.3 on a 3840 x 2400 display of 50 um, in layers per
       second against the same command writing the PNG directory, each the
-      median of RUNS runs taken in turn, and the directory on one thread
+      median of FORMAT_RUNS runs taken in turn, and the directory on one thread
       against all the cores; and the directory on one thread held to each
       core in turn, as the cores of a virtual machine need not run alike (a
       busy neighbour on the host's other half of one core slows it by a
@@ -50,6 +50,10 @@
 extern char **environ;
 
 #define RUNS 3
+/* the first part's rounds: a round takes a few seconds, and two threads
+   against one moved by a fifth from round to round on this project's
+   machine, whose cores' speed drifts within seconds */
+#define FORMAT_RUNS 7
 #define CORES 8 /* held to each of the first CORES cores */
 
 static char work[64];
@@ -118,7 +122,7 @@ static int time_formats(const char *tool, const char *dir)
         {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
     enum { JOBS = sizeof jobs / sizeof jobs[0] };
     char model[4096], out[JOBS][128], one_out[128];
-    double t[JOBS][RUNS], rate[JOBS], ratio[RUNS], on_core[CORES][RUNS], best[RUNS], bound[RUNS], ideal[RUNS];
+    double t[JOBS][FORMAT_RUNS], rate[JOBS], ratio[FORMAT_RUNS], on_core[CORES][FORMAT_RUNS], best[FORMAT_RUNS], bound[FORMAT_RUNS], ideal[FORMAT_RUNS];
     size_t layers[JOBS] = {0}, one_layers = 0;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int r, k, c;
@@ -126,7 +130,7 @@ static int time_formats(const char *tool, const char *dir)
     snprintf(one_out, sizeof one_out, "%s/one", work);
     snprintf(model, sizeof model, "%s/turbineblade.ply", dir);
     for (k = 0; k < JOBS; k++) snprintf(out[k], sizeof out[k], "%s/%s", work, jobs[k].out);
-    for (r = 0; r < RUNS; r++)
+    for (r = 0; r < FORMAT_RUNS; r++)
         for (k = 0; k < JOBS; k++) {
             char *argv[16];
             int a = 0;
@@ -152,7 +156,7 @@ static int time_formats(const char *tool, const char *dir)
             for (c = 0; jobs[k].uniform == 2 && c < cores; c++)
                 if ((on_core[c][r] = run_on_core(argv, &one_layers, c)) < 0) cores = 0; /* not measured */
         }
-    for (r = 0; r < RUNS; r++) { /* before median sorts the times */
+    for (r = 0; r < FORMAT_RUNS; r++) { /* before median sorts the times */
         double speed = 0;
         ratio[r] = t[4][r] / t[0][r];
         best[r] = HUGE_VAL;
@@ -165,10 +169,10 @@ static int time_formats(const char *tool, const char *dir)
         best[r] /= t[0][r];                /* all the cores against the fastest alone */
         ideal[r] = t[0][r] / ideal[r];     /* all the cores against that ideal */
     }
-    printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", RUNS);
+    printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", FORMAT_RUNS);
     printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
     for (k = 0; k < JOBS; k++) {
-        double s = median(t[k], RUNS);
+        double s = median(t[k], FORMAT_RUNS);
         int base = jobs[k].uniform == 1 ? 5 : 0;
         rate[k] = layers[k] / s;
         printf("  %-30s %7zu %9.2f %10.1f", jobs[k].name, layers[k], s, rate[k]);
@@ -177,23 +181,23 @@ static int time_formats(const char *tool, const char *dir)
     }
     /* the two threads' ratio run by run (the two jobs of one round of the
        seven), so that a drift of the machine's speed between rounds moves both */
-    median(ratio, RUNS); /* sorts */
+    median(ratio, FORMAT_RUNS); /* sorts */
     printf("  all %ld cores against --threads 1, the directory: %.2fx (median of each run's ratio; %.2f-%.2fx)\n",
-           sysconf(_SC_NPROCESSORS_ONLN), ratio[RUNS / 2], ratio[0], ratio[RUNS - 1]);
+           sysconf(_SC_NPROCESSORS_ONLN), ratio[FORMAT_RUNS / 2], ratio[0], ratio[FORMAT_RUNS - 1]);
     if (!cores) {
         printf("  --threads 1 held to each core: not measured (more than %d cores, or they cannot be chosen here)\n", CORES);
         return 0;
     }
     printf("  --threads 1 held to each core, the directory:");
-    for (c = 0; c < cores; c++) printf(" core %d %.2f s%s", c, median(on_core[c], RUNS), c + 1 < cores ? "," : "\n");
+    for (c = 0; c < cores; c++) printf(" core %d %.2f s%s", c, median(on_core[c], FORMAT_RUNS), c + 1 < cores ? "," : "\n");
     /* each a median of its runs' ratios, each run's jobs taken in one round */
-    median(best, RUNS);
-    median(bound, RUNS);
-    median(ideal, RUNS);
+    median(best, FORMAT_RUNS);
+    median(bound, FORMAT_RUNS);
+    median(ideal, FORMAT_RUNS);
     printf("  all %ld cores against the fastest core alone: %.2fx (%.2f-%.2fx); at best %.2fx (%.2f-%.2fx), each core\n"
            "    its share of the whole command at its own speed; all cores took %.2fx (%.2f-%.2fx) that best time\n",
-           sysconf(_SC_NPROCESSORS_ONLN), best[RUNS / 2], best[0], best[RUNS - 1], bound[RUNS / 2], bound[0], bound[RUNS - 1],
-           ideal[RUNS / 2], ideal[0], ideal[RUNS - 1]);
+           sysconf(_SC_NPROCESSORS_ONLN), best[FORMAT_RUNS / 2], best[0], best[FORMAT_RUNS - 1], bound[FORMAT_RUNS / 2], bound[0], bound[FORMAT_RUNS - 1],
+           ideal[FORMAT_RUNS / 2], ideal[0], ideal[FORMAT_RUNS - 1]);
     return 0;
 }
 
