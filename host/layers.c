@@ -248,8 +248,11 @@ double layer_masks_bytes(const slice_args *s, int buffers)
 {
     double w = s->width, h = s->height, bits = s->supersample > 1 ? 8 : 1;
     double image = bits == 8 ? w * h : (w + 7) / 8 * h;
-    /* the directory's coding at worst: the mask code's bound and the PNG's filtered rows and output */
-    double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h);
+    /* the directory's coding at worst: the mask code's bound, the PNG's
+       filtered rows and output, and the rows' scan (mask_band_scan: a run
+       of 4 bytes a byte of the image, a step a row) */
+    double coding = (double)adaslice_rle_bound((uint32_t)w, (uint32_t)h, (int)bits) + 2 * (image + h) + 4 * image +
+                    (double)sizeof(mask_band_step) * h;
     /* the masker twice with more than one layer in flight (more than one
        thread): the whole one lives until its row bands are made */
     return (double)adaslice_masker_bytes((uint32_t)s->width, (uint32_t)s->height, s->supersample, SLICE_RULES[s->slice_at], 0) *
