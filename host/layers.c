@@ -188,7 +188,7 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
     const slice_args *s = m->s;
     int w = mk->grid.width, h = mk->grid.height, y0 = (int)mk->rows[0], y1 = (int)mk->rows[1], r, i;
     int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h, rows[2] = {0, out_h}, cols[2] = {0, out_w};
-    if (!s->rotate && !s->mirror_x) {
+    if (layer_masks_band_is_rows(m)) {
         /* the common case: rows as they are, and only the part's band of
            each (out is zero elsewhere): the copy was the one pass over the
            whole image on the masker's thread, and the slowest to share the
@@ -439,13 +439,15 @@ int layer_masks_scan_band(layer_masks *m, int b, size_t k, mask_band *rows)
     const int y0 = (int)mk->rows[0], r0 = y0 > m->row_lo ? y0 : m->row_lo;
     int r1 = (int)mk->rows[1] < m->row_hi ? (int)mk->rows[1] : m->row_hi, rc = sweep_band(m, b, k);
     const unsigned char *first = mk->image;
+    int stored[2];
     if (rc) return rc;
     if (r1 < r0) r1 = r0;
     /* stored top first: grid row h - 1 - r, so the band's top row first,
        unless mirrored in y (as orient_image lands them) */
+    landing(!m->s->mirror_y, m->grid.height, r0, r1, stored);
     if (r1 > r0) first += (size_t)((m->s->mirror_y ? r0 : r1 - 1) - y0) * mk->stride;
-    if (mask_band_scan(rows, first, m->s->mirror_y ? (ptrdiff_t)mk->stride : -(ptrdiff_t)mk->stride,
-                       m->s->mirror_y ? r0 : m->grid.height - r1, r1 - r0, m->stride, m->byte_lo, m->byte_hi))
+    if (mask_band_scan(rows, first, m->s->mirror_y ? (ptrdiff_t)mk->stride : -(ptrdiff_t)mk->stride, stored[0],
+                       r1 - r0, m->stride, m->byte_lo, m->byte_hi))
         return complain(RC_FAIL, "out of memory reading the rows of layer %zu", k + 1);
     return RC_OK;
 }

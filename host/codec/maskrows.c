@@ -175,12 +175,11 @@ void mask_scan_bands(mask_scan *s, const mask_band *bands, int count, int width,
 int mask_scan_image(mask_scan *s, const unsigned char *image, size_t stride, int width, int bits, int height,
                     const int lit[2])
 {
-    const size_t n = bits == 8 ? (size_t)width : ((size_t)width + 7) / 8;
     int lo = lit ? (lit[0] < 0 ? 0 : lit[0] > height ? height : lit[0]) : 0;
     int hi = lit ? (lit[1] < lo ? lo : lit[1] > height ? height : lit[1]) : height;
-    if (mask_band_scan(&s->own, image + (size_t)lo * stride, (ptrdiff_t)stride, lo, hi - lo, n, 0, n)) return -1;
     mask_scan_bands(s, &s->own, 1, width, bits, height);
-    return 0;
+    return mask_band_scan(&s->own, image + (size_t)lo * stride, (ptrdiff_t)stride, lo, hi - lo, s->row_bytes, 0,
+                          s->row_bytes);
 }
 
 /* Steps row y on into: the band that holds it, else the dark rows up to
