@@ -2782,7 +2782,7 @@ static uint32_t adaslice__he_to(const uint32_t *tri, size_t h) { return tri[h % 
    their lower-numbered vertex (a counting sort) and matching the few in each
    bucket by the other vertex, which keeps to arrays walked in order rather
    than a hash table's random probes. Zero-area facets, which every stage
-   skips, are left out. */
+   skips, are left out (`with_area`: the caller knows there are none). */
 typedef struct adaslice__edges {
     uint32_t *slot, *next;
     size_t cap;
@@ -2813,8 +2813,8 @@ static uint32_t adaslice__he_high(const uint32_t *tri, size_t h)
     return a < b ? b : a;
 }
 
-static adaslice_result adaslice__edges_build(const adaslice_mesh *m, const adaslice_allocator *al, adaslice__edges *e,
-                                             adaslice_error *err)
+static adaslice_result adaslice__edges_build(const adaslice_mesh *m, int with_area, const adaslice_allocator *al,
+                                             adaslice__edges *e, adaslice_error *err)
 {
     const uint32_t *tri = m->triangles;
     size_t n = 3 * m->triangle_count, nv = m->vertex_count, h, v, i, j, used = 0;
@@ -2834,13 +2834,13 @@ static adaslice_result adaslice__edges_build(const adaslice_mesh *m, const adasl
     memset(e->next, 0xff, n * sizeof(uint32_t));
     for (h = 0; h < n; h += 3) {
         int k;
-        if (adaslice__zero_area(m->vertices, tri + h)) continue;
+        if (!with_area && adaslice__zero_area(m->vertices, tri + h)) continue;
         for (k = 0; k < 3; k++) first[adaslice__he_low(tri, h + (size_t)k) + 1]++;
     }
     for (v = 0; v < nv; v++) first[v + 1] += first[v];
     for (h = 0; h < n; h += 3) {
         int k;
-        if (adaslice__zero_area(m->vertices, tri + h)) continue;
+        if (!with_area && adaslice__zero_area(m->vertices, tri + h)) continue;
         for (k = 0; k < 3; k++) order[first[adaslice__he_low(tri, h + (size_t)k)]++] = (uint32_t)(h + (size_t)k);
     }
     for (v = nv; v > 0; v--) first[v] = first[v - 1];
@@ -3031,8 +3031,9 @@ static adaslice_result adaslice__collapse_slivers(adaslice_mesh *m, const adasli
 }
 
 /* Welds the vertices of the open edges of e within `tolerance` of each
-   other (the lowest index stays, as adaslice_mesh_weld does); *merged counts
-   the moved. */
+   other (0: 1e-4 of the diagonal of the facets' box, taken only when there
+   are open edges); the lowest index stays, as adaslice_mesh_weld does.
+   *merged counts the moved. */
 static adaslice_result adaslice__weld_open(adaslice_mesh *m, const adaslice__edges *e, double tolerance,
                                            const adaslice_allocator *al, size_t *merged, adaslice_error *err)
 {
@@ -3051,7 +3052,12 @@ static adaslice_result adaslice__weld_open(adaslice_mesh *m, const adaslice__edg
         index[m->triangles[h]] = index[adaslice__he_to(m->triangles, h)] = 0;
     }
     for (i = 0; i < m->vertex_count; i++) if (index[i] == 0) index[i] = (uint32_t)n++;
-    if (n > 1) {
+    if (n > 1 && tolerance == 0) {
+        double lo[3], hi[3];
+        adaslice_mesh_bounds(m, lo, hi);
+        tolerance = 1e-4 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    }
+    if (n > 1 && tolerance > 0) {
         pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
         kept_pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
         remap = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, sizeof(uint32_t)));
@@ -3172,7 +3178,8 @@ typedef struct adaslice__shells {
 #define ADASLICE__OPEN (ADASLICE__NONE - 1) /* a half-edge's mate when it is alone on its edge */
 
 /* Winds each shell one way by flood fill through its two-facet edges; the
-   winding of the larger part stays. Counts what remains inconsistent. */
+   winding of the larger part stays. Counts the open and non-manifold edges
+   and what remains inconsistent. */
 static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adaslice__edges *e, adaslice__shells *s,
                                              const adaslice_allocator *al, adaslice_mesh_report *rep, adaslice_error *err)
 {
@@ -3193,6 +3200,8 @@ static adaslice_result adaslice__wind_shells(const adaslice_mesh *m, const adasl
         if (h == ADASLICE__NONE) continue;
         adaslice__edge_uses(tri, e, h, &uses[i], &net);
         rep->edge_steps += uses[i];
+        rep->open_edges += uses[i] == 1;
+        rep->nonmanifold_edges += uses[i] > 2;
         if (uses[i] == 1) mate[h] = ADASLICE__OPEN;
         if (uses[i] == 2) { mate[h] = e->next[h]; mate[e->next[h]] = h; }
     }
@@ -3412,7 +3421,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
     adaslice__shells s;
     adaslice_result r;
     size_t *depth = NULL, i, t, nt;
-    double tolerance = o ? o->tolerance : 0, lo[3], hi[3];
+    double tolerance = o ? o->tolerance : 0;
     memset(&rep, 0, sizeof rep);
     memset(&e, 0, sizeof e);
     memset(&s, 0, sizeof s);
@@ -3427,11 +3436,8 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
     if ((r = adaslice__collapse_slivers(m, &al, &rep.slivers_collapsed, err)) != ADASLICE_OK) return r;
     rep.degenerate_dropped = adaslice__drop_degenerate(m);
     if (!m->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "repair: every facet has zero area");
-    adaslice_mesh_bounds(m, lo, hi);
-    if (tolerance == 0)
-        tolerance = 1e-4 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if ((r = adaslice__edges_build(m, &al, &e, err)) != ADASLICE_OK) return r;
-    if (tolerance > 0 && (r = adaslice__weld_open(m, &e, tolerance, &al, &rep.welded_nearby, err)) != ADASLICE_OK) goto done;
+    if ((r = adaslice__edges_build(m, 1, &al, &e, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__weld_open(m, &e, tolerance, &al, &rep.welded_nearby, err)) != ADASLICE_OK) goto done;
     if (rep.welded_nearby) {
         /* the cracks closed: the facets and the edges change */
         rep.degenerate_dropped += adaslice__drop_degenerate(m);
@@ -3440,7 +3446,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
             goto done;
         }
         adaslice__edges_free(&al, &e);
-        if ((r = adaslice__edges_build(m, &al, &e, err)) != ADASLICE_OK) return r;
+        if ((r = adaslice__edges_build(m, 1, &al, &e, err)) != ADASLICE_OK) return r;
     }
     /* last: vertex numbers leave the edges' grouping as it is */
     if ((r = adaslice__drop_unused(m, &al, err)) != ADASLICE_OK) goto done;
@@ -3501,15 +3507,6 @@ ADASLICE_DEF adaslice_result adaslice_mesh_repair(adaslice_mesh *m, const adasli
         rep.flipped_facets++;
     }
     rep.shells = s.count;
-    for (i = 0; i < e.cap; i++) {
-        size_t uses;
-        long net;
-        if (e.slot[i] == ADASLICE__NONE) continue;
-        adaslice__edge_uses(m->triangles, &e, e.slot[i], &uses, &net);
-        rep.edge_steps += uses;
-        rep.open_edges += uses == 1;
-        rep.nonmanifold_edges += uses > 2;
-    }
     if (report) *report = rep;
     adaslice__ok(err);
     goto done;
@@ -3594,7 +3591,7 @@ static adaslice_result adaslice__gaps_init(adaslice__gaps **gaps, const adaslice
     adaslice_result r;
     size_t i, n = 0;
     *gaps = NULL;
-    if ((r = adaslice__edges_build(m, al, &e, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__edges_build(m, 0, al, &e, err)) != ADASLICE_OK) return r;
     for (i = 0; i < e.cap; i++) {
         size_t uses;
         long net;
