@@ -3876,12 +3876,21 @@ static int64_t adaslice__floor_div(int64_t a, int64_t b) /* b > 0 */
     return (a % b != 0 && a < 0) ? q - 1 : q;
 }
 
+/* floor(x) for |x| < 2^62, inline: where SSE4.1 is not assumed floor is a
+   call into libm, and the rasteriser takes several a triangle and row. */
+static double adaslice__floor_near(double x)
+{
+    double t = (double)(int64_t)x;
+    return t > x ? t - 1 : t;
+}
+
 /* The smallest i with alpha i + beta >= 0 (alpha > 0), and the largest with
-   alpha < 0: a floating-point guess, then exact integer correction (an int64
-   division per edge and row costs more than the rest of the row). */
+   alpha < 0: a floating-point guess (truncated: the correction makes it
+   exact), then exact integer correction (an int64 division per edge and row
+   costs more than the rest of the row). */
 static int64_t adaslice__first_nonnegative(int64_t alpha, int64_t beta)
 {
-    int64_t i = (int64_t)ceil(-(double)beta / (double)alpha);
+    int64_t i = (int64_t)(-(double)beta / (double)alpha);
     while (alpha * i + beta < 0) i++;
     while (alpha * (i - 1) + beta >= 0) i--;
     return i;
@@ -3889,7 +3898,7 @@ static int64_t adaslice__first_nonnegative(int64_t alpha, int64_t beta)
 
 static int64_t adaslice__last_nonnegative(int64_t alpha, int64_t beta)
 {
-    int64_t i = (int64_t)floor(-(double)beta / (double)alpha);
+    int64_t i = (int64_t)(-(double)beta / (double)alpha);
     while (alpha * i + beta < 0) i--;
     while (alpha * (i + 1) + beta >= 0) i++;
     return i;
@@ -3929,11 +3938,19 @@ static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_m
         V[k] = (P[k][1] - g->origin[1]) / g->pitch[1];
         D[k] = P[k][2] - r->depth_origin;
         if (!(fabs(U[k]) < ADASLICE__GRID_LIMIT && fabs(V[k]) < ADASLICE__GRID_LIMIT)) return 1;
-        X[k] = (int64_t)floor(U[k] * ADASLICE__SUBPIXEL + 0.5);
-        Y[k] = (int64_t)floor(V[k] * ADASLICE__SUBPIXEL + 0.5);
+        X[k] = (int64_t)adaslice__floor_near(U[k] * ADASLICE__SUBPIXEL + 0.5);
+        Y[k] = (int64_t)adaslice__floor_near(V[k] * ADASLICE__SUBPIXEL + 0.5);
     }
     area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
     if (area == 0) return 0; /* seen edge-on: the rays graze it */
+    ylo = Y[0] < Y[1] ? Y[0] : Y[1]; if (Y[2] < ylo) ylo = Y[2];
+    yhi = Y[0] > Y[1] ? Y[0] : Y[1]; if (Y[2] > yhi) yhi = Y[2];
+    /* rows whose centre 256 j + 128 lies in [ylo, yhi] */
+    j0 = (int)-adaslice__floor_div(-(ylo - ADASLICE__SUBPIXEL / 2), ADASLICE__SUBPIXEL);
+    j1 = (int)adaslice__floor_div(yhi - ADASLICE__SUBPIXEL / 2, ADASLICE__SUBPIXEL);
+    if (j0 < r->row_first) j0 = r->row_first;
+    if (j1 > r->row_end - 1) j1 = r->row_end - 1;
+    if (j0 > j1) return 0; /* between two rows' centres (most facets of a fine mesh in a small picture) */
     s.face = t | (area > 0 ? ADASLICE_SAMPLE_LEAVES : 0u); /* normal along +ray: leaving */
     if (area < 0) { /* rasterise counter-clockwise */
         int64_t ti; double td;
@@ -3952,13 +3969,6 @@ static int adaslice__raster_triangle(const adaslice__raster *r, const adaslice_m
     dlo = D[0] < D[1] ? D[0] : D[1]; if (D[2] < dlo) dlo = D[2];
     dhi = D[0] > D[1] ? D[0] : D[1]; if (D[2] > dhi) dhi = D[2];
     s.lo = dlo; s.hi = dhi; s.step = gx;
-    ylo = Y[0] < Y[1] ? Y[0] : Y[1]; if (Y[2] < ylo) ylo = Y[2];
-    yhi = Y[0] > Y[1] ? Y[0] : Y[1]; if (Y[2] > yhi) yhi = Y[2];
-    /* rows whose centre 256 j + 128 lies in [ylo, yhi] */
-    j0 = (int)-adaslice__floor_div(-(ylo - ADASLICE__SUBPIXEL / 2), ADASLICE__SUBPIXEL);
-    j1 = (int)adaslice__floor_div(yhi - ADASLICE__SUBPIXEL / 2, ADASLICE__SUBPIXEL);
-    if (j0 < r->row_first) j0 = r->row_first;
-    if (j1 > r->row_end - 1) j1 = r->row_end - 1;
     for (j = j0; j <= j1; j++) {
         int64_t yc = (int64_t)j * ADASLICE__SUBPIXEL + ADASLICE__SUBPIXEL / 2, lo = 0, hi = g->width - 1;
         int e, first, last;
