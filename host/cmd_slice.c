@@ -230,11 +230,11 @@ static int draw_picture(const plan_job *j, int w, int h, unsigned char *rgb)
 }
 
 /* The format's previews, drawn ahead on a thread of their own (with
-   --threads 2 or more) while the masker is set up beside the profile and
-   the plan, where a core is idle (else while the layers are made, where
-   they took a core from them): on the calling thread they held up the job
-   before or after its layers, alone on one core (the directory's took a
-   fortieth of the job). */
+   --threads 2 or more) from when the masker is set up beside the profile
+   and the plan, where a core is idle (started with the layers they took a
+   core from them), on into the first layers if they take longer: on the
+   calling thread they held up the job before or after its layers, alone on
+   one core (the directory's took a fortieth of the job). */
 typedef struct previews {
     const plan_job *j;
     const job_format *f;
@@ -360,17 +360,15 @@ static int open_masks(void *ctx)
     return rc;
 }
 
-/* plan_job's beside: the previews' thread is joined before it returns, so
-   that a plan that fails and drops the mesh (joining beside) leaves no
-   thread reading it. */
+/* plan_job's beside. The previews' thread goes on while the first layers
+   are made: waiting for it held up the layers' start by 5 ms on the turbine
+   blade, a core idle. It reads j->mesh, which a failing plan leaves to
+   job_free, after previews_free has joined it. */
 static int open_masks_and_previews(void *ctx)
 {
     masks_setup *ms = (masks_setup *)ctx;
-    int rc;
     previews_start(&ms->pv, ms->j, ms->f, ms->s->threads);
-    rc = open_masks(ctx);
-    previews_join(&ms->pv);
-    return rc;
+    return open_masks(ctx);
 }
 
 /* The job's description; every layer rendered once, in order, into the format. */

@@ -316,13 +316,14 @@ static int beside_join(plan_job *j)
     return j->beside_rc;
 }
 
-/* The mesh dropped on a failure once beside may have started on it. */
+/* A failure once beside may have started on the mesh: a kept mesh stays
+   in j->mesh for job_free (what beside started may still read it until its
+   caller joins that), any other is dropped. */
 static int drop_mesh(plan_job *j, adaslice_mesh *mesh, float *weights, int rc)
 {
     beside_join(j);
-    if (j->keep_mesh) memset(&j->mesh, 0, sizeof j->mesh);
     free(weights);
-    adaslice_mesh_free(mesh);
+    if (!j->keep_mesh) adaslice_mesh_free(mesh);
     return rc;
 }
 

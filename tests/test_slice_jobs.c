@@ -258,8 +258,9 @@ static void refusals_leave_nothing_behind(void)
         {"job.ctb", {"--pixels", "3840x2400", "--pitch", "0.05", "--aa", "4", "--memory", "100", NULL},
          "more than --memory 100 MB", 2},
         /* on two threads the masker is set up beside the profile and the
-           plan: their failures leave nothing of it (the sanitizers' leak
-           check) and say one line */
+           plan, and the previews drawn: their failures leave nothing of it
+           (the sanitizers' leak check), the previews' thread is joined before
+           the mesh it reads is freed, and they say one line */
         {"job", {"--eps", "0.000001", "--tmin", "0.05", "--threads", "2", NULL}, "eps 1e-06 is too small", 1},
         {"job", {"--bin", "0.000001", "--memory", "100", "--threads", "2", NULL}, "more than --memory 100 MB", 1},
     };
