@@ -485,7 +485,9 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
 #endif
 #endif
 ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh);
-/* Lowest and highest corner of the box around the vertices that triangles use. */
+/* Lowest and highest corner of the box around the vertices that triangles
+   use. Takes a byte a vertex from the mesh's allocator for a while (without
+   one, it reads every triangle's corners: three times slower). */
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3]);
 
 typedef struct adaslice_weld_options {
@@ -2560,17 +2562,37 @@ ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh)
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
 {
     /* in floats, without a test of the first corner in the loop: branch-free
-       min and max, as the slicer takes the bounds several times a job */
+       min and max, as the slicer takes the bounds several times a job. The
+       vertices used are marked first and then read in order: a vertex serves
+       about six corners, each a load from anywhere. */
     float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
-    size_t i;
+    unsigned char *used = NULL;
+    size_t i, v;
     int k;
-    if (mesh->triangle_count)
+    if (mesh->triangle_count) {
         for (k = 0; k < 3; k++) l[k] = h[k] = mesh->vertices[3 * (size_t)mesh->triangles[0] + k];
-    for (i = 1; i < 3 * mesh->triangle_count; i++) {
-        const float *v = mesh->vertices + 3 * (size_t)mesh->triangles[i];
-        for (k = 0; k < 3; k++) {
-            l[k] = v[k] < l[k] ? v[k] : l[k];
-            h[k] = v[k] > h[k] ? v[k] : h[k];
+        used = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mesh->allocator, mesh->vertex_count, 1));
+    }
+    if (used) {
+        memset(used, 0, mesh->vertex_count);
+        for (i = 0; i < 3 * mesh->triangle_count; i++)
+            if (mesh->triangles[i] < mesh->vertex_count) used[mesh->triangles[i]] = 1; /* as a bad mesh may have */
+        for (v = 0; v < mesh->vertex_count; v++) {
+            const float *p = mesh->vertices + 3 * v;
+            if (!used[v]) continue;
+            for (k = 0; k < 3; k++) {
+                l[k] = p[k] < l[k] ? p[k] : l[k];
+                h[k] = p[k] > h[k] ? p[k] : h[k];
+            }
+        }
+        adaslice__free(&mesh->allocator, used);
+    } else {
+        for (i = 1; i < 3 * mesh->triangle_count; i++) {
+            const float *p = mesh->vertices + 3 * (size_t)mesh->triangles[i];
+            for (k = 0; k < 3; k++) {
+                l[k] = p[k] < l[k] ? p[k] : l[k];
+                h[k] = p[k] > h[k] ? p[k] : h[k];
+            }
         }
     }
     for (k = 0; k < 3; k++) { lo[k] = l[k]; hi[k] = h[k]; }
@@ -7821,9 +7843,10 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
                                   (unsigned)rows[b], (unsigned)rows[b + 1]);
     al = whole->allocator;
     kept = ADASLICE__CAST(size_t *, adaslice__alloc(&al, count, sizeof(size_t)));
-    /* each facet's first and last band, found once: finding them again to
-       fill the bands took a third of the split */
-    span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, 2 * whole->count + 1, sizeof(uint32_t)));
+    /* each facet's first and last band, found once (finding them again to
+       fill the bands took a third of the split), in the mesh's order: in the
+       masker's, by height, each facet's corners were a load from anywhere */
+    span = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, 2 * whole->mesh->triangle_count + 1, sizeof(uint32_t)));
     if (!kept || !span) {
         adaslice__free(&al, kept);
         adaslice__free(&al, span);
@@ -7831,14 +7854,15 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
     }
     memset(kept, 0, count * sizeof(size_t));
     memset(bands, 0, count * sizeof *bands);
-    for (t = 0; t < whole->count; t++) {
+    for (t = 0; t < whole->mesh->triangle_count; t++) {
         span[2 * t] = 1;
         span[2 * t + 1] = 0; /* none */
-        if (!adaslice__band_span(whole, rows, count, whole->order[t], &b0, &b1)) continue;
+        if (!adaslice__band_span(whole, rows, count, (uint32_t)t, &b0, &b1)) continue;
         span[2 * t] = (uint32_t)b0;
         span[2 * t + 1] = (uint32_t)b1;
-        for (b = b0; b <= b1; b++) kept[b]++;
     }
+    for (t = 0; t < whole->count; t++) /* whole's own: all of the mesh's unless a band was split again */
+        for (b = span[2 * (size_t)whole->order[t]]; b <= span[2 * (size_t)whole->order[t] + 1]; b++) kept[b]++;
     for (b = 0; b < count; b++) {
         adaslice_masker *mk = &bands[b];
         /* the settings; no buffer, nothing swept */
@@ -7867,8 +7891,10 @@ ADASLICE_DEF adaslice_result adaslice_masker_bands(const adaslice_masker *whole,
     }
     /* whole's order filtered keeps its order: the same facets in the same
        sequence, so each band's sums run as the whole masker's */
-    for (t = 0; t < whole->count; t++)
-        for (b = span[2 * t]; b <= span[2 * t + 1]; b++) bands[b].order[bands[b].count++] = whole->order[t];
+    for (t = 0; t < whole->count; t++) {
+        uint32_t f = whole->order[t];
+        for (b = span[2 * f]; b <= span[2 * f + 1]; b++) bands[b].order[bands[b].count++] = f;
+    }
     adaslice__free(&al, kept);
     adaslice__free(&al, span);
     adaslice__ok(err);
