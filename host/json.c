@@ -29,21 +29,30 @@ static void json_quote(FILE *f, const char *s)
     fputc('"', f);
 }
 
-static void json_write_number(FILE *f, double v)
+static void json_write_number(json_writer *w, double v)
 {
-    char text[32];
+    unsigned char bits[sizeof(double)];
+    unsigned h = 0;
+    char *text;
+    size_t i;
     int digits;
     if (!isfinite(v)) {
-        fputs("null", f);
+        fputs("null", w->f);
         return;
     }
-    /* the shortest of %.15g .. %.17g that reads back as v */
-    for (digits = 15; digits < 17; digits++) {
-        snprintf(text, sizeof text, "%.*g", digits, v);
-        if (strtod(text, NULL) == v) break;
+    memcpy(bits, &v, sizeof bits); /* not ==: 0 and -0 are written apart */
+    for (i = 0; i < sizeof bits; i++) h = h * 31 + bits[i];
+    text = w->memo[h % JSON_MEMO].text;
+    if (!text[0] || memcmp(w->memo[h % JSON_MEMO].bits, bits, sizeof bits)) {
+        /* the shortest of %.15g .. %.17g that reads back as v */
+        for (digits = 15; digits < 17; digits++) {
+            snprintf(text, sizeof w->memo[0].text, "%.*g", digits, v);
+            if (strtod(text, NULL) == v) break;
+        }
+        if (digits == 17) snprintf(text, sizeof w->memo[0].text, "%.17g", v);
+        memcpy(w->memo[h % JSON_MEMO].bits, bits, sizeof bits);
     }
-    if (digits == 17) snprintf(text, sizeof text, "%.17g", v);
-    fputs(text, f);
+    fputs(text, w->f);
 }
 
 /* The comma, the line break and the key before a value at the current depth. */
@@ -99,7 +108,7 @@ void json_string(json_writer *w, const char *key, const char *v)
 void json_number(json_writer *w, const char *key, double v)
 {
     json_member(w, key);
-    json_write_number(w->f, v);
+    json_write_number(w, v);
 }
 
 void json_numbers(json_writer *w, const char *key, const double *v, size_t n)

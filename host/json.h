@@ -23,12 +23,18 @@
 #include <stdio.h>
 
 #define JSON_MAX_DEPTH 16
+#define JSON_MEMO 16
 typedef struct json_writer {
     FILE *f;
     int depth;
     unsigned char members[JSON_MAX_DEPTH];   /* written so far at each depth (0, 1: more) */
     unsigned char oneline[JSON_MAX_DEPTH];
     char close[JSON_MAX_DEPTH];              /* '}' or ']' */
+    /* numbers written lately, by their bits: finding the fewest digits
+       takes up to three printfs and two strtods, and a job's manifest
+       repeats most of its numbers (a layer's bottom is the top below it,
+       its thickness and exposure one of a few) */
+    struct { unsigned char bits[sizeof(double)]; char text[32]; } memo[JSON_MEMO];
 } json_writer;
 
 void json_init(json_writer *w, FILE *f);

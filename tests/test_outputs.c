@@ -959,10 +959,54 @@ static void json_strings_escape_what_they_must(void)
     CHECKF(!strcmp(got, want), "wrote %s", got);
 }
 
+/* Numbers in the fewest of 15 to 17 digits that read back, the same text
+   when one comes again (the writer keeps the last few): 0 and -0 apart, a
+   number its slot lost to another written anew, every one reading back bit
+   for bit and in no more digits than it needs. */
+static void json_numbers_read_back_when_they_repeat(void)
+{
+    double v[200];
+    char text[8192], *p, *end;
+    size_t n, i;
+    json_writer w;
+    FILE *f = tmpfile();
+    CHECK(f != NULL);
+    if (!f) return;
+    for (i = 0; i < 200; i++) {
+        static const double some[] = {0.0, -0.0, 0.1, 0.30000000000000004, 1.2500000000000002, 0.064, 1e-300, -2.5e17};
+        /* repeats and fresh values in turn; the fresh ones push the kept ones out */
+        v[i] = i % 3 ? some[(i * 7) % 8] : 1832.0525 + (double)i / 7;
+    }
+    json_init(&w, f);
+    json_begin_array(&w, NULL, 1);
+    for (i = 0; i < 200; i++) json_number(&w, NULL, v[i]);
+    json_end(&w);
+    rewind(f);
+    n = fread(text, 1, sizeof text - 1, f);
+    text[n] = 0;
+    fclose(f);
+    for (i = 0, p = text + 1; i < 200; i++, p = end + 1) {
+        char want[32];
+        double back = strtod(p, &end);
+        int digits;
+        CHECKF(end > p && memcmp(&back, &v[i], sizeof back) == 0, "number %zu (%.17g) wrote %.20s", i, v[i], p);
+        for (digits = 15; digits < 17; digits++) {
+            snprintf(want, sizeof want, "%.*g", digits, v[i]);
+            if (strtod(want, NULL) == v[i]) break;
+        }
+        if (digits == 17) snprintf(want, sizeof want, "%.17g", v[i]);
+        CHECKF((size_t)(end - p) == strlen(want) && !strncmp(p, want, strlen(want)), "number %zu: %.20s, not %s", i, p, want);
+        if (*end != ',') break;
+        end++; /* the space */
+    }
+    CHECKF(i == 199, "read %zu of 200 numbers", i + 1);
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(json_strings_escape_what_they_must);
+    RUN(json_numbers_read_back_when_they_repeat);
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(open_layer_svgs_fill_what_the_masks_light);
     RUN(orient_map_tiles_and_has_a_colour_bar);
