@@ -173,8 +173,10 @@
    offset or line, height, value). Every call that allocates takes an
    adaslice_allocator (alloc, free and a user pointer) from its options; NULL
    means ADASLICE_MALLOC / ADASLICE_FREE. An object that owns memory keeps
-   the allocator it was made with and frees through it. There is no global
-   state: calls are reentrant.
+   the allocator it was made with and frees through it; a call on a mesh may
+   borrow a little from the mesh's own (adaslice_mesh_bounds: a byte a vertex,
+   and so every call that takes a mesh's box), so threads sharing a mesh share
+   its allocator. There is no global state: calls are reentrant.
 
    PIPELINE AND UNITS
    mesh (mm, build direction +z) -> profile: N = ceil(H/b) bins, bin i is
@@ -486,8 +488,8 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
 #endif
 ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh);
 /* Lowest and highest corner of the box around the vertices that triangles
-   use. Takes a byte a vertex from the mesh's allocator for a while (without
-   one, it reads every triangle's corners: three times slower). */
+   use. Borrows a byte a vertex from the mesh's allocator (when it has none
+   to give, it reads every triangle's corners: three times slower). */
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3]);
 
 typedef struct adaslice_weld_options {
@@ -534,7 +536,7 @@ typedef struct adaslice_mesh_report {
     double volume;               /* mm^3 enclosed, after repair (open shells: about
                                     their centroid) */
     size_t edge_steps;           /* half-edges met walking the edges: the repair's work,
-                                    at most 12 per facet however many share an edge */
+                                    at most 9 per facet however many share an edge */
 } adaslice_mesh_report;
 
 /* Repairs a mesh in place as a slicer does on load: welds equal vertices;
@@ -2559,12 +2561,22 @@ ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh)
     memset(mesh, 0, sizeof *mesh);
 }
 
+/* l, h grown to take p: branch-free min and max */
+static void adaslice__box_grow(const float *p, float l[3], float h[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        l[k] = p[k] < l[k] ? p[k] : l[k];
+        h[k] = p[k] > h[k] ? p[k] : h[k];
+    }
+}
+
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
 {
-    /* in floats, without a test of the first corner in the loop: branch-free
-       min and max, as the slicer takes the bounds several times a job. The
-       vertices used are marked first and then read in order: a vertex serves
-       about six corners, each a load from anywhere. */
+    /* in floats, without a test of the first corner in the loop, as the
+       slicer takes the bounds several times a job. The vertices used are
+       marked first and then read in order: a vertex serves about six
+       corners, each a load from anywhere. */
     float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
     unsigned char *used = NULL;
     size_t i, v;
@@ -2576,24 +2588,12 @@ ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], 
     if (used) {
         memset(used, 0, mesh->vertex_count);
         for (i = 0; i < 3 * mesh->triangle_count; i++)
-            if (mesh->triangles[i] < mesh->vertex_count) used[mesh->triangles[i]] = 1; /* as a bad mesh may have */
-        for (v = 0; v < mesh->vertex_count; v++) {
-            const float *p = mesh->vertices + 3 * v;
-            if (!used[v]) continue;
-            for (k = 0; k < 3; k++) {
-                l[k] = p[k] < l[k] ? p[k] : l[k];
-                h[k] = p[k] > h[k] ? p[k] : h[k];
-            }
-        }
+            if (mesh->triangles[i] < mesh->vertex_count) used[mesh->triangles[i]] = 1; /* no write outside, whatever the mesh */
+        for (v = 0; v < mesh->vertex_count; v++)
+            if (used[v]) adaslice__box_grow(mesh->vertices + 3 * v, l, h);
         adaslice__free(&mesh->allocator, used);
     } else {
-        for (i = 1; i < 3 * mesh->triangle_count; i++) {
-            const float *p = mesh->vertices + 3 * (size_t)mesh->triangles[i];
-            for (k = 0; k < 3; k++) {
-                l[k] = p[k] < l[k] ? p[k] : l[k];
-                h[k] = p[k] > h[k] ? p[k] : h[k];
-            }
-        }
+        for (i = 1; i < 3 * mesh->triangle_count; i++) adaslice__box_grow(mesh->vertices + 3 * (size_t)mesh->triangles[i], l, h);
     }
     for (k = 0; k < 3; k++) { lo[k] = l[k]; hi[k] = h[k]; }
 }

@@ -51,7 +51,7 @@ typedef struct plan_job {
     int profiled;                  /* profile came from the library and needs freeing */
     int keep_mesh;                 /* keep the model loaded (slice needs it) */
     adaslice_mesh mesh;
-    double lo[3], hi[3];           /* model only: the turned mesh's box, taken once (1.8M facets: 2 ms a time) */
+    double lo[3], hi[3];           /* model only: the turned mesh's box, taken once */
     double up[3];                  /* --orient: the direction turned up; else 0, 0, 1 */
     adaslice_plan plan[METHOD_COUNT];   /* by method: the asked one, all of them with --compare */
     adaslice_error why[METHOD_COUNT];   /* result of each plan that was attempted */
@@ -82,7 +82,9 @@ typedef struct plan_job {
        the profile and the plan once the mesh is loaded, turned and checked,
        for what needs only j->mesh (slice sets up its masker there), which
        neither touches. Joined before run_plan returns, whose result it is
-       when the rest succeeded. */
+       when the rest succeeded. What it starts may outlive it (slice's
+       previews): j->mesh stays, even when the plan fails, until job_free,
+       which the caller calls after joining that. */
     int (*beside)(void *ctx);
     void *beside_ctx;
     pthread_t beside_thread;
