@@ -131,6 +131,12 @@ void json_bool(json_writer *w, const char *key, int v)
     fputs(v ? "true" : "false", w->f);
 }
 
+void json_raw(json_writer *w, const char *key, const char *json, size_t n)
+{
+    json_member(w, key);
+    fwrite(json, 1, n, w->f);
+}
+
 void json_null(json_writer *w, const char *key)
 {
     json_member(w, key);

@@ -48,4 +48,6 @@ void json_numbers(json_writer *w, const char *key, const double *v, size_t n);
 void json_int(json_writer *w, const char *key, long long v);
 void json_bool(json_writer *w, const char *key, int v);
 void json_null(json_writer *w, const char *key);
+/* n bytes of JSON made elsewhere (by another writer) as one value. */
+void json_raw(json_writer *w, const char *key, const char *json, size_t n);
 #endif
