@@ -68,6 +68,7 @@ typedef struct dir_writer {
     FILE *lines_file;            /* into lines (open_memstream) */
     char *lines;
     size_t lines_size, *line_end;
+    int lines_failed;            /* a line was not written whole: out of memory */
     json_writer lines_json;
 } dir_writer;
 
@@ -165,6 +166,7 @@ static void manifest_line(dir_writer *w, size_t k)
     const job_layer *l = &w->d->layers[k];
     json_writer *j = &w->lines_json;
     char name[40];
+    long at;
     layer_name(name, k, w->digits, "png");
     json_begin_object(j, NULL, 1);
     json_int(j, "index", (long long)k + 1);
@@ -175,7 +177,9 @@ static void manifest_line(dir_writer *w, size_t k)
     json_number(j, "exposure_s", l->exposure_s);
     json_number(j, "lit_area_mm2", l->lit_mm2);
     json_end(j);
-    w->line_end[k] = (size_t)ftell(w->lines_file);
+    at = ftell(w->lines_file);
+    w->line_end[k] = at > 0 ? (size_t)at : 0;
+    w->lines_failed |= at <= 0 || (k && w->line_end[k] <= w->line_end[k - 1]);
 }
 
 /* DIR/NAME, malloc'd; NULL after a complaint. */
@@ -585,7 +589,8 @@ static int dir_put(void *writer, size_t k, job_blob *blob)
 
 static int write_manifest_file(dir_writer *w)
 {
-    if (fflush(w->lines_file) != 0) return complain(RC_FAIL, "out of memory for the manifest");
+    if (fflush(w->lines_file) != 0 || ferror(w->lines_file) || w->lines_failed)
+        return complain(RC_FAIL, "out of memory for the manifest");
     snprintf(w->path, w->path_size, "%s/manifest.json", w->dir);
     return write_atomic(w->path, write_manifest, w);
 }
