@@ -7716,6 +7716,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
 {
     adaslice_result r, res;
     adaslice__zkey *keys, *sorted;
+    double lo[3], hi[3];
     size_t t;
     int k, s = options && options->supersample ? options->supersample : 1;
     if (!mk) return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "masks: no masker given");
@@ -7741,7 +7742,8 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
     mk->rays.width = grid->width * s;
     mk->rays.height = grid->height * s;
     mk->rows[1] = (uint32_t)grid->height;
-    mk->depth_origin = adaslice__depth_origin(mesh, ADASLICE_AXIS_Z);
+    adaslice_mesh_bounds(mesh, lo, hi); /* once: the depths' origin, and an anti-aliased section's box */
+    mk->depth_origin = lo[2];
     mk->done = -DBL_MAX;
     mk->stride = s == 1 ? ((size_t)grid->width + 7) / 8 : (size_t)grid->width;
     if (!(options && options->edges_balance) && (res = adaslice__gaps_init(&mk->gaps, mesh, &mk->allocator, err)) != ADASLICE_OK)
@@ -7758,8 +7760,7 @@ ADASLICE_DEF adaslice_result adaslice_masker_init(adaslice_masker *mk, const ada
         /* an anti-aliased section: its exact coverage, from the section's
            edges, which stay within the mesh's box (a large display's cells
            cost their first touch) */
-        double lo[3], hi[3], box[4];
-        adaslice_mesh_bounds(mesh, lo, hi);
+        double box[4];
         box[0] = floor((lo[0] - grid->origin[0]) / grid->pitch[0]);
         box[1] = floor((lo[1] - grid->origin[1]) / grid->pitch[1]);
         box[2] = ceil((hi[0] - grid->origin[0]) / grid->pitch[0]) + 1;
