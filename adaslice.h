@@ -173,10 +173,8 @@
    offset or line, height, value). Every call that allocates takes an
    adaslice_allocator (alloc, free and a user pointer) from its options; NULL
    means ADASLICE_MALLOC / ADASLICE_FREE. An object that owns memory keeps
-   the allocator it was made with and frees through it; a call on a mesh may
-   borrow a little from the mesh's own (adaslice_mesh_bounds: a byte a vertex,
-   and so every call that takes a mesh's box), so threads sharing a mesh share
-   its allocator. There is no global state: calls are reentrant.
+   the allocator it was made with and frees through it. There is no global
+   state: calls are reentrant, and threads may read one mesh at once.
 
    PIPELINE AND UNITS
    mesh (mm, build direction +z) -> profile: N = ceil(H/b) bins, bin i is
@@ -488,8 +486,7 @@ ADASLICE_DEF adaslice_result adaslice_mesh_load_file(const char *path,
 #endif
 ADASLICE_DEF void adaslice_mesh_free(adaslice_mesh *mesh);
 /* Lowest and highest corner of the box around the vertices that triangles
-   use. Borrows a byte a vertex from the mesh's allocator (when it has none
-   to give, it reads every triangle's corners: three times slower). */
+   use (a zero as +0). Allocates nothing. */
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3]);
 
 typedef struct adaslice_weld_options {
@@ -2573,29 +2570,49 @@ static void adaslice__box_grow(const float *p, float l[3], float h[3])
 
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
 {
-    /* in floats, without a test of the first corner in the loop, as the
-       slicer takes the bounds several times a job. The vertices used are
-       marked first and then read in order: a vertex serves about six
-       corners, each a load from anywhere. */
+    /* in floats, as the slicer takes the bounds several times a job. The
+       box of every vertex, read in order, is the box of those the triangles
+       use when the vertices that reach its six faces are used, which one
+       pass over the corners' numbers (in order too) finds; only a stray
+       vertex out there sends it to the corners one by one, each a load from
+       anywhere. A zero comes out +0, whichever zero came first. */
     float l[3] = {0, 0, 0}, h[3] = {0, 0, 0};
-    unsigned char *used = NULL;
-    size_t i, v;
+    uint32_t at[6] = {0, 0, 0, 0, 0, 0}; /* the first vertex on each face: low x, y, z, high x, y, z */
+    size_t i, v, corners = 3 * mesh->triangle_count;
+    unsigned seen = 0;
     int k;
-    if (mesh->triangle_count) {
+    if (corners && mesh->vertex_count) {
+        for (k = 0; k < 3; k++) l[k] = h[k] = mesh->vertices[k];
+        for (v = 1; v < mesh->vertex_count; v++)
+            for (k = 0; k < 3; k++) {
+                float q = mesh->vertices[3 * v + (size_t)k];
+                if (q < l[k]) { l[k] = q; at[k] = (uint32_t)v; }
+                if (q > h[k]) { h[k] = q; at[3 + k] = (uint32_t)v; }
+            }
+        for (i = 0; i < corners && seen != 63; i += 4096) {
+            /* a whole block's count fixed, so that compilers compare in vectors */
+            const uint32_t *c = mesh->triangles + i;
+            const uint32_t a0 = at[0], a1 = at[1], a2 = at[2], a3 = at[3], a4 = at[4], a5 = at[5];
+            size_t j, n = corners - i < 4096 ? corners - i : 4096;
+            unsigned s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0;
+            if (n == 4096)
+                for (j = 0; j < 4096; j++) {
+                    s0 |= c[j] == a0; s1 |= c[j] == a1; s2 |= c[j] == a2;
+                    s3 |= c[j] == a3; s4 |= c[j] == a4; s5 |= c[j] == a5;
+                }
+            else
+                for (j = 0; j < n; j++) {
+                    s0 |= c[j] == a0; s1 |= c[j] == a1; s2 |= c[j] == a2;
+                    s3 |= c[j] == a3; s4 |= c[j] == a4; s5 |= c[j] == a5;
+                }
+            seen |= s0 | s1 << 1 | s2 << 2 | s3 << 3 | s4 << 4 | s5 << 5;
+        }
+    }
+    if (corners && seen != 63) {
         for (k = 0; k < 3; k++) l[k] = h[k] = mesh->vertices[3 * (size_t)mesh->triangles[0] + k];
-        used = ADASLICE__CAST(unsigned char *, adaslice__alloc(&mesh->allocator, mesh->vertex_count, 1));
+        for (i = 1; i < corners; i++) adaslice__box_grow(mesh->vertices + 3 * (size_t)mesh->triangles[i], l, h);
     }
-    if (used) {
-        memset(used, 0, mesh->vertex_count);
-        for (i = 0; i < 3 * mesh->triangle_count; i++)
-            if (mesh->triangles[i] < mesh->vertex_count) used[mesh->triangles[i]] = 1; /* no write outside, whatever the mesh */
-        for (v = 0; v < mesh->vertex_count; v++)
-            if (used[v]) adaslice__box_grow(mesh->vertices + 3 * v, l, h);
-        adaslice__free(&mesh->allocator, used);
-    } else {
-        for (i = 1; i < 3 * mesh->triangle_count; i++) adaslice__box_grow(mesh->vertices + 3 * (size_t)mesh->triangles[i], l, h);
-    }
-    for (k = 0; k < 3; k++) { lo[k] = l[k]; hi[k] = h[k]; }
+    for (k = 0; k < 3; k++) { lo[k] = l[k] + 0.0; hi[k] = h[k] + 0.0; }
 }
 
 /* ---- welding */

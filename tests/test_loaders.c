@@ -1,5 +1,7 @@
 /* Mesh loaders: each format written from a generated mesh and read back, the options,
    and every kind of malformed input with the exact place its error names. */
+#include <float.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -596,6 +598,88 @@ static void free_and_bounds(void)
     CHECK(adaslice_mesh_load("v", 1, NULL, NULL, NULL) == ADASLICE_ERR_ARGUMENT);
 }
 
+/* The box of the corners, one by one (the reference), a zero as +0. */
+static void corner_box(const adaslice_mesh *m, double lo[3], double hi[3])
+{
+    size_t i;
+    int k;
+    for (k = 0; k < 3; k++) { lo[k] = DBL_MAX; hi[k] = -DBL_MAX; }
+    for (i = 0; i < 3 * m->triangle_count; i++)
+        for (k = 0; k < 3; k++) {
+            double q = m->vertices[3 * (size_t)m->triangles[i] + k] + 0.0;
+            lo[k] = q < lo[k] ? q : lo[k];
+            hi[k] = q > hi[k] ? q : hi[k];
+        }
+}
+
+/* adaslice_mesh_bounds against the corners one by one: a sphere; with an
+   unused vertex first (the lowest index, so the first found on its faces)
+   beyond the part, then on the part's faces exactly (a tie with used ones);
+   zeros of either sign; and no allocation at all, whatever the mesh's
+   allocator (threads may read one mesh at once). */
+static void *refuse_alloc(void *user, size_t size)
+{
+    (void)size;
+    ++*(long *)user;
+    return NULL;
+}
+
+static void refuse_free(void *user, void *p)
+{
+    (void)user;
+    (void)p;
+}
+
+static void bounds_are_the_corners(void)
+{
+    adaslice_mesh s = gen_sphere(3, 16, 9, 1), m;
+    long asked = 0;
+    const adaslice_allocator refuse = {refuse_alloc, refuse_free, &asked};
+    double lo[3], hi[3], want_lo[3], want_hi[3], part_lo[3], part_hi[3];
+    int c, k, same;
+    corner_box(&s, part_lo, part_hi);
+    for (c = 0; c < 4; c++) {
+        size_t i;
+        m = gen_alloc(s.vertex_count + 1, s.triangle_count);
+        if (c == 0) {
+            memcpy(m.vertices, s.vertices, s.vertex_count * 3 * sizeof(float));
+            m.vertex_count = s.vertex_count;
+            memcpy(m.triangles, s.triangles, s.triangle_count * 3 * sizeof(uint32_t));
+        } else {
+            /* vertex 0 unused, the sphere's from 1 on */
+            memcpy(m.vertices + 3, s.vertices, s.vertex_count * 3 * sizeof(float));
+            m.vertex_count = s.vertex_count + 1;
+            for (k = 0; k < 3; k++)
+                m.vertices[k] = (float)(c == 1 ? (k == 0 ? -9 : 0.5) /* beyond one face */
+                                      : c == 2 ? (k == 2 ? part_hi[2] : part_lo[k]) /* on three faces exactly */
+                                               : part_lo[k] - 1); /* beyond three */
+            for (i = 0; i < 3 * s.triangle_count; i++) m.triangles[i] = s.triangles[i] + 1;
+        }
+        m.triangle_count = s.triangle_count;
+        m.allocator = refuse;
+        adaslice_mesh_bounds(&m, lo, hi);
+        corner_box(&m, want_lo, want_hi);
+        for (same = 1, k = 0; k < 3; k++) same = same && lo[k] == want_lo[k] && hi[k] == want_hi[k];
+        CHECKF(same, "case %d: (%g %g %g)-(%g %g %g) against the corners' (%g %g %g)-(%g %g %g)", c, lo[0], lo[1], lo[2],
+               hi[0], hi[1], hi[2], want_lo[0], want_lo[1], want_lo[2], want_hi[0], want_hi[1], want_hi[2]);
+        CHECKF(c != 1 || want_lo[0] == part_lo[0], "case 1: the stray vertex is in the corners' box");
+        gen_free(&m);
+    }
+    /* zeros of either sign, -0 met first: the box's zeros are +0 */
+    m = gen_alloc(3, 1);
+    gen_vertex(&m, -0.0, 0, -0.0);
+    gen_vertex(&m, 0.0, -1, 0.0);
+    gen_vertex(&m, -1, -0.0, 1);
+    gen_triangle(&m, 0, 1, 2);
+    m.allocator = refuse;
+    adaslice_mesh_bounds(&m, lo, hi);
+    CHECKF(lo[0] == -1 && lo[1] == -1 && lo[2] == 0 && !signbit(lo[2]) && hi[0] == 0 && !signbit(hi[0]) &&
+           hi[1] == 0 && !signbit(hi[1]) && hi[2] == 1, "(%g %g %g)-(%g %g %g)", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    gen_free(&m);
+    CHECKF(asked == 0, "%ld allocations asked for", asked);
+    gen_free(&s);
+}
+
 /* ----------------------------------------------------------- malformed */
 
 static void malformed_binary_stl_is_refused(void)
@@ -924,6 +1008,7 @@ void test_loaders(void)
     RUN(scale_multiplies_coordinates);
     RUN(degenerate_triangles_are_kept);
     RUN(free_and_bounds);
+    RUN(bounds_are_the_corners);
     RUN(malformed_binary_stl_is_refused);
     RUN(malformed_ascii_stl_is_refused);
     RUN(malformed_obj_is_refused);
