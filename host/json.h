@@ -26,6 +26,7 @@
 #define JSON_MEMO 16
 typedef struct json_writer {
     FILE *f;
+    int failed;                              /* a write to f failed (glibc's memory streams say so only there) */
     int depth;
     unsigned char members[JSON_MAX_DEPTH];   /* written so far at each depth (0, 1: more) */
     unsigned char oneline[JSON_MAX_DEPTH];

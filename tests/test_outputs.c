@@ -1002,11 +1002,51 @@ static void json_numbers_read_back_when_they_repeat(void)
     CHECKF(i == 199, "read %zu of 200 numbers", i + 1);
 }
 
+/* A write that fails is kept in the writer (a job's manifest lines go to a
+   memory stream, which on glibc drops what it cannot grow for and leaves
+   ferror clear): each kind of value written to /dev/full unbuffered,
+   where every write fails at once; to a memory stream, none. */
+static void json_writes_that_fail_are_kept(void)
+{
+    int kind, full;
+    for (kind = 0; kind < 8; kind++)
+        for (full = 0; full < 2; full++) {
+            FILE *f = fopen("/dev/full", "w");
+            char *text = NULL;
+            size_t size = 0;
+            FILE *m = open_memstream(&text, &size);
+            json_writer w;
+            CHECK(f != NULL && m != NULL);
+            if (!f || !m) return;
+            setvbuf(f, NULL, _IONBF, 0);
+            json_init(&w, m);
+            json_begin_array(&w, NULL, 1);
+            if (full) w.f = f; /* the first value: no comma, no key before it */
+            switch (kind) {
+            case 0: json_number(&w, NULL, 0.25); break;
+            case 1: json_int(&w, NULL, -7); break;
+            case 2: json_string(&w, NULL, "x\"y\x01"); break;
+            case 3: json_bool(&w, NULL, 1); break;
+            case 4: json_null(&w, NULL); break;
+            case 5: json_raw(&w, NULL, "[1]", 3); break;
+            case 6: json_numbers(&w, NULL, (const double[]){1, 2}, 2); break;
+            default: json_string(&w, NULL, NULL); break;
+            }
+            CHECKF(w.failed == full, "kind %d, %s: failed %d", kind, full ? "/dev/full" : "a memory stream", w.failed);
+            w.f = m;
+            json_end(&w);
+            fclose(f);
+            fclose(m);
+            free(text);
+        }
+}
+
 void test_outputs(void)
 {
     if (!cli_begin("adaslice-outputs")) return;
     RUN(json_strings_escape_what_they_must);
     RUN(json_numbers_read_back_when_they_repeat);
+    RUN(json_writes_that_fail_are_kept);
     RUN(layer_svgs_agree_with_the_manifest);
     RUN(open_layer_svgs_fill_what_the_masks_light);
     RUN(orient_map_tiles_and_has_a_colour_bar);

@@ -179,7 +179,7 @@ static void manifest_line(dir_writer *w, size_t k)
     json_end(j);
     at = ftell(w->lines_file);
     w->line_end[k] = at > 0 ? (size_t)at : 0;
-    w->lines_failed |= at <= 0 || (k && w->line_end[k] <= w->line_end[k - 1]);
+    w->lines_failed |= j->failed || at <= 0 || (k && w->line_end[k] <= w->line_end[k - 1]);
 }
 
 /* DIR/NAME, malloc'd; NULL after a complaint. */
