@@ -778,6 +778,34 @@ static void threads_write_the_same_job(void)
         cli_free(&r);
         CHECKF(same_directories(one, many, what), "an open box: %s", what);
     }
+    /* a box whose top is cracked off by 10^-4 mm, which the repair welds
+       (moving vertices): the same job on two threads */
+    {
+        static const int quads[6][4] = {
+            {0, 2, 3, 1}, {8, 9, 11, 10}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+        char cracked[300];
+        adaslice_mesh box = gen_alloc(12, 12);
+        cli_result r;
+        int i;
+        for (i = 0; i < 12; i++) { /* 8-11: the top's corners 4-7 again, moved */
+            int c = i < 8 ? i : i - 4;
+            gen_vertex(&box, ((c & 1) ? 6 : 0) + (i >= 8) * 1e-4, (c & 2) ? 5 : 0, (c & 4) ? 4 : 0);
+        }
+        for (i = 0; i < 6; i++) {
+            gen_triangle(&box, (uint32_t)quads[i][0], (uint32_t)quads[i][1], (uint32_t)quads[i][2]);
+            gen_triangle(&box, (uint32_t)quads[i][0], (uint32_t)quads[i][2], (uint32_t)quads[i][3]);
+        }
+        snprintf(cracked, sizeof cracked, "%s/cracked_box.obj", cli_dir);
+        cli_write_obj(cracked, &box);
+        gen_free(&box);
+        r = cli_run("slice", cracked, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
+        CHECKF(r.status == 0 && strstr(r.err, "vertices of cracks welded"), "%s", r.err);
+        cli_free(&r);
+        r = cli_run("slice", cracked, "--pixels", "301x253", "--pitch", "0.05", "--threads", "2", "-o", many, NULL);
+        CHECKF(r.status == 0, "%s", r.err);
+        cli_free(&r);
+        CHECKF(same_directories(one, many, what), "a cracked box: %s", what);
+    }
     /* over the hand's --aa 4 job in `many`: the sphere's 1-bit layers, fewer and smaller */
     {
         cli_result r = cli_run("slice", models[0], "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
