@@ -80,8 +80,9 @@ void progress_show(progress *p, size_t done, size_t total, const char *what, con
     double t = now_ms(), eta;
     int filled, i;
     if (!p->started) p->started = t;
-    if (!isatty(2) || (done < total && t - p->last < 100)) return;
+    if (done < total && t - p->last < 100) return;
     p->last = t;
+    if (!isatty(2)) return; /* asked at most every 100 ms: a call a layer was a system call a layer */
     filled = total ? (int)(30.0 * (double)done / (double)total) : 30;
     eta = done ? (t - p->started) * (double)(total - done) / (double)done / 1000 : 0;
     fputs("\r[", stderr);

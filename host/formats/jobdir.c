@@ -13,6 +13,7 @@
 
 #include <errno.h>
 #include <dirent.h>
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <math.h>
 #include <stdlib.h>
@@ -514,15 +515,20 @@ static int write_png(const char *path, unsigned char *png, size_t size)
    re-slice's time. */
 static int write_layer_png(const char *path, unsigned char *png, size_t size)
 {
-    FILE *f = fopen(path, "r+b");
-    int err = 0;
-    if (!f) f = fopen(path, "wb");
-    if (!f) err = errno;
+    /* open, write, cut, close: through stdio a layer took two more calls
+       into the kernel (a stat to size its buffer, the PNG in two writes) */
+    int fd = open(path, O_RDWR), err = 0;
+    size_t done = 0;
+    if (fd < 0) fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+    if (fd < 0) err = errno;
     else {
-        errno = 0; /* not the first open's */
-        if (fwrite(png, 1, size, f) != size || fflush(f) != 0 || ftruncate(fileno(f), (off_t)size) != 0)
-            err = errno ? errno : EIO;
-        if (fclose(f) != 0 && !err) err = errno;
+        while (done < size && !err) {
+            ssize_t n = write(fd, png + done, size - done);
+            if (n > 0) done += (size_t)n;
+            else if (n == 0 || errno != EINTR) err = n < 0 ? errno : EIO;
+        }
+        if (!err && ftruncate(fd, (off_t)size) != 0) err = errno;
+        if (close(fd) != 0 && !err) err = errno;
         if (err) remove(path);
     }
     free(png);
