@@ -736,6 +736,25 @@ static void an_open_mesh_is_masked_by_its_sections(void)
     }
 }
 
+/* mesh written to NAME in the test's directory, sliced on one thread (its
+   repair's warning saying `warned`) and on `threads`: the same job. */
+static void same_job_on_threads(const adaslice_mesh *mesh, const char *name, const char *warned, const char *threads)
+{
+    char path[300], one[300], many[300], what[300];
+    cli_result r;
+    snprintf(path, sizeof path, "%s/%s", cli_dir, name);
+    snprintf(one, sizeof one, "%s/one", cli_dir);
+    snprintf(many, sizeof many, "%s/many", cli_dir);
+    cli_write_obj(path, mesh);
+    r = cli_run("slice", path, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
+    CHECKF(r.status == 0 && strstr(r.err, warned), "%s: %s", name, r.err);
+    cli_free(&r);
+    r = cli_run("slice", path, "--pixels", "301x253", "--pitch", "0.05", "--threads", threads, "-o", many, NULL);
+    CHECKF(r.status == 0, "%s: %s", name, r.err);
+    cli_free(&r);
+    CHECKF(same_directories(one, many, what), "%s on %s threads: %s", name, threads, what);
+}
+
 static void threads_write_the_same_job(void)
 {
     static const char *const aa[] = {"1", "4"}, *const threads[] = {"2", "3", "8"};
@@ -763,29 +782,17 @@ static void threads_write_the_same_job(void)
         }
     /* an open mesh (a box without one side), which keeps one masker: its gaps' chords need whole sections */
     {
-        char open_box[300];
         adaslice_mesh box = gen_box(0, 0, 0, 6, 5, 4);
-        cli_result r;
-        snprintf(open_box, sizeof open_box, "%s/open_box.obj", cli_dir);
         box.triangle_count -= 2; /* gen_box's last two facets: its side at x = 6 */
-        cli_write_obj(open_box, &box);
+        same_job_on_threads(&box, "open_box.obj", "open edges", "3");
         gen_free(&box);
-        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
-        CHECKF(r.status == 0 && strstr(r.err, "open edges"), "%s", r.err);
-        cli_free(&r);
-        r = cli_run("slice", open_box, "--pixels", "301x253", "--pitch", "0.05", "--threads", "3", "-o", many, NULL);
-        CHECKF(r.status == 0, "%s", r.err);
-        cli_free(&r);
-        CHECKF(same_directories(one, many, what), "an open box: %s", what);
     }
     /* a box whose top is cracked off by 10^-4 mm, which the repair welds
-       (moving vertices): the same job on two threads */
+       (moving vertices) */
     {
         static const int quads[6][4] = {
             {0, 2, 3, 1}, {8, 9, 11, 10}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-        char cracked[300];
         adaslice_mesh box = gen_alloc(12, 12);
-        cli_result r;
         int i;
         for (i = 0; i < 12; i++) { /* 8-11: the top's corners 4-7 again, moved */
             int c = i < 8 ? i : i - 4;
@@ -795,16 +802,8 @@ static void threads_write_the_same_job(void)
             gen_triangle(&box, (uint32_t)quads[i][0], (uint32_t)quads[i][1], (uint32_t)quads[i][2]);
             gen_triangle(&box, (uint32_t)quads[i][0], (uint32_t)quads[i][2], (uint32_t)quads[i][3]);
         }
-        snprintf(cracked, sizeof cracked, "%s/cracked_box.obj", cli_dir);
-        cli_write_obj(cracked, &box);
+        same_job_on_threads(&box, "cracked_box.obj", "vertices of cracks welded", "2");
         gen_free(&box);
-        r = cli_run("slice", cracked, "--pixels", "301x253", "--pitch", "0.05", "--threads", "1", "-o", one, NULL);
-        CHECKF(r.status == 0 && strstr(r.err, "vertices of cracks welded"), "%s", r.err);
-        cli_free(&r);
-        r = cli_run("slice", cracked, "--pixels", "301x253", "--pitch", "0.05", "--threads", "2", "-o", many, NULL);
-        CHECKF(r.status == 0, "%s", r.err);
-        cli_free(&r);
-        CHECKF(same_directories(one, many, what), "a cracked box: %s", what);
     }
     /* over the hand's --aa 4 job in `many`: the sphere's 1-bit layers, fewer and smaller */
     {
