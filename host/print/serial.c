@@ -379,6 +379,14 @@ static int fresh_status(const serial_link *l, unsigned long seen, uint8_t first)
     return l->status_count != seen && (uint8_t)(l->status_ack - (uint8_t)(first + 1)) < 128;
 }
 
+/* How long a STATUS goes unanswered before another is asked: a few round
+   trips and the work the frames ahead of it ask, 10 ms at least. */
+static double serial_reask_ms(const serial_link *l)
+{
+    double ms = 4 * l->srtt + serial_work(l);
+    return ms > 10 ? ms : 10;
+}
+
 int serial_status(serial_link *l)
 {
     unsigned long seen = l->status_count;
@@ -387,13 +395,29 @@ int serial_status(serial_link *l)
     for (;;) {
         double asked;
         unsigned long resends;
+        int reasked = 0;
         if ((rc = serial_send(l, LINK_MSG_STATUS, NULL, 0))) return rc;
         asked = now_ms(); /* after any wait for the window: that is not the line's round trip */
         resends = l->retransmits;
-        while (!fresh_status(l, seen, first) && now_ms() - asked < l->rto_ms * 2)
+        while (!fresh_status(l, seen, first) && now_ms() - asked < l->rto_ms * 2) {
+            /* Asked once more after a few round trips. An MCU just restarted
+               has no numbering of ours: it acknowledges every frame with its
+               own count, 0, and when our STATUS was number 255 that reads as
+               taken, so nothing is resent and the reply never comes; the
+               next number, 0, is the first the new boot takes, and its reply
+               carries the new boot id. Without it the restart was heard at
+               twice the retransmission timeout (a screen put out 127 ms
+               after an MCU reset, where it takes 5-7 ms). Requests are
+               idempotent. */
+            if (!reasked && l->count < l->window && now_ms() - asked > serial_reask_ms(l)) {
+                reasked = 1;
+                if ((rc = serial_send(l, LINK_MSG_STATUS, NULL, 0))) return rc;
+            }
             if ((rc = serial_pump(l, 2))) return rc;
+        }
         if (fresh_status(l, seen, first)) {
-            if (l->retransmits == resends) serial_rtt(l, now_ms() - asked); /* Karn: no sample across a resend */
+            /* Karn: no sample across a resend, nor across a second request */
+            if (l->retransmits == resends && !reasked) serial_rtt(l, now_ms() - asked);
             return RC_OK;
         }
     }
