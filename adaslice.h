@@ -2568,6 +2568,19 @@ static void adaslice__box_grow(const float *p, float l[3], float h[3])
     }
 }
 
+/* Which of the vertices at[0..5] the n corners c use, as bits 0..5. */
+static unsigned adaslice__corners_at(const uint32_t *c, size_t n, const uint32_t at[6])
+{
+    const uint32_t a0 = at[0], a1 = at[1], a2 = at[2], a3 = at[3], a4 = at[4], a5 = at[5];
+    unsigned s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0;
+    size_t j;
+    for (j = 0; j < n; j++) {
+        s0 |= c[j] == a0; s1 |= c[j] == a1; s2 |= c[j] == a2;
+        s3 |= c[j] == a3; s4 |= c[j] == a4; s5 |= c[j] == a5;
+    }
+    return s0 | s1 << 1 | s2 << 2 | s3 << 3 | s4 << 4 | s5 << 5;
+}
+
 ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], double hi[3])
 {
     /* in floats, as the slicer takes the bounds several times a job. The
@@ -2589,24 +2602,9 @@ ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], 
                 if (q < l[k]) { l[k] = q; at[k] = (uint32_t)v; }
                 if (q > h[k]) { h[k] = q; at[3 + k] = (uint32_t)v; }
             }
-        for (i = 0; i < corners && seen != 63; i += 4096) {
-            /* a whole block's count fixed, so that compilers compare in vectors */
-            const uint32_t *c = mesh->triangles + i;
-            const uint32_t a0 = at[0], a1 = at[1], a2 = at[2], a3 = at[3], a4 = at[4], a5 = at[5];
-            size_t j, n = corners - i < 4096 ? corners - i : 4096;
-            unsigned s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0;
-            if (n == 4096)
-                for (j = 0; j < 4096; j++) {
-                    s0 |= c[j] == a0; s1 |= c[j] == a1; s2 |= c[j] == a2;
-                    s3 |= c[j] == a3; s4 |= c[j] == a4; s5 |= c[j] == a5;
-                }
-            else
-                for (j = 0; j < n; j++) {
-                    s0 |= c[j] == a0; s1 |= c[j] == a1; s2 |= c[j] == a2;
-                    s3 |= c[j] == a3; s4 |= c[j] == a4; s5 |= c[j] == a5;
-                }
-            seen |= s0 | s1 << 1 | s2 << 2 | s3 << 3 | s4 << 4 | s5 << 5;
-        }
+        /* a whole block's count fixed, so that compilers compare in vectors */
+        for (i = 0; i + 4096 <= corners && seen != 63; i += 4096) seen |= adaslice__corners_at(mesh->triangles + i, 4096, at);
+        if (seen != 63) seen |= adaslice__corners_at(mesh->triangles + i, corners - i, at);
     }
     if (corners && seen != 63) {
         for (k = 0; k < 3; k++) l[k] = h[k] = mesh->vertices[3 * (size_t)mesh->triangles[0] + k];
