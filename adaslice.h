@@ -397,7 +397,13 @@
      ADASLICE_NO_CONTOURS     the slice contours
      ADASLICE_NO_HYBRID       the hybrid planar / contoured face classification
    LIMITS  N < 2^31 bins; tmax/b <= 65535 bins per layer; 2^32 - 1 vertices;
-   grids of at most 2^21 pixels a side.
+   grids of at most 2^21 pixels a side. adaslice_mesh_load_file finds a
+   file's size with ftell: 2 GiB at most where a long has 32 bits.
+   FLOATING POINT  What this file promises bit for bit (a direction's profile
+   equal to the turned mesh's, a plan's heights its planes times the bin)
+   needs each double rounded to 64 bits as it is made (FLT_EVAL_METHOD 0):
+   64-bit targets and 32-bit ARM do; on 32-bit x86 build with -msse2
+   -mfpmath=sse, as x87 arithmetic keeps 80 bits between steps.
 
    HISTORY
      0.2.0  2026-12-05  adaslice_dp_bins and adaslice_dp_reach, so that the

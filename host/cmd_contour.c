@@ -69,7 +69,7 @@ static void contour_usage(FILE *f)
           "(G90), absolute or relative E, no arcs.\n"
           "\n"
           "  --project FILE      the 3MF PrusaSlicer sliced\n"
-          "  -o FILE             the G-code written\n"
+          "  -o, --out FILE      the G-code written\n"
           "  --resolution MM     the longest piece of a contoured path            [0.2]\n"
           "  --max-rise MM       the most a path rises above its layer's top\n"
           "                                                 [half the layer's height]\n"

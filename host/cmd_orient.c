@@ -213,11 +213,9 @@ static const char *unscored_options(int argc, char **argv, const plan_args *a)
     static char list[160];
     const char *given[10];
     size_t n = 0, k, used = 0;
-    int i;
     if (a->method == ADASLICE_METHOD_CURVATURE) given[n++] = "--method curvature";
     for (k = 0; k < sizeof names / sizeof *names; k++)
-        for (i = 1; i < argc; i++)
-            if (!strcmp(argv[i], names[k])) { given[n++] = names[k]; break; }
+        if (option_given(argc, argv, names[k])) given[n++] = names[k];
     list[0] = 0;
     for (k = 0; k < n; k++)
         used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", k == 0 ? "" : k + 1 < n ? ", " : " and ", given[k]);
@@ -250,6 +248,8 @@ int cmd_orient(int argc, char **argv)
     if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights) || a.sampler)
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
                                   "exact profiles: drop %s", unscored_options(argc, argv, &a));
+    if (option_given(argc, argv, "--memory"))
+        return complain(RC_USAGE, "orient: --memory bounds the profile of plan, slice and print, not the search: drop it");
     if ((rc = output_check("--map", o.map))) return rc;
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();

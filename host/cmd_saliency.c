@@ -29,11 +29,11 @@ static void saliency_usage(FILE *f)
           "saliency after Lee, Varshney and Jacobs 2005, in [0,1], 1 the most salient):\n"
           "one per line for each triangle, as --weights reads them.\n"
           "\n"
-          "  -o FILE             the weights\n"
+          "  -o, --out FILE      the weights\n"
           "  --ply FILE          the mesh coloured by weight, blue 0 .. red 1 (binary PLY;\n"
           "                      each triangle has its own three vertices, all its colour)\n"
           "  --png FILE          a 960 x 720 picture of the part coloured the same way, seen\n"
-          "                      from 35 degrees above the plate\n"
+          "                      from 30 degrees above the plate, at the front right\n"
           "  --scale S           multiply the model's coordinates by S (metres: 1000)\n"
           "  --no-saliency       weights from --weights and --weight alone\n"
           "\n", f);

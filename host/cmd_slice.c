@@ -41,7 +41,7 @@ static void slice_usage(FILE *f)
           "masks.rle (for adaslice print) and, last, manifest.json. A pixel is lit when the\n"
           "winding number of its vertical ray below the slicing height is positive.\n"
           "\n"
-          "  -o JOB              the job file or directory (required)\n"
+          "  -o, --output JOB    the job file or directory (required)\n"
           "  --format NAME       the format, whatever the extension\n", f);
     slice_options_usage(f);
     layer_z_table(f);

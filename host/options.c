@@ -18,6 +18,14 @@ double machine_memory_mb(void)
     return 4096;
 }
 
+int option_given(int argc, char **argv, const char *name)
+{
+    int i;
+    for (i = 1; i < argc; i++)
+        if (!strcmp(argv[i], name)) return 1;
+    return 0;
+}
+
 /* The value after option argv[*i]; NULL, said so, if there is none. */
 static const char *value_of(int argc, char **argv, int *i)
 {

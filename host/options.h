@@ -27,6 +27,10 @@ int name_option(int argc, char **argv, int *i, const char *const *names, int cou
 int numbers_option(int argc, char **argv, int *i, char sep, int n, const char *form, double *out);
 /* The same test without an option around it: 1 if text is n numbers. */
 int parse_numbers(const char *text, char sep, int n, double *out);
+/* 1 if `name` is among argv[1..]: for an option whose parsed value cannot
+   tell whether it was given (its default filled in). A value cannot look
+   like it: values never start with "--". */
+int option_given(int argc, char **argv, const char *name);
 /* Physical memory, MB (10^6 bytes); 4096 where the system does not say:
    half of it is what --memory allows unless told. */
 double machine_memory_mb(void);

@@ -158,6 +158,8 @@ int parse_plan(int argc, char **argv, plan_args *a)
     a->method = method < 0 ? ADASLICE_METHOD_OPTIMAL : (adaslice_method)method;
     a->sampler = sampler;
     if (a->resolution && !a->sampler) return complain(RC_USAGE, "--res applies to --sampler ldi");
+    if (option_given(argc, argv, "--mapping") && a->method != ADASLICE_METHOD_CURVATURE && !a->compare)
+        return complain(RC_USAGE, "--mapping applies to --method curvature (and --compare)");
     if (strcmp(cmd, "plan") && a->profile)
         return complain(RC_USAGE, "%s takes a MODEL, not --profile (adaslice plan --profile plans a profile)", cmd);
     if (!a->model && !a->profile)

@@ -143,6 +143,10 @@ static void bad_arguments_exit_2(void)
         {{"slice", "m.stl", "-o", ".ctb", "--pixels", "100x100", "--pitch", "0.05"}, {".ctb", "name"}},
         {{"slice", "m.stl", "-o", "job_v1.2", "--pixels", "100x100", "--pitch", "0.05"}, {".2", "--format"}},
         {{"plan", "m.stl", "--3mf", "x.stl"}, {"--3mf", ".3mf"}},
+        /* options that would do nothing are refused, not ignored */
+        {{"plan", "m.stl", "--mapping", "exp"}, {"--mapping", "curvature"}},
+        {{"orient", "m.stl", "--memory", "100"}, {"--memory", "search"}},
+        {{"print", "m.stl", "--port", "/dev/null", "--threads", "2"}, {"--threads"}},
     };
     size_t i;
     int k;

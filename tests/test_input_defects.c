@@ -405,12 +405,12 @@ static void binary_file_content_is_escaped(void)
 /* A value each option takes in the tests below (and what it needs besides),
    by "--option PLACEHOLDER" as help writes it, else by the option alone. */
 static const struct { const char *option, *value; } OPTION_VALUES[] = {
-    {"-o", "@out"}, {"--3mf", "@x.3mf"}, {"--aa", "2"}, {"--alpha", "0.5"}, {"--baud", "115200"}, {"--bin", "0.002"},
+    {"-o", "@out"}, {"--output", "@out"}, {"--3mf", "@x.3mf"}, {"--aa", "2"}, {"--alpha", "0.5"}, {"--baud", "115200"}, {"--bin", "0.002"},
     {"--bottom-exposure", "25"}, {"--bottom-layers", "3"}, {"--budget", "100"}, {"--dirs", "10"},
     {"--exposure-left", "500 --resume-from 2"},
     {"--display", "68x120 --pixels 1440x2560"}, {"--eps", "0.065"}, {"--exposure S@T", "2.5@0.05"},
     {"--exposure S1@T1,S2@T2", "2@0.05,6@0.15"}, {"--format", "dir"}, {"--give-up", "30"}, {"--map", "@map.svg"},
-    {"--mapping", "exp"}, {"--memory", "4000"}, {"--method", "greedy"}, {"--metric", "area"}, {"--mirror", "x"},
+    {"--mapping", "exp --method curvature"}, {"--memory", "4000"}, {"--method", "greedy"}, {"--metric", "area"}, {"--mirror", "x"},
     {"--nozzle", "0.4"}, {"--orient", "0,0,1"}, {"--out", "@plan.csv"}, {"--peel", "5"}, {"--peel-speed", "2"},
     {"--penetration", "0.098"}, {"--pitch", "0.05 --pixels 1440x2560"}, {"--pixels", "1440x2560 --pitch 0.05"},
     {"--place", "0,0"}, {"--plot", "@plot.svg"}, {"--ply", "@c.ply"}, {"--port", "/nonexistent/port"},
@@ -489,7 +489,7 @@ static int check_listed(const char *command, const char *option, const char *pla
 }
 
 /* Each option a command's help lists (a line's first column: "--bin MM",
-   "--json", "--mirror, --rotate, ...") is accepted by that command, and
+   "--json", "--mirror, --rotate, ...", "-o, --out FILE") is accepted by that command, and
    adaslice saliency does not offer --saliency, which it always does. */
 static void every_option_in_help_is_accepted(void)
 {
@@ -506,11 +506,13 @@ static void every_option_in_help_is_accepted(void)
             if (strncmp(line, "  -", 3)) continue;
             gap = strstr(line + 2, "  ");
             snprintf(column, sizeof column, "%.*s", gap ? (int)(gap - line - 2) : (int)strlen(line + 2), line + 2);
-            if (strstr(column, ", -")) { /* several options, each as another command has it */
+            if (strstr(column, ", -")) { /* several options ("-o, --out FILE": names of one) */
                 for (item = column; item; item = next) {
                     next = strstr(item, ", ");
                     if (next) *next = 0, next += 2;
-                    listed += check_listed(commands[c], item, "", 1);
+                    placeholder[0] = 0;
+                    sscanf(item, "%63s %63s", option, placeholder);
+                    listed += check_listed(commands[c], option, placeholder, 1);
                 }
                 continue;
             }

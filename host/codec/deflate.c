@@ -382,7 +382,7 @@ int deflate_bytes(const unsigned char *data, size_t n, size_t row, unsigned char
 
     *out = NULL;
     *out_size = 0;
-    if ((uint64_t)n > 0xFFFFFFFFu || (!data && n)) return -1;
+    if (n > 0xFFFFFFFFu || (!data && n)) return -1;
     memset(&d, 0, sizeof d);
     d.data = data;
     d.n = n;

@@ -347,7 +347,7 @@ static int open_job(void **writer, const char *path, const job_desc *d)
     if (d->width > 0xFFFF || d->height > 0xFFFF)
         return complain(RC_FAIL, "%s: a goo job holds at most 65535 pixels across and down (%dx%d)", path, d->width,
                         d->height);
-    if ((uint64_t)d->layer_count > 0xFFFFFFFFu)
+    if (d->layer_count > 0xFFFFFFFFu)
         return complain(RC_FAIL, "%s: %zu layers are more than a goo file can count", path, d->layer_count);
     w = (goo_writer *)calloc(1, sizeof *w);
     header = (unsigned char *)calloc(1, GOO_HEADER);

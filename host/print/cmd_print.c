@@ -275,7 +275,7 @@ static void print_usage(FILE *f)
           "                        to the top of Z's travel at 5 mm/s (if Z is homed)\n"
           "\n"
           "masks (the display's size and pitch come from the printer)\n"
-          "  --mirror, --rotate, --aa, --slice-at, --place   as adaslice slice\n"
+          "  --mirror, --rotate, --aa, --slice-at, --place, --memory   as adaslice slice\n"
           "\n", f);
     screen_usage(f);
     fputc('\n', f);
@@ -541,6 +541,8 @@ static int parse_target(int argc, char **argv, print_args *pa, slice_args *s, pl
     if (!rc && pa->abort) { free(rest); free(rest2); return RC_OK; }
     if (!rc) rc = parse_slice(rest_argc, rest, s, &rest2_argc, rest2, 0);
     if (!rc && s->geometry_given) rc = complain(RC_USAGE, "print: the printer reports its display; drop --printer/--pixels/--pitch/--display");
+    if (!rc && option_given(rest_argc, rest, "--threads"))
+        rc = complain(RC_USAGE, "print: each mask is made on one thread as the printer needs it; drop --threads");
     if (!rc && rest2_argc >= 2 && rest2[1][0] != '-' && is_dir(rest2[1])) {
         *jobdir = rest2[1];
         if (rest2_argc > 2) rc = complain(RC_USAGE, "print JOBDIR: %s: plan and mask options belong to adaslice slice", rest2[2]);
