@@ -151,6 +151,7 @@ NO_SWITCHES = LOADERS SAMPLED WEIGHTS ORIENT CONTOURS HYBRID STDIO
 # header's FLOATING POINT note asks on 32-bit x86.
 M32 = -m32 -msse2 -mfpmath=sse -D_FILE_OFFSET_BITS=64
 $(B)/cc/adaslice_m32: $(call objs,m32,$(HOST_SRC) $(LIB_SRC))
+	@mkdir -p $(@D)
 	$(CC) $(M32) -pthread $^ -o $@ -lm
 compile-checks: $(call objs,o3,$(HOST_SRC) $(LIB_SRC)) $(B)/cc/adaslice_m32
 	@mkdir -p $(B)/cc
