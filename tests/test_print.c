@@ -386,16 +386,6 @@ static void print_survives_a_lost_link(void)
 static int second_host_status(const char *port, uint8_t type, link_status *out);
 static void check_resumed_in_place(const char *log_path, const char *report_path, size_t split_min, size_t split_max);
 
-/* UV-on periods in the simulator's log so far. */
-static size_t lit_so_far(const char *log_path)
-{
-    char *log = read_whole_text(log_path), *at;
-    size_t lit = 0;
-    for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
-    free(log);
-    return lit;
-}
-
 /* The host goes deaf mid-print for 6 s (the printer's replies are lost, the
    host's frames arrive): it hears nothing, resends its window, and gives up
    (exit 5, ~3.4 s). The printer takes the repeats for no word from the host,

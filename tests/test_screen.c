@@ -690,13 +690,25 @@ static void wrong_screen_is_refused(void)
 }
 
 /* Waits (FIFO, see observer_realtime) for the screen to go from dark to
-   lit, so that a stop sent next comes at the start of a layer's light,
-   the whole settle and exposure (150 ms and more) before its own end. */
-static int at_lit_start(const char *fb)
+   lit and then for the printer's light (one more UV-on in the simulator's
+   log), so that a stop sent next comes at the start of a layer's exposure,
+   150 ms before its end. The light comes on only once the printer has the
+   host's SCREEN for the layer drawn; the screen file alone turns lit while
+   the host is still drawing, before it says SCREEN, and a stop there found
+   the screen dark in the printer's record (a second host's abort lifted Z
+   where the test expected it held: CI, 2026-12-06). */
+static int at_lit_start(const char *log, const char *fb)
 {
     double t0 = seconds_now();
-    int ok = ms_until(fb, 0, t0, 10) >= 0 && ms_until(fb, 1, seconds_now(), 10) >= 0;
-    CHECKF(ok, "the screen was not lit within 10 s");
+    size_t before;
+    int ok = ms_until(fb, 0, t0, 10) >= 0;
+    before = lit_so_far(log); /* the screen dark: the last layer's light is out */
+    ok = ok && ms_until(fb, 1, seconds_now(), 10) >= 0;
+    while (ok && lit_so_far(log) == before) {
+        if (seconds_now() - t0 > 20) ok = 0;
+        sleep_ms(1);
+    }
+    CHECKF(ok, "the screen was not lit, or the printer's light not on, within 20 s");
     return ok;
 }
 
@@ -722,7 +734,7 @@ static int held_print_at_lit(child *sim, const char *log, const char *fb, const 
         *pid = run_held(args, out, err);
     }
     CHECK(wait_for_exposures(log, exposures));
-    if (observer_realtime(1) && at_lit_start(fb)) return 1;
+    if (observer_realtime(1) && at_lit_start(log, fb)) return 1;
     observer_realtime(0);
     kill(*pid, SIGKILL);
     free(drain_held(*pid, *err, &status));
@@ -794,15 +806,9 @@ static void pause_and_killed_host_leave_it_dark(void)
               (char *)NULL);
         _exit(127);
     }
-    {
-        size_t m;
-        char *log = (char *)read_whole_file(cli_path("simp.log"), &m), *p;
-        uv_before = 0;
-        if (log) { log[m] = 0; for (p = log; (p = strstr(p, " uv 1")) != NULL; p++) uv_before++; }
-        free(log);
-    }
+    uv_before = (unsigned)lit_so_far(cli_path("simp.log"));
     CHECK(wait_for_exposures(cli_path("simp.log"), uv_before + 2));
-    if (!observer_realtime(1) || !at_lit_start(fb)) {
+    if (!observer_realtime(1) || !at_lit_start(cli_path("simp.log"), fb)) {
         observer_realtime(0);
         kill(pid, SIGKILL);
         waitpid(pid, NULL, 0);

@@ -25,16 +25,22 @@ static inline double seconds_now(void)
     return (double)t.tv_sec + t.tv_nsec / 1e9;
 }
 
+/* UV-on periods (exposures begun) in a simulator's log so far. */
+static inline size_t lit_so_far(const char *log_path)
+{
+    char *log = read_whole_text(log_path), *at;
+    size_t lit = 0;
+    for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
+    free(log);
+    return lit;
+}
+
 /* Waits (up to 12 s) until a simulator's log shows n exposures begun. */
 static inline int wait_for_exposures(const char *log_path, unsigned n)
 {
     int i;
     for (i = 0; i < 600; i++) {
-        char *log = read_whole_text(log_path), *at;
-        unsigned lit = 0;
-        for (at = log; at && (at = strstr(at, " uv 1")) != NULL; at++) lit++;
-        free(log);
-        if (lit >= n) return 1;
+        if (lit_so_far(log_path) >= n) return 1;
         sleep_ms(20);
     }
     return 0;
