@@ -689,27 +689,20 @@ static void wrong_screen_is_refused(void)
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 
-/* Waits (FIFO, see observer_realtime) for the screen to go from dark to
-   lit and then for the printer's light (one more UV-on in the simulator's
-   log), so that a stop sent next comes at the start of a layer's exposure,
-   150 ms before its end. The light comes on only once the printer has the
-   host's SCREEN for the layer drawn; the screen file alone turns lit while
-   the host is still drawing, before it says SCREEN, and a stop there found
-   the screen dark in the printer's record (a second host's abort lifted Z
-   where the test expected it held: CI, 2026-12-06). */
+/* Waits (FIFO, see observer_realtime) for the printer's next light (one
+   more UV-on in the simulator's log, wait_for_exposures: within 20 ms of
+   it), so that a stop sent next comes early in a layer's exposure, 150 ms
+   long, with the layer on the screen. The light comes on only once the
+   printer has the host's SCREEN for the layer drawn; the screen file alone
+   turns lit while the host is still drawing, before it says SCREEN, and a
+   stop there found the screen dark in the printer's record (a second host's
+   abort lifted Z where the test expected it held: CI, 2026-12-06). */
 static int at_lit_start(const char *log, const char *fb)
 {
-    double t0 = seconds_now();
-    size_t before;
-    int ok = ms_until(fb, 0, t0, 10) >= 0;
-    before = lit_so_far(log); /* the screen dark: the last layer's light is out */
-    ok = ok && ms_until(fb, 1, seconds_now(), 10) >= 0;
-    while (ok && lit_so_far(log) == before) {
-        if (seconds_now() - t0 > 20) ok = 0;
-        sleep_ms(1);
-    }
-    CHECKF(ok, "the screen was not lit, or the printer's light not on, within 20 s");
-    return ok;
+    int ok = wait_for_exposures(log, (unsigned)lit_so_far(log) + 1);
+    CHECKF(ok, "the printer's light did not come on within 12 s");
+    CHECKF(!ok || !all_zero(fb), "the printer's light is on over a dark screen");
+    return ok && !all_zero(fb);
 }
 
 /* The long job (slice_long_job, in jobl) printed on the simulator's port
