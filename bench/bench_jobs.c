@@ -7,7 +7,10 @@
       core in turn, as the cores of a virtual machine need not run alike (a
       busy neighbour on the host's other half of one core slows it by a
       third): what all the cores could do at best is each its share of the
-      work at its own speed. SL1 holds one layer height, so it is timed,
+      work at its own speed; and one copy of that job a core, all at once,
+      for what the cores give together (a ceiling for one job's threads,
+      lower than the sum of the cores alone where they share a physical
+      core, its caches or memory). SL1 holds one layer height, so it is timed,
       with the directory beside it, on a uniform plan.
    2. Print time saved: every shared model's estimated print time (each
       layer's exposure by the working curve, settle, peel and return at the
@@ -111,6 +114,35 @@ static double run_on_core(char **argv, size_t *layers, int core)
 #endif
 }
 
+/* n copies of argv at once, copy i writing to its own out_i (argv's last
+   is the -o name, which it changes and restores); their wall time until the
+   last ends, or -1. What the cores give together when each runs a job of
+   one thread: a ceiling for one job's threads, set by the machine (cores
+   that share a physical core, its caches or its memory slow each other),
+   not by the job. */
+static double run_together(char **argv, int argc, int n)
+{
+    char *own = argv[argc - 1], names[CORES][160];
+    pid_t pid[CORES];
+    double t0, t;
+    int i, st, ok = 1;
+    t0 = now();
+    for (i = 0; i < n; i++) {
+        posix_spawn_file_actions_t fa;
+        snprintf(names[i], sizeof names[i], "%s_%d", own, i);
+        argv[argc - 1] = names[i];
+        posix_spawn_file_actions_init(&fa);
+        posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+        if (posix_spawn(&pid[i], argv[0], &fa, NULL, argv, environ) != 0) pid[i] = -1, ok = 0;
+        posix_spawn_file_actions_destroy(&fa);
+    }
+    argv[argc - 1] = own;
+    for (i = 0; i < n; i++)
+        if (pid[i] < 0 || waitpid(pid[i], &st, 0) != pid[i] || !WIFEXITED(st) || WEXITSTATUS(st) != 0) ok = 0;
+    t = now() - t0;
+    return ok ? t : -1;
+}
+
 /* uniform: 1 on --uniform 0.1 (against the uniform directory), 2 on one thread */
 typedef struct job { const char *name, *out; int uniform; } job;
 
@@ -122,7 +154,8 @@ static int time_formats(const char *tool, const char *dir)
         {"directory (PNG), uniform 0.1", "uniform", 1}, {"sl1, uniform 0.1", "job.sl1", 1}};
     enum { JOBS = sizeof jobs / sizeof jobs[0] };
     char model[4096], out[JOBS][128], one_out[128];
-    double t[JOBS][FORMAT_RUNS], rate[JOBS], ratio[FORMAT_RUNS], on_core[CORES][FORMAT_RUNS], best[FORMAT_RUNS], bound[FORMAT_RUNS], ideal[FORMAT_RUNS];
+    double t[JOBS][FORMAT_RUNS], rate[JOBS], ratio[FORMAT_RUNS], on_core[CORES][FORMAT_RUNS], best[FORMAT_RUNS], bound[FORMAT_RUNS], ideal[FORMAT_RUNS],
+        together[FORMAT_RUNS], share[FORMAT_RUNS];
     size_t layers[JOBS] = {0}, one_layers = 0;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int r, k, c;
@@ -152,9 +185,14 @@ static int time_formats(const char *tool, const char *dir)
                 printf("bench_jobs: %s slice %s -o %s failed\n", tool, model, out[k]);
                 return 1;
             }
-            /* after the directory on one thread, the same held to each core */
+            /* after the directory on one thread, the same held to each core,
+               then one copy a core all at once */
             for (c = 0; jobs[k].uniform == 2 && c < cores; c++)
                 if ((on_core[c][r] = run_on_core(argv, &one_layers, c)) < 0) cores = 0; /* not measured */
+            if (jobs[k].uniform == 2 && cores > 1 && (together[r] = run_together(argv, a, (int)cores)) < 0) {
+                printf("bench_jobs: %ld copies of %s slice %s --threads 1 at once failed\n", cores, tool, model);
+                return 1;
+            }
         }
     for (r = 0; r < FORMAT_RUNS; r++) { /* before median sorts the times */
         double speed = 0;
@@ -168,6 +206,10 @@ static int time_formats(const char *tool, const char *dir)
         bound[r] = best[r] / ideal[r];     /* what that is against the fastest core alone */
         best[r] /= t[0][r];                /* all the cores against the fastest alone */
         ideal[r] = t[0][r] / ideal[r];     /* all the cores against that ideal */
+        if (cores > 1) {
+            together[r] = cores * t[4][r] / together[r]; /* one-thread jobs' work done at once, against one alone */
+            share[r] = ratio[r] / together[r];            /* how much of that ceiling the job's threads reach */
+        }
     }
     printf("slice turbineblade.ply x4.3, 3840 x 2400 px of 50 um: the whole command, median of %d\n", FORMAT_RUNS);
     printf("  %-30s %7s %9s %10s %s\n", "format", "layers", "seconds", "layers/s", "against the directory");
@@ -198,6 +240,14 @@ static int time_formats(const char *tool, const char *dir)
            "    its share of the whole command at its own speed; all cores took %.2fx (%.2f-%.2fx) that best time\n",
            sysconf(_SC_NPROCESSORS_ONLN), best[FORMAT_RUNS / 2], best[0], best[FORMAT_RUNS - 1], bound[FORMAT_RUNS / 2], bound[0], bound[FORMAT_RUNS - 1],
            ideal[FORMAT_RUNS / 2], ideal[0], ideal[FORMAT_RUNS - 1]);
+    if (cores > 1) {
+        median(together, FORMAT_RUNS);
+        median(share, FORMAT_RUNS);
+        printf("  %ld copies of --threads 1 at once, the directory: %.2fx the work of one alone in the time (%.2f-%.2fx),\n"
+               "    what these cores give together; all cores on one job reached %.2f of it (%.2f-%.2f)\n",
+               cores, together[FORMAT_RUNS / 2], together[0], together[FORMAT_RUNS - 1], share[FORMAT_RUNS / 2], share[0],
+               share[FORMAT_RUNS - 1]);
+    }
     return 0;
 }
 
