@@ -112,18 +112,16 @@ static int take(int argc, char **argv, int *i, cure_args *c, int *rc)
 
 /* The firmware counts milliseconds (a mask takes 1 ms to an hour) and
    nanometres in 32 bits. */
-#define MIN_SECONDS 0.001
-#define MAX_SECONDS 3600.0
-#define MAX_PEEL_MM 1000.0
 
 int cure_finish(cure_args *c, double tmin, double tmax)
 {
     adaslice_error e;
     int k;
-    if (c->bottom_exposure_s > MAX_SECONDS || c->motion.wait_before_cure_s > MAX_SECONDS)
-        return complain(RC_USAGE, "--bottom-exposure and --settle are limited to %g s", MAX_SECONDS);
-    if (c->motion.lift_mm > MAX_PEEL_MM || c->motion.lift_speed > MAX_PEEL_MM || c->motion.retract_speed > MAX_PEEL_MM)
-        return complain(RC_USAGE, "--peel is limited to %g mm and speeds to %g mm/s", MAX_PEEL_MM, MAX_PEEL_MM);
+    if (c->bottom_exposure_s > CURE_MAX_SECONDS || c->motion.wait_before_cure_s > CURE_MAX_SECONDS)
+        return complain(RC_USAGE, "--bottom-exposure and --settle are limited to %g s", CURE_MAX_SECONDS);
+    if (c->motion.lift_mm > CURE_MAX_PEEL_MM || c->motion.lift_speed > CURE_MAX_PEEL_MM ||
+        c->motion.retract_speed > CURE_MAX_PEEL_MM)
+        return complain(RC_USAGE, "--peel is limited to %g mm and speeds to %g mm/s", CURE_MAX_PEEL_MM, CURE_MAX_PEEL_MM);
     default_curve(c, tmin);
     for (k = 0; k < (c->points ? c->points : 1); k++) {
         if (!(c->seconds[k] > 0))
@@ -142,17 +140,18 @@ int cure_finish(cure_args *c, double tmin, double tmax)
     /* E(t) grows with t: its ends are the thinnest and thickest exposures */
     for (k = 0; k < 2; k++) {
         double t = k ? tmax : tmin, e_t = adaslice_cure_seconds(&c->cure, t);
-        if (e_t >= MIN_SECONDS && e_t <= MAX_SECONDS) continue;
+        if (e_t >= CURE_MIN_SECONDS && e_t <= CURE_MAX_SECONDS) continue;
         /* Dp 0: no curve, one exposure for every layer */
         if (!(c->cure.penetration > 0))
             return complain(RC_USAGE, "--exposure %g: every layer gets %g s; exposures are %g to %g s", c->cure.seconds,
-                            c->cure.seconds, MIN_SECONDS, MAX_SECONDS);
+                            c->cure.seconds, CURE_MIN_SECONDS, CURE_MAX_SECONDS);
         return complain(RC_USAGE, "the working curve (%g s at %g mm, Dp %g mm%s) gives a %g mm layer %.4g s; exposures are %g to "
                                   "%g s", c->cure.seconds, c->cure.thickness, c->cure.penetration,
-                        c->typical ? ": a typical resin's, --penetration gives yours" : "", t, e_t, MIN_SECONDS, MAX_SECONDS);
+                        c->typical ? ": a typical resin's, --penetration gives yours" : "", t, e_t, CURE_MIN_SECONDS, CURE_MAX_SECONDS);
     }
-    if (c->bottom_layers && c->bottom_exposure_s < MIN_SECONDS)
-        return complain(RC_USAGE, "--bottom-exposure %g: exposures are %g to %g s", c->bottom_exposure_s, MIN_SECONDS, MAX_SECONDS);
+    if (c->bottom_layers && c->bottom_exposure_s < CURE_MIN_SECONDS)
+        return complain(RC_USAGE, "--bottom-exposure %g: exposures are %g to %g s", c->bottom_exposure_s, CURE_MIN_SECONDS,
+                        CURE_MAX_SECONDS);
     return RC_OK;
 }
 

@@ -26,6 +26,11 @@ typedef struct cure_args {
 /* UVtools' maintainer cures 0.05 mm in 1.8 s and 0.10 mm in 3 s of a
    standard resin (UVtools #280): Dp = 0.05 / ln(3 / 1.8). */
 #define CURE_TYPICAL_DP 0.098
+/* What a job may ask of a printer: exposures and the settle, seconds; the
+   peel, mm, and its speeds, mm/s. A job's file is held to them when read. */
+#define CURE_MIN_SECONDS 0.001
+#define CURE_MAX_SECONDS 3600.0
+#define CURE_MAX_PEEL_MM 1000.0
 void cure_defaults(cure_args *c);
 /* The defaults with their working curve (T = tmin), for an estimate where no
    printer is involved (plan --compare): slice's exposures without the limits

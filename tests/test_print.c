@@ -1243,6 +1243,143 @@ static void print_a_sliced_job(void)
     }
 }
 
+/* masks.rle as its header (tests' own reading of jobdir.h's layout): the
+   offset of layer k's (0-based) record, or 0 past the file. */
+static size_t layer_record(const unsigned char *f, size_t n, unsigned k)
+{
+    size_t at = 44;
+    while (k-- && at + 16 <= n) at += 16 + ((size_t)f[at + 12] | (size_t)f[at + 13] << 8 | (size_t)f[at + 14] << 16 |
+                                           (size_t)f[at + 15] << 24);
+    return at + 16 <= n ? at : 0;
+}
+
+static void write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    CHECKF(f && fwrite(data, 1, n, f) == n && fclose(f) == 0, "cannot write %.400s", path);
+}
+
+/* masks.rle damaged (len bytes at `at` replaced), the manifest made to name
+   its new CRC-32 so that the damage itself is what the reader meets; then
+   `adaslice print DIR --port /dev/null` (or, with spec, `adaslice show DIR
+   --layer 1 --screen SPEC`) must exit 1 with one line holding `says`. The
+   job is put back as it was after. */
+static void damaged_masks_said(const char *dir, size_t at, const void *bytes, size_t len, const char *says,
+                               const char *spec)
+{
+    char mp[600], jp[600], crc[9];
+    unsigned char *f, *g = NULL;
+    char *man, *key;
+    size_t n, mn;
+    cli_result r;
+    snprintf(mp, sizeof mp, "%s/masks.rle", dir);
+    snprintf(jp, sizeof jp, "%s/manifest.json", dir);
+    f = read_whole_file(mp, &n);
+    man = (char *)read_whole_file(jp, &mn);
+    key = man ? strstr(man, "\"masks_rle_crc32\": \"") : NULL;
+    CHECK(f && key && at + len <= n);
+    if (f && key && at + len <= n && (g = (unsigned char *)malloc(n)) != NULL) {
+        char old[8];
+        memcpy(old, key + 20, 8);
+        memcpy(g, f, n);
+        memcpy(g + at, bytes, len);
+        snprintf(crc, sizeof crc, "%08x", (unsigned)adaslice_crc32(0, g, n));
+        memcpy(key + 20, crc, 8);
+        write_bytes(mp, g, n);
+        write_bytes(jp, man, mn);
+        r = spec ? cli_run("show", dir, "--layer", "1", "--screen", spec, "--seconds", "0.001", NULL)
+                 : cli_run("print", dir, "--port", "/dev/null", NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, says), "%s, byte %zu damaged: exit %d: %s (want: %s)",
+               spec ? "show" : "print", at, r.status, r.err, says);
+        cli_free(&r);
+        memcpy(key + 20, old, 8);
+        write_bytes(mp, f, n);
+        write_bytes(jp, man, mn);
+    }
+    free(g);
+    free(f);
+    free(man);
+}
+
+/* A damaged job is refused whole before the print begins, naming masks.rle's
+   byte: a layer's code or CRC half way up (the printer would refuse that
+   layer and leave half a part on the plate), a header a printer could not
+   take or slice would not write (a settle of 49 days hung the print), a
+   layer of no thickness, a directory for the file; and show checks a job's
+   size and pitch against the screen before it makes an image of that size
+   (a header of 16777215 x 16777215 px asked for 256 TB). Reaching the
+   refusal, not the port (/dev/null), shows it comes first. */
+static void damaged_job_is_refused_before_the_print(void)
+{
+    char job[300], spec[600], mp[600], want[200];
+    static const unsigned char zero[4] = {0, 0, 0, 0}, ones[4] = {0xff, 0xff, 0xff, 0xff};
+    static const unsigned char huge_8bit[9] = {0xff, 0xff, 0xff, 0, 0xff, 0xff, 0xff, 0, 8};
+    unsigned char *f, crc_flipped, short_code = 0x80;
+    unsigned layers, k;
+    size_t n, mid, last;
+    cli_result r;
+    snprintf(job, sizeof job, "%s/damaged", cli_dir);
+    snprintf(spec, sizeof spec, "file:%s/damaged-fb,240x200,32", cli_dir);
+    snprintf(mp, sizeof mp, "%s/masks.rle", job);
+    r = cli_run("slice", MODEL, "--scale", "15", "--pixels", "240x200", "--pitch", "0.1", "--uniform", "0.5", "-o", job,
+                CURE, "--peel", "2", "--peel-speed", "10", "--return-speed", "10", "--settle", "0.05", NULL);
+    CHECKF(r.status == 0, "slice: %s", r.err);
+    cli_free(&r);
+    f = read_whole_file(mp, &n);
+    CHECK(f != NULL && n > 64);
+    if (!f || n <= 64) { free(f); return; }
+    layers = (unsigned)(f[20] | f[21] << 8);
+    k = layers / 2;
+    mid = layer_record(f, n, k);
+    last = layer_record(f, n, layers - 1);
+    CHECKF(layers > 4 && mid > 44 && last > mid, "%u layers, layer %u at %zu, the last at %zu", layers, k + 1, mid, last);
+    if (layers > 4 && mid > 44 && last > mid) {
+        /* a row of no runs, half way up */
+        snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u's mask code is damaged", mid + 16, k + 1);
+        damaged_masks_said(job, mid + 16, zero, 1, want, NULL);
+        crc_flipped = (unsigned char)(f[mid + 8] ^ 1);
+        snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u's mask decodes to CRC-32", mid + 8, k + 1);
+        damaged_masks_said(job, mid + 8, &crc_flipped, 1, want, NULL);
+        snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u is 0 bins thick", mid, k + 1);
+        damaged_masks_said(job, mid, zero, 4, want, NULL);
+        /* the last layer's last byte made a number that goes on: the code ends inside it */
+        snprintf(want, sizeof want, "layer %u's mask code", layers);
+        damaged_masks_said(job, n - 1, &short_code, 1, want, NULL);
+        damaged_masks_said(job, 8, zero, 4, "masks.rle: byte 8: masks of 0 x 200 px", NULL);
+        damaged_masks_said(job, 16, "\2", 1, "masks.rle: byte 16: masks of 2 bits", NULL);
+        damaged_masks_said(job, 40, ones, 4, "masks.rle: byte 40: a settle of 4294967295 ms", NULL);
+        damaged_masks_said(job, 28, ones, 4, "masks.rle: byte 28: a peel of 4294967295 nm", spec);
+        damaged_masks_said(job, 8, huge_8bit, sizeof huge_8bit, "the job's masks are 16777215 x 16777215 px; the screen",
+                           spec);
+    }
+    free(f);
+    /* the manifest's pitch written without spaces is still the job's */
+    {
+        char jp[600], *man, *at;
+        size_t mn;
+        snprintf(jp, sizeof jp, "%s/manifest.json", job);
+        man = (char *)read_whole_file(jp, &mn);
+        at = man ? strstr(man, "\"pitch_mm\": [0.1, 0.1]") : NULL;
+        CHECK(at != NULL);
+        if (at) {
+            memcpy(at, "\"pitch_mm\":[0.1,0.1]  ", 22);
+            write_bytes(jp, man, mn);
+            r = cli_run("show", job, "--layer", "1", "--screen", spec, "--seconds", "0.001", "--screen-pitch", "50", NULL);
+            CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "pixels are 100 x 100 um") &&
+                       strstr(r.err, "are 50 um"),
+                   "%d %s", r.status, r.err);
+            cli_free(&r);
+        }
+        free(man);
+    }
+    /* a directory where masks.rle should be */
+    CHECK(remove(mp) == 0 && mkdir(mp, 0755) == 0);
+    r = cli_run("print", job, "--port", "/dev/null", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "masks.rle: Is a directory"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    rmdir(mp);
+}
+
 /* --report to a symlink (its target written, the link kept), a FIFO (a
    reader gets the record, the FIFO stays), /dev/null (stays a device) and
    "-" (standard output) (issue 26). */
@@ -1798,6 +1935,7 @@ void test_print(void)
     RUN(aborted_print_resumes);
     RUN(step_late_print_resumes_with_home);
     RUN(print_a_sliced_job);
+    RUN(damaged_job_is_refused_before_the_print);
     RUN(report_goes_through_links_fifos_devices_and_stdout);
     RUN(other_pitch_is_refused_first);
     RUN(bad_ports_are_named);

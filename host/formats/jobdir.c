@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "../bytes.h"
+#include "../cure.h"
 #include "../json.h"
 #include "jobdir.h"
 #include "jobfile.h"
@@ -281,25 +282,34 @@ static int is_own_layer_png(const char *name, size_t layers, int digits)
     return !strcmp(name, own);
 }
 
-/* The whole of a small text file, malloc'd; NULL with errno set. */
-static char *read_text(const char *path)
+/* The whole of a regular file, malloc'd with a NUL after it (its size into
+   *size if given); NULL with errno set: EISDIR or EINVAL where the name is a
+   directory, a FIFO or a device, whose reading fails, waits or never ends. */
+static char *read_whole(const char *path, size_t *size)
 {
-    FILE *f = fopen(path, "rb");
-    char *text = NULL;
-    long size;
-    int err;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (text = (char *)malloc((size_t)size + 1)) != NULL && fread(text, 1, (size_t)size, f) == (size_t)size)
-        text[size] = 0;
-    else {
-        free(text);
-        text = NULL;
+    struct stat st;
+    FILE *f;
+    char *data = NULL;
+    size_t n;
+    int err = 0;
+    if (stat(path, &st) != 0) return NULL;
+    if (!S_ISREG(st.st_mode)) {
+        errno = S_ISDIR(st.st_mode) ? EISDIR : EINVAL;
+        return NULL;
     }
-    err = errno;
+    if (!(f = fopen(path, "rb"))) return NULL;
+    n = (size_t)st.st_size;
+    if ((uint64_t)st.st_size != n || n == (size_t)-1 || !(data = (char *)malloc(n + 1))) err = ENOMEM;
+    else if (fread(data, 1, n, f) != n || fgetc(f) != EOF) err = ferror(f) && errno ? errno : EIO; /* it changed */
     fclose(f);
-    if (!text) errno = err ? err : EIO;
-    return text;
+    if (err) {
+        free(data);
+        errno = err;
+        return NULL;
+    }
+    data[n] = 0;
+    if (size) *size = n;
+    return data;
 }
 
 /* The directory holds something. */
@@ -383,7 +393,7 @@ static int remove_old_job(const char *dir, size_t layers, int digits, int force,
     old_job o;
     char *text;
     snprintf(path, size, "%s/manifest.json", dir);
-    if (!(text = read_text(path))) {
+    if (!(text = read_whole(path, NULL))) {
         if (errno != ENOENT) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
         return jobdir_check(dir, force);
     }
@@ -690,23 +700,13 @@ static int matches_manifest(const char *dir, const char *masks_path, job_masks *
     const char *at;
     unsigned long named = 0;
     uint32_t crc = adaslice_crc32(0, m->file, m->file_size);
-    FILE *f;
-    long size = -1;
     int rc = RC_FAIL;
     if (!path) return RC_FAIL;
-    if (!(f = fopen(path, "rb"))) {
-        complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", path);
+    if (!(text = read_whole(path, NULL))) {
+        if (errno == ENOENT) complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", path);
+        else complain(RC_FAIL, "cannot read %s: %s", path, errno == EINVAL ? "not a regular file" : strerror(errno));
         goto done;
     }
-    if (fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (text = (char *)malloc((size_t)size + 1)) != NULL && fread(text, 1, (size_t)size, f) == (size_t)size)
-        text[size] = 0;
-    else {
-        free(text);
-        text = NULL;
-    }
-    fclose(f);
-    if (!text) { complain(RC_FAIL, "cannot read %s", path); goto done; }
     at = strstr(text, "\"masks_rle_crc32\": \"");
     if (!at || sscanf(at + 20, "%8lx", &named) != 1) {
         complain(RC_FAIL, "%s names no masks.rle (masks_rle_crc32): it is not the manifest of this %s", path, masks_path);
@@ -719,9 +719,9 @@ static int matches_manifest(const char *dir, const char *masks_path, job_masks *
     }
     /* the pitch the part was sliced at: a printer with other pixels prints it scaled */
     at = strstr(text, "\"pitch_mm\"");
-    if (!at || sscanf(at + 10, " : [ %lf , %lf", &m->pitch_mm[0], &m->pitch_mm[1]) != 2 || !(m->pitch_mm[0] > 0) ||
-        !(m->pitch_mm[1] > 0)) {
-        complain(RC_FAIL, "%s names no pixel pitch (printer.pitch_mm): slice it again", path);
+    if (!at || sscanf(at + 10, " : [ %lf , %lf", &m->pitch_mm[0], &m->pitch_mm[1]) != 2 ||
+        !(m->pitch_mm[0] > 0 && m->pitch_mm[0] <= 1000) || !(m->pitch_mm[1] > 0 && m->pitch_mm[1] <= 1000)) {
+        complain(RC_FAIL, "%s names no pixel pitch of 0 to 1000 mm (printer.pitch_mm): slice it again", path);
         goto done;
     }
     rc = RC_OK;
@@ -731,13 +731,48 @@ done:
     return rc;
 }
 
+int jobdir_decode_layer(const char *dir, const job_masks *m, uint32_t k, unsigned char *row,
+                        void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx)
+{
+    static const char *const why[] = {"a number longer than 5 bytes", "runs that do not make up a row",
+                                      "more rows than the mask's"};
+    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8, start = (size_t)(m->codes[k] - m->file);
+    adaslice_rle_decoder dec;
+    adaslice_result r;
+    if (adaslice_rle_decoder_init(&dec, m->width, m->height, (int)m->bits, row, stride))
+        return complain(RC_FAIL, "%s/masks.rle: masks of %u x %u px, %u bits, cannot be decoded", dir, m->width, m->height,
+                        m->bits); /* not reached: jobdir_read_masks checks them */
+    r = adaslice_rle_decode(&dec, m->codes[k], m->sizes[k], emit, ctx);
+    if (r >= ADASLICE_ERR_VARINT && r <= ADASLICE_ERR_ROWS)
+        return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask code is damaged: %s", dir, start + dec.offset,
+                        k + 1, why[r - ADASLICE_ERR_VARINT]);
+    if (r || !adaslice_rle_finished(&dec))
+        return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask code ends before its %u rows do", dir,
+                        start + m->sizes[k], k + 1, m->height);
+    if (ADASLICE_RLE_CRC(&dec) != m->crcs[k])
+        return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask decodes to CRC-32 %08x, not the %08x named there: "
+                                 "the file is damaged", dir, start - MASKS_LAYER + 8, k + 1, (unsigned)ADASLICE_RLE_CRC(&dec),
+                        (unsigned)m->crcs[k]);
+    return RC_OK;
+}
+
+int jobdir_check_layers(const char *dir, const job_masks *m)
+{
+    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8;
+    unsigned char *row = (unsigned char *)malloc(stride);
+    uint32_t k;
+    int rc = RC_OK;
+    if (!row) return complain(RC_FAIL, "out of memory for a row of %u px", m->width);
+    for (k = 0; k < m->layers && !rc; k++) rc = jobdir_decode_layer(dir, m, k, row, NULL, NULL);
+    free(row);
+    return rc;
+}
+
 int jobdir_read_masks(const char *dir, job_masks *m)
 {
     char *path = dir_file(dir, "masks.rle");
     size_t at;
     uint32_t k;
-    FILE *f;
-    long size;
     int rc = RC_FAIL;
     struct stat st;
     char *manifest = dir_file(dir, "manifest.json");
@@ -756,18 +791,11 @@ int jobdir_read_masks(const char *dir, job_masks *m)
         goto done;
     }
     free(manifest);
-    if (!(f = fopen(path, "rb"))) {
-        complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno));
+    if (!(m->file = (unsigned char *)read_whole(path, &m->file_size))) {
+        if (errno == ENOENT) complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno));
+        else complain(RC_FAIL, "cannot read %s: %s", path, errno == EINVAL ? "not a regular file" : strerror(errno));
         goto done;
     }
-    if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0 ||
-        !(m->file = (unsigned char *)malloc((size_t)size + 1)) || fread(m->file, 1, (size_t)size, f) != (size_t)size) {
-        fclose(f);
-        complain(RC_FAIL, "cannot read %s", path);
-        goto done;
-    }
-    fclose(f);
-    m->file_size = (size_t)size;
     if (m->file_size >= 8 && !memcmp(m->file, "ADASMSK1", 8)) {
         complain(RC_FAIL, "%s: a job from an adaslice before per-layer exposures: slice it again", path);
         goto done;
@@ -785,8 +813,30 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     m->peel_speed_um_s = get_le32(m->file + 32);
     m->return_speed_um_s = get_le32(m->file + 36);
     m->settle_ms = get_le32(m->file + 40);
+    /* the run-length code's own limits (adaslice_rle_decoder_init) */
+    if (m->width < 1 || m->width >= 1u << 24 || m->height < 1 || m->height >= 1u << 24) {
+        complain(RC_FAIL, "%s: byte 8: masks of %u x %u px: each side is 1 to %u px", path, m->width, m->height,
+                 (1u << 24) - 1);
+        goto done;
+    }
+    if (m->bits != 1 && m->bits != 8) {
+        complain(RC_FAIL, "%s: byte 16: masks of %u bits a pixel: 1 or 8", path, m->bits);
+        goto done;
+    }
     if (!k || k > m->file_size / MASKS_LAYER || !m->bin_nm) {
         complain(RC_FAIL, "%s: byte 20: the file does not hold %u layer%s of %u nm", path, k, plural(k), m->bin_nm);
+        goto done;
+    }
+    /* what slice would have refused to write (cure.h) */
+    if (m->peel_nm > CURE_MAX_PEEL_MM * 1e6 || m->peel_speed_um_s > CURE_MAX_PEEL_MM * 1e3 ||
+        m->return_speed_um_s > CURE_MAX_PEEL_MM * 1e3) {
+        complain(RC_FAIL, "%s: byte 28: a peel of %u nm at %u um/s, back at %u um/s: peels are limited to %g mm and "
+                          "speeds to %g mm/s", path, m->peel_nm, m->peel_speed_um_s, m->return_speed_um_s,
+                 CURE_MAX_PEEL_MM, CURE_MAX_PEEL_MM);
+        goto done;
+    }
+    if (m->settle_ms > CURE_MAX_SECONDS * 1e3) {
+        complain(RC_FAIL, "%s: byte 40: a settle of %u ms: it is limited to %g s", path, m->settle_ms, CURE_MAX_SECONDS);
         goto done;
     }
     if (job_masks_alloc(m, k)) goto done;
@@ -797,10 +847,14 @@ int jobdir_read_masks(const char *dir, job_masks *m)
             goto done;
         }
         m->lengths[k] = get_le32(m->file + at);
+        if (!m->lengths[k]) {
+            complain(RC_FAIL, "%s: byte %zu: layer %u is 0 bins thick", path, at, k + 1);
+            goto done;
+        }
         m->exposure_ms[k] = get_le32(m->file + at + 4);
-        if (!m->exposure_ms[k] || m->exposure_ms[k] > 3600000u) {
-            complain(RC_FAIL, "%s: byte %zu: layer %u's exposure of %u ms is not 1 ms to an hour", path, at + 4, k + 1,
-                     m->exposure_ms[k]);
+        if (m->exposure_ms[k] < CURE_MIN_SECONDS * 1e3 || m->exposure_ms[k] > CURE_MAX_SECONDS * 1e3) {
+            complain(RC_FAIL, "%s: byte %zu: layer %u's exposure of %u ms is not %g ms to %g s", path, at + 4, k + 1,
+                     m->exposure_ms[k], CURE_MIN_SECONDS * 1e3, CURE_MAX_SECONDS);
             goto done;
         }
         m->crcs[k] = get_le32(m->file + at + 8);

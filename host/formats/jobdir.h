@@ -47,6 +47,16 @@ typedef struct job_masks {
 int job_masks_alloc(job_masks *m, uint32_t layers);
 void job_masks_free(job_masks *m);
 /* Reads and checks DIR/masks.rle, naming the file and byte at fault, and
-   the pixel pitch its manifest names. */
+   the pixel pitch its manifest names: its header and layer table (what
+   slice would write, cure.h's limits), not the layers' codes. */
 int jobdir_read_masks(const char *dir, job_masks *m);
+/* Decodes layer k (0-based) of m, each row into `row` (a row's bytes) and
+   to emit(ctx, y, row) if given, and checks the rows against the layer's
+   CRC-32; a complaint names masks.rle's byte at fault. */
+int jobdir_decode_layer(const char *dir, const job_masks *m, uint32_t k, unsigned char *row,
+                        void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx);
+/* Every layer so decoded and checked: before a print begins, so that a
+   damaged layer does not stop it half way up the part (about a second for
+   1,400 layers of 3840 x 2400 px). */
+int jobdir_check_layers(const char *dir, const job_masks *m);
 #endif

@@ -689,7 +689,7 @@ int cmd_print(int argc, char **argv)
         goto done;
     }
     if (pa.screen.device && ((rc = screen_open(&scr, &pa.screen)) || (rc = screen_fits(&scr, pj.width, pj.height, l.id.pitch_nm)) ||
-                             (jobdir && (rc = screen_fits_job(&scr, jobdir))) ||
+                             (jobdir && (rc = screen_fits_job(&scr, jobdir, pj.file.pitch_mm))) ||
                              (rc = screen_guard(&scr, l.fd)) || (rc = screen_print_said_dark(&l))))
         goto done;
     if (!(rep = (report_layer *)calloc(pj.layers, sizeof *rep))) { rc = complain(RC_FAIL, "out of memory"); goto done; }

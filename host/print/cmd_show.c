@@ -159,18 +159,22 @@ static void take_row(void *ctx, uint32_t y, const unsigned char *row)
     memcpy(m->px + (size_t)y * m->stride, row, m->stride);
 }
 
-static int job_image(const show_args *a, image *m)
+/* The job's layer, once the job is known to fit the screen: its size
+   comes from the job's file, and is the screen's before anything that size
+   is made. */
+static int job_image(const show_args *a, const screen *s, image *m)
 {
     job_masks jm;
-    adaslice_rle_decoder dec;
     row_sink sink;
     unsigned char *row = NULL;
     uint32_t k = (uint32_t)a->layer;
     int rc;
     memset(&jm, 0, sizeof jm);
     if ((rc = jobdir_read_masks(a->job, &jm))) return rc;
-    if (k > jm.layers) {
+    if (k > jm.layers)
         rc = complain(RC_USAGE, "show %s --layer %u: the job has %u layer%s", a->job, k, jm.layers, plural(jm.layers));
+    if (!rc && !(rc = screen_fits(s, jm.width, jm.height, 0))) rc = screen_fits_job(s, a->job, jm.pitch_mm);
+    if (rc) {
         job_masks_free(&jm);
         return rc;
     }
@@ -181,11 +185,8 @@ static int job_image(const show_args *a, image *m)
     sink.m = m;
     m->px = (unsigned char *)malloc(m->stride * m->h);
     row = (unsigned char *)malloc(m->stride);
-    if (!m->px || !row) rc = complain(RC_FAIL, "out of memory for a mask");
-    else if (adaslice_rle_decoder_init(&dec, m->w, m->h, m->bits, row, m->stride) ||
-             adaslice_rle_decode(&dec, jm.codes[k - 1], jm.sizes[k - 1], take_row, &sink) || !adaslice_rle_finished(&dec) ||
-             ADASLICE_RLE_CRC(&dec) != jm.crcs[k - 1])
-        rc = complain(RC_FAIL, "%s/masks.rle: layer %u does not decode to its CRC-32 %08x", a->job, k, (unsigned)jm.crcs[k - 1]);
+    if (!m->px || !row) rc = complain(RC_FAIL, "out of memory for a mask of %u x %u px", m->w, m->h);
+    else rc = jobdir_decode_layer(a->job, &jm, k - 1, row, take_row, &sink);
     free(row);
     job_masks_free(&jm);
     return rc;
@@ -248,7 +249,7 @@ int cmd_show(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     if ((a.port && (rc = serial_connect(&l, a.port, (long)a.baud, 3))) ||
-        (rc = a.job ? job_image(&a, &m) : pattern_image(&a, &s, &m)) || (a.job && (rc = screen_fits_job(&s, a.job))) ||
+        (rc = a.job ? job_image(&a, &s, &m) : pattern_image(&a, &s, &m)) ||
         (rc = screen_guard(&s, l.fd)) ||
         (rc = screen_show(&s, m.px, m.stride, m.w, m.h, m.bits)))
         goto done;

@@ -175,6 +175,7 @@ int print_job_from_model(print_job *pj, plan_args *a, plan_job *j, slice_args *s
 int print_job_from_dir(print_job *pj, const char *dir)
 {
     int rc = jobdir_read_masks(dir, &pj->file);
+    if (!rc) rc = jobdir_check_layers(dir, &pj->file);
     if (rc) return rc;
     pj->layers = pj->file.layers;
     pj->bin_nm = pj->file.bin_nm;

@@ -376,22 +376,11 @@ int screen_fits(const screen *s, uint32_t w, uint32_t h, uint32_t pitch_nm)
     return RC_OK;
 }
 
-int screen_fits_job(const screen *s, const char *dir)
+int screen_fits_job(const screen *s, const char *dir, const double pitch_mm[2])
 {
-    char path[1024], text[4096], *at;
-    size_t n;
-    double x, y;
-    FILE *f;
-    snprintf(path, sizeof path, "%s/manifest.json", dir);
-    if (!(f = fopen(path, "rb"))) return RC_OK;
-    n = fread(text, 1, sizeof text - 1, f); /* the printer comes first, near the top */
-    fclose(f);
-    text[n] = 0;
-    if (!(at = strstr(text, "\"pitch_mm\": [")) || sscanf(at + 13, "%lf , %lf", &x, &y) != 2 || !(x > 0) || !(y > 0))
-        return RC_OK;
-    if (s->pitch_um > 0 && (fabs(x * 1000 - s->pitch_um) > 1e-3 * s->pitch_um || fabs(y * 1000 - s->pitch_um) > 1e-3 * s->pitch_um))
-        return complain(RC_FAIL, "%s's pixels are %g x %g um; the screen %s's are %g um", dir, x * 1000, y * 1000, s->name,
-                        s->pitch_um);
+    double x = pitch_mm[0] * 1000, y = pitch_mm[1] * 1000;
+    if (s->pitch_um > 0 && (fabs(x - s->pitch_um) > 1e-3 * s->pitch_um || fabs(y - s->pitch_um) > 1e-3 * s->pitch_um))
+        return complain(RC_FAIL, "%s's pixels are %g x %g um; the screen %s's are %g um", dir, x, y, s->name, s->pitch_um);
     return RC_OK;
 }
 

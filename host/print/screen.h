@@ -80,9 +80,10 @@ int screen_open(screen *s, const screen_options *o);
 /* A job of w x h mask pixels at pitch_nm (0 unknown) fits the panel as it
    sits, or a complaint naming both. */
 int screen_fits(const screen *s, uint32_t w, uint32_t h, uint32_t pitch_nm);
-/* A job directory's pixel pitch (its manifest.json's "pitch_mm") is the
-   panel's, when both are known; else a complaint naming both. */
-int screen_fits_job(const screen *s, const char *dir);
+/* A job directory's pixel pitch (its manifest.json's "pitch_mm", as
+   jobdir_read_masks reads it) is the panel's, when the panel's is known;
+   else a complaint naming both. */
+int screen_fits_job(const screen *s, const char *dir, const double pitch_mm[2]);
 /* Draws the mask (rows top first, `stride` bytes apart, 1 or 8 bits) whole
    and waits until the panel shows it: a page flip where the framebuffer
    has a second page, else drawn over the dark page. RC_OK or a complaint. */
