@@ -80,26 +80,47 @@ static int z_field(const char *s, const char *comma, double *z)
     return end == comma;
 }
 
+/* A sign, then a digit, a point, or inf or nan in any case. */
+static int starts_as_number(const char *s)
+{
+    int k;
+    s += *s == '+' || *s == '-';
+    for (k = 0; k < 3 && s[k]; k++)
+        if ((s[k] | 0x20) != "inf"[k] && (s[k] | 0x20) != "nan"[k]) break;
+    return (*s >= '0' && *s <= '9') || *s == '.' || k == 3;
+}
+
 int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, adaslice_profile *out)
 {
     FILE *f = fopen(path, "r");
     char *line = NULL, q[QUOTE_SIZE];
     size_t line_cap = 0, lineno = 0, n = 0, cap = 0, first_line = 0;
+    ssize_t got;
     double *phi = NULL, bin = bin_given ? bin_given : ADASLICE_DEFAULT_BIN;
     z_column zc = {0, 0, 0, 0, 0};
     int rc = RC_OK, first = 1, has_z = 0;
 
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
-    while (!rc && getline(&line, &line_cap, f) != -1) {
-        char *s = trim(line), *comma = strchr(s, ','), *field;
+    while (!rc && (got = getline(&line, &line_cap, f)) != -1) {
+        char *s, *comma, *field;
         const char *end;
         double v = 0, z = 0;
         lineno++;
+        if (memchr(line, 0, (size_t)got)) {
+            rc = complain(RC_FAIL, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno,
+                          (size_t)((char *)memchr(line, 0, (size_t)got) - line) + 1);
+            break;
+        }
+        /* a spreadsheet's UTF-8 byte order mark */
+        s = trim(lineno == 1 && !strncmp(line, "\xef\xbb\xbf", 3) ? line + 3 : line);
+        comma = strchr(s, ',');
         if (!*s || *s == '#') continue;
         field = comma ? trim(strrchr(s, ',') + 1) : s;
         end = decimal_number(field, &v);
         if (!end || *end || (comma && !z_field(s, comma, &z))) {
-            if (!first) rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
+            /* the first line may be a header, unless it begins as a number does */
+            if (!first || starts_as_number(s))
+                rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
         } else if (!isfinite(v) || v < 0) {
             rc = complain(RC_FAIL, "%s:%zu: '%s': profile values must be finite and >= 0", path, lineno,
                           quote_text(q, s, strlen(s)));

@@ -154,6 +154,10 @@ int weights_check(const weight_args *w)
     if (w->blend == 2 && c[0] == 0 && c[1] == 0 && !w->file && !w->region_count)
         return complain(RC_USAGE, "--importance %g,%g,%g weighs only the user's weights, and no --weights or --weight "
                         "is given", c[0], c[1], c[2]);
+    /* and the user's weights given a share of none would do nothing, unread */
+    if (w->blend == 2 && c[2] == 0 && (w->file || w->region_count))
+        return complain(RC_USAGE, "--importance %g,%g,0 gives the user's weights (%s) no share: drop them, or give "
+                        "them one", c[0], c[1], w->file ? "--weights" : "--weight");
     return RC_OK;
 }
 
@@ -171,13 +175,20 @@ static int read_weights(const char *path, size_t count, float *w)
     FILE *f = fopen(path, "r");
     char *line = NULL, q[QUOTE_SIZE];
     size_t cap = 0, lineno = 0, n = 0;
+    ssize_t got;
     int rc = RC_OK;
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
-    while (!rc && getline(&line, &cap, f) != -1) {
-        char *s = trim(line);
+    while (!rc && (got = getline(&line, &cap, f)) != -1) {
+        char *s;
         const char *end;
         double v = 0;
         lineno++;
+        if (memchr(line, 0, (size_t)got)) {
+            rc = complain(RC_USAGE, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno,
+                          (size_t)((char *)memchr(line, 0, (size_t)got) - line) + 1);
+            break;
+        }
+        s = trim(line);
         if (!*s || *s == '#') continue;
         if (!(end = decimal_number(s, &v)) || *end)
             rc = complain(RC_USAGE, "%s:%zu: '%s' is not a number", path, lineno, quote_text(q, s, strlen(s)));

@@ -138,6 +138,8 @@ static void bad_arguments_exit_2(void)
         {{"plan", "m.stl", "--importance", "0x1,0,0"}, {"--importance", "0x1"}},
         {{"plan", "m.stl", "--importance", "0,0,1"}, {"--importance", "--weights"}},
         {{"saliency", "m.stl", "-o", "w.txt", "--importance", "0,0,1"}, {"--importance", "--weights"}},
+        {{"plan", "m.stl", "--importance", "1,0,0", "--weights", "w.txt"}, {"--importance", "--weights"}},
+        {{"plan", "m.stl", "--importance", "0.5,0.5,0", "--weight", "box:0,0,0,1,1,1=0.5"}, {"--importance", "--weight"}},
         {{"slice", "m.stl", "-o", "j", "--bottom-layers", "-1"}, {"--bottom-layers", "from 0"}},
         /* job names */
         {{"slice", "m.stl", "-o", ".ctb", "--pixels", "100x100", "--pitch", "0.05"}, {".ctb", "name"}},
@@ -354,17 +356,36 @@ static void bad_profile_lines_are_named(void)
         {"# c\n0.1\nnan\n", ":3"},
         {"0.1\n1e999\n", ":2"},
         {"h1\nh2\n", ":2"},
+        /* a first line that begins as a number is a number, not a header to skip */
+        {"inf\n0.1\n0.2\n", ":1"},
+        {"0.5abc\n0.1\n0.2\n", ":1"},
+        {"-nan\n0.1\n0.2\n", ":1"},
+        /* a NUL byte ends no line: the rest of it is not dropped unseen */
+        {"0.1\n0.2\0,9\n0.3\n", ":2: a NUL byte at column 4"},
     };
-    const char *path = cli_path("bad.csv");
+    static const char bom[] = "\xef\xbb\xbf" "0.1\n0.2\n0.3\n0.4\n";
+    const char *path = cli_path("bad.csv"), *weights = cli_path("nul_weights.txt");
+    cli_result r;
     size_t i;
     for (i = 0; i < sizeof cases / sizeof *cases; i++) {
-        cli_result r;
-        write_all(path, cases[i].text, strlen(cases[i].text));
+        size_t n = strlen(cases[i].text);
+        if (strstr(cases[i].named, "NUL")) n += 1 + strlen(cases[i].text + n + 1);
+        write_all(path, cases[i].text, n);
         r = cli_run("plan", "--profile", path, NULL);
         CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "bad.csv") && strstr(r.err, cases[i].named),
                "case %zu: exit %d, '%s'", i, r.status, r.err);
         cli_free(&r);
     }
+    /* a spreadsheet's byte order mark before the first value: four values, none lost */
+    write_all(path, bom, sizeof bom - 1);
+    r = cli_run("plan", "--profile", path, "--bin", "0.05", "--tmin", "0.05", "--tmax", "0.1", "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "bins") == 4, "exit %d: %s %s", r.status, r.err, r.out);
+    cli_free(&r);
+    write_all(weights, "0.5\n\0garbage\n", 13);
+    r = cli_run("plan", sphere_stl(), "--weights", weights, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "nul_weights.txt:2: a NUL byte"), "exit %d, '%s'",
+           r.status, r.err);
+    cli_free(&r);
 }
 
 static void infeasible_eps_names_the_smallest(void)

@@ -18,6 +18,8 @@
 #include <ctype.h>
 #include "meshgen.h"
 #include "../host/output.h"
+#include "../host/codec/zip.h"
+#include "../host/formats/threemf.h"
 
 #ifndef CELL_MM
 #define CELL_MM 0.8
@@ -1012,6 +1014,45 @@ static char *edited(const char *text, const char *what, const char *with)
     return out;
 }
 
+/* The 3MF at `from` written to `to` with member `name`'s first `what`
+   replaced by `with` (a member that is not there is added, as `with`).
+   1 when written. */
+static int edited_3mf(const char *from, const char *to, const char *name, const char *what, const char *with)
+{
+    static const char *const members[] = {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model",
+                                          "Metadata/Slic3r_PE_layer_heights_profile.txt",
+                                          "Metadata/layer_heights_profile.txt", "Metadata/Slic3r_PE.config",
+                                          THREEMF_CONTOUR_PART};
+    unsigned char *data, *member;
+    zip_writer *z;
+    size_t n, size, k;
+    char why[128];
+    int ok = 1, found = 0;
+    if (!(data = read_whole_file(from, &n)) || zip_open(&z, to)) { free(data); return 0; }
+    for (k = 0; k < sizeof members / sizeof *members && ok; k++) {
+        int got = zip_member(data, n, members[k], &member, &size, why);
+        if (got < 0) ok = 0;
+        if (got) {
+            if (strcmp(members[k], name)) continue;
+            member = (unsigned char *)calloc(1, 1);
+            size = 0;
+        }
+        if (!strcmp(members[k], name)) {
+            char *changed, *text = (char *)malloc(size + 1);
+            memcpy(text, member, size);
+            text[size] = 0;
+            changed = what && *what ? edited(text, what, with) : (char *)strcpy((char *)malloc(strlen(with) + 1), with);
+            ok = ok && strcmp(changed, text) && !zip_add(z, members[k], changed, strlen(changed), 1);
+            found = 1;
+            free(changed);
+            free(text);
+        } else ok = ok && !zip_add(z, members[k], member, size, 1);
+        free(member);
+    }
+    free(data);
+    return !zip_close(z, ok && found) && ok && found;
+}
+
 static void refused_inputs_get_one_line_and_no_file(void)
 {
     static const char *const cases[][3] = {
@@ -1069,6 +1110,60 @@ static void refused_inputs_get_one_line_and_no_file(void)
         r = cli_run("contour", gcode, "-o", cli_path("out.gcode"), NULL);
         CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--project"), "exit %d: %.300s", r.status, r.err);
         cli_free(&r);
+    }
+    /* the project's own parts damaged or crafted: each refused in one line,
+       nothing written; and the build item's tag first in the model's text
+       (its attributes once read the byte before the text) is read as it is */
+    {
+        static const char *const projects[][4] = {
+            {THREEMF_CONTOUR_PART, "", "; max_angle = 120\n", "max_angle = 120"},
+            {THREEMF_CONTOUR_PART, "", "; resolution = 1e-20\n", "resolution = 1e-20"},
+            {THREEMF_CONTOUR_PART, "", "; max_rise = 0x10\n", "max_rise = 0x10"},
+            {"3D/3dmodel.model", "<vertex x=\"", "<vertex x=\"24abc", "vertex 0 has no x, y and z"},
+            {"3D/3dmodel.model", "<vertex x=\"", "<vertex x=\"-1e30", "vertex 0 has no x, y and z"},
+            {"Metadata/Slic3r_PE_layer_heights_profile.txt", "|", "|0;0.2;0.2;0.2;0.2;0.2;0.2;0.2;", "not above the one before"},
+        };
+        char *model_text;
+        for (c = 0; c < sizeof projects / sizeof *projects; c++) {
+            CHECKF(edited_3mf(path3mf, cli_path("edited.3mf"), projects[c][0], projects[c][1], projects[c][2]),
+                   "case %zu: %s not edited", c, projects[c][0]);
+            r = cli_run("contour", gcode, "--project", cli_path("edited.3mf"), "-o", cli_path("out.gcode"), NULL);
+            CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, projects[c][3]), "%s: exit %d: %.300s",
+                   projects[c][3], r.status, r.err);
+            CHECKF(!cli_exists(cli_path("out.gcode")), "%s: out.gcode written", projects[c][3]);
+            cli_free(&r);
+        }
+        /* the item's tag moved to the model text's first byte */
+        {
+            unsigned char *data = read_whole_file(path3mf, NULL), *model = NULL;
+            size_t n = 0, size = 0;
+            char why[128], *item, *end, *moved;
+            FILE *probe = fopen(path3mf, "rb");
+            if (probe) { fseek(probe, 0, SEEK_END); n = (size_t)ftell(probe); fclose(probe); }
+            CHECK(data && !zip_member(data, n, "3D/3dmodel.model", &model, &size, why));
+            model_text = model ? (char *)calloc(size + 1, 1) : NULL;
+            if (model_text) memcpy(model_text, model, size);
+            item = model_text ? strstr(model_text, "<item ") : NULL;
+            end = item ? strchr(item, '>') : NULL;
+            CHECK(item && end);
+            if (item && end) {
+                size_t len = (size_t)(end + 1 - item);
+                moved = (char *)malloc(size + 1);
+                memcpy(moved, item, len);
+                memcpy(moved + len, model_text, (size_t)(item - model_text));
+                strcpy(moved + len + (item - model_text), end + 1);
+                /* the whole text as the member: edited_3mf replaces it (what "" adds as given) */
+                CHECK(edited_3mf(path3mf, cli_path("edited.3mf"), "3D/3dmodel.model", model_text, moved));
+                r = cli_run("contour", gcode, "--project", cli_path("edited.3mf"), "-o", cli_path("out.gcode"), NULL);
+                CHECKF(r.status == 0, "the item's tag first: exit %d: %.300s", r.status, r.err);
+                cli_free(&r);
+                remove(cli_path("out.gcode"));
+                free(moved);
+            }
+            free(model_text);
+            free(model);
+            free(data);
+        }
     }
     /* another part's project: a box of another size, and the same part
        planned with other layers */

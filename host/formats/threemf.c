@@ -292,18 +292,22 @@ static const char *attribute(const char *tag, const char *name)
 {
     size_t n = strlen(name);
     const char *p;
-    for (p = tag; *p && *p != '>'; p++)
+    if (!*tag) return NULL;
+    /* from the tag's second byte: p[-1] is in the text even where the tag
+       is its first */
+    for (p = tag + 1; *p && *p != '>'; p++)
         if (p[-1] == ' ' && !strncmp(p, name, n) && p[n] == '=' && (p[n + 1] == '"' || p[n + 1] == '\'')) return p + n + 2;
     return NULL;
 }
 
+/* A number (decimal_number's: no hex, no junk after it) of at most
+   CONTOUR_MAX_LIMIT, the attribute's quote right after it. */
 static int number_attribute(const char *tag, const char *name, double *v)
 {
-    const char *a = attribute(tag, name);
-    char *end;
+    const char *a = attribute(tag, name), *end;
     if (!a) return 0;
-    *v = strtod(a, &end);
-    return end != a && isfinite(*v);
+    end = decimal_number(a, v);
+    return end && end != a && end[0] == a[-1] && fabs(*v) < CONTOUR_MAX_LIMIT;
 }
 
 /* The number of tags `<name ` in text. */
@@ -327,10 +331,15 @@ static int read_mesh(const char *path, const char *xml, threemf_project *p)
         return complain(RC_FAIL, "%s: 3D/3dmodel.model: %zu vertices and %zu triangles", path, nv, nt);
     item = strstr(xml, "<item ");
     if ((tag = attribute(item, "transform")) != NULL) {
-        char *end;
-        for (i = 0; i < 12; i++, tag = end)
-            if (m[i] = strtod(tag, &end), end == tag || !isfinite(m[i]))
+        const char *end;
+        char quote = tag[-1];
+        for (i = 0; i < 12; i++, tag = end) {
+            while (*tag == ' ') tag++;
+            if (!(end = decimal_number(tag, &m[i])) || !(fabs(m[i]) < CONTOUR_MAX_LIMIT) || (*end != ' ' && *end != quote))
                 return complain(RC_FAIL, "%s: the build item's transform is not 12 numbers", path);
+        }
+        while (*tag == ' ') tag++;
+        if (*tag != quote) return complain(RC_FAIL, "%s: the build item's transform is not 12 numbers", path);
         p->transformed = 1;
     }
     p->mesh.vertices = (float *)malloc((nv ? nv : 1) * 3 * sizeof(float));
@@ -340,7 +349,8 @@ static int read_mesh(const char *path, const char *xml, threemf_project *p)
         double v[3];
         tag = strstr(tag, "<vertex ") + 1;
         if (!number_attribute(tag, "x", &v[0]) || !number_attribute(tag, "y", &v[1]) || !number_attribute(tag, "z", &v[2]))
-            return complain(RC_FAIL, "%s: 3D/3dmodel.model: vertex %zu has no x, y and z", path, i);
+            return complain(RC_FAIL, "%s: 3D/3dmodel.model: vertex %zu has no x, y and z of under %g mm", path, i,
+                            CONTOUR_MAX_LIMIT);
         /* 3MF's transform: the row vector (x y z 1) times the 4 x 3 matrix */
         p->mesh.vertices[3 * i] = (float)(m[0] * v[0] + m[3] * v[1] + m[6] * v[2] + m[9]);
         p->mesh.vertices[3 * i + 1] = (float)(m[1] * v[0] + m[4] * v[1] + m[7] * v[2] + m[10]);
@@ -367,18 +377,21 @@ static int read_mesh(const char *path, const char *xml, threemf_project *p)
    (every second pair, as threemf_write writes a step per layer). */
 static int read_profile(const char *path, const char *text, threemf_project *p)
 {
-    const char *at = strchr(text, '|');
+    const char *at = strchr(text, '|'), *end_of_line = "";
     size_t n = 0, cap = 0, pair = 0;
     if (!at) return complain(RC_FAIL, "%s: the layer height profile has no '|'", path);
     for (at++; *at && *at != '\n'; pair++) {
         double z, h;
-        char *end;
-        z = strtod(at, &end);
-        if (end == at || *end != ';') break;
-        h = strtod(end + 1, &end);
-        if (!isfinite(z) || !(h > 0) || (*end && *end != ';' && *end != '\n')) break;
+        const char *end;
+        if (!(end = decimal_number(at, &z)) || *end != ';') break;
+        if (!(end = decimal_number(end + 1, &h)) || !(h > 0 && h < CONTOUR_MAX_LIMIT) || !(fabs(z) < CONTOUR_MAX_LIMIT) ||
+            (*end && *end != ';' && *end != '\n'))
+            break;
         at = *end == ';' ? end + 1 : end;
         if (pair % 2 == 0) continue;
+        if (n && !(z > p->tops[n - 1]))
+            return complain(RC_FAIL, "%s: the layer height profile's layer %zu ends at %g mm, not above the one before (%g mm)",
+                            path, n + 1, z, p->tops[n - 1]);
         if (n == cap) {
             double *t = (double *)realloc(p->tops, (cap = cap ? 2 * cap : 256) * sizeof *t);
             if (!t) return complain(RC_FAIL, "out of memory");
@@ -386,25 +399,35 @@ static int read_profile(const char *path, const char *text, threemf_project *p)
         }
         p->tops[n++] = z;
     }
-    if (*at && *at != '\n')
-        return complain(RC_FAIL, "%s: the layer height profile is not z;h pairs at byte %zu", path, (size_t)(at - text));
+    if (*at == '\n') /* one line: after it, only blanks */
+        for (end_of_line = at; *end_of_line == '\n' || *end_of_line == '\r' || *end_of_line == ' '; end_of_line++) {}
+    if ((*at && *at != '\n') || *end_of_line)
+        return complain(RC_FAIL, "%s: the layer height profile is not z;h pairs at byte %zu", path,
+                        (size_t)((*at && *at != '\n' ? at : end_of_line) - text));
     if (!n) return complain(RC_FAIL, "%s: the layer height profile has no layers", path);
     p->layers = n;
     return RC_OK;
 }
 
 /* The contour's limits from THREEMF_CONTOUR_PART's "; key = value" lines;
-   a key missing or not a positive number stays 0 (the contour's default). */
-static void read_contour_limits(const char *text, size_t size, threemf_project *p)
+   a key missing stays 0 (the contour's default); one that contour would
+   refuse on its command line is refused here. */
+static int read_contour_limits(const char *path, const char *text, size_t size, threemf_project *p)
 {
     static const char *const keys[] = {"max_angle", "max_rise", "resolution"};
+    static const double least[] = {0, 0, CONTOUR_MIN_PIECE}, most[] = {CONTOUR_MAX_ANGLE, CONTOUR_MAX_LIMIT, CONTOUR_MAX_LIMIT};
     double *values[3], x;
     size_t k, n;
     values[0] = &p->max_angle; values[1] = &p->max_rise; values[2] = &p->resolution;
     for (k = 0; k < 3; k++) {
         const char *v = gcode_config_value(text, size, keys[k], &n), *end = v ? decimal_number(v, &x) : NULL;
-        if (end && end == v + n && x > 0 && x < 1e6) *values[k] = x;
+        if (!v) continue;
+        if (!end || end != v + n || !(x > least[k] || (k == 2 && x == least[k])) || !(x < most[k]))
+            return complain(RC_FAIL, "%s: %s: %s = %.*s: contour takes %s %g and under %g", path, THREEMF_CONTOUR_PART,
+                            keys[k], (int)(n < 40 ? n : 40), v, k == 2 ? "from" : "over", least[k], most[k]);
+        *values[k] = x;
     }
+    return RC_OK;
 }
 
 int threemf_read(const char *path, threemf_project *p)
@@ -436,7 +459,7 @@ int threemf_read(const char *path, threemf_project *p)
         unsigned char *limits = NULL;
         if ((got = zip_member(data, size, THREEMF_CONTOUR_PART, &limits, &n, why)) < 0)
             rc = complain(RC_FAIL, "%s: %s", path, why);
-        else if (!got) read_contour_limits((const char *)limits, n, p);
+        else if (!got) rc = read_contour_limits(path, (const char *)limits, n, p);
         free(limits);
     }
     free(data);

@@ -33,6 +33,12 @@ typedef struct threemf_args {
    limits and the faces (0-based, in the model's order) and heights it may
    contour, "; key = value" lines as Slic3r_PE.config's. */
 #define THREEMF_CONTOUR_PART "Metadata/adaslice_contour.config"
+/* What contour takes for its limits, from its command line or that part:
+   slopes under CONTOUR_MAX_ANGLE degrees, pieces of CONTOUR_MIN_PIECE mm or
+   more, and no limit of CONTOUR_MAX_LIMIT or more. */
+#define CONTOUR_MAX_ANGLE 90.0
+#define CONTOUR_MIN_PIECE 0.01
+#define CONTOUR_MAX_LIMIT 1e6
 
 /* Takes --3mf FILE, --nozzle MM and the --hybrid options out of argv
    (argv[0] kept); RC_OK or RC_USAGE after a complaint. */
