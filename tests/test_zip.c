@@ -380,6 +380,35 @@ static void bad_members_are_refused(void)
     free(long_name);
 }
 
+/* zip_member reads a member back; one whose central record claims more
+   bytes than deflate can make of its data (1032 to 1), or than the reader
+   takes, is refused before anything that size is made. */
+static void member_sizes_are_bounded(void)
+{
+    static char text[5000];
+    unsigned char *data, *out = NULL, *cd;
+    size_t n, got = 0;
+    char why[128], path[128];
+    zip_writer *z;
+    memset(text, 'a', sizeof text - 1);
+    snprintf(path, sizeof path, "%s", in_dir("sizes.zip"));
+    CHECK(zip_open(&z, path) == 0 && zip_add(z, "m.txt", text, sizeof text - 1, 1) == 0 && zip_close(z, 1) == 0);
+    data = read_whole_file(path, &n);
+    CHECK(data && n > 22);
+    if (!data || n <= 22) { free(data); return; }
+    CHECK(zip_member(data, n, "m.txt", &out, &got, why) == 0 && got == sizeof text - 1 && !memcmp(out, text, got));
+    free(out);
+    /* the central record (APPNOTE 4.3.12): the end record's offset at 16, the member's uncompressed size at 24 */
+    cd = data + (data[n - 6] | data[n - 5] << 8 | data[n - 4] << 16 | (size_t)data[n - 3] << 24);
+    cd[24] = 0xff; cd[25] = 0xff; cd[26] = 0xff; cd[27] = 0x3f; /* 1 GiB - 1 from a few bytes */
+    out = NULL;
+    CHECK(zip_member(data, n, "m.txt", &out, &got, why) < 0 && !out && strstr(why, "more than this reader takes"));
+    cd[27] = 0x7f; /* 2 GiB: over the cap whatever the ratio */
+    CHECK(zip_member(data, n, "m.txt", &out, &got, why) < 0 && !out && strstr(why, "more than this reader takes"));
+    free(data);
+    remove(path);
+}
+
 /* Random bytes of many sizes around deflate's block and window sizes, and
    runs; deflated and stored. */
 static void unzip_finds_every_member_intact(void)
@@ -453,6 +482,7 @@ void test_zip(void)
     RUN(archives_are_laid_out_as_the_appnote_says);
     RUN(three_hundred_members_are_listed);
     RUN(bad_members_are_refused);
+    RUN(member_sizes_are_bounded);
     RUN_NEEDING("unzip", unzip_finds_every_member_intact);
     RUN_NEEDING("unzip", unzip_extracts_three_hundred_members);
     remove_tree(dir);

@@ -278,6 +278,13 @@ int zip_member(const unsigned char *data, size_t size, const char *name, unsigne
                 snprintf(why, 128, "%.40s: compression method %u (stored or deflated only)", name, method);
                 return -1;
             }
+            /* deflate makes at most 1032 bytes of 1; and no member this
+               reader is asked for (a 3MF's model, its profile) nears 1 GiB */
+            if (usize > ZIP_MEMBER_MAX || (method == 8 && usize / 1032 > csize)) {
+                snprintf(why, 128, "%.40s: %zu bytes from %zu: more than this reader takes (%u MiB, 1032 to 1)", name,
+                         usize, csize, (unsigned)(ZIP_MEMBER_MAX >> 20));
+                return -1;
+            }
             if (!(*out = (unsigned char *)malloc(usize + 1))) { snprintf(why, 128, "out of memory"); return -1; }
             if (method == 0) memcpy(*out, data + start, usize);
             if ((method == 8 && inflate_bytes(data + start, csize, *out, usize)) ||

@@ -31,9 +31,10 @@ int zip_close(zip_writer *z, int ok);
 
 /* ---- reading --------------------------------------------------------- */
 
+#define ZIP_MEMBER_MAX ((size_t)1 << 30)
 /* Member `name` of the archive data[0, size), stored or deflated, its CRC-32
    checked, into *out (malloc'd, a NUL after its *out_size bytes; the caller
-   frees it). 0; 1 when the archive has no such member; -1 for an archive or
+   frees it); ZIP_MEMBER_MAX bytes at most. 0; 1 when the archive has no such member; -1 for an archive or
    member that is malformed (what is wrong in why[0, 128)) or out of memory. */
 int zip_member(const unsigned char *data, size_t size, const char *name, unsigned char **out, size_t *out_size,
                char why[128]);
