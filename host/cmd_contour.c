@@ -755,7 +755,11 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
         if (i < end && !pieces) pieces = 1;
         if (n + pieces + 1 > cap) {
             point *t = (point *)realloc(p, (cap = 2 * (n + pieces + 1)) * sizeof *t);
-            if (!t) { free(p); w->failed = 1; return RC_FAIL; }
+            if (!t) {
+                free(p);
+                w->failed = 1;
+                return complain(RC_FAIL, "out of memory for %zu points of layer %zu", n + pieces + 1, layer + 1);
+            }
             p = t;
         }
         if (!n) {
@@ -792,7 +796,11 @@ static int write_run(writer *w, size_t first, size_t end, size_t layer, int fixe
         if (z < lo) z = lo;
         p[k].dz = p[k].fixed ? 0 : z - top;
     }
-    if (!(scratch = (double *)malloc(2 * n * sizeof *scratch))) { free(p); w->failed = 1; return RC_FAIL; }
+    if (!(scratch = (double *)malloc(2 * n * sizeof *scratch))) {
+        free(p);
+        w->failed = 1;
+        return complain(RC_FAIL, "out of memory for %zu points of layer %zu", n, layer + 1);
+    }
     limit_slope(p, n, w->tan_max, scratch, scratch + n);
     free(scratch);
     /* the output: the nozzle onto the start, then every piece */
