@@ -254,6 +254,14 @@ int cmd_orient(int argc, char **argv)
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();
     rc = plan_orient_search(&a, &mesh, o.dirs, o.alpha, &scores, minima, &count);
+    if (!rc) { /* a best of none would print as a direction */
+        size_t feasible = 0;
+        for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;
+        if (!feasible)
+            rc = complain(RC_FAIL, "%s: no direction of the %zu and the 6 axes has a plan within eps %g mm of layers %g to "
+                                   "%g mm: a larger --eps, or check the part's size (--scale)", a.model, o.dirs, a.eps,
+                          a.tmin, a.tmax);
+    }
     if (!rc && o.map) {
         map_ctx m;
         m.scores = scores;

@@ -578,6 +578,11 @@ static void orient_finds_directions(void)
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--out") && !cli_exists(cli_path("o.csv")), "%d %s",
            r.status, r.err);
     cli_free(&r);
+    /* no direction with a plan (the box thinner than a layer every way): said, not a best of none printed */
+    r = cli_run("orient", box, "--scale", "0.00001", "--dirs", "20", "--map", cli_path("none.svg"), NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "no direction of the 20") && !*r.out &&
+           !cli_exists(cli_path("none.svg")), "%d %s %s", r.status, r.err, r.out);
+    cli_free(&r);
 }
 
 /* A quad a b c d facing along n (wound to match). */
