@@ -6827,7 +6827,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
     plan->bins_max = job.hi;
     if (job.n < job.lo) {
         r = adaslice__fail(err, ADASLICE_ERR_INFEASIBLE, 0, 0,
-                           "plan: the part is %g mm tall, thinner than one layer of tmin %g mm", job.n * p->bin, opt.tmin);
+                           "plan: the part is %g mm tall, thinner than one layer of tmin %g mm",
+                           p->height > 0 ? p->height : job.n * p->bin, opt.tmin); /* bins round a sliver up to one */
         if (err) err->z = 0;
         return r;
     }

@@ -583,6 +583,10 @@ static void orient_finds_directions(void)
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "no direction of the 20") && !*r.out &&
            !cli_exists(cli_path("none.svg")), "%d %s %s", r.status, r.err, r.out);
     cli_free(&r);
+    /* and plan says its true height (the box is 50 mm tall as loaded), not the one bin it rounds up to */
+    r = cli_run("plan", box, "--scale", "0.00001", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "the part is 0.0005 mm tall"), "%d %s", r.status, r.err);
+    cli_free(&r);
 }
 
 /* A quad a b c d facing along n (wound to match). */
