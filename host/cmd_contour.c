@@ -19,6 +19,9 @@
 
 #include <errno.h>
 #include <math.h>
+
+/* X, Y and Z farther from the origin than any FDM printer reaches: refused */
+#define GCODE_REACH_MM 1e4
 #include <stdlib.h>
 #include <string.h>
 
@@ -328,9 +331,16 @@ static int gfile_read(const char *path, gfile *g)
         if (w.letter == 'G' && w.code == 92 && (w.has & GC_E)) m.pos[3] = w.v[3];
         if (is_move(&w)) {
             double e = m.pos[3], from[2];
+            int moved, axis;
             from[0] = m.pos[0];
             from[1] = m.pos[1];
-            if (step(&m, &w) == 2 && m.layer >= 0) {
+            moved = step(&m, &w);
+            /* every move is cut into pieces later: one to 10^19 mm wrapped a count */
+            for (axis = 0; axis < 3; axis++)
+                if (!(fabs(m.pos[axis]) <= GCODE_REACH_MM))
+                    return complain(RC_FAIL, "%s: line %zu: %c %g mm: beyond any printer's reach (%g mm)", path, i + 1,
+                                    "XYZ"[axis], m.pos[axis], GCODE_REACH_MM);
+            if (moved == 2 && m.layer >= 0) {
                 path_seg *sg;
                 if (g->seg_count == g->seg_cap) {
                     path_seg *t = (path_seg *)realloc(g->segs, (g->seg_cap = g->seg_cap ? 2 * g->seg_cap : 4096) * sizeof *t);

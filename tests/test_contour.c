@@ -1064,6 +1064,8 @@ static void refused_inputs_get_one_line_and_no_file(void)
         {"; gcode_flavor = reprap", "; gcode_flavor = makerware", "gcode_flavor makerware"},
         {"\nG21 ", "\nG20 ", "G20, inches"},
         {"\nG90 ", "\nG92 X10\nG90 ", "G92 sets X, Y or Z"},
+        /* a travel to 1.8e18 mm wrapped the count of pieces its run was cut into (ASan: a heap overflow) */
+        {"\nG1 X", "\nG1 X1844674407370955300 Y99.809 F7800\nG1 X", "X 1.84467e+18 mm: beyond any printer's reach"},
     };
     char path3mf[300], gcode[300], *text;
     adaslice_mesh m = gen_dome(10, 40, 1, 10, 48), other = gen_box(0, 0, 0, 30, 20, 3);
