@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 static char *trim(char *s)
 {
@@ -83,11 +84,8 @@ static int z_field(const char *s, const char *comma, double *z)
 /* A sign, then a digit, a point, or inf or nan in any case. */
 static int starts_as_number(const char *s)
 {
-    int k;
     s += *s == '+' || *s == '-';
-    for (k = 0; k < 3 && s[k]; k++)
-        if ((s[k] | 0x20) != "inf"[k] && (s[k] | 0x20) != "nan"[k]) break;
-    return (*s >= '0' && *s <= '9') || *s == '.' || k == 3;
+    return (*s >= '0' && *s <= '9') || *s == '.' || !strncasecmp(s, "inf", 3) || !strncasecmp(s, "nan", 3);
 }
 
 int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, adaslice_profile *out)
