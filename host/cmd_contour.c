@@ -141,7 +141,9 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
 typedef struct line_ref { size_t at, len; } line_ref;
 
 typedef struct layer_info {
-    double top, height;          /* ;Z: and ;HEIGHT: */
+    double top, height;          /* ;Z: and ;HEIGHT:; top moves up by z_offset once the plan has matched it */
+    double mark;                 /* ;Z: as the file says it */
+    size_t line;                 /* the ;Z: line's index */
     size_t first_seg;            /* the layer's extrusions: gfile.segs from here to the next layer's */
     double e_in, e_out;          /* filament extruded, before and after */
 } layer_info;
@@ -160,6 +162,7 @@ typedef struct gfile {
     path_seg *segs;              /* every extrusion, in order */
     size_t seg_count, seg_cap;
     int relative_e_seen;
+    double z_offset;             /* PrusaSlicer's z_offset: its moves are there above ;Z: */
 } gfile;
 
 /* PrusaSlicer 2.5's feature labels (ExtrusionEntity.cpp's role names):
@@ -281,6 +284,20 @@ static int gfile_read(const char *path, gfile *g)
                                  "marlin2, klipper, repetier, smoothie, sprinter or teacup firmware", path,
                         quote_text(q, v, n));
     }
+    /* the moves are z_offset above the ;Z: comments (not in the 3MF's plan) */
+    if ((v = gcode_config_value(g->text, g->size, "z_offset", &n))) {
+        char text[40], *end;
+        memcpy(text, v, n < sizeof text ? n : sizeof text - 1);
+        text[n < sizeof text ? n : sizeof text - 1] = 0;
+        g->z_offset = strtod(text, &end);
+        if (end == text || *end || !(fabs(g->z_offset) <= 10)) {
+            char q[QUOTE_SIZE];
+            return complain(RC_FAIL, "%s: z_offset %s in the config at its end: not a Z offset in mm (-10 to 10)", path,
+                            quote_text(q, v, n));
+        }
+    }
+    if ((v = gcode_config_value(g->text, g->size, "spiral_vase", &n)) && n == 1 && *v == '1')
+        return complain(RC_FAIL, "%s: spiral_vase = 1: its Z climbs within each layer; contour reads planar layers", path);
     memset(&m, 0, sizeof m);
     m.layer = -1;
     g->lo[0] = g->lo[1] = HUGE_VAL;
@@ -299,7 +316,8 @@ static int gfile_read(const char *path, gfile *g)
                 g->layers = t;
             }
             memset(&g->layers[g->layer_count], 0, sizeof *g->layers);
-            g->layers[g->layer_count].top = z;
+            g->layers[g->layer_count].top = g->layers[g->layer_count].mark = z;
+            g->layers[g->layer_count].line = i;
             g->layers[g->layer_count].first_seg = g->seg_count;
             m.layer = (long)g->layer_count++;
             continue;
@@ -340,6 +358,14 @@ static int gfile_read(const char *path, gfile *g)
                 if (!(fabs(m.pos[axis]) <= GCODE_REACH_MM))
                     return complain(RC_FAIL, "%s: line %zu: %c %g mm: beyond any printer's reach (%g mm)", path, i + 1,
                                     "XYZ"[axis], m.pos[axis], GCODE_REACH_MM);
+            /* contour takes the layer's plane from ;Z:: a ;Z: lost or a Z moved
+               within a layer would put the nozzle into what it printed */
+            if (moved == 2 && m.layer >= 0 && m.kind &&
+                fabs(m.pos[2] - (g->layers[m.layer].top + g->z_offset)) > 2e-3)
+                return complain(RC_FAIL, "%s: line %zu: the part extruded at Z %g in the layer that ;Z:%g (line %zu) "
+                                         "puts at %g%s: the ;Z: comments do not follow the moves", path, i + 1,
+                                m.pos[2], g->layers[m.layer].top, g->layers[m.layer].line + 1,
+                                g->layers[m.layer].top + g->z_offset, g->z_offset ? " with its z_offset" : "");
             if (moved == 2 && m.layer >= 0) {
                 path_seg *sg;
                 if (g->seg_count == g->seg_cap) {
@@ -422,13 +448,23 @@ static int place(const contour_args *a, const gfile *g, const threemf_project *p
                                   fabs((g->lo[1] + g->hi[1]) / 2 - (b[1] + t[1]) / 2) < 0.05;
         }
     }
-    /* every layer is one the plan made (PrusaSlicer leaves out empty ones) */
+    /* every layer is one the plan made (PrusaSlicer leaves out empty ones),
+       as thick as the plan made it: the beads' E follows the height */
     for (i = 0; i < g->layer_count; i++) {
-        while (j < p->layers && p->tops[j] < g->layers[i].top - 2e-3) j++;
-        if (j == p->layers || fabs(p->tops[j] - g->layers[i].top) > 2e-3)
+        layer_info *L = &g->layers[i];
+        double planned;
+        while (j < p->layers && p->tops[j] < L->top - 2e-3) j++;
+        if (j == p->layers || fabs(p->tops[j] - L->top) > 2e-3)
             return complain(RC_FAIL, "%s: layer %zu at Z %g is not one of the %zu layers %s plans: not sliced from this project",
-                            a->in, i + 1, g->layers[i].top, p->layers, a->project);
+                            a->in, i + 1, L->top, p->layers, a->project);
+        planned = p->tops[j] - (j ? p->tops[j - 1] : 0);
+        if (fabs(L->height - planned) > 2e-3)
+            return complain(RC_FAIL, "%s: layer %zu (;Z:%g, line %zu): ;HEIGHT:%g, but %s plans it %g mm thick", a->in, i + 1,
+                            L->top, L->line + 1, L->height, a->project, planned);
     }
+    /* from here on every Z is where the moves are */
+    for (i = 0; i < g->layer_count; i++) g->layers[i].top += g->z_offset;
+    pl->shift[2] += g->z_offset;
     return RC_OK;
 }
 
@@ -1023,7 +1059,7 @@ static int write_view(const contour_args *a, const gfile *g, const surface *s, c
     int rc;
     if (!w->view_n)
         return complain(RC_FAIL, "--svg-path %zu: layer %zu (;Z:%g) of %s has no contoured move to draw", a->view_layer,
-                        a->view_layer, L->top, a->in);
+                        a->view_layer, L->mark, a->in);
     n = (size_t)ceil(w->view_length / (a->resolution / 4)) + 1;
     if (!(mesh = (double *)malloc(2 * n * sizeof *mesh))) return complain(RC_FAIL, "out of memory");
     for (k = 0; k < n; k++) {

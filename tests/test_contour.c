@@ -1066,6 +1066,13 @@ static void refused_inputs_get_one_line_and_no_file(void)
         {"\nG90 ", "\nG92 X10\nG90 ", "G92 sets X, Y or Z"},
         /* a travel to 1.8e18 mm wrapped the count of pieces its run was cut into (ASan: a heap overflow) */
         {"\nG1 X", "\nG1 X1844674407370955300 Y99.809 F7800\nG1 X", "X 1.84467e+18 mm: beyond any printer's reach"},
+        /* contour takes each layer's plane from its ;Z: comment: a Z moved
+           within the layer lifted every path after it (exit 0) */
+        {"\n;TYPE:Solid infill", "\n;TYPE:Solid infill\nG1 Z5", "extruded at Z 5 in the layer that"},
+        /* a bead's E follows the layer's height: 0.001 made E 12 times the file's */
+        {"\n;HEIGHT:", "\n;HEIGHT:0.001\n;HEIGHT:", ";HEIGHT:0.001, but"},
+        {"; z_offset = 0", "; z_offset = 0abc", "z_offset 0abc"},
+        {"; spiral_vase = 0", "; spiral_vase = 1", "spiral_vase = 1"},
     };
     char path3mf[300], gcode[300], *text;
     adaslice_mesh m = gen_dome(10, 40, 1, 10, 48), other = gen_box(0, 0, 0, 30, 20, 3);
@@ -1094,6 +1101,24 @@ static void refused_inputs_get_one_line_and_no_file(void)
                r.status, r.err);
         CHECKF(!cli_exists(cli_path("out.gcode")), "%s: out.gcode written", cases[c][2]);
         cli_free(&r);
+    }
+    /* a layer's ;Z: lost: its moves taken as the layer below's, whose
+       plane is lower; contour put the nozzle into the layer it printed */
+    {
+        const char *z1 = strstr(text, "\n;Z:"), *z2 = z1 ? strstr(z1 + 1, "\n;Z:") : NULL, *end = z2 ? strchr(z2 + 1, '\n') : NULL;
+        CHECK(end);
+        if (end) {
+            char *bad = (char *)malloc(strlen(text) + 1);
+            memcpy(bad, text, (size_t)(z2 - text));
+            strcpy(bad + (z2 - text), end);
+            cli_write(cli_path("bad.gcode"), bad);
+            free(bad);
+            r = cli_run("contour", cli_path("bad.gcode"), "--project", path3mf, "-o", cli_path("out.gcode"), NULL);
+            CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "the ;Z: comments do not follow the moves"),
+                   "a ;Z: removed: exit %d: %.300s", r.status, r.err);
+            CHECK(!cli_exists(cli_path("out.gcode")));
+            cli_free(&r);
+        }
     }
     {
         static const char *const usage[][3] = {{"--max-angle", "90", "--max-angle 90"},
@@ -1189,6 +1214,110 @@ static void refused_inputs_get_one_line_and_no_file(void)
     free(text);
 }
 
+/* text with every move's Z word `dz` higher, as PrusaSlicer's z_offset
+   writes it (the ;Z: comments stay), and "; z_offset = 0" said so. */
+static char *z_moved(const char *text, double dz, const char *said, size_t *moved)
+{
+    size_t n = strlen(text), cap = n + n / 4 + 256, len = 0;
+    char *out = (char *)malloc(cap), *with;
+    const char *line = text;
+    *moved = 0;
+    while (*line) {
+        const char *end = strchr(line, '\n'), *z = NULL, *p;
+        size_t l = end ? (size_t)(end + 1 - line) : strlen(line);
+        if (!strncmp(line, "G1 ", 3) || !strncmp(line, "G0 ", 3))
+            for (p = line; p < line + l && *p != ';'; p++)
+                if (p[0] == ' ' && p[1] == 'Z') { z = p + 2; break; }
+        if (len + l + 32 > cap) out = (char *)realloc(out, cap *= 2);
+        if (z) {
+            char *after;
+            double v = strtod(z, &after);
+            memcpy(out + len, line, (size_t)(z - line));
+            len += (size_t)(z - line);
+            len += (size_t)sprintf(out + len, "%.3f", v + dz);
+            memcpy(out + len, after, l - (size_t)(after - line));
+            len += l - (size_t)(after - line);
+            (*moved)++;
+        } else {
+            memcpy(out + len, line, l);
+            len += l;
+        }
+        line += l;
+    }
+    out[len] = 0;
+    with = edited(out, "; z_offset = 0\n", said);
+    free(out);
+    return with;
+}
+
+/* PrusaSlicer's z_offset puts every move that far above the layer's ;Z:
+   comment: contour's output of such a file is the plain file's with every
+   Z that much higher, line for line (it once put the contoured paths at
+   ;Z:, into what the layer printed, 0.15 mm down); and PrusaSlicer's own
+   file with --z-offset is taken. */
+static void z_offset_moves_every_z(void)
+{
+    char path3mf[300], gcode[300], *text, *shifted, *a = NULL, *b = NULL, *pa, *pb;
+    adaslice_mesh m = gen_dome(10, 40, 1, 10, 48);
+    size_t moved = 0, lines = 0, zs = 0, bad = 0;
+    int shown = 0;
+    cli_result r;
+    cli_write_obj(cli_path("zo.obj"), &m);
+    gen_free(&m);
+    snprintf(path3mf, sizeof path3mf, "%s", cli_path("zo.3mf"));
+    snprintf(gcode, sizeof gcode, "%s", cli_path("zo.gcode"));
+    if (!prusa_gcode_after(cli_run("plan", cli_path("zo.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf, gcode, NULL))
+        return;
+    text = read_whole_text(gcode);
+    CHECK(text && strstr(text, "\n; z_offset = 0\n"));
+    if (check_case_failed()) { free(text); return; }
+    shifted = z_moved(text, 0.15, "; z_offset = 0.15\n", &moved);
+    cli_write(cli_path("zo15.gcode"), shifted);
+    free(shifted);
+    free(text);
+    r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("zo.out"), NULL);
+    CHECKF(r.status == 0, "exit %d: %.300s", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("contour", cli_path("zo15.gcode"), "--project", path3mf, "-o", cli_path("zo15.out"), NULL);
+    CHECKF(r.status == 0, "z_offset 0.15: exit %d: %.300s", r.status, r.err);
+    cli_free(&r);
+    a = read_whole_text(cli_path("zo.out"));
+    b = read_whole_text(cli_path("zo15.out"));
+    CHECK(a && b);
+    for (pa = a, pb = b; pa && pb && *pa && *pb; lines++) {
+        char *ea = strchr(pa, '\n'), *eb = strchr(pb, '\n'), *za, *zb;
+        size_t la = ea ? (size_t)(ea - pa) : strlen(pa), lb = eb ? (size_t)(eb - pb) : strlen(pb);
+        /* the same line but for the Z word's number */
+        za = !strncmp(pa, "G1 ", 3) ? strstr(pa, " Z") : NULL;
+        zb = !strncmp(pb, "G1 ", 3) ? strstr(pb, " Z") : NULL;
+        if (za && za - pa < (long)la && zb && zb - pb < (long)lb && za - pa == zb - pb && !strncmp(pa, pb, (size_t)(za - pa))) {
+            char *ra, *rb;
+            double va = strtod(za + 2, &ra), vb = strtod(zb + 2, &rb);
+            zs++;
+            if (fabs(vb - va - 0.15) > 1.5e-3 || la - (size_t)(ra - pa) != lb - (size_t)(rb - pb) ||
+                strncmp(ra, rb, la - (size_t)(ra - pa)))
+                bad++;
+        } else if (la != lb || strncmp(pa, pb, la)) {
+            if (!strstr(pa, "z_offset")) bad++;
+        }
+        if (bad && !shown) shown = printf("    first difference, line %zu: %.*s | %.*s\n", lines + 1, (int)la, pa, (int)lb, pb);
+        pa = ea ? ea + 1 : pa + la;
+        pb = eb ? eb + 1 : pb + lb;
+    }
+    CHECKF(a && b && !*pa && !*pb && bad == 0 && zs > moved, "%zu lines, %zu of them with Z (%zu in the file), %zu differ",
+           lines, zs, moved, bad);
+    free(a);
+    free(b);
+    /* PrusaSlicer's own */
+    if (!prusa_gcode_after(cli_run("plan", cli_path("zo.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf,
+                           cli_path("zo-prusa.gcode"), "--z-offset=0.15"))
+        return;
+    r = cli_run("contour", cli_path("zo-prusa.gcode"), "--project", path3mf, "-o", cli_path("zo-prusa.out"), NULL);
+    CHECKF(r.status == 0 && strstr(r.out, "shifted") && strstr(r.out, "contoured"), "PrusaSlicer's --z-offset 0.15: exit %d: %.300s",
+           r.status, r.err);
+    cli_free(&r);
+}
+
 void test_contour(void)
 {
     if (!cli_begin("adaslice-contour")) { CHECK(!"no temporary directory"); return; }
@@ -1196,6 +1325,7 @@ void test_contour(void)
     RUN_NEEDING("prusa-slicer", an_aerofoil_is_printed_on_its_surface);
     RUN_NEEDING("prusa-slicer", the_bundled_hand_is_printed_on_its_surface);
     RUN_NEEDING("prusa-slicer", refused_inputs_get_one_line_and_no_file);
+    RUN_NEEDING("prusa-slicer", z_offset_moves_every_z);
     RUN_NEEDING("prusa-slicer", a_hybrid_projects_limits_are_taken);
     RUN_NEEDING("prusa-slicer", the_svg_path_is_the_gcodes);
     RUN_NEEDING("prusa-slicer", top_skins_follow_the_dome_further);
