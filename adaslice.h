@@ -177,8 +177,9 @@
    state: calls are reentrant, and threads may read one mesh at once.
 
    PIPELINE AND UNITS
-   mesh (mm, build direction +z) -> profile: N = ceil(H/b) bins, bin i is
-   [z0 + i*b, z0 + (i+1)*b) -> plan: planes 0 = s0 < ... < sK = N on bin
+   mesh (mm, build direction +z) -> profile: N = ceil(H/b) bins (H less its
+   float rounding), bin i is [z0 + i*b, z0 + (i+1)*b) -> plan: planes
+   0 = s0 < ... < sK = N on bin
    boundaries; heights in a plan are mm above the part's bottom z0 -> masks at
    absolute heights on a printer's grid.
 
@@ -4636,7 +4637,13 @@ static adaslice_result adaslice__profile_bins(const adaslice_mesh *mesh, const a
     }
     if (!(hi[2] > lo[2]))
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "profile: the mesh is flat (height 0 along z)");
-    bins = ceil((hi[2] - lo[2]) / opt->bin - 1e-9);
+    /* the vertices are floats: a height of whole bins (10.3 mm is 10.3000002
+       as a float) gets no extra bin for the rounding, which a uniform plan
+       made a last layer of one bin (0.002 mm, refused by formats of 0.01) */
+    {
+        double far = fabs(lo[2]) > fabs(hi[2]) ? fabs(lo[2]) : fabs(hi[2]), noise = 2 * FLT_EPSILON * far / opt->bin;
+        bins = ceil((hi[2] - lo[2]) / opt->bin - 1e-9 - (noise < 0.25 ? noise : 0.25));
+    }
     if (bins < 1) bins = 1;
     if (bins > 2147483646.0)
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "profile: %g bins of %g mm over %g mm is too many",

@@ -5,6 +5,7 @@
 #include "output.h"
 #include "pages.h"
 #include "report.h"
+#include <math.h>
 #include <string.h>
 
 /* "3 facets" or "1 facet" into a list, comma-separated. */
@@ -35,6 +36,25 @@ static void warn_repairs(const char *path, const adaslice_mesh_report *r)
             fixed[0] && left[0] ? ";" : "", left[0] ? " left " : "", left);
 }
 
+/* A float holds a coordinate to 24 bits: far from the origin (CAD or survey
+   coordinates) the part's shape is already coarser than a layer's bins when
+   loaded. Said, not repaired: the file's own origin is the user's to move. */
+static void warn_far_from_origin(const char *path, const adaslice_mesh *m)
+{
+    double far = 0, ulp;
+    size_t i;
+    int e;
+    for (i = 0; i < 3 * m->vertex_count; i++) {
+        double c = fabs((double)m->vertices[i]);
+        far = c > far ? c : far;
+    }
+    (void)frexp(far, &e);
+    ulp = ldexp(1, e - 24);
+    if (ulp > 1e-3)
+        fprintf(stderr, "adaslice: warning: %s: vertices lie up to %g mm from the origin, where a float holds a coordinate "
+                        "only to %g mm: the part is loaded that coarse; move it near the origin in the file\n", path, far, ulp);
+}
+
 int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report)
 {
     return model_load_timed(path, scale, mesh, report, NULL);
@@ -53,6 +73,7 @@ int model_load_timed(const char *path, double scale, adaslice_mesh *mesh, adasli
     memset(&ro, 0, sizeof ro);
     ro.allocator = pages_allocator();
     if (adaslice_mesh_load_file(path, &lo, mesh, &err) != ADASLICE_OK) return library_error(&err);
+    warn_far_from_origin(path, mesh);
     t0 = now_ms();
     if (adaslice_mesh_repair(mesh, &ro, &r, &err) != ADASLICE_OK) {
         adaslice_mesh_free(mesh);

@@ -663,6 +663,62 @@ static void orient_never_does_worse_than_as_loaded(void)
 /* Every command repairs what it loads and says so in one line: a box with
    facets wound backwards and one inside out, each warned about with what was
    done, the report in --json, the plan as the clean box's. */
+/* A part a whole number of layers tall gets exactly that many: its height
+   as floats (10.3 mm is 10.3000002) once gave one more bin, and a uniform
+   plan a last layer of 0.002 mm, which the ChiTu zip refused. */
+static void whole_layers_tall_part_has_no_sliver(void)
+{
+    static const double heights[] = {10.3, 7.15, 23.45, 0.35, 151.1};
+    size_t k;
+    for (k = 0; k < sizeof heights / sizeof *heights; k++) {
+        adaslice_mesh m = gen_box(0, 0, 0, 10, 10, heights[k]);
+        cli_result r;
+        long want = lround(heights[k] / 0.05);
+        cli_write_obj(cli_path("tall.obj"), &m);
+        gen_free(&m);
+        r = cli_run("plan", cli_path("tall.obj"), "--uniform", "0.05", "--json", NULL);
+        CHECKF(r.status == 0 && (long)cli_json_number(r.out, "layers") == want, "%g mm: exit %d, %g layers, not %ld: %.200s",
+               heights[k], r.status, cli_json_number(r.out, "layers"), want, r.err);
+        cli_free(&r);
+        r = cli_run("slice", cli_path("tall.obj"), "--uniform", "0.05", "--pixels", "200x200", "--pitch", "0.1", "-o",
+                    cli_path("tall.zip"), NULL);
+        CHECKF(r.status == 0 && !r.err[0], "%g mm, ChiTu zip: exit %d: %.300s", heights[k], r.status, r.err);
+        cli_free(&r);
+    }
+}
+
+/* Coordinates far from the origin are held as floats: a 10 mm box 1.23 km
+   out is loaded 0.125 mm coarse (once 21 % oversize, silently); said once. */
+static void far_from_the_origin_is_warned(void)
+{
+#define BOX_FACES "f 1 4 2\nf 1 3 4\nf 5 8 7\nf 5 6 8\nf 1 6 5\nf 1 2 6\nf 3 8 4\nf 3 7 8\nf 1 7 3\nf 1 5 7\nf 2 8 6\nf 2 4 8\n"
+    FILE *f = fopen(cli_path("far.obj"), "w");
+    cli_result r;
+    int i;
+    CHECK(f != NULL);
+    if (!f) return;
+    for (i = 0; i < 8; i++)
+        fprintf(f, "v %.6f %.6f %.6f\n", 1234567.891 + 10.3 * (i & 1), 20.1 * (i >> 1 & 1), 7.77 * (i >> 2 & 1));
+    fputs(BOX_FACES, f);
+    fclose(f);
+    r = cli_run("plan", cli_path("far.obj"), "--uniform", "0.05", NULL);
+    CHECKF(r.status == 0 && cli_one_message(r.err) && strstr(r.err, "warning") && strstr(r.err, "far.obj") &&
+               strstr(r.err, "1.23458e+06 mm from the origin") && strstr(r.err, "only to 0.125 mm"),
+           "exit %d: '%s'", r.status, r.err);
+    cli_free(&r);
+    /* 16 m is where a float's step passes 1 um: a part 10 m out is not warned about */
+    f = fopen(cli_path("near.obj"), "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    for (i = 0; i < 8; i++) fprintf(f, "v %.6f %.6f %.6f\n", 10000 + 10.3 * (i & 1), 20.1 * (i >> 1 & 1), 7.77 * (i >> 2 & 1));
+    fputs(BOX_FACES, f);
+    fclose(f);
+    r = cli_run("plan", cli_path("near.obj"), "--uniform", "0.05", NULL);
+    CHECKF(r.status == 0 && !r.err[0], "exit %d: '%s'", r.status, r.err);
+    cli_free(&r);
+#undef BOX_FACES
+}
+
 static void repairs_are_warned_about_and_reported(void)
 {
     const char *bad = cli_path("bad_box.stl"), *good = cli_path("good_box.stl");
@@ -856,6 +912,8 @@ void test_cli(void)
     RUN(slice_writes_a_job);
     RUN(orient_finds_directions);
     RUN(orient_never_does_worse_than_as_loaded);
+    RUN(whole_layers_tall_part_has_no_sliver);
+    RUN(far_from_the_origin_is_warned);
     RUN(repairs_are_warned_about_and_reported);
     RUN(unwritable_output_fails_cleanly);
     RUN(bad_model_is_named);
