@@ -1053,6 +1053,22 @@ static int edited_3mf(const char *from, const char *to, const char *name, const 
     return !zip_close(z, ok && found) && ok && found;
 }
 
+/* A small dome (stem.obj) planned into stem.3mf and sliced by PrusaSlicer
+   into stem.gcode (paths in path3mf and gcode): the G-code's text, NULL
+   after a failed check. */
+static char *sliced_small_dome(const char *stem, char *path3mf, char *gcode)
+{
+    adaslice_mesh m = gen_dome(10, 40, 1, 10, 48);
+    char obj[300];
+    snprintf(obj, sizeof obj, "%s/%s.obj", cli_dir, stem);
+    snprintf(path3mf, 300, "%s/%s.3mf", cli_dir, stem);
+    snprintf(gcode, 300, "%s/%s.gcode", cli_dir, stem);
+    cli_write_obj(obj, &m);
+    gen_free(&m);
+    if (!prusa_gcode_after(cli_run("plan", obj, PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf, gcode, NULL)) return NULL;
+    return read_whole_text(gcode);
+}
+
 static void refused_inputs_get_one_line_and_no_file(void)
 {
     static const char *const cases[][3] = {
@@ -1075,18 +1091,12 @@ static void refused_inputs_get_one_line_and_no_file(void)
         {"; spiral_vase = 0", "; spiral_vase = 1", "spiral_vase = 1"},
     };
     char path3mf[300], gcode[300], *text;
-    adaslice_mesh m = gen_dome(10, 40, 1, 10, 48), other = gen_box(0, 0, 0, 30, 20, 3);
+    adaslice_mesh other = gen_box(0, 0, 0, 30, 20, 3);
     cli_result r;
     size_t c;
-    cli_write_obj(cli_path("small.obj"), &m);
     cli_write_obj(cli_path("other.obj"), &other);
-    gen_free(&m);
     gen_free(&other);
-    snprintf(path3mf, sizeof path3mf, "%s", cli_path("small.3mf"));
-    snprintf(gcode, sizeof gcode, "%s", cli_path("small.gcode"));
-    if (!prusa_gcode_after(cli_run("plan", cli_path("small.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf, gcode, NULL))
-        return;
-    text = read_whole_text(gcode);
+    if (!(text = sliced_small_dome("small", path3mf, gcode))) return;
     /* the unedited file is taken */
     r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("ok.gcode"), NULL);
     CHECKF(r.status == 0 && cli_exists(cli_path("ok.gcode")), "exit %d: %.300s", r.status, r.err);
@@ -1258,18 +1268,11 @@ static char *z_moved(const char *text, double dz, const char *said, size_t *move
 static void z_offset_moves_every_z(void)
 {
     char path3mf[300], gcode[300], *text, *shifted, *a = NULL, *b = NULL, *pa, *pb;
-    adaslice_mesh m = gen_dome(10, 40, 1, 10, 48);
     size_t moved = 0, lines = 0, zs = 0, bad = 0;
     int shown = 0;
     cli_result r;
-    cli_write_obj(cli_path("zo.obj"), &m);
-    gen_free(&m);
-    snprintf(path3mf, sizeof path3mf, "%s", cli_path("zo.3mf"));
-    snprintf(gcode, sizeof gcode, "%s", cli_path("zo.gcode"));
-    if (!prusa_gcode_after(cli_run("plan", cli_path("zo.obj"), PRUSA_FDM_ARGS, "--3mf", path3mf, NULL), path3mf, gcode, NULL))
-        return;
-    text = read_whole_text(gcode);
-    CHECK(text && strstr(text, "\n; z_offset = 0\n"));
+    if (!(text = sliced_small_dome("zo", path3mf, gcode))) return;
+    CHECK(strstr(text, "\n; z_offset = 0\n"));
     if (check_case_failed()) { free(text); return; }
     shifted = z_moved(text, 0.15, "; z_offset = 0.15\n", &moved);
     cli_write(cli_path("zo15.gcode"), shifted);
