@@ -3699,7 +3699,8 @@ static void adaslice__cut_point(const adaslice_mesh *m, uint32_t below, uint32_t
    memory. */
 static int adaslice__join_ends(adaslice__gaps *g)
 {
-    size_t n = g->heads, side, cells, i, j;
+    size_t n = g->heads, side, cells, i, j, *live;
+    uint32_t *run_end, *first;
     double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, size;
     long r;
     for (side = 1; side * side < n; side++) {}
@@ -3709,7 +3710,7 @@ static int adaslice__join_ends(adaslice__gaps *g)
         adaslice__free(&g->allocator, g->cell_head);
         g->cell_cap = g->slot_cap = 0;
         g->cell_first = ADASLICE__CAST(size_t *, adaslice__alloc(&g->allocator, 2 * (cells + 1), sizeof(size_t)));
-        g->cell_head = ADASLICE__CAST(uint32_t *, adaslice__alloc(&g->allocator, 2 * n, sizeof(uint32_t)));
+        g->cell_head = ADASLICE__CAST(uint32_t *, adaslice__alloc(&g->allocator, 3 * 2 * n, sizeof(uint32_t)));
         if (!g->cell_first || !g->cell_head) return 0;
         g->cell_cap = 2 * (cells + 1);
         g->slot_cap = 2 * n;
@@ -3733,29 +3734,56 @@ static int adaslice__join_ends(adaslice__gaps *g)
     }
     for (i = cells; i > 0; i--) g->cell_first[i] = g->cell_first[i - 1];
     g->cell_first[0] = 0;
+    /* A facet repeated n times puts n ends on one point, one after another
+       in its cell: a run, whose heads are equally near any tail, so only its
+       first free one (first[] at the run's start) can be the nearest, and
+       they go in order. Visiting runs, not heads, keeps that linear, not
+       n^2; live[c] is cell c's first run with a head free. */
+    run_end = g->cell_head + g->slot_cap;
+    first = run_end + g->slot_cap;
+    for (i = 0; i < cells; i++) {
+        size_t k = g->cell_first[i], e = g->cell_first[i + 1];
+        while (k < e) {
+            size_t start = k, h = g->cell_head[k];
+            while (k < e && g->head[2 * g->cell_head[k]] == g->head[2 * h] &&
+                   g->head[2 * g->cell_head[k] + 1] == g->head[2 * h + 1])
+                k++;
+            run_end[start] = (uint32_t)k;
+            first[start] = (uint32_t)start;
+        }
+    }
+    live = g->cell_first + cells + 1;
+    memcpy(live, g->cell_first, cells * sizeof *live);
     for (j = 0; j < n; j++) g->taker[j] = ADASLICE__NONE;
     for (i = 0; i < g->tails; i++) {
         const double *t = g->tail + 2 * i;
         long cx = (long)adaslice__cell(t[0], lo[0], size, side), cy = (long)adaslice__cell(t[1], lo[1], size, side);
         double best = DBL_MAX;
-        size_t pick = ADASLICE__NONE;
+        size_t pick = ADASLICE__NONE, pick_run = 0;
         /* every head in ring r lies at least (r - 1) cells away */
         for (r = 0; r <= (long)side && !(r > 1 && (double)(r - 1) * size * (double)(r - 1) * size > best); r++) {
             long dx, dy;
             for (dy = -r; dy <= r; dy++)
                 for (dx = -r; dx <= r; dx += (dy == -r || dy == r) ? 1 : 2 * r) {
                     long x = cx + dx, y = cy + dy;
-                    size_t k;
+                    size_t c = (size_t)y * side + (size_t)x, e, k;
                     if (x < 0 || y < 0 || x >= (long)side || y >= (long)side) { if (!r) break; continue; }
-                    for (k = g->cell_first[(size_t)y * side + (size_t)x]; k < g->cell_first[(size_t)y * side + (size_t)x + 1]; k++) {
-                        size_t h = g->cell_head[k];
-                        double ex = g->head[2 * h] - t[0], ey = g->head[2 * h + 1] - t[1];
-                        if (g->taker[h] == ADASLICE__NONE && ex * ex + ey * ey < best) { best = ex * ex + ey * ey; pick = h; }
+                    e = g->cell_first[c + 1];
+                    while (live[c] < e && first[live[c]] == run_end[live[c]]) live[c] = run_end[live[c]];
+                    for (k = live[c]; k < e; k = run_end[k]) {
+                        size_t h;
+                        double ex, ey;
+                        if (first[k] == run_end[k]) continue;
+                        h = g->cell_head[first[k]];
+                        ex = g->head[2 * h] - t[0];
+                        ey = g->head[2 * h + 1] - t[1];
+                        if (ex * ex + ey * ey < best) { best = ex * ex + ey * ey; pick = h; pick_run = k; }
                     }
                     if (!r) break;
                 }
         }
         g->taker[pick] = (uint32_t)i;
+        first[pick_run]++;
     }
     return 1;
 }

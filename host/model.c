@@ -41,16 +41,19 @@ static void warn_repairs(const char *path, const adaslice_mesh_report *r)
    loaded. Said, not repaired: the file's own origin is the user's to move. */
 static void warn_far_from_origin(const char *path, const adaslice_mesh *m)
 {
-    double far = 0, ulp;
+    double far = 0, lo[3], hi[3], size = 0, ulp;
     size_t i;
     int e;
     for (i = 0; i < 3 * m->vertex_count; i++) {
         double c = fabs((double)m->vertices[i]);
         far = c > far ? c : far;
     }
+    adaslice_mesh_bounds(m, lo, hi);
+    for (i = 0; i < 3; i++) size = hi[i] - lo[i] > size ? hi[i] - lo[i] : size;
     (void)frexp(far, &e);
     ulp = ldexp(1, e - 24);
-    if (ulp > 1e-3)
+    /* a part 100 m tall is that coarse too, but only to 10^-7 of itself */
+    if (ulp > 1e-3 && ulp > 1e-5 * size)
         fprintf(stderr, "adaslice: warning: %s: vertices lie up to %g mm from the origin, where a float holds a coordinate "
                         "only to %g mm: the part is loaded that coarse; move it near the origin in the file\n", path, far, ulp);
 }

@@ -203,8 +203,8 @@ static void too_tall_for_the_default_printer(void)
    display of no known height: the same for micrometres. */
 static void wrong_units_warn(void)
 {
-    cli_result r = cli_run("slice", box_obj("tiny.obj", 0.5, 0.4, 0.3), "--pixels", "100x100", "--pitch", "0.01", "-o",
-                           cli_path("tiny_job"), NULL);
+    cli_result r = cli_run("slice", box_obj("tiny.obj", 0.5, 0.4, 0.3), "--pixels", "100x100", "--pitch", "0.01",
+                           "--bottom-layers", "1", "-o", cli_path("tiny_job"), NULL);
     CHECKF(r.status == 0 && cli_one_message(r.err) && strstr(r.err, "warning: the part is 0.5 x 0.4 x 0.3 mm") &&
                strstr(r.err, "metres? --scale 1000") && strstr(r.err, "300 mm tall"),
            "exit %d: %s", r.status, r.err);

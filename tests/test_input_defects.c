@@ -355,7 +355,7 @@ static void counts_of_one_are_singular(void)
        job that lights none is refused */
     cli_write(cli_path("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0.3 0.3 0.1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
     r = cli_run("slice", cli_path("flat.obj"), "-o", cli_path("flat_job"), "--pixels", "64x64", "--pitch", "0.05",
-                "--bottom-layers", "1", "--uniform", "0.102", NULL);
+                "--bottom-layers", "1", "--uniform", "0.1", NULL);
     CHECKF(r.status == 0 && strstr(r.out, "1 layer of") && strstr(r.out, "1 bottom layer of"), "exit %d: %s%s", r.status,
            r.out, r.err);
     expect_singular("slice one layer", &r);
