@@ -3709,7 +3709,9 @@ static int adaslice__join_ends(adaslice__gaps *g)
         adaslice__free(&g->allocator, g->cell_first);
         adaslice__free(&g->allocator, g->cell_head);
         g->cell_cap = g->slot_cap = 0;
-        g->cell_first = ADASLICE__CAST(size_t *, adaslice__alloc(&g->allocator, 2 * (cells + 1), sizeof(size_t)));
+        /* cell_cap starts, then as many live[] */
+        g->cell_first = ADASLICE__CAST(size_t *, adaslice__alloc(&g->allocator, 2 * 2 * (cells + 1), sizeof(size_t)));
+        /* slot_cap heads, then as many run_end[] and first[] */
         g->cell_head = ADASLICE__CAST(uint32_t *, adaslice__alloc(&g->allocator, 3 * 2 * n, sizeof(uint32_t)));
         if (!g->cell_first || !g->cell_head) return 0;
         g->cell_cap = 2 * (cells + 1);
@@ -3752,7 +3754,7 @@ static int adaslice__join_ends(adaslice__gaps *g)
             first[start] = (uint32_t)start;
         }
     }
-    live = g->cell_first + cells + 1;
+    live = g->cell_first + g->cell_cap;
     memcpy(live, g->cell_first, cells * sizeof *live);
     for (j = 0; j < n; j++) g->taker[j] = ADASLICE__NONE;
     for (i = 0; i < g->tails; i++) {

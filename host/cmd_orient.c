@@ -179,6 +179,7 @@ static void orient_usage(FILE *f)
           "  --dirs N            directions on the sphere, 1 to 1000000           [1000]\n"
           "  --alpha A           weight of the layer count against the error, 0..1  [0.5]\n"
           "  --map FILE          SVG map of F over the sphere (longitude, latitude)\n"
+          "  --memory MB         the most the search may take  [half the machine's memory]\n"
           "\n", f);
     plan_options_usage(f, FOR_ORIENT);
 }
@@ -248,8 +249,6 @@ int cmd_orient(int argc, char **argv)
     if (a.method == ADASLICE_METHOD_CURVATURE || weights_given(&a.weights) || a.sampler)
         return complain(RC_USAGE, "orient scores directions by unweighted optimal, greedy, finest or coarsest plans of "
                                   "exact profiles: drop %s", unscored_options(argc, argv, &a));
-    if (option_given(argc, argv, "--memory"))
-        return complain(RC_USAGE, "orient: --memory bounds the profile of plan, slice and print, not the search: drop it");
     if ((rc = output_check("--map", o.map))) return rc;
     if ((rc = model_load(a.model, a.scale, &mesh, &repair)) != RC_OK) return rc;
     t0 = now_ms();

@@ -428,7 +428,7 @@ int plan_orient_search(const plan_args *a, const adaslice_mesh *mesh, size_t cou
     po.metric = a->metric;
     po.bin = a->bin;
     plan_options_of(a, a->method, &pl);
-    return orient_search(a->model, mesh, &po, &pl, count, alpha, scores, minima, minima_count);
+    return orient_search(a->model, mesh, &po, &pl, count, alpha, a->memory_mb * 1e6, scores, minima, minima_count);
 }
 
 void plan_options_of(const plan_args *a, adaslice_method method, adaslice_plan_options *o)

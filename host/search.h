@@ -18,7 +18,10 @@
    of them, the axes last), F(O) with `alpha` over all of them;
    minima[0 .. *minima_count) are the best local minima, best first (at most
    SEARCH_MINIMA + 1), so the best never scores worse than the part as
-   loaded. RC_OK or a complaint made, naming `model`. */
+   loaded. A search whose threads' profiles could need more than
+   memory_limit bytes (0: no limit) is refused before any work. RC_OK or a
+   complaint made, naming `model`. */
 int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
-                  size_t count, double alpha, adaslice_direction_score **scores, size_t *minima, size_t *minima_count);
+                  size_t count, double alpha, double memory_limit, adaslice_direction_score **scores, size_t *minima,
+                  size_t *minima_count);
 #endif

@@ -147,7 +147,6 @@ static void bad_arguments_exit_2(void)
         {{"plan", "m.stl", "--3mf", "x.stl"}, {"--3mf", ".3mf"}},
         /* options that would do nothing are refused, not ignored */
         {{"plan", "m.stl", "--mapping", "exp"}, {"--mapping", "curvature"}},
-        {{"orient", "m.stl", "--memory", "100"}, {"--memory", "search"}},
         {{"print", "m.stl", "--port", "/dev/null", "--threads", "2"}, {"--threads"}},
     };
     size_t i;

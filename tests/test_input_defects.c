@@ -681,6 +681,21 @@ static void a_part_in_micrometres_is_refused_before_profiling(void)
                "%s: exit %d, '%s'", samplers[i], r.status, r.err);
         cli_free(&r);
     }
+    /* the orientation search holds a profile a thread: the same part asked
+       14 GB a thread and was killed; refused before any work, with --memory
+       and without it (ten times taller: 240 GB, over half of any machine) */
+    {
+        static const char *const searches[][6] = {{"orient", "--dirs", "10", "--memory", "300", "300 MB"},
+                                                  {"orient", "--dirs", "10", "--scale", "10", "more than --memory"},
+                                                  {"plan", "--orient", "best", "--scale", "10", "more than --memory"}};
+        for (i = 0; i < 3; i++) {
+            cli_result r = cli_run(searches[i][0], path, searches[i][1], searches[i][2], searches[i][3], searches[i][4], NULL);
+            CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "the search needs up to") &&
+                       strstr(r.err, searches[i][5]) && strstr(r.err, "--scale 0.001") && !*r.out,
+                   "%s %s: exit %d, '%s'", searches[i][0], searches[i][4], r.status, r.err);
+            cli_free(&r);
+        }
+    }
 }
 
 /* One OBJ face of 5,000 references round a pyramid: its fan is facets

@@ -301,7 +301,7 @@ static void threaded_search_matches_the_turned_meshes(void)
         size_t minima[SEARCH_MINIMA + 1], ref_minima[SEARCH_MINIMA + 1], count = 0, ref_count, longest = 0;
         memset(&po, 0, sizeof po);
         po.bin = bins[c];
-        CHECK(orient_search("test", &meshes[c], &po, NULL, n, 0.5, &fast, minima, &count) == RC_OK && fast);
+        CHECK(orient_search("test", &meshes[c], &po, NULL, n, 0.5, 0, &fast, minima, &count) == RC_OK && fast);
         t.vertices = (float *)malloc(3 * t.vertex_count * sizeof(float));
         for (k = 0; k < total; k++) {
             const double *dk = d + 3 * k;
