@@ -189,6 +189,31 @@ static void two_gaps_in_one_section_are_joined_across(void)
     gen_free(&twice);
 }
 
+/* Sections with fewer gaps below, more at the equator: the join's grid
+   grows from layer to layer within the room it had (nine cells in the room
+   four left once wrote past it, under ASan). */
+static void gaps_that_multiply_with_height_are_joined(void)
+{
+    adaslice_mesh s = gen_sphere(5, 48, 24, 0), holed = gen_alloc(0, 0), next;
+    double holes[6 * 4], z[5] = {2.5, 3.9, 4.6, 5.0, 5.4};
+    int k;
+    gen_append(&holed, &s);
+    for (k = 0; k < 6; k++) {
+        double a = k < 4 ? k * 3.14159265358979 / 2 + 0.4 : (k - 4) * 3.14159265358979, r = k < 4 ? 5 : 4.33;
+        holes[4 * k] = r * cos(a);
+        holes[4 * k + 1] = r * sin(a);
+        holes[4 * k + 2] = k < 4 ? 5 : 2.5;
+        holes[4 * k + 3] = 1.0;
+        next = without(&holed, near_point, holes + 4 * k);
+        gen_free(&holed);
+        holed = next;
+    }
+    CHECK(holed.triangle_count < s.triangle_count);
+    compare("sphere with six holes", &holed, &s, z, 5, holes, 6, 1.2, 2.5, 1, 0);
+    gen_free(&s);
+    gen_free(&holed);
+}
+
 static void overlapping_open_shells_stay_lit(void)
 {
     adaslice_mesh a = gen_sphere(3, 40, 20, 0), b = gen_sphere(3, 40, 20, 0), pair, closed;
@@ -259,6 +284,7 @@ void test_open_meshes(void)
     RUN(a_sphere_with_its_cap_cut_away_keeps_its_masks_below_the_cut);
     RUN(a_sphere_with_a_hole_differs_only_at_the_hole);
     RUN(two_gaps_in_one_section_are_joined_across);
+    RUN(gaps_that_multiply_with_height_are_joined);
     RUN(overlapping_open_shells_stay_lit);
     RUN(an_open_box_is_lit_below_its_rim);
     RUN(sampled_areas_of_an_open_mesh_are_its_sections);
