@@ -1107,6 +1107,11 @@ int cmd_contour(int argc, char **argv)
     if ((rc = parse_contour(argc, argv, &a, &help))) return rc;
     if (help) { contour_usage(stdout); return RC_OK; }
     if ((rc = output_check("-o", a.out)) || (rc = output_check("--svg-path", a.view_out))) return rc;
+    {
+        const char *const options[] = {"-o", "--svg-path"};
+        const char *const paths[] = {a.out, a.view_out};
+        if ((rc = output_check_distinct(options, paths, 2))) return rc;
+    }
     memset(&g, 0, sizeof g);
     memset(&s, 0, sizeof s);
     if ((rc = gfile_read(a.in, &g))) { gfile_free(&g); return rc; }

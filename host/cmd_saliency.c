@@ -168,6 +168,11 @@ int cmd_saliency(int argc, char **argv)
     }
     if ((rc = output_check("-o", s.out)) || (rc = output_check("--ply", s.ply)) || (rc = output_check("--png", s.png)))
         return rc;
+    {
+        const char *const options[] = {"-o", "--ply", "--png"};
+        const char *const paths[] = {s.out, s.ply, s.png};
+        if ((rc = output_check_distinct(options, paths, 3))) return rc;
+    }
     t0 = now_ms();
     if ((rc = model_load(s.model, s.scale, &mesh, NULL)) != RC_OK) return rc;
     t1 = now_ms();

@@ -2,6 +2,10 @@
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
+/* realpath: POSIX.1-2008, which glibc declares for X/Open */
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700
+#endif
 #include "output.h"
 #include "report.h"
 
@@ -119,6 +123,52 @@ int output_check_dir(const char *option, const char *path)
         return complain(RC_USAGE, "%s %s: exists and is not a directory, so a job directory cannot go there (a job "
                                   "file: give its extension, --format NAME or --printer NAME)", option, path);
     }
+}
+
+/* path with its directory resolved (links, "..", "."), malloc'd; NULL
+   when that directory does not resolve. */
+static char *resolved(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char *dir = (char *)malloc(strlen(path) + 2), *real, *out = NULL;
+    if (!dir) return NULL;
+    if (!slash) strcpy(dir, ".");
+    else if (slash == path) strcpy(dir, "/");
+    else { memcpy(dir, path, (size_t)(slash - path)); dir[slash - path] = 0; }
+    if ((real = realpath(dir, NULL)) && (out = (char *)malloc(strlen(real) + strlen(path) + 2)))
+        sprintf(out, "%s/%s", real, slash ? slash + 1 : path);
+    free(real);
+    free(dir);
+    return out;
+}
+
+static int same_output(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    FILE *fa = stream_named(a), *fb = stream_named(b);
+    char *ra, *rb;
+    int same;
+    if (fa || fb) return fa == fb;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino && !S_ISCHR(sa.st_mode);
+    ra = resolved(a);
+    rb = resolved(b);
+    same = ra && rb ? !strcmp(ra, rb) : !strcmp(a, b);
+    free(ra);
+    free(rb);
+    return same;
+}
+
+int output_check_distinct(const char *const *options, const char *const *paths, size_t n)
+{
+    size_t i, j;
+    for (i = 0; i < n; i++)
+        for (j = i + 1; j < n; j++)
+            if (paths[i] && paths[j] && same_output(paths[i], paths[j]))
+                return complain(RC_USAGE, "%s %s and %s %s are one file: %s", options[i], paths[i], options[j], paths[j],
+                                stream_named(paths[i]) ? "the two would be mixed in one stream"
+                                                       : "the last written would replace the other");
+    return RC_OK;
 }
 
 /* ------------------------------------------------------------ signals */

@@ -22,6 +22,11 @@ int output_check(const char *option, const char *path);
 /* The same for a job directory: an existing writable directory, or a new
    one in a writable directory. */
 int output_check_dir(const char *option, const char *path);
+/* Before the work: no two of the n outputs (NULL ones skipped) are one file,
+   which would keep only the last written ("-" twice is standard output
+   twice; a device such as /dev/null may take them all). RC_OK or an
+   RC_USAGE complaint naming both options. */
+int output_check_distinct(const char *const *options, const char *const *paths, size_t n);
 
 /* An output being written: f takes the bytes. */
 typedef struct output {

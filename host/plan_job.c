@@ -589,10 +589,15 @@ static void write_plot(FILE *f, const void *ctx)
 
 int check_plan_outputs(const plan_args *a)
 {
+    static const char *const options[] = {"--out", "--profile-out", "--plot"};
+    const char *paths[3];
     int rc = output_check("--out", a->out);
     if (!rc) rc = output_check("--profile-out", a->profile_out);
     if (!rc) rc = output_check("--plot", a->plot);
-    return rc;
+    paths[0] = a->out;
+    paths[1] = a->profile_out;
+    paths[2] = a->plot;
+    return rc ? rc : output_check_distinct(options, paths, 3);
 }
 
 int write_outputs(const plan_args *a, const plan_job *j)

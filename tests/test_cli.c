@@ -148,6 +148,12 @@ static void bad_arguments_exit_2(void)
         /* options that would do nothing are refused, not ignored */
         {{"plan", "m.stl", "--mapping", "exp"}, {"--mapping", "curvature"}},
         {{"print", "m.stl", "--port", "/dev/null", "--threads", "2"}, {"--threads"}},
+        /* two outputs on one file: only the last written would be left */
+        {{"plan", "m.stl", "--out", "same.txt", "--plot", "./same.txt"}, {"--out same.txt", "--plot ./same.txt"}},
+        {{"plan", "m.stl", "--out", "-", "--profile-out", "-"}, {"--out -", "mixed"}},
+        {{"plan", "m.stl", "--plot", "p.3mf", "--3mf", "p.3mf"}, {"--plot", "--3mf"}},
+        {{"slice", "m.stl", "--printer", "elegoo-saturn", "-o", "j.ctb", "--out", "j.ctb"}, {"-o j.ctb", "--out j.ctb"}},
+        {{"saliency", "m.stl", "-o", "w.txt", "--png", "w.txt"}, {"-o w.txt", "--png w.txt"}},
     };
     size_t i;
     int k;

@@ -1147,6 +1147,12 @@ static void refused_inputs_get_one_line_and_no_file(void)
         r = cli_run("contour", gcode, "-o", cli_path("out.gcode"), NULL);
         CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--project"), "exit %d: %.300s", r.status, r.err);
         cli_free(&r);
+        /* the picture onto the G-code: one would replace the other */
+        r = cli_run("contour", gcode, "--project", path3mf, "-o", cli_path("out.gcode"), "--svg-path", "1",
+                    cli_path("out.gcode"), NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "are one file"), "exit %d: %.300s", r.status, r.err);
+        CHECK(!cli_exists(cli_path("out.gcode")));
+        cli_free(&r);
     }
     /* the project's own parts damaged or crafted: each refused in one line,
        nothing written; and the build item's tag first in the model's text
