@@ -3699,11 +3699,15 @@ static void adaslice__cut_point(const adaslice_mesh *m, uint32_t below, uint32_t
    memory. */
 static int adaslice__join_ends(adaslice__gaps *g)
 {
-    size_t n = g->heads, side, cells, i, j, *live;
+    size_t n = g->heads, side, cells, i, j, points = n ? 1 : 0, *live;
     uint32_t *run_end, *first;
     double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, size;
     long r;
-    for (side = 1; side * side < n; side++) {}
+    /* a cell a point, not a head: thousands of heads on a few points (a fan
+       of facets wound round and round) in a grid of thousands of cells had
+       each tail search rings of empty cells for them */
+    for (j = 1; j < n; j++) points += g->head[2 * j] != g->head[2 * j - 2] || g->head[2 * j + 1] != g->head[2 * j - 1];
+    for (side = 1; side * side < points; side++) {}
     cells = side * side;
     if (cells + 1 > g->cell_cap || n > g->slot_cap) {
         adaslice__free(&g->allocator, g->cell_first);
@@ -4126,6 +4130,12 @@ static int adaslice__sample_before(const adaslice_sample *a, const adaslice_samp
     return a->depth < b->depth || (a->depth == b->depth && a->face < b->face);
 }
 
+static int adaslice__sample_cmp(const void *a, const void *b)
+{
+    const adaslice_sample *x = ADASLICE__CAST(const adaslice_sample *, a), *y = ADASLICE__CAST(const adaslice_sample *, b);
+    return adaslice__sample_before(x, y) ? -1 : adaslice__sample_before(y, x);
+}
+
 /* Builds rows [row_first, row_end) into `ldi` (whose grid is the full grid):
    first[] has (rows * width + 1) entries. */
 static adaslice_result adaslice__ldi_band(const adaslice_mesh *m, adaslice_ldi *ldi, int row_first, int row_end,
@@ -4160,6 +4170,13 @@ static adaslice_result adaslice__ldi_band(const adaslice_mesh *m, adaslice_ldi *
     (void)adaslice__raster_mesh(&r, m, err);
     for (p = 0; p < pixels; p++) { /* insertion sort: a ray meets few surfaces */
         size_t a = ldi->first[p], b = ldi->first[p + 1], i, k;
+        /* but facets stacked thousands deep (a fan wound round and round)
+           made that quadratic: minutes for one plan --hybrid. A total
+           order, so both sorts give the same samples. */
+        if (b - a > 32) {
+            qsort(ldi->samples + a, b - a, sizeof *ldi->samples, adaslice__sample_cmp);
+            continue;
+        }
         for (i = a + 1; i < b; i++) {
             adaslice_sample s = ldi->samples[i];
             for (k = i; k > a && adaslice__sample_before(&s, &ldi->samples[k - 1]); k--) ldi->samples[k] = ldi->samples[k - 1];
