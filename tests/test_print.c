@@ -1364,6 +1364,15 @@ static void damaged_job_is_refused_before_the_print(void)
         crc_flipped = (unsigned char)(f[mid + 8] ^ 1);
         snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u's mask decodes to CRC-32", mid + 8, k + 1);
         damaged_masks_said(job, mid + 8, &crc_flipped, 1, want, NULL);
+        /* the next layer damaged too (the other thread's): the first is named */
+        {
+            size_t next = layer_record(f, n, k + 1);
+            f[next + 8] ^= 1;
+            write_bytes(mp, f, n);
+            f[next + 8] ^= 1;
+            damaged_masks_said(job, mid + 8, &crc_flipped, 1, want, NULL);
+            write_bytes(mp, f, n);
+        }
         snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u is 0 bins thick", mid, k + 1);
         damaged_masks_said(job, mid, zero, 4, want, NULL);
         /* the last layer's last byte made a number that goes on: the code ends inside it */

@@ -14,6 +14,7 @@
 
 #include <errno.h>
 #include <dirent.h>
+#include <pthread.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <math.h>
@@ -731,41 +732,93 @@ done:
     return rc;
 }
 
+/* Layer k's mask decoded through emit (may be NULL): 0 when it is whole and
+   its CRC-32 the one named, else what is wrong (a decoder's result, or
+   ADASLICE_ERR_ROWS + 1: too few rows, + 2: another CRC); dec is left as it
+   ended, for the message. */
+static int decode_quietly(const job_masks *m, uint32_t k, unsigned char *row, adaslice_rle_decoder *dec,
+                          void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx)
+{
+    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8;
+    adaslice_result r;
+    if (adaslice_rle_decoder_init(dec, m->width, m->height, (int)m->bits, row, stride)) return ADASLICE_ERR_ARGUMENT;
+    r = adaslice_rle_decode(dec, m->codes[k], m->sizes[k], emit, ctx);
+    if (r >= ADASLICE_ERR_VARINT && r <= ADASLICE_ERR_ROWS) return (int)r;
+    if (r || !adaslice_rle_finished(dec)) return ADASLICE_ERR_ROWS + 1;
+    return ADASLICE_RLE_CRC(dec) == m->crcs[k] ? 0 : ADASLICE_ERR_ROWS + 2;
+}
+
 int jobdir_decode_layer(const char *dir, const job_masks *m, uint32_t k, unsigned char *row,
                         void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx)
 {
     static const char *const why[] = {"a number longer than 5 bytes", "runs that do not make up a row",
                                       "more rows than the mask's"};
-    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8, start = (size_t)(m->codes[k] - m->file);
+    size_t start = (size_t)(m->codes[k] - m->file);
     adaslice_rle_decoder dec;
-    adaslice_result r;
-    if (adaslice_rle_decoder_init(&dec, m->width, m->height, (int)m->bits, row, stride))
+    int r = decode_quietly(m, k, row, &dec, emit, ctx);
+    if (r == ADASLICE_ERR_ARGUMENT)
         return complain(RC_FAIL, "%s/masks.rle: masks of %u x %u px, %u bits, cannot be decoded", dir, m->width, m->height,
                         m->bits); /* not reached: jobdir_read_masks checks them */
-    r = adaslice_rle_decode(&dec, m->codes[k], m->sizes[k], emit, ctx);
     if (r >= ADASLICE_ERR_VARINT && r <= ADASLICE_ERR_ROWS)
         return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask code is damaged: %s", dir, start + dec.offset,
                         k + 1, why[r - ADASLICE_ERR_VARINT]);
-    if (r || !adaslice_rle_finished(&dec))
+    if (r == ADASLICE_ERR_ROWS + 1)
         return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask code ends before its %u rows do", dir,
                         start + m->sizes[k], k + 1, m->height);
-    if (ADASLICE_RLE_CRC(&dec) != m->crcs[k])
+    if (r)
         return complain(RC_FAIL, "%s/masks.rle: byte %zu: layer %u's mask decodes to CRC-32 %08x, not the %08x named there: "
                                  "the file is damaged", dir, start - MASKS_LAYER + 8, k + 1, (unsigned)ADASLICE_RLE_CRC(&dec),
                         (unsigned)m->crcs[k]);
     return RC_OK;
 }
 
+/* Every other layer from `from`, up to the first unsound one. */
+typedef struct layer_check {
+    const job_masks *m;
+    uint32_t from, bad;          /* bad: the first unsound layer, or m->layers */
+    unsigned char *row;
+} layer_check;
+
+static void *check_every_other(void *arg)
+{
+    layer_check *c = (layer_check *)arg;
+    adaslice_rle_decoder dec;
+    uint32_t k;
+    for (k = c->from; k < c->m->layers; k += 2)
+        if (decode_quietly(c->m, k, c->row, &dec, NULL, NULL)) { c->bad = k; break; }
+    return NULL;
+}
+
+/* On two threads: a print checks every layer before the port opens (2 s of a
+   turbine blade's 1,421 layers at 3840 x 2400 on one). The first damaged
+   layer is the one named, as on one thread. */
 int jobdir_check_layers(const char *dir, const job_masks *m)
 {
     size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8;
-    unsigned char *row = (unsigned char *)malloc(stride);
-    uint32_t k;
-    int rc = RC_OK;
-    if (!row) return complain(RC_FAIL, "out of memory for a row of %u px", m->width);
-    for (k = 0; k < m->layers && !rc; k++) rc = jobdir_decode_layer(dir, m, k, row, NULL, NULL);
-    free(row);
-    return rc;
+    layer_check c[2];
+    pthread_t other;
+    int t, threaded;
+    uint32_t bad;
+    for (t = 0; t < 2; t++) {
+        c[t].m = m;
+        c[t].from = (uint32_t)t;
+        c[t].bad = m->layers;
+        c[t].row = (unsigned char *)malloc(stride);
+    }
+    if (!c[0].row || !c[1].row) {
+        free(c[0].row);
+        free(c[1].row);
+        return complain(RC_FAIL, "out of memory for a row of %u px", m->width);
+    }
+    threaded = pthread_create(&other, NULL, check_every_other, &c[1]) == 0;
+    check_every_other(&c[0]);
+    if (threaded) pthread_join(other, NULL);
+    else check_every_other(&c[1]);
+    bad = c[0].bad < c[1].bad ? c[0].bad : c[1].bad;
+    t = bad < m->layers ? jobdir_decode_layer(dir, m, bad, c[0].row, NULL, NULL) : RC_OK;
+    free(c[0].row);
+    free(c[1].row);
+    return t;
 }
 
 int jobdir_read_masks(const char *dir, job_masks *m)
