@@ -121,35 +121,27 @@ static void *search_worker(void *arg)
     return NULL;
 }
 
-/* Scores `count` lattice directions on all the host's cores; the minima come
-   best first. Returns RC_OK or a complaint made. */
 /* The most one thread's direction can hold: its profile over the part's
    longest extent (the box's diagonal) in bins, and the range-maximum table
-   over it, a level for each doubling of the longest facet (a facet along the
-   whole part defeats the table's chunking), twice, as a worker keeps freed
-   blocks for the next direction; plus the facets' and corners' own arrays.
-   (A part 4 m tall held 1.36 GB on two threads; one in micrometres asked
-   14 GB a thread of a 23 GB machine and was killed.) */
-static double search_thread_bytes(const adaslice_mesh *m, double bin, double *bins)
+   over it, a level for each doubling of the longest facet (the orienter's
+   longest edge: a facet along the whole part defeats the table's chunking),
+   twice, as a worker keeps freed blocks for the next direction; plus the
+   facets' and corners' own arrays. (A part 4 m tall held 1.36 GB on two
+   threads; one in micrometres asked 14 GB a thread of a 23 GB machine and
+   was killed.) */
+static double search_thread_bytes(const adaslice_orienter *o, double bin, double *bins)
 {
-    double lo[3], hi[3], d = 0, longest = 0, levels;
-    size_t t;
+    double lo[3], hi[3], d = 0, levels;
     int k;
-    adaslice_mesh_bounds(m, lo, hi);
+    adaslice_mesh_bounds(o->mesh, lo, hi);
     for (k = 0; k < 3; k++) d += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    for (t = 0; t < m->triangle_count; t++)
-        for (k = 0; k < 3; k++) {
-            const float *a = m->vertices + 3 * (size_t)m->triangles[3 * t + k];
-            const float *b = m->vertices + 3 * (size_t)m->triangles[3 * t + (k + 1) % 3];
-            double e = ((double)a[0] - b[0]) * ((double)a[0] - b[0]) + ((double)a[1] - b[1]) * ((double)a[1] - b[1]) +
-                       ((double)a[2] - b[2]) * ((double)a[2] - b[2]);
-            longest = e > longest ? e : longest;
-        }
     *bins = ceil(sqrt(d) / bin) + 1;
-    levels = floor(log2(fmin(*bins, sqrt(longest) / bin + 2))) + 1;
-    return 8 * *bins * (2 * levels + 3) + 32 * (double)m->triangle_count + 16 * (double)m->vertex_count;
+    levels = floor(log2(fmin(*bins, o->longest_edge / bin + 2))) + 1;
+    return 8 * *bins * (2 * levels + 3) + 32 * (double)o->mesh->triangle_count + 16 * (double)o->mesh->vertex_count;
 }
 
+/* Scores `count` lattice directions on all the host's cores; the minima come
+   best first. Returns RC_OK or a complaint made. */
 int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_profile_options *po, const adaslice_plan_options *pl,
                   size_t count, double alpha, double memory_limit, adaslice_direction_score **scores, size_t *minima,
                   size_t *minima_count)
@@ -162,16 +154,18 @@ int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_p
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int n_threads = cores < 1 ? 1 : cores > 16 ? 16 : (int)cores, t, started = 0;
 
+    if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error_in(model, &e);
     if (memory_limit > 0) {
-        double bin = po->bin > 0 ? po->bin : ADASLICE_DEFAULT_BIN, bins, need = n_threads * search_thread_bytes(mesh, bin, &bins);
+        double bin = po->bin > 0 ? po->bin : ADASLICE_DEFAULT_BIN, bins, need = n_threads * search_thread_bytes(&o, bin, &bins);
         char need_text[32], limit_text[32];
-        if (need > memory_limit)
+        if (need > memory_limit) {
+            adaslice_orienter_free(&o);
             return complain(RC_FAIL, "%s: the search needs up to %s (%d thread%s, each a profile of up to %.0f bins of %g mm "
                                      "along the part's %g mm diagonal), more than --memory %s; a model in micrometres? "
                                      "--scale 0.001; or a larger --bin", model, size_text(need, need_text), n_threads,
                             n_threads == 1 ? "" : "s", bins, bin, (bins - 1) * bin, size_text(memory_limit, limit_text));
+        }
     }
-    if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error_in(model, &e);
     memset(&s, 0, sizeof s);
     dirs = (double *)malloc(3 * (count + SEARCH_AXES) * sizeof *dirs);
     *scores = (adaslice_direction_score *)calloc(count + SEARCH_AXES, sizeof **scores);
