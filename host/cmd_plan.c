@@ -342,12 +342,7 @@ int cmd_plan(int argc, char **argv)
     if ((rc = threemf_check_hybrid(&t, &a))) return rc;
     if (t.path && (rc = threemf_check_bounds(&t, &a))) return rc;
     a.hybrid = t.hybrid ? &t.contour : NULL;
-    if ((rc = check_plan_outputs(&a)) || (rc = output_check("--3mf", t.path))) return rc;
-    {
-        const char *const options[] = {"--out", "--profile-out", "--plot", "--3mf"};
-        const char *const paths[] = {a.out, a.profile_out, a.plot, t.path};
-        if ((rc = output_check_distinct(options, paths, 4))) return rc;
-    }
+    if ((rc = check_plan_outputs(&a, "--3mf", t.path)) || (rc = output_check("--3mf", t.path))) return rc;
     memset(&j, 0, sizeof j);
     j.args = &a;
     j.keep_mesh = t.path != NULL;

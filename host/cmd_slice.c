@@ -534,12 +534,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc) rc = choose_format(&s, &f, &extended);
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
     if (!rc) rc = output_check_dir_or_file(f, extended ? extended : s.dir, s.force);
-    if (!rc) rc = check_plan_outputs(&a);
-    if (!rc) {
-        const char *const options[] = {"-o", "--out", "--profile-out", "--plot"};
-        const char *const paths[] = {extended ? extended : s.dir, a.out, a.profile_out, a.plot};
-        rc = output_check_distinct(options, paths, 4);
-    }
+    if (!rc) rc = check_plan_outputs(&a, "-o", extended ? extended : s.dir);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
     if (!rc) rc = layer_masks_check(&s, pipeline_images(s.threads));
     if (rc) { free(extended); return rc; }

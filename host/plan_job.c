@@ -587,17 +587,14 @@ static void write_plot(FILE *f, const void *ctx)
     svg_write_plan(f, &fig);
 }
 
-int check_plan_outputs(const plan_args *a)
+int check_plan_outputs(const plan_args *a, const char *option, const char *path)
 {
-    static const char *const options[] = {"--out", "--profile-out", "--plot"};
-    const char *paths[3];
+    const char *const options[] = {"--out", "--profile-out", "--plot", option};
+    const char *const paths[] = {a->out, a->profile_out, a->plot, path};
     int rc = output_check("--out", a->out);
     if (!rc) rc = output_check("--profile-out", a->profile_out);
     if (!rc) rc = output_check("--plot", a->plot);
-    paths[0] = a->out;
-    paths[1] = a->profile_out;
-    paths[2] = a->plot;
-    return rc ? rc : output_check_distinct(options, paths, 3);
+    return rc ? rc : output_check_distinct(options, paths, 4);
 }
 
 int write_outputs(const plan_args *a, const plan_job *j)

@@ -106,9 +106,10 @@ int write_outputs(const plan_args *a, const plan_job *j);
    so that eps stays feasible, at which heights and why, into out ("" when
    none was). */
 void plan_changes_line(const adaslice_plan *p, double bin, char *out, size_t cap);
-/* --out, --profile-out and --plot can be written (output_check): before the
-   model is loaded. */
-int check_plan_outputs(const plan_args *a);
+/* --out, --profile-out and --plot can be written (output_check), and none
+   is another's file or the command's own output `option` `path` (NULL:
+   none; checked by its command): before the model is loaded. */
+int check_plan_outputs(const plan_args *a, const char *option, const char *path);
 /* The thickest uniform layers within the bounds of `than` whose worst error is
    no larger than its worst: what the same quality costs without adaptive
    layers. 1 with *out made (free it), 0 if even the thinnest are worse. */
