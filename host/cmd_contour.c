@@ -19,11 +19,11 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* X, Y and Z farther from the origin than any FDM printer reaches: refused */
 #define GCODE_REACH_MM 1e4
-#include <stdlib.h>
-#include <string.h>
 
 #define CROSSINGS_MAX 64
 /* the thinnest bead a path is lowered to over what lies under it, a
@@ -286,11 +286,8 @@ static int gfile_read(const char *path, gfile *g)
     }
     /* the moves are z_offset above the ;Z: comments (not in the 3MF's plan) */
     if ((v = gcode_config_value(g->text, g->size, "z_offset", &n))) {
-        char text[40], *end;
-        memcpy(text, v, n < sizeof text ? n : sizeof text - 1);
-        text[n < sizeof text ? n : sizeof text - 1] = 0;
-        g->z_offset = strtod(text, &end);
-        if (end == text || *end || !(fabs(g->z_offset) <= 10)) {
+        const char *end = decimal_number(v, &g->z_offset);
+        if (!end || end != v + n || !(fabs(g->z_offset) <= 10)) {
             char q[QUOTE_SIZE];
             return complain(RC_FAIL, "%s: z_offset %s in the config at its end: not a Z offset in mm (-10 to 10)", path,
                             quote_text(q, v, n));
