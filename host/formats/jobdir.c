@@ -732,6 +732,9 @@ done:
     return rc;
 }
 
+/* The bytes of one of m's rows. */
+static size_t masks_stride(const job_masks *m) { return m->bits == 8 ? m->width : (m->width + 7) / 8; }
+
 /* Layer k's mask decoded through emit (may be NULL): 0 when it is whole and
    its CRC-32 the one named, else what is wrong (a decoder's result, or
    ADASLICE_ERR_ROWS + 1: too few rows, + 2: another CRC); dec is left as it
@@ -739,9 +742,8 @@ done:
 static int decode_quietly(const job_masks *m, uint32_t k, unsigned char *row, adaslice_rle_decoder *dec,
                           void (*emit)(void *ctx, uint32_t y, const unsigned char *row), void *ctx)
 {
-    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8;
     adaslice_result r;
-    if (adaslice_rle_decoder_init(dec, m->width, m->height, (int)m->bits, row, stride)) return ADASLICE_ERR_ARGUMENT;
+    if (adaslice_rle_decoder_init(dec, m->width, m->height, (int)m->bits, row, masks_stride(m))) return ADASLICE_ERR_ARGUMENT;
     r = adaslice_rle_decode(dec, m->codes[k], m->sizes[k], emit, ctx);
     if (r >= ADASLICE_ERR_VARINT && r <= ADASLICE_ERR_ROWS) return (int)r;
     if (r || !adaslice_rle_finished(dec)) return ADASLICE_ERR_ROWS + 1;
@@ -794,7 +796,6 @@ static void *check_every_other(void *arg)
    layer is the one named, as on one thread. */
 int jobdir_check_layers(const char *dir, const job_masks *m)
 {
-    size_t stride = m->bits == 8 ? m->width : (m->width + 7) / 8;
     layer_check c[2];
     pthread_t other;
     int t, threaded;
@@ -803,7 +804,7 @@ int jobdir_check_layers(const char *dir, const job_masks *m)
         c[t].m = m;
         c[t].from = (uint32_t)t;
         c[t].bad = m->layers;
-        c[t].row = (unsigned char *)malloc(stride);
+        c[t].row = (unsigned char *)malloc(masks_stride(m));
     }
     if (!c[0].row || !c[1].row) {
         free(c[0].row);
