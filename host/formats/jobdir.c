@@ -313,6 +313,9 @@ static char *read_whole(const char *path, size_t *size)
     return data;
 }
 
+/* Why read_whole failed, from its errno. */
+static const char *read_whole_error(void) { return errno == EINVAL ? "not a regular file" : strerror(errno); }
+
 /* The directory holds something. */
 static int has_entries(const char *dir)
 {
@@ -705,7 +708,7 @@ static int matches_manifest(const char *dir, const char *masks_path, job_masks *
     if (!path) return RC_FAIL;
     if (!(text = read_whole(path, NULL))) {
         if (errno == ENOENT) complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", path);
-        else complain(RC_FAIL, "cannot read %s: %s", path, errno == EINVAL ? "not a regular file" : strerror(errno));
+        else complain(RC_FAIL, "cannot read %s: %s", path, read_whole_error());
         goto done;
     }
     at = strstr(text, "\"masks_rle_crc32\": \"");
@@ -847,7 +850,7 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     free(manifest);
     if (!(m->file = (unsigned char *)read_whole(path, &m->file_size))) {
         if (errno == ENOENT) complain(RC_FAIL, "cannot open %s: %s (was the job written by adaslice slice?)", path, strerror(errno));
-        else complain(RC_FAIL, "cannot read %s: %s", path, errno == EINVAL ? "not a regular file" : strerror(errno));
+        else complain(RC_FAIL, "cannot read %s: %s", path, read_whole_error());
         goto done;
     }
     if (m->file_size >= 8 && !memcmp(m->file, "ADASMSK1", 8)) {
