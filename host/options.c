@@ -9,6 +9,21 @@
 #include <string.h>
 #include <unistd.h>
 
+char *text_line_trim(char *s)
+{
+    char *end = s + strlen(s);
+    while (*s == ' ' || *s == '\t') s++;
+    while (end > s && (end[-1] == '\n' || end[-1] == '\r' || end[-1] == ' ' || end[-1] == '\t')) *--end = 0;
+    return s;
+}
+
+int text_line_check(const char *path, size_t lineno, const char *line, size_t n, int rc)
+{
+    const char *nul = (const char *)memchr(line, 0, n);
+    if (!nul) return RC_OK;
+    return complain(rc, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno, (size_t)(nul - line) + 1);
+}
+
 double machine_memory_mb(void)
 {
 #if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)

@@ -14,6 +14,13 @@ int file_option(int argc, char **argv, int *i, const char **out);
    NULL. strtod alone also takes hex (0x10 as 16), inf, nan and leading
    blanks. */
 const char *decimal_number(const char *text, double *out);
+/* The lines of the text files of numbers that options name (--profile,
+   --weights). text_line_trim: the line without its blanks at either end
+   and its line end (cut in place). text_line_check: line[0, n), as getline
+   read it, holds no NUL byte (not text, and C's strings stop there); RC_OK,
+   or `rc` after a complaint naming line `lineno` of path and the column. */
+char *text_line_trim(char *line);
+int text_line_check(const char *path, size_t lineno, const char *line, size_t n, int rc);
 /* A finite number > 0, or >= 0 when zero_ok. */
 int number_option(int argc, char **argv, int *i, int zero_ok, double *out);
 /* A whole number from 1 to max. */

@@ -14,14 +14,6 @@
 #include <string.h>
 #include <strings.h>
 
-static char *trim(char *s)
-{
-    char *end = s + strlen(s);
-    while (*s == ' ' || *s == '\t') s++;
-    while (end > s && (end[-1] == '\n' || end[-1] == '\r' || end[-1] == ' ' || end[-1] == '\t')) *--end = 0;
-    return s;
-}
-
 /* Appends v to the growing array *phi of *n values. */
 static int push(double **phi, size_t *n, size_t *cap, double v)
 {
@@ -104,16 +96,12 @@ int profile_csv_read(const char *path, adaslice_metric metric, double bin_given,
         const char *end;
         double v = 0, z = 0;
         lineno++;
-        if (memchr(line, 0, (size_t)got)) {
-            rc = complain(RC_FAIL, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno,
-                          (size_t)((char *)memchr(line, 0, (size_t)got) - line) + 1);
-            break;
-        }
+        if ((rc = text_line_check(path, lineno, line, (size_t)got, RC_FAIL))) break;
         /* a spreadsheet's UTF-8 byte order mark */
-        s = trim(lineno == 1 && !strncmp(line, "\xef\xbb\xbf", 3) ? line + 3 : line);
+        s = text_line_trim(lineno == 1 && !strncmp(line, "\xef\xbb\xbf", 3) ? line + 3 : line);
         comma = strchr(s, ',');
         if (!*s || *s == '#') continue;
-        field = comma ? trim(strrchr(s, ',') + 1) : s;
+        field = comma ? text_line_trim(strrchr(s, ',') + 1) : s;
         end = decimal_number(field, &v);
         if (!end || *end || (comma && !z_field(s, comma, &z))) {
             /* the first line may be a header, unless it begins as a number does */

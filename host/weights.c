@@ -161,14 +161,6 @@ int weights_check(const weight_args *w)
     return RC_OK;
 }
 
-static char *trim(char *s)
-{
-    char *end = s + strlen(s);
-    while (*s == ' ' || *s == '\t') s++;
-    while (end > s && (end[-1] == '\n' || end[-1] == '\r' || end[-1] == ' ' || end[-1] == '\t')) *--end = 0;
-    return s;
-}
-
 /* Multiplies w[t] by line t's weight; blank lines and # comments are skipped. */
 static int read_weights(const char *path, size_t count, float *w)
 {
@@ -183,12 +175,8 @@ static int read_weights(const char *path, size_t count, float *w)
         const char *end;
         double v = 0;
         lineno++;
-        if (memchr(line, 0, (size_t)got)) {
-            rc = complain(RC_USAGE, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno,
-                          (size_t)((char *)memchr(line, 0, (size_t)got) - line) + 1);
-            break;
-        }
-        s = trim(line);
+        if ((rc = text_line_check(path, lineno, line, (size_t)got, RC_USAGE))) break;
+        s = text_line_trim(line);
         if (!*s || *s == '#') continue;
         if (!(end = decimal_number(s, &v)) || *end)
             rc = complain(RC_USAGE, "%s:%zu: '%s' is not a number", path, lineno, quote_text(q, s, strlen(s)));
