@@ -54,12 +54,13 @@ static const char *cli_path(const char *name)
 }
 
 
-static inline void cli_write(const char *path, const char *text)
+static inline void cli_write_bytes(const char *path, const void *data, size_t n)
 {
     FILE *f = fopen(path, "wb");
-    size_t n = strlen(text);
-    CHECKF(f && fwrite(text, 1, n, f) == n && fclose(f) == 0, "cannot write %.400s", path);
+    CHECKF(f && fwrite(data, 1, n, f) == n && fclose(f) == 0, "cannot write %.400s", path);
 }
+
+static inline void cli_write(const char *path, const char *text) { cli_write_bytes(path, text, strlen(text)); }
 
 /* cli_run(arg, ..., NULL) */
 static inline cli_result cli_run(const char *first, ...)

@@ -19,12 +19,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-static void write_all(const char *path, const void *data, size_t size)
-{
-    FILE *f = fopen(path, "wb");
-    CHECKF(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "cannot write %s", path);
-}
-
 /* cli_run with an argument list: up to 8 arguments, NULL-terminated */
 static cli_result run_args(const char *const *a)
 {
@@ -61,7 +55,7 @@ static void write_stl(const char *path, const adaslice_mesh *m, size_t keep)
         for (c = 0; c < 3; c++)
             for (k = 0; k < 3; k++)
                 put_f32(buf + 84 + 50 * t + 12 + 12 * c + 4 * k, m->vertices[3 * m->triangles[3 * t + c] + k]);
-    write_all(path, buf, size);
+    cli_write_bytes(path, buf, size);
     free(buf);
 }
 
@@ -375,18 +369,18 @@ static void bad_profile_lines_are_named(void)
     for (i = 0; i < sizeof cases / sizeof *cases; i++) {
         size_t n = strlen(cases[i].text);
         if (strstr(cases[i].named, "NUL")) n += 1 + strlen(cases[i].text + n + 1);
-        write_all(path, cases[i].text, n);
+        cli_write_bytes(path, cases[i].text, n);
         r = cli_run("plan", "--profile", path, NULL);
         CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "bad.csv") && strstr(r.err, cases[i].named),
                "case %zu: exit %d, '%s'", i, r.status, r.err);
         cli_free(&r);
     }
     /* a spreadsheet's byte order mark before the first value: four values, none lost */
-    write_all(path, bom, sizeof bom - 1);
+    cli_write_bytes(path, bom, sizeof bom - 1);
     r = cli_run("plan", "--profile", path, "--bin", "0.05", "--tmin", "0.05", "--tmax", "0.1", "--json", NULL);
     CHECKF(r.status == 0 && cli_json_number(r.out, "bins") == 4, "exit %d: %s %s", r.status, r.err, r.out);
     cli_free(&r);
-    write_all(weights, "0.5\n\0garbage\n", 13);
+    cli_write_bytes(weights, "0.5\n\0garbage\n", 13);
     r = cli_run("plan", sphere_stl(), "--weights", weights, NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "nul_weights.txt:2: a NUL byte"), "exit %d, '%s'",
            r.status, r.err);
@@ -665,9 +659,6 @@ static void orient_never_does_worse_than_as_loaded(void)
     }
 }
 
-/* Every command repairs what it loads and says so in one line: a box with
-   facets wound backwards and one inside out, each warned about with what was
-   done, the report in --json, the plan as the clean box's. */
 /* A part a whole number of layers tall gets exactly that many: its height
    as floats (10.3 mm is 10.3000002) once gave one more bin, and a uniform
    plan a last layer of 0.002 mm, which the ChiTu zip refused. */
@@ -724,6 +715,9 @@ static void far_from_the_origin_is_warned(void)
 #undef BOX_FACES
 }
 
+/* Every command repairs what it loads and says so in one line: a box with
+   facets wound backwards and one inside out, each warned about with what was
+   done, the report in --json, the plan as the clean box's. */
 static void repairs_are_warned_about_and_reported(void)
 {
     const char *bad = cli_path("bad_box.stl"), *good = cli_path("good_box.stl");
@@ -893,9 +887,9 @@ static void messages_name_what_was_run(void)
     }
     /* another slicer's job, by its extension or its magic, is refused as
        such before the port is opened (/dev/null is none) */
-    write_all(job, ctb, sizeof ctb);
+    cli_write_bytes(job, ctb, sizeof ctb);
     message_is("print job (CTB magic)", cli_run("print", job, "--port", "/dev/null", NULL), "a CTB job file", "serial port", "STL '");
-    write_all(cli_path("job.sl1"), "x", 1);
+    cli_write_bytes(cli_path("job.sl1"), "x", 1);
     message_is("print job.sl1", cli_run("print", cli_path("job.sl1"), "--port", "/dev/null", NULL), "a .sl1 job file",
                "serial port", NULL);
 }

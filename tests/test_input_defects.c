@@ -35,12 +35,6 @@ static cli_result run_list(const char *const *a)
                    (const char *)NULL);
 }
 
-static void write_bytes(const char *path, const void *data, size_t size)
-{
-    FILE *f = fopen(path, "wb");
-    CHECKF(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "cannot write %s", path);
-}
-
 /* `head` and then zeros to `size` bytes, which take no disk: a sparse file. */
 static int write_sparse(const char *path, const void *head, size_t n, double size)
 {
@@ -361,7 +355,7 @@ static void counts_of_one_are_singular(void)
     expect_singular("slice one layer", &r);
     cli_free(&r);
     stl_header(h, "", 1);
-    write_bytes(stl, h, sizeof h);
+    cli_write_bytes(stl, h, sizeof h);
     r = cli_run("plan", stl, NULL);
     CHECKF(r.status == 1 && strstr(r.err, "header says 1 triangle (134 bytes)"), "exit %d: %s", r.status, r.err);
     cli_free(&r);
@@ -388,8 +382,8 @@ static void binary_file_content_is_escaped(void)
     junk[0] = '0'; junk[1] = '.'; junk[2] = '1'; junk[3] = '\n'; /* one good value, then bytes */
     for (i = 4; i < sizeof junk - 1; i++) junk[i] = (unsigned char)(i == 4 ? 0x89 : i == 5 ? 0x01 : 'A' + i % 50);
     junk[sizeof junk - 1] = '\n';
-    write_bytes(profile, junk, sizeof junk);
-    write_bytes(weights, junk, sizeof junk);
+    cli_write_bytes(profile, junk, sizeof junk);
+    cli_write_bytes(weights, junk, sizeof junk);
     r = cli_run("plan", "--profile", profile, NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && printable_line(r.err) && strstr(r.err, "binary_profile.csv:2:") &&
            strstr(r.err, "'\\x89\\x01") && strstr(r.err, "...'"), "exit %d, '%s'", r.status, r.err);

@@ -1277,12 +1277,6 @@ static size_t layer_record(const unsigned char *f, size_t n, unsigned k)
     return at + 16 <= n ? at : 0;
 }
 
-static void write_bytes(const char *path, const void *data, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    CHECKF(f && fwrite(data, 1, n, f) == n && fclose(f) == 0, "cannot write %.400s", path);
-}
-
 /* masks.rle damaged (len bytes at `at` replaced), the manifest made to name
    its new CRC-32 so that the damage itself is what the reader meets; then
    `adaslice print DIR --port /dev/null` (or, with spec, `adaslice show DIR
@@ -1309,16 +1303,16 @@ static void damaged_masks_said(const char *dir, size_t at, const void *bytes, si
         memcpy(g + at, bytes, len);
         snprintf(crc, sizeof crc, "%08x", (unsigned)adaslice_crc32(0, g, n));
         memcpy(key + 20, crc, 8);
-        write_bytes(mp, g, n);
-        write_bytes(jp, man, mn);
+        cli_write_bytes(mp, g, n);
+        cli_write_bytes(jp, man, mn);
         r = spec ? cli_run("show", dir, "--layer", "1", "--screen", spec, "--seconds", "0.001", NULL)
                  : cli_run("print", dir, "--port", "/dev/null", NULL);
         CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, says), "%s, byte %zu damaged: exit %d: %s (want: %s)",
                spec ? "show" : "print", at, r.status, r.err, says);
         cli_free(&r);
         memcpy(key + 20, old, 8);
-        write_bytes(mp, f, n);
-        write_bytes(jp, man, mn);
+        cli_write_bytes(mp, f, n);
+        cli_write_bytes(jp, man, mn);
     }
     free(g);
     free(f);
@@ -1368,10 +1362,10 @@ static void damaged_job_is_refused_before_the_print(void)
         {
             size_t next = layer_record(f, n, k + 1);
             f[next + 8] ^= 1;
-            write_bytes(mp, f, n);
+            cli_write_bytes(mp, f, n);
             f[next + 8] ^= 1;
             damaged_masks_said(job, mid + 8, &crc_flipped, 1, want, NULL);
-            write_bytes(mp, f, n);
+            cli_write_bytes(mp, f, n);
         }
         snprintf(want, sizeof want, "masks.rle: byte %zu: layer %u is 0 bins thick", mid, k + 1);
         damaged_masks_said(job, mid, zero, 4, want, NULL);
@@ -1396,7 +1390,7 @@ static void damaged_job_is_refused_before_the_print(void)
         CHECK(at != NULL);
         if (at) {
             memcpy(at, "\"pitch_mm\":[0.1,0.1]  ", 22);
-            write_bytes(jp, man, mn);
+            cli_write_bytes(jp, man, mn);
             r = cli_run("show", job, "--layer", "1", "--screen", spec, "--seconds", "0.001", "--screen-pitch", "50", NULL);
             CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "pixels are 100 x 100 um") &&
                        strstr(r.err, "are 50 um"),
