@@ -243,6 +243,9 @@ static void steps_on_time_under_qemu(void)
        over milliseconds, and a whole chunk of a frame that a line brings
        over several passes: how long the longest pass is then depends on how
        fast the host's process runs, which one step interval cannot bound. */
+    CHECKF(err && qemu_said(err, "fw-mps2: passes whose interrupts outran them ", 0) == 0,
+           "%lld passes counted more interrupt ticks than they lasted: the own-work figures below are wrong",
+           err ? qemu_said(err, "fw-mps2: passes whose interrupts outran them ", 0) : -1);
     work = err ? qemu_said(err, "fw-mps2: the loop's own work, worst pass (cycles) ", 0) : -1;
     moving_work = err ? qemu_said(err, "fw-mps2: the loop's own work, worst pass while Z moves (cycles) ", 0) : -1;
     cover = (long long)(QEMU_STEP_QUEUE - QEMU_REFILL_GAP) * min_interval;

@@ -68,19 +68,39 @@ uint32_t cm3_stack_used(void)
 }
 
 /* The outermost handler's ticks, entry to return: one that preempts
-   another is inside it (and runs whole before it resumes). */
+   another is inside it (and runs whole before it resumes). Each step runs
+   with interrupts held: an alarm that preempted a UART handler between its
+   depth's decrement and its sum took the depth for its own outermost entry,
+   and the two handlers' ticks were counted twice over, a pass's interrupts
+   longer than the pass (CI read a pass's own work as 2^64 - a few cycles). */
 volatile uint64_t cm3_isr_ticks;
-static volatile uint32_t isr_depth;
+static uint32_t isr_depth;
 static uint64_t isr_entered;
+
+static uint32_t interrupts_hold(void)
+{
+    uint32_t primask;
+    __asm__ volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
+    return primask;
+}
+
+static void interrupts_restore(uint32_t primask)
+{
+    __asm__ volatile("msr primask, %0" ::"r"(primask) : "memory");
+}
 
 void cm3_trace_isr_enter(void)
 {
+    uint32_t held = interrupts_hold();
     if (isr_depth++ == 0) isr_entered = cm3_ticks();
+    interrupts_restore(held);
 }
 
 void cm3_trace_isr_leave(void)
 {
+    uint32_t held = interrupts_hold();
     if (--isr_depth == 0) cm3_isr_ticks += cm3_ticks() - isr_entered;
+    interrupts_restore(held);
 }
 #endif
 

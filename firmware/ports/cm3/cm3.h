@@ -165,7 +165,7 @@ uint32_t cm3_stack_used(void);
 void cm3_trace_isr_enter(void);
 void cm3_trace_isr_leave(void);
 extern volatile uint64_t cm3_isr_ticks;
-extern uint64_t cm3_worst_work, cm3_worst_moving_work;
+extern uint64_t cm3_worst_work, cm3_worst_moving_work, cm3_miscounted_passes;
 #endif
 
 /* ---- serve.c ---------------------------------------------------------------- */

@@ -13,6 +13,7 @@ uint64_t cm3_worst_pass;        /* ticks of the longest pass (idle left out), it
 uint64_t cm3_worst_moving_pass; /* the same while Z moves */
 uint64_t cm3_worst_work;        /* the longest pass with its interrupts' ticks out: the loop's own work */
 uint64_t cm3_worst_moving_work; /* the same while Z moves */
+uint64_t cm3_miscounted_passes; /* passes whose interrupts' ticks outran the pass: the count is wrong */
 /* Read whole (two words on this core), and in the order that keeps every
    interrupt counted inside the pass also inside its ticks: a pass's own
    work is never under-stated. */
@@ -25,6 +26,7 @@ static uint64_t isr_ticks(void)
 #define PASS_END()                                                                                      \
     do {                                                                                                \
         uint64_t i_ = isr_ticks() - pass_isr, t_ = cm3_ticks() - pass_start, w_ = t_ - i_;             \
+        if (i_ > t_) { cm3_miscounted_passes++; w_ = t_; }                                              \
         int m_ = moving || fw_axis_busy(&fw->axis) || fw->steps.head != fw->steps.tail;                 \
         if (t_ > cm3_worst_pass) cm3_worst_pass = t_;                                                   \
         if (w_ > cm3_worst_work) cm3_worst_work = w_;                                                   \

@@ -164,6 +164,7 @@ static void trace_report(void)
     board_trace_text("fw-mps2: worst loop pass while Z moves (cycles) ", cm3_worst_moving_pass);
     board_trace_text("fw-mps2: the loop's own work, worst pass (cycles) ", cm3_worst_work);
     board_trace_text("fw-mps2: the loop's own work, worst pass while Z moves (cycles) ", cm3_worst_moving_work);
+    board_trace_text("fw-mps2: passes whose interrupts outran them ", cm3_miscounted_passes);
     board_trace_text("fw-mps2: stack used (bytes) ", cm3_stack_used());
     board_trace_text("fw-mps2: replies dropped ", cm3_tx_dropped());
 }
