@@ -125,20 +125,23 @@ int output_check_dir(const char *option, const char *path)
     }
 }
 
-/* path with its directory resolved (links, "..", "."), malloc'd; NULL
+/* The file path names (its links followed, a link to a file not yet made
+   included) with its directory resolved (links, "..", "."), malloc'd; NULL
    when that directory does not resolve. */
 static char *resolved(const char *path)
 {
-    const char *slash = strrchr(path, '/');
-    char *dir = (char *)malloc(strlen(path) + 2), *real, *out = NULL;
-    if (!dir) return NULL;
-    if (!slash) strcpy(dir, ".");
-    else if (slash == path) strcpy(dir, "/");
-    else { memcpy(dir, path, (size_t)(slash - path)); dir[slash - path] = 0; }
-    if ((real = realpath(dir, NULL)) && (out = (char *)malloc(strlen(real) + strlen(path) + 2)))
-        sprintf(out, "%s/%s", real, slash ? slash + 1 : path);
+    char *file = resolve_links(path), *dir = file ? (char *)malloc(strlen(file) + 2) : NULL, *real = NULL, *out = NULL;
+    const char *slash = file ? strrchr(file, '/') : NULL;
+    if (dir) {
+        if (!slash) strcpy(dir, ".");
+        else if (slash == file) strcpy(dir, "/");
+        else { memcpy(dir, file, (size_t)(slash - file)); dir[slash - file] = 0; }
+        if ((real = realpath(dir, NULL)) && (out = (char *)malloc(strlen(real) + strlen(file) + 2)))
+            sprintf(out, "%s/%s", real, slash ? slash + 1 : file);
+    }
     free(real);
     free(dir);
+    free(file);
     return out;
 }
 

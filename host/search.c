@@ -173,6 +173,7 @@ int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_p
         free(dirs);
         free(*scores);
         *scores = NULL;
+        adaslice_orienter_free(&o);
         return complain(RC_FAIL, "out of memory for %zu direction%s", count, plural(count));
     }
     adaslice_fibonacci_directions(count, dirs);

@@ -160,6 +160,19 @@ static void bad_arguments_exit_2(void)
                    i, r.err, cases[i].named[k]);
         cli_free(&r);
     }
+    { /* a link to a file not yet made is that file: the plot went through it onto the plan (exit 0) */
+        char target[600], link[600];
+        cli_result r;
+        snprintf(target, sizeof target, "%s/linked_plan.csv", cli_dir);
+        snprintf(link, sizeof link, "%s/link_to_plan.csv", cli_dir);
+        remove(target);
+        remove(link);
+        CHECK(symlink("linked_plan.csv", link) == 0);
+        r = cli_run("plan", sphere_stl(), "--out", target, "--plot", link, NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "are one file") && access(target, F_OK) != 0,
+               "exit %d: %s", r.status, r.err);
+        cli_free(&r);
+    }
 }
 
 /* What options that read as nothing say they do: plain decimals taken in
