@@ -7309,7 +7309,8 @@ static int adaslice__bound_shift(size_t bins)
 /* The cusp profile's facets that can raise it, into keep in order (their
    count returned), the others left out: a facet whose value is at most the
    profile's over all its bins cannot change a maximum. Of the plate of
-   bench's, over 200 directions, 76 % are such, of the turbine blade's 73 %. The profile is bounded below
+   bench's, along any direction, 99 % are such; the bound below leaves out 76 %
+   of its facets (200 directions), 73 % of the turbine blade's. The profile is bounded below
    per block of bins by each box's first facet, computed exactly as the
    profile does and always kept: a block within that facet's bins is at least
    its value. A facet is left out when |n . d| plus its bound
