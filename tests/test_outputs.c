@@ -937,6 +937,37 @@ static void a_directory_job_removes_only_its_own_files(void)
 /* JSON strings escape what RFC 8259 says they must (the quote, the
    backslash, control characters) and nothing else: a model's name with
    quotes, backslashes, a tab, a newline and UTF-8 in it reads back. */
+/* Another program's manifest.json (a web app's) is not an old job: slice
+   took it for one and removed it and every file its "files" named, exit 0.
+   Refused, --force or not (the job's manifest would replace it), and
+   nothing in the directory touched. */
+static void another_programs_manifest_is_left_alone(void)
+{
+    static const char *const files[] = {"manifest.json", "index.html", "app.js"};
+    static const char *const texts[] = {"{\"name\": \"app\", \"files\": [\"index.html\", \"app.js\"]}\n", "<html>\n", "run()\n"};
+    char dir[300], path[400];
+    int force;
+    size_t i;
+    snprintf(dir, sizeof dir, "%s/webapp", cli_dir);
+    mkdir(dir, 0755);
+    for (i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[i]);
+        cli_write(path, texts[i]);
+    }
+    for (force = 0; force < 2; force++) {
+        cli_result r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir,
+                               force ? "--force" : NULL, NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "manifest.json") && strstr(r.err, "adaslice-job"),
+               "%s: exit %d: %s", force ? "--force" : "plain", r.status, r.err);
+        cli_free(&r);
+        for (i = 0; i < 3; i++) {
+            snprintf(path, sizeof path, "%s/%s", dir, files[i]);
+            CHECKF(same_text(path, texts[i]), "%s: %s was removed or changed", force ? "--force" : "plain", files[i]);
+        }
+    }
+    cli_remove_all(dir);
+}
+
 static void json_strings_escape_what_they_must(void)
 {
     static const char name[] = "a \"b\" c\\d\te\nf\x01 \xc3\xa9 g";
@@ -1058,5 +1089,6 @@ void test_outputs(void)
     RUN(every_command_exits_130_on_ctrl_c);
     RUN(a_full_disk_leaves_nothing);
     RUN(a_directory_job_removes_only_its_own_files);
+    RUN(another_programs_manifest_is_left_alone);
     cli_end();
 }

@@ -384,6 +384,24 @@ static void remove_listed(old_job *o, const char *text)
     }
 }
 
+/* A manifest.json this tool wrote: every one has said "format": "adaslice-job"
+   first. Another program's manifest.json (a web app's, a package's) names its
+   own files, which a re-slice must not take for an old job's. */
+static int manifest_is_a_job(const char *text)
+{
+    const char *p = strstr(text, "\"format\"");
+    if (!p) return 0;
+    for (p += 8; *p == ' ' || *p == '\t' || *p == '\r' || *p == '\n' || *p == ':'; p++) {}
+    return !strncmp(p, "\"adaslice-job\"", 14);
+}
+
+static int foreign_manifest(const char *dir)
+{
+    return complain(RC_USAGE, "-o %s: its manifest.json is not an adaslice job's (no \"format\": \"adaslice-job\"); the "
+                              "job's would replace it and the files it lists were left alone: give a new or empty "
+                              "directory", dir);
+}
+
 /* What an earlier job left in dir, as its manifest names it: the manifest
    first (so that an interrupted clean leaves no job that looks whole), then
    its files; nothing else. A directory that holds files and no manifest is
@@ -400,6 +418,10 @@ static int remove_old_job(const char *dir, size_t layers, int digits, int force,
     if (!(text = read_whole(path, NULL))) {
         if (errno != ENOENT) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
         return jobdir_check(dir, force);
+    }
+    if (!manifest_is_a_job(text)) {
+        free(text);
+        return foreign_manifest(dir);
     }
     if (remove(path) != 0 && errno != ENOENT) {
         free(text);
@@ -419,12 +441,19 @@ static int remove_old_job(const char *dir, size_t layers, int digits, int force,
 int jobdir_check(const char *dir, int force)
 {
     size_t n = strlen(dir) + 16;
-    char *manifest = (char *)malloc(n);
+    char *manifest = (char *)malloc(n), *text;
     struct stat st;
-    int ours;
+    int ours = 0;
     if (!manifest) return complain(RC_FAIL, "out of memory");
     snprintf(manifest, n, "%s/manifest.json", dir);
-    ours = stat(manifest, &st) == 0;
+    if (stat(manifest, &st) == 0 && (text = read_whole(manifest, NULL)) != NULL) {
+        ours = manifest_is_a_job(text);
+        free(text);
+        if (!ours) {
+            free(manifest);
+            return foreign_manifest(dir);
+        }
+    }
     free(manifest);
     if (ours || force || stat(dir, &st) != 0 || !S_ISDIR(st.st_mode) || !has_entries(dir)) return RC_OK;
     return complain(RC_USAGE, "-o %s: the directory holds files and no manifest.json of an adaslice job; they are "
