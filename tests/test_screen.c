@@ -654,7 +654,8 @@ static void wrong_screen_is_refused(void)
     CHECKF(r.status == 1 && strstr(r.err, "the job's masks are 240 x 200 px; the screen") && strstr(r.err, "shows 300 x 200 px"),
            "%d %s", r.status, r.err);
     cli_free(&r);
-    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbw"));
+    /* a file of its own: fbw is now a 100 x 200 screen's image, which an 80 x 200 one does not draw on */
+    snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", cli_path("fbw80"));
     r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, "--screen-pitch", "50", NULL);
     CHECKF(r.status == 1 && strstr(r.err, "the job's pixels are 100 um") && strstr(r.err, "are 50 um"), "%d %s", r.status, r.err);
     cli_free(&r);
@@ -686,6 +687,34 @@ static void wrong_screen_is_refused(void)
     r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", "file:nowhere", NULL);
     CHECKF(r.status == 2 && strstr(r.err, "file:PATH,WxH,BPP"), "%d %s", r.status, r.err);
     cli_free(&r);
+    /* "32junk" is not 32, nor "+80" 80 */
+    snprintf(spec, sizeof spec, "file:%s,80x200,24junk", cli_path("fbjunk"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "file:PATH,WxH,BPP"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    snprintf(spec, sizeof spec, "file:%s,+80x200,24", cli_path("fbjunk"));
+    r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "file:PATH,WxH,BPP"), "%d %s", r.status, r.err);
+    cli_free(&r);
+    /* a file that is not a screen's image of this size (the job's own
+       masks.rle, named by mistake) is left as it was: it was zeroed and grown */
+    {
+        char masks[560];
+        size_t before_n = 0, after_n = 0;
+        unsigned char *before, *after;
+        snprintf(masks, sizeof masks, "%s/masks.rle", cli_path("job"));
+        before = read_whole_file(masks, &before_n);
+        snprintf(spec, sizeof spec, "file:%s,80x200,24,rgb", masks);
+        r = cli_run("print", cli_path("job"), "--port", sim.line + 4, "--screen", spec, NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "masks.rle") && strstr(r.err, "left alone"), "%d %s",
+               r.status, r.err);
+        cli_free(&r);
+        after = read_whole_file(masks, &after_n);
+        CHECKF(before && after && before_n == after_n && !memcmp(before, after, before_n), "masks.rle changed: %zu bytes, was %zu",
+               after_n, before_n);
+        free(before);
+        free(after);
+    }
     CHECKF(stop_sim(&sim) == 0, "the simulator failed");
 }
 

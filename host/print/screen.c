@@ -196,13 +196,25 @@ static void wait_us(uint32_t us)
     while (nanosleep(&t, &t) != 0 && errno == EINTR) {}
 }
 
+/* A plain decimal at *p (digits only: no sign, no space), *p moved past it. */
+static int take_digits(const char **p, unsigned long *v)
+{
+    char *end;
+    if (**p < '0' || **p > '9') return 0;
+    errno = 0;
+    *v = strtoul(*p, &end, 10);
+    *p = end;
+    return errno == 0;
+}
+
 /* file:PATH,WxH,BPP[,packing] */
 static int open_file(screen *s, const char *spec, int *packing)
 {
     char path[256];
     unsigned long w = 0, h = 0, bpp = 0;
     char pack[8] = "";
-    int fields, k;
+    int fields = 0, k;
+    const char *at;
     struct stat st;
     static const uint8_t off32[3] = {16, 8, 0}, len32[3] = {8, 8, 8}, off16[3] = {11, 5, 0}, len16[3] = {5, 6, 5};
     const char *first = strchr(spec, ',');
@@ -210,7 +222,16 @@ static int open_file(screen *s, const char *spec, int *packing)
         return complain(RC_USAGE, "--screen %s: expected file:PATH,WxH,BPP[,gray|rgb|bgr]", spec);
     memcpy(path, spec, (size_t)(first - spec));
     path[first - spec] = 0;
-    fields = sscanf(first + 1, "%lux%lu,%lu,%7s", &w, &h, &bpp, pack);
+    at = first + 1;
+    if (take_digits(&at, &w) && *at++ == 'x' && take_digits(&at, &h) && *at++ == ',' && take_digits(&at, &bpp)) {
+        fields = 3;
+        if (*at == ',' && strlen(at + 1) < sizeof pack) {
+            strcpy(pack, at + 1);
+            fields = 4;
+        } else if (*at) {
+            fields = 0; /* trailing junk: "32junk" is not 32 */
+        }
+    }
     if (fields < 3 || !w || !h || w > 65535 || h > 65535 || (bpp != 16 && bpp != 24 && bpp != 32))
         return complain(RC_USAGE, "--screen file:%s: expected file:PATH,WxH,BPP[,gray|rgb|bgr] with BPP 16, 24 or 32", spec);
     if (fields == 4) {
@@ -231,6 +252,13 @@ static int open_file(screen *s, const char *spec, int *packing)
         return complain(RC_FAIL, "--screen %s: %s", path, strerror(errno));
     if (fstat(s->fd, &st) != 0 || !S_ISREG(st.st_mode))
         return complain(RC_FAIL, "--screen file:%s: not a regular file (a framebuffer is /dev/fbN, without file:)", path);
+    /* a file of another size is not this screen's image (a job's masks.rle
+       named by mistake was zeroed and grown): only a new or empty one, or
+       one this screen's size, is drawn on */
+    if (st.st_size != 0 && (uint64_t)st.st_size != (uint64_t)s->map_size)
+        return complain(RC_USAGE, "--screen file:%s: the file holds %lld bytes, not the %zu of a %lux%lu screen at %lu bits: "
+                                  "not this screen's image, so it is left alone; give a new file",
+                        path, (long long)st.st_size, s->map_size, w, h, bpp);
     if ((size_t)st.st_size < s->map_size && ftruncate(s->fd, (off_t)s->map_size) != 0)
         return complain(RC_FAIL, "--screen %s: cannot make it %zu bytes: %s", path, s->map_size, strerror(errno));
     return RC_OK;
