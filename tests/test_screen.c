@@ -1167,6 +1167,33 @@ static void show_layer_and_patterns(void)
     free(j.crc);
 }
 
+/* What show cannot draw is refused at once, naming the value: a ruler whose
+   millimetre lines touch (a pitch of 1e12 um looped for ever, deaf to
+   Ctrl-C), a checker's square under a pixel (1e-300 mm: a cast past 2^32),
+   a pitch out of any screen's range; a job directory that is not there is
+   named as such (it was "not whole"). */
+static void show_refuses_what_it_cannot_draw(void)
+{
+    static const char *const cases[][9] = {
+        {"--pattern", "ruler", "--screen-pitch", "1e12", NULL},
+        {"--pattern", "ruler", "--screen-pitch", "0.5", NULL},
+        {"--pattern", "ruler", "--screen-pitch", "300", NULL},
+        {"--pattern", "checker", "--screen-pitch", "50", "--cell", "1e-300", NULL},
+        {"/nonexistent/job", "--layer", "1", NULL},
+    };
+    static const char *const named[] = {"--screen-pitch 1e+12", "--screen-pitch 0.5", "would touch", "--cell 1e-300",
+                                        "/nonexistent/job: No such file"};
+    char spec[600];
+    size_t i;
+    snprintf(spec, sizeof spec, "file:%s,80x200,24", cli_path("fbq"));
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        const char *const *c = cases[i];
+        cli_result r = cli_run("show", "--screen", spec, "--seconds", "0.01", c[0], c[1], c[2], c[3], c[4], c[5], NULL);
+        CHECKF(r.status != 0 && cli_one_message(r.err) && strstr(r.err, named[i]), "case %zu: exit %d: %s", i, r.status, r.err);
+        cli_free(&r);
+    }
+}
+
 /* show --pattern white --port --expose: an exposure test. The printer
    lights the white screen once, for the time asked, under the observer's
    eyes; the screen is dark after, and the printer takes a print next (the
@@ -1189,6 +1216,10 @@ static void white_exposure_test(void)
     CHECK(all_zero(cli_path("fbx")));
     r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "100000", NULL);
     CHECKF(r.status == 2 && strstr(r.err, "lights 0.001 to"), "show --expose too long: exit %d: %s", r.status, r.err);
+    cli_free(&r);
+    /* 2^32 ms and a little: it wrapped to 4 ms and lit, exit 0 */
+    r = cli_run("show", "--pattern", "white", "--screen", spec, "--port", sim.line + 4, "--expose", "4294967.3", NULL);
+    CHECKF(r.status == 2 && strstr(r.err, "lights 0.001 to"), "show --expose 2^32 ms: exit %d: %s", r.status, r.err);
     cli_free(&r);
     {
         /* Ctrl-C in a long exposure test: the screen dark within 100 ms,
@@ -1378,6 +1409,7 @@ void test_screen(void)
     RUN(aa_job_on_a_turned_gray_screen);
     RUN(wrong_screen_is_refused);
     RUN(show_layer_and_patterns);
+    RUN(show_refuses_what_it_cannot_draw);
     RUN(white_exposure_test);
     RUN(real_framebuffer_if_any);
     RUN_NEEDING("capsh (libcap2-bin)", guard_priority_refused_is_said);

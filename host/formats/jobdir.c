@@ -871,6 +871,12 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     /* a slice removes the manifest first and writes it last, masks.rle and
        the layers going straight under their names meanwhile: without it the
        job is not whole, whatever masks.rle holds */
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        int found = stat(dir, &st) == 0;
+        complain(RC_FAIL, "%s: %s", dir, found ? "not a job directory" : strerror(errno));
+        free(manifest);
+        goto done;
+    }
     if (stat(manifest, &st) != 0 && errno == ENOENT) {
         complain(RC_FAIL, "%s: missing: the job is not whole (its slice did not finish); slice it again", manifest);
         free(manifest);

@@ -122,6 +122,9 @@ static int pattern_image(const show_args *a, const screen *s, image *m)
     case PATTERN_WHITE: memset(m->px, 0xff, m->stride * m->h); break;
     case PATTERN_CHECKER: {
         double cell = px_per_mm ? a->cell_mm * px_per_mm : 32;
+        /* a square under a pixel is no checker (and x / cell past 2^32 no count) */
+        if (cell < 1)
+            return complain(RC_USAGE, "show --cell %g: under one of the screen's %g um pixels", a->cell_mm, s->pitch_um);
         for (y = 0; y < m->h; y++)
             for (x = 0; x < m->w; x++)
                 if (((uint32_t)(x / cell) + (uint32_t)(y / cell)) % 2 == 0) set_pixel(m, x, y);
@@ -133,6 +136,11 @@ static int pattern_image(const show_args *a, const screen *s, image *m)
         if (!px_per_mm)
             return complain(RC_USAGE, "show --pattern ruler: the screen's pitch? --screen-pitch UM or --screen-panel NAME");
         step = px_per_mm;
+        /* lines a millimetre apart that touch would be a solid screen (and a
+           step near 0 never ends the loop) */
+        if (step < 4)
+            return complain(RC_USAGE, "show --pattern ruler: the screen's pixels (%g um) are over a quarter of a millimetre: "
+                                      "its millimetre lines would touch", s->pitch_um);
         for (k = 0; k * step < m->w; k++) {
             double x0 = floor(k * step + 0.5);
             fill_rect(m, x0, 0, x0 + (k % 10 ? 1 : 3), m->h);
@@ -206,10 +214,11 @@ static int expose(serial_link *l, const show_args *a)
     int rc, lit = 0;
     sm.layer = LINK_SCREEN_PATTERN;
     sm.exposure_ms = 0;
-    em.ms = (uint32_t)(a->expose_s * 1000 + 0.5);
-    if (!em.ms || em.ms > l->id.max_exposure_ms)
+    /* the range in seconds, before a cast that wraps past 2^32 ms */
+    if (!(a->expose_s * 1000 + 0.5 >= 1) || a->expose_s * 1000 + 0.5 >= (double)l->id.max_exposure_ms + 1)
         return complain(RC_USAGE, "show --expose %g: the printer on %s lights 0.001 to %.3f s at once", a->expose_s, a->port,
                         l->id.max_exposure_ms / 1000.0);
+    em.ms = (uint32_t)(a->expose_s * 1000 + 0.5);
     if ((rc = serial_send(l, LINK_MSG_SCREEN, buf, link_put_screen(buf, &sm))) ||
         (rc = serial_send(l, LINK_MSG_EXPOSE, buf, link_put_expose(buf, &em))) || (rc = serial_status(l)))
         return rc;

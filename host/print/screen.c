@@ -59,7 +59,11 @@ int screen_option(int argc, char **argv, int *i, screen_options *o, int *rc)
     if (!strcmp(opt, "--screen")) *rc = file_option(argc, argv, i, &o->device);
     else if (!strcmp(opt, "--screen-packing")) *rc = name_option(argc, argv, i, PACKINGS, 3, "gray, rgb or bgr", &o->packing);
     else if (!strcmp(opt, "--screen-mirror")) *rc = name_option(argc, argv, i, MIRRORS, 3, "none, x or y", &o->mirror);
-    else if (!strcmp(opt, "--screen-pitch")) *rc = number_option(argc, argv, i, 0, &o->pitch_um);
+    else if (!strcmp(opt, "--screen-pitch")) {
+        /* a panel's pixels are tens of micrometres, a projector's a few hundred */
+        if (!(*rc = number_option(argc, argv, i, 0, &o->pitch_um)) && (o->pitch_um < 1 || o->pitch_um > 10000))
+            *rc = complain(RC_USAGE, "--screen-pitch %g: a pixel pitch in micrometres, from 1 to 10000", o->pitch_um);
+    }
     else if (!strcmp(opt, "--screen-panel")) {
         if (!(*rc = file_option(argc, argv, i, &o->panel)) && !panel_find(o->panel)) {
             char names[256] = "";
