@@ -457,11 +457,14 @@ static void uv(fw_state *fw, int on, uint64_t when, uint64_t until)
     fw->port.uv(fw->port.ctx, on, when, until);
 }
 
+/* A speed under a step a second is one step a second: 0 steps/s is the
+   axis's top speed (motion.c), and a peel asked at 2 um/s ran at 10 mm/s. */
 static uint32_t um_s_to_steps(const fw_state *fw, uint32_t um_s)
 {
     uint64_t p = (uint64_t)um_s * fw->config.axis.steps_per_mm, s;
     /* 32 bits when it fits: a 64-bit division is thousands of cycles on an 8-bit core */
     s = p >> 32 ? p / 1000u : (uint32_t)p / 1000u;
+    if (!s && um_s) s = 1;
     return s > 0xffffffffu ? 0xffffffffu : (uint32_t)s;
 }
 

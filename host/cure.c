@@ -122,6 +122,9 @@ int cure_finish(cure_args *c, double tmin, double tmax)
     if (c->motion.lift_mm > CURE_MAX_PEEL_MM || c->motion.lift_speed > CURE_MAX_PEEL_MM ||
         c->motion.retract_speed > CURE_MAX_PEEL_MM)
         return complain(RC_USAGE, "--peel is limited to %g mm and speeds to %g mm/s", CURE_MAX_PEEL_MM, CURE_MAX_PEEL_MM);
+    if (c->motion.lift_speed < CURE_MIN_SPEED_MM_S || c->motion.retract_speed < CURE_MIN_SPEED_MM_S)
+        return complain(RC_USAGE, "--peel-speed %g, --return-speed %g: speeds are at least %g mm/s (a job keeps um/s)",
+                        c->motion.lift_speed, c->motion.retract_speed, CURE_MIN_SPEED_MM_S);
     default_curve(c, tmin);
     for (k = 0; k < (c->points ? c->points : 1); k++) {
         if (!(c->seconds[k] > 0))

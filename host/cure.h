@@ -31,6 +31,9 @@ typedef struct cure_args {
 #define CURE_MIN_SECONDS 0.001
 #define CURE_MAX_SECONDS 3600.0
 #define CURE_MAX_PEEL_MM 1000.0
+/* speeds are kept in um/s: a slower one would be written as 0, which the
+   firmware takes for its top speed */
+#define CURE_MIN_SPEED_MM_S 0.001
 void cure_defaults(cure_args *c);
 /* The defaults with their working curve (T = tmin), for an estimate where no
    printer is involved (plan --compare): slice's exposures without the limits

@@ -135,6 +135,8 @@ static void bad_arguments_exit_2(void)
         {{"plan", "m.stl", "--importance", "1,0,0", "--weights", "w.txt"}, {"--importance", "--weights"}},
         {{"plan", "m.stl", "--importance", "0.5,0.5,0", "--weight", "box:0,0,0,1,1,1=0.5"}, {"--importance", "--weight"}},
         {{"slice", "m.stl", "-o", "j", "--bottom-layers", "-1"}, {"--bottom-layers", "from 0"}},
+        /* a job keeps um/s: 0.0004 mm/s was written as 0, the firmware's top speed */
+        {{"slice", "m.stl", "-o", "j", "--peel-speed", "0.0004"}, {"--peel-speed 0.0004", "0.001 mm/s"}},
         /* job names */
         {{"slice", "m.stl", "-o", ".ctb", "--pixels", "100x100", "--pitch", "0.05"}, {".ctb", "name"}},
         {{"slice", "m.stl", "-o", "job_v1.2", "--pixels", "100x100", "--pitch", "0.05"}, {".2", "--format"}},

@@ -249,6 +249,27 @@ static void start_a_move(fake_printer *p)
     CHECK(fake_state(p) == LINK_STATE_MOVING);
 }
 
+/* A speed under a step a second is a step a second: 0 steps/s is the
+   axis's top speed, and a peel asked at 2 um/s (0.8 steps/s at 400
+   steps/mm) ran at 10 mm/s. 1 um/s, 4 steps up: one step in the first
+   1.5 s, not all four in milliseconds. */
+static void speeds_under_a_step_a_second_are_one(void)
+{
+    static fake_printer p;
+    uint8_t mv[LINK_SIZE_MOVE];
+    link_move move;
+    fake_init(&p, 8, 8, 1);
+    home(&p);
+    move.z_nm = 4 * 1000000 / 400;
+    move.speed_um_s = 1;
+    fake_send(&p, LINK_MSG_MOVE, mv, link_put_move(mv, &move));
+    fake_run(&p, p.now + FAKE_TICK_HZ * 3 / 2);
+    CHECKF(p.true_position >= 1 && p.true_position <= 2 && fake_state(&p) == LINK_STATE_MOVING,
+           "1 um/s: %d of 4 steps in 1.5 s", (int)p.true_position);
+    fake_run(&p, p.now + FAKE_TICK_HZ * 5);
+    CHECKF(p.true_position == 4, "1 um/s: %d of 4 steps in 6.5 s", (int)p.true_position);
+}
+
 /* The loop stalls 20 ms in the middle of a move while the step interrupt
    goes on: the queued steps leave on time, then the core finds the next step
    past due and stops dead (STEP_LATE, UV and motor off, Z unhomed) instead of
@@ -923,6 +944,7 @@ void test_firmware(void)
     RUN(link_recovers);
     RUN(bad_masks_are_never_shown);
     RUN(mask_decoding_takes_bounded_slices);
+    RUN(speeds_under_a_step_a_second_are_one);
     RUN(a_stalled_loop_stops_the_motion);
     RUN(a_stack_fault_halts_the_core);
     RUN(thousand_layers_without_drift);

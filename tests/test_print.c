@@ -1376,6 +1376,8 @@ static void damaged_job_is_refused_before_the_print(void)
         damaged_masks_said(job, 16, "\2", 1, "masks.rle: byte 16: masks of 2 bits", NULL);
         damaged_masks_said(job, 40, ones, 4, "masks.rle: byte 40: a settle of 4294967295 ms", NULL);
         damaged_masks_said(job, 28, ones, 4, "masks.rle: byte 28: a peel of 4294967295 nm", spec);
+        /* a peel speed of 0 is the firmware's top speed, which slice never writes */
+        damaged_masks_said(job, 32, zero, 4, "masks.rle: byte 28: a peel of", NULL);
         damaged_masks_said(job, 8, huge_8bit, sizeof huge_8bit, "the job's masks are 16777215 x 16777215 px; the screen",
                            spec);
     }

@@ -921,9 +921,9 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     }
     /* what slice would have refused to write (cure.h) */
     if (m->peel_nm > CURE_MAX_PEEL_MM * 1e6 || m->peel_speed_um_s > CURE_MAX_PEEL_MM * 1e3 ||
-        m->return_speed_um_s > CURE_MAX_PEEL_MM * 1e3) {
+        m->return_speed_um_s > CURE_MAX_PEEL_MM * 1e3 || !m->peel_speed_um_s || !m->return_speed_um_s) {
         complain(RC_FAIL, "%s: byte 28: a peel of %u nm at %u um/s, back at %u um/s: peels are limited to %g mm and "
-                          "speeds to %g mm/s", path, m->peel_nm, m->peel_speed_um_s, m->return_speed_um_s,
+                          "speeds to 1 um/s .. %g mm/s", path, m->peel_nm, m->peel_speed_um_s, m->return_speed_um_s,
                  CURE_MAX_PEEL_MM, CURE_MAX_PEEL_MM);
         goto done;
     }
