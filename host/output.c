@@ -28,6 +28,28 @@ static int names_a_stream(const char *path)
            !strncmp(path, "/dev/fd/", 8) || !strncmp(path, "/proc/self/fd/", 14);
 }
 
+/* Standard output once an output took it (output_check): the command's
+   summary and notes then go to standard error, or they would be mixed into
+   the data (a profile CSV written to "-" and read back failed at its line
+   4,007, the summary's first). */
+static FILE *data_stdout;
+
+static void take_stdout(void)
+{
+    int fd;
+    if (data_stdout) return;
+    fflush(stdout);
+    if ((fd = dup(STDOUT_FILENO)) < 0) return;
+    if (!(data_stdout = fdopen(fd, "wb"))) {
+        close(fd);
+        return;
+    }
+    if (dup2(STDERR_FILENO, STDOUT_FILENO) < 0) { /* printf stays where it was: the data with it */
+        fclose(data_stdout);
+        data_stdout = NULL;
+    }
+}
+
 /* The stream the tool has open under that name ("-" is standard output),
    written through its FILE (an open of /dev/stdout, when the shell sent it to
    a file, would truncate what was printed and write over it), or NULL. */
@@ -35,7 +57,7 @@ static FILE *stream_named(const char *path)
 {
     if (!strcmp(path, "-") || !strcmp(path, "/dev/stdout") || !strcmp(path, "/dev/fd/1") ||
         !strcmp(path, "/proc/self/fd/1"))
-        return stdout;
+        return data_stdout ? data_stdout : stdout;
     if (!strcmp(path, "/dev/stderr") || !strcmp(path, "/dev/fd/2") || !strcmp(path, "/proc/self/fd/2")) return stderr;
     return NULL;
 }
@@ -104,7 +126,9 @@ int output_check(const char *option, const char *path)
     if (!path) return RC_OK;
     if (!*path) return complain(RC_USAGE, "%s \"\": an empty file name", option);
     switch (output_kind(path)) {
-    case OUT_STRAIGHT: return RC_OK;
+    case OUT_STRAIGHT:
+        if (stream_named(path) == stdout) take_stdout();
+        return RC_OK;
     case OUT_DIRECTORY: return complain(RC_USAGE, "%s %s: is a directory; give a file name", option, path);
     default: return check_parent(option, path);
     }

@@ -17,7 +17,9 @@ int output_kind(const char *path);
 
 /* Before the work: path (of command-line option `option`, for the message)
    can take a file: not empty, not a directory, its directory exists and is
-   writable. RC_OK or an RC_USAGE complaint made. NULL passes. */
+   writable. RC_OK or an RC_USAGE complaint made. NULL passes. A path that is
+   standard output ("-", /dev/stdout) takes it for the data: what the command
+   prints besides (its summary, --json's object) goes to standard error. */
 int output_check(const char *option, const char *path);
 /* The same for a job directory: an existing writable directory, or a new
    one in a writable directory. */

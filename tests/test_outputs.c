@@ -621,9 +621,23 @@ static void no_extension_on_a_path_that_exists(void)
     /* /dev/stdout is standard output, wherever the shell sent it (here a file,
        which a rename would have taken and an open would have cut) */
     r = cli_run("plan", raised_sphere(), "--out", "/dev/stdout", NULL);
-    CHECKF(r.status == 0 && !strncmp(r.out, "layer,", 6) && strstr(r.out, "\nmodel "), "exit %d: %.200s %s", r.status,
-           r.out, r.err);
+    CHECKF(r.status == 0 && !strncmp(r.out, "layer,", 6), "exit %d: %.200s %s", r.status, r.out, r.err);
+    /* the data alone: the summary goes to standard error (it followed the
+       CSV, and a profile written to "-" and read back failed at its line) */
+    CHECKF(!strstr(r.out, "model ") && strstr(r.err, "model "), "the summary went with the data: %.300s", r.out);
     cli_free(&r);
+    {
+        char csv[600];
+        cli_result back;
+        snprintf(csv, sizeof csv, "%s/profile_from_stdout.csv", cli_dir);
+        r = cli_run("plan", raised_sphere(), "--profile-out", "-", NULL);
+        CHECKF(r.status == 0 && !strstr(r.out, "model "), "exit %d: %.300s", r.status, r.out);
+        cli_write(csv, r.out);
+        cli_free(&r);
+        back = cli_run("plan", "--profile", csv, NULL);
+        CHECKF(back.status == 0, "the profile written to - read back: exit %d: %s", back.status, back.err);
+        cli_free(&back);
+    }
 }
 
 /* The index of the last argument. */
