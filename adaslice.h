@@ -6827,6 +6827,7 @@ static adaslice_result adaslice__plan_setup(const adaslice_profile *p, const ada
 {
     adaslice_result r;
     size_t i;
+    double total = 0;
     if (!p || !p->phi || !p->bin_count)
         return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "plan: the profile is empty");
     if (options) *opt = *options; else memset(opt, 0, sizeof *opt);
@@ -6845,11 +6846,20 @@ static adaslice_result adaslice__plan_setup(const adaslice_profile *p, const ada
     if (opt->eps_units && *hi > 255)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                               "plan: a printer plans layers of at most 255 bins; tmax / bin is %u", (unsigned)*hi);
-    for (i = 0; i < p->bin_count; i++)
+    for (i = 0; i < p->bin_count; i++) {
         if (!(p->phi[i] >= 0) || p->phi[i] > DBL_MAX)
             return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
                                   "plan: profile value %g at bin %zu (z = %g mm) is not a finite number >= 0",
                                   p->phi[i], i, (double)i * p->bin);
+        total += p->phi[i];
+    }
+    /* every layer's error is at most twice the whole sum times the bin (the
+       volume metric's differences), in any order of adding: a plan whose
+       errors overflowed to inf passed as feasible */
+    if (!(4 * total * p->bin <= DBL_MAX))
+        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+                              "plan: the profile's values sum to %g: its layers' errors would pass the largest double",
+                              total);
     if (opt->method == ADASLICE_METHOD_CURVATURE) return adaslice__curvature_check(p, opt, err);
     return ADASLICE_OK;
 }

@@ -395,6 +395,15 @@ static void bad_profile_lines_are_named(void)
     r = cli_run("plan", "--profile", path, "--bin", "0.05", "--tmin", "0.05", "--tmax", "0.1", "--json", NULL);
     CHECKF(r.status == 0 && cli_json_number(r.out, "bins") == 4, "exit %d: %s %s", r.status, r.err, r.out);
     cli_free(&r);
+    /* finite values whose sum is not: the plan's errors were inf, its JSON error null, exit 0 */
+    {
+        char big[4000] = "";
+        for (i = 0; i < 200; i++) strcat(big, "3e306\n");
+        cli_write(path, big);
+        r = cli_run("plan", "--profile", path, "--eps", "1e308", NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "sum to"), "exit %d, '%s'", r.status, r.err);
+        cli_free(&r);
+    }
     cli_write_bytes(weights, "0.5\n\0garbage\n", 13);
     r = cli_run("plan", sphere_stl(), "--weights", weights, NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "nul_weights.txt:2: a NUL byte"), "exit %d, '%s'",
