@@ -6120,6 +6120,14 @@ ADASLICE_DEF adaslice_result adaslice_saliency(const adaslice_mesh *mesh, float 
         goto done;
     }
     for (k = 0; k < 3; k++) diagonal += (hi[k] - pt.lo[k]) * (hi[k] - pt.lo[k]);
+    /* the curvatures and distances are floats, squared: a part 1e20 mm across
+       (or 1e-20) got every weight 1 without a word; 1e-18 .. 1e18 gave the
+       same weights as 1 mm */
+    if (sqrt(diagonal) < 1e-15 || sqrt(diagonal) > 1e15) {
+        r = adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "saliency: the part is %g mm across: outside 1e-15 .. 1e15 mm, "
+                           "where its curvatures leave the range of floats", sqrt(diagonal));
+        goto done;
+    }
     /* a triangle with area has distinct corners: the diagonal is positive */
     r = adaslice__saliency_points(&pt, ADASLICE__SALIENCY_EPS * sqrt(diagonal), sal, &al, err);
     if (r != ADASLICE_OK) goto done;
