@@ -871,6 +871,68 @@ static void turned_jobs_are_the_same_on_many_threads(void)
     unsetenv("SOURCE_DATE_EPOCH");
 }
 
+/* Mirrors and half turns are the plain job's pixels flipped, read back by
+   the GOO reader written from the format's documentation: each layer pixel
+   (i, r) of --mirror M --rotate R is the plain job's (w - 1 - i or i,
+   h - 1 - r or r). The sphere off the plate's centre on 301 x 253 pixels
+   (no multiple of 8), 1-bit and --aa 4. Such jobs (most printers' presets
+   mirror) now flip rows a byte at a time, not pixel by pixel. */
+static void mirrors_and_half_turns_flip_the_plain_job(void)
+{
+    static const char *const turns[][2] = {{"0", "none"}, {"0", "x"}, {"0", "y"}, {"0", "xy"}, {"180", "none"}, {"180", "x"}};
+    static const char *const aa[] = {"1", "4"};
+    char out[300];
+    int t, a;
+    snprintf(out, sizeof out, "%s/flipped.goo", cli_dir);
+    for (a = 0; a < 2; a++) {
+        unsigned char *plain[64] = {NULL};
+        unsigned layers = 0, k;
+        int w = 0, h = 0;
+        for (t = 0; t < 6; t++) {
+            int flip_cols = (turns[t][1][0] == 'x') != (t >= 4), flip_rows = (strchr(turns[t][1], 'y') != NULL) != (t >= 4);
+            size_t size, bad = 0;
+            unsigned char *data;
+            jr_job job;
+            cli_result r = cli_run("slice", sphere_obj(), "--pixels", "301x253", "--pitch", "0.05", "--place", "2.37,-1.11",
+                                   "--uniform", "1", "--rotate", turns[t][0], "--mirror", turns[t][1], "--aa", aa[a], "-o", out,
+                                   NULL);
+            CHECKF(r.status == 0, "%s", r.err);
+            cli_free(&r);
+            data = read_whole_file(out, &size);
+            if (!data || jr_read_goo(data, size, &job) != 0) {
+                CHECKF(0, "--mirror %s --rotate %s: the reader refuses it", turns[t][1], turns[t][0]);
+                free(data);
+                break;
+            }
+            if (t == 0) {
+                w = job.width;
+                h = job.height;
+                layers = job.layer_count < 64 ? job.layer_count : 64;
+                for (k = 0; k < layers; k++) {
+                    plain[k] = job.layers[k].image;
+                    job.layers[k].image = NULL; /* kept */
+                }
+            } else {
+                CHECKF(job.width == w && job.height == h && job.layer_count >= layers, "%d x %d, %u layers", job.width,
+                       job.height, job.layer_count);
+                for (k = 0; k < layers && job.width == w && job.height == h; k++) {
+                    int i, rr;
+                    for (rr = 0; rr < h; rr++)
+                        for (i = 0; i < w; i++)
+                            bad += job.layers[k].image[(size_t)rr * w + i] !=
+                                   plain[k][(size_t)(flip_rows ? h - 1 - rr : rr) * w + (flip_cols ? w - 1 - i : i)];
+                }
+                CHECKF(bad == 0, "--mirror %s --rotate %s --aa %s: %zu pixels are not the plain job's flipped", turns[t][1],
+                       turns[t][0], aa[a], bad);
+            }
+            jr_free(&job);
+            free(data);
+        }
+        CHECKF(layers >= 8 && w == 301 && h == 253, "%u layers of %d x %d", layers, w, h);
+        for (k = 0; k < layers; k++) free(plain[k]);
+    }
+}
+
 /* A uniform job's top layer is what is left of the part: the headers' one
    layer height and exposure are the regular layers', not the top's. */
 static void headers_hold_the_regular_layers(void)
@@ -1059,6 +1121,7 @@ void test_slice_jobs(void)
     RUN(an_open_mesh_is_masked_by_its_sections);
     RUN(threads_write_the_same_job);
     RUN(turned_jobs_are_the_same_on_many_threads);
+    RUN(mirrors_and_half_turns_flip_the_plain_job);
     RUN(headers_hold_the_regular_layers);
     RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);
