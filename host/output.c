@@ -200,7 +200,13 @@ int output_check_distinct(const char *const *options, const char *const *paths, 
 
 /* ------------------------------------------------------------ signals */
 
-static volatile sig_atomic_t caught, holding;
+/* Set by the handler, read by the pipeline's threads too: a volatile
+   sig_atomic_t is only the handler's and the thread it interrupted, so both
+   are read and written as atomics (lock-free, safe in a handler). */
+static volatile sig_atomic_t caught_flag, holding_flag;
+static int caught(void) { return __atomic_load_n(&caught_flag, __ATOMIC_SEQ_CST); }
+static int holding(void) { return __atomic_load_n(&holding_flag, __ATOMIC_SEQ_CST); }
+#define SET_FLAG(flag, v) __atomic_store_n(&(flag), (v), __ATOMIC_SEQ_CST)
 
 static const char *signal_name(int sig)
 {
@@ -209,8 +215,8 @@ static const char *signal_name(int sig)
 
 static void on_signal(int sig)
 {
-    caught = sig;
-    if (!holding) { /* nothing written yet: end here (write and _exit are async-signal-safe) */
+    SET_FLAG(caught_flag, sig);
+    if (!holding()) { /* nothing written yet: end here (write and _exit are async-signal-safe) */
         const char *name = signal_name(sig);
         ssize_t ignored;
         ignored = write(2, "adaslice: interrupted by ", 25);
@@ -233,12 +239,12 @@ void outputs_catch_signals(void)
     for (i = 0; i < sizeof signals / sizeof signals[0]; i++) sigaction(signals[i], &sa, NULL);
 }
 
-int output_interrupted(void) { return caught; }
-void outputs_hold_signals(void) { holding = 1; }
+int output_interrupted(void) { return caught(); }
+void outputs_hold_signals(void) { SET_FLAG(holding_flag, 1); }
 
 int output_failed(const char *path, int err)
 {
-    return caught ? RC_FAIL : complain(RC_FAIL, "cannot write %s: %s", path, strerror(err));
+    return caught() ? RC_FAIL : complain(RC_FAIL, "cannot write %s: %s", path, strerror(err));
 }
 
 /* The files this run put in place (renamed), to remove if it fails. */
@@ -263,8 +269,8 @@ static void note_placed(const char *path)
 int outputs_finish(int rc)
 {
     size_t i;
-    int sig = caught;
-    holding = 1; /* what follows is the cleaning: a second signal waits for it */
+    int sig = caught();
+    SET_FLAG(holding_flag, 1); /* what follows is the cleaning: a second signal waits for it */
     for (i = 0; i < placed_count; i++) {
         if (sig || rc == RC_FAIL || rc == RC_USAGE) remove(placed[i]);
         free(placed[i]);
@@ -292,7 +298,7 @@ int output_open(output *o, const char *path, int seekable)
     int kind = output_kind(path), err = 0;
     memset(o, 0, sizeof *o);
     outputs_hold_signals();
-    if (caught) return RC_FAIL;
+    if (caught()) return RC_FAIL;
     if (kind == OUT_DIRECTORY) return complain(RC_FAIL, "cannot write %s: it is a directory", path);
     if (!(o->path = strdup(path))) return complain(RC_FAIL, "cannot write %s: out of memory", path);
     if (kind == OUT_STRAIGHT) {
@@ -344,7 +350,7 @@ int output_close(output *o, int ok, int err)
     if (ok && !err && o->copy) err = copy_out(o);
     if ((o->copy || !stream_named(o->path)) && fclose(o->f) != 0 && ok && !err) err = errno ? errno : EIO;
     o->f = NULL;
-    if (caught) ok = 0;
+    if (caught()) ok = 0;
     if (ok && !err && o->tmp && rename(o->tmp, o->target) != 0) err = errno;
     if (ok && !err) {
         if (o->tmp) note_placed(o->target);
