@@ -247,10 +247,18 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
         }
         return;
     }
-    /* the band's rows are out's columns (a quarter turn) or rows, perhaps
-       counted from the other end */
-    if (s->rotate & 1) landing((s->rotate == 1) != s->mirror_y, h, y0, y1, cols);
-    else landing((s->rotate == 0) != s->mirror_y, h, y0, y1, rows);
+    /* A quarter turn: the band's rows are out's columns, perhaps counted
+       from the other end, and the grid's columns out's rows; only the
+       part's rows and columns are written (out is zero elsewhere, as
+       above: over the whole width it took 7x the time of an upright job) */
+    {
+        int c0 = m->bits == 8 ? (int)m->byte_lo : (int)m->byte_lo * 8, c1 = m->bits == 8 ? (int)m->byte_hi : (int)m->byte_hi * 8;
+        int b0 = y0 > m->row_lo ? y0 : m->row_lo, b1 = y1 < m->row_hi ? y1 : m->row_hi;
+        if (b1 <= b0) return;
+        c1 = c1 < w ? c1 : w;
+        landing((s->rotate == 1) != s->mirror_y, h, b0, b1, cols);
+        landing((s->rotate == 1) != s->mirror_x, w, c0, c1, rows);
+    }
     for (r = rows[0]; r < rows[1]; r++) {
         unsigned char *dst = out + (size_t)r * out_stride;
         for (i = cols[0]; i < cols[1]; i++) {

@@ -871,29 +871,40 @@ static void turned_jobs_are_the_same_on_many_threads(void)
     unsetenv("SOURCE_DATE_EPOCH");
 }
 
-/* Mirrors and half turns are the plain job's pixels flipped, read back by
-   the GOO reader written from the format's documentation: each layer pixel
-   (i, r) of --mirror M --rotate R is the plain job's (w - 1 - i or i,
-   h - 1 - r or r). The sphere off the plate's centre on 301 x 253 pixels
-   (no multiple of 8), 1-bit and --aa 4. Such jobs (most printers' presets
-   mirror) now flip rows a byte at a time, not pixel by pixel. */
-static void mirrors_and_half_turns_flip_the_plain_job(void)
+/* Turned and mirrored jobs are the plain job's pixels moved, read back by
+   the GOO reader written from the format's documentation: pixel (i, r) of
+   --rotate R (counter-clockwise) is the upright picture's (x, y) = (i, r),
+   (w - 1 - r, i), (w - 1 - i, h - 1 - r) or (r, h - 1 - i) for R = 0, 90,
+   180, 270, mirrored after (x to w - 1 - x, y to h - 1 - y); the display is
+   301 x 253 pixels (no multiple of 8), so a quarter-turned job's upright
+   picture is the plain job of 253 x 301. The sphere off the plate's centre,
+   1-bit and
+   --aa 4. Such jobs (most printers' presets mirror or turn) are now made a
+   row a byte at a time, or over the part's box only, not pixel by pixel
+   over the whole plate. */
+static void turned_and_mirrored_jobs_move_the_plain_pixels(void)
 {
-    static const char *const turns[][2] = {{"0", "none"}, {"0", "x"}, {"0", "y"}, {"0", "xy"}, {"180", "none"}, {"180", "x"}};
+    /* the first of each display size is the plain job the next are held to */
+    static const char *const turns[][3] = {{"0", "none", "301x253"}, {"0", "x", "301x253"}, {"0", "y", "301x253"},
+                                           {"0", "xy", "301x253"}, {"180", "none", "301x253"}, {"180", "x", "301x253"},
+                                           {"0", "none", "253x301"}, {"90", "none", "301x253"}, {"270", "x", "301x253"},
+                                           {"90", "xy", "301x253"}, {"270", "y", "301x253"}};
     static const char *const aa[] = {"1", "4"};
+    const int count = (int)(sizeof turns / sizeof *turns);
     char out[300];
     int t, a;
-    snprintf(out, sizeof out, "%s/flipped.goo", cli_dir);
+    snprintf(out, sizeof out, "%s/turned.goo", cli_dir);
     for (a = 0; a < 2; a++) {
         unsigned char *plain[64] = {NULL};
         unsigned layers = 0, k;
         int w = 0, h = 0;
-        for (t = 0; t < 6; t++) {
-            int flip_cols = (turns[t][1][0] == 'x') != (t >= 4), flip_rows = (strchr(turns[t][1], 'y') != NULL) != (t >= 4);
+        for (t = 0; t < count; t++) {
+            int rot = atoi(turns[t][0]) / 90, mx = strchr(turns[t][1], 'x') != NULL, my = strchr(turns[t][1], 'y') != NULL;
+            int plain_job = t == 0 || t == 6, tw = rot & 1 ? h : w, th = rot & 1 ? w : h;
             size_t size, bad = 0;
             unsigned char *data;
             jr_job job;
-            cli_result r = cli_run("slice", sphere_obj(), "--pixels", "301x253", "--pitch", "0.05", "--place", "2.37,-1.11",
+            cli_result r = cli_run("slice", sphere_obj(), "--pixels", turns[t][2], "--pitch", "0.05", "--place", "1.13,-0.91",
                                    "--uniform", "1", "--rotate", turns[t][0], "--mirror", turns[t][1], "--aa", aa[a], "-o", out,
                                    NULL);
             CHECKF(r.status == 0, "%s", r.err);
@@ -904,7 +915,8 @@ static void mirrors_and_half_turns_flip_the_plain_job(void)
                 free(data);
                 break;
             }
-            if (t == 0) {
+            if (plain_job) {
+                for (k = 0; k < layers; k++) free(plain[k]);
                 w = job.width;
                 h = job.height;
                 layers = job.layer_count < 64 ? job.layer_count : 64;
@@ -913,22 +925,26 @@ static void mirrors_and_half_turns_flip_the_plain_job(void)
                     job.layers[k].image = NULL; /* kept */
                 }
             } else {
-                CHECKF(job.width == w && job.height == h && job.layer_count >= layers, "%d x %d, %u layers", job.width,
+                CHECKF(job.width == tw && job.height == th && job.layer_count >= layers, "%d x %d, %u layers", job.width,
                        job.height, job.layer_count);
-                for (k = 0; k < layers && job.width == w && job.height == h; k++) {
+                for (k = 0; k < layers && job.width == tw && job.height == th; k++) {
                     int i, rr;
-                    for (rr = 0; rr < h; rr++)
-                        for (i = 0; i < w; i++)
-                            bad += job.layers[k].image[(size_t)rr * w + i] !=
-                                   plain[k][(size_t)(flip_rows ? h - 1 - rr : rr) * w + (flip_cols ? w - 1 - i : i)];
+                    for (rr = 0; rr < th; rr++)
+                        for (i = 0; i < tw; i++) {
+                            int x = rot == 0 ? i : rot == 1 ? w - 1 - rr : rot == 2 ? w - 1 - i : rr;
+                            int y = rot == 0 ? rr : rot == 1 ? i : rot == 2 ? h - 1 - rr : h - 1 - i;
+                            if (mx) x = w - 1 - x;
+                            if (my) y = h - 1 - y;
+                            bad += job.layers[k].image[(size_t)rr * tw + i] != plain[k][(size_t)y * w + x];
+                        }
                 }
-                CHECKF(bad == 0, "--mirror %s --rotate %s --aa %s: %zu pixels are not the plain job's flipped", turns[t][1],
-                       turns[t][0], aa[a], bad);
+                CHECKF(bad == 0, "--rotate %s --mirror %s --aa %s: %zu pixels are not the plain job's moved", turns[t][0],
+                       turns[t][1], aa[a], bad);
             }
             jr_free(&job);
             free(data);
         }
-        CHECKF(layers >= 8 && w == 301 && h == 253, "%u layers of %d x %d", layers, w, h);
+        CHECKF(layers >= 8 && w == 253 && h == 301, "%u layers of %d x %d", layers, w, h);
         for (k = 0; k < layers; k++) free(plain[k]);
     }
 }
@@ -1121,7 +1137,7 @@ void test_slice_jobs(void)
     RUN(an_open_mesh_is_masked_by_its_sections);
     RUN(threads_write_the_same_job);
     RUN(turned_jobs_are_the_same_on_many_threads);
-    RUN(mirrors_and_half_turns_flip_the_plain_job);
+    RUN(turned_and_mirrored_jobs_move_the_plain_pixels);
     RUN(headers_hold_the_regular_layers);
     RUN(the_8k_s_preset_writes_prz);
     RUN(job_directories_cannot_go_stale);
