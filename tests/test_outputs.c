@@ -874,6 +874,18 @@ static int same_text(const char *path, const char *text)
 
 /* A slice into a directory of someone's files is refused unless --force;
    then, and on every re-slice, only the files an earlier manifest lists go. */
+/* The directory dir made, with files names[i] holding texts[i]: a user's. */
+static void make_files(const char *dir, const char *const *names, const char *const *texts, size_t n)
+{
+    char path[400];
+    size_t i;
+    mkdir(dir, 0755);
+    for (i = 0; i < n; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        cli_write(path, texts[i]);
+    }
+}
+
 static void a_directory_job_removes_only_its_own_files(void)
 {
     static const char *const users[] = {"layer_99999.png", "layer_00070.png", "layer_00001.svg", "notes.txt"};
@@ -881,11 +893,7 @@ static void a_directory_job_removes_only_its_own_files(void)
     cli_result r;
     size_t i;
     snprintf(dir, sizeof dir, "%s/userdir", cli_dir);
-    mkdir(dir, 0755);
-    for (i = 0; i < 4; i++) {
-        snprintf(path, sizeof path, "%s/%s", dir, users[i]);
-        cli_write(path, users[i]);
-    }
+    make_files(dir, users, users, 4);
     r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir, NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, dir) && strstr(r.err, "--force"), "exit %d: %s",
            r.status, r.err);
@@ -963,11 +971,7 @@ static void another_programs_manifest_is_left_alone(void)
     int force;
     size_t i;
     snprintf(dir, sizeof dir, "%s/webapp", cli_dir);
-    mkdir(dir, 0755);
-    for (i = 0; i < 3; i++) {
-        snprintf(path, sizeof path, "%s/%s", dir, files[i]);
-        cli_write(path, texts[i]);
-    }
+    make_files(dir, files, texts, 3);
     for (force = 0; force < 2; force++) {
         cli_result r = cli_run("slice", raised_sphere(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir,
                                force ? "--force" : NULL, NULL);
