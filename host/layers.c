@@ -223,6 +223,10 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
     const slice_args *s = m->s;
     int w = mk->grid.width, h = mk->grid.height, y0 = (int)mk->rows[0], y1 = (int)mk->rows[1], r, i;
     int out_w = (s->rotate & 1) ? h : w, out_h = (s->rotate & 1) ? w : h, rows[2] = {0, out_h}, cols[2] = {0, out_w};
+    /* the part's pixel columns and, of this band, its rows */
+    int c0 = m->bits == 8 ? (int)m->byte_lo : (int)m->byte_lo * 8, c1 = m->bits == 8 ? (int)m->byte_hi : (int)m->byte_hi * 8;
+    int b0 = y0 > m->row_lo ? y0 : m->row_lo, b1 = y1 < m->row_hi ? y1 : m->row_hi;
+    c1 = c1 < w ? c1 : w;
     if (!(s->rotate & 1)) {
         /* no quarter turn: rows stay rows, perhaps counted from the other
            end and with their columns flipped, and only the part's band of
@@ -231,15 +235,12 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
            share the memory with threads coding other layers; flipped
            pixel by pixel, a mirrored printer's job (most presets) took 16x
            the time of its masks */
-        int flip_rows = s->mirror_y != (s->rotate == 2), flip_cols = s->mirror_x != (s->rotate == 2);
-        size_t lo = m->byte_lo, hi = m->byte_hi;
-        if (flip_cols) { /* the part's bytes [lo, hi) seen from the other end */
-            int c0 = m->bits == 8 ? (int)lo : (int)lo * 8, c1 = m->bits == 8 ? (int)hi : (int)hi * 8;
-            c1 = c1 < w ? c1 : w;
-            lo = m->bits == 8 ? (size_t)(w - c1) : (size_t)(w - c1) / 8;
-            hi = m->bits == 8 ? (size_t)(w - c0) : ((size_t)(w - c0) + 7) / 8;
-        }
-        for (r = y0 > m->row_lo ? y0 : m->row_lo; r < y1 && r < m->row_hi; r++) {
+        int flip_rows = s->mirror_y != (s->rotate == 2), flip_cols = s->mirror_x != (s->rotate == 2), span[2];
+        size_t lo, hi;
+        landing(flip_cols, w, c0, c1, span); /* the part's columns in out's rows, as bytes */
+        lo = m->bits == 8 ? (size_t)span[0] : (size_t)span[0] / 8;
+        hi = m->bits == 8 ? (size_t)span[1] : ((size_t)span[1] + 7) / 8;
+        for (r = b0; r < b1; r++) {
             const unsigned char *src = mk->image + (size_t)(r - y0) * mk->stride;
             unsigned char *dst = out + (size_t)(flip_rows ? r : h - 1 - r) * out_stride;
             if (flip_cols) row_flipped(src, dst, w, m->bits, lo, hi);
@@ -251,14 +252,9 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
        from the other end, and the grid's columns out's rows; only the
        part's rows and columns are written (out is zero elsewhere, as
        above: over the whole width it took 7x the time of an upright job) */
-    {
-        int c0 = m->bits == 8 ? (int)m->byte_lo : (int)m->byte_lo * 8, c1 = m->bits == 8 ? (int)m->byte_hi : (int)m->byte_hi * 8;
-        int b0 = y0 > m->row_lo ? y0 : m->row_lo, b1 = y1 < m->row_hi ? y1 : m->row_hi;
-        if (b1 <= b0) return;
-        c1 = c1 < w ? c1 : w;
-        landing((s->rotate == 1) != s->mirror_y, h, b0, b1, cols);
-        landing((s->rotate == 1) != s->mirror_x, w, c0, c1, rows);
-    }
+    if (b1 <= b0) return;
+    landing((s->rotate == 1) != s->mirror_y, h, b0, b1, cols);
+    landing((s->rotate == 1) != s->mirror_x, w, c0, c1, rows);
     for (r = rows[0]; r < rows[1]; r++) {
         unsigned char *dst = out + (size_t)r * out_stride;
         for (i = cols[0]; i < cols[1]; i++) {

@@ -99,15 +99,22 @@ int count_option(int argc, char **argv, int *i, size_t max, size_t *out)
     return whole_option(argc, argv, i, 1, max, out);
 }
 
+const char *whole_number(const char *text, unsigned long long *out)
+{
+    char *end;
+    if (*text < '0' || *text > '9') return NULL;
+    *out = strtoull(text, &end, 10); /* past the largest: ULLONG_MAX */
+    return end;
+}
+
 int whole_option(int argc, char **argv, int *i, size_t least, size_t max, size_t *out)
 {
-    const char *opt = argv[*i], *v = value_of(argc, argv, i);
-    char *end;
-    unsigned long long n;
+    const char *opt = argv[*i], *v = value_of(argc, argv, i), *end;
+    unsigned long long n = 0;
     if (!v) return RC_USAGE;
     errno = 0;
-    n = strtoull(v, &end, 10);
-    if (*v < '0' || *v > '9' || *end)
+    end = whole_number(v, &n);
+    if (!end || *end)
         return complain(RC_USAGE, "%s %s: not a whole number from %zu to %zu", opt, v, least, max);
     if (errno == ERANGE || n > max) return complain(RC_USAGE, "%s %s: too large, the most is %zu", opt, v, max);
     if (n < least) return complain(RC_USAGE, "%s %s: too small, the least is %zu", opt, v, least);

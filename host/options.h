@@ -21,6 +21,10 @@ const char *decimal_number(const char *text, double *out);
    or `rc` after a complaint naming line `lineno` of path and the column. */
 char *text_line_trim(char *line);
 int text_line_check(const char *path, size_t lineno, const char *line, size_t n, int rc);
+/* A whole number's digits at the start of text (no sign, no blank) into
+   *out, ULLONG_MAX past it; the end of the digits, or NULL when text does
+   not start with one. */
+const char *whole_number(const char *text, unsigned long long *out);
 /* A finite number > 0, or >= 0 when zero_ok. */
 int number_option(int argc, char **argv, int *i, int zero_ok, double *out);
 /* A whole number from 1 to max. */

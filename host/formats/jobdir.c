@@ -446,7 +446,7 @@ int jobdir_check(const char *dir, int force)
     int ours = 0;
     if (!manifest) return complain(RC_FAIL, "out of memory");
     snprintf(manifest, n, "%s/manifest.json", dir);
-    if (stat(manifest, &st) == 0 && (text = read_whole(manifest, NULL)) != NULL) {
+    if ((text = read_whole(manifest, NULL)) != NULL) {
         ours = manifest_is_a_job(text);
         free(text);
         if (!ours) {
@@ -859,7 +859,7 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     char *path = dir_file(dir, "masks.rle");
     size_t at;
     uint32_t k;
-    int rc = RC_FAIL;
+    int rc = RC_FAIL, found;
     struct stat st;
     char *manifest = dir_file(dir, "manifest.json");
     memset(m, 0, sizeof *m);
@@ -871,8 +871,7 @@ int jobdir_read_masks(const char *dir, job_masks *m)
     /* a slice removes the manifest first and writes it last, masks.rle and
        the layers going straight under their names meanwhile: without it the
        job is not whole, whatever masks.rle holds */
-    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        int found = stat(dir, &st) == 0;
+    if ((found = stat(dir, &st) == 0) == 0 || !S_ISDIR(st.st_mode)) {
         complain(RC_FAIL, "%s: %s", dir, found ? "not a job directory" : strerror(errno));
         free(manifest);
         goto done;

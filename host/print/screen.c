@@ -200,22 +200,11 @@ static void wait_us(uint32_t us)
     while (nanosleep(&t, &t) != 0 && errno == EINTR) {}
 }
 
-/* A plain decimal at *p (digits only: no sign, no space), *p moved past it. */
-static int take_digits(const char **p, unsigned long *v)
-{
-    char *end;
-    if (**p < '0' || **p > '9') return 0;
-    errno = 0;
-    *v = strtoul(*p, &end, 10);
-    *p = end;
-    return errno == 0;
-}
-
 /* file:PATH,WxH,BPP[,packing] */
 static int open_file(screen *s, const char *spec, int *packing)
 {
     char path[256];
-    unsigned long w = 0, h = 0, bpp = 0;
+    unsigned long long w = 0, h = 0, bpp = 0;
     char pack[8] = "";
     int fields = 0, k;
     const char *at;
@@ -227,7 +216,8 @@ static int open_file(screen *s, const char *spec, int *packing)
     memcpy(path, spec, (size_t)(first - spec));
     path[first - spec] = 0;
     at = first + 1;
-    if (take_digits(&at, &w) && *at++ == 'x' && take_digits(&at, &h) && *at++ == ',' && take_digits(&at, &bpp)) {
+    if ((at = whole_number(at, &w)) && *at++ == 'x' && (at = whole_number(at, &h)) && *at++ == ',' &&
+        (at = whole_number(at, &bpp))) {
         fields = 3;
         if (*at == ',' && strlen(at + 1) < sizeof pack) {
             strcpy(pack, at + 1);
@@ -260,7 +250,7 @@ static int open_file(screen *s, const char *spec, int *packing)
        named by mistake was zeroed and grown): only a new or empty one, or
        one this screen's size, is drawn on */
     if (st.st_size != 0 && (uint64_t)st.st_size != (uint64_t)s->map_size)
-        return complain(RC_USAGE, "--screen file:%s: the file holds %lld bytes, not the %zu of a %lux%lu screen at %lu bits: "
+        return complain(RC_USAGE, "--screen file:%s: the file holds %lld bytes, not the %zu of a %llux%llu screen at %llu bits: "
                                   "not this screen's image, so it is left alone; give a new file",
                         path, (long long)st.st_size, s->map_size, w, h, bpp);
     if ((size_t)st.st_size < s->map_size && ftruncate(s->fd, (off_t)s->map_size) != 0)
