@@ -21,6 +21,7 @@
        streaming while Z moves, the peels at the top speed; every loop
        pass, its interrupts included, shorter than PASS_MAX, while Z moves
        and while it is still;
+     - a binary MOVE slower than a step a second steps once a second;
      - the watchdog: the main loop made to hang while the light is on; the
        MCU resets within the watchdog period, which switches the light off,
        and it answers again afterwards;
@@ -841,6 +842,20 @@ static void watchdog_resets_a_hung_loop(void)
 
 /* HELLO until IDENTIFY answers (5 s at most); 1 with its fields. The port
    is binary from then on, for a few link timeouts. */
+/* `n` bytes to the printer (the pty is non-blocking). */
+static int send_all_bytes(avr_child *c, const uint8_t *bytes, size_t n)
+{
+    size_t at = 0;
+    double t0 = now_s();
+    while (at < n && now_s() - t0 < 60) {
+        ssize_t k = write(c->tty, bytes + at, n - at);
+        if (k > 0) { at += (size_t)k; continue; }
+        if (k < 0 && errno != EAGAIN) return 0;
+        { struct timespec ts = {0, 2000000}; nanosleep(&ts, NULL); }
+    }
+    return at == n;
+}
+
 static int avr_identify(avr_child *c, link_identify *id)
 {
     uint8_t frame[LINK_FRAME_MAX], hello[LINK_SIZE_HELLO];
@@ -864,6 +879,105 @@ static int avr_identify(avr_child *c, link_identify *id)
         }
     }
     return 0;
+}
+
+/* One frame to the image and its answer: `want`'s (STATUS_REPLY's fields
+   into *st) or an ACK acknowledging it; 0 when none comes in `seconds`. */
+static int avr_request(avr_child *c, uint8_t *seq, uint8_t type, const uint8_t *payload, size_t size, uint8_t want,
+                       link_status *st, double seconds)
+{
+    uint8_t frame[LINK_FRAME_MAX];
+    link_deframer rx;
+    size_t n = link_frame_build(frame, *seq, type, payload, size), m;
+    double t0 = now_s();
+    uint8_t expect = (uint8_t)(*seq + 1);
+    link_deframer_init(&rx, link_mcu_to_host_type);
+    if (!send_all_bytes(c, frame, n)) return 0;
+    *seq = expect;
+    while (now_s() - t0 < seconds) {
+        uint8_t b;
+        if (read(c->tty, &b, 1) != 1) { struct timespec ts = {0, 2000000}; nanosleep(&ts, NULL); continue; }
+        link_deframe_push(&rx, b);
+        while ((m = link_deframe_next(&rx)) != 0) {
+            int got = rx.buf[1] == expect && rx.buf[2] == want &&
+                      (want != LINK_MSG_STATUS_REPLY || link_get_status(st, rx.buf + 3, m - LINK_FRAME_MIN));
+            link_deframe_consume(&rx);
+            if (got) return 1;
+        }
+    }
+    return 0;
+}
+
+/* STATUS until Z is still (the MOVING flag off), or `seconds` pass. */
+static int avr_wait_still(avr_child *c, uint8_t *seq, link_status *st, double seconds)
+{
+    double t0 = now_s();
+    while (now_s() - t0 < seconds) {
+        struct timespec ts = {0, 100000000};
+        if (!avr_request(c, seq, LINK_MSG_STATUS, NULL, 0, LINK_MSG_STATUS_REPLY, st, 5)) return 0;
+        if (!(st->flags & LINK_FLAG_MOVING) && st->state != LINK_STATE_HOMING && st->state != LINK_STATE_MOVING) return 1;
+        nanosleep(&ts, NULL);
+    }
+    return 0;
+}
+
+/* A MOVE slower than a step a second (PROTOCOL.md: "under one step a
+   second: one step a second"), on the image: 1 um/s is 0.4 of the board's
+   steps a second, which the firmware once took for 0 and ran at the top
+   speed (a peel asked at 2 um/s ran at 10 mm/s). Three steps up after
+   homing: each a second after the one before by the pins' record (16 M
+   cycles, less a tick at most, more by the ramps' v/a at most), the first
+   a second or more after homing's last, and the image's own STATUS at the
+   target. */
+#define SLOW_MOVE_NM 7500u /* three steps of 2.5 um */
+static void slow_move_steps_once_a_second(void)
+{
+    avr_child c;
+    const char *opts[] = {"--z-start", "1", "--max-seconds", "120", "--timeout", "600", NULL};
+    link_identify id;
+    link_status st;
+    link_move mv;
+    uint8_t payload[LINK_SIZE_MOVE], seq;
+    avr_log l;
+    int ok;
+    size_t k;
+    /* at v = 1 step/s the ramps to and from it at the board's acceleration a
+       take v/a seconds in all, which the steps' times may carry */
+    const uint64_t second = BOARD_CPU_HZ, tick = CYCLES_PER_TICK, ramps = BOARD_CPU_HZ / BOARD_ACCEL_STEPS_S2 + 1u;
+    memset(&st, 0, sizeof st);
+    if (!avr_start(&c, "build/test_avr/slow.log", opts)) { CHECK(!"build/avr-run did not start"); avr_stop(&c); return; }
+    ok = avr_identify(&c, &id);
+    CHECKF(ok, "no IDENTIFY");
+    seq = 2; /* avr_identify's HELLO was number 1 */
+    ok = ok && avr_request(&c, &seq, LINK_MSG_HOME, NULL, 0, LINK_MSG_ACK, NULL, 5) && avr_wait_still(&c, &seq, &st, 120);
+    CHECKF(ok && (st.flags & LINK_FLAG_HOMED) && st.error == LINK_ERR_NONE, "homing: state %u, flags %u, error %u",
+           (unsigned)st.state, (unsigned)st.flags, (unsigned)st.error);
+    mv.z_nm = (int32_t)SLOW_MOVE_NM;
+    mv.speed_um_s = 1;
+    (void)link_put_move(payload, &mv);
+    ok = ok && avr_request(&c, &seq, LINK_MSG_MOVE, payload, sizeof payload, LINK_MSG_ACK, NULL, 5) &&
+         avr_wait_still(&c, &seq, &st, 120);
+    CHECKF(ok && st.z_nm == (int32_t)SLOW_MOVE_NM && st.error == LINK_ERR_NONE, "the slow move: STATUS says z %ld nm, error %u",
+           (long)st.z_nm, (unsigned)st.error);
+    check_avr_exit(&c, "build/test_avr/slow.log");
+    if (check_case_failed()) return;
+    CHECK(read_avr_log("build/test_avr/slow.log", &l));
+    if (check_case_failed()) { free_avr_log(&l); return; }
+    CHECKF(l.steps > 3, "%zu steps in the record", l.steps);
+    for (k = l.steps > 3 ? l.steps - 3 : 0; k < l.steps && k > 0; k++) {
+        uint64_t gap = l.step_at[k] - l.step_at[k - 1];
+        CHECKF(l.step_dir[k] > 0, "step %zu of the move went down", k);
+        if (k == l.steps - 3)
+            CHECKF(gap + tick >= second, "the move's first step %.6f s after homing's last: faster than a step a second",
+                   (double)gap / second);
+        else
+            CHECKF(gap + tick >= second && gap <= second + ramps + tick, "the move's steps %.6f s apart, not a second", (double)gap / second);
+    }
+    CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
+    if (l.steps > 3)
+        printf("    avr: a move at 1 um/s: its steps %.6f and %.6f s apart\n", (double)(l.step_at[l.steps - 2] - l.step_at[l.steps - 3]) / second,
+               (double)(l.step_at[l.steps - 1] - l.step_at[l.steps - 2]) / second);
+    free_avr_log(&l);
 }
 
 /* M114's "Count Z:" */
@@ -954,18 +1068,10 @@ static size_t log_events(const char *path, const char *what, uint64_t *at, size_
     return n;
 }
 
-/* All of `text` to the printer (the pty is non-blocking). */
+/* All of `text` to the printer. */
 static int send_all(avr_child *c, const char *text)
 {
-    size_t n = strlen(text), at = 0;
-    double t0 = now_s();
-    while (at < n && now_s() - t0 < 60) {
-        ssize_t k = write(c->tty, text + at, n - at);
-        if (k > 0) { at += (size_t)k; continue; }
-        if (k < 0 && errno != EAGAIN) return 0;
-        { struct timespec ts = {0, 2000000}; nanosleep(&ts, NULL); }
-    }
-    return at == n;
+    return send_all_bytes(c, (const uint8_t *)text, strlen(text));
 }
 
 /* `lines` comment lines of 64 bytes into `out`: G-code replies nothing to
@@ -1175,5 +1281,6 @@ void test_avr(void)
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", binary_print_with_masks_streaming);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", running_image_reports_its_figures);
     RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", gcode_light_and_stops);
+    RUN_NEEDING("simavr (libsimavr-dev) and avr-gcc: build/avr-run, build/fw-ramps-test.elf", slow_move_steps_once_a_second);
     cli_end();
 }
