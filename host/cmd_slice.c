@@ -263,7 +263,7 @@ static void previews_start(previews *p, const plan_job *j, const job_format *f, 
     p->j = j;
     p->f = f;
     p->started = 1;
-    p->drawing = threads > 1 && f->previews[0][0] > 0 && pthread_create(&p->thread, NULL, draw_previews, p) == 0;
+    p->drawing = threads > 1 && f->previews[0][0] > 0 && output_thread_start(&p->thread, draw_previews, p) == 0;
 }
 
 static void previews_join(previews *p)

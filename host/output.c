@@ -240,6 +240,20 @@ void outputs_catch_signals(void)
 }
 
 int output_interrupted(void) { return caught(); }
+
+int output_thread_start(pthread_t *thread, void *(*run)(void *), void *arg)
+{
+    sigset_t these, before;
+    int rc;
+    sigemptyset(&these);
+    sigaddset(&these, SIGINT);
+    sigaddset(&these, SIGTERM);
+    sigaddset(&these, SIGHUP);
+    pthread_sigmask(SIG_BLOCK, &these, &before); /* the new thread inherits the mask */
+    rc = pthread_create(thread, NULL, run, arg);
+    pthread_sigmask(SIG_SETMASK, &before, NULL);
+    return rc;
+}
 void outputs_hold_signals(void) { SET_FLAG(holding_flag, 1); }
 
 int output_failed(const char *path, int err)

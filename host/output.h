@@ -8,6 +8,7 @@
    checked by output_check before the work. */
 #ifndef ADASLICE_HOST_OUTPUT_H
 #define ADASLICE_HOST_OUTPUT_H
+#include <pthread.h>
 #include <stdio.h>
 
 /* What is at an output path: nothing yet, a regular file (or a link to one),
@@ -63,6 +64,10 @@ const char *base_name(const char *path);
 void outputs_catch_signals(void);
 /* The signal caught, or 0. */
 int output_interrupted(void);
+/* pthread_create for a worker: the thread starts with the signals above
+   blocked, so they reach the main thread, whose blocked write (a FIFO, a
+   full pipe) they interrupt; a worker taking one would leave it blocked. */
+int output_thread_start(pthread_t *thread, void *(*run)(void *), void *arg);
 /* From now on a signal is only noted: the caller polls output_interrupted. */
 void outputs_hold_signals(void);
 /* A complaint about path's write failing with errno err, unless the run was

@@ -307,7 +307,7 @@ static void *run_beside(void *arg)
 static void beside_start(plan_job *j)
 {
     if (!j->beside || !j->keep_mesh) return;
-    j->beside_running = pthread_create(&j->beside_thread, NULL, run_beside, j) == 0;
+    j->beside_running = output_thread_start(&j->beside_thread, run_beside, j) == 0;
     if (!j->beside_running) run_beside(j);
 }
 

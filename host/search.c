@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "search.h"
+#include "output.h"
 #include "pages.h"
 #include "report.h"
 
@@ -188,7 +189,7 @@ int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_p
     s.count = count;
     pthread_mutex_init(&s.lock, NULL);
     for (t = 0; t < n_threads; t++)
-        if (pthread_create(&threads[t], NULL, search_worker, &s) == 0) started++;
+        if (output_thread_start(&threads[t], search_worker, &s) == 0) started++;
     if (!started) search_worker(&s); /* no threads to be had: do it here */
     for (t = 0; t < started; t++) pthread_join(threads[t], NULL);
     pthread_mutex_destroy(&s.lock);

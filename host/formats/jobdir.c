@@ -843,7 +843,7 @@ int jobdir_check_layers(const char *dir, const job_masks *m)
         free(c[1].row);
         return complain(RC_FAIL, "out of memory for a row of %u px", m->width);
     }
-    threaded = pthread_create(&other, NULL, check_every_other, &c[1]) == 0;
+    threaded = output_thread_start(&other, check_every_other, &c[1]) == 0;
     check_every_other(&c[0]);
     if (threaded) pthread_join(other, NULL);
     else check_every_other(&c[1]);

@@ -15,6 +15,7 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 #include "pipeline.h"
+#include "../output.h"
 #include "../pages.h"
 #include "../report.h"
 
@@ -239,7 +240,7 @@ int pipeline_run(const pipeline_job *job)
     for (; started < helpers; started++) { /* fewer threads to be had: the job is the same on fewer */
         workers[started].p = &p;
         workers[started].me = started + 1;
-        if (pthread_create(&threads[started], NULL, work, &workers[started]) != 0) break;
+        if (output_thread_start(&threads[started], work, &workers[started]) != 0) break;
     }
     take_steps(&p, 0);
     for (i = 0; i < started; i++) pthread_join(threads[i], NULL);
