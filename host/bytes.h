@@ -51,6 +51,7 @@ static inline void put_be_f32(unsigned char *p, double v) { put_be32(p, f32_bits
 
 static inline unsigned get_le16(const unsigned char *p) { return (unsigned)p[0] | (unsigned)p[1] << 8; }
 static inline uint32_t get_le32(const unsigned char *p) { return get_le16(p) | (uint32_t)get_le16(p + 2) << 16; }
+static inline uint64_t get_le64(const unsigned char *p) { return get_le32(p) | (uint64_t)get_le32(p + 4) << 32; }
 static inline unsigned get_be16(const unsigned char *p) { return (unsigned)p[0] << 8 | (unsigned)p[1]; }
 static inline uint32_t get_be32(const unsigned char *p) { return (uint32_t)get_be16(p) << 16 | get_be16(p + 2); }
 
