@@ -297,13 +297,14 @@ static void turn_quarter(const adaslice_masker *mk, int x_down, int y_down, int 
                     const unsigned char *src = first;
                     if (n == 8 && ni == 8 && x >= 0 && x + 8 <= w) {
                         uint64_t v[8];
-                        for (j = 0; j < 8; j++, src += next) v[j] = get_le64(src + x);
+                        for (j = 0; j < 8; j++) v[j] = get_le64(src + j * next + x);
                         bytes_transposed(v);
                         for (c = 0; c < 8; c++) put_le64(dst + (size_t)(x_down ? 7 - c : c) * out_stride, v[c]);
                         continue;
                     }
-                    for (j = 0; j < ni; j++, src += next)
-                        for (c = 0; c < n; c++) dst[(size_t)c * out_stride + (size_t)j] = src[x_down ? w - 1 - (q + c) : q + c];
+                    for (j = 0; j < ni; j++)
+                        for (c = 0; c < n; c++)
+                            dst[(size_t)c * out_stride + (size_t)j] = src[j * next + (x_down ? w - 1 - (q + c) : q + c)];
                 }
             }
         return;
@@ -322,9 +323,9 @@ static void turn_quarter(const adaslice_masker *mk, int x_down, int y_down, int 
                 const unsigned char *at = mk->image + (size_t)(gy - y0) * mk->stride + (x >> 3);
                 ptrdiff_t next = step * (ptrdiff_t)mk->stride;
                 if (sh)
-                    for (j = 0; j < 8; j++, at += next) m = m << 8 | (((unsigned)at[0] << 8 | at[1]) >> (8 - sh) & 0xFFu);
+                    for (j = 0; j < 8; j++) m = m << 8 | (((unsigned)at[j * next] << 8 | at[j * next + 1]) >> (8 - sh) & 0xFFu);
                 else
-                    for (j = 0; j < 8; j++, at += next) m = m << 8 | at[0];
+                    for (j = 0; j < 8; j++) m = m << 8 | at[j * next];
             } else {
                 for (j = 0; j < 8; j++) {
                     int gy = y_down ? h - 1 - (i + j) : i + j;
@@ -370,8 +371,9 @@ static void orient_image(const layer_masks *m, const adaslice_masker *mk, unsign
     }
     /* A quarter turn: the band's rows are out's columns, perhaps counted
        from the other end, and the grid's columns out's rows; only the
-       part's rows and columns are written (out is zero elsewhere, as
-       above: over the whole width it took 7x the time of an upright job) */
+       part's rows and columns are written, in whole bytes (out is zero
+       elsewhere, as above: over the whole width it took 7x the time of an
+       upright job) */
     if (b1 <= b0) return;
     landing((s->rotate == 1) != s->mirror_y, h, b0, b1, cols);
     landing((s->rotate == 1) != s->mirror_x, w, c0, c1, rows);

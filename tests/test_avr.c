@@ -839,9 +839,6 @@ static void watchdog_resets_a_hung_loop(void)
     free_avr_log(&l);
 }
 
-
-/* HELLO until IDENTIFY answers (5 s at most); 1 with its fields. The port
-   is binary from then on, for a few link timeouts. */
 /* `n` bytes to the printer (the pty is non-blocking). */
 static int send_all_bytes(avr_child *c, const uint8_t *bytes, size_t n)
 {
@@ -856,6 +853,8 @@ static int send_all_bytes(avr_child *c, const uint8_t *bytes, size_t n)
     return at == n;
 }
 
+/* HELLO until IDENTIFY answers (5 s at most); 1 with its fields. The port
+   is binary from then on, for a few link timeouts. */
 static int avr_identify(avr_child *c, link_identify *id)
 {
     uint8_t frame[LINK_FRAME_MAX], hello[LINK_SIZE_HELLO];
