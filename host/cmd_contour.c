@@ -1103,6 +1103,8 @@ int cmd_contour(int argc, char **argv)
     size_t i;
     if ((rc = parse_contour(argc, argv, &a, &help))) return rc;
     if (help) { contour_usage(stdout); return RC_OK; }
+    outputs_add_input(a.in);
+    outputs_add_input(a.project);
     if ((rc = output_check("-o", a.out)) || (rc = output_check("--svg-path", a.view_out))) return rc;
     {
         const char *const options[] = {"-o", "--svg-path"};

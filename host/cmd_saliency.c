@@ -166,6 +166,7 @@ int cmd_saliency(int argc, char **argv)
         saliency_usage(stdout);
         return RC_OK;
     }
+    outputs_add_input(s.model);
     if ((rc = output_check("-o", s.out)) || (rc = output_check("--ply", s.ply)) || (rc = output_check("--png", s.png)))
         return rc;
     {

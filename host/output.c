@@ -121,8 +121,19 @@ static int check_parent(const char *option, const char *path)
     return rc;
 }
 
+static const char *inputs[8];
+static size_t input_count;
+
+void outputs_add_input(const char *path)
+{
+    if (path && strcmp(path, "-") && input_count < sizeof inputs / sizeof *inputs) inputs[input_count++] = path;
+}
+
+static int same_output(const char *a, const char *b);
+
 int output_check(const char *option, const char *path)
 {
+    size_t i;
     if (!path) return RC_OK;
     if (!*path) return complain(RC_USAGE, "%s \"\": an empty file name", option);
     switch (output_kind(path)) {
@@ -130,7 +141,12 @@ int output_check(const char *option, const char *path)
         if (stream_named(path) == stdout) take_stdout();
         return RC_OK;
     case OUT_DIRECTORY: return complain(RC_USAGE, "%s %s: is a directory; give a file name", option, path);
-    default: return check_parent(option, path);
+    default:
+        for (i = 0; i < input_count; i++)
+            if (same_output(path, inputs[i]))
+                return complain(RC_USAGE, "%s %s is %s, which this command reads: it would be written over", option,
+                                path, inputs[i]);
+        return check_parent(option, path);
     }
 }
 

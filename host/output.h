@@ -22,6 +22,10 @@ int output_kind(const char *path);
    standard output ("-", /dev/stdout) takes it for the data: what the command
    prints besides (its summary, --json's object) goes to standard error. */
 int output_check(const char *option, const char *path);
+/* A file the command reads (NULL and "-" ignored): from then on
+   output_check refuses it as an output, which would write over it (plan
+   MODEL --plot MODEL replaced the model with a picture of its plan). */
+void outputs_add_input(const char *path);
 /* The same for a job directory: an existing writable directory, or a new
    one in a writable directory. */
 int output_check_dir(const char *option, const char *path);

@@ -105,7 +105,7 @@ static int orient_option(int argc, char **argv, int *i, plan_args *a)
 int parse_plan(int argc, char **argv, plan_args *a)
 {
     const char *cmd = argv[0]; /* the command run: its messages name it */
-    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0;
+    int i, rc = RC_OK, metric = ADASLICE_METRIC_CUSP, method = -1, sampler = 0, bounds = 0, eps_given = 0;
     double uniform = 0;
     memset(a, 0, sizeof *a);
     a->eps = ADASLICE_DEFAULT_EPS;
@@ -126,7 +126,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else if (!strcmp(o, "--profile-out")) rc = file_option(argc, argv, &i, &a->profile_out);
         else if (!strcmp(o, "--plot")) rc = file_option(argc, argv, &i, &a->plot);
         else if (!strcmp(o, "--bin")) rc = number_option(argc, argv, &i, 0, &a->bin);
-        else if (!strcmp(o, "--eps")) rc = number_option(argc, argv, &i, 0, &a->eps);
+        else if (!strcmp(o, "--eps")) { rc = number_option(argc, argv, &i, 0, &a->eps); eps_given = 1; }
         else if (!strcmp(o, "--tmin")) { rc = number_option(argc, argv, &i, 0, &a->tmin); bounds = 1; }
         else if (!strcmp(o, "--tmax")) { rc = number_option(argc, argv, &i, 0, &a->tmax); bounds = 1; }
         else if (!strcmp(o, "--uniform")) rc = number_option(argc, argv, &i, 0, &uniform);
@@ -148,6 +148,18 @@ int parse_plan(int argc, char **argv, plan_args *a)
         else return complain(RC_USAGE, "unknown option %s (see adaslice %s --help)", o, cmd);
     }
     if (rc || (rc = weights_check(&a->weights))) return rc;
+    {
+        /* heights past these are no layer: a bin of 1e308 mm made the height inf and the plan's rows NaN */
+        const char *const names[] = {"--bin", "--tmin", "--tmax", "--uniform"};
+        const double values[] = {a->bin, a->tmin, a->tmax, uniform};
+        int k;
+        for (k = 0; k < 4; k++)
+            if (values[k] > PLAN_LAYER_MAX_MM)
+                return complain(RC_USAGE, "%s %g mm is thicker than any layer (%g mm at most)", names[k], values[k], (double)PLAN_LAYER_MAX_MM);
+    }
+    if (a->budget && eps_given)
+        return complain(RC_USAGE, "--budget %zu finds the least eps for that many layers: leave out --eps %g", a->budget,
+                        a->eps);
     if (!a->memory_mb) a->memory_mb = machine_memory_mb() / 2;
     if (uniform) {
         if (method >= 0 || bounds) return complain(RC_USAGE, "--uniform %g sets the method and both bounds: leave out --method, --tmin and --tmax", uniform);
@@ -168,7 +180,9 @@ int parse_plan(int argc, char **argv, plan_args *a)
     if (a->model && a->profile)
         return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
                         a->model, a->profile);
-    if (a->profile && a->scale) return complain(RC_USAGE, "--scale applies to a MODEL, not to --profile");
+    if (a->profile && (a->scale || a->orient || a->sampler))
+        return complain(RC_USAGE, "%s applies to a MODEL, not to --profile (a profile is sampled already)",
+                        a->scale ? "--scale" : a->orient ? "--orient" : "--sampler");
     if (a->profile && weights_given(&a->weights))
         return complain(RC_USAGE, "--saliency, --weights and --weight weight a MODEL's faces, not --profile");
     if (a->profile && a->method == ADASLICE_METHOD_CURVATURE)
@@ -176,6 +190,9 @@ int parse_plan(int argc, char **argv, plan_args *a)
     if (a->method == ADASLICE_METHOD_CURVATURE && a->orient == ORIENT_BEST)
         return complain(RC_USAGE, "--orient best searches with the library's methods, not curvature");
     if (a->tmin > a->tmax) return complain(RC_USAGE, "--tmin %g is larger than --tmax %g", a->tmin, a->tmax);
+    outputs_add_input(a->model);
+    outputs_add_input(a->profile);
+    outputs_add_input(a->weights.file);
     if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
         return complain(RC_USAGE, "--budget works with --method optimal only, not %s", METHOD_NAMES[a->method]);
     return RC_OK;

@@ -124,6 +124,10 @@ void job_free(plan_job *j);
    tall, was most likely read in the wrong unit. */
 #define UNITS_SMALL_MM 1.0
 #define UNITS_TALL_MM 1000.0
+/* The thickest layer --tmax, --uniform (and --tmin, --bin) may ask: a
+   concrete printer's courses are a few cm; past this a value is a typo or
+   the wrong unit, and near DBL_MAX heights overflow. */
+#define PLAN_LAYER_MAX_MM 100.0
 /* "; a model in micrometres? --scale 0.001 ..." for a part over UNITS_TALL_MM
    tall, else "": the tail of a message. */
 void units_hint(double tall_mm, char *out, size_t size);

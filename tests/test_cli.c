@@ -120,6 +120,13 @@ static void bad_arguments_exit_2(void)
         {{"plan", "m.stl", "--tmin", "0.2", "--tmax", "0.1"}, {"--tmin", "--tmax"}},
         {{"plan", "m.stl", "--method", "greedy", "--budget", "10"}, {"--budget"}},
         {{"plan", "--profile", "p.csv", "--scale", "2"}, {"--scale"}},
+        /* a profile is sampled already; --budget finds its own eps; no layer is 1e308 mm (the height was inf) */
+        {{"plan", "--profile", "p.csv", "--orient", "1,0,0"}, {"--orient"}},
+        {{"plan", "--profile", "p.csv", "--sampler", "ldi"}, {"--sampler"}},
+        {{"plan", "m.stl", "--eps", "0.03", "--budget", "60"}, {"--budget", "--eps"}},
+        {{"plan", "--profile", "p.csv", "--bin", "1e308"}, {"--bin", "1e+308"}},
+        {{"plan", "m.stl", "--tmax", "3000"}, {"--tmax", "3000"}},
+        {{"plan", "m.stl", "--uniform", "101"}, {"--uniform", "101"}},
         /* numbers are plain decimals: strtod alone takes hex, inf and nan (issue 26) */
         {{"plan", "m.stl", "--eps", "0x10"}, {"--eps", "0x10"}},
         {{"plan", "m.stl", "--eps", " 1"}, {"--eps"}},
@@ -174,6 +181,49 @@ static void bad_arguments_exit_2(void)
         CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "are one file") && access(target, F_OK) != 0,
                "exit %d: %s", r.status, r.err);
         cli_free(&r);
+    }
+    { /* an output that is an input (by name, by another path, by a link): plan M --plot M replaced the model with
+         a picture of its plan, exit 0 */
+        char model[600], copy[600], link[600], csv[600], gcode[600], job[600];
+        const char *const *c;
+        size_t size = 0, size2;
+        unsigned char *before = read_whole_file(sphere_stl(), &size), *after;
+        snprintf(model, sizeof model, "%s/input_model.stl", cli_dir);
+        snprintf(copy, sizeof copy, "%s/./input_model.stl", cli_dir);
+        snprintf(link, sizeof link, "%s/input_link.csv", cli_dir);
+        snprintf(csv, sizeof csv, "%s/input_profile.csv", cli_dir);
+        snprintf(gcode, sizeof gcode, "%s/input.gcode", cli_dir);
+        snprintf(job, sizeof job, "%s/input_job", cli_dir);
+        remove(link);
+        CHECK(before != NULL);
+        if (before) cli_write_bytes(model, before, size);
+        cli_write(gcode, ";Z:0.2\n");
+        CHECK(symlink("input_model.stl", link) == 0);
+        {
+            cli_result r = cli_run("plan", model, "--profile-out", csv, NULL);
+            CHECKF(r.status == 0, "%s", r.err);
+            cli_free(&r);
+        }
+        {
+            const char *const runs[][8] = {{"plan", model, "--plot", model}, {"plan", model, "--out", copy},
+                                           {"plan", model, "--out", link}, {"plan", "--profile", csv, "--profile-out", csv},
+                                           {"slice", model, "--profile-out", model, "-o", job}, {"saliency", model, "-o", link},
+                                           {"orient", model, "--map", copy},
+                                           {"contour", gcode, "--project", model, "-o", gcode}};
+            for (c = runs[0]; c < runs[0] + 8 * (sizeof runs / sizeof *runs); c += 8) {
+                cli_result r = run_args(c);
+                CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "which this command reads"), "%s %s %s %s: exit %d: %s",
+                       c[0], c[1], c[2], c[3], r.status, r.err);
+                cli_free(&r);
+            }
+        }
+        after = read_whole_file(model, &size2);
+        CHECKF(after && size2 == size && !memcmp(after, before, size), "the model was written over (%zu bytes, were %zu)", size2, size);
+        free(after);
+        after = read_whole_file(gcode, &size2);
+        CHECKF(after && size2 == 7, "the G-code was written over (%zu bytes)", size2);
+        free(after);
+        free(before);
     }
     { /* a part 1e20 mm across got every saliency weight 1, without a word */
         char w[600];
