@@ -17,11 +17,29 @@ char *text_line_trim(char *s)
     return s;
 }
 
-int text_line_check(const char *path, size_t lineno, const char *line, size_t n, int rc)
+int text_line_read(FILE *f, const char *path, size_t lineno, char *line, int bad, int *rc)
 {
-    const char *nul = (const char *)memchr(line, 0, n);
-    if (!nul) return RC_OK;
-    return complain(rc, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno, (size_t)(nul - line) + 1);
+    size_t n = 0;
+    int c;
+    *rc = RC_OK;
+    while ((c = getc_unlocked(f)) != EOF) { /* one thread reads the file: no lock a byte */
+        if (c == 0) {
+            *rc = complain(bad, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno, n + 1);
+            return 0;
+        }
+        if (n + 1 == TEXT_LINE_MAX) {
+            *rc = complain(bad, "%s:%zu: a line longer than %d bytes: not a file of numbers", path, lineno, TEXT_LINE_MAX - 1);
+            return 0;
+        }
+        line[n++] = (char)c;
+        if (c == '\n') break;
+    }
+    line[n] = 0;
+    if (ferror(f)) {
+        *rc = complain(RC_FAIL, "cannot read %s at line %zu: %s", path, lineno, strerror(errno));
+        return 0;
+    }
+    return n > 0;
 }
 
 double machine_memory_mb(void)

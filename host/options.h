@@ -4,6 +4,7 @@
    RC_USAGE. */
 #ifndef ADASLICE_HOST_OPTIONS_H
 #define ADASLICE_HOST_OPTIONS_H
+#include <stdio.h>
 #include <stddef.h>
 
 /* Any text (a path), not starting with "--". */
@@ -16,11 +17,16 @@ int file_option(int argc, char **argv, int *i, const char **out);
 const char *decimal_number(const char *text, double *out);
 /* The lines of the text files of numbers that options name (--profile,
    --weights). text_line_trim: the line without its blanks at either end
-   and its line end (cut in place). text_line_check: line[0, n), as getline
-   read it, holds no NUL byte (not text, and C's strings stop there); RC_OK,
-   or `rc` after a complaint naming line `lineno` of path and the column. */
+   and its line end (cut in place). text_line_read: line `lineno` of f into
+   line (TEXT_LINE_MAX bytes, NUL-terminated); 1 when read, 0 at the end of
+   the file (*rc RC_OK) or with *rc a complaint made: a line longer than
+   the buffer (/dev/zero as a profile grew one line to 15 GB), a NUL byte
+   (not text, and C's strings stop there), or a read error (which getline
+   reported as the end: a profile cut short planned, exit 0). `bad` is the
+   status for what the file holds. */
+#define TEXT_LINE_MAX 4096
 char *text_line_trim(char *line);
-int text_line_check(const char *path, size_t lineno, const char *line, size_t n, int rc);
+int text_line_read(FILE *f, const char *path, size_t lineno, char *line, int bad, int *rc);
 /* A whole number's digits at the start of text (no sign, no blank) into
    *out, ULLONG_MAX past it; the end of the digits, or NULL when text does
    not start with one. */

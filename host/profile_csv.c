@@ -1,6 +1,6 @@
 /* A profile read from a file: see profile_csv.h. */
 #ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* getline */
+#define _POSIX_C_SOURCE 200809L /* getc_unlocked, strncasecmp */
 #endif
 #include "profile_csv.h"
 #include "options.h"
@@ -83,27 +83,29 @@ static int starts_as_number(const char *s)
 int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, adaslice_profile *out)
 {
     FILE *f = fopen(path, "r");
-    char *line = NULL, q[QUOTE_SIZE];
-    size_t line_cap = 0, lineno = 0, n = 0, cap = 0, first_line = 0;
-    ssize_t got;
+    char line[TEXT_LINE_MAX], q[QUOTE_SIZE];
+    size_t lineno = 0, n = 0, cap = 0, first_line = 0;
     double *phi = NULL, bin = bin_given ? bin_given : ADASLICE_DEFAULT_BIN;
     z_column zc = {0, 0, 0, 0, 0};
     int rc = RC_OK, first = 1, has_z = 0;
 
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
-    while (!rc && (got = getline(&line, &line_cap, f)) != -1) {
+    while (!rc && text_line_read(f, path, lineno + 1, line, RC_FAIL, &rc)) {
         char *s, *comma, *field;
         const char *end;
         double v = 0, z = 0;
         lineno++;
-        if ((rc = text_line_check(path, lineno, line, (size_t)got, RC_FAIL))) break;
         /* a spreadsheet's UTF-8 byte order mark */
         s = text_line_trim(lineno == 1 && !strncmp(line, "\xef\xbb\xbf", 3) ? line + 3 : line);
         comma = strchr(s, ',');
         if (!*s || *s == '#') continue;
         field = comma ? text_line_trim(strrchr(s, ',') + 1) : s;
         end = decimal_number(field, &v);
-        if (!end || *end || (comma && !z_field(s, comma, &z))) {
+        if (comma && strchr(comma + 1, ',')) {
+            /* a plan's rows (layer,z_bottom,...) read as a profile took their last column */
+            rc = complain(RC_FAIL, "%s:%zu: '%s': a profile's line is phi or z,phi, not more fields", path, lineno,
+                          quote_text(q, s, strlen(s)));
+        } else if (!end || *end || (comma && !z_field(s, comma, &z))) {
             /* the first line may be a header, unless it begins as a number does */
             if (!first || starts_as_number(s))
                 rc = complain(RC_FAIL, "%s:%zu: not a number: '%s'", path, lineno, quote_text(q, s, strlen(s)));
@@ -123,7 +125,6 @@ int profile_csv_read(const char *path, adaslice_metric metric, double bin_given,
         }
         first = 0;
     }
-    if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && !n) rc = complain(RC_FAIL, "%s: no profile values", path);
     if (!rc && has_z && n > 1) {
         double column = z_column_bin(&zc, n);
@@ -133,7 +134,6 @@ int profile_csv_read(const char *path, adaslice_metric metric, double bin_given,
                           column, bin_given);
     }
     fclose(f);
-    free(line);
     if (rc) {
         free(phi);
         return rc;

@@ -1,7 +1,7 @@
 /* Per-face weights: saliency, a weight file and regions, multiplied face by
    face, or blended with the view importance. */
 #ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* getline */
+#define _POSIX_C_SOURCE 200809L
 #endif
 #include "weights.h"
 #include "options.h"
@@ -165,17 +165,15 @@ int weights_check(const weight_args *w)
 static int read_weights(const char *path, size_t count, float *w)
 {
     FILE *f = fopen(path, "r");
-    char *line = NULL, q[QUOTE_SIZE];
-    size_t cap = 0, lineno = 0, n = 0;
-    ssize_t got;
+    char line[TEXT_LINE_MAX], q[QUOTE_SIZE];
+    size_t lineno = 0, n = 0;
     int rc = RC_OK;
     if (!f) return complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
-    while (!rc && (got = getline(&line, &cap, f)) != -1) {
+    while (!rc && text_line_read(f, path, lineno + 1, line, RC_USAGE, &rc)) {
         char *s;
         const char *end;
         double v = 0;
         lineno++;
-        if ((rc = text_line_check(path, lineno, line, (size_t)got, RC_USAGE))) break;
         s = text_line_trim(line);
         if (!*s || *s == '#') continue;
         if (!(end = decimal_number(s, &v)) || *end)
@@ -188,12 +186,10 @@ static int read_weights(const char *path, size_t count, float *w)
         else
             w[n++] *= (float)v;
     }
-    if (!rc && ferror(f)) rc = complain(RC_FAIL, "cannot read %s: %s", path, strerror(errno));
     if (!rc && n != count)
         rc = complain(RC_USAGE, "%s: %zu weight%s for the model's %zu triangle%s (one per line, in the order they load)",
                       path, n, plural(n), count, plural(count));
     fclose(f);
-    free(line);
     return rc;
 }
 

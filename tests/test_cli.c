@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #endif
 #include "cli_run.h"
+#include "../host/options.h"
 #include "../adaslice.h"
 #include "meshgen.h"
 
@@ -435,6 +436,8 @@ static void bad_profile_lines_are_named(void)
         {"-nan\n0.1\n0.2\n", ":1"},
         /* a NUL byte ends no line: the rest of it is not dropped unseen */
         {"0.1\n0.2\0,9\n0.3\n", ":2: a NUL byte at column 4"},
+        /* a plan's rows are no profile: their last column was read as phi */
+        {"0.1,0.2\n0.3,x,0.4\n", ":2: '0.3,x,0.4': a profile's line is phi or z,phi"},
     };
     static const char bom[] = "\xef\xbb\xbf" "0.1\n0.2\n0.3\n0.4\n";
     const char *path = cli_path("bad.csv"), *weights = cli_path("nul_weights.txt");
@@ -461,6 +464,20 @@ static void bad_profile_lines_are_named(void)
         cli_write(path, big);
         r = cli_run("plan", "--profile", path, "--eps", "1e308", NULL);
         CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "sum to"), "exit %d, '%s'", r.status, r.err);
+        cli_free(&r);
+    }
+    { /* /dev/zero as a profile grew one line to 15 GB; a line past the limit is said, not read on */
+        char *text = (char *)malloc(3 * TEXT_LINE_MAX);
+        if (text) {
+            memset(text, '7', 3 * TEXT_LINE_MAX - 1);
+            memcpy(text, "0.1\n0.2\n", 8);
+            text[3 * TEXT_LINE_MAX - 1] = '\n';
+            cli_write_bytes(path, text, 3 * TEXT_LINE_MAX);
+        }
+        free(text);
+        r = cli_run("plan", "--profile", path, NULL);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "bad.csv:3: a line longer than"), "exit %d, '%s'",
+               r.status, r.err);
         cli_free(&r);
     }
     cli_write_bytes(weights, "0.5\n\0garbage\n", 13);
