@@ -118,8 +118,8 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
             a->view_out = argv[++i];
         }
         else if (!strcmp(o, "--max-angle")) {
-            if (!(rc = number_option(argc, argv, &i, 0, &a->max_angle)) && a->max_angle >= CONTOUR_MAX_ANGLE)
-                return complain(RC_USAGE, "--max-angle %g: a slope is under 90 degrees", a->max_angle);
+            if (!(rc = number_option(argc, argv, &i, 0, &a->max_angle)))
+                rc = contour_limit_check("--max-angle ", "max_angle", a->max_angle, RC_USAGE);
         }
         else return complain(RC_USAGE, "unknown option %s (see adaslice contour --help)", o);
     }
@@ -127,8 +127,8 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
     if (!a->in) return complain(RC_USAGE, "contour needs IN.gcode (see adaslice contour --help)");
     if (!a->project) return complain(RC_USAGE, "contour needs --project PART.3mf, the 3MF PrusaSlicer sliced");
     if (!a->out) return complain(RC_USAGE, "contour needs -o OUT.gcode");
-    if (a->resolution && a->resolution < CONTOUR_MIN_PIECE)
-        return complain(RC_USAGE, "--resolution %g: %g mm or more", a->resolution, CONTOUR_MIN_PIECE);
+    if (a->resolution && (rc = contour_limit_check("--resolution ", "resolution", a->resolution, RC_USAGE))) return rc;
+    if (a->max_rise && (rc = contour_limit_check("--max-rise ", "max_rise", a->max_rise, RC_USAGE))) return rc;
     if (a->top_skins && (!a->clearance || !a->clearance_angle))
         return complain(RC_USAGE, "--top-skins needs --nozzle-clearance MM and --clearance-angle DEG, your nozzle's");
     if (!a->top_skins && (a->clearance || a->clearance_angle))

@@ -1134,6 +1134,7 @@ static void refused_inputs_get_one_line_and_no_file(void)
         static const char *const usage[][3] = {{"--max-angle", "90", "--max-angle 90"},
                                                 {"--resolution", "0.001", "--resolution 0.001"},
                                                 {"--max-rise", "-1", "--max-rise"},
+                                                {"--max-rise", "1e300", "--max-rise 1e+300"},
                                                 {"--clearance-angle", "90", "--clearance-angle 90"},
                                                 {"--nozzle-clearance", "1", "are for --top-skins"},
                                                 {"--top-skins", "--top-skins", "--top-skins needs --nozzle-clearance"},

@@ -307,6 +307,9 @@ static void bad_hybrid_input_is_refused(void)
         {"--3mf", "@", "--max-angle", "10", NULL, "add it"},
         {"--hybrid", "--3mf", "@", "--metric", "roughness", "--metric roughness"},
         {"--hybrid", "--3mf", "@", "--reach", "0", "--reach"},
+        /* limits contour would refuse when it reads the project (exit 0 here before) */
+        {"--hybrid", "--3mf", "@", "--resolution", "1e-300", "--resolution 1e-300"},
+        {"--hybrid", "--3mf", "@", "--max-rise", "1e300", "--max-rise 1e+300"},
     };
     size_t c;
     for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {

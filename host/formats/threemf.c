@@ -42,6 +42,11 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
         else { rest[(*rest_argc)++] = argv[i]; continue; }
         if (strcmp(o, "--3mf") && strcmp(o, "--nozzle") && strcmp(o, "--hybrid")) t->contour_given = 1;
     }
+    /* what the project says, contour takes: plan --hybrid --resolution 1e-300 made a project contour refused */
+    if (!rc && h->rise) rc = contour_limit_check("--max-rise ", "max_rise", h->rise, RC_USAGE);
+    if (!rc && h->resolution) rc = contour_limit_check("--resolution ", "resolution", h->resolution, RC_USAGE);
+    if (!rc && h->reach && !(h->reach < CONTOUR_MAX_LIMIT))
+        rc = complain(RC_USAGE, "--reach %g: under %g mm", h->reach, CONTOUR_MAX_LIMIT);
     if (!rc && t->hybrid && h->max_angle == 0) h->max_angle = ADASLICE_DEFAULT_MAX_ANGLE;
     if (!rc && !(h->max_angle <= 45))
         rc = complain(RC_USAGE, "--max-angle %g: the contour follows faces up to 45 degrees from horizontal, "
@@ -409,22 +414,32 @@ static int read_profile(const char *path, const char *text, threemf_project *p)
     return RC_OK;
 }
 
+int contour_limit_check(const char *where, const char *key, double x, int rc)
+{
+    int k = !strcmp(key, "max_angle") ? 0 : !strcmp(key, "max_rise") ? 1 : 2;
+    static const double least[] = {0, 0, CONTOUR_MIN_PIECE}, most[] = {CONTOUR_MAX_ANGLE, CONTOUR_MAX_LIMIT, CONTOUR_MAX_LIMIT};
+    if ((x > least[k] || (k == 2 && x == least[k])) && x < most[k]) return RC_OK;
+    return complain(rc, "%s%g: contour takes %s %g and under %g", where, x, k == 2 ? "from" : "over", least[k], most[k]);
+}
+
 /* The contour's limits from THREEMF_CONTOUR_PART's "; key = value" lines;
    a key missing stays 0 (the contour's default); one that contour would
    refuse on its command line is refused here. */
 static int read_contour_limits(const char *path, const char *text, size_t size, threemf_project *p)
 {
     static const char *const keys[] = {"max_angle", "max_rise", "resolution"};
-    static const double least[] = {0, 0, CONTOUR_MIN_PIECE}, most[] = {CONTOUR_MAX_ANGLE, CONTOUR_MAX_LIMIT, CONTOUR_MAX_LIMIT};
     double *values[3], x;
     size_t k, n;
+    char where[512];
     values[0] = &p->max_angle; values[1] = &p->max_rise; values[2] = &p->resolution;
     for (k = 0; k < 3; k++) {
         const char *v = gcode_config_value(text, size, keys[k], &n), *end = v ? decimal_number(v, &x) : NULL;
+        int rc;
         if (!v) continue;
-        if (!end || end != v + n || !(x > least[k] || (k == 2 && x == least[k])) || !(x < most[k]))
-            return complain(RC_FAIL, "%s: %s: %s = %.*s: contour takes %s %g and under %g", path, THREEMF_CONTOUR_PART,
-                            keys[k], (int)(n < 40 ? n : 40), v, k == 2 ? "from" : "over", least[k], most[k]);
+        snprintf(where, sizeof where, "%s: %s: %s = ", path, THREEMF_CONTOUR_PART, keys[k]);
+        if (!end || end != v + n)
+            return complain(RC_FAIL, "%s%.*s: not a number", where, (int)(n < 40 ? n : 40), v);
+        if ((rc = contour_limit_check(where, keys[k], x, RC_FAIL))) return rc;
         *values[k] = x;
     }
     return RC_OK;

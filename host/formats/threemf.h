@@ -39,6 +39,11 @@ typedef struct threemf_args {
 #define CONTOUR_MAX_ANGLE 90.0
 #define CONTOUR_MIN_PIECE 0.01
 #define CONTOUR_MAX_LIMIT 1e6
+/* The contour's limits by name, as that part and contour's options give
+   them ("max_angle", "max_rise", "resolution"): RC_OK when contour takes
+   x, else a complaint (status rc): `where` ("--max-rise ", "FILE: ... =
+   "), the value and the range. */
+int contour_limit_check(const char *where, const char *key, double x, int rc);
 
 /* Takes --3mf FILE, --nozzle MM and the --hybrid options out of argv
    (argv[0] kept); RC_OK or RC_USAGE after a complaint. */
