@@ -246,9 +246,25 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
     adaslice_mesh_bounds(&j->mesh, lo, hi);
     height = hi[2] - lo[2];
     if (!(tops = (double *)malloc(n * sizeof *tops))) return complain(RC_FAIL, "out of memory");
-    for (k = 0; k < n; k++) {
-        /* the bins round the height up; the last layer ends on the part's top */
+    for (k = 0; k < n; k++) /* the bins round the height up; the last layer ends on the part's top */
         tops[k] = as_written(k + 1 < n ? pl->layers[k].z_top : height);
+    if (n > 1 && tops[n - 1] - tops[n - 2] < a->tmin * (1 - 1e-9)) {
+        /* what is left above the last whole layer (a uniform plan's, or the bins' rounding): a layer of it was
+           PrusaSlicer's ;HEIGHT:0.0001, laid as one. It joins the layer below, or the two share their height
+           where one would pass what the nozzle lays. */
+        double top = tops[n - 1] - tops[n - 2], two = tops[n - 1] - (n > 2 ? tops[n - 3] : 0);
+        if (two <= THREEMF_MAX_OF_NOZZLE * t->nozzle) {
+            tops[n - 2] = tops[n - 1];
+            n--;
+            fprintf(stderr, "adaslice: warning: %s: the top %.9g mm, under --tmin %g, joins the layer below: %.9g mm\n",
+                    t->path, top, a->tmin, two);
+        } else {
+            tops[n - 2] = as_written(tops[n - 1] - two / 2);
+            fprintf(stderr, "adaslice: warning: %s: the top %.9g mm, under --tmin %g, and the layer below share their "
+                    "%.9g mm\n", t->path, top, a->tmin, two);
+        }
+    }
+    for (k = 0; k < n; k++) {
         if (tops[k] - below < thinnest) thinnest = tops[k] - below;
         if (tops[k] - below > thickest) thickest = tops[k] - below;
         below = tops[k];
