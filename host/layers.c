@@ -121,7 +121,7 @@ int parse_slice(int argc, char **argv, slice_args *s, int *rest_argc, char **res
         } else if (!strcmp(o, "--force")) {
             s->force = 1;
         } else if (!strcmp(o, "--memory")) {
-            rc = number_option(argc, argv, &i, 0, &s->memory_mb);
+            rc = memory_option(argc, argv, &i, &s->memory_mb);
         } else if (!strcmp(o, "--threads")) {
             size_t n = 1;
             rc = count_option(argc, argv, &i, 64, &n);

@@ -42,6 +42,13 @@ int text_line_read(FILE *f, const char *path, size_t lineno, char *line, int bad
     return n > 0;
 }
 
+int memory_option(int argc, char **argv, int *i, double *mb)
+{
+    int rc = number_option(argc, argv, i, 0, mb);
+    if (!rc && *mb < 1) rc = complain(RC_USAGE, "--memory %g: 1 MB at least", *mb);
+    return rc;
+}
+
 double machine_memory_mb(void)
 {
 #if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)

@@ -15,6 +15,9 @@ int file_option(int argc, char **argv, int *i, const char **out);
    NULL. strtod alone also takes hex (0x10 as 16), inf, nan and leading
    blanks. */
 const char *decimal_number(const char *text, double *out);
+/* --memory MB: a number, 1 MB at least (1e-300 read as "needs 0 MB, more
+   than --memory 0 MB"). */
+int memory_option(int argc, char **argv, int *i, double *mb);
 /* The lines of the text files of numbers that options name (--profile,
    --weights). text_line_trim: the line without its blanks at either end
    and its line end (cut in place). text_line_read: line `lineno` of f into

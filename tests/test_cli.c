@@ -128,6 +128,10 @@ static void bad_arguments_exit_2(void)
         {{"plan", "--profile", "p.csv", "--bin", "1e308"}, {"--bin", "1e+308"}},
         {{"plan", "m.stl", "--tmax", "3000"}, {"--tmax", "3000"}},
         {{"plan", "m.stl", "--uniform", "101"}, {"--uniform", "101"}},
+        {{"plan", "m.stl", "--memory", "1e-300"}, {"--memory", "1 MB"}},
+        {{"slice", "m.stl", "--memory", "0.5", "-o", "j"}, {"--memory", "1 MB"}},
+        {{"plan", "m.stl", "--nozzle", "0.6"}, {"--nozzle", "--3mf"}},
+        {{"plan", "m.stl", "--nozzle", "1e300", "--3mf", "n.3mf"}, {"--nozzle", "10 mm"}},
         /* numbers are plain decimals: strtod alone takes hex, inf and nan (issue 26) */
         {{"plan", "m.stl", "--eps", "0x10"}, {"--eps", "0x10"}},
         {{"plan", "m.stl", "--eps", " 1"}, {"--eps"}},
@@ -463,7 +467,8 @@ static void bad_profile_lines_are_named(void)
         for (i = 0; i < 200; i++) strcat(big, "3e306\n");
         cli_write(path, big);
         r = cli_run("plan", "--profile", path, "--eps", "1e308", NULL);
-        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "sum to"), "exit %d, '%s'", r.status, r.err);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "bad.csv: plan:") && strstr(r.err, "sum to"),
+               "exit %d, '%s'", r.status, r.err);
         cli_free(&r);
     }
     { /* /dev/zero as a profile grew one line to 15 GB; a line past the limit is said, not read on */

@@ -33,7 +33,11 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
                 (!dot || strchr(dot, '/') || dot[-1] == '/' || dot == t->path || strcasecmp(dot, ".3mf")))
                 rc = complain(RC_USAGE, "--3mf %s: the name must end in .3mf", t->path);
         }
-        else if (!strcmp(o, "--nozzle")) rc = number_option(argc, argv, &i, 0, &t->nozzle);
+        else if (!strcmp(o, "--nozzle")) {
+            if (!(rc = number_option(argc, argv, &i, 0, &t->nozzle)) && t->nozzle > THREEMF_MAX_NOZZLE)
+                rc = complain(RC_USAGE, "--nozzle %g: an FDM nozzle is at most %g mm", t->nozzle, THREEMF_MAX_NOZZLE);
+            t->nozzle_given = 1;
+        }
         else if (!strcmp(o, "--hybrid")) t->hybrid = 1;
         else if (!strcmp(o, "--max-angle")) rc = number_option(argc, argv, &i, 0, &h->max_angle);
         else if (!strcmp(o, "--reach")) rc = number_option(argc, argv, &i, 0, &h->reach);
@@ -47,6 +51,7 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
     if (!rc && h->resolution) rc = contour_limit_check("--resolution ", "resolution", h->resolution, RC_USAGE);
     if (!rc && h->reach && !(h->reach < CONTOUR_MAX_LIMIT))
         rc = complain(RC_USAGE, "--reach %g: under %g mm", h->reach, CONTOUR_MAX_LIMIT);
+    if (!rc && t->nozzle_given && !t->path) rc = complain(RC_USAGE, "--nozzle is the 3MF's printer's: add --3mf FILE");
     if (!rc && t->hybrid && h->max_angle == 0) h->max_angle = ADASLICE_DEFAULT_MAX_ANGLE;
     if (!rc && !(h->max_angle <= 45))
         rc = complain(RC_USAGE, "--max-angle %g: the contour follows faces up to 45 degrees from horizontal, "

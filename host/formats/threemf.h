@@ -20,10 +20,13 @@
    (max_layer_height 0: 75 % of the nozzle), and its floor for any layer. */
 #define THREEMF_MAX_OF_NOZZLE 0.75
 #define THREEMF_MIN_LAYER 0.01
+/* The widest --nozzle: large-format printers' reach 2-3 mm. */
+#define THREEMF_MAX_NOZZLE 10.0
 
 typedef struct threemf_args {
     const char *path;            /* --3mf FILE, or NULL */
     double nozzle;               /* --nozzle MM */
+    int nozzle_given;
     int hybrid;                  /* --hybrid */
     adaslice_hybrid_options contour; /* --max-angle, --reach, --max-rise, --resolution */
     int contour_given;           /* one of those was */
