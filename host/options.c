@@ -27,8 +27,8 @@ int text_line_read(FILE *f, const char *path, size_t lineno, char *line, int bad
             *rc = complain(bad, "%s:%zu: a NUL byte at column %zu: not a text file", path, lineno, n + 1);
             return 0;
         }
-        if (n + 1 == TEXT_LINE_MAX) {
-            *rc = complain(bad, "%s:%zu: a line longer than %d bytes: not a file of numbers", path, lineno, TEXT_LINE_MAX - 1);
+        if (c != '\n' && n + 2 == TEXT_LINE_MAX) { /* room for the line end and the NUL */
+            *rc = complain(bad, "%s:%zu: a line longer than %d bytes: not a file of numbers", path, lineno, TEXT_LINE_MAX - 2);
             return 0;
         }
         line[n++] = (char)c;

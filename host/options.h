@@ -22,8 +22,8 @@ int memory_option(int argc, char **argv, int *i, double *mb);
    --weights). text_line_trim: the line without its blanks at either end
    and its line end (cut in place). text_line_read: line `lineno` of f into
    line (TEXT_LINE_MAX bytes, NUL-terminated); 1 when read, 0 at the end of
-   the file (*rc RC_OK) or with *rc a complaint made: a line longer than
-   the buffer (/dev/zero as a profile grew one line to 15 GB), a NUL byte
+   the file (*rc RC_OK) or with *rc a complaint made: a line of more than
+   TEXT_LINE_MAX - 2 bytes before its line end (/dev/zero as a profile grew one line to 15 GB), a NUL byte
    (not text, and C's strings stop there), or a read error (which getline
    reported as the end: a profile cut short planned, exit 0). `bad` is the
    status for what the file holds. */

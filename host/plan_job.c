@@ -157,7 +157,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
             if (values[k] > PLAN_LAYER_MAX_MM)
                 return complain(RC_USAGE, "%s %g mm is thicker than any layer (%g mm at most)", names[k], values[k], (double)PLAN_LAYER_MAX_MM);
     }
-    if (a->budget && eps_given)
+    if (a->budget && eps_given && !a->compare) /* --compare's other methods take --eps */
         return complain(RC_USAGE, "--budget %zu finds the least eps for that many layers: leave out --eps %g", a->budget,
                         a->eps);
     if (!a->memory_mb) a->memory_mb = machine_memory_mb() / 2;
@@ -180,7 +180,7 @@ int parse_plan(int argc, char **argv, plan_args *a)
     if (a->model && a->profile)
         return complain(RC_USAGE, "plan takes a MODEL or --profile FILE, not both (%s and --profile %s)",
                         a->model, a->profile);
-    if (a->profile && (a->scale || a->orient || a->sampler))
+    if (a->profile && (a->scale || a->orient || option_given(argc, argv, "--sampler")))
         return complain(RC_USAGE, "%s applies to a MODEL, not to --profile (a profile is sampled already)",
                         a->scale ? "--scale" : a->orient ? "--orient" : "--sampler");
     if (a->profile && weights_given(&a->weights))

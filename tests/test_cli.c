@@ -132,6 +132,8 @@ static void bad_arguments_exit_2(void)
         {{"slice", "m.stl", "--memory", "0.5", "-o", "j"}, {"--memory", "1 MB"}},
         {{"plan", "m.stl", "--nozzle", "0.6"}, {"--nozzle", "--3mf"}},
         {{"plan", "m.stl", "--nozzle", "1e300", "--3mf", "n.3mf"}, {"--nozzle", "10 mm"}},
+        {{"plan", "m.stl", "--nozzle", "0.02", "--3mf", "n.3mf"}, {"--nozzle", "0.05"}},
+        {{"plan", "--profile", "p.csv", "--sampler", "exact"}, {"--sampler"}},
         /* numbers are plain decimals: strtod alone takes hex, inf and nan (issue 26) */
         {{"plan", "m.stl", "--eps", "0x10"}, {"--eps", "0x10"}},
         {{"plan", "m.stl", "--eps", " 1"}, {"--eps"}},
@@ -471,6 +473,22 @@ static void bad_profile_lines_are_named(void)
                "exit %d, '%s'", r.status, r.err);
         cli_free(&r);
     }
+    { /* the longest line taken: TEXT_LINE_MAX - 2 bytes before its line end, LF or CRLF, or the file's end */
+        static const char *const ends[] = {"\n0.1\n0.2\n", "\r\n0.1\n0.2\n", ""};
+        char *text = (char *)malloc(TEXT_LINE_MAX + 16);
+        for (i = 0; text && i < 3; i++) {
+            size_t n = TEXT_LINE_MAX - 2 - (i == 1);
+            memcpy(text, "0.1\n", 4);
+            memset(text + 4, ' ', n);
+            text[4] = '#';
+            strcpy(text + 4 + n, ends[i]);
+            cli_write(path, text);
+            r = cli_run("plan", "--profile", path, "--tmin", "0.002", "--tmax", "0.004", NULL);
+            CHECKF(r.status == 0, "a line of %zu bytes, ending %zu: exit %d, '%s'", n, i, r.status, r.err);
+            cli_free(&r);
+        }
+        free(text);
+    }
     { /* /dev/zero as a profile grew one line to 15 GB; a line past the limit is said, not read on */
         char *text = (char *)malloc(3 * TEXT_LINE_MAX);
         if (text) {
@@ -481,8 +499,36 @@ static void bad_profile_lines_are_named(void)
         }
         free(text);
         r = cli_run("plan", "--profile", path, NULL);
-        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "bad.csv:3: a line longer than"), "exit %d, '%s'",
-               r.status, r.err);
+        CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "bad.csv:3: a line longer than 4094 bytes"),
+               "exit %d, '%s'", r.status, r.err);
+        cli_free(&r);
+        text = (char *)malloc(TEXT_LINE_MAX + 16);
+        if (text) {
+            memcpy(text, "0.1\n#", 5);
+            memset(text + 5, ' ', TEXT_LINE_MAX - 2);
+            strcpy(text + 5 + TEXT_LINE_MAX - 2, "\n0.2\n");
+            cli_write(path, text);
+        }
+        free(text);
+        r = cli_run("plan", "--profile", path, NULL);
+        CHECKF(r.status == 1 && strstr(r.err, "bad.csv:2: a line longer"), "one byte over: exit %d, '%s'", r.status, r.err);
+        cli_free(&r);
+        text = (char *)malloc(TEXT_LINE_MAX + 16); /* the same at the file's end, no line end after it */
+        if (text) {
+            memcpy(text, "0.1\n#", 5);
+            memset(text + 5, ' ', TEXT_LINE_MAX - 2);
+            text[5 + TEXT_LINE_MAX - 2] = 0;
+            cli_write(path, text);
+        }
+        free(text);
+        r = cli_run("plan", "--profile", path, NULL);
+        CHECKF(r.status == 1 && strstr(r.err, "bad.csv:2: a line longer"), "one byte over at the end: exit %d, '%s'", r.status,
+               r.err);
+        cli_free(&r);
+    }
+    { /* --compare's other methods take --eps, --budget or not */
+        r = cli_run("plan", sphere_stl(), "--budget", "150", "--compare", "--eps", "0.02", NULL);
+        CHECKF(r.status == 0 && strstr(r.out, "0.02"), "exit %d: %s", r.status, r.err);
         cli_free(&r);
     }
     cli_write_bytes(weights, "0.5\n\0garbage\n", 13);

@@ -310,6 +310,7 @@ static void bad_hybrid_input_is_refused(void)
         /* limits contour would refuse when it reads the project (exit 0 here before) */
         {"--hybrid", "--3mf", "@", "--resolution", "1e-300", "--resolution 1e-300"},
         {"--hybrid", "--3mf", "@", "--max-rise", "1e300", "--max-rise 1e+300"},
+        {"--hybrid", "--3mf", "@", "--max-rise", "999999.9999", "--max-rise 1e+06"}, /* as the project writes it */
     };
     size_t c;
     for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {

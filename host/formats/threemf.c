@@ -15,6 +15,14 @@
 #include <string.h>
 #include <strings.h>
 
+/* A number as the file will hold it (%.9g). */
+static double as_written(double z)
+{
+    char text[32];
+    snprintf(text, sizeof text, "%.9g", z);
+    return strtod(text, NULL);
+}
+
 int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char **rest)
 {
     int i, rc = RC_OK;
@@ -34,8 +42,10 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
                 rc = complain(RC_USAGE, "--3mf %s: the name must end in .3mf", t->path);
         }
         else if (!strcmp(o, "--nozzle")) {
-            if (!(rc = number_option(argc, argv, &i, 0, &t->nozzle)) && t->nozzle > THREEMF_MAX_NOZZLE)
-                rc = complain(RC_USAGE, "--nozzle %g: an FDM nozzle is at most %g mm", t->nozzle, THREEMF_MAX_NOZZLE);
+            if (!(rc = number_option(argc, argv, &i, 0, &t->nozzle)) &&
+                !(t->nozzle >= THREEMF_MIN_NOZZLE && t->nozzle <= THREEMF_MAX_NOZZLE))
+                rc = complain(RC_USAGE, "--nozzle %g: an FDM nozzle is %g to %g mm", t->nozzle, THREEMF_MIN_NOZZLE,
+                              THREEMF_MAX_NOZZLE);
             t->nozzle_given = 1;
         }
         else if (!strcmp(o, "--hybrid")) t->hybrid = 1;
@@ -46,9 +56,10 @@ int threemf_options(int argc, char **argv, threemf_args *t, int *rest_argc, char
         else { rest[(*rest_argc)++] = argv[i]; continue; }
         if (strcmp(o, "--3mf") && strcmp(o, "--nozzle") && strcmp(o, "--hybrid")) t->contour_given = 1;
     }
-    /* what the project says, contour takes: plan --hybrid --resolution 1e-300 made a project contour refused */
-    if (!rc && h->rise) rc = contour_limit_check("--max-rise ", "max_rise", h->rise, RC_USAGE);
-    if (!rc && h->resolution) rc = contour_limit_check("--resolution ", "resolution", h->resolution, RC_USAGE);
+    /* what the project says, contour takes: plan --hybrid --resolution 1e-300 made a project contour refused;
+       checked as the project will hold it (999999.9999 is written 1000000) */
+    if (!rc && h->rise) rc = contour_limit_check("--max-rise ", "max_rise", as_written(h->rise), RC_USAGE);
+    if (!rc && h->resolution) rc = contour_limit_check("--resolution ", "resolution", as_written(h->resolution), RC_USAGE);
     if (!rc && h->reach && !(h->reach < CONTOUR_MAX_LIMIT))
         rc = complain(RC_USAGE, "--reach %g: under %g mm", h->reach, CONTOUR_MAX_LIMIT);
     if (!rc && t->nozzle_given && !t->path) rc = complain(RC_USAGE, "--nozzle is the 3MF's printer's: add --3mf FILE");
@@ -226,14 +237,6 @@ static void write_contour(FILE *f, const void *ctx)
         fprintf(f, " %.6g-%.6g", lo, hi);
     }
     fputc('\n', f);
-}
-
-/* A top as the file will hold it. */
-static double as_written(double z)
-{
-    char text[32];
-    snprintf(text, sizeof text, "%.9g", z);
-    return strtod(text, NULL);
 }
 
 int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *note)

@@ -20,7 +20,10 @@
    (max_layer_height 0: 75 % of the nozzle), and its floor for any layer. */
 #define THREEMF_MAX_OF_NOZZLE 0.75
 #define THREEMF_MIN_LAYER 0.01
-/* The widest --nozzle: large-format printers' reach 2-3 mm. */
+/* The --nozzle range: micro nozzles are 0.1 mm, large-format printers'
+   2-3 mm; from 0.05 a layer shared by two (threemf_write) stays over
+   THREEMF_MIN_LAYER. */
+#define THREEMF_MIN_NOZZLE 0.05
 #define THREEMF_MAX_NOZZLE 10.0
 
 typedef struct threemf_args {
