@@ -416,10 +416,12 @@ static const struct { const char *option, *value; } OPTION_VALUES[] = {
     {"--screen", "file:fb.bin,240x200,24"}, {"--screen-packing", "rgb"}, {"--screen-rotate", "90"}, {"--screen-mirror", "x"},
     {"--screen-pitch", "50"}, {"--screen-panel", "2k-5.5"},
     {"--project", "@x.3mf"}, {"--resolution", "0.2"}, {"--max-rise", "0.05"}, {"--max-angle", "15"},
-    /* "COMMAND --option": what it needs there (plan's contour limits set up --hybrid, which needs --3mf) */
+    /* "COMMAND --option": what it needs there (plan's contour limits set up --hybrid, which needs --3mf, as
+       --nozzle does) */
     {"plan --hybrid", "--3mf @x.3mf"}, {"plan --max-angle", "15 --hybrid --3mf @x.3mf"},
     {"plan --reach", "2 --hybrid --3mf @x.3mf"}, {"plan --max-rise", "0.05 --hybrid --3mf @x.3mf"},
     {"plan --resolution", "0.2 --hybrid --3mf @x.3mf"}, {"--svg-path", "1 @path.svg"},
+    {"plan --nozzle", "0.4 --3mf @x.3mf"}, /* the 3MF's printer's */
     /* contour's top skins take the nozzle's two figures together */
     {"contour --top-skins", "--nozzle-clearance 1 --clearance-angle 30"},
     {"contour --nozzle-clearance", "1 --top-skins --clearance-angle 30"},
