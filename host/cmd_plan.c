@@ -11,6 +11,7 @@
 #include "formats/threemf.h"
 
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -155,7 +156,19 @@ static void print_summary(const plan_args *a, const plan_job *j)
     if (a->budget) printf(" (the smallest that fits %zu layer%s)", a->budget, plural(a->budget));
     printf("\nthickness  %g .. %g mm, %u .. %u bin%s per layer\n", a->tmin, a->tmax, p->bins_min, p->bins_max,
            plural(p->bins_max));
-    printf("layers     %zu\n", p->layer_count);
+    {
+        /* the layers as made: the summary gave a uniform plan's bounds, 0.2 .. 0.2 mm, over a top of 0.002 */
+        double thinnest = HUGE_VAL, thickest = 0;
+        size_t k;
+        for (k = 0; k < p->layer_count; k++) {
+            thinnest = p->layers[k].thickness < thinnest ? p->layers[k].thickness : thinnest;
+            thickest = p->layers[k].thickness > thickest ? p->layers[k].thickness : thickest;
+        }
+        printf("layers     %zu", p->layer_count);
+        if (p->layer_count) printf(", %g to %g mm", thinnest, thickest);
+        if (p->layer_count > 1 && thinnest < a->tmin * (1 - 1e-9)) printf(" (the top layer holds what is left of the height)");
+        printf("\n");
+    }
     printf("error      worst %g%s, total %g%s", p->worst_error, eu, p->total_error, eu);
     if (p->over_eps) printf(", %zu layer%s over eps", p->over_eps, plural(p->over_eps));
     printf("\n");

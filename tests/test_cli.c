@@ -282,6 +282,11 @@ static void options_say_what_they_do(void)
     r = cli_run("plan", sphere_stl(), "--3mf", cli_path("plan.3MF"), NULL);
     CHECKF(r.status == 0 && cli_exists(cli_path("plan.3MF")), "exit %d: %s", r.status, r.err);
     cli_free(&r);
+    /* a uniform plan's summary gave its bounds, 0.3 .. 0.3 mm, over a thinner top: the layers as made now */
+    r = cli_run("plan", sphere_stl(), "--uniform", "0.3", NULL);
+    CHECKF(r.status == 0 && strstr(r.out, " to 0.3 mm (the top layer holds what is left of the height)"), "exit %d: %s",
+           r.status, r.out);
+    cli_free(&r);
 }
 
 /* An open mesh's two volumes say which closure each is: plan --json's
