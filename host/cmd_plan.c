@@ -63,7 +63,7 @@ static void print_compare(const plan_args *a, const plan_job *j)
     int r;
     compare_cure(a, &c);
     snprintf(head, sizeof head, "worst error%s%s%s", *unit ? " (" : "", unit, *unit ? ")" : "");
-    printf("\nTable 3: %s, %s, eps %g%s\n", base_name(a->model ? a->model : a->profile),
+    printf("\nTable 3: %s, %s, eps %g%s\n", base_name(plan_source(a)),
            METRICS[a->metric].label, a->eps, unit_suffix(unit, u));
     printf("%-10s %8s %18s %10s %12s\n", "method", "layers", head, "over eps", "print time");
     for (r = 0; r < TABLE3_ROWS; r++) {
@@ -242,7 +242,7 @@ static void print_json(const plan_args *a, const plan_job *j)
     compare_cure(a, &c);
     json_init(&w, stdout);
     json_begin_object(&w, NULL, 0);
-    json_string(&w, "model", a->model ? a->model : a->profile);
+    json_string(&w, "model", plan_source(a));
     json_string(&w, "source", a->model ? "mesh" : "profile");
     json_string(&w, "format", a->model ? format_name(j->format) : NULL);
     if (a->model) {

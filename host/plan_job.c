@@ -199,6 +199,8 @@ int parse_plan(int argc, char **argv, plan_args *a)
 }
 
 
+const char *plan_source(const plan_args *a) { return a->model ? a->model : a->profile; }
+
 void units_hint(double tall_mm, char *out, size_t size)
 {
     *out = 0;
@@ -289,14 +291,14 @@ static int profile_planar_parts(const plan_args *a, plan_job *j, const adaslice_
         adaslice_hybrid_faces(mesh, &ho, j->residual, *weights, &j->hybrid, &err) != ADASLICE_OK) {
         free(walls);
         if (j->planar_profile.phi) adaslice_profile_free(&j->planar_profile);
-        return library_error_in(a->model ? a->model : a->profile, &err);
+        return library_error_in(plan_source(a), &err);
     }
     /* faces left planar keep their weights */
     for (t = 0; t < n; t++) walls[t] = j->residual[t] < 0 ? (*weights)[t] : 0;
     if (profile_with(a, mesh, po, walls, &j->walls_profile, &err) != ADASLICE_OK) {
         free(walls);
         adaslice_profile_free(&j->planar_profile);
-        return library_error_in(a->model ? a->model : a->profile, &err);
+        return library_error_in(plan_source(a), &err);
     }
     free(walls);
     return RC_OK;
@@ -516,10 +518,10 @@ static int plan_planar_same_error(const plan_args *a, plan_job *j)
         adaslice_error e;
         o.method = ADASLICE_METHOD_FINEST;
         r = adaslice_plan_profile(&j->planar_profile, &o, &j->planar, &e);
-        if (r != ADASLICE_OK) return library_error_in(a->model ? a->model : a->profile, &e);
+        if (r != ADASLICE_OK) return library_error_in(plan_source(a), &e);
         j->planar_finest = 1;
     } else if (r != ADASLICE_OK) {
-        return library_error_in(a->model ? a->model : a->profile, &j->planar_why);
+        return library_error_in(plan_source(a), &j->planar_why);
     }
     j->planar_found = 1;
     return RC_OK;
@@ -533,13 +535,13 @@ static int plan_steps(const plan_args *a, plan_job *j)
     int rc = a->model ? profile_model(a, j) : read_profile(a, j), m;
     if (rc) return rc;
     t0 = now_ms();
-    if (plan_with(a, j, a->method) != ADASLICE_OK) return library_error_in(a->model ? a->model : a->profile, &j->why[a->method]);
+    if (plan_with(a, j, a->method) != ADASLICE_OK) return library_error_in(plan_source(a), &j->why[a->method]);
     j->ms_plan = now_ms() - t0;
     for (m = 0; a->compare && m < METHOD_COUNT; m++) {
         adaslice_result r;
         if (m == ADASLICE_METHOD_CURVATURE && !j->kappa) continue; /* a --profile has no curvature */
         r = j->planned[m] ? ADASLICE_OK : plan_with(a, j, (adaslice_method)m);
-        if (r != ADASLICE_OK && r != ADASLICE_ERR_INFEASIBLE) return library_error_in(a->model ? a->model : a->profile, &j->why[m]);
+        if (r != ADASLICE_OK && r != ADASLICE_ERR_INFEASIBLE) return library_error_in(plan_source(a), &j->why[m]);
     }
     if (a->compare && j->planned[ADASLICE_METHOD_OPTIMAL] && j->why[ADASLICE_METHOD_OPTIMAL].result == ADASLICE_OK)
         j->uniform_found = plan_uniform_no_worse(&j->profile, &j->plan[ADASLICE_METHOD_OPTIMAL], &j->uniform);
@@ -594,7 +596,7 @@ static void write_plot(FILE *f, const void *ctx)
     const plan_job *j = (const plan_job *)ctx;
     const plan_args *a = j->args;
     svg_plan_figure fig;
-    fig.model = base_name(a->model ? a->model : a->profile);
+    fig.model = base_name(plan_source(a));
     fig.metric = METRICS[a->metric].label;
     fig.phi_axis = METRICS[a->metric].phi_axis;
     fig.eps_unit = METRICS[a->metric].eps_unit;

@@ -94,6 +94,8 @@ typedef struct plan_job {
 /* The plan options of `plan` (argv[0] is the command's name); RC_OK or a
    complaint made. */
 int parse_plan(int argc, char **argv, plan_args *a);
+/* The file the plan comes from, for messages: the MODEL, or --profile's. */
+const char *plan_source(const plan_args *a);
 /* The command whose help lists the plan options: each lists those it takes. */
 enum { FOR_PLAN = 1, FOR_SLICE = 2, FOR_ORIENT = 4, FOR_PRINT = 8 };
 void plan_options_usage(FILE *f, unsigned command);

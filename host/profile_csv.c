@@ -1,6 +1,6 @@
 /* A profile read from a file: see profile_csv.h. */
 #ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* getc_unlocked, strncasecmp */
+#define _POSIX_C_SOURCE 200809L /* strncasecmp */
 #endif
 #include "profile_csv.h"
 #include "options.h"
