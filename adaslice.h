@@ -6336,6 +6336,7 @@ typedef struct adaslice__job {
     adaslice_dp dp;
     void *ring;               /* the planner's workspace */
     size_t ring_size;
+    int planned;              /* dp holds the plan with the forced planes */
 } adaslice__job;
 
 /* Runs the DP with the given eps in units; returns the layer count or
@@ -6609,15 +6610,32 @@ static void adaslice__layers_above(adaslice__job *job, uint64_t eps, void *ring,
     }
 }
 
-/* Fewest layers from plane `from` to every plane up to `to` (no forced plane
-   between), into from_layers[plane]; `dp` carries on from where it stopped. */
-static void adaslice__layers_from(adaslice__job *job, adaslice_dp *dp, uint32_t from, uint32_t to, uint32_t *from_layers)
+/* The DP pushed on up to plane `to` (no forced plane between), the fewest
+   layers to each plane into layers[plane]. */
+static void adaslice__layers_to(adaslice__job *job, uint32_t to, uint32_t *layers)
 {
     uint32_t at;
-    while ((at = from + adaslice_dp_bins(dp)) < to) {
-        adaslice_dp_push(dp, job->units[at], 0);
-        from_layers[at + 1] = adaslice_dp_layers(dp);
+    while ((at = adaslice_dp_bins(&job->dp)) < to) {
+        adaslice_dp_push(&job->dp, job->units[at], 0);
+        layers[at + 1] = adaslice_dp_layers(&job->dp);
     }
+}
+
+/* Makes `plane`, which the DP has passed by less than its ring, the last one
+   pushed and a forced one: what the DP pushed after it is forgotten, and it
+   stands as adaslice_dp_push with `forced` would have left it. */
+static void adaslice__dp_force_back(adaslice_dp *dp, uint32_t plane)
+{
+    ADASLICE_ASSERT(plane <= dp->plane && dp->plane - plane < dp->cap && dp->layers[plane & (dp->cap - 1)] != ADASLICE__UNREACHED);
+    dp->plane = dp->floor = dp->reach = plane;
+    dp->head = dp->count = dp->scan = 0;
+}
+
+/* Workspace for adaslice__sharp_settle: the DP's ring holds twice its
+   thickest layer, as settling goes back that far. */
+static size_t adaslice__settle_workspace(uint32_t n, uint32_t hi, int volume)
+{
+    return adaslice__dp_bytes(n, hi, adaslice__ring_size(2 * hi), volume);
 }
 
 /* §3.3 without making eps infeasible: the pre-pass's planes (job->forced),
@@ -6628,45 +6646,46 @@ static void adaslice__layers_from(adaslice__job *job, adaslice_dp *dp, uint32_t 
    fewest layers between two planes). That holds at the top by induction, so
    the plan exists and has at most K0 + kept layers. Tried at the plane
    wanted, then 1, 2, ... bins below and above it, up to a thickest layer
-   away, never onto or past a neighbour. Changes go to *changes (allocated,
-   `*count` of them); returns the planes kept, or UNREACHED out of memory.
-   No plan at all within eps: every plane is dropped, silently (the error
-   then is the plan's own). */
+   away, never onto or past a neighbour. The DP runs bottom-up once: C +
+   S(L, f) is its count at f, and a plane kept is one it goes back to and
+   forces, so that it ends as adaslice__job_run with the planes kept would,
+   and job->planned says so. job->ring: adaslice__settle_workspace bytes.
+   Changes go to *changes (allocated, `*count` of them); returns the planes
+   kept, or UNREACHED out of memory. No plan at all within eps: every plane
+   is dropped, silently (the error then is the plan's own). */
 static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const adaslice_allocator *al,
                                        adaslice_plane_change **changes, size_t *count)
 {
-    uint32_t n = job->n, i, L = 0, C = 0, kept = 0, K0, *above, *from, *wanted, wanted_count = 0;
-    size_t ring_size = adaslice_dp_workspace(n, job->hi, job->volume), cap = 0;
-    void *ring;
-    adaslice_dp dp;
+    uint32_t n = job->n, i, L = 0, kept = 0, K0, *above, *upto, *wanted, wanted_count = 0;
+    size_t cap = 0;
     *changes = NULL;
     *count = 0;
     for (i = 1; i < n; i++) wanted_count += job->forced[i] != 0;
     if (!wanted_count) return 0;
     above = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)n + 1, 2 * sizeof(uint32_t)));
     wanted = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, (size_t)wanted_count + 1, sizeof(uint32_t)));
-    ring = adaslice__alloc(al, 1, ring_size);
-    if (!above || !wanted || !ring) goto nomem;
-    from = above + n + 1;
+    if (!above || !wanted) goto nomem;
+    upto = above + n + 1;
     for (i = 1, wanted_count = 0; i < n; i++) if (job->forced[i]) wanted[wanted_count++] = i;
     wanted[wanted_count] = n;
     memset(job->forced, 0, (size_t)n + 1);
-    adaslice__layers_above(job, eps, ring, ring_size, above);
+    adaslice__layers_above(job, eps, job->ring, job->ring_size, above);
     K0 = above[0];
     if (K0 == ADASLICE__UNREACHED) goto done;
-    (void)adaslice_dp_init(&dp, ring, ring_size, n, job->lo, job->hi, eps, job->volume, job->slack);
+    (void)adaslice__dp_setup(&job->dp, job->ring, job->ring_size, n, job->lo, job->hi, eps, job->volume, job->slack,
+                             adaslice__ring_size(2 * job->hi));
     for (i = 0; i < wanted_count; i++) {
         uint32_t c = wanted[i], next = wanted[i + 1], d, placed = 0, reach = c + job->hi < next ? c + job->hi : next - 1;
         int infeasible;
-        adaslice__layers_from(job, &dp, L, reach, from);
-        infeasible = from[c] == ADASLICE__UNREACHED || above[c] == ADASLICE__UNREACHED;
+        adaslice__layers_to(job, reach, upto);
+        infeasible = upto[c] == ADASLICE__UNREACHED || above[c] == ADASLICE__UNREACHED;
         for (d = 0; d <= job->hi && !placed; d++) {
             int side;
             for (side = 0; side < 2 && !placed; side++) {
                 uint32_t f = side ? c + d : c - d;
                 if ((side && (d == 0 || f > reach)) || (!side && d >= c - L)) continue;
-                if (from[f] != ADASLICE__UNREACHED && above[f] != ADASLICE__UNREACHED &&
-                    (uint64_t)C + from[f] + above[f] <= (uint64_t)K0 + kept + 1)
+                if (upto[f] != ADASLICE__UNREACHED && above[f] != ADASLICE__UNREACHED &&
+                    (uint64_t)upto[f] + above[f] <= (uint64_t)K0 + kept + 1)
                     placed = f;
             }
         }
@@ -6683,15 +6702,15 @@ static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const a
         }
         if (!placed) continue;
         job->forced[placed] = 1;
-        C += from[placed];
         L = placed;
         kept++;
-        (void)adaslice_dp_init(&dp, ring, ring_size, n - L, job->lo, job->hi, eps, job->volume, job->slack);
+        adaslice__dp_force_back(&job->dp, placed);
     }
+    adaslice__layers_to(job, n, upto);
+    job->planned = 1;
 done:
     adaslice__free(al, above);
     adaslice__free(al, wanted);
-    adaslice__free(al, ring);
     return kept;
 nomem:
     adaslice__free(al, *changes);
@@ -6734,7 +6753,7 @@ static adaslice_result adaslice__plan_optimal(adaslice__job *job, const adaslice
     if (job->forced && !opt->budget &&
         adaslice__sharp_settle(job, eps_units, &plan->allocator, &plan->changes, &plan->plane_changes) == ADASLICE__UNREACHED)
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory");
-    layers = adaslice__job_run(job, eps_units);
+    layers = job->planned ? adaslice_dp_layers(&job->dp) : adaslice__job_run(job, eps_units);
     if (layers == ADASLICE__UNREACHED) {
         uint32_t reach = adaslice_dp_reach(&job->dp);
         uint64_t need;
@@ -6932,7 +6951,8 @@ ADASLICE_DEF adaslice_result adaslice_plan_profile(const adaslice_profile *p, co
         break;
     }
     case ADASLICE_METHOD_OPTIMAL: {
-        size_t need = adaslice_dp_workspace(job.n, job.hi, job.volume);
+        size_t need = opt.sharp > 0 ? adaslice__settle_workspace(job.n, job.hi, job.volume)
+                                    : adaslice_dp_workspace(job.n, job.hi, job.volume);
         job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, job.n, sizeof(uint64_t)));
         ring = adaslice__alloc(&al, 1, need);
         if (!job.units || !ring) { r = adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "plan: out of memory"); break; }
@@ -7010,12 +7030,15 @@ ADASLICE_DEF adaslice_result adaslice_plan_units(const adaslice_profile *p, cons
         job.hi = hi;
         job.forced = planes;
         job.units = ADASLICE__CAST(uint64_t *, adaslice__alloc(&al, n, sizeof(uint64_t)));
-        if (job.units) {
+        job.ring_size = adaslice__settle_workspace(n, hi, 0);
+        job.ring = adaslice__alloc(&al, 1, job.ring_size);
+        if (job.units && job.ring) {
             for (i = 0; i < n; i++) job.units[i] = units[i];
             kept = adaslice__sharp_settle(&job, opt.eps_units, &al, &changes, &count);
         }
         adaslice__free(&al, changes);
         adaslice__free(&al, job.units);
+        adaslice__free(&al, job.ring);
         if (kept == ADASLICE__UNREACHED) {
             adaslice__free(&al, ok);
             adaslice__free(&al, planes);

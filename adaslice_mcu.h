@@ -498,25 +498,32 @@ static uint32_t adaslice__ring_size(uint32_t bins_max)
     return cap;
 }
 
-ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
+/* The workspace with a ring of `cap` planes: adaslice.h's plane settling
+   keeps more than bins_max of them, to go back to a plane it has passed. */
+static size_t adaslice__dp_bytes(uint32_t bins, uint32_t bins_max, uint32_t cap, int volume)
 {
-    size_t cap = adaslice__ring_size(bins_max), width = bins_max <= 255 ? 1 : 2;
+    size_t width = bins_max <= 255 ? 1 : 2;
     return cap * ((volume ? 4 : 2) * sizeof(uint64_t) + 2 * sizeof(uint32_t)) + width * ((size_t)bins + 1);
 }
 
-ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
-                                             uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
-                                             uint64_t slack)
+ADASLICE_DEF size_t adaslice_dp_workspace(uint32_t bins, uint32_t bins_max, int volume)
+{
+    return adaslice__dp_bytes(bins, bins_max, adaslice__ring_size(bins_max), volume);
+}
+
+static adaslice_result adaslice__dp_setup(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
+                                          uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
+                                          uint64_t slack, uint32_t cap)
 {
     unsigned char *mem = ADASLICE__CAST(unsigned char *, workspace);
     uint32_t c;
     if (!dp || !mem || bins_min < 1 || bins_min > bins_max || bins_max > 65535 || bins > 0x7ffffffeu ||
-        size < adaslice_dp_workspace(bins, bins_max, volume))
+        cap <= bins_max || size < adaslice__dp_bytes(bins, bins_max, cap, volume))
         return ADASLICE_ERR_ARGUMENT;
     memset(dp, 0, sizeof *dp);
     dp->lo = bins_min;
     dp->hi = bins_max;
-    dp->cap = c = adaslice__ring_size(bins_max);
+    dp->cap = c = cap;
     dp->eps = eps;
     dp->volume = volume != 0;
     dp->slack = slack;
@@ -533,6 +540,14 @@ ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, 
     dp->back = mem;
     adaslice__dp_start(dp);
     return ADASLICE_OK;
+}
+
+ADASLICE_DEF adaslice_result adaslice_dp_init(adaslice_dp *dp, void *workspace, size_t size, uint32_t bins,
+                                             uint32_t bins_min, uint32_t bins_max, uint64_t eps, int volume,
+                                             uint64_t slack)
+{
+    return adaslice__dp_setup(dp, workspace, size, bins, bins_min, bins_max, eps, volume, slack,
+                              adaslice__ring_size(bins_max));
 }
 
 ADASLICE_DEF uint32_t adaslice_dp_layers(const adaslice_dp *dp)
