@@ -6434,15 +6434,22 @@ ADASLICE_DEF double adaslice_layer_error(const adaslice_profile *p, size_t first
     return sum * p->bin;
 }
 
-/* Whether r bins can be cut into layers of lo..hi bins, for every r <= n. */
+/* Whether r bins can be cut into layers of lo..hi bins, for every r <= n.
+   After lo lengths in a row that can, every longer one can: one layer more
+   reaches the next from one of them. */
 static void adaslice__tileable(unsigned char *ok, uint32_t n, uint32_t lo, uint32_t hi)
 {
-    uint32_t r, in_window = 0;
+    uint32_t r, in_window = 0, run = 1;
     ok[0] = 1;
     for (r = 1; r <= n; r++) {
+        if (run >= lo) {
+            memset(ok + r, 1, (size_t)n + 1 - r);
+            return;
+        }
         if (r >= lo) in_window += ok[r - lo];
         if (r >= hi + 1) in_window -= ok[r - hi - 1];
         ok[r] = in_window > 0;
+        run = ok[r] ? run + 1 : 0;
     }
 }
 
@@ -7347,6 +7354,20 @@ static int adaslice__bound_shift(size_t bins)
     }
 }
 
+/* Facet t's runs in the chunks of 2^shift bins its corners meet (two at
+   most: a chunk is longer than any facet), counted into runs[chunk + 1]. */
+static void adaslice__count_runs(const adaslice_mesh *m, const adaslice__turned_corner *cv, size_t t, int shift,
+                                 size_t *runs)
+{
+    const uint32_t *tri = m->triangles + 3 * t;
+    uint32_t a = cv[tri[0]].bin, b = cv[tri[1]].bin, c = cv[tri[2]].bin;
+    uint32_t first = a < b ? a : b, last = a > b ? a : b;
+    first = c < first ? c : first;
+    last = c > last ? c : last;
+    runs[(first >> shift) + 1]++;
+    runs[(last >> shift) + 1] += first >> shift != last >> shift;
+}
+
 /* The cusp profile's facets that can raise it, into keep in order (their
    count returned), the others left out: a facet whose value is at most the
    profile's over all its bins cannot change a maximum. Of the plate of
@@ -7362,12 +7383,13 @@ static int adaslice__bound_shift(size_t bins)
    rounding. `lower`: levels x blocks doubles, the bound's range-minimum
    table; a block is 2^shift bins. */
 static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned_corner *cv, const double up[3],
-                              const adaslice_profile *p, double *lower, int levels, int shift, uint32_t *keep)
+                              const adaslice_profile *p, double *lower, int levels, int shift, uint32_t *keep,
+                              int chunk_shift, size_t *runs)
 {
     const adaslice_mesh *m = &o->sorted;
     size_t n = p->bin_count, blocks = ((n - 1) >> shift) + 1, boxes = adaslice__box_count(m->triangle_count);
     size_t block = (size_t)1 << shift;
-    size_t b, t, g, kept = 0;
+    size_t b, t, g, kept = 0, box_kept, bin_lo, bin_hi;
     double inverse = 1.0 / p->bin, top = (double)(long)(n - 1), margin = 1e-5 * o->reach;
     double s[3]; /* d over 32767, for the normals in 32767ths */
     int k;
@@ -7398,12 +7420,15 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
             zlo += up[k] * (up[k] >= 0 ? box[k] : box[3 + k]);
             zhi += up[k] * (up[k] >= 0 ? box[3 + k] : box[k]);
         }
-        g0 = adaslice__bin_of(p->z0, inverse, top, zlo - margin) >> shift;
-        g1 = adaslice__bin_of(p->z0, inverse, top, zhi + margin) >> shift;
+        bin_lo = adaslice__bin_of(p->z0, inverse, top, zlo - margin);
+        bin_hi = adaslice__bin_of(p->z0, inverse, top, zhi + margin);
+        g0 = bin_lo >> shift;
+        g1 = bin_hi >> shift;
         k = adaslice__floor_log2(g1 - g0 + 1);
         least = lower[(size_t)k * blocks + g0];
         g = g1 + 1 - ((size_t)1 << k);
         least = lower[(size_t)k * blocks + g] < least ? lower[(size_t)k * blocks + g] : least;
+        box_kept = kept;
         keep[kept++] = (uint32_t)first;
         /* the largest |n . d| in the cone: the cosine of d's angle to the
            axis less the cone's, or 1 within it (normals in 32767ths are up
@@ -7412,14 +7437,19 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
         cos_d = cos_d < 1 ? cos_d : 1;
         sin_d = sqrt(1 - cos_d * cos_d);
         most = cos_d >= cone[3] ? 1 : cos_d * cone[3] + sin_d * cone[4];
-        if (most * (1 + 3e-5) + 1e-6 + cone[5] <= least) continue;
         end = end < m->triangle_count ? end : m->triangle_count;
+        if (most * (1 + 3e-5) + 1e-6 + cone[5] <= least) end = first + 1;
         for (t = first + 1; t < end; t++) {
             const int16_t *nn = o->normals + 4 * t;
             double a = fabs(nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]);
             keep[kept] = (uint32_t)t; /* a store and a count: whether it stays is unpredictable */
             kept += a + adaslice__value_bound(nn[3]) > least;
         }
+        if (!runs) continue;
+        /* the runs' count per chunk, for adaslice__max_along: a box within a
+           chunk by its bins has its facets there */
+        if (bin_lo >> chunk_shift == bin_hi >> chunk_shift) runs[(bin_lo >> chunk_shift) + 1] += kept - box_kept;
+        else for (; box_kept < kept; box_kept++) adaslice__count_runs(m, cv, keep[box_kept], chunk_shift, runs);
     }
     return kept;
 }
@@ -7461,16 +7491,6 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     if (chunks == 1) chunk = n;
     memset(&quiet, 0, sizeof quiet);
     memset(&rmax, 0, sizeof rmax);
-    if (o->normals) {
-        int bound_shift = adaslice__bound_shift(n);
-        size_t blocks = ((n - 1) >> bound_shift) + 1;
-        int bound_levels = adaslice__floor_log2(blocks) + 1;
-        double *lower = ADASLICE__CAST(double *, adaslice__alloc(&al, blocks * (size_t)bound_levels, sizeof(double)));
-        keep = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, count, sizeof *keep));
-        if (lower && keep) count = adaslice__prune(o, cv, up, p, lower, bound_levels, bound_shift, keep);
-        adaslice__free(&al, lower);
-        if (!lower || !keep) goto nomem;
-    }
     if (chunks > 1) {
         /* two runs a facet at most: the same size for every direction, so
            a search's allocator can keep it */
@@ -7478,17 +7498,21 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, chunks + 1, sizeof *start));
         if (!sorted || !start) goto nomem;
         memset(start, 0, (chunks + 1) * sizeof *start);
-        for (i = 0; i < count; i++) {
-            const uint32_t *tri = m->triangles + 3 * (keep ? keep[i] : i);
-            uint32_t a = cv[tri[0]].bin, b = cv[tri[1]].bin, cc = cv[tri[2]].bin;
-            uint32_t first = a < b ? a : b, last = a > b ? a : b;
-            first = cc < first ? cc : first;
-            last = cc > last ? cc : last;
-            start[(first >> shift) + 1]++;
-            start[(last >> shift) + 1] += first >> shift != last >> shift;
-        }
-        for (c = 1; c <= chunks; c++) start[c] += start[c - 1]; /* chunk c's runs go from start[c] */
     }
+    if (o->normals) { /* the prune counts the runs of the facets it keeps */
+        int bound_shift = adaslice__bound_shift(n);
+        size_t blocks = ((n - 1) >> bound_shift) + 1;
+        int bound_levels = adaslice__floor_log2(blocks) + 1;
+        double *lower = ADASLICE__CAST(double *, adaslice__alloc(&al, blocks * (size_t)bound_levels, sizeof(double)));
+        keep = ADASLICE__CAST(uint32_t *, adaslice__alloc(&al, count, sizeof *keep));
+        if (lower && keep) count = adaslice__prune(o, cv, up, p, lower, bound_levels, bound_shift, keep, shift, start);
+        adaslice__free(&al, lower);
+        if (!lower || !keep) goto nomem;
+    } else if (chunks > 1) {
+        for (i = 0; i < count; i++) adaslice__count_runs(m, cv, i, shift, start);
+    }
+    if (chunks > 1)
+        for (c = 1; c <= chunks; c++) start[c] += start[c - 1]; /* chunk c's runs go from start[c] */
     if (!adaslice__rmax_init(&rmax, chunk, span, &al)) goto nomem;
     for (i = 0; i < count; i++) {
         const uint32_t *tri = m->triangles + 3 * (t = keep ? keep[i] : i);
@@ -7519,9 +7543,12 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
             piece.first = piece.last + 1;
             piece.last = last;
         }
+        /* the counts came from the boxes' bins, which hold their corners' */
+        ADASLICE_ASSERT(start[cl] < 2 * m->triangle_count);
         sorted[start[cl]++] = piece;
     }
     if (chunks > 1) { /* the cursors back to the chunks' starts */
+        ADASLICE_ASSERT(start[chunks - 1] == start[chunks]);
         for (c = chunks; c > 0; c--) start[c] = start[c - 1];
         start[0] = 0;
     }
