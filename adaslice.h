@@ -6891,7 +6891,7 @@ static adaslice_result adaslice__plan_setup(const adaslice_profile *p, const ada
        volume metric's differences), in any order of adding: a plan whose
        errors overflowed to inf passed as feasible */
     if (!(4 * total * p->bin <= DBL_MAX))
-        return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0,
+        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0,
                               "plan: the profile's values sum to %g: its layers' errors would pass the largest double",
                               total);
     if (opt->method == ADASLICE_METHOD_CURVATURE) return adaslice__curvature_check(p, opt, err);
