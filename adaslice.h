@@ -4704,7 +4704,7 @@ static adaslice_result adaslice__profile_bins(const adaslice_mesh *mesh, const a
 /* The same, then phi (and the areas for area and volume) allocated. */
 static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
                                                adaslice_profile *profile, adaslice_profile_options *opt,
-                                               const double *zrange, adaslice_error *err)
+                                               const double *zrange, int zero, adaslice_error *err)
 {
     adaslice_allocator al;
     adaslice_result r;
@@ -4723,7 +4723,7 @@ static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const 
         memset(profile, 0, sizeof *profile);
         return adaslice__fail(err, ADASLICE_ERR_NOMEM, 0, 0, "profile: out of memory for %zu bins", n);
     }
-    memset(profile->phi, 0, n * sizeof(double));
+    if (zero) memset(profile->phi, 0, n * sizeof(double));
     profile->metric = opt->metric;
     profile->bin_count = n;
     profile->bin = opt->bin;
@@ -4853,7 +4853,7 @@ static adaslice_result adaslice__profile_exact(const adaslice_mesh *mesh, const 
     size_t n;
     int max_type;
 
-    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, zrange, 1, err)) != ADASLICE_OK) return r;
     if (opt.progress) opt.progress(opt.progress_user, 0);
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
@@ -5202,7 +5202,7 @@ ADASLICE_DEF adaslice_result adaslice_profile_sampled(const adaslice_mesh *mesh,
     size_t n, t, i;
     int axis, max_type;
 
-    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, NULL, err)) != ADASLICE_OK) return r;
+    if ((r = adaslice__profile_begin(mesh, options, profile, &opt, NULL, 1, err)) != ADASLICE_OK) return r;
     n = profile->bin_count;
     max_type = opt.metric <= ADASLICE_METRIC_ROUGHNESS;
     memset(&s, 0, sizeof s);
@@ -7612,7 +7612,8 @@ ADASLICE_DEF adaslice_result adaslice_profile_along(const adaslice_orienter *o, 
         zrange[0] = q[2] < zrange[0] ? q[2] : zrange[0];
         zrange[1] = q[2] > zrange[1] ? q[2] : zrange[1];
     }
-    if ((r = adaslice__profile_begin(m, &o->profile, profile, &opt, zrange, err)) != ADASLICE_OK) {
+    /* phi not cleared: adaslice__max_along writes every bin */
+    if ((r = adaslice__profile_begin(m, &o->profile, profile, &opt, zrange, 0, err)) != ADASLICE_OK) {
         adaslice__free(&al, cv);
         return r;
     }
