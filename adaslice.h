@@ -7460,9 +7460,10 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
    nor on a run being cut in two. Along a long part the range-maximum table
    grows to tens of MB, cleared, updated at random and pushed down for every
    direction, and memory bounds the search; so the bins are cut into chunks
-   whose table stays in cache, the facets' runs sorted into them by a
-   counting pass over the corners' bins (those crossing a border cut there).
-   For the cusp metric unweighted, only the facets adaslice__prune keeps. */
+   whose table stays in cache, the facets' runs sorted into them by their
+   counts per chunk (those crossing a border cut there). For the cusp metric
+   unweighted, only the facets adaslice__prune keeps, which it counts;
+   otherwise a pass over every facet's corners counts them. */
 static adaslice_result adaslice__max_along(const adaslice_orienter *o, const adaslice__turned_corner *cv,
                                            const double up[3], const adaslice_profile_options *opt,
                                            adaslice_profile *p, adaslice_error *err)
