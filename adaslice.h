@@ -4701,7 +4701,8 @@ static adaslice_result adaslice__profile_bins(const adaslice_mesh *mesh, const a
     return ADASLICE_OK;
 }
 
-/* The same, then phi (and the areas for area and volume) allocated. */
+/* The same, then phi (and the areas for area and volume) allocated; phi
+   cleared unless `zero` is 0 (a caller that writes every bin). */
 static adaslice_result adaslice__profile_begin(const adaslice_mesh *mesh, const adaslice_profile_options *options,
                                                adaslice_profile *profile, adaslice_profile_options *opt,
                                                const double *zrange, int zero, adaslice_error *err)
@@ -6665,6 +6666,7 @@ static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const a
 {
     uint32_t n = job->n, i, L = 0, kept = 0, K0, *above, *upto, *wanted, wanted_count = 0;
     size_t cap = 0;
+    adaslice_result r;
     *changes = NULL;
     *count = 0;
     for (i = 1; i < n; i++) wanted_count += job->forced[i] != 0;
@@ -6679,8 +6681,10 @@ static uint32_t adaslice__sharp_settle(adaslice__job *job, uint64_t eps, const a
     adaslice__layers_above(job, eps, job->ring, job->ring_size, above);
     K0 = above[0];
     if (K0 == ADASLICE__UNREACHED) goto done;
-    (void)adaslice__dp_setup(&job->dp, job->ring, job->ring_size, n, job->lo, job->hi, eps, job->volume, job->slack,
-                             adaslice__ring_size(2 * job->hi));
+    r = adaslice__dp_setup(&job->dp, job->ring, job->ring_size, n, job->lo, job->hi, eps, job->volume, job->slack,
+                           adaslice__ring_size(2 * job->hi));
+    ADASLICE_ASSERT(r == ADASLICE_OK); /* job->ring: adaslice__settle_workspace bytes */
+    (void)r;
     for (i = 0; i < wanted_count; i++) {
         uint32_t c = wanted[i], next = wanted[i + 1], d, placed = 0, reach = c + job->hi < next ? c + job->hi : next - 1;
         int infeasible;
@@ -7381,7 +7385,8 @@ static void adaslice__count_runs(const adaslice_mesh *m, const adaslice__turned_
    their values cannot pass the profile there. The box's bins come from its
    corners' heights along d with the margin of adaslice__longest_run's
    rounding. `lower`: levels x blocks doubles, the bound's range-minimum
-   table; a block is 2^shift bins. */
+   table; a block is 2^shift bins. `runs` (NULL: one chunk): the kept facets'
+   runs counted per chunk of 2^chunk_shift bins into runs[chunk + 1]. */
 static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned_corner *cv, const double up[3],
                               const adaslice_profile *p, double *lower, int levels, int shift, uint32_t *keep,
                               int chunk_shift, size_t *runs)
@@ -7544,7 +7549,7 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
             piece.first = piece.last + 1;
             piece.last = last;
         }
-        /* the counts came from the boxes' bins, which hold their corners' */
+        /* the counts came from the corners' bins, or the prune's boxes' that hold them */
         ADASLICE_ASSERT(start[cl] < 2 * m->triangle_count);
         sorted[start[cl]++] = piece;
     }
