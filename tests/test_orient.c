@@ -559,6 +559,76 @@ static void ties_go_to_the_part_as_loaded(void)
     CHECKF(count == 1 && minima[0] == 1, "%zu minima, the first %zu", count, count ? minima[0] : 99);
 }
 
+static unsigned orient_rng_state = 2026;
+static unsigned orient_rng(void)
+{
+    orient_rng_state = orient_rng_state * 1103515245u + 12345u;
+    return (orient_rng_state >> 8) & 0xffffffu;
+}
+
+/* Every pair tried, as adaslice_orient_minima did before it searched runs of
+   falling z: the reference for the windowed search. */
+static size_t minima_of_every_pair(const adaslice_direction_score *s, size_t n, double radius, size_t *out, size_t max)
+{
+    double c = cos(radius);
+    size_t i, j, count = 0;
+    for (i = 0; i < n; i++) {
+        int lowest = 1;
+        for (j = 0; j < n && lowest; j++) {
+            const double *a = s[i].direction, *b = s[j].direction;
+            if (j == i || a[0] * b[0] + a[1] * b[1] + a[2] * b[2] < c) continue;
+            if (s[j].score != s[i].score ? s[j].score < s[i].score
+                : a[2] != b[2] ? b[2] > a[2] : j < i)
+                lowest = 0;
+        }
+        if (!lowest) continue;
+        for (j = count < max ? count++ : max; j > 0; j--) { /* by score, ties as adaslice__orient_before */
+            const adaslice_direction_score *p = &s[i], *q = &s[out[j - 1]];
+            if (!(p->score != q->score ? p->score < q->score
+                  : p->direction[2] != q->direction[2] ? p->direction[2] > q->direction[2] : i < out[j - 1]))
+                break;
+            if (j < max) out[j] = out[j - 1];
+        }
+        if (j < max) out[j] = i;
+    }
+    return count;
+}
+
+/* The lattice and the axes as the tool lists them, scores random or in five
+   levels (ties), radii from the tool's to past pi; and directions in no order
+   (each its own run: every pair tried). */
+static void minima_windowed_equal_every_pair(void)
+{
+    static const double axes[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+    int trial;
+    for (trial = 0; trial < 60; trial++) {
+        size_t n = 10 + (size_t)(orient_rng() % 1500), i, a[12], b[12], ca, cb;
+        int k, mode = trial % 3;
+        double *d = (double *)malloc(3 * (n + 6) * sizeof *d), radius;
+        adaslice_direction_score *s = (adaslice_direction_score *)calloc(n + 6, sizeof *s);
+        if (!d || !s) { CHECK(0); free(d); free(s); return; }
+        adaslice_fibonacci_directions(n, d);
+        memcpy(d + 3 * n, axes, sizeof axes);
+        for (i = 0; i < n + 6; i++) {
+            if (mode == 2) { /* a random unit direction */
+                double v[3], len;
+                for (k = 0; k < 3; k++) v[k] = (double)(orient_rng() % 20001) / 10000 - 1;
+                len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                for (k = 0; k < 3; k++) d[3 * i + k] = len > 0 ? v[k] / len : k == 2;
+            }
+            memcpy(s[i].direction, d + 3 * i, sizeof s[i].direction);
+            s[i].score = mode == 1 ? (double)(orient_rng() % 5) / 10 : (double)(orient_rng() % 1000000) / 1e6;
+        }
+        radius = trial % 7 == 0 ? 3.5 : 2.5 * sqrt(4 * M_PI / (double)n) * (1 + trial % 4);
+        ca = adaslice_orient_minima(s, n + 6, radius, a, 12);
+        cb = minima_of_every_pair(s, n + 6, radius, b, 12);
+        CHECKF(ca == cb && !memcmp(a, b, (ca < 12 ? ca : 12) * sizeof a[0]),
+               "trial %d (n %zu, mode %d): %zu minima, every pair %zu", trial, n, mode, ca, cb);
+        free(d);
+        free(s);
+    }
+}
+
 void test_orient(void)
 {
     RUN(fibonacci_directions_cover_the_sphere);
@@ -567,6 +637,7 @@ void test_orient(void)
     RUN(turning_the_mesh_reproduces_the_search);
     RUN(minima_are_apart);
     RUN(ties_go_to_the_part_as_loaded);
+    RUN(minima_windowed_equal_every_pair);
     RUN(search_matches_a_brute_force_reference);
     RUN(threaded_search_matches_the_turned_meshes);
     RUN(sorted_copy_keeps_weights_and_heights);
