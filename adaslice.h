@@ -6386,6 +6386,9 @@ static void adaslice__quantise(adaslice__job *job)
     job->quantum = 1;
     if (top * p->bin > 0) {
         (void)frexp(top * p->bin * job->hi, &ex);
+        /* errors under 2^-900 mm in all: a coarser unit, so that b / quantum
+           and eps / quantum stay finite (they rounded to inf below 2^-980) */
+        ex = ex > -900 ? ex : -900;
         job->quantum = ldexp(1.0, ex - 40);
         per_unit = ldexp(p->bin, 40 - ex); /* b / quantum, exact: a power of two apart */
     }

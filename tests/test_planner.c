@@ -509,6 +509,35 @@ static void the_pre_pass_never_makes_eps_infeasible(void)
            plans, changed, moved, dropped, most_over);
 }
 
+/* Errors of 10^-300 mm and subnormal ones fit any eps: the unit they are
+   counted in once rounded to inf, and such a profile was called infeasible
+   with "the smallest feasible eps is 0". */
+static void tiny_errors_fit_any_eps(void)
+{
+    static double tiny[3] = {1e-300, 0, 0}, sub[4] = {1e-320, 1e-320, 0, 4e-320};
+    double *values[2] = {tiny, sub};
+    size_t counts[2] = {3, 4};
+    int k, metric;
+    for (k = 0; k < 2; k++)
+        for (metric = 0; metric < 4; metric += 3) { /* cusp and volume */
+            adaslice_profile p;
+            adaslice_plan_options o;
+            adaslice_plan plan;
+            adaslice_error e;
+            memset(&p, 0, sizeof p);
+            p.metric = (adaslice_metric)metric;
+            p.bin_count = counts[k];
+            p.bin = 0.01;
+            p.height = 0.01 * counts[k];
+            p.phi = values[k];
+            memset(&o, 0, sizeof o);
+            o.tmin = 0.01;
+            CHECKF(adaslice_plan_profile(&p, &o, &plan, &e) == ADASLICE_OK, "values %d, metric %d: %s", k, metric, e.message);
+            CHECK(plan.layer_count == 1 && plan.worst_error < 1e-290 && !plan.over_eps);
+            adaslice_plan_free(&plan);
+        }
+}
+
 void test_planner(void)
 {
     RUN(fig3_k_and_d_arrays);
@@ -518,5 +547,6 @@ void test_planner(void)
     RUN(baselines_keep_their_constraints);
     RUN(quantising_never_breaks_eps);
     RUN(rounding_cannot_hide_an_excess);
+    RUN(tiny_errors_fit_any_eps);
     RUN(bad_arguments_are_named);
 }
