@@ -925,14 +925,15 @@ static int avr_wait_still(avr_child *c, uint8_t *seq, link_status *st, double se
    steps a second, which the firmware once took for 0 and ran at the top
    speed (a peel asked at 2 um/s ran at 10 mm/s). Three steps up after
    homing: each a second after the one before by the pins' record (16 M
-   cycles, less a tick at most, more by the ramps' v/a at most), the first
-   a second or more after homing's last, and the image's own STATUS at the
-   target. */
+   cycles, less a tick at most, more by the ramps' v/a at most), and the
+   image's own STATUS at the target. The image runs at most 5 times real
+   time: unpaced, an idle image's virtual time ran through the budget while a
+   loaded host was still sending HOME. */
 #define SLOW_MOVE_NM 7500u /* three steps of 2.5 um */
 static void slow_move_steps_once_a_second(void)
 {
     avr_child c;
-    const char *opts[] = {"--z-start", "1", "--max-seconds", "120", "--timeout", "600", NULL};
+    const char *opts[] = {"--z-start", "1", "--speed", "5", "--max-seconds", "300", "--timeout", "600", NULL};
     link_identify id;
     link_status st;
     link_move mv;
@@ -966,10 +967,7 @@ static void slow_move_steps_once_a_second(void)
     for (k = l.steps > 3 ? l.steps - 3 : 0; k < l.steps && k > 0; k++) {
         uint64_t gap = l.step_at[k] - l.step_at[k - 1];
         CHECKF(l.step_dir[k] > 0, "step %zu of the move went down", k);
-        if (k == l.steps - 3)
-            CHECKF(gap + tick >= second, "the move's first step %.6f s after homing's last: faster than a step a second",
-                   (double)gap / second);
-        else
+        if (k > l.steps - 3) /* the first one's gap holds the wait for MOVE as well */
             CHECKF(gap + tick >= second && gap <= second + ramps + tick, "the move's steps %.6f s apart, not a second", (double)gap / second);
     }
     CHECKF(!l.pass.late && !l.resets, "%lu steps refused as late, %zu resets", l.pass.late, l.resets);
