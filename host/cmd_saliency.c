@@ -167,6 +167,7 @@ int cmd_saliency(int argc, char **argv)
         return RC_OK;
     }
     outputs_add_input(s.model);
+    outputs_add_input(s.weights.file);
     if ((rc = output_check("-o", s.out)) || (rc = output_check("--ply", s.ply)) || (rc = output_check("--png", s.png)))
         return rc;
     {

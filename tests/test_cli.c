@@ -215,7 +215,7 @@ static void bad_arguments_exit_2(void)
             const char *const runs[][8] = {{"plan", model, "--plot", model}, {"plan", model, "--out", copy},
                                            {"plan", model, "--out", link}, {"plan", "--profile", csv, "--profile-out", csv},
                                            {"slice", model, "--profile-out", model, "-o", job}, {"saliency", model, "-o", link},
-                                           {"orient", model, "--map", copy},
+                                           {"orient", model, "--map", copy}, {"saliency", model, "--weights", csv, "--png", csv},
                                            {"contour", gcode, "--project", model, "-o", gcode}};
             for (c = runs[0]; c < runs[0] + 8 * (sizeof runs / sizeof *runs); c += 8) {
                 cli_result r = run_args(c);
