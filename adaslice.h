@@ -7648,7 +7648,9 @@ ADASLICE_DEF adaslice_result adaslice_orienter_score(const adaslice_orienter *o,
     double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     memset(s, 0, sizeof *s);
     if (len > 0) { s->direction[0] = d[0] / len; s->direction[1] = d[1] / len; s->direction[2] = d[2] / len; }
-    if ((r = adaslice_profile_along(o, d, &p, err)) != ADASLICE_OK) return r;
+    /* no height along d (a sheet seen edge-on): no layers, no plan */
+    if ((r = adaslice_profile_along(o, d, &p, err)) == ADASLICE_ERR_EMPTY) { adaslice__ok(err); return ADASLICE_OK; }
+    if (r != ADASLICE_OK) return r;
     r = adaslice_plan_profile(&p, &o->plan, &plan, &e);
     adaslice_profile_free(&p);
     if (r == ADASLICE_ERR_INFEASIBLE) { adaslice__ok(err); return ADASLICE_OK; }

@@ -256,7 +256,11 @@ int cmd_orient(int argc, char **argv)
     if (!rc) { /* a best of none would print as a direction */
         size_t feasible = 0;
         for (i = 0; i < o.dirs + SEARCH_AXES; i++) feasible += scores[i].feasible;
-        if (!feasible)
+        if (!feasible && a.budget)
+            rc = complain(RC_FAIL, "%s: no direction of the %zu and the 6 axes has a plan of at most %zu layers of %g to "
+                                   "%g mm: a larger --budget, or check the part's size (--scale)", a.model, o.dirs,
+                          a.budget, a.tmin, a.tmax);
+        else if (!feasible)
             rc = complain(RC_FAIL, "%s: no direction of the %zu and the 6 axes has a plan within eps %g mm of layers %g to "
                                    "%g mm: a larger --eps, or check the part's size (--scale)", a.model, o.dirs, a.eps,
                           a.tmin, a.tmax);

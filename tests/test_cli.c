@@ -739,6 +739,20 @@ static void orient_finds_directions(void)
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "no direction of the 20") && !*r.out &&
            !cli_exists(cli_path("none.svg")), "%d %s %s", r.status, r.err, r.out);
     cli_free(&r);
+    /* with --budget it is the budget that no direction meets (--eps, which it advised, is refused with it) */
+    r = cli_run("orient", box, "--dirs", "20", "--budget", "3", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "at most 3 layers") && strstr(r.err, "--budget") &&
+           !*r.out, "%d %s %s", r.status, r.err, r.out);
+    cli_free(&r);
+    /* a sheet seen edge-on along x has no height there: that direction has no plan; the search goes on (it
+       stopped at "the mesh is flat") */
+    {
+        const char *sheet = cli_path("edge_on.obj");
+        cli_write(sheet, "v 0 0 0\nv 0 10 0\nv 0 10 10\nv 0 0 10\nf 1 2 3\nf 1 3 4\n");
+        r = cli_run("orient", sheet, "--dirs", "20", NULL);
+        CHECKF(r.status == 0 && strstr(r.out, "(24 feasible)"), "%d %s %s", r.status, r.err, r.out); /* all but +-x */
+        cli_free(&r);
+    }
     /* and plan says its true height (the box is 50 mm tall as loaded), not the one bin it rounds up to */
     r = cli_run("plan", box, "--scale", "0.00001", NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "the part is 0.0005 mm tall"), "%d %s", r.status, r.err);
@@ -1011,7 +1025,7 @@ static void messages_name_what_was_run(void)
     char flat[512], job[512];
     /* a CTB's header starts with its magic (0x12FD0086, v3), little-endian */
     static const unsigned char ctb[16] = {0x86, 0x00, 0xFD, 0x12, 3, 0, 0, 0};
-    static const char *const cmds[] = {"plan", "slice", "orient"};
+    static const char *const cmds[] = {"plan", "slice"};
     size_t k;
     snprintf(flat, sizeof flat, "%s", cli_path("flat.stl"));
     snprintf(job, sizeof job, "%s", cli_path("job"));
@@ -1040,6 +1054,11 @@ static void messages_name_what_was_run(void)
         if (k == 0) { cli_free(&r); r = cli_run("plan", flat, NULL); }
         CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, flat) && strstr(r.err, "flat"), "%s flat.stl: %d '%s'",
                cmds[k], r.status, r.err);
+        cli_free(&r);
+    }
+    { /* orient stands it up: only +-z have no height, so no plan */
+        cli_result r = cli_run("orient", flat, "--dirs", "10", NULL);
+        CHECKF(r.status == 0 && strstr(r.out, "(14 feasible)"), "orient flat.stl: %d '%s' '%s'", r.status, r.err, r.out);
         cli_free(&r);
     }
     /* another slicer's job, by its extension or its magic, is refused as
