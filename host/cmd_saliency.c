@@ -60,6 +60,10 @@ static int parse_saliency(int argc, char **argv, saliency_args *s, int *help)
             return complain(RC_USAGE, "unknown option %s (see adaslice saliency --help)", o);
     }
     if (rc || (rc = weights_check(&s->weights))) return rc;
+    /* the blend weighs saliency by --importance's first share: --no-saliency was passed over, unsaid */
+    if (s->no_saliency && s->weights.blend)
+        return complain(RC_USAGE, "--no-saliency with %s: the blend gives saliency --importance's first share; "
+                                  "give --importance 0,V,U instead", s->weights.blend == 2 ? "--importance" : "--view");
     if (!s->model) return complain(RC_USAGE, "saliency needs a MODEL");
     if (!s->out && !s->ply && !s->png)
         return complain(RC_USAGE, "saliency writes -o WEIGHTS, --ply FILE or --png FILE; none is given");

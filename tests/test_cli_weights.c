@@ -152,6 +152,12 @@ static void weight_regions_select_faces_by_centroid(void)
     CHECK(n == 5 && w[0] == 0.25 && w[2] == 0.5 && w[3] == 0.5);
     free(w);
     cli_free(&r);
+    /* the blend weighs saliency by --importance: with --no-saliency it was saliency's half all the same, unsaid */
+    remove(weights);
+    r = cli_run("saliency", model, "--no-saliency", "--view", "top", "-o", weights, NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--no-saliency with --view") && !cli_exists(weights),
+           "exit %d: %s", r.status, r.err);
+    cli_free(&r);
 }
 
 static void weight_option_errors(void)
