@@ -6125,7 +6125,7 @@ ADASLICE_DEF adaslice_result adaslice_saliency(const adaslice_mesh *mesh, float 
        (or 1e-20) got every weight 1 without a word; 1e-18 .. 1e18 gave the
        same weights as 1 mm */
     if (sqrt(diagonal) < 1e-15 || sqrt(diagonal) > 1e15) {
-        r = adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "saliency: the part is %g mm across: outside 1e-15 .. 1e15 mm, "
+        r = adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "saliency: the part is %g mm across: outside 1e-15 .. 1e15 mm, "
                            "where its curvatures leave the range of floats", sqrt(diagonal));
         goto done;
     }

@@ -182,7 +182,7 @@ int cmd_saliency(int argc, char **argv)
     t0 = now_ms();
     if ((rc = model_load(s.model, s.scale, &mesh, NULL)) != RC_OK) return rc;
     t1 = now_ms();
-    rc = weights_for_plan(&s.weights, &mesh, &weight);
+    rc = weights_for_plan(&s.weights, s.model, &mesh, &weight);
     if (!rc && !weight) { /* nothing asked for: every face weighs 1 */
         weight = (float *)malloc(mesh.triangle_count * sizeof *weight);
         if (!weight)

@@ -363,7 +363,7 @@ static int profile_model(const plan_args *a, plan_job *j)
     j->ms_load = now_ms() - t0 - j->ms_repair;
     /* before any turn, so that regions are in the model's own coordinates */
     t0 = now_ms();
-    if ((rc = weights_for_plan(&a->weights, &mesh, &weights)) != RC_OK) {
+    if ((rc = weights_for_plan(&a->weights, a->model, &mesh, &weights)) != RC_OK) {
         adaslice_mesh_free(&mesh);
         return rc;
     }

@@ -233,7 +233,7 @@ static void normalise(float *v, size_t n)
 
 /* a S + b V + c U, divided by its largest value: the user term U is the
    weight file and the regions (0 where none are given: nothing is marked). */
-static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
+static int blend(const weight_args *w, const char *model, const adaslice_mesh *mesh, float *out)
 {
     size_t t, n = mesh->triangle_count;
     const double *c = w->blend == 2 ? w->importance : (const double[3]){0.5, 0.3, 0.2};
@@ -243,7 +243,7 @@ static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
     if (!term) return complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
     for (t = 0; t < n; t++) out[t] = 0;
     if (c[0] > 0) {
-        if (adaslice_saliency(mesh, term, NULL, &e) != ADASLICE_OK) rc = library_error(&e);
+        if (adaslice_saliency(mesh, term, NULL, &e) != ADASLICE_OK) rc = library_error_in(model, &e);
         for (t = 0; !rc && t < n; t++) out[t] += (float)c[0] * term[t];
     }
     if (!rc && c[1] > 0) {
@@ -267,7 +267,7 @@ static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
                     memmove(lattice + 3 * vo.count++, lattice + 3 * k, 3 * sizeof *lattice);
             vo.directions = lattice;
         }
-        if (!rc && adaslice_view_importance(mesh, term, &vo, &e) != ADASLICE_OK) rc = library_error(&e);
+        if (!rc && adaslice_view_importance(mesh, term, &vo, &e) != ADASLICE_OK) rc = library_error_in(model, &e);
         free(lattice);
         normalise(term, n);
         for (t = 0; !rc && t < n; t++) out[t] += (float)c[1] * term[t];
@@ -285,7 +285,7 @@ static int blend(const weight_args *w, const adaslice_mesh *mesh, float *out)
     return RC_OK;
 }
 
-int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **out)
+int weights_for_plan(const weight_args *w, const char *model, const adaslice_mesh *mesh, float **out)
 {
     size_t t, n = mesh->triangle_count;
     float *f, *s = NULL;
@@ -296,7 +296,7 @@ int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **ou
     if (w->saliency) s = (float *)malloc((n ? n : 1) * sizeof *s);
     if (!f || (w->saliency && !s)) rc = complain(RC_FAIL, "out of memory for %zu weight%s", n, plural(n));
     if (!rc && w->blend) {
-        rc = blend(w, mesh, f);
+        rc = blend(w, model, mesh, f);
         free(s);
         if (rc) { free(f); return rc; }
         *out = f;
@@ -307,7 +307,7 @@ int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **ou
     if (!rc && w->file) rc = read_weights(w->file, n, f);
     if (!rc && w->saliency) {
         adaslice_error e;
-        if (adaslice_saliency(mesh, s, NULL, &e) != ADASLICE_OK) rc = library_error(&e);
+        if (adaslice_saliency(mesh, s, NULL, &e) != ADASLICE_OK) rc = library_error_in(model, &e);
         for (t = 0; !rc && t < n; t++) f[t] *= s[t];
     }
     if (!rc) apply_regions(w, mesh, f);

@@ -41,7 +41,7 @@ int weights_check(const weight_args *w);
 /* One weight per triangle of `mesh` in *out (malloc'd), or *out = NULL when
    none are asked for. A bad weight file is RC_USAGE, an unreadable one RC_FAIL;
    the complaint is made. */
-int weights_for_plan(const weight_args *w, const adaslice_mesh *mesh, float **out);
+int weights_for_plan(const weight_args *w, const char *model, const adaslice_mesh *mesh, float **out);
 /* The weight options' help; `saliency_option`: with --saliency (adaslice
    saliency weighs by saliency unless told not to). */
 void weights_usage(FILE *f, int saliency_option);
