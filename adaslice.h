@@ -6167,6 +6167,14 @@ ADASLICE_DEF adaslice_result adaslice_view_importance(const adaslice_mesh *mesh,
     if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "view importance: the mesh has no triangles");
     if (res < 1 || res > 8192)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: resolution %d is outside 1..8192", res);
+    { /* turned in floats, a part near their largest overflowed to inf: a grid of NaN pixels, "out of memory" */
+        double lo[3], hi[3], diagonal = 0;
+        adaslice_mesh_bounds(mesh, lo, hi);
+        for (k = 0; k < 3; k++) diagonal += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        if (!(sqrt(diagonal) <= 1e15))
+            return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "view importance: the part is %g mm across: over "
+                                  "1e15 mm, where its turned views leave the range of floats", sqrt(diagonal));
+    }
     if (n > 1000000 || (given && !options->count))
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: %zu directions (1 to 1000000, and a count "
                               "for the ones given)", given ? options->count : n);

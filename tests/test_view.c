@@ -172,6 +172,10 @@ static void bad_views_are_refused(void)
     /* a huge direction is still a direction: the top, seen from straight above */
     CHECK(adaslice_view_importance(&m, w, &(adaslice_view_options){huge, 1, 0, NULL}, &e) == ADASLICE_OK);
     gen_free(&m);
+    /* a part near the floats' largest overflowed when turned: "out of memory" for a grid of NaN pixels */
+    m = gen_box(0, 0, 0, 3e38f, 3e38f, 3e38f);
+    CHECKF(adaslice_view_importance(&m, w, NULL, &e) == ADASLICE_ERR_OVERFLOW && strstr(e.message, "across"), "%s", e.message);
+    gen_free(&m);
 }
 
 /* The preview shows each face in its own colour when given them: a box with
