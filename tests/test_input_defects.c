@@ -458,7 +458,7 @@ static void expect_accepted(const char *command, const char *option, const char 
     /* --profile replaces the model; print --abort takes none */
     if (strcmp(option, "--profile") && strcmp(option, "--abort")) args[n++] = cli_path("no-such-model.stl");
     if (!strcmp(command, "slice")) { args[n++] = "-o"; args[n++] = cli_path("job"); }
-    if (!strcmp(command, "saliency")) { args[n++] = "-o"; args[n++] = cli_path("w.txt"); }
+    if (!strcmp(command, "saliency")) { args[n++] = "-o"; args[n++] = cli_path("saliency_out.txt"); } /* not --weights @w.txt */
     if (!strcmp(command, "print")) { args[n++] = "--port"; args[n++] = "/nonexistent/port"; }
     if (!strcmp(command, "contour")) { args[n++] = "--project"; args[n++] = cli_path("x.3mf"); args[n++] = "-o"; args[n++] = cli_path("c.gcode"); }
     args[n++] = option;
