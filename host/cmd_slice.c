@@ -203,14 +203,14 @@ static int check_plan(const job_format *f, const char *path, const adaslice_plan
                                       "uniform layers with --method finest or --method coarsest, or --uniform T",
                             path, f->what, lo, hi);
         if (fabs(p->layers[n - 1].thickness - t) > 1e-9)
-            fprintf(stderr, "adaslice: warning: %s: the last layer is %g mm; %s holds one height, so it prints %g mm "
-                            "(the top %g mm higher)\n",
-                    path, p->layers[n - 1].thickness, f->what, t, t - p->layers[n - 1].thickness);
+            warn("%s: the last layer is %g mm; %s holds one height, so it prints %g mm "
+                 "(the top %g mm higher)",
+                 path, p->layers[n - 1].thickness, f->what, t, t - p->layers[n - 1].thickness);
     }
     if (f == &JOB_FORMAT_SL1 && s->cure.bottom_layers > 1)
-        fprintf(stderr, "adaslice: warning: %s: the SL1 fades its exposure from the bottom exposure to the normal one over "
-                        "the %zu bottom layers, so only the first gets the full %g s\n",
-                path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
+        warn("%s: the SL1 fades its exposure from the bottom exposure to the normal one over "
+             "the %zu bottom layers, so only the first gets the full %g s",
+             path, s->cure.bottom_layers, s->cure.bottom_exposure_s);
     if (f->max_layers && n > f->max_layers)
         return complain(RC_USAGE, "%s: %zu layer%s; %s holds %zu at most", path, n, plural(n), f->what, f->max_layers);
     return RC_OK;
@@ -415,8 +415,8 @@ static int write_job(const slice_args *s, const plan_args *a, plan_job *j, const
     d->layers = layers;
     d->bottom_layers = (unsigned)(s->cure.bottom_layers < count ? s->cure.bottom_layers : count);
     if (s->cure.bottom_layers > count)
-        fprintf(stderr, "adaslice: warning: --bottom-layers %zu: the job has %zu layer%s, all of them bottom layers of "
-                        "%g s\n", s->cure.bottom_layers, count, plural(count), s->cure.bottom_exposure_s);
+        warn("--bottom-layers %zu: the job has %zu layer%s, all of them bottom layers of "
+             "%g s", s->cure.bottom_layers, count, plural(count), s->cure.bottom_exposure_s);
     d->bottom_exposure_s = s->cure.bottom_exposure_s;
     d->exposure_s = s->cure.cure.seconds;
     d->layer_height_mm = HUGE_VAL;
@@ -610,6 +610,8 @@ int cmd_slice(int argc, char **argv)
                "writing %.0f ms (the last three summed over %d thread%s); %.0f ms in all\n",
                j.ms_load, j.ms_repair, j.ms_profile, j.ms_plan, stage_ms[0], stage_ms[1], stage_ms[2], s.threads,
                plural((size_t)s.threads), now_ms() - t0);
+        /* a job directory is no output main removes: it goes here */
+        if ((rc = stdout_written(rc)) && f == &JOB_FORMAT_DIR) jobdir_remove(path);
     }
 done:
     previews_free(&ms.pv);

@@ -195,9 +195,9 @@ void cure_layers(const cure_args *c, const adaslice_plan *p, job_layer *out)
     if (!(c->cure.penetration > 0) && thickest >= c->bottom_layers && thickest < p->layer_count &&
         p->layers[thickest].thickness > thinnest * (1 + 1e-9)) {
         double t = p->layers[thickest].thickness, need = exp((t - thinnest) / CURE_TYPICAL_DP);
-        fprintf(stderr, "adaslice: warning: one exposure (%g s) for layers of %g to %g mm: layer %zu (%g mm) needs "
-                        "%.2gx the dose of a %g mm layer for a resin of Dp %g mm; give --exposure S@T with "
-                        "--penetration DP, or two points S1@T1,S2@T2\n",
-                c->cure.seconds, thinnest, t, thickest + 1, t, need, thinnest, CURE_TYPICAL_DP);
+        warn("one exposure (%g s) for layers of %g to %g mm: layer %zu (%g mm) needs "
+             "%.2gx the dose of a %g mm layer for a resin of Dp %g mm; give --exposure S@T with "
+             "--penetration DP, or two points S1@T1,S2@T2",
+             c->cure.seconds, thinnest, t, thickest + 1, t, need, thinnest, CURE_TYPICAL_DP);
     }
 }

@@ -444,10 +444,10 @@ int layer_masks_fit(const slice_args *s, const double lo[3], const double hi[3])
         return complain(RC_FAIL, "the part is %g mm tall: the %s%s%s builds %g mm%s", tall,
                         s->geometry_given ? "" : "default printer (", s->preset->name,
                         s->geometry_given ? "" : "; --printer NAME for another)", s->preset->z_max, hint);
-    if (*hint) fprintf(stderr, "adaslice: warning: the part is %g mm tall%s\n", tall, hint);
+    if (*hint) warn("the part is %g mm tall%s", tall, hint);
     else if (most < UNITS_SMALL_MM)
-        fprintf(stderr, "adaslice: warning: the part is %g x %g x %g mm; a model in metres? --scale 1000 reads it in "
-                        "millimetres, %g mm tall\n", hi[0] - lo[0], hi[1] - lo[1], tall, tall * 1000);
+        warn("the part is %g x %g x %g mm; a model in metres? --scale 1000 reads it in "
+             "millimetres, %g mm tall", hi[0] - lo[0], hi[1] - lo[1], tall, tall * 1000);
     return part_fits(s, lo, hi, size);
 }
 

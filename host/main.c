@@ -85,10 +85,10 @@ int main(int argc, char **argv)
         /* print keeps its own SIGINT (it pauses the printer); the others stop
            and leave nothing half-written (output.h) */
         if (c->run != cmd_print) outputs_catch_signals();
-        rc = outputs_finish(c->run(argc - 1, argv + 1));
+        /* the summary is part of the work: when it cannot be written, the
+           files written with it go too */
+        rc = outputs_finish(stdout_written(c->run(argc - 1, argv + 1)));
     }
-    /* a full disk or closed pipe on stdout is a failure, not a silent success */
-    if (fflush(stdout) != 0 || ferror(stdout)) return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));
-    return rc;
+    return stdout_written(rc);
 }
 

@@ -32,8 +32,8 @@ static void warn_repairs(const char *path, const adaslice_mesh_report *r)
     item(left, sizeof left, r->inconsistent_edges, "edge whose facets cannot be wound alike",
          "edges whose facets cannot be wound alike");
     if (!fixed[0] && !left[0]) return;
-    fprintf(stderr, "adaslice: warning: %s:%s%s%s%s%s\n", path, fixed[0] ? " repaired " : "", fixed,
-            fixed[0] && left[0] ? ";" : "", left[0] ? " left " : "", left);
+    warn("%s:%s%s%s%s%s", path, fixed[0] ? " repaired " : "", fixed,
+         fixed[0] && left[0] ? ";" : "", left[0] ? " left " : "", left);
 }
 
 /* A float holds a coordinate to 24 bits: far from the origin (CAD or survey
@@ -54,8 +54,8 @@ static void warn_far_from_origin(const char *path, const adaslice_mesh *m)
     ulp = ldexp(1, e - 24);
     /* a part 100 m tall is that coarse too, but only to 10^-7 of itself */
     if (ulp > 1e-3 && ulp > 1e-5 * size)
-        fprintf(stderr, "adaslice: warning: %s: vertices lie up to %g mm from the origin, where a float holds a coordinate "
-                        "only to %g mm: the part is loaded that coarse; move it near the origin in the file\n", path, far, ulp);
+        warn("%s: vertices lie up to %g mm from the origin, where a float holds a coordinate "
+             "only to %g mm: the part is loaded that coarse; move it near the origin in the file", path, far, ulp);
 }
 
 int model_load(const char *path, double scale, adaslice_mesh *mesh, adaslice_mesh_report *report)

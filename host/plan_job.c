@@ -194,7 +194,11 @@ int parse_plan(int argc, char **argv, plan_args *a)
     outputs_add_input(a->profile);
     outputs_add_input(a->weights.file);
     if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
-        return complain(RC_USAGE, "--budget works with --method optimal only, not %s", METHOD_NAMES[a->method]);
+        return complain(RC_USAGE, "--budget works with --method optimal only, not %s",
+                        uniform ? "--uniform (one plan, no choice)" : METHOD_NAMES[a->method]);
+    if (option_given(argc, argv, "--sharp") && a->method != ADASLICE_METHOD_OPTIMAL && !a->compare)
+        return complain(RC_USAGE, "--sharp applies to --method optimal (and --compare), not %s",
+                        uniform ? "--uniform" : METHOD_NAMES[a->method]);
     return RC_OK;
 }
 
@@ -239,8 +243,8 @@ static int profile_fits(const plan_args *a, const adaslice_mesh *mesh, const dou
                         a->model, c.samples, mesh->triangle_count, c.samples / (double)mesh->triangle_count,
                         LDI_SAMPLES_LIMIT);
     if (warn_units && *hint)
-        fprintf(stderr, "adaslice: warning: %s: the part is %g mm tall, its profile %s%s\n", a->model, hi[2] - lo[2],
-                size_text(c.bytes, need), hint);
+        warn("%s: the part is %g mm tall, its profile %s%s", a->model, hi[2] - lo[2],
+             size_text(c.bytes, need), hint);
     return RC_OK;
 }
 
@@ -433,7 +437,7 @@ static int profile_model(const plan_args *a, plan_job *j)
 static int read_profile(const plan_args *a, plan_job *j)
 {
     double t0 = now_ms();
-    int rc = profile_csv_read(a->profile, a->metric, a->bin, &j->profile);
+    int rc = profile_csv_read(a->profile, a->metric, a->bin, a->memory_mb * 1e6, &j->profile);
     j->ms_load = now_ms() - t0;
     return rc;
 }

@@ -80,10 +80,11 @@ static int starts_as_number(const char *s)
     return (*s >= '0' && *s <= '9') || *s == '.' || !strncasecmp(s, "inf", 3) || !strncasecmp(s, "nan", 3);
 }
 
-int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, adaslice_profile *out)
+int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, double max_bytes,
+                     adaslice_profile *out)
 {
     FILE *f = fopen(path, "r");
-    char line[TEXT_LINE_MAX], q[QUOTE_SIZE];
+    char line[TEXT_LINE_MAX], q[QUOTE_SIZE], limit[32];
     size_t lineno = 0, n = 0, cap = 0, first_line = 0;
     double *phi = NULL, bin = bin_given ? bin_given : ADASLICE_DEFAULT_BIN;
     z_column zc = {0, 0, 0, 0, 0};
@@ -117,6 +118,9 @@ int profile_csv_read(const char *path, adaslice_metric metric, double bin_given,
                           quote_text(q, s, strlen(s)), comma ? "a" : "no", first_line);
         } else if (comma && (rc = z_column_add(&zc, path, lineno, n, z))) {
             /* z_column_add said why */
+        } else if ((double)(n + 1) * sizeof *phi > max_bytes) {
+            rc = complain(RC_FAIL, "%s:%zu: the profile passes --memory %s at %zu values; a larger --memory", path,
+                          lineno, size_text(max_bytes, limit), n + 1);
         } else if (!push(&phi, &n, &cap, v)) {
             rc = complain(RC_FAIL, "%s: out of memory after %zu value%s", path, n, plural(n));
         } else if (n == 1) {

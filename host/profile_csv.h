@@ -10,7 +10,8 @@
 /* Reads path into *out (its phi malloc'd: the caller frees it)
    with `metric`; bin_given 0 takes the bin from the z column, or the
    default with none; a z column whose bins differ from bin_given is
-   refused. RC_OK, or a complaint naming the file, line and value, and
-   nothing held. */
-int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, adaslice_profile *out);
+   refused, and so is a profile whose values pass max_bytes (--memory).
+   RC_OK, or a complaint naming the file, line and value, and nothing held. */
+int profile_csv_read(const char *path, adaslice_metric metric, double bin_given, double max_bytes,
+                     adaslice_profile *out);
 #endif

@@ -4,19 +4,58 @@
 #endif
 #include "report.h"
 
+#include <errno.h>
 #include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
 #include <stdio.h>
 #include <time.h>
 #include <unistd.h>
 
+/* One line on stderr: a control byte in the message (a file named with a
+   newline in it) is written as \xNN, so one complaint stays one line. */
+static void say(const char *prefix, const char *fmt, va_list ap)
+{
+    char small[1024], *text = small;
+    va_list again;
+    int n;
+    size_t i;
+    va_copy(again, ap);
+    n = vsnprintf(small, sizeof small, fmt, ap);
+    if (n >= (int)sizeof small && (text = (char *)malloc((size_t)n + 1)) != NULL) vsnprintf(text, (size_t)n + 1, fmt, again);
+    va_end(again);
+    if (!text) text = small; /* no memory: the message cut short */
+    fputs(prefix, stderr);
+    for (i = 0; n > 0 && text[i]; i++) {
+        unsigned char c = (unsigned char)text[i];
+        if (c < 32 || c == 127) fprintf(stderr, "\\x%02x", c);
+        else fputc(c, stderr);
+    }
+    fputc('\n', stderr);
+    if (text != small) free(text);
+}
+
 int complain(int rc, const char *fmt, ...)
 {
     va_list ap;
-    fputs("adaslice: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    say("adaslice: ", fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
+    return rc;
+}
+
+void warn(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    say("adaslice: warning: ", fmt, ap);
+    va_end(ap);
+}
+
+int stdout_written(int rc)
+{
+    if (rc == RC_OK && (fflush(stdout) != 0 || ferror(stdout)))
+        return complain(RC_FAIL, "cannot write standard output: %s", strerror(errno));
     return rc;
 }
 

@@ -11,8 +11,15 @@
    128 + a signal: interrupted (output.h's outputs_finish) */
 enum { RC_OK = 0, RC_FAIL = 1, RC_USAGE = 2, RC_PAUSED = 3, RC_RESET = 4, RC_LOST = 5 };
 
-/* "adaslice: " + the message on stderr; returns rc. */
+/* "adaslice: " + the message on stderr, one line (control bytes as \xNN);
+   returns rc. */
 int complain(int rc, const char *fmt, ...);
+/* "adaslice: warning: " + the message, the same way: something was repaired
+   or guessed and the work goes on. */
+void warn(const char *fmt, ...);
+/* rc, or RC_FAIL (said) when rc is RC_OK and standard output could not be
+   written (a full disk, a closed pipe): a failure, not a silent success. */
+int stdout_written(int rc);
 /* The library's message; exit 2 for an argument it rejects, else 1. */
 int library_error(const adaslice_error *e);
 /* The same about `file` (the model the library worked on): "file: message". */

@@ -130,13 +130,14 @@ static void *search_worker(void *arg)
    facets' and corners' own arrays. (A part 4 m tall held 1.36 GB on two
    threads; one in micrometres asked 14 GB a thread of a 23 GB machine and
    was killed.) */
-static double search_thread_bytes(const adaslice_orienter *o, double bin, double *bins)
+static double search_thread_bytes(const adaslice_orienter *o, double bin, double *bins, double *diagonal)
 {
     double lo[3], hi[3], d = 0, levels;
     int k;
     adaslice_mesh_bounds(o->mesh, lo, hi);
     for (k = 0; k < 3; k++) d += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    *bins = ceil(sqrt(d) / bin) + 1;
+    *diagonal = sqrt(d);
+    *bins = ceil(*diagonal / bin) + 1;
     levels = floor(log2(fmin(*bins, o->longest_edge / bin + 2))) + 1;
     return 8 * *bins * (2 * levels + 3) + 32 * (double)o->mesh->triangle_count + 16 * (double)o->mesh->vertex_count;
 }
@@ -157,14 +158,20 @@ int orient_search(const char *model, const adaslice_mesh *mesh, const adaslice_p
 
     if (adaslice_orienter_init(&o, mesh, po, pl, &e) != ADASLICE_OK) return library_error_in(model, &e);
     if (memory_limit > 0) {
-        double bin = po->bin > 0 ? po->bin : ADASLICE_DEFAULT_BIN, bins, need = n_threads * search_thread_bytes(&o, bin, &bins);
+        double bin = po->bin > 0 ? po->bin : ADASLICE_DEFAULT_BIN, bins, diagonal,
+               need = n_threads * search_thread_bytes(&o, bin, &bins, &diagonal);
         char need_text[32], limit_text[32];
+        if (!(need < 1e18)) { /* a bin near the smallest double: bins and bytes past any machine */
+            adaslice_orienter_free(&o);
+            return complain(RC_FAIL, "%s: --bin %g mm is too fine: the part's %g mm diagonal would be %.3g bins",
+                            model, bin, diagonal, bins);
+        }
         if (need > memory_limit) {
             adaslice_orienter_free(&o);
             return complain(RC_FAIL, "%s: the search needs up to %s (%d thread%s, each a profile of up to %.0f bins of %g mm "
                                      "along the part's %g mm diagonal), more than --memory %s; a model in micrometres? "
                                      "--scale 0.001; or a larger --bin", model, size_text(need, need_text), n_threads,
-                            n_threads == 1 ? "" : "s", bins, bin, (bins - 1) * bin, size_text(memory_limit, limit_text));
+                            n_threads == 1 ? "" : "s", bins, bin, diagonal, size_text(memory_limit, limit_text));
         }
     }
     memset(&s, 0, sizeof s);

@@ -1071,6 +1071,47 @@ static void messages_name_what_was_run(void)
                "serial port", NULL);
 }
 
+/* Found by a bad-input hunt: each was a message that misled or split. */
+static void options_that_cannot_apply_are_named(void)
+{
+    const char *profile = cli_path("long_profile.txt"), *odd = cli_path("two\nlines.stl");
+    FILE *f = fopen(profile, "w");
+    cli_result r;
+    int i;
+    for (i = 0; f && i < 200000; i++) fputs("0.25\n", f);
+    if (f) fclose(f);
+    /* --memory bounds a profile read from a file too: it grew to the file's size */
+    r = cli_run("plan", "--profile", profile, "--memory", "1", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "long_profile.txt:125001: the profile passes --memory 1 MB"),
+           "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", "--profile", profile, "--memory", "2", "--json", NULL);
+    CHECKF(r.status == 0 && cli_json_number(r.out, "bins") == 200000, "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    /* --uniform is a method: it was blamed as "not finest" */
+    r = cli_run("plan", "--profile", profile, "--uniform", "0.1", "--budget", "3", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "not --uniform"), "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    /* only the optimal plan keeps planes at sharp changes: greedy ignored --sharp unsaid */
+    r = cli_run("plan", "--profile", profile, "--method", "greedy", "--sharp", "0.1", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--sharp applies to --method optimal"), "exit %d, '%s'",
+           r.status, r.err);
+    cli_free(&r);
+    r = cli_run("plan", "--profile", profile, "--compare", "--sharp", "0.1", NULL);
+    CHECKF(r.status == 0, "--compare --sharp: exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    /* a bin near the smallest double: "inf GB ... along the part's inf mm diagonal" */
+    r = cli_run("orient", sphere_stl(), "--bin", "1e-320", NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "is too fine") && !strstr(r.err, "inf mm"),
+           "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    /* a name with a newline in it stays in one line of complaint */
+    r = cli_run("plan", odd, NULL);
+    CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "two\\x0alines.stl"), "exit %d, '%s'", r.status,
+           r.err);
+    cli_free(&r);
+}
+
 void test_cli(void)
 {
     if (!cli_begin("adaslice-cli")) return;
@@ -1094,5 +1135,6 @@ void test_cli(void)
     RUN(unwritable_output_fails_cleanly);
     RUN(bad_model_is_named);
     RUN(messages_name_what_was_run);
+    RUN(options_that_cannot_apply_are_named);
     cli_end();
 }

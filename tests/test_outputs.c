@@ -858,6 +858,30 @@ static void a_full_disk_leaves_nothing(void)
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, full), "exit %d: %s", r.status, r.err);
     CHECKF(!cli_exists(weights) && !cli_exists(ply), "saliency: the weights or the PLY left after the PNG failed");
     cli_free(&r);
+    { /* the summary on a full standard output fails the run, and takes the files written with it */
+        static const char *const commands[] = {"plan '%s' --out '%s'",
+                                               "slice '%s' --pixels 300x300 --pitch 0.05 -o '%s'"};
+        char cmd[4096], run[1200], err[600], model[600], out[600];
+        int k, status;
+        /* cli_path's names last eight calls: these are kept */
+        snprintf(err, sizeof err, "%s", cli_path("full-stderr.txt"));
+        snprintf(model, sizeof model, "%s", raised_sphere());
+        for (k = 0; k < 2; k++) {
+            snprintf(out, sizeof out, "%s", cli_path(k ? "full-job" : "full-plan.csv"));
+            snprintf(run, sizeof run, commands[k], model, out);
+            snprintf(cmd, sizeof cmd, "'%s' %s > '%s' 2> '%s'", cli_tool, run, full, err);
+            status = system(cmd);
+            {
+                char *said = read_whole_text(err);
+                CHECKF(WIFEXITED(status) && WEXITSTATUS(status) == 1 && said && cli_one_message(said) &&
+                           strstr(said, "cannot write standard output"),
+                       "%.200s > %.100s: status %d, '%.150s'", run, full, status, said ? said : "");
+                free(said);
+            }
+            CHECKF(k ? !entries(out) : !cli_exists(out), "%.200s > %.100s: its output is left", run, full);
+            cli_remove_all(out);
+        }
+    }
     CHECKF(stat(full, &st) == 0 && S_ISCHR(st.st_mode), "%s is no longer a device", full);
     if (strcmp(full, "/dev/full")) remove(full);
 }

@@ -662,8 +662,8 @@ static int dir_finish(dir_writer *w)
         if (err) return complain(RC_FAIL, "cannot write %s: %s", w->masks_path, strerror(err));
         w->has_masks = 1;
     } else {
-        fprintf(stderr, "adaslice: warning: %s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
-                        "is not a whole number of nanometres\n", w->dir, d->bin_mm);
+        warn("%s: no masks.rle, so adaslice print cannot take this job: its bin of %g mm "
+             "is not a whole number of nanometres", w->dir, d->bin_mm);
     }
     if (!d->preview) return write_manifest_file(w);
     if (!(rgb = (unsigned char *)malloc((size_t)pw * ph * 3)) || d->preview(d->preview_ctx, pw, ph, rgb) ||

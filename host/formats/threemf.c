@@ -264,12 +264,12 @@ int threemf_write(const threemf_args *t, const plan_args *a, plan_job *j, FILE *
         if (two <= THREEMF_MAX_OF_NOZZLE * t->nozzle) {
             tops[n - 2] = tops[n - 1];
             n--;
-            fprintf(stderr, "adaslice: warning: %s: the top %.9g mm, under --tmin %g, joins the layer below: %.9g mm\n",
-                    t->path, top, a->tmin, two);
+            warn("%s: the top %.9g mm, under --tmin %g, joins the layer below: %.9g mm",
+                 t->path, top, a->tmin, two);
         } else {
             tops[n - 2] = as_written(tops[n - 1] - two / 2);
-            fprintf(stderr, "adaslice: warning: %s: the top %.9g mm, under --tmin %g, and the layer below share their "
-                    "%.9g mm\n", t->path, top, a->tmin, two);
+            warn("%s: the top %.9g mm, under --tmin %g, and the layer below share their "
+                 "%.9g mm", t->path, top, a->tmin, two);
         }
     }
     for (k = 0; k < n; k++) {

@@ -557,10 +557,10 @@ int screen_guard(screen *s, int port_fd)
         memset(&p, 0, sizeof p);
         p.sched_priority = sched_get_priority_min(SCHED_FIFO);
         if (sched_getscheduler(0) != SCHED_FIFO && sched_setscheduler(0, SCHED_FIFO, &p) != 0)
-            fprintf(stderr, "adaslice: warning: --screen %s: this host and its guard may not run at real-time priority "
-                            "(%s): on a busy machine the screen goes dark later after a stop (the printer's reset, "
-                            "this host's death); run as root or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep "
-                            "adaslice)\n", s->name, strerror(errno));
+            warn("--screen %s: this host and its guard may not run at real-time priority "
+                 "(%s): on a busy machine the screen goes dark later after a stop (the printer's reset, "
+                 "this host's death); run as root or give adaslice CAP_SYS_NICE (setcap cap_sys_nice+ep "
+                 "adaslice)", s->name, strerror(errno));
     }
     fflush(NULL);
     s->guard = fork();
