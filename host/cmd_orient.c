@@ -305,9 +305,15 @@ int cmd_orient(int argc, char **argv)
         json_end(&w);
         json_begin_object(&w, "as_loaded", 1);
         json_bool(&w, "feasible", scores[o.dirs].feasible);
-        json_int(&w, "layers", (long long)scores[o.dirs].layers);
-        json_number(&w, "worst_error", scores[o.dirs].worst_error);
-        json_number(&w, "F", scores[o.dirs].score);
+        if (scores[o.dirs].feasible) {
+            json_int(&w, "layers", (long long)scores[o.dirs].layers);
+            json_number(&w, "worst_error", scores[o.dirs].worst_error);
+            json_number(&w, "F", scores[o.dirs].score);
+        } else { /* no plan: no count, error or score (0 layers read as a plan of none) */
+            json_null(&w, "layers");
+            json_null(&w, "worst_error");
+            json_null(&w, "F");
+        }
         json_end(&w);
         json_end(&w);
     } else if (!rc) {

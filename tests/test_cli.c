@@ -1061,6 +1061,11 @@ static void messages_name_what_was_run(void)
         cli_result r = cli_run("orient", flat, "--dirs", "10", NULL);
         CHECKF(r.status == 0 && strstr(r.out, "(14 feasible)"), "orient flat.stl: %d '%s' '%s'", r.status, r.err, r.out);
         cli_free(&r);
+        /* as loaded it has no plan: no layers, not 0 of them */
+        r = cli_run("orient", flat, "--dirs", "10", "--json", NULL);
+        CHECKF(r.status == 0 && strstr(r.out, "\"as_loaded\": {\"feasible\": false, \"layers\": null, \"worst_error\": null, \"F\": null}"),
+               "orient flat.stl --json: %d '%s' '%s'", r.status, r.err, r.out);
+        cli_free(&r);
     }
     /* another slicer's job, by its extension or its magic, is refused as
        such before the port is opened (/dev/null is none) */
