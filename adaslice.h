@@ -9149,6 +9149,13 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
                               width, height);
     if ((r = adaslice__mesh_check(mesh, "preview", err)) != ADASLICE_OK) return r;
     if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "preview: the mesh has no triangles");
+    adaslice_mesh_bounds(mesh, lo3, hi3);
+    pitch = 0;
+    for (k = 0; k < 3; k++) pitch += (hi3[k] - lo3[k]) * (hi3[k] - lo3[k]);
+    /* turned in floats, a part near their largest overflows to inf */
+    if (!(sqrt(pitch) <= 1e15))
+        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "preview: the part is %g mm across: over 1e15 mm, where "
+                              "its turned view leaves the range of floats", sqrt(pitch));
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
     el = (opt.elevation == 0 && opt.azimuth == 0 ? 30 : opt.elevation) * 3.14159265358979323846 / 180;
     az = (opt.elevation == 0 && opt.azimuth == 0 ? -45 : opt.azimuth) * 3.14159265358979323846 / 180;

@@ -131,7 +131,7 @@ static void write_png(FILE *f, const void *ctx)
 }
 
 /* The part as adaslice_preview shows it, each face in its weight's colour. */
-static int write_picture(const char *path, const weighted_mesh *w)
+static int write_picture(const char *path, const char *model, const weighted_mesh *w)
 {
     enum { WIDTH = 960, HEIGHT = 720 };
     adaslice_preview_options o;
@@ -146,7 +146,7 @@ static int write_picture(const char *path, const weighted_mesh *w)
     memset(&o, 0, sizeof o);
     o.face_colours = colours;
     o.background[0] = o.background[1] = o.background[2] = 255;
-    if (!rc && adaslice_preview(w->mesh, WIDTH, HEIGHT, &o, rgb, &e) != ADASLICE_OK) rc = library_error(&e);
+    if (!rc && adaslice_preview(w->mesh, WIDTH, HEIGHT, &o, rgb, &e) != ADASLICE_OK) rc = library_error_in(model, &e);
     if (!rc && png_encode_rgb(rgb, WIDTH, HEIGHT, &png, &p.size)) rc = complain(RC_FAIL, "out of memory for %s", path);
     p.png = png;
     if (!rc) rc = write_atomic(path, write_png, &p);
@@ -200,7 +200,7 @@ int cmd_saliency(int argc, char **argv)
         }
         if (s.out) rc = write_atomic(s.out, write_weights, &wm);
         if (!rc && s.ply) rc = write_atomic(s.ply, write_ply, &wm);
-        if (!rc && s.png) rc = write_picture(s.png, &wm);
+        if (!rc && s.png) rc = write_picture(s.png, s.model, &wm);
         if (!rc) {
             printf("model      %s: %zu triangle%s\n", s.model, mesh.triangle_count, plural(mesh.triangle_count));
             printf("weights    mean %.3g, largest %.3g, %zu face%s above 0.5\n", sum / (double)mesh.triangle_count, top,

@@ -13,6 +13,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Pixels the view importance may render: about a minute here (1.2e8 a
+   second); 8192 views of 8192 x 8192 ran for over an hour, unsaid. */
+#define VIEW_PIXELS_LIMIT 8e9
+
 void weights_usage(FILE *f, int saliency_option)
 {
     fputs("weights (paper section 4.2), multiplied face by face into the profile\n", f);
@@ -36,8 +40,9 @@ void weights_usage(FILE *f, int saliency_option)
           "                      X,Y,Z[,X,Y,Z...] towards the viewer    [hemisphere]\n"
           "  --view-count N      views in a named half of the sphere (all: twice as many)\n"
           "                                                             [%d]\n"
-          "  --view-res PX       pixels across the part in each view        [%d]\n",
-          ADASLICE_DEFAULT_VIEWS, ADASLICE_DEFAULT_VIEW_RESOLUTION);
+          "  --view-res PX       pixels across the part in each view        [%d]\n"
+          "                      (views x PX x PX: at most %.0e, about a minute)\n",
+          ADASLICE_DEFAULT_VIEWS, ADASLICE_DEFAULT_VIEW_RESOLUTION, VIEW_PIXELS_LIMIT);
 }
 
 static const struct { const char *name; double axis[3]; } VIEW_NAMES[] = {
@@ -150,6 +155,15 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
 int weights_check(const weight_args *w)
 {
     const double *c = w->importance;
+    if (w->blend && c[1] > 0) {
+        double half = (double)(w->view_lattice ? w->view_lattice : ADASLICE_DEFAULT_VIEWS);
+        double views = w->view_half < 0 ? (double)w->view_count : w->view_half == 2 ? 2 * half : half;
+        double res = (double)(w->view_res ? w->view_res : ADASLICE_DEFAULT_VIEW_RESOLUTION);
+        if (views * res * res > VIEW_PIXELS_LIMIT)
+            return complain(RC_USAGE, "the view importance would render %.0f views of %.0f x %.0f pixels, %.3g in all, "
+                            "more than %.3g: fewer views (--view-count) or a lower --view-res", views, res, res,
+                            views * res * res, VIEW_PIXELS_LIMIT);
+    }
     /* the user term is 0 where no weights are given: the blend would weigh nothing */
     if (w->blend == 2 && c[0] == 0 && c[1] == 0 && !w->file && !w->region_count)
         return complain(RC_USAGE, "--importance %g,%g,%g weighs only the user's weights, and no --weights or --weight "

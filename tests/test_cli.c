@@ -1110,6 +1110,13 @@ static void options_that_cannot_apply_are_named(void)
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "is too fine") && !strstr(r.err, "inf mm"),
            "exit %d, '%s'", r.status, r.err);
     cli_free(&r);
+    /* 8192 views of 8192 x 8192 pixels ran for over an hour without a word */
+    r = cli_run("saliency", sphere_stl(), "--importance", "0,1,0", "--view", "all", "--view-count", "4096", "--view-res",
+                "8192", "-o", cli_path("views.txt"), NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "8192 views of 8192 x 8192 pixels") &&
+               !cli_exists(cli_path("views.txt")),
+           "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
     /* a name with a newline in it stays in one line of complaint */
     r = cli_run("plan", odd, NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "two\\x0alines.stl"), "exit %d, '%s'", r.status,

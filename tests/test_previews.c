@@ -227,8 +227,38 @@ static void the_demo_hand_stands_on_its_wrist(void)
            rows.wrist_pixels, rows.wrist, rows.finger_pixels, rows.fingers, HAND_H);
 }
 
+/* A part near the largest float turned to inf in the camera's frame and was
+   reported as a triangle far off the grid (exit 2); it is refused as too
+   large, and one of 1e14 mm is still drawn. */
+static void a_part_too_large_to_turn_is_refused(void)
+{
+    static const uint32_t tris[] = {0, 1, 2, 0, 2, 3};
+    float v[12] = {0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, -1};
+    adaslice_mesh m;
+    adaslice_error e;
+    unsigned char *rgb = (unsigned char *)malloc(64 * 48 * 3);
+    static const float scales[] = {1e14f, 3e38f};
+    int k, i;
+    memset(&m, 0, sizeof m);
+    m.vertex_count = 4;
+    m.vertices = v;
+    m.triangle_count = 2;
+    m.triangles = (uint32_t *)tris;
+    for (k = 0; rgb && k < 2; k++) {
+        adaslice_result r;
+        for (i = 0; i < 12; i++) v[i] = v[i] ? (v[i] > 0 ? scales[k] : -scales[k]) : 0;
+        r = adaslice_preview(&m, 64, 48, NULL, rgb, &e);
+        if (k == 0) CHECKF(r == ADASLICE_OK, "1e14 mm: %s", e.message);
+        else CHECKF(r == ADASLICE_ERR_OVERFLOW && strstr(e.message, "mm across"), "3e38 mm: %d %s", (int)r, e.message);
+        for (i = 0; i < 12; i++) v[i] = v[i] ? (v[i] > 0 ? 1.0f : -1.0f) : 0;
+    }
+    CHECK(rgb != NULL);
+    free(rgb);
+}
+
 void test_previews(void)
 {
+    RUN(a_part_too_large_to_turn_is_refused);
     RUN(a_tower_stands_and_a_slab_lies_in_ctb_and_goo_previews);
     RUN_NEEDING("oiiotool", a_tower_stands_and_a_slab_lies_in_png_previews);
     RUN(the_demo_hand_stands_on_its_wrist);
