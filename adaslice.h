@@ -4418,8 +4418,17 @@ static double *adaslice__rmax_finish(adaslice__rmax *r, const adaslice_profile_o
         if (!r->zeroed[k]) continue;
         down = adaslice__rmax_level(r, k - 1);
         /* each bin below takes the larger of the two above that cover it:
-           one store a bin and no bin read after it is stored */
+           one store a bin and no bin read after it is stored; two bins a
+           step, which gcc -O2 turns into vector maxima (a bin a step it
+           does not) */
         for (j = 0; j < half && j < end; j++) down[j] = down[j] < up[j] ? up[j] : down[j];
+        for (; j + 2 <= end; j += 2) {
+            double a0 = up[j] > up[j - half] ? up[j] : up[j - half];
+            double a1 = up[j + 1] > up[j + 1 - half] ? up[j + 1] : up[j + 1 - half];
+            double d0 = down[j], d1 = down[j + 1];
+            down[j] = d0 < a0 ? a0 : d0;
+            down[j + 1] = d1 < a1 ? a1 : d1;
+        }
         for (; j < end; j++) {
             double a = up[j] > up[j - half] ? up[j] : up[j - half];
             down[j] = down[j] < a ? a : down[j];
@@ -7221,13 +7230,19 @@ static int adaslice__orienter_sort(adaslice_orienter *o, const double lo[3], con
     uint32_t *order = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, 2 * n, sizeof *order));
     uint32_t *number = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, m->vertex_count, sizeof *number));
     adaslice_mesh *s = &o->sorted;
-    double scale[3];
+    double scale[3], extent;
     int k, ok = 0;
     s->vertices = ADASLICE__CAST(float *, adaslice__alloc(al, m->vertex_count, 3 * sizeof(float)));
     s->triangles = ADASLICE__CAST(uint32_t *, adaslice__alloc(al, n, 3 * sizeof(uint32_t)));
     if (o->profile.weights) o->weights = ADASLICE__CAST(float *, adaslice__alloc(al, n, sizeof(float)));
     if (!key || !order || !number || !s->vertices || !s->triangles || (o->profile.weights && !o->weights)) goto done;
-    for (k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? 1023.0 / (3 * (hi[k] - lo[k])) : 0;
+    /* one cell size on every axis: cells as long as the part along its
+       longest axis and thin across made boxes of 16 facets ten times longer
+       than wide on bench's plate (1,043 x 144 x 91 mm), 15 mm on average
+       for facets of 1 mm, and their bounds of the profile too low to skip */
+    extent = 0;
+    for (k = 0; k < 3; k++) extent = hi[k] - lo[k] > extent ? hi[k] - lo[k] : extent;
+    for (k = 0; k < 3; k++) scale[k] = extent > 0 ? 1023.0 / (3 * extent) : 0;
     for (t = 0; t < n; t++) {
         const uint32_t *tri = m->triangles + 3 * t;
         uint64_t code = 0;
@@ -7396,8 +7411,12 @@ static void adaslice__count_runs(const adaslice_mesh *m, const adaslice__turned_
    their values cannot pass the profile there. The box's bins come from its
    corners' heights along d with the margin of adaslice__longest_run's
    rounding. `lower`: levels x blocks doubles, the bound's range-minimum
-   table; a block is 2^shift bins. `runs` (NULL: one chunk): the kept facets'
-   runs counted per chunk of 2^chunk_shift bins into runs[chunk + 1]. */
+   table; a block is 2^shift bins. `runs` (NULL: one chunk): room for the
+   kept facets' runs per chunk of 2^chunk_shift bins, added to runs[chunk + 1]:
+   a box's facets lie within its bins, and a facet has one run at most in
+   each chunk, so a box across one border reserves a run a facet on either
+   side of it (gathering each facet's corners to count them exactly cost as
+   much as gathering them for their values). */
 static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned_corner *cv, const double up[3],
                               const adaslice_profile *p, double *lower, int levels, int shift, uint32_t *keep,
                               int chunk_shift, size_t *runs)
@@ -7462,10 +7481,14 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
             kept += a + adaslice__value_bound(nn[3]) > least;
         }
         if (!runs) continue;
-        /* the runs' count per chunk, for adaslice__max_along: a box within a
-           chunk by its bins has its facets there */
-        if (bin_lo >> chunk_shift == bin_hi >> chunk_shift) runs[(bin_lo >> chunk_shift) + 1] += kept - box_kept;
-        else for (; box_kept < kept; box_kept++) adaslice__count_runs(m, cv, keep[box_kept], chunk_shift, runs);
+        g0 = bin_lo >> chunk_shift;
+        g1 = bin_hi >> chunk_shift;
+        if (g1 <= g0 + 1) {
+            runs[g0 + 1] += kept - box_kept;
+            if (g1 != g0) runs[g1 + 1] += kept - box_kept;
+        } else {
+            for (; box_kept < kept; box_kept++) adaslice__count_runs(m, cv, keep[box_kept], chunk_shift, runs);
+        }
     }
     return kept;
 }
@@ -7490,7 +7513,7 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     adaslice__rmax rmax;
     adaslice__run *sorted = NULL;
     uint32_t *keep = NULL;
-    size_t *start = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c, i;
+    size_t *start = NULL, *begin = NULL, n = p->bin_count, longest = adaslice__longest_run(o), span, chunk, chunks, t, c, i;
     size_t count = m->triangle_count;
     adaslice_metric metric = opt->metric;
     const float *weights = o->weights;
@@ -7512,9 +7535,11 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         /* two runs a facet at most: the same size for every direction, so
            a search's allocator can keep it */
         sorted = ADASLICE__CAST(adaslice__run *, adaslice__alloc(&al, 2 * m->triangle_count, sizeof *sorted));
-        start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, chunks + 1, sizeof *start));
+        /* start[c]: where chunk c's runs begin, then its cursor; begin: a copy */
+        start = ADASLICE__CAST(size_t *, adaslice__alloc(&al, 2 * (chunks + 1), sizeof *start));
         if (!sorted || !start) goto nomem;
         memset(start, 0, (chunks + 1) * sizeof *start);
+        begin = start + chunks + 1;
     }
     if (o->normals) { /* the prune counts the runs of the facets it keeps */
         int bound_shift = adaslice__bound_shift(n);
@@ -7528,8 +7553,10 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
     } else if (chunks > 1) {
         for (i = 0; i < count; i++) adaslice__count_runs(m, cv, i, shift, start);
     }
-    if (chunks > 1)
+    if (chunks > 1) {
         for (c = 1; c <= chunks; c++) start[c] += start[c - 1]; /* chunk c's runs go from start[c] */
+        memcpy(begin, start, (chunks + 1) * sizeof *start);
+    }
     if (!adaslice__rmax_init(&rmax, chunk, span, &al)) goto nomem;
     for (i = 0; i < count; i++) {
         const uint32_t *tri = m->triangles + 3 * (t = keep ? keep[i] : i);
@@ -7556,24 +7583,20 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         cl = last >> shift;
         if (cf != cl) {
             piece.last = (uint32_t)(cl << shift) - 1;
+            ADASLICE_ASSERT(start[cf] < begin[cf + 1]);
             sorted[start[cf]++] = piece;
             piece.first = piece.last + 1;
             piece.last = last;
         }
-        /* the counts came from the corners' bins, or the prune's boxes' that hold them */
-        ADASLICE_ASSERT(start[cl] < 2 * m->triangle_count);
+        /* the room came from the corners' bins, or the prune's boxes' that hold them */
+        ADASLICE_ASSERT(start[cl] < begin[cl + 1]);
         sorted[start[cl]++] = piece;
-    }
-    if (chunks > 1) { /* the cursors back to the chunks' starts */
-        ADASLICE_ASSERT(start[chunks - 1] == start[chunks]);
-        for (c = chunks; c > 0; c--) start[c] = start[c - 1];
-        start[0] = 0;
     }
     for (c = 0; c < chunks; c++) {
         size_t c0 = c * chunk, j;
         if (chunks > 1) {
             memset(rmax.zeroed, 0, sizeof rmax.zeroed);
-            for (j = start[c]; j < start[c + 1]; j++)
+            for (j = begin[c]; j < start[c]; j++)
                 adaslice__rmax_update(&rmax, sorted[j].first - c0, sorted[j].last - c0, sorted[j].value);
         }
         memcpy(p->phi + c0, adaslice__rmax_finish(&rmax, &quiet), (n - c0 < chunk ? n - c0 : chunk) * sizeof(double));
