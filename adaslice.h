@@ -9163,7 +9163,7 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     uint32_t *face;
     /* in the camera's frame: up, towards the viewer and to the left, so the
        top is the brightest and the two sides in view differ */
-    double el, az, rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
+    double el, az, rot[9], lo3[3], hi3[3], pitch, across, light[3] = {-0.45, 0.55, 0.70};
     const unsigned char *part, *back;
     size_t p;
     int k;
@@ -9173,12 +9173,13 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     if ((r = adaslice__mesh_check(mesh, "preview", err)) != ADASLICE_OK) return r;
     if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "preview: the mesh has no triangles");
     adaslice_mesh_bounds(mesh, lo3, hi3);
-    pitch = 0;
-    for (k = 0; k < 3; k++) pitch += (hi3[k] - lo3[k]) * (hi3[k] - lo3[k]);
+    across = 0;
+    for (k = 0; k < 3; k++) across += (hi3[k] - lo3[k]) * (hi3[k] - lo3[k]);
+    across = sqrt(across);
     /* turned in floats, a part near their largest overflows to inf */
-    if (!(sqrt(pitch) <= 1e15))
+    if (!(across <= 1e15))
         return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "preview: the part is %g mm across: over 1e15 mm, where "
-                              "its turned view leaves the range of floats", sqrt(pitch));
+                              "its turned view leaves the range of floats", across);
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
     el = (opt.elevation == 0 && opt.azimuth == 0 ? 30 : opt.elevation) * 3.14159265358979323846 / 180;
     az = (opt.elevation == 0 && opt.azimuth == 0 ? -45 : opt.azimuth) * 3.14159265358979323846 / 180;
