@@ -7384,16 +7384,22 @@ static int adaslice__bound_shift(size_t bins)
     }
 }
 
+/* A facet's run: the least and the largest of its corners' bins. */
+static inline void adaslice__corner_run(uint32_t a, uint32_t b, uint32_t c, uint32_t *first, uint32_t *last)
+{
+    uint32_t lo = a < b ? a : b, hi = a > b ? a : b;
+    *first = c < lo ? c : lo;
+    *last = c > hi ? c : hi;
+}
+
 /* Facet t's runs in the chunks of 2^shift bins its corners meet (two at
    most: a chunk is longer than any facet), counted into runs[chunk + 1]. */
 static void adaslice__count_runs(const adaslice_mesh *m, const adaslice__turned_corner *cv, size_t t, int shift,
                                  size_t *runs)
 {
     const uint32_t *tri = m->triangles + 3 * t;
-    uint32_t a = cv[tri[0]].bin, b = cv[tri[1]].bin, c = cv[tri[2]].bin;
-    uint32_t first = a < b ? a : b, last = a > b ? a : b;
-    first = c < first ? c : first;
-    last = c > last ? c : last;
+    uint32_t first, last;
+    adaslice__corner_run(cv[tri[0]].bin, cv[tri[1]].bin, cv[tri[2]].bin, &first, &last);
     runs[(first >> shift) + 1]++;
     runs[(last >> shift) + 1] += first >> shift != last >> shift;
 }
@@ -7434,9 +7440,8 @@ static size_t adaslice__prune(const adaslice_orienter *o, const adaslice__turned
         const uint32_t *tri = o->firsts + 3 * b; /* not m->triangles: a line read for 12 bytes */
         const adaslice__turned_corner *c0 = cv + tri[0], *c1 = cv + tri[1], *c2 = cv + tri[2];
         double value = adaslice__corner_value(c0->p, c1->p, c2->p, ADASLICE_METRIC_CUSP, 0);
-        size_t lo = c0->bin < c1->bin ? c0->bin : c1->bin, hi = c0->bin > c1->bin ? c0->bin : c1->bin;
-        lo = c2->bin < lo ? c2->bin : lo;
-        hi = c2->bin > hi ? c2->bin : hi;
+        uint32_t lo, hi;
+        adaslice__corner_run(c0->bin, c1->bin, c2->bin, &lo, &hi);
         /* the blocks wholly within lo..hi */
         for (g = (lo + block - 1) >> shift; (g + 1) << shift <= hi + 1; g++)
             lower[g] = lower[g] < value ? value : lower[g];
@@ -7562,7 +7567,7 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
         const uint32_t *tri = m->triangles + 3 * (t = keep ? keep[i] : i);
         const adaslice__turned_corner *a = cv + tri[0], *b = cv + tri[1], *cc = cv + tri[2];
         double value = adaslice__corner_value(a->p, b->p, cc->p, metric, rough);
-        uint32_t first = a->bin < b->bin ? a->bin : b->bin, last = a->bin > b->bin ? a->bin : b->bin;
+        uint32_t first, last;
         adaslice__run piece;
         size_t cf, cl;
         if (value < 0) {
@@ -7570,8 +7575,7 @@ static adaslice_result adaslice__max_along(const adaslice_orienter *o, const ada
             value = 0; /* its counted place filled with a run that changes nothing */
         }
         if (weights) value *= weights[t];
-        first = cc->bin < first ? cc->bin : first;
-        last = cc->bin > last ? cc->bin : last;
+        adaslice__corner_run(a->bin, b->bin, cc->bin, &first, &last);
         if (chunks == 1) {
             adaslice__rmax_update(&rmax, first, last, value);
             continue;
