@@ -104,7 +104,7 @@ static int parse_contour(int argc, char **argv, contour_args *a, int *help)
         else if (!strcmp(o, "--project")) rc = file_option(argc, argv, &i, &a->project);
         else if (!strcmp(o, "-o") || !strcmp(o, "--out")) rc = file_option(argc, argv, &i, &a->out);
         else if (!strcmp(o, "--resolution")) rc = number_option(argc, argv, &i, 0, &a->resolution);
-        else if (!strcmp(o, "--max-rise")) rc = number_option(argc, argv, &i, 1, &a->max_rise);
+        else if (!strcmp(o, "--max-rise")) rc = number_option(argc, argv, &i, 0, &a->max_rise); /* 0 read as "not given" */
         else if (!strcmp(o, "--top-skins")) a->top_skins = 1;
         else if (!strcmp(o, "--nozzle-clearance")) rc = number_option(argc, argv, &i, 0, &a->clearance);
         else if (!strcmp(o, "--clearance-angle")) {
@@ -411,10 +411,12 @@ static int place(const contour_args *a, const gfile *g, const threemf_project *p
     int k;
     memset(pl, 0, sizeof *pl);
     adaslice_mesh_bounds(&p->mesh, lo, hi);
-    for (k = 0; k < 2; k++) {
+    for (k = 0; k < 2; k++) { /* both sizes first: the message gives x and y */
         pl->size_g[k] = g->hi[k] - g->lo[k];
         pl->size_m[k] = hi[k] - lo[k];
         pl->shift[k] = (g->lo[k] + g->hi[k]) / 2 - (lo[k] + hi[k]) / 2;
+    }
+    for (k = 0; k < 2; k++) {
         if (pl->size_g[k] > pl->size_m[k] + 0.2 || pl->size_g[k] < pl->size_m[k] - 2)
             return complain(RC_FAIL, "%s: the part is %.3f x %.3f mm in %s but %.3f x %.3f mm in %s: not the part "
                                      "the project holds", a->in, pl->size_g[0], pl->size_g[1], a->in, pl->size_m[0],

@@ -160,6 +160,12 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR &&
         (output_kind(s->dir) == OUT_NEW || output_kind(s->dir) == OUT_DIRECTORY)) {
         size_t n = strlen(s->dir) + strlen((*fmt)->extension) + 1;
+        const char *base = strrchr(s->dir, '/') ? strrchr(s->dir, '/') + 1 : s->dir;
+        /* e3/ with a preset wrote the hidden file e3/.ctb */
+        if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
+            return complain(RC_USAGE, "-o %s: a directory, and a %s job is one file: give it a name (%s%sjob%s), or "
+                                      "--format dir for a job directory", s->dir, (*fmt)->name, s->dir,
+                            *base ? "/" : "", (*fmt)->extension);
         if (!(*path = (char *)malloc(n))) return complain(RC_FAIL, "out of memory");
         snprintf(*path, n, "%s%s", s->dir, (*fmt)->extension);
     }

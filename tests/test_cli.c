@@ -1079,10 +1079,13 @@ static void messages_name_what_was_run(void)
 /* Found by a bad-input hunt: each was a message that misled or split. */
 static void options_that_cannot_apply_are_named(void)
 {
-    const char *profile = cli_path("long_profile.txt"), *odd = cli_path("two\nlines.stl");
-    FILE *f = fopen(profile, "w");
+    char profile[600], odd[600]; /* cli_path's names last eight calls */
+    FILE *f;
     cli_result r;
     int i;
+    snprintf(profile, sizeof profile, "%s", cli_path("long_profile.txt"));
+    snprintf(odd, sizeof odd, "%s", cli_path("two\nlines.stl"));
+    f = fopen(profile, "w");
     for (i = 0; f && i < 200000; i++) fputs("0.25\n", f);
     if (f) fclose(f);
     /* --memory bounds a profile read from a file too: it grew to the file's size */
@@ -1116,6 +1119,19 @@ static void options_that_cannot_apply_are_named(void)
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "8192 views of 8192 x 8192 pixels") &&
                !cli_exists(cli_path("views.txt")),
            "exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
+    /* a job file's name that is only a directory: e3/ wrote the hidden file e3/.ctb */
+    {
+        char dir[600];
+        snprintf(dir, sizeof dir, "%s/", cli_path(""));
+        r = cli_run("slice", sphere_stl(), "--printer", "elegoo-saturn", "-o", dir, NULL);
+        CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "job.ctb") && !cli_exists(cli_path(".ctb")),
+               "exit %d, '%s'", r.status, r.err);
+        cli_free(&r);
+    }
+    /* contour's --max-rise 0 was taken as not given: the project's limit applied, unsaid */
+    r = cli_run("contour", "in.gcode", "--project", "p.3mf", "-o", cli_path("o.gcode"), "--max-rise", "0", NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--max-rise"), "exit %d, '%s'", r.status, r.err);
     cli_free(&r);
     /* a name with a newline in it stays in one line of complaint */
     r = cli_run("plan", odd, NULL);
