@@ -172,6 +172,56 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     return RC_OK;
 }
 
+/* Whether path's directory is dir: the same directory when both exist,
+   else the same name. */
+static int in_directory(const char *path, const char *dir)
+{
+    const char *slash = strrchr(path, '/');
+    char parent[4096];
+    size_t n = slash ? (size_t)(slash - path) : 0, d = strlen(dir);
+    struct stat a, b;
+    if (n >= sizeof parent) return 0;
+    if (!slash) strcpy(parent, ".");
+    else if (!n) strcpy(parent, "/");
+    else { memcpy(parent, path, n); parent[n] = 0; }
+    if (stat(parent, &a) == 0 && stat(dir, &b) == 0) return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+    while (d > 1 && dir[d - 1] == '/') d--;
+    return strlen(parent) == d && !strncmp(parent, dir, d);
+}
+
+/* A name a job directory writes, or removes as an older job's
+   (formats/jobdir.c). */
+static int job_file_name(const char *base)
+{
+    static const char *const names[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
+    size_t k;
+    for (k = 0; k < sizeof names / sizeof *names; k++)
+        if (!strcmp(base, names[k])) return 1;
+    if (strncmp(base, "layer_", 6) || !(base[6] >= '0' && base[6] <= '9')) return 0;
+    for (base += 6; *base >= '0' && *base <= '9'; base++) {}
+    return !strcmp(base, ".png") || !strcmp(base, ".svg");
+}
+
+/* --out, --profile-out and --plot into the job directory under one of its
+   own names: --out jj/masks.rle replaced the masks with the plan, exit 0,
+   and --plot jj/layer_00001.png was replaced by the layer. Its own plan.csv
+   and plot.svg are what --out and --plot write there anyway. */
+static int outputs_clear_of_the_job(const plan_args *a, const char *dir)
+{
+    const char *const options[] = {"--out", "--profile-out", "--plot"};
+    const char *const paths[] = {a->out, a->profile_out, a->plot};
+    const char *const same[] = {"plan.csv", NULL, "plot.svg"};
+    int k;
+    for (k = 0; k < 3; k++) {
+        const char *base = paths[k] ? base_name(paths[k]) : NULL;
+        if (!base || !job_file_name(base) || (same[k] && !strcmp(base, same[k])) || !in_directory(paths[k], dir))
+            continue;
+        return complain(RC_USAGE, "%s %s: the job directory %s writes %s itself; give it another name or put it "
+                                  "beside the job", options[k], paths[k], dir, base);
+    }
+    return RC_OK;
+}
+
 /* -o's path takes the job: before the model is loaded. */
 static int output_check_dir_or_file(const job_format *f, const char *path, int force)
 {
@@ -541,6 +591,7 @@ int cmd_slice(int argc, char **argv)
     if (!rc && s.svg && f != &JOB_FORMAT_DIR) rc = complain(RC_USAGE, "--svg writes into a job directory, not a %s file", f->name);
     if (!rc) rc = output_check_dir_or_file(f, extended ? extended : s.dir, s.force);
     if (!rc) rc = check_plan_outputs(&a, "-o", extended ? extended : s.dir);
+    if (!rc && f == &JOB_FORMAT_DIR) rc = outputs_clear_of_the_job(&a, s.dir);
     if (!rc) rc = cure_finish(&s.cure, a.tmin, a.tmax);
     if (!rc) rc = layer_masks_check(&s, pipeline_images(s.threads));
     if (rc) { free(extended); return rc; }

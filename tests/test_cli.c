@@ -1129,6 +1129,22 @@ static void options_that_cannot_apply_are_named(void)
                "exit %d, '%s'", r.status, r.err);
         cli_free(&r);
     }
+    /* another output under a job directory's own name: --out jj/masks.rle replaced the masks with the plan, exit 0 */
+    {
+        char dir[600], out[700];
+        int made;
+        for (made = 0; made < 2; made++) {
+            snprintf(dir, sizeof dir, "%s", cli_path(made ? "made_job" : "new_job"));
+            if (made) mkdir(dir, 0777);
+            snprintf(out, sizeof out, "%s/masks.rle", dir);
+            r = cli_run("slice", sphere_stl(), "--pixels", "300x300", "--pitch", "0.05", "-o", dir, "--out", out, NULL);
+            /* a new directory: --out's directory is not there yet, which is said first */
+            CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, made ? "writes masks.rle itself" : "--out") &&
+                       !cli_exists(out),
+                   "%s: exit %d, '%s'", made ? "an existing directory" : "a new one", r.status, r.err);
+            cli_free(&r);
+        }
+    }
     /* contour's --max-rise 0 was taken as not given: the project's limit applied, unsaid */
     r = cli_run("contour", "in.gcode", "--project", "p.3mf", "-o", cli_path("o.gcode"), "--max-rise", "0", NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--max-rise"), "exit %d, '%s'", r.status, r.err);
