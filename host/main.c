@@ -85,9 +85,12 @@ int main(int argc, char **argv)
         /* print keeps its own SIGINT (it pauses the printer); the others stop
            and leave nothing half-written (output.h) */
         if (c->run != cmd_print) outputs_catch_signals();
+        rc = c->run(argc - 1, argv + 1);
         /* the summary is part of the work: when it cannot be written, the
-           files written with it go too */
-        rc = outputs_finish(stdout_written(c->run(argc - 1, argv + 1)));
+           files written with it go too; but not a print's report, the record
+           of what a printer did */
+        if (c->run != cmd_print && c->run != cmd_show) rc = stdout_written(rc);
+        rc = outputs_finish(rc);
     }
     return stdout_written(rc);
 }

@@ -196,7 +196,9 @@ int parse_plan(int argc, char **argv, plan_args *a)
     if (a->budget && a->method != ADASLICE_METHOD_OPTIMAL)
         return complain(RC_USAGE, "--budget works with --method optimal only, not %s",
                         uniform ? "--uniform (one plan, no choice)" : METHOD_NAMES[a->method]);
-    if (option_given(argc, argv, "--sharp") && a->method != ADASLICE_METHOD_OPTIMAL && !a->compare)
+    /* print says itself that it plans the optimal way; --sharp 0 is what the others do */
+    if (a->sharp > 0 && option_given(argc, argv, "--sharp") && a->method != ADASLICE_METHOD_OPTIMAL && !a->compare &&
+        strcmp(cmd, "print"))
         return complain(RC_USAGE, "--sharp applies to --method optimal (and --compare), not %s",
                         uniform ? "--uniform" : METHOD_NAMES[a->method]);
     return RC_OK;

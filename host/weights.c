@@ -152,10 +152,17 @@ int weights_option(int argc, char **argv, int *i, weight_args *w, int *rc)
     return 1;
 }
 
+/* The blend's shares: --importance's, or the default's for --view alone. */
+static const double *weights_importance(const weight_args *w)
+{
+    static const double defaults[3] = {0.5, 0.3, 0.2};
+    return w->blend == 2 ? w->importance : defaults;
+}
+
 int weights_check(const weight_args *w)
 {
     const double *c = w->importance;
-    if (w->blend && c[1] > 0) {
+    if (w->blend && weights_importance(w)[1] > 0) {
         double half = (double)(w->view_lattice ? w->view_lattice : ADASLICE_DEFAULT_VIEWS);
         double views = w->view_half < 0 ? (double)w->view_count : w->view_half == 2 ? 2 * half : half;
         double res = (double)(w->view_res ? w->view_res : ADASLICE_DEFAULT_VIEW_RESOLUTION);
@@ -250,7 +257,7 @@ static void normalise(float *v, size_t n)
 static int blend(const weight_args *w, const char *model, const adaslice_mesh *mesh, float *out)
 {
     size_t t, n = mesh->triangle_count;
-    const double *c = w->blend == 2 ? w->importance : (const double[3]){0.5, 0.3, 0.2};
+    const double *c = weights_importance(w);
     float *term = (float *)malloc((n ? n : 1) * sizeof *term);
     int rc = RC_OK, user = w->file || w->region_count;
     adaslice_error e;

@@ -1149,6 +1149,16 @@ static void options_that_cannot_apply_are_named(void)
     r = cli_run("contour", "in.gcode", "--project", "p.3mf", "-o", cli_path("o.gcode"), "--max-rise", "0", NULL);
     CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "--max-rise"), "exit %d, '%s'", r.status, r.err);
     cli_free(&r);
+    /* --view alone blends with the default shares: the limit held only with --importance */
+    r = cli_run("saliency", sphere_stl(), "--view", "all", "--view-count", "4096", "--view-res", "8192", "-o",
+                cli_path("views.txt"), NULL);
+    CHECKF(r.status == 2 && cli_one_message(r.err) && strstr(r.err, "8192 views of 8192 x 8192 pixels"), "exit %d, '%s'",
+           r.status, r.err);
+    cli_free(&r);
+    /* --sharp 0 is what greedy does anyway */
+    r = cli_run("plan", "--profile", profile, "--method", "greedy", "--sharp", "0", NULL);
+    CHECKF(r.status == 0, "--method greedy --sharp 0: exit %d, '%s'", r.status, r.err);
+    cli_free(&r);
     /* a name with a newline in it stays in one line of complaint */
     r = cli_run("plan", odd, NULL);
     CHECKF(r.status == 1 && cli_one_message(r.err) && strstr(r.err, "two\\x0alines.stl"), "exit %d, '%s'", r.status,
