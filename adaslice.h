@@ -2620,6 +2620,17 @@ ADASLICE_DEF void adaslice_mesh_bounds(const adaslice_mesh *mesh, double lo[3], 
     for (k = 0; k < 3; k++) { lo[k] = l[k] + 0.0; hi[k] = h[k] + 0.0; }
 }
 
+/* The diagonal of the mesh's box: the weld's scale, and past 1e15 mm the
+   size at which a turned copy in floats overflows. */
+static double adaslice__diagonal(const adaslice_mesh *mesh)
+{
+    double lo[3], hi[3], d = 0;
+    int k;
+    adaslice_mesh_bounds(mesh, lo, hi);
+    for (k = 0; k < 3; k++) d += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    return sqrt(d);
+}
+
 /* ---- welding */
 #define ADASLICE__NONE 0xffffffffu
 
@@ -3096,11 +3107,7 @@ static adaslice_result adaslice__weld_open(adaslice_mesh *m, const adaslice__edg
         index[m->triangles[h]] = index[adaslice__he_to(m->triangles, h)] = 0;
     }
     for (i = 0; i < m->vertex_count; i++) if (index[i] == 0) index[i] = (uint32_t)n++;
-    if (n > 1 && tolerance == 0) {
-        double lo[3], hi[3];
-        adaslice_mesh_bounds(m, lo, hi);
-        tolerance = 1e-4 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    }
+    if (n > 1 && tolerance == 0) tolerance = 1e-4 * adaslice__diagonal(m);
     if (n > 1 && tolerance > 0) {
         pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
         kept_pos = ADASLICE__CAST(float *, adaslice__alloc(al, n, 3 * sizeof(float)));
@@ -6177,12 +6184,10 @@ ADASLICE_DEF adaslice_result adaslice_view_importance(const adaslice_mesh *mesh,
     if (res < 1 || res > 8192)
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: resolution %d is outside 1..8192", res);
     { /* turned in floats, a part near their largest overflowed to inf: a grid of NaN pixels, "out of memory" */
-        double lo[3], hi[3], diagonal = 0;
-        adaslice_mesh_bounds(mesh, lo, hi);
-        for (k = 0; k < 3; k++) diagonal += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-        if (!(sqrt(diagonal) <= 1e15))
+        double across = adaslice__diagonal(mesh);
+        if (!(across <= 1e15))
             return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "view importance: the part is %g mm across: over "
-                                  "1e15 mm, where its turned views leave the range of floats", sqrt(diagonal));
+                                  "1e15 mm, where its turned views leave the range of floats", across);
     }
     if (n > 1000000 || (given && !options->count))
         return adaslice__fail(err, ADASLICE_ERR_ARGUMENT, 0, 0, "view importance: %zu directions (1 to 1000000, and a count "
@@ -9167,7 +9172,7 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
     uint32_t *face;
     /* in the camera's frame: up, towards the viewer and to the left, so the
        top is the brightest and the two sides in view differ */
-    double el, az, rot[9], lo3[3], hi3[3], pitch, across, light[3] = {-0.45, 0.55, 0.70};
+    double el, az, rot[9], lo3[3], hi3[3], pitch, light[3] = {-0.45, 0.55, 0.70};
     const unsigned char *part, *back;
     size_t p;
     int k;
@@ -9176,14 +9181,12 @@ ADASLICE_DEF adaslice_result adaslice_preview(const adaslice_mesh *mesh, int wid
                               width, height);
     if ((r = adaslice__mesh_check(mesh, "preview", err)) != ADASLICE_OK) return r;
     if (!mesh->triangle_count) return adaslice__fail(err, ADASLICE_ERR_EMPTY, 0, 0, "preview: the mesh has no triangles");
-    adaslice_mesh_bounds(mesh, lo3, hi3);
-    across = 0;
-    for (k = 0; k < 3; k++) across += (hi3[k] - lo3[k]) * (hi3[k] - lo3[k]);
-    across = sqrt(across);
-    /* turned in floats, a part near their largest overflows to inf */
-    if (!(across <= 1e15))
-        return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "preview: the part is %g mm across: over 1e15 mm, where "
-                              "its turned view leaves the range of floats", across);
+    { /* turned in floats, a part near their largest overflows to inf */
+        double across = adaslice__diagonal(mesh);
+        if (!(across <= 1e15))
+            return adaslice__fail(err, ADASLICE_ERR_OVERFLOW, 0, 0, "preview: the part is %g mm across: over 1e15 mm, "
+                                  "where its turned view leaves the range of floats", across);
+    }
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
     el = (opt.elevation == 0 && opt.azimuth == 0 ? 30 : opt.elevation) * 3.14159265358979323846 / 180;
     az = (opt.elevation == 0 && opt.azimuth == 0 ? -45 : opt.azimuth) * 3.14159265358979323846 / 180;
