@@ -129,7 +129,7 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     }
     {
         /* ".ctb" alone would be a hidden directory, or get its extension twice */
-        const char *base = strrchr(s->dir, '/') ? strrchr(s->dir, '/') + 1 : s->dir;
+        const char *base = base_name(s->dir);
         const job_format *named;
         char named_x[32];
         snprintf(named_x, sizeof named_x, "x%.30s", base);
@@ -160,7 +160,7 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     if ((*fmt)->extension && job_format_for_path(s->dir) == &JOB_FORMAT_DIR &&
         (output_kind(s->dir) == OUT_NEW || output_kind(s->dir) == OUT_DIRECTORY)) {
         size_t n = strlen(s->dir) + strlen((*fmt)->extension) + 1;
-        const char *base = strrchr(s->dir, '/') ? strrchr(s->dir, '/') + 1 : s->dir;
+        const char *base = base_name(s->dir);
         /* e3/ with a preset wrote the hidden file e3/.ctb */
         if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
             return complain(RC_USAGE, "-o %s: a directory, and a %s job is one file: give it a name (%s%sjob%s), or "
@@ -172,36 +172,6 @@ static int choose_format(const slice_args *s, const job_format **fmt, char **pat
     return RC_OK;
 }
 
-/* Whether path's directory is dir: the same directory when both exist,
-   else the same name. */
-static int in_directory(const char *path, const char *dir)
-{
-    const char *slash = strrchr(path, '/');
-    char parent[4096];
-    size_t n = slash ? (size_t)(slash - path) : 0, d = strlen(dir);
-    struct stat a, b;
-    if (n >= sizeof parent) return 0;
-    if (!slash) strcpy(parent, ".");
-    else if (!n) strcpy(parent, "/");
-    else { memcpy(parent, path, n); parent[n] = 0; }
-    if (stat(parent, &a) == 0 && stat(dir, &b) == 0) return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
-    while (d > 1 && dir[d - 1] == '/') d--;
-    return strlen(parent) == d && !strncmp(parent, dir, d);
-}
-
-/* A name a job directory writes, or removes as an older job's
-   (formats/jobdir.c). */
-static int job_file_name(const char *base)
-{
-    static const char *const names[] = {"manifest.json", "masks.rle", "preview.png", "plan.csv", "plot.svg"};
-    size_t k;
-    for (k = 0; k < sizeof names / sizeof *names; k++)
-        if (!strcmp(base, names[k])) return 1;
-    if (strncmp(base, "layer_", 6) || !(base[6] >= '0' && base[6] <= '9')) return 0;
-    for (base += 6; *base >= '0' && *base <= '9'; base++) {}
-    return !strcmp(base, ".png") || !strcmp(base, ".svg");
-}
-
 /* --out, --profile-out and --plot into the job directory under one of its
    own names: --out jj/masks.rle replaced the masks with the plan, exit 0,
    and --plot jj/layer_00001.png was replaced by the layer. Its own plan.csv
@@ -211,15 +181,21 @@ static int outputs_clear_of_the_job(const plan_args *a, const char *dir)
     const char *const options[] = {"--out", "--profile-out", "--plot"};
     const char *const paths[] = {a->out, a->profile_out, a->plot};
     const char *const same[] = {"plan.csv", NULL, "plot.svg"};
-    int k;
-    for (k = 0; k < 3; k++) {
+    int k, rc = RC_OK;
+    for (k = 0; k < 3 && !rc; k++) {
         const char *base = paths[k] ? base_name(paths[k]) : NULL;
-        if (!base || !job_file_name(base) || (same[k] && !strcmp(base, same[k])) || !in_directory(paths[k], dir))
-            continue;
-        return complain(RC_USAGE, "%s %s: the job directory %s writes %s itself; give it another name or put it "
-                                  "beside the job", options[k], paths[k], dir, base);
+        size_t n;
+        char *own;
+        if (!base || !jobdir_file_name(base) || (same[k] && !strcmp(base, same[k]))) continue;
+        n = strlen(dir) + strlen(base) + 2;
+        if (!(own = (char *)malloc(n))) return complain(RC_FAIL, "out of memory");
+        snprintf(own, n, "%s/%s", dir, base);
+        if (output_same(paths[k], own))
+            rc = complain(RC_USAGE, "%s %s: the job directory %s writes %s itself; give it another name or put it "
+                                    "beside the job", options[k], paths[k], dir, base);
+        free(own);
     }
-    return RC_OK;
+    return rc;
 }
 
 /* -o's path takes the job: before the model is loaded. */

@@ -129,7 +129,6 @@ void outputs_add_input(const char *path)
     if (path && strcmp(path, "-") && input_count < sizeof inputs / sizeof *inputs) inputs[input_count++] = path;
 }
 
-static int same_output(const char *a, const char *b);
 
 int output_check(const char *option, const char *path)
 {
@@ -143,7 +142,7 @@ int output_check(const char *option, const char *path)
     case OUT_DIRECTORY: return complain(RC_USAGE, "%s %s: is a directory; give a file name", option, path);
     default:
         for (i = 0; i < input_count; i++)
-            if (same_output(path, inputs[i]))
+            if (output_same(path, inputs[i]))
                 return complain(RC_USAGE, "%s %s is %s, which this command reads: it would be written over", option,
                                 path, inputs[i]);
         return check_parent(option, path);
@@ -185,7 +184,7 @@ static char *resolved(const char *path)
     return out;
 }
 
-static int same_output(const char *a, const char *b)
+int output_same(const char *a, const char *b)
 {
     struct stat sa, sb;
     FILE *fa = stream_named(a), *fb = stream_named(b);
@@ -207,7 +206,7 @@ int output_check_distinct(const char *const *options, const char *const *paths, 
     size_t i, j;
     for (i = 0; i < n; i++)
         for (j = i + 1; j < n; j++)
-            if (paths[i] && paths[j] && same_output(paths[i], paths[j]))
+            if (paths[i] && paths[j] && output_same(paths[i], paths[j]))
                 return complain(RC_USAGE, "%s %s and %s %s are one file: %s", options[i], paths[i], options[j], paths[j],
                                 stream_named(paths[i]) ? "the two would be mixed in one stream"
                                                        : "the last written would replace the other");

@@ -34,6 +34,10 @@ int output_check_dir(const char *option, const char *path);
    twice; a device such as /dev/null may take them all). RC_OK or an
    RC_USAGE complaint naming both options. */
 int output_check_distinct(const char *const *options, const char *const *paths, size_t n);
+/* Whether two outputs are one file (links followed, a file not yet made by
+   its resolved directory) or one stream ("-", /dev/stdout); a device is
+   never the same. */
+int output_same(const char *a, const char *b);
 
 /* An output being written: f takes the bytes. */
 typedef struct output {

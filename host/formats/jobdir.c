@@ -269,6 +269,21 @@ static uint32_t milli(double v) { return (uint32_t)(v * 1000 + 0.5); }
 
 static int dir_close(void *writer, int ok);
 
+/* The files a job writes besides its layers and manifest.json (some jobs
+   fewer), and those a manifest from before its "files" list had. */
+static const char *const JOB_EXTRAS[] = {"masks.rle", "preview.png", "plan.csv", "plot.svg"};
+
+int jobdir_file_name(const char *name)
+{
+    size_t k;
+    if (!strcmp(name, "manifest.json")) return 1;
+    for (k = 0; k < sizeof JOB_EXTRAS / sizeof JOB_EXTRAS[0]; k++)
+        if (!strcmp(name, JOB_EXTRAS[k])) return 1;
+    if (strncmp(name, "layer_", 6) || !(name[6] >= '0' && name[6] <= '9')) return 0;
+    for (name += 6; *name >= '0' && *name <= '9'; name++) {}
+    return !strcmp(name, ".png") || !strcmp(name, ".svg");
+}
+
 /* A layer PNG under the very name this job of `layers` gives one of its own
    (`digits` wide, 1 to layers). */
 static int is_own_layer_png(const char *name, size_t layers, int digits)
@@ -352,7 +367,6 @@ static void remove_named(old_job *o, const char *name, size_t n)
    four files a slice wrote besides. */
 static void remove_listed(old_job *o, const char *text)
 {
-    static const char *const before_the_list[] = {"masks.rle", "preview.png", "plan.csv", "plot.svg"};
     const char *p = strstr(text, "\"files\": [");
     size_t i;
     if (p) {
@@ -366,8 +380,7 @@ static void remove_listed(old_job *o, const char *text)
         }
         return;
     }
-    for (i = 0; i < sizeof before_the_list / sizeof before_the_list[0]; i++)
-        remove_named(o, before_the_list[i], strlen(before_the_list[i]));
+    for (i = 0; i < sizeof JOB_EXTRAS / sizeof JOB_EXTRAS[0]; i++) remove_named(o, JOB_EXTRAS[i], strlen(JOB_EXTRAS[i]));
     for (p = text; !o->rc && (p = strstr(p, "\"file\": \"")) != NULL;) {
         const char *name = p + 9, *end = strchr(name, '"');
         size_t n;

@@ -26,6 +26,9 @@ void layer_path(char *path, size_t size, const char *dir, size_t k, int digits, 
    SVGs, masks.rle, preview.png, plan.csv and plot.svg), leaving DIR and
    anything else in it. */
 int jobdir_remove(const char *dir);
+/* 1 when a job directory may write or remove a file of this name: its
+   manifest, masks, preview, plan, plot, or a layer's PNG or SVG. */
+int jobdir_file_name(const char *name);
 /* Before the work: a DIR that holds files and no manifest.json is someone
    else's, refused (RC_USAGE, said) unless force. */
 int jobdir_check(const char *dir, int force);
